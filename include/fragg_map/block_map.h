@@ -1,0 +1,110 @@
+// The host map: block key -> block, blocks in an arena of fixed-size chunks (stable
+// addresses, so the CUDA backend can pin them). Unobserved space has no block.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+#include "fragg_map/cell.h"
+#include "fragg_map/culling.h"
+#include "fragg_map/key.h"
+
+namespace fragg {
+
+using BlockIndex = uint32_t;
+constexpr BlockIndex kNoBlock = 0xffffffffu;
+
+/// Where the arena gets its chunks from: plain aligned memory by default; the CUDA backend
+/// installs a pinned-memory allocator.
+class ChunkAllocator {
+ public:
+  virtual ~ChunkAllocator() = default;
+  virtual void* allocate(size_t bytes) = 0;
+  virtual void deallocate(void* p, size_t bytes) = 0;
+  virtual const char* name() const = 0;
+};
+std::shared_ptr<ChunkAllocator> plainChunkAllocator();
+
+struct BlockMeta {
+  BlockKey key;
+  uint64_t changed_at = 0;  ///< map revision of the last change (for incremental publishing)
+  CullMemory cull;
+  bool live = false;
+};
+
+/// Inclusive voxel-key bounds of the observed map.
+struct KeyBounds {
+  bool empty = true;
+  VoxelKey min, max;
+};
+
+class BlockMap {
+ public:
+  static constexpr size_t kBlocksPerChunk = 1024;  // 2 MiB of cells per chunk
+
+  explicit BlockMap(std::shared_ptr<ChunkAllocator> allocator = plainChunkAllocator());
+  ~BlockMap();
+  BlockMap(const BlockMap&) = delete;
+  BlockMap& operator=(const BlockMap&) = delete;
+  BlockMap(BlockMap&&) noexcept;
+  BlockMap& operator=(BlockMap&&) noexcept;
+
+  /// Lookups return kNoBlock / nullptr when the block does not exist. Thread-safe with other
+  /// lookups, not with insertions or erasures.
+  BlockIndex find(const BlockKey& key) const;
+  const Block* findBlock(const BlockKey& key) const;
+  Block* findBlock(const BlockKey& key);
+  const Cell* findCell(const VoxelKey& key) const;
+
+  /// Returns the block's index, creating an all-unobserved block when it is missing.
+  BlockIndex findOrCreate(const BlockKey& key, bool* created = nullptr);
+  void erase(const BlockKey& key);
+  void clear();
+
+  Block& block(BlockIndex i) { return chunks_[i / kBlocksPerChunk][i % kBlocksPerChunk]; }
+  const Block& block(BlockIndex i) const { return chunks_[i / kBlocksPerChunk][i % kBlocksPerChunk]; }
+  BlockMeta& meta(BlockIndex i) { return meta_[i]; }
+  const BlockMeta& meta(BlockIndex i) const { return meta_[i]; }
+
+  size_t size() const { return index_.size(); }
+  bool empty() const { return index_.empty(); }
+  /// Upper bound (exclusive) of live block indices, for parallel loops over meta().live.
+  BlockIndex indexEnd() const { return static_cast<BlockIndex>(meta_.size()); }
+
+  /// Calls `fn(index)` for every live block whose key lies in [lo, hi] (inclusive), using the
+  /// coarse spatial index so the cost follows the blocks there, not the box volume.
+  void forEachInBox(const BlockKey& lo, const BlockKey& hi,
+                    const std::function<void(BlockIndex)>& fn) const;
+  /// Every live block, in unspecified order.
+  void forEach(const std::function<void(BlockIndex)>& fn) const;
+
+  /// Blocks' key bounds (kept as blocks are created).
+  bool blockBounds(BlockKey* lo, BlockKey* hi) const;
+  /// Exact bounds of observed cells (scans the boundary blocks).
+  KeyBounds observedBounds() const;
+
+  size_t hostBytes() const;
+  const char* allocatorName() const { return allocator_->name(); }
+
+ private:
+  struct SuperKeyHash {
+    size_t operator()(const BlockKey& k) const noexcept { return BlockKeyHash()(k); }
+  };
+  static BlockKey superKeyOf(const BlockKey& b) {
+    return {b.x >> kBlockBits, b.y >> kBlockBits, b.z >> kBlockBits};
+  }
+
+  std::shared_ptr<ChunkAllocator> allocator_;
+  std::vector<Block*> chunks_;
+  std::vector<BlockMeta> meta_;
+  std::vector<BlockIndex> free_;
+  std::unordered_map<BlockKey, BlockIndex, BlockKeyHash> index_;
+  std::unordered_map<BlockKey, std::vector<BlockIndex>, SuperKeyHash> super_;
+  BlockKey lo_, hi_;
+};
+
+}  // namespace fragg

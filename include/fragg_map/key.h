@@ -1,0 +1,65 @@
+// Voxel and block keys: int32 per axis, key = floor(p / resolution). Blocks are 8^3 voxels.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+
+#include "fragg_map/hd.h"
+
+namespace fragg {
+
+constexpr int kBlockBits = 3;
+constexpr int kBlockSize = 1 << kBlockBits;  // voxels per block edge
+constexpr int kBlockMask = kBlockSize - 1;
+constexpr int kCellsPerBlock = kBlockSize * kBlockSize * kBlockSize;
+
+struct VoxelKey {
+  int32_t x = 0, y = 0, z = 0;
+  FRAGG_HD bool operator==(const VoxelKey& o) const { return x == o.x && y == o.y && z == o.z; }
+  FRAGG_HD bool operator!=(const VoxelKey& o) const { return !(*this == o); }
+};
+
+struct BlockKey {
+  int32_t x = 0, y = 0, z = 0;
+  FRAGG_HD bool operator==(const BlockKey& o) const { return x == o.x && y == o.y && z == o.z; }
+  FRAGG_HD bool operator!=(const BlockKey& o) const { return !(*this == o); }
+};
+
+/// Block holding a voxel (floor division by 8, right for negative keys).
+FRAGG_HD BlockKey blockKeyOf(const VoxelKey& v) {
+  return {v.x >> kBlockBits, v.y >> kBlockBits, v.z >> kBlockBits};
+}
+
+/// Index of a voxel inside its block, x fastest.
+FRAGG_HD int cellIndexOf(const VoxelKey& v) {
+  return (v.x & kBlockMask) | ((v.y & kBlockMask) << kBlockBits) |
+         ((v.z & kBlockMask) << (2 * kBlockBits));
+}
+
+/// Voxel key of cell `cell_index` in block `b`.
+FRAGG_HD VoxelKey voxelKeyOf(const BlockKey& b, int cell_index) {
+  return {(b.x << kBlockBits) | (cell_index & kBlockMask),
+          (b.y << kBlockBits) | ((cell_index >> kBlockBits) & kBlockMask),
+          (b.z << kBlockBits) | ((cell_index >> (2 * kBlockBits)) & kBlockMask)};
+}
+
+struct BlockKeyHash {
+  size_t operator()(const BlockKey& k) const noexcept {
+    // Large odd multipliers (as in Teschner et al. spatial hashing), mixed into 64 bits.
+    uint64_t h = static_cast<uint64_t>(static_cast<uint32_t>(k.x)) * 73856093ULL;
+    h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.y)) * 19349669ULL << 21;
+    h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.z)) * 83492791ULL << 42;
+    h ^= h >> 29;
+    h *= 0xbf58476d1ce4e5b9ULL;
+    return static_cast<size_t>(h ^ (h >> 32));
+  }
+};
+
+struct VoxelKeyHash {
+  size_t operator()(const VoxelKey& k) const noexcept {
+    return BlockKeyHash()(BlockKey{k.x, k.y, k.z});
+  }
+};
+
+}  // namespace fragg

@@ -1,0 +1,92 @@
+// fragg::Map: the public face of the occupancy map.
+//
+//   fragg::MapParams params;                  // resolution, occupancy model, backend...
+//   fragg::Map map(params);
+//   map.insert(cloud, T_map_sensor, fragg::SensorModel::autoFromCloud(0.0, 30.0));
+//   fragg::CellState s = map.query(p_map);
+//   map.save("x.fgm");   fragg::Map m = fragg::Map::load("x.fgm");
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "fragg_map/block_map.h"
+#include "fragg_map/frustum.h"
+#include "fragg_map/insert_stats.h"
+#include "fragg_map/map_params.h"
+#include "fragg_map/occupancy.h"
+#include "fragg_map/point_cloud.h"
+#include "fragg_map/sensor_model.h"
+
+namespace fragg {
+
+class Integrator;
+class Culler;
+
+struct MemoryStats {
+  size_t host_block_bytes = 0;  ///< cells + per-block metadata + index
+  size_t device_bytes = 0;      ///< CUDA backend only
+  size_t blocks = 0;
+  size_t known_voxels = 0;      ///< observed cells
+};
+
+class Map {
+ public:
+  explicit Map(const MapParams& params = MapParams());
+  ~Map();
+  Map(Map&&) noexcept;
+  Map& operator=(Map&&) noexcept;
+  Map(const Map&) = delete;
+  Map& operator=(const Map&) = delete;
+
+  /// Integrates one scan. `cloud` is in the sensor frame; `T_map_sensor` places the sensor.
+  /// Throws InvalidArgument for a non-finite pose or a bad sensor model (map untouched).
+  InsertStats insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
+                     const SensorModel& sensor, int64_t stamp_ns = 0);
+
+  CellState query(const Eigen::Vector3d& p_map) const;
+  CellState state(const Cell& c) const { return model_.state(c); }
+  const Cell* findCell(const VoxelKey& key) const { return blocks_.findCell(key); }
+  VoxelKey keyOf(const Eigen::Vector3d& p_map) const;  ///< throws if beyond the int32 range
+  Eigen::Vector3d centerOf(const VoxelKey& key) const;
+
+  /// Makes every cell in the box unknown (block-granular memory release where possible).
+  void clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map);
+  void reset();
+
+  /// The frustum of the last insertion (for visualisation).
+  const Frustum& lastFrustum() const { return last_frustum_; }
+
+  const MapParams& params() const { return params_; }
+  const OccupancyModel& model() const { return model_; }
+  double resolution() const { return params_.resolution_m; }
+  const BlockMap& blocks() const;
+  /// Write access for loaders and merging; bumps the revision of every block it hands out.
+  BlockMap& mutableBlocks();
+  uint64_t revision() const { return revision_; }
+  size_t scanCount() const { return scans_; }
+  const char* backendName() const;
+
+  MemoryStats memory() const;
+  size_t knownVoxelCount() const;
+  KeyBounds bounds() const { return blocks().observedBounds(); }
+
+  void save(const std::string& path) const;
+  static Map load(const std::string& path);
+
+ private:
+  MapParams params_;
+  OccupancyModel model_;
+  BlockMap blocks_;
+  std::unique_ptr<Culler> culler_;
+  std::unique_ptr<Integrator> integrator_;
+  Frustum last_frustum_;
+  uint64_t revision_ = 0;
+  size_t scans_ = 0;
+};
+
+}  // namespace fragg

@@ -1,0 +1,13 @@
+set(FRAGG_CORE_SOURCES
+  ${CMAKE_CURRENT_LIST_DIR}/occupancy.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/map_params.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/sensor_model.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/block_map.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/frustum_builder.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/culler.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/scan_preparation.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/cpu_integrator.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/insert_stats.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/map.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/map_file.cpp
+)
