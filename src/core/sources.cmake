@@ -1,4 +1,5 @@
 set(FRAGG_CORE_SOURCES
+  ${CMAKE_CURRENT_LIST_DIR}/atomic_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/occupancy.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_params.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sensor_model.cpp
