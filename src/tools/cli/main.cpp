@@ -1,0 +1,33 @@
+// fragg_map: build, inspect, export, render and compare occupancy maps.
+#include <cstdio>
+#include <exception>
+
+#include <CLI/CLI.hpp>
+
+#include "cli/commands.h"
+#include "fragg_map/errors.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"fragg_map: GPU-accelerated 3D occupancy maps (build, stats, export, render, "
+               "compare)"};
+  app.require_subcommand(1);
+  fragg::cli::addBuildCommand(app);
+  fragg::cli::addStatsCommand(app);
+  fragg::cli::addExportCommand(app);
+  fragg::cli::addRenderCommand(app);
+  fragg::cli::addCompareCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    std::fprintf(stderr, "fragg_map: error: %s (see --help)\n", e.what());
+    return 2;
+  } catch (const fragg::InvalidArgument& e) {
+    std::fprintf(stderr, "fragg_map: error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "fragg_map: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
