@@ -24,7 +24,7 @@ enum class FrustumTest : uint8_t {
 
 constexpr int kMaxFrustumTests = 8;
 /// Index of the near plane in a pinhole frustum (the one translation coherence applies to).
-constexpr int kNearPlaneTest = 4;
+constexpr int kNearPlaneTest = 0;
 
 struct Frustum {
   double origin_m[3] = {0, 0, 0};  ///< sensor origin in the map frame

@@ -65,7 +65,7 @@ class Map {
   const OccupancyModel& model() const { return model_; }
   double resolution() const { return params_.resolution_m; }
   const BlockMap& blocks() const;
-  /// Write access for loaders and merging; bumps the revision of every block it hands out.
+  /// Write access for loaders, importers and merging; bumps the map revision.
   BlockMap& mutableBlocks();
   uint64_t revision() const { return revision_; }
   size_t scanCount() const { return scans_; }

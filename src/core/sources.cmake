@@ -7,6 +7,7 @@ set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/frustum_builder.cpp
   ${CMAKE_CURRENT_LIST_DIR}/culler.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scan_preparation.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/scan_scratch.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cpu_integrator.cpp
   ${CMAKE_CURRENT_LIST_DIR}/insert_stats.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map.cpp

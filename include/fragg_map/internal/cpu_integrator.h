@@ -1,0 +1,22 @@
+// The CPU backend: rays in parallel over every core (OpenMP), cell flags in a scan scratch,
+// then the log-odds update over the touched blocks only.
+#pragma once
+
+#include "fragg_map/internal/integrator.h"
+#include "fragg_map/internal/scan_scratch.h"
+
+namespace fragg {
+
+class CpuIntegrator : public Integrator {
+ public:
+  explicit CpuIntegrator(int threads) : threads_(threads) {}
+  void integrate(const PreparedScan& scan, const OccupancyModel& model, RayCast raycast,
+                 uint64_t revision, BlockMap& blocks, InsertStats& stats) override;
+  const char* name() const override { return "cpu"; }
+
+ private:
+  int threads_;
+  ScanScratch scratch_;
+};
+
+}  // namespace fragg

@@ -1,0 +1,44 @@
+// A scan ready for ray casting: rays in voxel units relative to the sensor's voxel.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "fragg_map/frustum.h"
+#include "fragg_map/insert_stats.h"
+#include "fragg_map/map_params.h"
+#include "fragg_map/point_cloud.h"
+#include "fragg_map/raycast.h"
+#include "fragg_map/sensor_model.h"
+
+namespace fragg {
+
+struct RayEnd {
+  float end_v[3];  ///< relative to PreparedScan::ref, voxel units
+  uint32_t hit;    ///< 1: the end cell is a hit; 0: free-only ray (clipped or no return)
+};
+static_assert(sizeof(RayEnd) == 16, "RayEnd is 16 bytes");
+
+struct PreparedScan {
+  VoxelKey ref;                 ///< the sensor origin's voxel
+  float start_v[3] = {0, 0, 0};  ///< sensor origin relative to ref, voxel units, in [0, 1)
+  std::vector<RayEnd> rays;
+
+  RayVox ray(size_t i) const {
+    const RayEnd& e = rays[i];
+    return RayVox{ref, {start_v[0], start_v[1], start_v[2]}, {e.end_v[0], e.end_v[1], e.end_v[2]},
+                  e.hit != 0};
+  }
+};
+
+/// Transforms, filters and clips a cloud (OctoMap semantics: NaN/Inf and points closer than
+/// min range dropped; points beyond max range become free-only rays ending at max range).
+/// `model` must be resolved (not auto); when `explicit_model` is set, points outside the
+/// frustum are dropped and counted. Fills the point counters of `stats`.
+void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
+                 const SensorModel& model, const Frustum& frustum, bool explicit_model,
+                 const MapParams& params, PreparedScan& out, InsertStats& stats);
+
+}  // namespace fragg

@@ -1,0 +1,66 @@
+// PNG images of a map: a top-down height image and horizontal slices.
+//
+// Image axes: x grows to the right, y grows upwards (north up); one voxel is `scale` pixels
+// wide. The image covers the map's observed x/y bounds, or the crop box when one is given.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "fragg_map/map.h"
+
+namespace fragg {
+
+struct Rgb {
+  uint8_t r = 0, g = 0, b = 0;
+  bool operator==(const Rgb& o) const { return r == o.r && g == o.g && b == o.b; }
+  bool operator!=(const Rgb& o) const { return !(*this == o); }
+};
+
+struct RenderOptions {
+  int scale = 1;  ///< pixels per voxel edge, >= 1
+  /// Only cells inside the box (metres, map frame) are drawn and the image covers its x/y
+  /// extent; without it the image covers the observed bounds (and all heights).
+  std::optional<Eigen::AlignedBox3d> crop;
+  int max_side_px = 4096;  ///< longest image side allowed
+  /// When the image would exceed max_side_px: draw several voxels per pixel (a pixel shows
+  /// the highest occupied / any occupied, else any free cell of its voxels) instead of
+  /// throwing InvalidArgument.
+  bool auto_downscale = true;
+  Rgb free_color{200, 200, 200};    ///< free (and no occupied) cells: light grey
+  Rgb unknown_color{24, 24, 24};    ///< never observed or inside the unknown band: near black
+  Rgb occupied_color{230, 60, 30};  ///< slice view; the top view colours by height instead
+};
+
+/// What was drawn.
+struct RenderInfo {
+  int width_px = 0;
+  int height_px = 0;
+  int voxels_per_pixel = 1;  ///< > 1 when the image was downscaled (per axis)
+  int scale = 1;             ///< pixels per voxel edge (per group of voxels when downscaled)
+  VoxelKey min_key, max_key;  ///< inclusive voxel range drawn (x, y; z of the cells counted)
+  size_t occupied_columns = 0;  ///< pixels showing an occupied cell
+  double z_min_m = 0, z_max_m = 0;  ///< top view: heights at the ends of the colour ramp
+};
+
+/// Colour ramp for heights, t in [0, 1] (clamped): blue, cyan, green, yellow, red.
+Rgb heightColor(double t);
+
+/// Top-down height image: a pixel whose column holds an occupied cell takes the ramp colour
+/// of the highest one (the ramp spans the lowest to the highest such top cell; a single
+/// height takes the middle), a column with free cells only is free_color, one with neither
+/// is unknown_color. Writes `path_png` atomically. Throws InvalidArgument for bad options or
+/// an empty map without a crop box, IoError when the file cannot be written.
+RenderInfo renderTopDown(const Map& map, const std::string& path_png,
+                         const RenderOptions& options = RenderOptions());
+
+/// Horizontal slice through the voxel layer that holds height `z_m`: occupied_color,
+/// free_color and unknown_color per cell state (map's own occupancy model). Same image
+/// geometry and errors as renderTopDown; the crop box's z extent is ignored.
+RenderInfo renderSlice(const Map& map, double z_m, const std::string& path_png,
+                       const RenderOptions& options = RenderOptions());
+
+}  // namespace fragg

@@ -1,0 +1,20 @@
+// The .fgm map file (DESIGN §7), little-endian:
+//   header : "FRAGGMAP" | u32 version | u32 header bytes | f64 resolution_m |
+//            f64 prob_hit, prob_miss, clamp_min, clamp_max, unknown_band |
+//            u32 block edge (8) | u32 flags (bit 0: blocks zlib-compressed) |
+//            u64 block count | u64 scans integrated
+//   blocks : i32 x, y, z | u32 payload bytes | payload (512 x {i16 hits, i16 log_odds_fx}),
+//            sorted by key so the same map always gives the same bytes
+//   footer : u32 CRC-32 (zlib) of everything before it
+// Saved to a temporary file and renamed. The loader checks every field and the checksum.
+#pragma once
+
+#include <cstdint>
+
+namespace fragg {
+
+constexpr char kMapFileMagic[8] = {'F', 'R', 'A', 'G', 'G', 'M', 'A', 'P'};
+constexpr uint32_t kMapFileVersion = 1;
+constexpr uint32_t kMapFileCompressed = 1u;
+
+}  // namespace fragg

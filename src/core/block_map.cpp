@@ -1,0 +1,208 @@
+#include "fragg_map/block_map.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <new>
+
+namespace fragg {
+
+namespace {
+class PlainChunkAllocator : public ChunkAllocator {
+ public:
+  void* allocate(size_t bytes) override {
+    void* p = std::aligned_alloc(4096, (bytes + 4095) / 4096 * 4096);
+    if (!p) throw std::bad_alloc();
+    return p;
+  }
+  void deallocate(void* p, size_t) override { std::free(p); }
+  const char* name() const override { return "plain"; }
+};
+
+void initBlock(Block& b) {
+  for (Cell& c : b.cells) c = Cell();
+}
+}  // namespace
+
+std::shared_ptr<ChunkAllocator> plainChunkAllocator() {
+  static auto allocator = std::make_shared<PlainChunkAllocator>();
+  return allocator;
+}
+
+BlockMap::BlockMap(std::shared_ptr<ChunkAllocator> allocator) : allocator_(std::move(allocator)) {}
+
+BlockMap::~BlockMap() {
+  for (Block* c : chunks_) allocator_->deallocate(c, kBlocksPerChunk * sizeof(Block));
+}
+
+BlockMap::BlockMap(BlockMap&& o) noexcept { *this = std::move(o); }
+
+BlockMap& BlockMap::operator=(BlockMap&& o) noexcept {
+  if (this == &o) return *this;
+  for (Block* c : chunks_) allocator_->deallocate(c, kBlocksPerChunk * sizeof(Block));
+  allocator_ = std::move(o.allocator_);
+  chunks_ = std::move(o.chunks_);
+  meta_ = std::move(o.meta_);
+  free_ = std::move(o.free_);
+  index_ = std::move(o.index_);
+  super_ = std::move(o.super_);
+  lo_ = o.lo_;
+  hi_ = o.hi_;
+  o.allocator_ = allocator_;
+  o.chunks_.clear();
+  o.clear();
+  return *this;
+}
+
+BlockIndex BlockMap::find(const BlockKey& key) const {
+  auto it = index_.find(key);
+  return it == index_.end() ? kNoBlock : it->second;
+}
+
+const Block* BlockMap::findBlock(const BlockKey& key) const {
+  const BlockIndex i = find(key);
+  return i == kNoBlock ? nullptr : &block(i);
+}
+
+Block* BlockMap::findBlock(const BlockKey& key) {
+  const BlockIndex i = find(key);
+  return i == kNoBlock ? nullptr : &block(i);
+}
+
+const Cell* BlockMap::findCell(const VoxelKey& key) const {
+  const Block* b = findBlock(blockKeyOf(key));
+  return b ? &b->cells[cellIndexOf(key)] : nullptr;
+}
+
+BlockIndex BlockMap::findOrCreate(const BlockKey& key, bool* created) {
+  auto [it, inserted] = index_.try_emplace(key, kNoBlock);
+  if (created) *created = inserted;
+  if (!inserted) return it->second;
+  BlockIndex i;
+  try {
+    if (!free_.empty()) {
+      i = free_.back();
+      free_.pop_back();
+    } else {
+      i = static_cast<BlockIndex>(meta_.size());
+      if (i % kBlocksPerChunk == 0)
+        chunks_.push_back(
+            static_cast<Block*>(allocator_->allocate(kBlocksPerChunk * sizeof(Block))));
+      meta_.emplace_back();
+    }
+    super_[superKeyOf(key)].push_back(i);
+  } catch (...) {
+    index_.erase(it);
+    throw;
+  }
+  it->second = i;
+  initBlock(block(i));
+  BlockMeta& m = meta_[i];
+  m = BlockMeta();
+  m.key = key;
+  m.live = true;
+  if (index_.size() == 1) {
+    lo_ = hi_ = key;
+  } else {
+    lo_ = {std::min(lo_.x, key.x), std::min(lo_.y, key.y), std::min(lo_.z, key.z)};
+    hi_ = {std::max(hi_.x, key.x), std::max(hi_.y, key.y), std::max(hi_.z, key.z)};
+  }
+  return i;
+}
+
+void BlockMap::erase(const BlockKey& key) {
+  auto it = index_.find(key);
+  if (it == index_.end()) return;
+  const BlockIndex i = it->second;
+  index_.erase(it);
+  auto sit = super_.find(superKeyOf(key));
+  if (sit != super_.end()) {
+    auto& v = sit->second;
+    v.erase(std::remove(v.begin(), v.end(), i), v.end());
+    if (v.empty()) super_.erase(sit);
+  }
+  meta_[i].live = false;
+  free_.push_back(i);
+  // Bounds stay conservative after erasures; recompute them when the map empties.
+  if (index_.empty()) lo_ = hi_ = BlockKey();
+}
+
+void BlockMap::clear() {
+  index_.clear();
+  super_.clear();
+  free_.clear();
+  for (BlockIndex i = static_cast<BlockIndex>(meta_.size()); i-- > 0;) {
+    meta_[i].live = false;
+    free_.push_back(i);
+  }
+  lo_ = hi_ = BlockKey();
+}
+
+void BlockMap::forEachInBox(const BlockKey& lo, const BlockKey& hi,
+                            const std::function<void(BlockIndex)>& fn) const {
+  if (index_.empty() || lo.x > hi.x || lo.y > hi.y || lo.z > hi.z) return;
+  const BlockKey slo = superKeyOf(lo), shi = superKeyOf(hi);
+  const double box_supers = (double(shi.x) - slo.x + 1) * (double(shi.y) - slo.y + 1) *
+                            (double(shi.z) - slo.z + 1);
+  auto inside = [&](const BlockKey& k) {
+    return k.x >= lo.x && k.x <= hi.x && k.y >= lo.y && k.y <= hi.y && k.z >= lo.z &&
+           k.z <= hi.z;
+  };
+  if (box_supers > static_cast<double>(super_.size())) {
+    for (const auto& [skey, list] : super_) {
+      if (skey.x < slo.x || skey.x > shi.x || skey.y < slo.y || skey.y > shi.y ||
+          skey.z < slo.z || skey.z > shi.z)
+        continue;
+      for (BlockIndex i : list)
+        if (inside(meta_[i].key)) fn(i);
+    }
+    return;
+  }
+  for (int32_t z = slo.z; z <= shi.z; ++z)
+    for (int32_t y = slo.y; y <= shi.y; ++y)
+      for (int32_t x = slo.x; x <= shi.x; ++x) {
+        auto it = super_.find(BlockKey{x, y, z});
+        if (it == super_.end()) continue;
+        for (BlockIndex i : it->second)
+          if (inside(meta_[i].key)) fn(i);
+      }
+}
+
+void BlockMap::forEach(const std::function<void(BlockIndex)>& fn) const {
+  for (const auto& kv : index_) fn(kv.second);
+}
+
+bool BlockMap::blockBounds(BlockKey* lo, BlockKey* hi) const {
+  if (index_.empty()) return false;
+  *lo = lo_;
+  *hi = hi_;
+  return true;
+}
+
+KeyBounds BlockMap::observedBounds() const {
+  KeyBounds b;
+  for (const auto& [key, i] : index_) {
+    const Block& blk = block(i);
+    for (int c = 0; c < kCellsPerBlock; ++c) {
+      if (!blk.cells[c].observed()) continue;
+      const VoxelKey v = voxelKeyOf(key, c);
+      if (b.empty) {
+        b.min = b.max = v;
+        b.empty = false;
+        continue;
+      }
+      b.min = {std::min(b.min.x, v.x), std::min(b.min.y, v.y), std::min(b.min.z, v.z)};
+      b.max = {std::max(b.max.x, v.x), std::max(b.max.y, v.y), std::max(b.max.z, v.z)};
+    }
+  }
+  return b;
+}
+
+size_t BlockMap::hostBytes() const {
+  // Cells in the arena, per-block metadata, and the hash index (node + bucket per entry).
+  const size_t index_entry = sizeof(BlockKey) + sizeof(BlockIndex) + 2 * sizeof(void*);
+  return chunks_.size() * kBlocksPerChunk * sizeof(Block) + meta_.capacity() * sizeof(BlockMeta) +
+         index_.size() * index_entry + index_.bucket_count() * sizeof(void*) +
+         super_.size() * (sizeof(BlockKey) + 3 * sizeof(void*) + 2 * sizeof(void*));
+}
+
+}  // namespace fragg

@@ -1,0 +1,134 @@
+#include "fragg_map/internal/cpu_integrator.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "fragg_map/raycast.h"
+
+namespace fragg {
+
+namespace {
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// Marks the cells of one ray in the scratch, remembering the current block between cells.
+struct MarkCells {
+  ScanScratch* scratch = nullptr;
+  ScratchBlock* current = nullptr;
+  BlockKey current_key;
+  uint64_t visits = 0;
+
+  void operator()(const VoxelKey& v, bool hit) {
+    ++visits;
+    const BlockKey b = blockKeyOf(v);
+    if (!current || b != current_key) {
+      current = &scratch->blockFor(b);
+      current_key = b;
+    }
+    uint8_t* flag = &current->flags[cellIndexOf(v)];
+    const uint8_t bit = hit ? kFlagHit : kFlagFree;
+    if ((__atomic_load_n(flag, __ATOMIC_RELAXED) & bit) == 0)
+      __atomic_fetch_or(flag, bit, __ATOMIC_RELAXED);
+  }
+};
+
+/// Bounding box, in blocks, of every cell the scan's rays can touch.
+void scanBlockBounds(const PreparedScan& scan, BlockKey* lo, BlockKey* hi) {
+  float mn[3], mx[3];
+  for (int a = 0; a < 3; ++a) mn[a] = mx[a] = scan.start_v[a];
+  for (const RayEnd& r : scan.rays)
+    for (int a = 0; a < 3; ++a) {
+      mn[a] = std::min(mn[a], r.end_v[a]);
+      mx[a] = std::max(mx[a], r.end_v[a]);
+    }
+  const int32_t ref[3] = {scan.ref.x, scan.ref.y, scan.ref.z};
+  int32_t l[3], h[3];
+  for (int a = 0; a < 3; ++a) {
+    l[a] = (ref[a] + floorToInt(mn[a]) - 1) >> kBlockBits;
+    h[a] = (ref[a] + floorToInt(mx[a]) + 1) >> kBlockBits;
+  }
+  *lo = {l[0], l[1], l[2]};
+  *hi = {h[0], h[1], h[2]};
+}
+}  // namespace
+
+void CpuIntegrator::integrate(const PreparedScan& scan, const OccupancyModel& model,
+                              RayCast raycast, uint64_t revision, BlockMap& blocks,
+                              InsertStats& stats) {
+  const int threads = threads_ > 0 ? threads_ : omp_get_max_threads();
+  auto t0 = std::chrono::steady_clock::now();
+  BlockKey lo, hi;
+  scanBlockBounds(scan, &lo, &hi);
+  scratch_.begin(lo, hi);
+  struct ScratchGuard {  // the scratch must be clean for the next scan, even after a throw
+    ScanScratch& s;
+    ~ScratchGuard() { s.end(); }
+  } guard{scratch_};
+
+  uint64_t visits = 0;
+  const long n = static_cast<long>(scan.rays.size());
+#pragma omp parallel num_threads(threads) reduction(+ : visits)
+  {
+    MarkCells mark;
+    mark.scratch = &scratch_;
+#pragma omp for schedule(dynamic, 512)
+    for (long i = 0; i < n; ++i) {
+      const RayVox ray = scan.ray(static_cast<size_t>(i));
+      mark.current = nullptr;
+      if (raycast == RayCast::kBresenham)
+        traverseBresenham(ray, mark);
+      else
+        traverseDda(ray, mark);
+    }
+    visits += mark.visits;
+  }
+  stats.voxel_visits += visits;
+  stats.seconds_raycast += secondsSince(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  std::vector<ScratchBlock*> touched;
+  scratch_.forEachTouched([&](ScratchBlock& b) { touched.push_back(&b); });
+  std::vector<BlockIndex> target(touched.size(), kNoBlock);
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (long j = 0; j < static_cast<long>(touched.size()); ++j)
+    target[j] = blocks.find(touched[j]->key);
+  uint64_t created = 0;
+  for (size_t j = 0; j < touched.size(); ++j) {
+    if (target[j] != kNoBlock) continue;
+    target[j] = blocks.findOrCreate(touched[j]->key);
+    ++created;
+  }
+  uint64_t updated = 0;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 64) reduction(+ : updated)
+  for (long j = 0; j < static_cast<long>(touched.size()); ++j) {
+    const uint8_t* flags = touched[j]->flags;
+    Block& block = blocks.block(target[j]);
+    bool changed = false;
+    for (int w = 0; w < kCellsPerBlock; w += 8) {
+      uint64_t word;
+      std::memcpy(&word, flags + w, sizeof(word));
+      if (word == 0) continue;
+      for (int c = w; c < w + 8; ++c) {
+        const uint8_t f = flags[c];
+        if (f == 0) continue;
+        Cell& cell = block.cells[c];
+        const Cell before = cell;
+        model.apply(cell, (f & kFlagHit) != 0);
+        changed |= before.log_odds_fx != cell.log_odds_fx || before.hits != cell.hits;
+        ++updated;
+      }
+    }
+    if (changed) blocks.meta(target[j]).changed_at = revision;
+  }
+  stats.cells_updated += updated;
+  stats.blocks_touched += touched.size();
+  stats.blocks_created += created;
+  stats.seconds_apply += secondsSince(t0);
+}
+
+}  // namespace fragg

@@ -1,0 +1,161 @@
+#include "fragg_map/map.h"
+
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/internal/cpu_integrator.h"
+#include "fragg_map/internal/culler.h"
+#include "fragg_map/internal/frustum_builder.h"
+#include "fragg_map/internal/prepared_scan.h"
+
+namespace fragg {
+
+namespace {
+std::unique_ptr<Integrator> makeIntegrator(const MapParams& p) {
+  if (p.backend == Backend::kCuda)
+    throw InvalidArgument("backend cuda requested, but this build has no CUDA backend");
+  return std::make_unique<CpuIntegrator>(p.threads);
+}
+
+void validatePose(const Eigen::Isometry3d& T) {
+  if (!T.matrix().allFinite()) throw InvalidArgument("sensor pose is not finite (NaN or Inf)");
+  const Eigen::Matrix3d R = T.linear();
+  if ((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-4 ||
+      R.determinant() < 0)
+    throw InvalidArgument("sensor pose rotation is not a rotation matrix");
+}
+
+double farthestPoint(const PointCloud& cloud) {
+  double r2 = 0.0;
+  for (const auto& p : cloud.points_S)
+    if (p.allFinite()) r2 = std::max(r2, static_cast<double>(p.squaredNorm()));
+  return std::max(1.0, std::ceil(std::sqrt(r2)));
+}
+}  // namespace
+
+Map::Map(const MapParams& params)
+    : params_(params),
+      model_(OccupancyModel::fromParams(params.occupancy)),
+      culler_(std::make_unique<Culler>(params.culling)) {
+  params_.validate();
+  integrator_ = makeIntegrator(params_);
+}
+
+Map::~Map() = default;
+Map::Map(Map&&) noexcept = default;
+Map& Map::operator=(Map&&) noexcept = default;
+
+InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
+                        const SensorModel& sensor, int64_t stamp_ns) {
+  (void)stamp_ns;  // kept with the scan once the scan store exists (loop closure)
+  const auto t0 = std::chrono::steady_clock::now();
+  validatePose(T_map_sensor);
+  sensor.validate();
+  if (cloud.empty()) throw InvalidArgument("point cloud is empty");
+  const bool explicit_model = sensor.type != SensorType::kAuto;
+  SensorModel model = explicit_model ? sensor : resolveAutoSensor(sensor, cloud);
+  if (model.max_range_m <= 0.0) model.max_range_m = farthestPoint(cloud);
+
+  InsertStats stats;
+  const Frustum frustum = buildFrustum(model, T_map_sensor, params_.resolution_m);
+  auto t = std::chrono::steady_clock::now();
+  stats.culling = culler_->cull(frustum, model, T_map_sensor, params_.resolution_m, blocks_, nullptr);
+  stats.seconds_cull = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+
+  t = std::chrono::steady_clock::now();
+  PreparedScan scan;
+  prepareScan(cloud, T_map_sensor, model, frustum, explicit_model, params_, scan, stats);
+  stats.seconds_prepare =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+
+  integrator_->integrate(scan, model_, params_.raycast, revision_ + 1, blocks_, stats);
+  ++revision_;
+  ++scans_;
+  last_frustum_ = frustum;
+  stats.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return stats;
+}
+
+VoxelKey Map::keyOf(const Eigen::Vector3d& p_map) const {
+  const Eigen::Vector3d v = p_map / params_.resolution_m;
+  if (!v.allFinite() || v.cwiseAbs().maxCoeff() >= 2147483647.0)
+    throw InvalidArgument("point is outside the map's key range");
+  return {static_cast<int32_t>(std::floor(v.x())), static_cast<int32_t>(std::floor(v.y())),
+          static_cast<int32_t>(std::floor(v.z()))};
+}
+
+Eigen::Vector3d Map::centerOf(const VoxelKey& key) const {
+  return (Eigen::Vector3d(key.x, key.y, key.z) + Eigen::Vector3d::Constant(0.5)) *
+         params_.resolution_m;
+}
+
+CellState Map::query(const Eigen::Vector3d& p_map) const {
+  const Cell* c = blocks_.findCell(keyOf(p_map));
+  return c ? model_.state(*c) : CellState::kUnknown;
+}
+
+void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map) {
+  if (!min_map.allFinite() || !max_map.allFinite())
+    throw InvalidArgument("clear box corners must be finite");
+  if ((min_map.array() > max_map.array()).any())
+    throw InvalidArgument("clear box min corner must not exceed the max corner");
+  const VoxelKey lo = keyOf(min_map), hi = keyOf(max_map);
+  const BlockKey blo = blockKeyOf(lo), bhi = blockKeyOf(hi);
+  std::vector<BlockIndex> hit;
+  blocks_.forEachInBox(blo, bhi, [&](BlockIndex i) { hit.push_back(i); });
+  ++revision_;
+  for (BlockIndex i : hit) {
+    const BlockKey key = blocks_.meta(i).key;
+    Block& b = blocks_.block(i);
+    bool any_left = false;
+    for (int c = 0; c < kCellsPerBlock; ++c) {
+      const VoxelKey v = voxelKeyOf(key, c);
+      const bool inside = v.x >= lo.x && v.x <= hi.x && v.y >= lo.y && v.y <= hi.y &&
+                          v.z >= lo.z && v.z <= hi.z;
+      if (inside)
+        b.cells[c] = Cell();
+      else
+        any_left |= b.cells[c].observed();
+    }
+    if (any_left)
+      blocks_.meta(i).changed_at = revision_;
+    else
+      blocks_.erase(key);
+  }
+}
+
+void Map::reset() {
+  blocks_.clear();
+  culler_->reset();
+  ++revision_;
+  scans_ = 0;
+}
+
+const BlockMap& Map::blocks() const { return blocks_; }
+
+BlockMap& Map::mutableBlocks() {
+  ++revision_;
+  return blocks_;
+}
+
+const char* Map::backendName() const { return integrator_->name(); }
+
+size_t Map::knownVoxelCount() const {
+  size_t n = 0;
+  blocks_.forEach([&](BlockIndex i) {
+    for (const Cell& c : blocks_.block(i).cells) n += c.observed() ? 1 : 0;
+  });
+  return n;
+}
+
+MemoryStats Map::memory() const {
+  MemoryStats m;
+  m.host_block_bytes = blocks_.hostBytes();
+  m.blocks = blocks_.size();
+  m.known_voxels = knownVoxelCount();
+  return m;
+}
+
+}  // namespace fragg

@@ -1,0 +1,201 @@
+// Map::save and Map::load: the .fgm format described in map_file.h.
+#include "fragg_map/map_file.h"
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "fragg_map/atomic_file.h"
+#include "fragg_map/errors.h"
+#include "fragg_map/map.h"
+
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the .fgm writer assumes little-endian");
+
+namespace fragg {
+
+namespace {
+constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 * 6 + 4 + 4 + 8 + 8;
+constexpr size_t kBlockBytes = sizeof(Block);
+
+class Writer {
+ public:
+  template <class T>
+  void put(const T& v) {
+    const auto* p = reinterpret_cast<const uint8_t*>(&v);
+    bytes.insert(bytes.end(), p, p + sizeof(T));
+  }
+  void put(const void* data, size_t n) {
+    const auto* p = static_cast<const uint8_t*>(data);
+    bytes.insert(bytes.end(), p, p + n);
+  }
+  std::vector<uint8_t> bytes;
+};
+
+class Reader {
+ public:
+  Reader(const std::vector<uint8_t>& b, size_t end, const std::string& path)
+      : bytes_(b), end_(end), path_(path) {}
+  template <class T>
+  T get(const char* what) {
+    T v;
+    take(&v, sizeof(T), what);
+    return v;
+  }
+  void take(void* out, size_t n, const char* what) {
+    if (end_ - pos_ < n) fail(std::string("truncated while reading ") + what);
+    std::memcpy(out, bytes_.data() + pos_, n);
+    pos_ += n;
+  }
+  size_t remaining() const { return end_ - pos_; }
+  [[noreturn]] void fail(const std::string& why) const {
+    throw IoError(path_ + ": not a valid .fgm map: " + why);
+  }
+
+ private:
+  const std::vector<uint8_t>& bytes_;
+  size_t end_;
+  size_t pos_ = 0;
+  std::string path_;
+};
+
+std::vector<uint8_t> readWholeFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("cannot open " + path + ": " + std::strerror(errno));
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0) throw IoError("cannot read " + path);
+  std::vector<uint8_t> bytes(static_cast<size_t>(size));
+  in.seekg(0);
+  if (size > 0 && !in.read(reinterpret_cast<char*>(bytes.data()), size))
+    throw IoError("cannot read " + path + ": " + std::strerror(errno));
+  return bytes;
+}
+}  // namespace
+
+void Map::save(const std::string& path) const {
+  const OccupancyParams& occ = params_.occupancy;
+  std::vector<BlockIndex> order;
+  order.reserve(blocks_.size());
+  blocks_.forEach([&](BlockIndex i) { order.push_back(i); });
+  auto keyLess = [this](BlockIndex a, BlockIndex b) {
+    const BlockKey &ka = blocks_.meta(a).key, &kb = blocks_.meta(b).key;
+    return std::tie(ka.z, ka.y, ka.x) < std::tie(kb.z, kb.y, kb.x);
+  };
+  std::sort(order.begin(), order.end(), keyLess);
+
+  Writer w;
+  w.put(kMapFileMagic, sizeof(kMapFileMagic));
+  w.put(kMapFileVersion);
+  w.put(static_cast<uint32_t>(kHeaderBytes));
+  w.put(params_.resolution_m);
+  for (double v : {occ.prob_hit, occ.prob_miss, occ.clamp_min, occ.clamp_max, occ.unknown_band})
+    w.put(v);
+  w.put(static_cast<uint32_t>(kBlockSize));
+  w.put(kMapFileCompressed);
+  w.put(static_cast<uint64_t>(order.size()));
+  w.put(static_cast<uint64_t>(scans_));
+  std::vector<uint8_t> packed(compressBound(kBlockBytes));
+  for (BlockIndex i : order) {
+    const BlockKey& k = blocks_.meta(i).key;
+    w.put(k.x);
+    w.put(k.y);
+    w.put(k.z);
+    uLongf packed_size = packed.size();
+    if (compress2(packed.data(), &packed_size, reinterpret_cast<const Bytef*>(&blocks_.block(i)),
+                  kBlockBytes, 1) != Z_OK)
+      throw IoError("cannot write " + path + ": compression failed");
+    w.put(static_cast<uint32_t>(packed_size));
+    w.put(packed.data(), packed_size);
+  }
+  const uint32_t crc = static_cast<uint32_t>(crc32(0L, w.bytes.data(), w.bytes.size()));
+  w.put(crc);
+  AtomicFile file(path);
+  file.write(w.bytes.data(), w.bytes.size());
+  file.commit();
+}
+
+Map Map::load(const std::string& path) {
+  const std::vector<uint8_t> bytes = readWholeFile(path);
+  if (bytes.size() < kHeaderBytes + 4)
+    throw IoError(path + ": not a valid .fgm map: file too short (" +
+                  std::to_string(bytes.size()) + " bytes)");
+  Reader r(bytes, bytes.size() - 4, path);
+  char magic[8];
+  r.take(magic, sizeof(magic), "magic");
+  if (std::memcmp(magic, kMapFileMagic, sizeof(magic)) != 0) r.fail("wrong magic (not FRAGGMAP)");
+  const auto version = r.get<uint32_t>("version");
+  if (version != kMapFileVersion)
+    r.fail("unsupported version " + std::to_string(version) + " (this build reads version " +
+           std::to_string(kMapFileVersion) + ")");
+  uint32_t stored_crc;
+  std::memcpy(&stored_crc, bytes.data() + bytes.size() - 4, 4);
+  if (static_cast<uint32_t>(crc32(0L, bytes.data(), bytes.size() - 4)) != stored_crc)
+    r.fail("checksum mismatch (file corrupted or truncated)");
+  if (r.get<uint32_t>("header size") != kHeaderBytes) r.fail("unexpected header size");
+
+  MapParams params;
+  params.resolution_m = r.get<double>("resolution");
+  OccupancyParams& occ = params.occupancy;
+  occ.prob_hit = r.get<double>("prob_hit");
+  occ.prob_miss = r.get<double>("prob_miss");
+  occ.clamp_min = r.get<double>("clamp_min");
+  occ.clamp_max = r.get<double>("clamp_max");
+  occ.unknown_band = r.get<double>("unknown_band");
+  try {
+    params.validate();
+  } catch (const InvalidArgument& e) {
+    r.fail(std::string("bad parameters: ") + e.what());
+  }
+  if (r.get<uint32_t>("block edge") != static_cast<uint32_t>(kBlockSize))
+    r.fail("block edge is not " + std::to_string(kBlockSize));
+  const auto flags = r.get<uint32_t>("flags");
+  if (flags & ~kMapFileCompressed) r.fail("unknown flags " + std::to_string(flags));
+  const auto count = r.get<uint64_t>("block count");
+  const auto scans = r.get<uint64_t>("scan count");
+  // Every block takes at least 16 bytes: reject absurd counts before allocating.
+  if (count > r.remaining() / 16) r.fail("block count larger than the file");
+
+  Map map(params);
+  const OccupancyModel& model = map.model();
+  std::vector<uint8_t> packed;
+  for (uint64_t b = 0; b < count; ++b) {
+    BlockKey key;
+    key.x = r.get<int32_t>("block key");
+    key.y = r.get<int32_t>("block key");
+    key.z = r.get<int32_t>("block key");
+    const auto size = r.get<uint32_t>("block size");
+    bool created = false;
+    const BlockIndex i = map.blocks_.findOrCreate(key, &created);
+    if (!created) r.fail("duplicate block");
+    Block& block = map.blocks_.block(i);
+    if (flags & kMapFileCompressed) {
+      if (size > r.remaining()) r.fail("truncated block");
+      packed.resize(size);
+      r.take(packed.data(), size, "block");
+      uLongf out_size = kBlockBytes;
+      if (uncompress(reinterpret_cast<Bytef*>(&block), &out_size, packed.data(), size) != Z_OK ||
+          out_size != kBlockBytes)
+        r.fail("block does not decompress to " + std::to_string(kBlockBytes) + " bytes");
+    } else {
+      if (size != kBlockBytes) r.fail("uncompressed block of wrong size");
+      r.take(&block, kBlockBytes, "block");
+    }
+    for (const Cell& c : block.cells) {
+      if (c.hits < 0) r.fail("negative hit count");
+      if (c.observed() && (c.log_odds_fx < model.min_fx || c.log_odds_fx > model.max_fx))
+        r.fail("log-odds outside the clamping range");
+    }
+  }
+  if (r.remaining() != 0) r.fail("trailing bytes after the last block");
+  map.scans_ = static_cast<size_t>(scans);
+  map.revision_ = 1;
+  return map;
+}
+
+}  // namespace fragg

@@ -1,0 +1,48 @@
+#include "fragg_map/map_params.h"
+
+#include <cmath>
+#include <string>
+
+#include "fragg_map/errors.h"
+
+namespace fragg {
+
+const char* toString(Backend b) {
+  switch (b) {
+    case Backend::kCpu:
+      return "cpu";
+    case Backend::kCuda:
+      return "cuda";
+    case Backend::kAuto:
+      break;
+  }
+  return "auto";
+}
+
+Backend backendFromString(const std::string& s) {
+  if (s == "auto") return Backend::kAuto;
+  if (s == "cpu") return Backend::kCpu;
+  if (s == "cuda") return Backend::kCuda;
+  throw InvalidArgument("backend must be auto, cpu or cuda, got '" + s + "'");
+}
+
+const char* toString(RayCast r) { return r == RayCast::kBresenham ? "bresenham" : "dda"; }
+
+RayCast rayCastFromString(const std::string& s) {
+  if (s == "dda") return RayCast::kDda;
+  if (s == "bresenham") return RayCast::kBresenham;
+  throw InvalidArgument("raycast must be dda or bresenham, got '" + s + "'");
+}
+
+void MapParams::validate() const {
+  if (!std::isfinite(resolution_m) || resolution_m < 1e-3 || resolution_m > 100.0)
+    throw InvalidArgument("resolution must be in [0.001, 100] m, got " +
+                          std::to_string(resolution_m));
+  occupancy.validate();
+  if (culling.coherence_ttl_scans < 1 || culling.coherence_ttl_scans > 32)
+    throw InvalidArgument("culling coherence TTL must be in [1, 32] scans, got " +
+                          std::to_string(culling.coherence_ttl_scans));
+  if (threads < 0) throw InvalidArgument("threads must be >= 0 (0 = every core)");
+}
+
+}  // namespace fragg

@@ -1,0 +1,144 @@
+#include "fragg_map/internal/prepared_scan.h"
+
+#include <omp.h>
+
+#include <cmath>
+
+#include "fragg_map/errors.h"
+
+namespace fragg {
+
+namespace {
+// Keys must stay inside int32 with room for a ray's traversal.
+constexpr double kMaxAbsVoxel = 2147483647.0 - 1048576.0;
+
+bool finitePoint(const Eigen::Vector3f& p) {
+  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
+}
+
+
+/// Direction of a no-return pixel, interpolated from the nearest valid pixels in its row.
+bool interpolateDirection(const PointCloud& cloud, uint32_t row, uint32_t col,
+                          Eigen::Vector3d* dir_S) {
+  const uint32_t w = cloud.width;
+  const uint32_t reach = std::max<uint32_t>(2, w / 8);
+  const Eigen::Vector3f* line = &cloud.points_S[size_t{row} * w];
+  auto valid = [&](uint32_t c) { return finitePoint(line[c]) && line[c].squaredNorm() > 0.f; };
+  int left = -1, right = -1;
+  for (uint32_t d = 1; d <= reach && col >= d; ++d)
+    if (valid(col - d)) {
+      left = static_cast<int>(col - d);
+      break;
+    }
+  for (uint32_t d = 1; d <= reach && col + d < w; ++d)
+    if (valid(col + d)) {
+      right = static_cast<int>(col + d);
+      break;
+    }
+  if (left < 0 || right < 0) return false;
+  const Eigen::Vector3d a = line[left].cast<double>().normalized();
+  const Eigen::Vector3d b = line[right].cast<double>().normalized();
+  const double t = double(col - left) / double(right - left);
+  const Eigen::Vector3d d = (1 - t) * a + t * b;
+  if (d.norm() < 1e-6) return false;
+  *dir_S = d.normalized();
+  return true;
+}
+}  // namespace
+
+void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
+                 const SensorModel& model, const Frustum& frustum, bool explicit_model,
+                 const MapParams& params, PreparedScan& out, InsertStats& stats) {
+  const Eigen::Matrix3d R = T_map_sensor.linear();
+  const Eigen::Vector3d o = T_map_sensor.translation();
+  const double inv_res = 1.0 / params.resolution_m;
+  const Eigen::Vector3d o_v = o * inv_res;
+  if (o_v.cwiseAbs().maxCoeff() > kMaxAbsVoxel)
+    throw InvalidArgument("sensor origin is outside the map's int32 key range");
+  out.ref = {static_cast<int32_t>(std::floor(o_v.x())), static_cast<int32_t>(std::floor(o_v.y())),
+             static_cast<int32_t>(std::floor(o_v.z()))};
+  const Eigen::Vector3d ref_v(out.ref.x, out.ref.y, out.ref.z);
+  for (int a = 0; a < 3; ++a) out.start_v[a] = static_cast<float>(o_v[a] - ref_v[a]);
+
+  const double min_range = model.min_range_m;
+  const double max_range = model.max_range_m;  // > 0: the model is resolved
+  const float slack_m = static_cast<float>(1e-3 + params.resolution_m);
+  const size_t n = cloud.size();
+  stats.points_in += n;
+  out.rays.clear();
+
+  // Builds the ray towards map-frame point `end` (relative to o, metres).
+  auto makeRay = [&](const Eigen::Vector3d& rel_m, bool hit, RayEnd* ray) {
+    const Eigen::Vector3d end_v = (o + rel_m) * inv_res;
+    if (end_v.cwiseAbs().maxCoeff() > kMaxAbsVoxel) return false;
+    for (int a = 0; a < 3; ++a) ray->end_v[a] = static_cast<float>(end_v[a] - ref_v[a]);
+    ray->hit = hit ? 1u : 0u;
+    return true;
+  };
+
+  const int threads = params.threads > 0 ? params.threads : omp_get_max_threads();
+  std::vector<std::vector<RayEnd>> per_thread(threads);
+  uint64_t invalid = 0, too_close = 0, outside = 0, hits = 0, free_only = 0, no_return = 0;
+  const bool clear_no_return = params.clear_no_return_rays && cloud.organised();
+#pragma omp parallel num_threads(threads) reduction(+ : invalid, too_close, outside, hits, \
+                                                    free_only, no_return)
+  {
+    std::vector<RayEnd>& local = per_thread[omp_get_thread_num()];
+    local.reserve(n / threads + 16);
+#pragma omp for schedule(static)
+    for (long i = 0; i < static_cast<long>(n); ++i) {
+      const Eigen::Vector3f& p = cloud.points_S[i];
+      RayEnd ray;
+      if (!finitePoint(p)) {
+        Eigen::Vector3d dir_S;
+        if (clear_no_return &&
+            interpolateDirection(cloud, static_cast<uint32_t>(i / cloud.width),
+                                 static_cast<uint32_t>(i % cloud.width), &dir_S) &&
+            makeRay(R * dir_S * max_range, false, &ray)) {
+          local.push_back(ray);
+          ++no_return;
+        } else {
+          ++invalid;
+        }
+        continue;
+      }
+      const Eigen::Vector3d p_S = p.cast<double>();
+      const double range = p_S.norm();
+      if (range == 0.0) {  // (0, 0, 0): a common "no return" marker
+        ++invalid;
+        continue;
+      }
+      if (range < min_range) {
+        ++too_close;
+        continue;
+      }
+      const bool clipped = range > max_range;
+      const Eigen::Vector3d rel = R * (clipped ? Eigen::Vector3d(p_S * (max_range / range)) : p_S);
+      if (explicit_model) {
+        const float rel_f[3] = {float(rel.x()), float(rel.y()), float(rel.z())};
+        if (!frustumContains(frustum, rel_f, slack_m)) {
+          ++outside;
+          continue;
+        }
+      }
+      if (!makeRay(rel, !clipped, &ray)) {
+        ++invalid;
+        continue;
+      }
+      local.push_back(ray);
+      ++(clipped ? free_only : hits);
+    }
+  }
+  size_t total = 0;
+  for (const auto& v : per_thread) total += v.size();
+  out.rays.reserve(total);
+  for (const auto& v : per_thread) out.rays.insert(out.rays.end(), v.begin(), v.end());
+  stats.dropped_invalid += invalid;
+  stats.dropped_min_range += too_close;
+  stats.dropped_outside_frustum += outside;
+  stats.rays_hit += hits;
+  stats.rays_free_only += free_only;
+  stats.rays_no_return += no_return;
+}
+
+}  // namespace fragg

@@ -1,0 +1,201 @@
+#include "fragg_map/sensor_model.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sstream>
+
+#include "fragg_map/errors.h"
+
+namespace fragg {
+
+namespace {
+constexpr double kDeg = M_PI / 180.0;
+
+bool validPoint(const Eigen::Vector3f& p) {
+  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()) &&
+         p.squaredNorm() > 0.f;
+}
+
+/// Rounds an angle up to whole degrees so that similar clouds resolve to the same model (and
+/// culling can reuse rejections across scans).
+double ceilDeg(double rad) { return std::ceil(rad / kDeg - 1e-9) * kDeg; }
+double floorDeg(double rad) { return std::floor(rad / kDeg + 1e-9) * kDeg; }
+}  // namespace
+
+const char* toString(SensorType t) {
+  switch (t) {
+    case SensorType::kSpinningLidar:
+      return "lidar";
+    case SensorType::kPinhole:
+      return "pinhole";
+    case SensorType::kAuto:
+      break;
+  }
+  return "auto";
+}
+
+SensorType sensorTypeFromString(const std::string& s) {
+  if (s == "auto") return SensorType::kAuto;
+  if (s == "lidar" || s == "spinning_lidar") return SensorType::kSpinningLidar;
+  if (s == "pinhole" || s == "depth") return SensorType::kPinhole;
+  throw InvalidArgument("sensor must be auto, lidar or pinhole, got '" + s + "'");
+}
+
+SensorModel SensorModel::autoFromCloud(double min_range_m, double max_range_m) {
+  SensorModel m;
+  m.type = SensorType::kAuto;
+  m.min_range_m = min_range_m;
+  m.max_range_m = max_range_m;
+  return m;
+}
+
+SensorModel SensorModel::pinhole(double hfov_rad, double vfov_rad, double min_range_m,
+                                 double max_range_m, OpticalAxis axis) {
+  SensorModel m;
+  m.type = SensorType::kPinhole;
+  m.hfov_rad = hfov_rad;
+  m.vfov_rad = vfov_rad;
+  m.min_range_m = min_range_m;
+  m.max_range_m = max_range_m;
+  m.optical_axis = axis;
+  if (axis == OpticalAxis::kXForward) {
+    m.forward_S = Eigen::Vector3d::UnitX();
+    m.right_S = -Eigen::Vector3d::UnitY();
+  }
+  return m;
+}
+
+SensorModel SensorModel::spinningLidar(double elevation_min_rad, double elevation_max_rad,
+                                       double min_range_m, double max_range_m) {
+  SensorModel m;
+  m.type = SensorType::kSpinningLidar;
+  m.elevation_min_rad = elevation_min_rad;
+  m.elevation_max_rad = elevation_max_rad;
+  m.min_range_m = min_range_m;
+  m.max_range_m = max_range_m;
+  return m;
+}
+
+void SensorModel::validate() const {
+  if (!std::isfinite(min_range_m) || min_range_m < 0.0)
+    throw InvalidArgument("min range must be >= 0 m, got " + std::to_string(min_range_m));
+  if (!std::isfinite(max_range_m))
+    throw InvalidArgument("max range must be finite (or <= 0 for no limit)");
+  if (max_range_m > 0.0 && max_range_m <= min_range_m)
+    throw InvalidArgument("max range must exceed min range");
+  if (type == SensorType::kPinhole) {
+    if (!(hfov_rad > 0.0 && hfov_rad < M_PI) || !(vfov_rad > 0.0 && vfov_rad < M_PI))
+      throw InvalidArgument("pinhole hfov and vfov must be in (0, 180) degrees");
+    if (std::fabs(forward_S.norm() - 1.0) > 1e-6 || std::fabs(right_S.norm() - 1.0) > 1e-6 ||
+        std::fabs(forward_S.dot(right_S)) > 1e-6)
+      throw InvalidArgument("pinhole axes must be orthonormal");
+  }
+  if (type == SensorType::kSpinningLidar) {
+    if (!std::isfinite(elevation_min_rad) || !std::isfinite(elevation_max_rad) ||
+        elevation_min_rad >= elevation_max_rad || elevation_min_rad < -M_PI / 2 - 1e-9 ||
+        elevation_max_rad > M_PI / 2 + 1e-9)
+      throw InvalidArgument("lidar elevation limits must satisfy -90 <= min < max <= 90 deg");
+  }
+}
+
+std::string SensorModel::describe() const {
+  std::ostringstream s;
+  s.precision(4);
+  s << toString(type);
+  if (type == SensorType::kPinhole)
+    s << " hfov=" << hfov_rad / kDeg << "deg vfov=" << vfov_rad / kDeg << "deg";
+  if (type == SensorType::kSpinningLidar)
+    s << " elevation=[" << elevation_min_rad / kDeg << ", " << elevation_max_rad / kDeg
+      << "]deg";
+  s << " range=[" << min_range_m << ", ";
+  if (max_range_m > 0.0)
+    s << max_range_m << "]m";
+  else
+    s << "unlimited]";
+  return s.str();
+}
+
+SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud) {
+  SensorModel out = model;
+  double max_dist = 0.0;
+  Eigen::Vector3d mean_dir = Eigen::Vector3d::Zero();
+  std::array<bool, 36> azimuth_bins{};
+  size_t valid = 0;
+  double el_min = M_PI / 2, el_max = -M_PI / 2;
+  for (const auto& p : cloud.points_S) {
+    if (!validPoint(p)) continue;
+    const Eigen::Vector3d d = p.cast<double>();
+    const double r = d.norm();
+    max_dist = std::max(max_dist, r);
+    mean_dir += d / r;
+    const double az = std::atan2(d.y(), d.x());
+    azimuth_bins[std::min(35, static_cast<int>((az + M_PI) / (2 * M_PI) * 36))] = true;
+    const double el = std::atan2(d.z(), std::hypot(d.x(), d.y()));
+    el_min = std::min(el_min, el);
+    el_max = std::max(el_max, el);
+    ++valid;
+  }
+  if (out.max_range_m <= 0.0) out.max_range_m = std::max(1.0, std::ceil(max_dist));
+  if (valid == 0) {  // nothing to see: a lidar model keeps culling well defined
+    out.type = SensorType::kSpinningLidar;
+    out.elevation_min_rad = -M_PI / 2;
+    out.elevation_max_rad = M_PI / 2;
+    return out;
+  }
+  const int bins = static_cast<int>(std::count(azimuth_bins.begin(), azimuth_bins.end(), true));
+  Eigen::Vector3d axis = mean_dir / static_cast<double>(valid);
+  const bool surrounds = bins >= 24 || axis.norm() < 0.3;
+  if (!surrounds) {
+    axis.normalize();
+    // Snap to a sensor axis when close, so camera clouds keep the same frustum scan to scan.
+    for (int a = 0; a < 3; ++a) {
+      for (double sign : {1.0, -1.0}) {
+        Eigen::Vector3d e = Eigen::Vector3d::Zero();
+        e[a] = sign;
+        if (axis.dot(e) > std::cos(3 * kDeg)) axis = e;
+      }
+    }
+    const Eigen::Vector3d hint = std::fabs(axis.z()) < 0.9 ? Eigen::Vector3d(0, 0, 1)
+                                                           : Eigen::Vector3d(0, -1, 0);
+    const Eigen::Vector3d right = hint.cross(axis).normalized();
+    const Eigen::Vector3d vertical = axis.cross(right);
+    double half_h = 0.0, half_v = 0.0;
+    bool fits = true;
+    for (const auto& p : cloud.points_S) {
+      if (!validPoint(p)) continue;
+      const Eigen::Vector3d d = p.cast<double>();
+      const double z = d.dot(axis);
+      if (z <= 0.0) {
+        fits = false;
+        break;
+      }
+      half_h = std::max(half_h, std::atan2(std::fabs(d.dot(right)), z));
+      half_v = std::max(half_v, std::atan2(std::fabs(d.dot(vertical)), z));
+    }
+    // One degree of slack, rounded up to whole degrees; wider than 170 degrees: use a lidar.
+    const double hfov = ceilDeg(2 * half_h + 2 * kDeg), vfov = ceilDeg(2 * half_v + 2 * kDeg);
+    if (fits && hfov < 170 * kDeg && vfov < 170 * kDeg) {
+      out.type = SensorType::kPinhole;
+      out.hfov_rad = hfov;
+      out.vfov_rad = vfov;
+      out.forward_S = axis;
+      out.right_S = right;
+      return out;
+    }
+  }
+  out.type = SensorType::kSpinningLidar;
+  out.elevation_min_rad = std::max(-M_PI / 2, floorDeg(el_min - kDeg));
+  out.elevation_max_rad = std::min(M_PI / 2, ceilDeg(el_max + kDeg));
+  return out;
+}
+
+double frustumVoxelEstimate(double fov_rad, double depth_m, double near_m, double resolution_m) {
+  const double t = std::tan(fov_rad / 2.0);
+  const double s1 = M_PI / 4.0 * (t * near_m) * (t * near_m);
+  const double s2 = M_PI / 4.0 * (t * (near_m + depth_m)) * (t * (near_m + depth_m));
+  const double volume = depth_m / 3.0 * (s1 + s2 + std::sqrt(s1 * s2));
+  return volume / (resolution_m * resolution_m * resolution_m);
+}
+
+}  // namespace fragg

@@ -1,0 +1,202 @@
+// fragg_map build INPUT -o MAP.fgm: integrates every scan of a dataset into a map.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/commands.h"
+#include "cli/progress.h"
+#include "fragg_map/atomic_file.h"
+#include "fragg_map/errors.h"
+#include "fragg_map/io/dataset.h"
+#include "fragg_map/map.h"
+#ifdef FRAGG_HAVE_ROSBAG
+#include "fragg_map/io/rosbag_source.h"
+#endif
+
+namespace fragg::cli {
+
+namespace {
+struct BuildOptions {
+  std::string input, output;
+  double resolution_m = MapParams().resolution_m;
+  double max_range_m = -1.0, min_range_m = 0.0;
+  std::string sensor = "auto", backend = "auto", raycast = "dda";
+  double hfov_deg = 0.0, vfov_deg = 0.0;
+  double elevation_min_deg = -90.0, elevation_max_deg = 90.0;
+  std::string optical_axis = "z";
+  std::string topic, frame = "map";
+  OccupancyParams occupancy;
+  bool clear_no_return = false;
+  int threads = 0;
+  bool json = false;
+};
+
+constexpr double kDeg = M_PI / 180.0;
+
+SensorModel sensorFrom(const BuildOptions& o) {
+  switch (sensorTypeFromString(o.sensor)) {
+    case SensorType::kPinhole:
+      if (o.hfov_deg <= 0 || o.vfov_deg <= 0)
+        throw InvalidArgument("--sensor pinhole needs --hfov and --vfov (degrees)");
+      if (o.optical_axis != "z" && o.optical_axis != "x")
+        throw InvalidArgument("--optical-axis must be z (camera optical frame) or x (body frame)");
+      return SensorModel::pinhole(o.hfov_deg * kDeg, o.vfov_deg * kDeg, o.min_range_m,
+                                  o.max_range_m,
+                                  o.optical_axis == "x" ? OpticalAxis::kXForward
+                                                        : OpticalAxis::kZForward);
+    case SensorType::kSpinningLidar:
+      return SensorModel::spinningLidar(o.elevation_min_deg * kDeg, o.elevation_max_deg * kDeg,
+                                        o.min_range_m, o.max_range_m);
+    case SensorType::kAuto:
+      break;
+  }
+  return SensorModel::autoFromCloud(o.min_range_m, o.max_range_m);
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t i = static_cast<size_t>(std::ceil(q * v.size())) - (q > 0 ? 1 : 0);
+  return v[std::min(i, v.size() - 1)];
+}
+
+void runBuild(const BuildOptions& o) {
+  MapParams params;
+  params.resolution_m = o.resolution_m;
+  params.occupancy = o.occupancy;
+  params.backend = backendFromString(o.backend);
+  params.raycast = rayCastFromString(o.raycast);
+  params.clear_no_return_rays = o.clear_no_return;
+  params.threads = o.threads;
+  params.validate();
+  const SensorModel sensor = sensorFrom(o);
+  sensor.validate();
+  if (o.output.size() < 5 || o.output.substr(o.output.size() - 4) != ".fgm")
+    throw InvalidArgument("output must be a .fgm file, got '" + o.output + "'");
+  { AtomicFile probe(o.output); }  // fail now, not after the build, if it cannot be written
+
+#ifdef FRAGG_HAVE_ROSBAG
+  registerRosbagReader();
+#endif
+  DatasetOptions dataset_options;
+  dataset_options.topic = o.topic;
+  dataset_options.frame = o.frame;
+  auto source = openDataset(o.input, dataset_options);
+  Map map(params);
+
+  Progress progress(source->size());
+  InsertStats total;
+  std::vector<double> ms_per_scan;
+  Scan scan;
+  const auto t0 = std::chrono::steady_clock::now();
+  while (source->next(scan)) {
+    if (scan.cloud.empty()) continue;  // an empty message carries nothing to integrate
+    const InsertStats s = map.insert(scan.cloud, scan.T_map_sensor, sensor, scan.stamp_ns);
+    total.add(s);
+    ms_per_scan.push_back(s.seconds_total * 1e3);
+    progress.update(ms_per_scan.size());
+  }
+  progress.finish();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (ms_per_scan.empty()) throw IoError(o.input + ": no scans with points found");
+  map.save(o.output);
+
+  const MemoryStats mem = map.memory();
+  const double median = percentile(ms_per_scan, 0.5), p99 = percentile(ms_per_scan, 0.99);
+  if (total.dropped_outside_frustum > 0)
+    std::fprintf(stderr,
+                 "fragg_map: warning: %llu points fell outside the %s sensor model's frustum "
+                 "and were dropped (widen --hfov/--vfov or use --sensor auto)\n",
+                 static_cast<unsigned long long>(total.dropped_outside_frustum),
+                 o.sensor.c_str());
+  if (o.json) {
+    nlohmann::json j = {
+        {"output", o.output},
+        {"input", source->describe()},
+        {"backend", map.backendName()},
+        {"resolution_m", params.resolution_m},
+        {"scans", ms_per_scan.size()},
+        {"points", total.points_in},
+        {"rays_hit", total.rays_hit},
+        {"rays_free_only", total.rays_free_only},
+        {"rays_no_return", total.rays_no_return},
+        {"dropped_invalid", total.dropped_invalid},
+        {"dropped_min_range", total.dropped_min_range},
+        {"dropped_outside_frustum", total.dropped_outside_frustum},
+        {"voxel_visits", total.voxel_visits},
+        {"seconds", seconds},
+        {"insert_seconds", total.seconds_total},
+        {"ms_per_scan", {{"median", median}, {"p99", p99},
+                         {"mean", total.seconds_total * 1e3 / ms_per_scan.size()}}},
+        {"known_voxels", mem.known_voxels},
+        {"blocks", mem.blocks},
+        {"host_bytes", mem.host_block_bytes},
+        {"culling", {{"blocks_tested", total.culling.blocks_tested},
+                     {"blocks_visible", total.culling.blocks_visible},
+                     {"tests_run", total.culling.tests_run},
+                     {"saved_by_plane_memory", total.culling.saved_by_plane_memory},
+                     {"saved_by_rotation", total.culling.saved_by_rotation},
+                     {"saved_by_translation", total.culling.saved_by_translation}}}};
+    std::printf("%s\n", j.dump().c_str());
+  } else {
+    std::printf("%s\n",
+                fmt::format("built {}: {} scans, {} points, {:.2f} s, {:.1f} ms/scan (median "
+                            "{:.1f}, p99 {:.1f}), {} known voxels, {:.1f} MiB host memory, "
+                            "backend {}",
+                            o.output, ms_per_scan.size(), total.points_in, seconds,
+                            total.seconds_total * 1e3 / ms_per_scan.size(), median, p99,
+                            mem.known_voxels, mem.host_block_bytes / 1048576.0, map.backendName())
+                    .c_str());
+  }
+}
+}  // namespace
+
+void addBuildCommand(CLI::App& app) {
+  auto o = std::make_shared<BuildOptions>();
+  CLI::App* c = app.add_subcommand("build", "Build a map from a dataset (bag, KITTI, graph, PCD "
+                                            "folder + TUM poses, depth images, point file)");
+  c->add_option("input", o->input, "Dataset to read")->required();
+  c->add_option("-o,--output", o->output, "Map file to write (.fgm)")->required();
+  c->add_option("--resolution", o->resolution_m, "Voxel edge in metres")->capture_default_str();
+  c->add_option("--max-range", o->max_range_m,
+                "Max range in metres; farther points clear free space up to it (<= 0: none)");
+  c->add_option("--min-range", o->min_range_m, "Points closer than this are dropped (m)");
+  c->add_option("--sensor", o->sensor, "Sensor model: auto | lidar | pinhole")
+      ->capture_default_str();
+  c->add_option("--hfov", o->hfov_deg, "Pinhole horizontal field of view (degrees)");
+  c->add_option("--vfov", o->vfov_deg, "Pinhole vertical field of view (degrees)");
+  c->add_option("--optical-axis", o->optical_axis,
+                "Pinhole forward axis: z (optical frame) or x (body frame)")
+      ->capture_default_str();
+  c->add_option("--elevation-min", o->elevation_min_deg, "LiDAR lowest beam (degrees)")
+      ->capture_default_str();
+  c->add_option("--elevation-max", o->elevation_max_deg, "LiDAR highest beam (degrees)")
+      ->capture_default_str();
+  c->add_option("--backend", o->backend, "auto | cpu | cuda")->capture_default_str();
+  c->add_option("--raycast", o->raycast, "dda | bresenham")->capture_default_str();
+  c->add_option("--topic", o->topic, "Bag: PointCloud2 topic (default: the only one)");
+  c->add_option("--frame", o->frame, "Bag: fixed frame of the map")->capture_default_str();
+  c->add_option("--hit", o->occupancy.prob_hit, "Hit probability")->capture_default_str();
+  c->add_option("--miss", o->occupancy.prob_miss, "Miss probability")->capture_default_str();
+  c->add_option("--clamp-min", o->occupancy.clamp_min, "Lower clamping probability")
+      ->capture_default_str();
+  c->add_option("--clamp-max", o->occupancy.clamp_max, "Upper clamping probability")
+      ->capture_default_str();
+  c->add_option("--unknown-band", o->occupancy.unknown_band,
+                "Cells with |p - 0.5| <= band are unknown")
+      ->capture_default_str();
+  c->add_flag("--clear-no-return", o->clear_no_return,
+              "Organised clouds: clear free space along rays without a return");
+  c->add_option("--threads", o->threads, "CPU threads (0 = every core)")->capture_default_str();
+  c->add_flag("--json", o->json, "Print one JSON object on stdout");
+  c->callback([o] { runBuild(*o); });
+}
+
+}  // namespace fragg::cli

@@ -1,0 +1,97 @@
+// fragg_map stats MAP: what a map holds.
+#include <sys/stat.h>
+
+#include <cstdio>
+#include <string>
+
+#include <fmt/format.h>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/commands.h"
+#include "cli/map_input.h"
+#include "fragg_map/map.h"
+
+namespace fragg::cli {
+
+namespace {
+struct StatsOptions {
+  std::string map;
+  bool json = false;
+};
+
+void runStats(const StatsOptions& o) {
+  const Map map = loadMapFile(o.map);
+  size_t counts[3] = {0, 0, 0};
+  size_t observed = 0;
+  map.blocks().forEach([&](BlockIndex i) {
+    for (const Cell& c : map.blocks().block(i).cells) {
+      if (!c.observed()) continue;
+      ++observed;
+      ++counts[static_cast<int>(map.state(c))];
+    }
+  });
+  const KeyBounds b = map.bounds();
+  const MemoryStats mem = map.memory();
+  struct stat st {};
+  const long long file_bytes = ::stat(o.map.c_str(), &st) == 0 ? st.st_size : -1;
+  const double res = map.resolution();
+  const OccupancyParams& occ = map.params().occupancy;
+  nlohmann::json bounds = nullptr;
+  if (!b.empty) {
+    bounds = {{"min_m", {b.min.x * res, b.min.y * res, b.min.z * res}},
+              {"max_m", {(b.max.x + 1) * res, (b.max.y + 1) * res, (b.max.z + 1) * res}}};
+  }
+  if (o.json) {
+    nlohmann::json j = {{"map", o.map},
+                        {"file_bytes", file_bytes},
+                        {"resolution_m", res},
+                        {"scans", map.scanCount()},
+                        {"blocks", mem.blocks},
+                        {"known_voxels", observed},
+                        {"occupied", counts[static_cast<int>(CellState::kOccupied)]},
+                        {"free", counts[static_cast<int>(CellState::kFree)]},
+                        {"unknown_band", counts[static_cast<int>(CellState::kUnknown)]},
+                        {"bounds", bounds},
+                        {"host_bytes", mem.host_block_bytes},
+                        {"occupancy",
+                         {{"hit", occ.prob_hit},
+                          {"miss", occ.prob_miss},
+                          {"clamp_min", occ.clamp_min},
+                          {"clamp_max", occ.clamp_max},
+                          {"unknown_band", occ.unknown_band}}}};
+    std::printf("%s\n", j.dump().c_str());
+    return;
+  }
+  std::printf("%s", fmt::format("map          {}\n"
+                                "file         {} bytes\n"
+                                "resolution   {} m\n"
+                                "scans        {}\n"
+                                "blocks       {} (8^3 cells each)\n"
+                                "known voxels {} (occupied {}, free {}, in the unknown band {})\n",
+                                o.map, file_bytes, res, map.scanCount(), mem.blocks, observed,
+                                counts[2], counts[1], counts[0])
+                        .c_str());
+  if (!b.empty)
+    std::printf("%s", fmt::format("bounds       [{:.2f}, {:.2f}, {:.2f}] .. [{:.2f}, {:.2f}, "
+                                  "{:.2f}] m\n",
+                                  b.min.x * res, b.min.y * res, b.min.z * res, (b.max.x + 1) * res,
+                                  (b.max.y + 1) * res, (b.max.z + 1) * res)
+                          .c_str());
+  std::printf("%s", fmt::format("memory       {:.1f} MiB in host blocks\n"
+                                "occupancy    hit {} miss {} clamp [{}, {}] unknown band {}\n",
+                                mem.host_block_bytes / 1048576.0, occ.prob_hit, occ.prob_miss,
+                                occ.clamp_min, occ.clamp_max, occ.unknown_band)
+                        .c_str());
+}
+}  // namespace
+
+void addStatsCommand(CLI::App& app) {
+  auto o = std::make_shared<StatsOptions>();
+  CLI::App* c = app.add_subcommand("stats", "Print what a map holds (.fgm or .bt)");
+  c->add_option("map", o->map, "Map file")->required();
+  c->add_flag("--json", o->json, "Print one JSON object on stdout");
+  c->callback([o] { runStats(*o); });
+}
+
+}  // namespace fragg::cli
