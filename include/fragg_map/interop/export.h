@@ -1,10 +1,9 @@
 // Occupied voxel centres of a map, and writing them as point files (PLY, PCD).
 #pragma once
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "fragg_map/map.h"
 

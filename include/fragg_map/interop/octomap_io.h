@@ -6,11 +6,11 @@
 // anything beyond that instead of wrapping around.
 #pragma once
 
+#include <octomap/OcTree.h>
+
 #include <cstdint>
 #include <memory>
 #include <string>
-
-#include <octomap/OcTree.h>
 
 #include "fragg_map/map.h"
 

@@ -4,11 +4,10 @@
 // wide. The image covers the map's observed x/y bounds, or the crop box when one is given.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <optional>
 #include <string>
-
-#include <Eigen/Geometry>
 
 #include "fragg_map/map.h"
 
@@ -39,10 +38,10 @@ struct RenderOptions {
 struct RenderInfo {
   int width_px = 0;
   int height_px = 0;
-  int voxels_per_pixel = 1;  ///< > 1 when the image was downscaled (per axis)
-  int scale = 1;             ///< pixels per voxel edge (per group of voxels when downscaled)
-  VoxelKey min_key, max_key;  ///< inclusive voxel range drawn (x, y; z of the cells counted)
-  size_t occupied_columns = 0;  ///< pixels showing an occupied cell
+  int64_t voxels_per_pixel = 1;     ///< > 1 when the image was downscaled (per axis)
+  int scale = 1;                    ///< pixels per voxel edge (per group of voxels when downscaled)
+  VoxelKey min_key, max_key;        ///< inclusive voxel range drawn (x, y; z of the cells counted)
+  size_t occupied_columns = 0;      ///< pixels showing an occupied cell
   double z_min_m = 0, z_max_m = 0;  ///< top view: heights at the ends of the colour ramp
 };
 

@@ -1,0 +1,88 @@
+// fragg_map render MAP -o FILE.png [--view top|slice] [--z M] [--scale N]
+#include <fmt/format.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cli/commands.h"
+#include "cli/map_input.h"
+#include "fragg_map/errors.h"
+#include "fragg_map/interop/render.h"
+
+namespace fragg::cli {
+namespace {
+
+struct RenderArgs {
+  std::string input;
+  std::string output;
+  std::string view = "top";
+  std::vector<double> z;  // zero or one value
+  int scale = 1;
+  std::vector<double> crop;  // zero or six values
+  int max_size = RenderOptions().max_side_px;
+  bool no_downscale = false;
+};
+
+RenderOptions optionsOf(const RenderArgs& args) {
+  RenderOptions options;
+  options.scale = args.scale;
+  options.max_side_px = args.max_size;
+  options.auto_downscale = !args.no_downscale;
+  if (!args.crop.empty()) {
+    options.crop = Eigen::AlignedBox3d(Eigen::Vector3d(args.crop[0], args.crop[1], args.crop[2]),
+                                       Eigen::Vector3d(args.crop[3], args.crop[4], args.crop[5]));
+  }
+  return options;
+}
+
+void runRender(const RenderArgs& args) {
+  if (extensionOf(args.output) != "png")
+    throw InvalidArgument(
+        fmt::format("render: the output must be a .png file, got '{}'", args.output));
+  const bool slice = args.view == "slice";
+  if (slice && args.z.empty()) throw InvalidArgument("render: --view slice needs --z METRES");
+  if (!slice && !args.z.empty()) throw InvalidArgument("render: --z applies to --view slice only");
+  const RenderOptions options = optionsOf(args);
+  checkOutputDirectory(args.output);
+  const fragg::Map map = loadMapFile(args.input);
+  const RenderInfo info = slice ? renderSlice(map, args.z[0], args.output, options)
+                                : renderTopDown(map, args.output, options);
+  std::string detail = fmt::format("{} px per voxel", info.scale);
+  if (info.voxels_per_pixel > 1)
+    detail = fmt::format("downscaled: {} x {} voxels per pixel", info.voxels_per_pixel,
+                         info.voxels_per_pixel);
+  if (slice) {
+    fmt::print("rendered the slice at z = {:.3f} m to {}: {} x {} px ({})\n", info.z_min_m,
+               args.output, info.width_px, info.height_px, detail);
+  } else {
+    fmt::print("rendered the top view to {}: {} x {} px ({}), heights {:.2f} .. {:.2f} m\n",
+               args.output, info.width_px, info.height_px, detail, info.z_min_m, info.z_max_m);
+  }
+}
+
+}  // namespace
+
+void addRenderCommand(CLI::App& app) {
+  auto args = std::make_shared<RenderArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "render", "Render a map to PNG: top-down height image or a horizontal slice");
+  cmd->add_option("map", args->input, "Map file (.fgm, or OctoMap .bt / .ot)")->required();
+  cmd->add_option("-o,--output", args->output, "Output .png file (written atomically)")->required();
+  cmd->add_option("--view", args->view, "top (height image, default) | slice")
+      ->check(CLI::IsMember({"top", "slice"}));
+  cmd->add_option("--z", args->z, "Slice height in metres (with --view slice)")->expected(1);
+  cmd->add_option("--scale", args->scale, "Pixels per voxel (default 1)")->check(CLI::Range(1, 64));
+  cmd->add_option("--crop", args->crop,
+                  "Box to draw, metres: XMIN YMIN ZMIN XMAX YMAX ZMAX (default: the map)")
+      ->expected(6);
+  cmd->add_option("--max-size", args->max_size,
+                  fmt::format("Longest image side in pixels (default {})", args->max_size))
+      ->check(CLI::Range(1, 65536));
+  cmd->add_flag("--no-downscale", args->no_downscale,
+                "Fail when the image exceeds --max-size instead of drawing several voxels per "
+                "pixel");
+  cmd->callback([args] { runRender(*args); });
+}
+
+}  // namespace fragg::cli
