@@ -66,7 +66,7 @@ FRAGG_HD bool cullBlock(const Frustum& f, const CullContext& ctx, const float c[
   const float kEps = 1e-4f;
   ++n.blocks_tested;
   const uint32_t age = ctx.scan - mem.scan;
-  if (mem.test < f.num_tests && mem.scan != 0 && age >= 1 && age < static_cast<uint32_t>(ctx.ttl) &&
+  if (mem.test < f.num_tests && mem.test < kMaxFrustumTests && mem.scan != 0 && age >= 1 && age < static_cast<uint32_t>(ctx.ttl) &&
       age < kMaxCoherenceTtl) {
     const PastPose& past = ctx.past[age];
     if (past.valid) {
@@ -89,7 +89,7 @@ FRAGG_HD bool cullBlock(const Frustum& f, const CullContext& ctx, const float c[
     }
   }
   int first = -1;
-  if (ctx.plane_memory && mem.test < f.num_tests) {
+  if (ctx.plane_memory && mem.test < f.num_tests && mem.test < kMaxFrustumTests) {
     first = mem.test;
     ++n.tests_run;
     const float m = frustumTestMargin(f, first, c, h);

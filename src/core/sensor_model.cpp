@@ -5,6 +5,8 @@
 #include <cmath>
 #include <sstream>
 
+#include <Eigen/Geometry>
+
 #include "fragg_map/errors.h"
 
 namespace fragg {

@@ -1,1 +1,10 @@
 # Test suites of src/core.
+fragg_add_test(fragg_core_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/key_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/occupancy_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/raycast_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/insert_semantics_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/frustum_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/map_file_test.cpp
+  LIBS fragg_map_core ZLIB::ZLIB
+  LABELS core)

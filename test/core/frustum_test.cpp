@@ -1,0 +1,138 @@
+#include <gtest/gtest.h>
+
+#include <set>
+#include <vector>
+
+#include "fragg_map/internal/culler.h"
+#include "fragg_map/internal/frustum_builder.h"
+#include "fragg_map/map.h"
+
+namespace fragg {
+namespace {
+
+constexpr double kRes = 0.1;  // blocks of 0.8 m
+constexpr double kDeg = M_PI / 180.0;
+
+/// Is the block at `key` visible from a frustum (no memory)?
+bool visible(const Frustum& f, const BlockKey& key) {
+  const double b = kRes * kBlockSize;
+  const int32_t k[3] = {key.x, key.y, key.z};
+  float c[3];
+  for (int a = 0; a < 3; ++a) c[a] = static_cast<float>((k[a] + 0.5) * b - f.origin_m[a]);
+  CullContext ctx;
+  CullMemory mem;
+  CullCounters n;
+  return cullBlock(f, ctx, c, static_cast<float>(b / 2), mem, n);
+}
+
+Eigen::Isometry3d pose(double x, double y, double z, double yaw_rad, double pitch_rad = 0.0) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = (Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()))
+                   .toRotationMatrix();
+  T.translation() = Eigen::Vector3d(x, y, z);
+  return T;
+}
+
+TEST(FrustumTest, PinholeInsideOutsideAndStraddling) {
+  // Body-frame camera at the origin looking along +x, 60 x 40 degrees, 10 m.
+  const SensorModel cam =
+      SensorModel::pinhole(60 * kDeg, 40 * kDeg, 0.0, 10.0, OpticalAxis::kXForward);
+  const Frustum f = buildFrustum(cam, pose(0.0, 0.0, 0.0, 0.0), kRes);
+  EXPECT_TRUE(visible(f, {5, 0, 0}));     // straight ahead at 4.4 m
+  EXPECT_FALSE(visible(f, {-3, 0, 0}));   // behind
+  EXPECT_FALSE(visible(f, {2, 8, 0}));    // far to the left (70 degrees)
+  EXPECT_FALSE(visible(f, {20, 0, 0}));   // beyond 10 m
+  // Straddles the left plane: centre just outside 30 degrees, box reaches inside.
+  const double half = 0.4, cx = 4.4, cy = std::tan(30 * kDeg) * cx + 0.3;
+  EXPECT_TRUE(visible(f, {static_cast<int32_t>(std::floor(cx / 0.8)),
+                          static_cast<int32_t>(std::floor(cy / 0.8)), 0}));
+  (void)half;
+  // Block containing the sensor: visible.
+  EXPECT_TRUE(visible(f, {0, 0, 0}));
+  // Frustum AABB holds the pyramid: 10 m ahead, +-tan(30) * 10 m sideways.
+  EXPECT_EQ(f.aabb_max.x, static_cast<int32_t>(std::floor(10.0 / 0.8)));
+  EXPECT_EQ(f.aabb_min.x, 0);  // nothing behind the camera
+  EXPECT_EQ(f.aabb_max.y, static_cast<int32_t>(std::floor(std::tan(30 * kDeg) * 10.0 / 0.8)));
+}
+
+TEST(FrustumTest, LidarShellRejectsAboveBelowAndBeyond) {
+  const SensorModel lidar = SensorModel::spinningLidar(-15 * kDeg, 15 * kDeg, 0.0, 20.0);
+  const Frustum f = buildFrustum(lidar, pose(0.0, 0.0, 0.0, 0.3), kRes);
+  EXPECT_TRUE(visible(f, {10, 0, 0}));    // 8 m ahead at sensor height
+  EXPECT_TRUE(visible(f, {-10, -10, 1}));  // behind: a LiDAR sees all around
+  EXPECT_FALSE(visible(f, {2, 0, 10}));   // straight above
+  EXPECT_FALSE(visible(f, {2, 0, -10}));  // straight below
+  EXPECT_FALSE(visible(f, {40, 0, 0}));   // beyond 20 m
+  // Bounding box: height limited by the elevation limits.
+  EXPECT_LE(f.aabb_max.z, static_cast<int32_t>(std::floor(20.0 * std::sin(15 * kDeg) / 0.8)) + 1);
+}
+
+/// Fills a grid of blocks around the origin.
+void fillBlocks(BlockMap& blocks, int r) {
+  for (int x = -r; x <= r; ++x)
+    for (int y = -r; y <= r; ++y)
+      for (int z = -3; z <= 3; ++z) blocks.findOrCreate({x, y, z});
+}
+
+std::set<std::tuple<int, int, int>> keysOf(const BlockMap& blocks,
+                                           const std::vector<BlockIndex>& v) {
+  std::set<std::tuple<int, int, int>> s;
+  for (BlockIndex i : v) {
+    const BlockKey& k = blocks.meta(i).key;
+    s.insert({k.x, k.y, k.z});
+  }
+  return s;
+}
+
+void expectSameVisibleSets(const SensorModel& model, const std::vector<Eigen::Isometry3d>& path,
+                           CullCounters* saved) {
+  CullingParams on, off;
+  off.plane_memory = off.rotation_coherence = off.translation_coherence = false;
+  Culler with(on), without(off);
+  BlockMap a, b;
+  fillBlocks(a, 25);
+  fillBlocks(b, 25);
+  for (size_t i = 0; i < path.size(); ++i) {
+    const Frustum f = buildFrustum(model, path[i], kRes);
+    std::vector<BlockIndex> va, vb;
+    const CullCounters ca = with.cull(f, model, path[i], kRes, a, &va);
+    const CullCounters cb = without.cull(f, model, path[i], kRes, b, &vb);
+    ASSERT_EQ(keysOf(a, va), keysOf(b, vb)) << "scan " << i;
+    EXPECT_EQ(ca.blocks_visible, cb.blocks_visible);
+    EXPECT_EQ(cb.saved_by_plane_memory + cb.saved_by_rotation + cb.saved_by_translation, 0u);
+    if (i > 0) {
+      EXPECT_GT(ca.blocks_visible, 0u);
+    }
+    saved->add(ca);
+  }
+}
+
+TEST(FrustumTest, CoherenceNeverChangesTheVisibleSet) {
+  const SensorModel cam =
+      SensorModel::pinhole(70 * kDeg, 50 * kDeg, 0.0, 12.0, OpticalAxis::kXForward);
+  std::vector<Eigen::Isometry3d> path;
+  for (int i = 0; i < 40; ++i)  // a camera walking forward while panning left and right
+    path.push_back(pose(-4.0 + 0.1 * i, 0.05 * i, 0.2, 0.6 * std::sin(0.15 * i), 0.05));
+  for (int i = 0; i < 10; ++i) path.push_back(pose(0.0, 2.0, 0.2, 2.0 + 0.02 * i));  // slow turn
+  CullCounters cam_counters;
+  expectSameVisibleSets(cam, path, &cam_counters);
+  EXPECT_GT(cam_counters.saved_by_plane_memory, 0u);
+  EXPECT_GT(cam_counters.saved_by_rotation, 0u);
+  EXPECT_GT(cam_counters.saved_by_translation, 0u);
+
+  const SensorModel lidar = SensorModel::spinningLidar(-20 * kDeg, 10 * kDeg, 0.0, 9.0);
+  CullCounters lidar_counters;
+  expectSameVisibleSets(lidar, path, &lidar_counters);
+  EXPECT_GT(lidar_counters.saved_by_rotation, 0u);
+}
+
+TEST(FrustumTest, VoxelEstimateFollowsThePaperFormula) {
+  // x = 0: a cone of depth D with base pi/4 (tan(fov/2) D)^2 -> V = D/3 * S2.
+  const double fov = 60 * kDeg, D = 10.0, r = 0.1;
+  const double s2 = M_PI / 4 * std::pow(std::tan(fov / 2) * D, 2);
+  EXPECT_NEAR(frustumVoxelEstimate(fov, D, 0.0, r), D / 3 * s2 / (r * r * r), 1e-6);
+}
+
+}  // namespace
+}  // namespace fragg

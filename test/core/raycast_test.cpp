@@ -1,0 +1,134 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <set>
+#include <tuple>
+#include <vector>
+
+#include "fragg_map/raycast.h"
+
+namespace fragg {
+namespace {
+
+using Cells = std::vector<VoxelKey>;
+auto tupleOf(const VoxelKey& k) { return std::make_tuple(k.x, k.y, k.z); }
+
+struct Collect {
+  Cells cells;
+  std::vector<bool> hits;
+  void operator()(const VoxelKey& k, bool hit) {
+    cells.push_back(k);
+    hits.push_back(hit);
+  }
+};
+
+/// Does the segment a->b intersect the unit cube at `cell` grown by `grow` on every side?
+bool segmentHitsCell(const float a[3], const float b[3], const VoxelKey& cell, double grow) {
+  double t0 = 0.0, t1 = 1.0;
+  const int c[3] = {cell.x, cell.y, cell.z};
+  for (int i = 0; i < 3; ++i) {
+    const double lo = c[i] - grow, hi = c[i] + 1 + grow, d = double(b[i]) - a[i];
+    if (std::fabs(d) < 1e-12) {
+      if (a[i] < lo || a[i] > hi) return false;
+      continue;
+    }
+    double ta = (lo - a[i]) / d, tb = (hi - a[i]) / d;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+TEST(RaycastTest, DdaVisitsExactlyTheCellsTheSegmentCrosses) {
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<float> u(-20.f, 20.f);
+  int checked = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    RayVox ray{VoxelKey{0, 0, 0}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, true};
+    if (trial % 4 == 0) ray.end_v[2] = ray.start_v[2];  // planar rays too
+    Collect got;
+    traverseDda(ray, got);
+    ASSERT_FALSE(got.cells.empty());
+    // Starts in the start cell, ends in the end cell, steps to a face neighbour each time.
+    EXPECT_EQ(got.cells.front(), (VoxelKey{floorToInt(ray.start_v[0]), floorToInt(ray.start_v[1]),
+                                           floorToInt(ray.start_v[2])}));
+    EXPECT_EQ(got.cells.back(), (VoxelKey{floorToInt(ray.end_v[0]), floorToInt(ray.end_v[1]),
+                                          floorToInt(ray.end_v[2])}));
+    EXPECT_TRUE(got.hits.back());
+    for (size_t i = 0; i + 1 < got.cells.size(); ++i) {
+      EXPECT_FALSE(got.hits[i]);
+      const VoxelKey &p = got.cells[i], &q = got.cells[i + 1];
+      EXPECT_EQ(std::abs(p.x - q.x) + std::abs(p.y - q.y) + std::abs(p.z - q.z), 1);
+    }
+    std::set<std::tuple<int, int, int>> visited;
+    for (const auto& k : got.cells) visited.insert(tupleOf(k));
+    EXPECT_EQ(visited.size(), got.cells.size()) << "a cell was visited twice";
+    // Brute force over the bounding box: every cell the segment clearly crosses is visited,
+    // and every visited cell is at least touched (tolerance for grazing edges and corners).
+    int lo[3], hi[3];
+    for (int i = 0; i < 3; ++i) {
+      lo[i] = floorToInt(std::min(ray.start_v[i], ray.end_v[i])) - 1;
+      hi[i] = floorToInt(std::max(ray.start_v[i], ray.end_v[i])) + 1;
+    }
+    for (int x = lo[0]; x <= hi[0]; ++x)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int z = lo[2]; z <= hi[2]; ++z) {
+          const VoxelKey k{x, y, z};
+          const bool in = visited.count(tupleOf(k)) > 0;
+          if (segmentHitsCell(ray.start_v, ray.end_v, k, -1e-3)) {
+            EXPECT_TRUE(in) << "missed a crossed cell in trial " << trial;
+          }
+          if (in) {
+            EXPECT_TRUE(segmentHitsCell(ray.start_v, ray.end_v, k, 1e-3));
+          }
+        }
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2000);
+}
+
+TEST(RaycastTest, FreeOnlyRayStopsBeforeItsEndCell) {
+  RayVox ray{VoxelKey{10, -5, 3}, {0.5f, 0.5f, 0.5f}, {4.5f, 0.5f, 0.5f}, false};
+  Collect got;
+  traverseDda(ray, got);
+  ASSERT_EQ(got.cells.size(), 4u);
+  EXPECT_EQ(got.cells.front(), (VoxelKey{10, -5, 3}));
+  EXPECT_EQ(got.cells.back(), (VoxelKey{13, -5, 3}));
+  for (bool h : got.hits) EXPECT_FALSE(h);
+}
+
+TEST(RaycastTest, SameCellRayIsJustAHit) {
+  RayVox ray{VoxelKey{0, 0, 0}, {0.1f, 0.2f, 0.3f}, {0.9f, 0.8f, 0.7f}, true};
+  Collect got;
+  traverseDda(ray, got);
+  ASSERT_EQ(got.cells.size(), 1u);
+  EXPECT_TRUE(got.hits[0]);
+}
+
+TEST(RaycastTest, BresenhamConnectsStartToEnd) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-30.f, 30.f);
+  for (int trial = 0; trial < 500; ++trial) {
+    RayVox ray{VoxelKey{-100, 200, 0}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, true};
+    Collect got;
+    traverseBresenham(ray, got);
+    ASSERT_FALSE(got.cells.empty());
+    EXPECT_EQ(got.cells.front(), (VoxelKey{-100 + floorToInt(ray.start_v[0]),
+                                           200 + floorToInt(ray.start_v[1]),
+                                           floorToInt(ray.start_v[2])}));
+    EXPECT_EQ(got.cells.back(), (VoxelKey{-100 + floorToInt(ray.end_v[0]),
+                                          200 + floorToInt(ray.end_v[1]), floorToInt(ray.end_v[2])}));
+    for (size_t i = 0; i + 1 < got.cells.size(); ++i) {
+      const VoxelKey &p = got.cells[i], &q = got.cells[i + 1];
+      EXPECT_LE(std::max({std::abs(p.x - q.x), std::abs(p.y - q.y), std::abs(p.z - q.z)}), 1);
+      EXPECT_FALSE(p == q);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace fragg
