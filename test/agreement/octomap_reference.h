@@ -1,0 +1,86 @@
+// OctoMap as the reference: the same scans through octomap::OcTree::insertPointCloud, and a
+// cell-by-cell comparison with a fragg map (OctoMap's rule: observed, occupied iff p > 0.5).
+#pragma once
+
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include <octomap/octomap.h>
+
+#include "fragg_map/io/dataset.h"
+#include "fragg_map/map.h"
+
+namespace fragg::test {
+
+struct Agreement {
+  uint64_t both = 0, both_same = 0;  ///< cells known to both maps, and of those the same state
+  uint64_t only_fragg = 0, only_octomap = 0;
+  double bothRatio() const { return both ? double(both_same) / both : 0.0; }
+  double eitherRatio() const {
+    const uint64_t either = both + only_fragg + only_octomap;
+    return either ? double(both_same) / either : 0.0;
+  }
+};
+
+inline void insertIntoOctomap(octomap::OcTree& tree, const Scan& scan, double max_range_m) {
+  octomap::Pointcloud pc;
+  pc.reserve(scan.cloud.size());
+  for (const auto& p : scan.cloud.points_S) {
+    if (!p.allFinite() || p.squaredNorm() == 0.f) continue;
+    const Eigen::Vector3d q = scan.T_map_sensor * p.cast<double>();
+    pc.push_back(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()));
+  }
+  const Eigen::Vector3d o = scan.T_map_sensor.translation();
+  tree.insertPointCloud(pc, octomap::point3d(o.x(), o.y(), o.z()), max_range_m);
+}
+
+inline octomap::OcTree octomapWithParamsOf(const MapParams& p) {
+  octomap::OcTree tree(p.resolution_m);
+  tree.setProbHit(p.occupancy.prob_hit);
+  tree.setProbMiss(p.occupancy.prob_miss);
+  tree.setClampingThresMin(p.occupancy.clamp_min);
+  tree.setClampingThresMax(p.occupancy.clamp_max);
+  tree.setOccupancyThres(0.5);
+  return tree;
+}
+
+/// Compares every cell either map knows. OctoMap keys are voxel keys offset by 2^15.
+inline Agreement compareWithOctomap(const Map& map, const octomap::OcTree& tree) {
+  struct Key3Hash {
+    size_t operator()(const VoxelKey& k) const { return VoxelKeyHash()(k); }
+  };
+  std::unordered_map<VoxelKey, bool, Key3Hash> octo;  // voxel -> occupied
+  const int depth = static_cast<int>(tree.getTreeDepth());
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const int span = 1 << (depth - static_cast<int>(it.getDepth()));
+    const octomap::OcTreeKey k = it.getIndexKey();  // smallest key of the leaf's cube
+    const bool occupied = tree.isNodeOccupied(*it);
+    for (int dx = 0; dx < span; ++dx)
+      for (int dy = 0; dy < span; ++dy)
+        for (int dz = 0; dz < span; ++dz)
+          octo[VoxelKey{int(k[0]) - 32768 + dx, int(k[1]) - 32768 + dy,
+                        int(k[2]) - 32768 + dz}] = occupied;
+  }
+  Agreement a;
+  map.blocks().forEach([&](BlockIndex i) {
+    const BlockKey key = map.blocks().meta(i).key;
+    const Block& b = map.blocks().block(i);
+    for (int c = 0; c < kCellsPerBlock; ++c) {
+      if (!b.cells[c].observed()) continue;
+      const bool occupied = b.cells[c].log_odds_fx > 0;
+      auto it = octo.find(voxelKeyOf(key, c));
+      if (it == octo.end()) {
+        ++a.only_fragg;
+        continue;
+      }
+      ++a.both;
+      a.both_same += it->second == occupied ? 1 : 0;
+      octo.erase(it);
+    }
+  });
+  a.only_octomap = octo.size();
+  return a;
+}
+
+}  // namespace fragg::test
