@@ -3,11 +3,10 @@
 // truncated data); none of them exits or crashes on a malformed file.
 #pragma once
 
-#include <string>
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <string>
+#include <vector>
 
 #include "fragg_map/point_cloud.h"
 

@@ -2,10 +2,9 @@
 // Every reader throws fragg::IoError naming the file, the line and the problem.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 namespace fragg {
 
