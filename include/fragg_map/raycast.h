@@ -24,55 +24,74 @@ struct RayVox {
 
 FRAGG_HD int floorToInt(float v) { return static_cast<int>(floorf(v)); }
 
+/// Per-axis DDA state of one ray (scalars, so compilers keep it in registers).
+struct DdaAxis {
+  int cur;         ///< absolute voxel key on this axis
+  int step;        ///< +1, -1 or 0
+  int remaining;   ///< steps left on this axis
+  float t_max;     ///< ray parameter of the next boundary (INFINITY when none is left)
+  float t_delta;   ///< ray parameter between boundaries
+
+  FRAGG_HD void init(int ref, float start_v, float end_v) {
+    const int s = floorToInt(start_v), e = floorToInt(end_v);
+    const float d = end_v - start_v;
+    cur = ref + s;
+    if (e > s) {
+      step = 1;
+      remaining = e - s;
+      t_delta = 1.f / d;
+      t_max = (static_cast<float>(s + 1) - start_v) / d;
+    } else if (e < s) {
+      step = -1;
+      remaining = s - e;
+      t_delta = -1.f / d;
+      t_max = (start_v - static_cast<float>(s)) / -d;
+    } else {
+      step = 0;
+      remaining = 0;
+      t_delta = 0.f;
+      t_max = INFINITY;
+    }
+  }
+  FRAGG_HD void advance() {
+    cur += step;
+    --remaining;
+    t_max = remaining ? t_max + t_delta : INFINITY;
+  }
+};
+
 /// Exact 3D DDA (Amanatides & Woo). Visits every cell the segment passes through, in order,
 /// 6-connected; the per-axis step counts are fixed up front, so the walk always ends in the
 /// endpoint's cell. `visit(key, is_hit)` is called once per cell.
 template <class Visit>
 FRAGG_HD void traverseDda(const RayVox& ray, Visit& visit) {
-  int cur[3], remaining[3], step[3];
-  float t_max[3], t_delta[3];
-  for (int a = 0; a < 3; ++a) {
-    const int s = floorToInt(ray.start_v[a]);
-    const int e = floorToInt(ray.end_v[a]);
-    const float d = ray.end_v[a] - ray.start_v[a];
-    cur[a] = s;
-    if (e > s) {
-      step[a] = 1;
-      remaining[a] = e - s;
-      t_delta[a] = 1.f / d;
-      t_max[a] = (static_cast<float>(s + 1) - ray.start_v[a]) / d;
-    } else if (e < s) {
-      step[a] = -1;
-      remaining[a] = s - e;
-      t_delta[a] = -1.f / d;
-      t_max[a] = (ray.start_v[a] - static_cast<float>(s)) / -d;
-    } else {
-      step[a] = 0;
-      remaining[a] = 0;
-      t_delta[a] = 0.f;
-      t_max[a] = INFINITY;
-    }
-  }
-  const VoxelKey& r = ray.ref;
-  int total = remaining[0] + remaining[1] + remaining[2];
+  DdaAxis x, y, z;
+  x.init(ray.ref.x, ray.start_v[0], ray.end_v[0]);
+  y.init(ray.ref.y, ray.start_v[1], ray.end_v[1]);
+  z.init(ray.ref.z, ray.start_v[2], ray.end_v[2]);
+  int total = x.remaining + y.remaining + z.remaining;
   while (total > 0) {
-    visit(VoxelKey{r.x + cur[0], r.y + cur[1], r.z + cur[2]}, false);
-    int a;
-    if (t_max[0] < t_max[1]) {
-      a = t_max[0] < t_max[2] ? 0 : 2;
+    visit(VoxelKey{x.cur, y.cur, z.cur}, false);
+    // Smallest t_max advances (ties as OctoMap breaks them). An exhausted axis has an
+    // infinite t_max and is never chosen; the fallbacks only guard against rounding.
+    if (x.t_max < y.t_max) {
+      if (x.t_max < z.t_max && x.remaining)
+        x.advance();
+      else if (z.remaining)
+        z.advance();
+      else
+        (x.remaining ? x : y).advance();
     } else {
-      a = t_max[1] < t_max[2] ? 1 : 2;
+      if (y.t_max < z.t_max && y.remaining)
+        y.advance();
+      else if (z.remaining)
+        z.advance();
+      else
+        (y.remaining ? y : x).advance();
     }
-    // An axis whose steps are used up never advances again (guards against rounding).
-    if (remaining[a] == 0) {
-      a = remaining[0] ? 0 : (remaining[1] ? 1 : 2);
-    }
-    cur[a] += step[a];
-    --remaining[a];
-    t_max[a] = remaining[a] ? t_max[a] + t_delta[a] : INFINITY;
     --total;
   }
-  if (ray.end_is_hit) visit(VoxelKey{r.x + cur[0], r.y + cur[1], r.z + cur[2]}, true);
+  if (ray.end_is_hit) visit(VoxelKey{x.cur, y.cur, z.cur}, true);
 }
 
 FRAGG_HD int absInt(int v) { return v < 0 ? -v : v; }

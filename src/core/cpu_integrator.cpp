@@ -30,10 +30,7 @@ struct MarkCells {
       current = &scratch->blockFor(b);
       current_key = b;
     }
-    uint8_t* flag = &current->flags[cellIndexOf(v)];
-    const uint8_t bit = hit ? kFlagHit : kFlagFree;
-    if ((__atomic_load_n(flag, __ATOMIC_RELAXED) & bit) == 0)
-      __atomic_fetch_or(flag, bit, __ATOMIC_RELAXED);
+    current->mark(cellIndexOf(v), hit);
   }
 };
 
@@ -106,19 +103,19 @@ void CpuIntegrator::integrate(const PreparedScan& scan, const OccupancyModel& mo
   uint64_t updated = 0;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 64) reduction(+ : updated)
   for (long j = 0; j < static_cast<long>(touched.size()); ++j) {
-    const uint8_t* flags = touched[j]->flags;
+    const ScratchBlock& marks = *touched[j];
     Block& block = blocks.block(target[j]);
     bool changed = false;
     for (int w = 0; w < kCellsPerBlock; w += 8) {
-      uint64_t word;
-      std::memcpy(&word, flags + w, sizeof(word));
-      if (word == 0) continue;
+      uint64_t free_word, hit_word;
+      std::memcpy(&free_word, marks.free + w, sizeof(free_word));
+      std::memcpy(&hit_word, marks.hit + w, sizeof(hit_word));
+      if ((free_word | hit_word) == 0) continue;
       for (int c = w; c < w + 8; ++c) {
-        const uint8_t f = flags[c];
-        if (f == 0) continue;
+        if ((marks.free[c] | marks.hit[c]) == 0) continue;
         Cell& cell = block.cells[c];
         const Cell before = cell;
-        model.apply(cell, (f & kFlagHit) != 0);
+        model.apply(cell, marks.hit[c] != 0);
         changed |= before.log_odds_fx != cell.log_odds_fx || before.hits != cell.hits;
         ++updated;
       }

@@ -23,8 +23,8 @@ void ScanScratch::begin(const BlockKey& lo, const BlockKey& hi) {
     throw InvalidArgument("scan spans " + std::to_string(entries) +
                           " superblocks; limit the sensor's max range or coarsen the resolution");
   if (static_cast<int64_t>(table_.size()) < entries) {
-    std::vector<std::atomic<uint32_t>> bigger(static_cast<size_t>(entries));
-    for (auto& e : bigger) e.store(0, std::memory_order_relaxed);
+    std::vector<std::atomic<ScratchNode*>> bigger(static_cast<size_t>(entries));
+    for (auto& e : bigger) e.store(nullptr, std::memory_order_relaxed);
     table_.swap(bigger);
   }
 }
@@ -34,44 +34,39 @@ ScratchBlock& ScanScratch::blockFor(const BlockKey& key) {
   const int64_t sy = (key.y >> kSuperBits) - super_lo_.y;
   const int64_t sz = (key.z >> kSuperBits) - super_lo_.z;
   const uint32_t t = static_cast<uint32_t>((sz * dim_y_ + sy) * dim_x_ + sx);
-  uint32_t node_plus_one = table_[t].load(std::memory_order_acquire);
-  if (node_plus_one == 0) {
-    const uint32_t n = nodes_.allocate();
-    nodes_[n].table_index = t;
-    uint32_t expected = 0;
-    if (table_[t].compare_exchange_strong(expected, n + 1, std::memory_order_acq_rel))
-      node_plus_one = n + 1;
-    else
-      node_plus_one = expected;  // another thread won; node n stays unused (and zero)
+  ScratchNode* node = table_[t].load(std::memory_order_acquire);
+  if (!node) {
+    ScratchNode* fresh = &nodes_[nodes_.allocate()];
+    fresh->table_index = t;
+    if (table_[t].compare_exchange_strong(node, fresh, std::memory_order_acq_rel))
+      node = fresh;  // else `node` holds the winner's; `fresh` stays unused (and zero)
   }
-  ScratchNode& node = nodes_[node_plus_one - 1];
   const int local = (key.x & kSuperMask) | ((key.y & kSuperMask) << kSuperBits) |
                     ((key.z & kSuperMask) << (2 * kSuperBits));
-  uint32_t* slot = &node.slot_plus_one[local];
-  uint32_t block_plus_one = __atomic_load_n(slot, __ATOMIC_ACQUIRE);
-  if (block_plus_one == 0) {
-    const uint32_t b = blocks_.allocate();
-    blocks_[b].key = key;
-    uint32_t expected = 0;
-    if (__atomic_compare_exchange_n(slot, &expected, b + 1, false, __ATOMIC_ACQ_REL,
+  ScratchBlock** slot = &node->blocks[local];
+  ScratchBlock* block = __atomic_load_n(slot, __ATOMIC_ACQUIRE);
+  if (!block) {
+    ScratchBlock* fresh = &blocks_[blocks_.allocate()];
+    fresh->key = key;
+    if (__atomic_compare_exchange_n(slot, &block, fresh, false, __ATOMIC_ACQ_REL,
                                     __ATOMIC_ACQUIRE)) {
-      blocks_[b].published = true;
-      block_plus_one = b + 1;
-    } else {
-      block_plus_one = expected;
+      fresh->published = true;
+      block = fresh;
     }
   }
-  return blocks_[block_plus_one - 1];
+  return *block;
 }
 
 void ScanScratch::end() {
   nodes_.reset([this](ScratchNode& n) {
-    if (n.table_index < table_.size()) table_[n.table_index].store(0, std::memory_order_relaxed);
-    std::memset(n.slot_plus_one, 0, sizeof(n.slot_plus_one));
+    if (n.table_index < table_.size())
+      table_[n.table_index].store(nullptr, std::memory_order_relaxed);
+    std::memset(n.blocks, 0, sizeof(n.blocks));
     n.table_index = 0;
   });
   blocks_.reset([](ScratchBlock& b) {
-    std::memset(b.flags, 0, sizeof(b.flags));
+    std::memset(b.free, 0, sizeof(b.free));
+    std::memset(b.hit, 0, sizeof(b.hit));
     b.published = false;
   });
 }

@@ -1,6 +1,8 @@
-// Per-scan scratch of the CPU backend: a FREE/HIT flag byte per touched cell, found through a
-// dense table over the scan's bounding box in superblocks (8^3 blocks) and a 512-entry node per
-// touched superblock. Threads mark cells concurrently (atomic OR; hit wins when applied).
+// Per-scan scratch of the CPU backend: a FREE byte and a HIT byte per touched cell, found
+// through a dense table over the scan's bounding box in superblocks (8^3 blocks) and a
+// 512-entry node per touched superblock. Threads mark cells concurrently with plain byte
+// stores (every writer stores the same 1, so no read-modify-write is needed); hit wins when
+// the marks are applied.
 #pragma once
 
 #include <algorithm>
@@ -14,9 +16,6 @@
 #include "fragg_map/key.h"
 
 namespace fragg {
-
-constexpr uint8_t kFlagFree = 1;
-constexpr uint8_t kFlagHit = 2;
 
 /// Chunked pool of zero-initialised items; allocation is lock-free except for a new chunk.
 template <class T, size_t kChunk>
@@ -60,13 +59,20 @@ class ChunkedPool {
 };
 
 struct ScratchBlock {
-  uint8_t flags[512];
+  uint8_t free[512];  ///< 1: a ray passed through the cell
+  uint8_t hit[512];   ///< 1: a ray ended in the cell
   BlockKey key;
   bool published;
+
+  /// Marks cell `c` (relaxed atomic stores: racing writers all store 1).
+  void mark(int c, bool is_hit) {
+    uint8_t* f = is_hit ? &hit[c] : &free[c];
+    if (__atomic_load_n(f, __ATOMIC_RELAXED) == 0) __atomic_store_n(f, uint8_t{1}, __ATOMIC_RELAXED);
+  }
 };
 
 struct ScratchNode {
-  uint32_t slot_plus_one[512];  ///< scratch block of each block in the superblock (0 = none)
+  ScratchBlock* blocks[512];  ///< scratch block of each block in the superblock (null = none)
   uint32_t table_index;
 };
 
@@ -91,7 +97,7 @@ class ScanScratch {
   void end();
 
  private:
-  std::vector<std::atomic<uint32_t>> table_;  // node index + 1 per superblock (0 = none)
+  std::vector<std::atomic<ScratchNode*>> table_;  // node per superblock (null = none)
   BlockKey super_lo_;
   int64_t dim_x_ = 0, dim_y_ = 0, dim_z_ = 0;
   ChunkedPool<ScratchNode, 256> nodes_;
