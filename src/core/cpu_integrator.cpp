@@ -16,18 +16,37 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/// Marks the cells of one ray in the scratch, remembering the current block between cells.
+/// Marks the cells of rays in the scratch. Remembers the current block between cells and, in
+/// a small direct-mapped cache, the blocks of recent rays (neighbouring rays share blocks).
 struct MarkCells {
+  static constexpr int kCacheSize = 256;
+  struct CacheEntry {
+    BlockKey key;
+    ScratchBlock* block = nullptr;
+  };
   ScanScratch* scratch = nullptr;
   ScratchBlock* current = nullptr;
   BlockKey current_key;
   uint64_t visits = 0;
+  CacheEntry cache[kCacheSize];
+
+  ScratchBlock* lookup(const BlockKey& b) {
+    const uint32_t h = (static_cast<uint32_t>(b.x) * 73856093u) ^
+                       (static_cast<uint32_t>(b.y) * 19349669u) ^
+                       (static_cast<uint32_t>(b.z) * 83492791u);
+    CacheEntry& e = cache[(h ^ (h >> 16)) & (kCacheSize - 1)];
+    if (!e.block || e.key != b) {
+      e.block = &scratch->blockFor(b);
+      e.key = b;
+    }
+    return e.block;
+  }
 
   void operator()(const VoxelKey& v, bool hit) {
     ++visits;
     const BlockKey b = blockKeyOf(v);
     if (!current || b != current_key) {
-      current = &scratch->blockFor(b);
+      current = lookup(b);
       current_key = b;
     }
     current->mark(cellIndexOf(v), hit);
@@ -76,7 +95,7 @@ void CpuIntegrator::integrate(const PreparedScan& scan, const OccupancyModel& mo
 #pragma omp for schedule(dynamic, 512)
     for (long i = 0; i < n; ++i) {
       const RayVox ray = scan.ray(static_cast<size_t>(i));
-      mark.current = nullptr;
+      mark.current = nullptr;  // a new ray starts anywhere
       if (raycast == RayCast::kBresenham)
         traverseBresenham(ray, mark);
       else
@@ -106,16 +125,12 @@ void CpuIntegrator::integrate(const PreparedScan& scan, const OccupancyModel& mo
     const ScratchBlock& marks = *touched[j];
     Block& block = blocks.block(target[j]);
     bool changed = false;
-    for (int w = 0; w < kCellsPerBlock; w += 8) {
-      uint64_t free_word, hit_word;
-      std::memcpy(&free_word, marks.free + w, sizeof(free_word));
-      std::memcpy(&hit_word, marks.hit + w, sizeof(hit_word));
-      if ((free_word | hit_word) == 0) continue;
-      for (int c = w; c < w + 8; ++c) {
-        if ((marks.free[c] | marks.hit[c]) == 0) continue;
-        Cell& cell = block.cells[c];
+    for (int w = 0; w < kCellsPerBlock / 64; ++w) {
+      for (uint64_t bits = marks.free[w] | marks.hit[w]; bits != 0; bits &= bits - 1) {
+        const int bit = __builtin_ctzll(bits);
+        Cell& cell = block.cells[w * 64 + bit];
         const Cell before = cell;
-        model.apply(cell, marks.hit[c] != 0);
+        model.apply(cell, (marks.hit[w] >> bit) & 1);
         changed |= before.log_odds_fx != cell.log_odds_fx || before.hits != cell.hits;
         ++updated;
       }
