@@ -12,7 +12,7 @@ namespace fragg {
 /// Log-odds are stored in fixed point: value = log_odds_fx / kLogOddsScale.
 constexpr int kLogOddsScale = 1024;
 /// log_odds_fx of a cell that was never updated (outside any clamping range).
-constexpr int16_t kUnobservedLogOdds = std::numeric_limits<int16_t>::min();
+constexpr int16_t kUnobservedLogOdds = INT16_MIN;
 
 struct Cell {
   int16_t hits = 0;                         ///< saturating count of endpoints in the cell
