@@ -45,12 +45,14 @@ inline octomap::OcTree octomapWithParamsOf(const MapParams& p) {
   return tree;
 }
 
-/// Compares every cell either map knows. OctoMap keys are voxel keys offset by 2^15.
-inline Agreement compareWithOctomap(const Map& map, const octomap::OcTree& tree) {
-  struct Key3Hash {
-    size_t operator()(const VoxelKey& k) const { return VoxelKeyHash()(k); }
-  };
-  std::unordered_map<VoxelKey, bool, Key3Hash> octo;  // voxel -> occupied
+struct VoxelKeyHasher {
+  size_t operator()(const VoxelKey& k) const { return VoxelKeyHash()(k); }
+};
+using LeafStates = std::unordered_map<VoxelKey, bool, VoxelKeyHasher>;  // voxel -> occupied
+
+/// Every voxel an OcTree knows (coarser leaves expanded), with OctoMap's own occupancy test.
+inline LeafStates leafStates(const octomap::OcTree& tree) {
+  LeafStates states;
   const int depth = static_cast<int>(tree.getTreeDepth());
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
     const int span = 1 << (depth - static_cast<int>(it.getDepth()));
@@ -59,9 +61,15 @@ inline Agreement compareWithOctomap(const Map& map, const octomap::OcTree& tree)
     for (int dx = 0; dx < span; ++dx)
       for (int dy = 0; dy < span; ++dy)
         for (int dz = 0; dz < span; ++dz)
-          octo[VoxelKey{int(k[0]) - 32768 + dx, int(k[1]) - 32768 + dy,
-                        int(k[2]) - 32768 + dz}] = occupied;
+          states[VoxelKey{int(k[0]) - 32768 + dx, int(k[1]) - 32768 + dy,
+                          int(k[2]) - 32768 + dz}] = occupied;
   }
+  return states;
+}
+
+/// Compares every cell either map knows (fragg: observed, occupied iff log-odds > 0).
+inline Agreement compareWithOctomap(const Map& map, const octomap::OcTree& tree) {
+  LeafStates octo = leafStates(tree);
   Agreement a;
   map.blocks().forEach([&](BlockIndex i) {
     const BlockKey key = map.blocks().meta(i).key;
@@ -80,6 +88,24 @@ inline Agreement compareWithOctomap(const Map& map, const octomap::OcTree& tree)
     }
   });
   a.only_octomap = octo.size();
+  return a;
+}
+
+/// The same comparison between two OcTrees (`ours` plays fragg's part).
+inline Agreement compareTrees(const octomap::OcTree& ours, const octomap::OcTree& reference) {
+  LeafStates ref = leafStates(reference);
+  Agreement a;
+  for (const auto& [key, occupied] : leafStates(ours)) {
+    auto it = ref.find(key);
+    if (it == ref.end()) {
+      ++a.only_fragg;
+      continue;
+    }
+    ++a.both;
+    a.both_same += it->second == occupied ? 1 : 0;
+    ref.erase(it);
+  }
+  a.only_octomap = ref.size();
   return a;
 }
 
