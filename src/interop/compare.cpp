@@ -40,7 +40,7 @@ double MapComparison::agreementInEither() const { return ratio(agreeing, known_i
 
 MapComparison compareMaps(const Map& a, const Map& b, const CompareOptions& options) {
   const double ra = a.resolution(), rb = b.resolution();
-  if (!(std::abs(ra - rb) <= 1e-6 * std::max(ra, rb)))
+  if (!(std::abs(ra - rb) <= 1e-5 * std::max(ra, rb)))
     throw InvalidArgument(
         fmt::format("cannot compare maps of different resolutions ({} m and {} m)", ra, rb));
   MapComparison result;

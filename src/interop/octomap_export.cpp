@@ -57,9 +57,18 @@ std::unique_ptr<octomap::OcTree> toOcTree(const Map& map) {
 
 void exportOctomap(const Map& map, const std::string& path_bt) {
   std::unique_ptr<octomap::OcTree> tree = toOcTree(map);
+  // What OcTree::writeBinary does, without liboctomap's debug lines on stderr.
+  tree->toMaxLikelihood();
+  tree->prune();
   std::ostringstream buffer(std::ios::out | std::ios::binary);
-  if (!tree->writeBinary(buffer))
-    throw IoError(fmt::format("cannot write {}: OctoMap could not serialise the tree", path_bt));
+  buffer << "# Octomap OcTree binary file\n"
+         << "# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
+         << "id " << tree->getTreeType() << "\n"
+         << "size " << tree->size() << "\n"
+         << "res " << tree->getResolution() << "\n"
+         << "data\n";
+  tree->writeBinaryData(buffer);
+  if (!buffer) throw IoError(fmt::format("cannot write {}: cannot serialise the tree", path_bt));
   tree.reset();  // the serialised copy is all that is needed from here on
   AtomicFile file(path_bt);
   file.write(buffer.str());

@@ -26,32 +26,25 @@ std::string readWholeFile(const std::string& path) {
   return bytes;
 }
 
-Map importBinary(const std::string& bytes, const internal::OctomapFileHeader& header,
-                 const std::string& path) {
-  octomap::OcTree tree(header.resolution);
-  std::istringstream in(bytes, std::ios::in | std::ios::binary);
-  if (!tree.readBinary(in))
-    throw IoError(fmt::format("{}: liboctomap could not read the binary tree", path));
-  return internal::mapFromTree(tree, path);
-}
-
-Map importFull(const std::string& bytes, const internal::OctomapFileHeader& header,
-               const std::string& path) {
-  if (header.size == 0) {  // liboctomap would read a root node from no data
-    octomap::OcTree empty(header.resolution);
-    return internal::mapFromTree(empty, path);
+/// Reads the node data after the header into a `Tree` (liboctomap's readBinaryData or
+/// readData, without its header parser and the debug lines it prints).
+template <class Tree>
+Map readTree(const std::string& bytes, const internal::OctomapFileHeader& header,
+             const std::string& path) {
+  Tree tree(header.resolution);
+  if (header.size > 0) {
+    std::istringstream in(bytes, std::ios::in | std::ios::binary);
+    in.seekg(static_cast<std::streamoff>(header.data_offset));
+    if (header.kind == internal::OctomapFileKind::kBinary) {
+      tree.readBinaryData(in);
+    } else {
+      tree.readData(in);
+    }
+    if (!in || tree.size() != header.size)
+      throw IoError(fmt::format("{}: corrupt OctoMap file: read {} nodes of {}", path, tree.size(),
+                                header.size));
   }
-  std::istringstream in(bytes, std::ios::in | std::ios::binary);
-  std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read(in));
-  if (!tree) throw IoError(fmt::format("{}: liboctomap could not read the tree", path));
-  if (auto* t = dynamic_cast<const octomap::OcTree*>(tree.get()))
-    return internal::mapFromTree(*t, path);
-  if (auto* t = dynamic_cast<const octomap::ColorOcTree*>(tree.get()))
-    return internal::mapFromTree(*t, path);
-  if (auto* t = dynamic_cast<const octomap::OcTreeStamped*>(tree.get()))
-    return internal::mapFromTree(*t, path);
-  throw IoError(fmt::format("{}: OctoMap tree type '{}' is not an occupancy tree", path,
-                            tree->getTreeType()));
+  return internal::mapFromTree(tree, path);
 }
 
 }  // namespace
@@ -62,8 +55,12 @@ Map importOctomap(const std::string& path) {
   const std::string bytes = readWholeFile(path);
   const internal::OctomapFileHeader header = internal::parseOctomapHeader(bytes, path);
   internal::checkOctomapData(bytes, header, path);
-  if (header.kind == internal::OctomapFileKind::kBinary) return importBinary(bytes, header, path);
-  return importFull(bytes, header, path);
+  // A .bt holds occupancy bits only, whatever tree type wrote it.
+  if (header.kind == internal::OctomapFileKind::kBinary || header.id == "OcTree")
+    return readTree<octomap::OcTree>(bytes, header, path);
+  if (header.id == "ColorOcTree") return readTree<octomap::ColorOcTree>(bytes, header, path);
+  if (header.id == "OcTreeStamped") return readTree<octomap::OcTreeStamped>(bytes, header, path);
+  throw IoError(fmt::format("{}: OctoMap tree type '{}' is not supported", path, header.id));
 }
 
 }  // namespace fragg

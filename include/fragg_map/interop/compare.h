@@ -39,8 +39,8 @@ struct MapComparison {
   double agreementInEither() const;
 };
 
-/// Compares `a` and `b` cell by cell. Resolutions must agree to 1e-6 (relative, the
-/// precision OctoMap files carry), else InvalidArgument.
+/// Compares `a` and `b` cell by cell. Resolutions must agree to 1e-5 (relative: OctoMap
+/// files carry 6 significant digits), else InvalidArgument.
 MapComparison compareMaps(const Map& a, const Map& b,
                           const CompareOptions& options = CompareOptions());
 

@@ -1,0 +1,77 @@
+// Hand-made maps and temporary files for the interop tests (no ray casting involved).
+#pragma once
+
+#include <dirent.h>
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "fragg_map/map.h"
+
+namespace fragg::test {
+
+inline MapParams paramsAt(double resolution_m) {
+  MapParams p;
+  p.resolution_m = resolution_m;
+  p.backend = Backend::kCpu;
+  p.threads = 1;
+  return p;
+}
+
+/// Sets one cell's fixed-point log-odds, creating its block when needed.
+inline void setCell(Map& map, const VoxelKey& k, int16_t log_odds_fx) {
+  BlockMap& blocks = map.mutableBlocks();
+  blocks.block(blocks.findOrCreate(blockKeyOf(k))).cells[cellIndexOf(k)].log_odds_fx = log_odds_fx;
+}
+
+/// log_odds_fx of a cell, or kUnobservedLogOdds when it has no block.
+inline int16_t cellFx(const Map& map, const VoxelKey& k) {
+  const Cell* c = map.findCell(k);
+  return c ? c->log_odds_fx : kUnobservedLogOdds;
+}
+
+inline CellState stateAt(const Map& map, const VoxelKey& k) {
+  const Cell* c = map.findCell(k);
+  return c ? map.state(*c) : CellState::kUnknown;
+}
+
+/// A per-test directory under FRAGG_TEST_TMP (tests may run in parallel), emptied first.
+inline std::string testDir() {
+  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const std::string dir =
+      std::string(FRAGG_TEST_TMP) + "/" + info->test_suite_name() + "." + info->name();
+  const std::string cmd = "rm -rf '" + dir + "' && mkdir -p '" + dir + "'";
+  EXPECT_EQ(std::system(cmd.c_str()), 0);
+  return dir;
+}
+
+inline bool fileExists(const std::string& path) { return std::ifstream(path).good(); }
+
+inline std::string readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+inline void writeBytes(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+/// Names in a directory (without "." and ".."), to check that nothing was left behind.
+inline std::vector<std::string> listDir(const std::string& dir) {
+  std::vector<std::string> names;
+  if (DIR* d = opendir(dir.c_str())) {
+    while (dirent* e = readdir(d)) {
+      const std::string n = e->d_name;
+      if (n != "." && n != "..") names.push_back(n);
+    }
+    closedir(d);
+  }
+  return names;
+}
+
+}  // namespace fragg::test
