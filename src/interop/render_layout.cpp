@@ -54,7 +54,14 @@ RenderLayout renderLayout(const Map& map, const RenderOptions& options) {
           "render: the image would be {} x {} px, more than the {} px allowed per side (lower "
           "the scale, crop, or allow downscaling)",
           nx * options.scale, ny * options.scale, options.max_side_px));
-    layout.vpp = std::max(voxelsPerPixel(nx, max_cells), voxelsPerPixel(ny, max_cells));
+    // Fewer pixels per voxel first; several voxels per pixel only when one pixel is too many.
+    const int64_t n = std::max(nx, ny);
+    if (n <= options.max_side_px) {
+      layout.scale = static_cast<int>(options.max_side_px / n);
+    } else {
+      layout.scale = 1;
+      layout.vpp = voxelsPerPixel(n, options.max_side_px);
+    }
   }
   layout.grid_w = static_cast<int>((nx + layout.vpp - 1) / layout.vpp);
   layout.grid_h = static_cast<int>((ny + layout.vpp - 1) / layout.vpp);

@@ -169,11 +169,20 @@ TEST(Render, LargeMapsAreDownscaledOrRefused) {
   EXPECT_EQ(img.at(0, 0), options.free_color);
   EXPECT_EQ(img.at(3, 0), heightColor(0.5));  // voxel 9: the only (so middle) height
 
-  options.auto_downscale = false;
-  EXPECT_THROW(renderTopDown(map, dir + "/refused.png", options), InvalidArgument);
+  // A smaller scale first: 3 px per voxel would be 30 px, 2 px fit in 20.
   options.max_side_px = 20;
-  options.scale = 3;  // 30 px wide
+  options.scale = 3;
+  const RenderInfo rescaled = renderSlice(map, 0.0, dir + "/rescaled.png", options);
+  EXPECT_EQ(rescaled.scale, 2);
+  EXPECT_EQ(rescaled.voxels_per_pixel, 1);
+  EXPECT_EQ(rescaled.width_px, 20);
+  EXPECT_EQ(readPng(dir + "/rescaled.png").width, 20);
+
+  options.auto_downscale = false;
   EXPECT_THROW(renderSlice(map, 0.0, dir + "/refused.png", options), InvalidArgument);
+  options.max_side_px = 4;
+  options.scale = 1;
+  EXPECT_THROW(renderTopDown(map, dir + "/refused.png", options), InvalidArgument);
   EXPECT_FALSE(test::fileExists(dir + "/refused.png"));
 }
 

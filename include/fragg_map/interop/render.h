@@ -25,9 +25,9 @@ struct RenderOptions {
   /// extent; without it the image covers the observed bounds (and all heights).
   std::optional<Eigen::AlignedBox3d> crop;
   int max_side_px = 4096;  ///< longest image side allowed
-  /// When the image would exceed max_side_px: draw several voxels per pixel (a pixel shows
-  /// the highest occupied / any occupied, else any free cell of its voxels) instead of
-  /// throwing InvalidArgument.
+  /// When the image would exceed max_side_px: lower the scale, and when one pixel per voxel
+  /// is still too many, draw several voxels per pixel (a pixel shows the highest occupied /
+  /// any occupied, else any free cell of its voxels) instead of throwing InvalidArgument.
   bool auto_downscale = true;
   Rgb free_color{200, 200, 200};    ///< free (and no occupied) cells: light grey
   Rgb unknown_color{24, 24, 24};    ///< never observed or inside the unknown band: near black

@@ -49,9 +49,11 @@ void runRender(const RenderArgs& args) {
   const RenderInfo info = slice ? renderSlice(map, args.z[0], args.output, options)
                                 : renderTopDown(map, args.output, options);
   std::string detail = fmt::format("{} px per voxel", info.scale);
+  if (info.scale < args.scale)
+    detail += fmt::format(", lowered from {} to fit --max-size {}", args.scale, args.max_size);
   if (info.voxels_per_pixel > 1)
-    detail = fmt::format("downscaled: {} x {} voxels per pixel", info.voxels_per_pixel,
-                         info.voxels_per_pixel);
+    detail = fmt::format("downscaled to fit --max-size {}: {} x {} voxels per pixel", args.max_size,
+                         info.voxels_per_pixel, info.voxels_per_pixel);
   if (slice) {
     fmt::print("rendered the slice at z = {:.3f} m to {}: {} x {} px ({})\n", info.z_min_m,
                args.output, info.width_px, info.height_px, detail);
