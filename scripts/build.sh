@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Builds fragg_map as a catkin package: installs the missing Debian packages, links the
+# repository into a catkin workspace (ws/ by default) and runs catkin_make in Release.
+# The CLI lands in <ws>/devel/lib/fragg_map/fragg_map.
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+fragg_usage() {
+  echo "usage: bash scripts/build.sh [options]"
+  fragg_usage_common
+}
+fragg_parse_common "$@"
+
+fragg_install_deps
+fragg_build_ws
+echo
+echo "build: OK in $(fragg_elapsed): $FRAGG_WS/devel/lib/fragg_map/fragg_map"

@@ -1,0 +1,84 @@
+# Shared by scripts/build.sh, test.sh and demo.sh (sourced, not run): the environment of
+# ../shared/ROS.md, option parsing and the catkin workspace build.
+# shellcheck shell=bash
+
+FRAGG_REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
+
+# Debian's python3 first (catkin needs its catkin_pkg; /usr/local's python3 lacks it).
+export PATH=/usr/local/cuda/bin:/usr/sbin:/usr/bin:/sbin:/bin
+# Loopback-only ROS networking, line-buffered ROS logs (rostests, later).
+export ROS_MASTER_URI=http://127.0.0.1:11311 ROS_IP=127.0.0.1 ROSCONSOLE_STDOUT_LINE_BUFFERED=1
+
+FRAGG_WS="${FRAGG_WS:-$FRAGG_REPO/ws}"
+FRAGG_JOBS="${FRAGG_JOBS:-2}"
+FRAGG_DEPS=1
+
+fragg_usage_common() {
+  cat <<EOF
+  --ws DIR      catkin workspace (default: ws/ under the repository root; env FRAGG_WS)
+  --jobs N      parallel compile jobs (default: 2; env FRAGG_JOBS)
+  --no-deps     do not check or install the Debian packages (scripts/install_deps.sh)
+EOF
+}
+
+# Parses the options every script takes; unknown ones are an error.
+fragg_parse_common() {
+  while [ $# -gt 0 ]; do
+    case "$1" in
+      --ws) FRAGG_WS="${2:?--ws needs a directory}"; shift 2 ;;
+      --ws=*) FRAGG_WS="${1#--ws=}"; shift ;;
+      --jobs|-j) FRAGG_JOBS="${2:?--jobs needs a number}"; shift 2 ;;
+      --jobs=*) FRAGG_JOBS="${1#--jobs=}"; shift ;;
+      --no-deps) FRAGG_DEPS=0; shift ;;
+      -h|--help) fragg_usage; exit 0 ;;
+      *) echo "$(basename "$0"): unknown argument '$1'" >&2; fragg_usage >&2; exit 2 ;;
+    esac
+  done
+  case "$FRAGG_JOBS" in
+    ''|*[!0-9]*|0) echo "$(basename "$0"): --jobs must be a positive integer" >&2; exit 2 ;;
+  esac
+  mkdir -p "$FRAGG_WS"
+  FRAGG_WS="$(cd "$FRAGG_WS" && pwd -P)"
+}
+
+fragg_step() { printf '\n==== %s ====\n' "$*"; }
+
+fragg_install_deps() {
+  if [ "$FRAGG_DEPS" -eq 1 ]; then
+    fragg_step "Debian packages"
+    bash "$FRAGG_REPO/scripts/install_deps.sh"
+  fi
+}
+
+# Links the repository into $FRAGG_WS/src/fragg_map (once) and builds the workspace in
+# Release with Debian's python3. Returns catkin_make's status.
+fragg_build_ws() {
+  fragg_step "catkin build in $FRAGG_WS (-j$FRAGG_JOBS)"
+  mkdir -p "$FRAGG_WS/src"
+  local link="$FRAGG_WS/src/fragg_map"
+  if [ -L "$link" ]; then
+    if [ "$(cd "$link" && pwd -P)" != "$FRAGG_REPO" ]; then
+      echo "$link points to $(readlink "$link"), not to $FRAGG_REPO: use another --ws" >&2
+      return 1
+    fi
+  elif [ -e "$link" ]; then
+    echo "$link exists and is not a link to $FRAGG_REPO: use another --ws" >&2
+    return 1
+  else
+    ln -s "$FRAGG_REPO" "$link"
+  fi
+  fragg_catkin_make
+}
+
+# catkin_make in $FRAGG_WS with the job count and the CMake arguments every run must repeat
+# (a --force-cmake reconfigure without them would fall back to catkin's defaults).
+fragg_catkin_make() {
+  (cd "$FRAGG_WS" && catkin_make -j"$FRAGG_JOBS" "$@" -DCMAKE_BUILD_TYPE=Release \
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3)
+}
+
+# Seconds since the script started, as "1m23s".
+fragg_elapsed() {
+  local s=$SECONDS
+  printf '%dm%02ds' $((s / 60)) $((s % 60))
+}

@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# Runs every test: installs the missing Debian packages, builds the catkin workspace (ws/ by
+# default), runs the gtests with `catkin_make run_tests`, gates on catkin_test_results
+# (run_tests itself exits 0 when tests fail) and checks the clang-format of the sources.
+# Exits non-zero when anything fails. CI runs this (.ci/run).
+# Real data is read from ../shared/data/real beside the checkout.
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+fragg_usage() {
+  echo "usage: bash scripts/test.sh [options]"
+  fragg_usage_common
+}
+fragg_parse_common "$@"
+
+build="not run" tests="not run" format="not run"
+failed=0
+
+fragg_install_deps
+
+if fragg_build_ws; then
+  build="OK"
+  fragg_step "tests (catkin_make run_tests)"
+  # Results of earlier runs would hide missing ones: start from an empty folder.
+  rm -rf "$FRAGG_WS/build/test_results"
+  # --force-cmake: a fresh workspace must be reconfigured once after its first build, or
+  # Python tests see a cached empty PYTHONPATH (../shared/ROS.md); it costs a few seconds.
+  if fragg_catkin_make --force-cmake run_tests; then
+    run_tests_rc=0
+  else
+    run_tests_rc=$?
+  fi
+  fragg_step "test results"
+  if summary="$(catkin_test_results --verbose "$FRAGG_WS/build/test_results")"; then
+    results_rc=0
+  else
+    results_rc=$?
+  fi
+  echo "$summary"
+  summary_line="$(printf '%s\n' "$summary" | grep '^Summary:' | tail -n 1 || true)"
+  if [ "$run_tests_rc" -ne 0 ]; then
+    tests="FAILED: catkin_make run_tests exited $run_tests_rc (a test did not build?) ${summary_line}"
+    failed=1
+  elif [ "$results_rc" -ne 0 ]; then
+    tests="FAILED: ${summary_line:-catkin_test_results exited $results_rc}"
+    failed=1
+  elif ! printf '%s\n' "$summary_line" | grep -Eq '^Summary: [1-9][0-9]* tests'; then
+    tests="FAILED: no test results in $FRAGG_WS/build/test_results"
+    failed=1
+  else
+    tests="OK: $summary_line"
+  fi
+else
+  build="FAILED (catkin_make)"
+  failed=1
+fi
+
+fragg_step "format (scripts/check_format.sh)"
+if bash "$FRAGG_REPO/scripts/check_format.sh"; then
+  format="OK"
+else
+  format="FAILED (files listed above)"
+  failed=1
+fi
+
+fragg_step "summary ($(fragg_elapsed))"
+echo "build : $build"
+echo "tests : $tests"
+echo "format: $format"
+if [ "$failed" -ne 0 ]; then
+  echo "test.sh: FAILED"
+  exit 1
+fi
+echo "test.sh: all passed"
