@@ -15,9 +15,7 @@ fragg_usage() {
 fragg_parse_common "$@"
 
 data="${FRAGG_DATA:-$FRAGG_REPO/../shared/data/real}"
-rgbd="$data/slambook2_ch5_rgbd"
-velodyne="$data/small_gicp_pair/target.ply"
-for input in "$rgbd/pose.txt" "$velodyne"; do
+for input in "$data/slambook2_ch5_rgbd/pose.txt" "$data/small_gicp_pair/target.ply"; do
   if [ ! -e "$input" ]; then
     echo "demo: $input not found: the real data belongs in ../shared/data/real beside the" \
       "checkout (or set FRAGG_DATA)" >&2
@@ -25,6 +23,8 @@ for input in "$rgbd/pose.txt" "$velodyne"; do
   fi
 done
 data="$(cd "$data" && pwd -P)"
+rgbd="$data/slambook2_ch5_rgbd"
+velodyne="$data/small_gicp_pair/target.ply"
 
 fragg_install_deps
 fragg_build_ws
