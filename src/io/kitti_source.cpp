@@ -1,7 +1,8 @@
 // KITTI odometry sequence folder: velodyne/NNNNNN.bin, poses.txt (camera-0 poses, 3x4
 // row-major per line; also found as ../../poses/<sequence>.txt in the official layout),
-// calib.txt (Tr: velodyne -> camera), optional times.txt. The map frame is KITTI's: the
-// camera-0 frame of the first pose. T_map_sensor = pose[i] * Tr.
+// calib.txt (Tr: velodyne -> camera), optional times.txt. The map frame is the first scan's
+// Velodyne frame (z up, as robots and renderers expect; KITTI's camera frame has y down):
+// T_map_sensor = Tr^-1 * pose[i] * Tr.
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -52,7 +53,7 @@ std::unique_ptr<ScanSource> openKittiSequence(const std::string& dir) {
                         std::to_string(poses.size()) + " lines");
     ScanEntry entry;
     entry.path = scan;
-    entry.T_map_frame = poses[index] * T_cam_velo;
+    entry.T_map_frame = T_cam_velo.inverse() * poses[index] * T_cam_velo;
     if (!times.empty()) {
       if (index >= times.size())
         throwIo(scan, "frame " + std::to_string(index) + " has no time in " + times_path);

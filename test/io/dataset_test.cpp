@@ -219,11 +219,14 @@ TEST(Dataset, KittiSequenceFromRealScans) {
     EXPECT_NE(source->describe().find("KITTI"), std::string::npos);
     const std::vector<Scan> scans = readAll(*source);
     ASSERT_EQ(scans.size(), 2u);
+    expectPose(scans[0].T_map_sensor.inverse() * scans[1].T_map_sensor,
+               readMatrix4(realData("small_gicp_pair/T_target_source.txt")), 1e-6);
     for (int i = 0; i < 2; ++i) {
       size_t valid = 0;
       for (const Eigen::Vector3f& p : k.clouds[i].points_S) valid += p.allFinite();
       ASSERT_EQ(scans[i].cloud.size(), valid);
-      expectPose(scans[i].T_map_sensor, k.T_map_velo[i], 1e-6);
+      // The reader's map frame is the Velodyne frame of KITTI's camera-0 origin (z up).
+      expectPose(scans[i].T_map_sensor, k.T_cam_velo.inverse() * k.T_map_velo[i], 1e-6);
       EXPECT_NE(scans[i].source.find(i == 0 ? "000000.bin" : "000001.bin"), std::string::npos);
     }
     EXPECT_EQ(scans[0].stamp_ns, 0);

@@ -110,6 +110,9 @@ void runBuild(const BuildOptions& o) {
 
   const MemoryStats mem = map.memory();
   const double median = percentile(ms_per_scan, 0.5), p99 = percentile(ms_per_scan, 0.99);
+  if (source->skipped() > 0)
+    std::fprintf(stderr, "fragg_map: warning: %zu scans skipped (last: %s)\n", source->skipped(),
+                 source->lastSkipReason().c_str());
   if (total.dropped_outside_frustum > 0)
     std::fprintf(stderr,
                  "fragg_map: warning: %llu points fell outside the %s sensor model's frustum "
@@ -130,6 +133,7 @@ void runBuild(const BuildOptions& o) {
         {"dropped_invalid", total.dropped_invalid},
         {"dropped_min_range", total.dropped_min_range},
         {"dropped_outside_frustum", total.dropped_outside_frustum},
+        {"scans_skipped", source->skipped()},
         {"voxel_visits", total.voxel_visits},
         {"seconds", seconds},
         {"insert_seconds", total.seconds_total},
