@@ -72,22 +72,19 @@ FRAGG_HD void traverseDda(const RayVox& ray, Visit& visit) {
   int total = x.remaining + y.remaining + z.remaining;
   while (total > 0) {
     visit(VoxelKey{x.cur, y.cur, z.cur}, false);
-    // Smallest t_max advances (ties as OctoMap breaks them). An exhausted axis has an
-    // infinite t_max and is never chosen; the fallbacks only guard against rounding.
+    // Smallest t_max advances; ties go to the later axis, as in OctoMap's computeRayKeys. An
+    // exhausted axis has an infinite t_max, and an axis with steps left a finite one, so an
+    // exhausted axis is never chosen while steps remain.
     if (x.t_max < y.t_max) {
-      if (x.t_max < z.t_max && x.remaining)
+      if (x.t_max < z.t_max)
         x.advance();
-      else if (z.remaining)
-        z.advance();
       else
-        (x.remaining ? x : y).advance();
+        z.advance();
     } else {
-      if (y.t_max < z.t_max && y.remaining)
+      if (y.t_max < z.t_max)
         y.advance();
-      else if (z.remaining)
-        z.advance();
       else
-        (y.remaining ? y : x).advance();
+        z.advance();
     }
     --total;
   }

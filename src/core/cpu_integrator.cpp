@@ -80,18 +80,23 @@ void CpuIntegrator::integrate(const PreparedScan& scan, const OccupancyModel& mo
   auto t0 = std::chrono::steady_clock::now();
   BlockKey lo, hi;
   scanBlockBounds(scan, &lo, &hi);
-  scratch_.begin(lo, hi);
+  while (scratch_.size() < static_cast<size_t>(threads))
+    scratch_.push_back(std::make_unique<ScanScratch>());
   struct ScratchGuard {  // the scratch must be clean for the next scan, even after a throw
-    ScanScratch& s;
-    ~ScratchGuard() { s.end(); }
+    std::vector<std::unique_ptr<ScanScratch>>& all;
+    ~ScratchGuard() {
+      for (auto& s : all) s->end();
+    }
   } guard{scratch_};
+  for (int t = 0; t < threads; ++t) scratch_[t]->begin(lo, hi);
 
+  // 1. Ray casting: each thread marks cells in its own scratch.
   uint64_t visits = 0;
   const long n = static_cast<long>(scan.rays.size());
 #pragma omp parallel num_threads(threads) reduction(+ : visits)
   {
     MarkCells mark;
-    mark.scratch = &scratch_;
+    mark.scratch = scratch_[omp_get_thread_num()].get();
 #pragma omp for schedule(dynamic, 512)
     for (long i = 0; i < n; ++i) {
       const RayVox ray = scan.ray(static_cast<size_t>(i));
@@ -103,26 +108,34 @@ void CpuIntegrator::integrate(const PreparedScan& scan, const OccupancyModel& mo
     }
     visits += mark.visits;
   }
+  // 2. Merge the threads' marks into the first scratch.
+  ScanScratch& merged = *scratch_[0];
+  for (int t = 1; t < threads; ++t) {
+    ScanScratch& other = *scratch_[t];
+    for (size_t j = 0; j < other.touchedCount(); ++j) {
+      const ScratchBlock& b = other.touched(j);
+      merged.blockFor(b.key).orWith(b);
+    }
+  }
   stats.voxel_visits += visits;
   stats.seconds_raycast += secondsSince(t0);
 
+  // 3. Apply: find or create the host blocks, then update the marked cells.
   t0 = std::chrono::steady_clock::now();
-  std::vector<ScratchBlock*> touched;
-  scratch_.forEachTouched([&](ScratchBlock& b) { touched.push_back(&b); });
-  std::vector<BlockIndex> target(touched.size(), kNoBlock);
+  const long touched = static_cast<long>(merged.touchedCount());
+  std::vector<BlockIndex> target(static_cast<size_t>(touched), kNoBlock);
 #pragma omp parallel for num_threads(threads) schedule(static)
-  for (long j = 0; j < static_cast<long>(touched.size()); ++j)
-    target[j] = blocks.find(touched[j]->key);
+  for (long j = 0; j < touched; ++j) target[j] = blocks.find(merged.touched(j).key);
   uint64_t created = 0;
-  for (size_t j = 0; j < touched.size(); ++j) {
+  for (long j = 0; j < touched; ++j) {
     if (target[j] != kNoBlock) continue;
-    target[j] = blocks.findOrCreate(touched[j]->key);
+    target[j] = blocks.findOrCreate(merged.touched(j).key);
     ++created;
   }
   uint64_t updated = 0;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 64) reduction(+ : updated)
-  for (long j = 0; j < static_cast<long>(touched.size()); ++j) {
-    const ScratchBlock& marks = *touched[j];
+  for (long j = 0; j < touched; ++j) {
+    const ScratchBlock& marks = merged.touched(j);
     Block& block = blocks.block(target[j]);
     bool changed = false;
     for (int w = 0; w < kCellsPerBlock / 64; ++w) {
@@ -138,7 +151,7 @@ void CpuIntegrator::integrate(const PreparedScan& scan, const OccupancyModel& mo
     if (changed) blocks.meta(target[j]).changed_at = revision;
   }
   stats.cells_updated += updated;
-  stats.blocks_touched += touched.size();
+  stats.blocks_touched += static_cast<uint64_t>(touched);
   stats.blocks_created += created;
   stats.seconds_apply += secondsSince(t0);
 }

@@ -10,7 +10,7 @@ namespace fragg {
 namespace {
 constexpr int kSuperBits = kBlockBits;  // a superblock is 8^3 blocks
 constexpr int kSuperMask = (1 << kSuperBits) - 1;
-constexpr int64_t kMaxTableEntries = int64_t{1} << 26;  // 256 MiB of table at most
+constexpr int64_t kMaxTableEntries = int64_t{1} << 26;  // 512 MiB of table at most
 }  // namespace
 
 void ScanScratch::begin(const BlockKey& lo, const BlockKey& hi) {
@@ -22,11 +22,8 @@ void ScanScratch::begin(const BlockKey& lo, const BlockKey& hi) {
   if (entries > kMaxTableEntries)
     throw InvalidArgument("scan spans " + std::to_string(entries) +
                           " superblocks; limit the sensor's max range or coarsen the resolution");
-  if (static_cast<int64_t>(table_.size()) < entries) {
-    std::vector<std::atomic<ScratchNode*>> bigger(static_cast<size_t>(entries));
-    for (auto& e : bigger) e.store(nullptr, std::memory_order_relaxed);
-    table_.swap(bigger);
-  }
+  if (static_cast<int64_t>(table_.size()) < entries)
+    table_.assign(static_cast<size_t>(entries), nullptr);
 }
 
 ScratchBlock& ScanScratch::blockFor(const BlockKey& key) {
@@ -34,41 +31,29 @@ ScratchBlock& ScanScratch::blockFor(const BlockKey& key) {
   const int64_t sy = (key.y >> kSuperBits) - super_lo_.y;
   const int64_t sz = (key.z >> kSuperBits) - super_lo_.z;
   const uint32_t t = static_cast<uint32_t>((sz * dim_y_ + sy) * dim_x_ + sx);
-  ScratchNode* node = table_[t].load(std::memory_order_acquire);
+  Node*& node = table_[t];
   if (!node) {
-    ScratchNode* fresh = &nodes_[nodes_.allocate()];
-    fresh->table_index = t;
-    if (table_[t].compare_exchange_strong(node, fresh, std::memory_order_acq_rel))
-      node = fresh;  // else `node` holds the winner's; `fresh` stays unused (and zero)
+    if (used_nodes_ == nodes_.size()) nodes_.push_back(std::make_unique<Node>());
+    node = nodes_[used_nodes_++].get();
+    std::memset(node->blocks, 0, sizeof(node->blocks));
+    node->table_index = t;
   }
   const int local = (key.x & kSuperMask) | ((key.y & kSuperMask) << kSuperBits) |
                     ((key.z & kSuperMask) << (2 * kSuperBits));
-  ScratchBlock** slot = &node->blocks[local];
-  ScratchBlock* block = __atomic_load_n(slot, __ATOMIC_ACQUIRE);
+  ScratchBlock*& block = node->blocks[local];
   if (!block) {
-    ScratchBlock* fresh = &blocks_[blocks_.allocate()];
-    fresh->key = key;
-    if (__atomic_compare_exchange_n(slot, &block, fresh, false, __ATOMIC_ACQ_REL,
-                                    __ATOMIC_ACQUIRE)) {
-      fresh->published = true;
-      block = fresh;
-    }
+    if (used_blocks_ == blocks_.size()) blocks_.push_back(std::make_unique<ScratchBlock>());
+    block = blocks_[used_blocks_++].get();
+    std::memset(block, 0, sizeof(ScratchBlock));
+    block->key = key;
   }
   return *block;
 }
 
 void ScanScratch::end() {
-  nodes_.reset([this](ScratchNode& n) {
-    if (n.table_index < table_.size())
-      table_[n.table_index].store(nullptr, std::memory_order_relaxed);
-    std::memset(n.blocks, 0, sizeof(n.blocks));
-    n.table_index = 0;
-  });
-  blocks_.reset([](ScratchBlock& b) {
-    std::memset(b.free, 0, sizeof(b.free));
-    std::memset(b.hit, 0, sizeof(b.hit));
-    b.published = false;
-  });
+  for (size_t i = 0; i < used_nodes_; ++i) table_[nodes_[i]->table_index] = nullptr;
+  used_nodes_ = 0;
+  used_blocks_ = 0;
 }
 
 }  // namespace fragg

@@ -1,6 +1,10 @@
-// The CPU backend: rays in parallel over every core (OpenMP), cell flags in a scan scratch,
-// then the log-odds update over the touched blocks only.
+// The CPU backend: rays in parallel over every core (OpenMP), each thread marking cells in
+// its own scan scratch; the marks are merged, then the log-odds update runs over the touched
+// blocks only.
 #pragma once
+
+#include <memory>
+#include <vector>
 
 #include "fragg_map/internal/integrator.h"
 #include "fragg_map/internal/scan_scratch.h"
@@ -16,7 +20,7 @@ class CpuIntegrator : public Integrator {
 
  private:
   int threads_;
-  ScanScratch scratch_;
+  std::vector<std::unique_ptr<ScanScratch>> scratch_;  // one per thread
 };
 
 }  // namespace fragg
