@@ -60,8 +60,12 @@ class BlockMap {
   Block* findBlock(const BlockKey& key);
   const Cell* findCell(const VoxelKey& key) const;
 
-  /// Returns the block's index, creating an all-unobserved block when it is missing.
-  BlockIndex findOrCreate(const BlockKey& key, bool* created = nullptr);
+  /// Returns the block's index, creating an all-unobserved block when it is missing. With
+  /// `initialise` false a new block's cells are left for the caller to write (the CPU
+  /// backend fills new blocks in parallel).
+  BlockIndex findOrCreate(const BlockKey& key, bool* created = nullptr, bool initialise = true);
+  /// Makes room for `n` more blocks in the index.
+  void reserve(size_t n) { index_.reserve(index_.size() + n); }
   void erase(const BlockKey& key);
   void clear();
 

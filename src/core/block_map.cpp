@@ -73,7 +73,7 @@ const Cell* BlockMap::findCell(const VoxelKey& key) const {
   return b ? &b->cells[cellIndexOf(key)] : nullptr;
 }
 
-BlockIndex BlockMap::findOrCreate(const BlockKey& key, bool* created) {
+BlockIndex BlockMap::findOrCreate(const BlockKey& key, bool* created, bool initialise) {
   auto [it, inserted] = index_.try_emplace(key, kNoBlock);
   if (created) *created = inserted;
   if (!inserted) return it->second;
@@ -95,7 +95,7 @@ BlockIndex BlockMap::findOrCreate(const BlockKey& key, bool* created) {
     throw;
   }
   it->second = i;
-  initBlock(block(i));
+  if (initialise) initBlock(block(i));
   BlockMeta& m = meta_[i];
   m = BlockMeta();
   m.key = key;

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstring>
+#include <iterator>
 
 #include "fragg_map/raycast.h"
 
@@ -127,16 +127,20 @@ void CpuIntegrator::integrate(const PreparedScan& scan, const OccupancyModel& mo
 #pragma omp parallel for num_threads(threads) schedule(static)
   for (long j = 0; j < touched; ++j) target[j] = blocks.find(merged.touched(j).key);
   uint64_t created = 0;
+  std::vector<char> fresh(static_cast<size_t>(touched), 0);
+  for (long j = 0; j < touched; ++j) created += target[j] == kNoBlock ? 1 : 0;
+  blocks.reserve(created);
   for (long j = 0; j < touched; ++j) {
     if (target[j] != kNoBlock) continue;
-    target[j] = blocks.findOrCreate(merged.touched(j).key);
-    ++created;
+    target[j] = blocks.findOrCreate(merged.touched(j).key, nullptr, /*initialise=*/false);
+    fresh[j] = 1;
   }
   uint64_t updated = 0;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 64) reduction(+ : updated)
   for (long j = 0; j < touched; ++j) {
     const ScratchBlock& marks = merged.touched(j);
     Block& block = blocks.block(target[j]);
+    if (fresh[j]) std::fill(std::begin(block.cells), std::end(block.cells), Cell());
     bool changed = false;
     for (int w = 0; w < kCellsPerBlock / 64; ++w) {
       for (uint64_t bits = marks.free[w] | marks.hit[w]; bits != 0; bits &= bits - 1) {
