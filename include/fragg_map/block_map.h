@@ -70,7 +70,9 @@ class BlockMap {
   void clear();
 
   Block& block(BlockIndex i) { return chunks_[i / kBlocksPerChunk][i % kBlocksPerChunk]; }
-  const Block& block(BlockIndex i) const { return chunks_[i / kBlocksPerChunk][i % kBlocksPerChunk]; }
+  const Block& block(BlockIndex i) const {
+    return chunks_[i / kBlocksPerChunk][i % kBlocksPerChunk];
+  }
   BlockMeta& meta(BlockIndex i) { return meta_[i]; }
   const BlockMeta& meta(BlockIndex i) const { return meta_[i]; }
 

@@ -15,7 +15,7 @@ constexpr int kLogOddsScale = 1024;
 constexpr int16_t kUnobservedLogOdds = INT16_MIN;
 
 struct Cell {
-  int16_t hits = 0;                         ///< saturating count of endpoints in the cell
+  int16_t hits = 0;                          ///< saturating count of endpoints in the cell
   int16_t log_odds_fx = kUnobservedLogOdds;  ///< fixed-point log-odds, 1/1024 units
 
   FRAGG_HD bool observed() const { return log_odds_fx != kUnobservedLogOdds; }

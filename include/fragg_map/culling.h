@@ -19,17 +19,17 @@ constexpr int kMaxCoherenceTtl = 32;
 
 /// What culling remembers per block between scans (kept in the block's metadata).
 struct CullMemory {
-  uint32_t scan = 0;        ///< scan index of the last rejection (0 = none)
-  float margin_m = 0.f;     ///< margin of that rejection
-  uint8_t test = 0xff;      ///< test index that rejected it (0xff = none)
+  uint32_t scan = 0;     ///< scan index of the last rejection (0 = none)
+  float margin_m = 0.f;  ///< margin of that rejection
+  uint8_t test = 0xff;   ///< test index that rejected it (0xff = none)
 };
 
 /// Motion of the sensor from an earlier scan to the current one.
 struct PastPose {
   bool valid = false;
-  float translation_m = 0.f;                   ///< |o_now - o_then|
-  float rotation_rad = 0.f;                    ///< angle of R_then^-1 R_now
-  float advance_m[kMaxFrustumTests] = {};      ///< n_now . (o_now - o_then), plane tests
+  float translation_m = 0.f;               ///< |o_now - o_then|
+  float rotation_rad = 0.f;                ///< angle of R_then^-1 R_now
+  float advance_m[kMaxFrustumTests] = {};  ///< n_now . (o_now - o_then), plane tests
 };
 
 /// Everything a culling pass needs besides the frustum; plain data for the device.
@@ -66,8 +66,8 @@ FRAGG_HD bool cullBlock(const Frustum& f, const CullContext& ctx, const float c[
   const float kEps = 1e-4f;
   ++n.blocks_tested;
   const uint32_t age = ctx.scan - mem.scan;
-  if (mem.test < f.num_tests && mem.test < kMaxFrustumTests && mem.scan != 0 && age >= 1 && age < static_cast<uint32_t>(ctx.ttl) &&
-      age < kMaxCoherenceTtl) {
+  if (mem.test < f.num_tests && mem.test < kMaxFrustumTests && mem.scan != 0 && age >= 1 &&
+      age < static_cast<uint32_t>(ctx.ttl) && age < kMaxCoherenceTtl) {
     const PastPose& past = ctx.past[age];
     if (past.valid) {
       const float reach = sqrtf(dot3(c, c)) + h * 1.7320508f + past.translation_m;

@@ -16,10 +16,10 @@
 namespace fragg {
 
 enum class FrustumTest : uint8_t {
-  kPlane = 0,      ///< inside: n . x + d >= 0
-  kRangeSphere,    ///< inside: |x| <= max_range
-  kElevationMax,   ///< inside: elevation about `up` <= elevation_max
-  kElevationMin,   ///< inside: elevation about `up` >= elevation_min
+  kPlane = 0,     ///< inside: n . x + d >= 0
+  kRangeSphere,   ///< inside: |x| <= max_range
+  kElevationMax,  ///< inside: elevation about `up` <= elevation_max
+  kElevationMin,  ///< inside: elevation about `up` >= elevation_min
 };
 
 constexpr int kMaxFrustumTests = 8;

@@ -8,20 +8,20 @@
 namespace fragg {
 
 struct InsertStats {
-  uint64_t points_in = 0;            ///< points given
-  uint64_t rays_hit = 0;             ///< rays ending in a hit
-  uint64_t rays_free_only = 0;       ///< beyond max range: clear up to max range, no hit
-  uint64_t rays_no_return = 0;       ///< organised no-return rays cleared (when enabled)
-  uint64_t dropped_invalid = 0;      ///< NaN / Inf / beyond the int32 key range
-  uint64_t dropped_min_range = 0;    ///< closer than min range
+  uint64_t points_in = 0;                ///< points given
+  uint64_t rays_hit = 0;                 ///< rays ending in a hit
+  uint64_t rays_free_only = 0;           ///< beyond max range: clear up to max range, no hit
+  uint64_t rays_no_return = 0;           ///< organised no-return rays cleared (when enabled)
+  uint64_t dropped_invalid = 0;          ///< NaN / Inf / beyond the int32 key range
+  uint64_t dropped_min_range = 0;        ///< closer than min range
   uint64_t dropped_outside_frustum = 0;  ///< outside an explicit sensor model's frustum
-  uint64_t voxel_visits = 0;         ///< cells visited by the traversal (with repeats)
-  uint64_t cells_updated = 0;        ///< cells whose log-odds were updated (once per scan)
+  uint64_t voxel_visits = 0;             ///< cells visited by the traversal (with repeats)
+  uint64_t cells_updated = 0;            ///< cells whose log-odds were updated (once per scan)
   uint64_t blocks_touched = 0;
   uint64_t blocks_created = 0;
   CullCounters culling;
   double seconds_total = 0;
-  double seconds_prepare = 0;        ///< transform + filter
+  double seconds_prepare = 0;  ///< transform + filter
   double seconds_cull = 0;
   double seconds_raycast = 0;
   double seconds_apply = 0;

@@ -7,12 +7,11 @@
 //   map.save("x.fgm");   fragg::Map m = fragg::Map::load("x.fgm");
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
-
-#include <Eigen/Geometry>
 
 #include "fragg_map/block_map.h"
 #include "fragg_map/frustum.h"
@@ -31,7 +30,7 @@ struct MemoryStats {
   size_t host_block_bytes = 0;  ///< cells + per-block metadata + index
   size_t device_bytes = 0;      ///< CUDA backend only
   size_t blocks = 0;
-  size_t known_voxels = 0;      ///< observed cells
+  size_t known_voxels = 0;  ///< observed cells
 };
 
 class Map {

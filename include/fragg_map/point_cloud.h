@@ -2,11 +2,10 @@
 // sensor had no return, so that rays without a return can clear free space if asked.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace fragg {
 

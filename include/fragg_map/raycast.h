@@ -26,11 +26,11 @@ FRAGG_HD int floorToInt(float v) { return static_cast<int>(floorf(v)); }
 
 /// Per-axis DDA state of one ray (scalars, so compilers keep it in registers).
 struct DdaAxis {
-  int cur;         ///< absolute voxel key on this axis
-  int step;        ///< +1, -1 or 0
-  int remaining;   ///< steps left on this axis
-  float t_max;     ///< ray parameter of the next boundary (INFINITY when none is left)
-  float t_delta;   ///< ray parameter between boundaries
+  int cur;        ///< absolute voxel key on this axis
+  int step;       ///< +1, -1 or 0
+  int remaining;  ///< steps left on this axis
+  float t_max;    ///< ray parameter of the next boundary (INFINITY when none is left)
+  float t_delta;  ///< ray parameter between boundaries
 
   FRAGG_HD void init(int ref, float start_v, float end_v) {
     const int s = floorToInt(start_v), e = floorToInt(end_v);

@@ -2,9 +2,8 @@
 // block culling and GPU residency.
 #pragma once
 
-#include <string>
-
 #include <Eigen/Core>
+#include <string>
 
 #include "fragg_map/point_cloud.h"
 

@@ -32,8 +32,7 @@ void AtomicFile::commit() {
   const bool flushed = std::fflush(file_) == 0 && ::fsync(::fileno(file_)) == 0;
   const bool closed = std::fclose(file_) == 0;
   file_ = nullptr;
-  if (!flushed || !closed)
-    throw IoError("cannot write " + path_ + ": " + std::strerror(errno));
+  if (!flushed || !closed) throw IoError("cannot write " + path_ + ": " + std::strerror(errno));
   if (std::rename(tmp_path_.c_str(), path_.c_str()) != 0)
     throw IoError("cannot rename " + tmp_path_ + " to " + path_ + ": " + std::strerror(errno));
   committed_ = true;

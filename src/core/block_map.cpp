@@ -141,16 +141,15 @@ void BlockMap::forEachInBox(const BlockKey& lo, const BlockKey& hi,
                             const std::function<void(BlockIndex)>& fn) const {
   if (index_.empty() || lo.x > hi.x || lo.y > hi.y || lo.z > hi.z) return;
   const BlockKey slo = superKeyOf(lo), shi = superKeyOf(hi);
-  const double box_supers = (double(shi.x) - slo.x + 1) * (double(shi.y) - slo.y + 1) *
-                            (double(shi.z) - slo.z + 1);
+  const double box_supers =
+      (double(shi.x) - slo.x + 1) * (double(shi.y) - slo.y + 1) * (double(shi.z) - slo.z + 1);
   auto inside = [&](const BlockKey& k) {
-    return k.x >= lo.x && k.x <= hi.x && k.y >= lo.y && k.y <= hi.y && k.z >= lo.z &&
-           k.z <= hi.z;
+    return k.x >= lo.x && k.x <= hi.x && k.y >= lo.y && k.y <= hi.y && k.z >= lo.z && k.z <= hi.z;
   };
   if (box_supers > static_cast<double>(super_.size())) {
     for (const auto& [skey, list] : super_) {
-      if (skey.x < slo.x || skey.x > shi.x || skey.y < slo.y || skey.y > shi.y ||
-          skey.z < slo.z || skey.z > shi.z)
+      if (skey.x < slo.x || skey.x > shi.x || skey.y < slo.y || skey.y > shi.y || skey.z < slo.z ||
+          skey.z > shi.z)
         continue;
       for (BlockIndex i : list)
         if (inside(meta_[i].key)) fn(i);

@@ -9,10 +9,9 @@ namespace fragg {
 
 bool Culler::sameModel(const SensorModel& m) const {
   const SensorModel& l = last_model_;
-  return have_model_ && l.type == m.type && l.hfov_rad == m.hfov_rad &&
-         l.vfov_rad == m.vfov_rad && l.elevation_min_rad == m.elevation_min_rad &&
-         l.elevation_max_rad == m.elevation_max_rad && l.max_range_m == m.max_range_m &&
-         l.forward_S == m.forward_S && l.right_S == m.right_S;
+  return have_model_ && l.type == m.type && l.hfov_rad == m.hfov_rad && l.vfov_rad == m.vfov_rad &&
+         l.elevation_min_rad == m.elevation_min_rad && l.elevation_max_rad == m.elevation_max_rad &&
+         l.max_range_m == m.max_range_m && l.forward_S == m.forward_S && l.right_S == m.right_S;
 }
 
 void Culler::reset() {

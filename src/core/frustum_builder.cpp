@@ -53,8 +53,7 @@ Frustum buildFrustum(const SensorModel& model, const Eigen::Isometry3d& T_map_se
     Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();
     for (double sh : {-1.0, 1.0})
       for (double sv : {-1.0, 1.0}) {
-        const Eigen::Vector3d c =
-            D * (fwd + sh * std::tan(ha) * right + sv * std::tan(va) * vert);
+        const Eigen::Vector3d c = D * (fwd + sh * std::tan(ha) * right + sv * std::tan(va) * vert);
         lo = lo.cwiseMin(c);
         hi = hi.cwiseMax(c);
       }

@@ -61,7 +61,8 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   InsertStats stats;
   const Frustum frustum = buildFrustum(model, T_map_sensor, params_.resolution_m);
   auto t = std::chrono::steady_clock::now();
-  stats.culling = culler_->cull(frustum, model, T_map_sensor, params_.resolution_m, blocks_, nullptr);
+  stats.culling =
+      culler_->cull(frustum, model, T_map_sensor, params_.resolution_m, blocks_, nullptr);
   stats.seconds_cull = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 
   t = std::chrono::steady_clock::now();
@@ -74,7 +75,8 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   ++revision_;
   ++scans_;
   last_frustum_ = frustum;
-  stats.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  stats.seconds_total =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;
 }
 
@@ -112,8 +114,8 @@ void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_ma
     bool any_left = false;
     for (int c = 0; c < kCellsPerBlock; ++c) {
       const VoxelKey v = voxelKeyOf(key, c);
-      const bool inside = v.x >= lo.x && v.x <= hi.x && v.y >= lo.y && v.y <= hi.y &&
-                          v.z >= lo.z && v.z <= hi.z;
+      const bool inside =
+          v.x >= lo.x && v.x <= hi.x && v.y >= lo.y && v.y <= hi.y && v.z >= lo.z && v.z <= hi.z;
       if (inside)
         b.cells[c] = Cell();
       else

@@ -123,8 +123,8 @@ void Map::save(const std::string& path) const {
 Map Map::load(const std::string& path) {
   const std::vector<uint8_t> bytes = readWholeFile(path);
   if (bytes.size() < kHeaderBytes + 4)
-    throw IoError(path + ": not a valid .fgm map: file too short (" +
-                  std::to_string(bytes.size()) + " bytes)");
+    throw IoError(path + ": not a valid .fgm map: file too short (" + std::to_string(bytes.size()) +
+                  " bytes)");
   Reader r(bytes, bytes.size() - 4, path);
   char magic[8];
   r.take(magic, sizeof(magic), "magic");

@@ -1,10 +1,9 @@
-#include "fragg_map/internal/prepared_scan.h"
-
 #include <omp.h>
 
 #include <cmath>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/prepared_scan.h"
 
 namespace fragg {
 
@@ -15,7 +14,6 @@ constexpr double kMaxAbsVoxel = 2147483647.0 - 1048576.0;
 bool finitePoint(const Eigen::Vector3f& p) {
   return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
 }
-
 
 /// Direction of a no-return pixel, interpolated from the nearest valid pixels in its row.
 bool interpolateDirection(const PointCloud& cloud, uint32_t row, uint32_t col,

@@ -1,11 +1,10 @@
 #include "fragg_map/sensor_model.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <sstream>
-
-#include <Eigen/Geometry>
 
 #include "fragg_map/errors.h"
 
@@ -108,8 +107,7 @@ std::string SensorModel::describe() const {
   if (type == SensorType::kPinhole)
     s << " hfov=" << hfov_rad / kDeg << "deg vfov=" << vfov_rad / kDeg << "deg";
   if (type == SensorType::kSpinningLidar)
-    s << " elevation=[" << elevation_min_rad / kDeg << ", " << elevation_max_rad / kDeg
-      << "]deg";
+    s << " elevation=[" << elevation_min_rad / kDeg << ", " << elevation_max_rad / kDeg << "]deg";
   s << " range=[" << min_range_m << ", ";
   if (max_range_m > 0.0)
     s << max_range_m << "]m";
@@ -158,8 +156,8 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud)
         if (axis.dot(e) > std::cos(3 * kDeg)) axis = e;
       }
     }
-    const Eigen::Vector3d hint = std::fabs(axis.z()) < 0.9 ? Eigen::Vector3d(0, 0, 1)
-                                                           : Eigen::Vector3d(0, -1, 0);
+    const Eigen::Vector3d hint =
+        std::fabs(axis.z()) < 0.9 ? Eigen::Vector3d(0, 0, 1) : Eigen::Vector3d(0, -1, 0);
     const Eigen::Vector3d right = hint.cross(axis).normalized();
     const Eigen::Vector3d vertical = axis.cross(right);
     double half_h = 0.0, half_v = 0.0;

@@ -49,10 +49,10 @@ TEST(CliBagAgreementTest, ExportedBtAgreesWithOctomap) {
   ASSERT_TRUE(exported.readBinary(bt));
   EXPECT_DOUBLE_EQ(exported.getResolution(), 0.05);
   const test::Agreement a = test::compareTrees(exported, reference);
-  std::printf("[agreement] fragg_map build + export .bt vs OctoMap, %d scans from a bag: "
-              "both-known %llu cells, same state %.4f %%; either-known %.4f %%\n",
-              scans, static_cast<unsigned long long>(a.both), 100 * a.bothRatio(),
-              100 * a.eitherRatio());
+  std::printf(
+      "[agreement] fragg_map build + export .bt vs OctoMap, %d scans from a bag: "
+      "both-known %llu cells, same state %.4f %%; either-known %.4f %%\n",
+      scans, static_cast<unsigned long long>(a.both), 100 * a.bothRatio(), 100 * a.eitherRatio());
   EXPECT_GT(a.both, 100000u);
   EXPECT_GE(a.bothRatio(), 0.995);
   EXPECT_GE(a.eitherRatio(), 0.99);

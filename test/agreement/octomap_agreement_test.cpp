@@ -41,12 +41,12 @@ void expectAgreement(const std::vector<Scan>& scans, double resolution_m, double
     test::insertIntoOctomap(tree, s, max_range_m);
   }
   const test::Agreement a = test::compareWithOctomap(map, tree);
-  std::printf("[agreement] %s: %zu scans, res %.2f m: both-known %llu cells, same state %.4f %%;"
-              " either-known %.4f %% (only fragg %llu, only OctoMap %llu)\n",
-              label, scans.size(), resolution_m, static_cast<unsigned long long>(a.both),
-              100 * a.bothRatio(), 100 * a.eitherRatio(),
-              static_cast<unsigned long long>(a.only_fragg),
-              static_cast<unsigned long long>(a.only_octomap));
+  std::printf(
+      "[agreement] %s: %zu scans, res %.2f m: both-known %llu cells, same state %.4f %%;"
+      " either-known %.4f %% (only fragg %llu, only OctoMap %llu)\n",
+      label, scans.size(), resolution_m, static_cast<unsigned long long>(a.both),
+      100 * a.bothRatio(), 100 * a.eitherRatio(), static_cast<unsigned long long>(a.only_fragg),
+      static_cast<unsigned long long>(a.only_octomap));
   EXPECT_GT(a.both, 10000u) << label;
   EXPECT_GE(a.bothRatio(), 0.995) << label;
   EXPECT_GE(a.eitherRatio(), 0.99) << label;

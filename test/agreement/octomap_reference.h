@@ -2,11 +2,11 @@
 // cell-by-cell comparison with a fragg map (OctoMap's rule: observed, occupied iff p > 0.5).
 #pragma once
 
+#include <octomap/octomap.h>
+
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
-
-#include <octomap/octomap.h>
 
 #include "fragg_map/io/dataset.h"
 #include "fragg_map/map.h"
@@ -61,8 +61,8 @@ inline LeafStates leafStates(const octomap::OcTree& tree) {
     for (int dx = 0; dx < span; ++dx)
       for (int dy = 0; dy < span; ++dy)
         for (int dz = 0; dz < span; ++dz)
-          states[VoxelKey{int(k[0]) - 32768 + dx, int(k[1]) - 32768 + dy,
-                          int(k[2]) - 32768 + dz}] = occupied;
+          states[VoxelKey{int(k[0]) - 32768 + dx, int(k[1]) - 32768 + dy, int(k[2]) - 32768 + dz}] =
+              occupied;
   }
   return states;
 }

@@ -39,10 +39,10 @@ TEST(FrustumTest, PinholeInsideOutsideAndStraddling) {
   const SensorModel cam =
       SensorModel::pinhole(60 * kDeg, 40 * kDeg, 0.0, 10.0, OpticalAxis::kXForward);
   const Frustum f = buildFrustum(cam, pose(0.0, 0.0, 0.0, 0.0), kRes);
-  EXPECT_TRUE(visible(f, {5, 0, 0}));     // straight ahead at 4.4 m
-  EXPECT_FALSE(visible(f, {-3, 0, 0}));   // behind
-  EXPECT_FALSE(visible(f, {2, 8, 0}));    // far to the left (70 degrees)
-  EXPECT_FALSE(visible(f, {20, 0, 0}));   // beyond 10 m
+  EXPECT_TRUE(visible(f, {5, 0, 0}));    // straight ahead at 4.4 m
+  EXPECT_FALSE(visible(f, {-3, 0, 0}));  // behind
+  EXPECT_FALSE(visible(f, {2, 8, 0}));   // far to the left (70 degrees)
+  EXPECT_FALSE(visible(f, {20, 0, 0}));  // beyond 10 m
   // Straddles the left plane: centre just outside 30 degrees, box reaches inside.
   const double half = 0.4, cx = 4.4, cy = std::tan(30 * kDeg) * cx + 0.3;
   EXPECT_TRUE(visible(f, {static_cast<int32_t>(std::floor(cx / 0.8)),
@@ -59,11 +59,11 @@ TEST(FrustumTest, PinholeInsideOutsideAndStraddling) {
 TEST(FrustumTest, LidarShellRejectsAboveBelowAndBeyond) {
   const SensorModel lidar = SensorModel::spinningLidar(-15 * kDeg, 15 * kDeg, 0.0, 20.0);
   const Frustum f = buildFrustum(lidar, pose(0.0, 0.0, 0.0, 0.3), kRes);
-  EXPECT_TRUE(visible(f, {10, 0, 0}));    // 8 m ahead at sensor height
+  EXPECT_TRUE(visible(f, {10, 0, 0}));     // 8 m ahead at sensor height
   EXPECT_TRUE(visible(f, {-10, -10, 1}));  // behind: a LiDAR sees all around
-  EXPECT_FALSE(visible(f, {2, 0, 10}));   // straight above
-  EXPECT_FALSE(visible(f, {2, 0, -10}));  // straight below
-  EXPECT_FALSE(visible(f, {40, 0, 0}));   // beyond 20 m
+  EXPECT_FALSE(visible(f, {2, 0, 10}));    // straight above
+  EXPECT_FALSE(visible(f, {2, 0, -10}));   // straight below
+  EXPECT_FALSE(visible(f, {40, 0, 0}));    // beyond 20 m
   // Bounding box: height limited by the elevation limits.
   EXPECT_LE(f.aabb_max.z, static_cast<int32_t>(std::floor(20.0 * std::sin(15 * kDeg) / 0.8)) + 1);
 }

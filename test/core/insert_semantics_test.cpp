@@ -18,8 +18,8 @@ const Cell* cellAt(const Map& m, int x, int y, int z) { return m.findCell(VoxelK
 
 TEST(InsertTest, EndpointHitAndFreeCellsBefore) {
   Map map;
-  const InsertStats s = map.insert(cloudOf({{1.0f, 0.f, 0.f}}), sensorAtVoxelCentre(),
-                                   SensorModel::autoFromCloud());
+  const InsertStats s =
+      map.insert(cloudOf({{1.0f, 0.f, 0.f}}), sensorAtVoxelCentre(), SensorModel::autoFromCloud());
   EXPECT_EQ(s.rays_hit, 1u);
   for (int x = 0; x < 20; ++x) {
     const Cell* c = cellAt(map, x, 0, 0);
@@ -108,9 +108,8 @@ TEST(InsertTest, ExplicitSensorCountsPointsOutsideItsFrustum) {
   Map map;
   // A camera looking along +z with a 60 x 40 degree view: the point along +x is outside.
   const SensorModel cam = SensorModel::pinhole(60 * M_PI / 180, 40 * M_PI / 180, 0.0, 10.0);
-  const InsertStats s =
-      map.insert(cloudOf({{0.f, 0.f, 2.f}, {2.f, 0.f, 0.f}, {0.5f, 0.3f, 2.f}}),
-                 sensorAtVoxelCentre(), cam);
+  const InsertStats s = map.insert(cloudOf({{0.f, 0.f, 2.f}, {2.f, 0.f, 0.f}, {0.5f, 0.3f, 2.f}}),
+                                   sensorAtVoxelCentre(), cam);
   EXPECT_EQ(s.dropped_outside_frustum, 1u);
   EXPECT_EQ(s.rays_hit, 2u);
   EXPECT_EQ(map.query({0.025, 0.025, 2.025}), CellState::kOccupied);

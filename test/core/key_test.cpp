@@ -1,9 +1,10 @@
+#include "fragg_map/key.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
 
 #include "fragg_map/errors.h"
-#include "fragg_map/key.h"
 #include "fragg_map/map.h"
 
 namespace fragg {

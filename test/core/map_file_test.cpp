@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
-
 #include <unistd.h>
+#include <zlib.h>
 
 #include <cstdio>
 #include <cstring>
@@ -8,8 +8,6 @@
 #include <iterator>
 #include <string>
 #include <vector>
-
-#include <zlib.h>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/map.h"
@@ -100,8 +98,8 @@ TEST(MapFileTest, TruncatedCorruptedAndWrongVersionFilesAreRejected) {
   std::vector<char> v2 = bytes;
   const uint32_t version = 2;
   std::memcpy(v2.data() + 8, &version, 4);
-  const uint32_t crc = static_cast<uint32_t>(
-      crc32(0L, reinterpret_cast<const Bytef*>(v2.data()), v2.size() - 4));
+  const uint32_t crc =
+      static_cast<uint32_t>(crc32(0L, reinterpret_cast<const Bytef*>(v2.data()), v2.size() - 4));
   std::memcpy(v2.data() + v2.size() - 4, &crc, 4);
   writeAll(tmpPath("v2.fgm"), v2);
   expectRejected(tmpPath("v2.fgm"), "version 2");

@@ -1,9 +1,10 @@
+#include "fragg_map/occupancy.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "fragg_map/errors.h"
-#include "fragg_map/occupancy.h"
 
 namespace fragg {
 namespace {

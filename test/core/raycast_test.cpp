@@ -1,3 +1,5 @@
+#include "fragg_map/raycast.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -6,8 +8,6 @@
 #include <set>
 #include <tuple>
 #include <vector>
-
-#include "fragg_map/raycast.h"
 
 namespace fragg {
 namespace {
@@ -117,11 +117,12 @@ TEST(RaycastTest, BresenhamConnectsStartToEnd) {
     Collect got;
     traverseBresenham(ray, got);
     ASSERT_FALSE(got.cells.empty());
-    EXPECT_EQ(got.cells.front(), (VoxelKey{-100 + floorToInt(ray.start_v[0]),
-                                           200 + floorToInt(ray.start_v[1]),
-                                           floorToInt(ray.start_v[2])}));
-    EXPECT_EQ(got.cells.back(), (VoxelKey{-100 + floorToInt(ray.end_v[0]),
-                                          200 + floorToInt(ray.end_v[1]), floorToInt(ray.end_v[2])}));
+    EXPECT_EQ(got.cells.front(),
+              (VoxelKey{-100 + floorToInt(ray.start_v[0]), 200 + floorToInt(ray.start_v[1]),
+                        floorToInt(ray.start_v[2])}));
+    EXPECT_EQ(got.cells.back(),
+              (VoxelKey{-100 + floorToInt(ray.end_v[0]), 200 + floorToInt(ray.end_v[1]),
+                        floorToInt(ray.end_v[2])}));
     for (size_t i = 0; i + 1 < got.cells.size(); ++i) {
       const VoxelKey &p = got.cells[i], &q = got.cells[i + 1];
       EXPECT_LE(std::max({std::abs(p.x - q.x), std::abs(p.y - q.y), std::abs(p.z - q.z)}), 1);

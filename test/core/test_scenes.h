@@ -1,10 +1,9 @@
 // Small synthetic inputs shared by the core tests.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <random>
-
-#include <Eigen/Geometry>
 
 #include "fragg_map/map.h"
 

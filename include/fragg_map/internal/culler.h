@@ -2,9 +2,8 @@
 // over the host map's blocks in the frustum's bounding box.
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Geometry>
+#include <vector>
 
 #include "fragg_map/block_map.h"
 #include "fragg_map/culling.h"
@@ -21,8 +20,8 @@ class Culler {
   /// Culls the blocks of `blocks` against `f` (built from `model` at `T_map_sensor`) and
   /// appends the visible ones to `visible` (when not null).
   CullCounters cull(const Frustum& f, const SensorModel& model,
-                    const Eigen::Isometry3d& T_map_sensor, double resolution_m,
-                    BlockMap& blocks, std::vector<BlockIndex>* visible);
+                    const Eigen::Isometry3d& T_map_sensor, double resolution_m, BlockMap& blocks,
+                    std::vector<BlockIndex>* visible);
 
   /// Context for the current scan (also what a device-side culling pass would upload).
   CullContext context(const Frustum& f, const Eigen::Isometry3d& T_map_sensor) const;

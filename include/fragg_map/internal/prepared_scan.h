@@ -1,10 +1,9 @@
 // A scan ready for ray casting: rays in voxel units relative to the sensor's voxel.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "fragg_map/frustum.h"
 #include "fragg_map/insert_stats.h"
@@ -22,13 +21,15 @@ struct RayEnd {
 static_assert(sizeof(RayEnd) == 16, "RayEnd is 16 bytes");
 
 struct PreparedScan {
-  VoxelKey ref;                 ///< the sensor origin's voxel
+  VoxelKey ref;                  ///< the sensor origin's voxel
   float start_v[3] = {0, 0, 0};  ///< sensor origin relative to ref, voxel units, in [0, 1)
   std::vector<RayEnd> rays;
 
   RayVox ray(size_t i) const {
     const RayEnd& e = rays[i];
-    return RayVox{ref, {start_v[0], start_v[1], start_v[2]}, {e.end_v[0], e.end_v[1], e.end_v[2]},
+    return RayVox{ref,
+                  {start_v[0], start_v[1], start_v[2]},
+                  {e.end_v[0], e.end_v[1], e.end_v[2]},
                   e.hit != 0};
   }
 };

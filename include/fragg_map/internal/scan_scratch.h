@@ -18,9 +18,7 @@ struct ScratchBlock {
   uint64_t hit[kCellsPerBlock / 64];   ///< bit c: a ray ended in cell c
   BlockKey key;
 
-  void mark(int c, bool is_hit) {
-    (is_hit ? hit : free)[c >> 6] |= uint64_t{1} << (c & 63);
-  }
+  void mark(int c, bool is_hit) { (is_hit ? hit : free)[c >> 6] |= uint64_t{1} << (c & 63); }
   void orWith(const ScratchBlock& o) {
     for (int w = 0; w < kCellsPerBlock / 64; ++w) {
       free[w] |= o.free[w];

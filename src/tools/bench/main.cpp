@@ -2,17 +2,17 @@
 //
 // Prints a table (markdown) and, with --json FILE, the same figures as JSON: ms/scan median and
 // p99, voxel visits per second, the speed ratio, bytes per known voxel, and cell agreement.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <CLI/CLI.hpp>
-#include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
 #include "bench/synthetic_lidar.h"
 #include "fragg_map/errors.h"
@@ -177,7 +177,9 @@ int main(int argc, char** argv) {
 
   try {
     std::vector<Workload> workloads;
-    auto want = [&](const std::string& n) { return only.empty() || n.find(only) != std::string::npos; };
+    auto want = [&](const std::string& n) {
+      return only.empty() || n.find(only) != std::string::npos;
+    };
     const std::string d = data + "/";
     if (want("velodyne_pair")) {
       std::ifstream in(d + "small_gicp_pair/T_target_source.txt");
@@ -188,20 +190,23 @@ int main(int argc, char** argv) {
       workloads.push_back({"velodyne_pair (HDL-32E, 2 scans)",
                            {fileScan(d + "small_gicp_pair/target.ply"),
                             fileScan(d + "small_gicp_pair/source.ply", T)},
-                           0.05, 30.0});
+                           0.05,
+                           30.0});
     }
     if (want("room"))
       workloads.push_back({"room_scans (2 x 112k indoor)",
                            {fileScan(d + "pcl_room_scans/room_scan1.pcd"),
                             fileScan(d + "pcl_room_scans/room_scan2.pcd")},
-                           0.05, -1.0});
+                           0.05,
+                           -1.0});
     if (want("vls128"))
       workloads.push_back({"vls128 (208k, outdoor)",
                            {fileScan(d + "nebula_single_scans/vls128_1585897255376374245.pcd")},
-                           0.05, 30.0});
+                           0.05,
+                           30.0});
     if (want("rgbd"))
-      workloads.push_back({"rgbd (5 x 640x480 Kinect)", readAll(d + "slambook2_ch5_rgbd"), 0.05,
-                           -1.0});
+      workloads.push_back(
+          {"rgbd (5 x 640x480 Kinect)", readAll(d + "slambook2_ch5_rgbd"), 0.05, -1.0});
     for (double range : {30.0, 50.0}) {
       const std::string name = fmt::format("synthetic lidar360 (180k pts, {:.0f} m)", range);
       if (!want("synthetic") || synthetic_scans <= 0) continue;
@@ -213,10 +218,11 @@ int main(int argc, char** argv) {
     }
 
     nlohmann::json out = nlohmann::json::array();
-    std::printf("| workload | res m | scans | pts/scan | fragg ms/scan median | p99 | "
-                "visits/s | OctoMap ms/scan median | speed-up | fragg B/voxel | OctoMap "
-                "B/voxel | agree both | agree either |\n|---|---|---|---|---|---|---|---|---|---|"
-                "---|---|---|\n");
+    std::printf(
+        "| workload | res m | scans | pts/scan | fragg ms/scan median | p99 | "
+        "visits/s | OctoMap ms/scan median | speed-up | fragg B/voxel | OctoMap "
+        "B/voxel | agree both | agree either |\n|---|---|---|---|---|---|---|---|---|---|"
+        "---|---|---|\n");
     for (const Workload& w : workloads) {
       size_t points = 0;
       for (const Scan& s : w.scans) points += s.cloud.size();
@@ -253,9 +259,8 @@ int main(int argc, char** argv) {
                               100 * octo.either);
 #endif
       std::printf("| %s | %.2f | %zu | %zu | %.2f | %.2f | %.3g %s\n", w.name.c_str(),
-                  w.resolution_m, w.scans.size(), points / w.scans.size(),
-                  percentile(all.ms, 0.5), percentile(all.ms, 0.99), all.visits / all.seconds,
-                  octo_cols.c_str());
+                  w.resolution_m, w.scans.size(), points / w.scans.size(), percentile(all.ms, 0.5),
+                  percentile(all.ms, 0.99), all.visits / all.seconds, octo_cols.c_str());
       std::fflush(stdout);
       out.push_back(j);
     }

@@ -49,7 +49,8 @@ double SyntheticLidar::castRay(const Eigen::Vector3d& o, const Eigen::Vector3d& 
   for (const Cylinder& c : trees_) {
     const Eigen::Vector2d oc = o.head<2>() - c.centre;
     const Eigen::Vector2d dh = d.head<2>();
-    const double a = dh.squaredNorm(), b = 2 * oc.dot(dh), cc = oc.squaredNorm() - c.radius * c.radius;
+    const double a = dh.squaredNorm(), b = 2 * oc.dot(dh),
+                 cc = oc.squaredNorm() - c.radius * c.radius;
     const double disc = b * b - 4 * a * cc;
     if (a < 1e-12 || disc < 0) continue;
     const double t = (-b - std::sqrt(disc)) / (2 * a);
@@ -76,9 +77,9 @@ Scan SyntheticLidar::scan(int index) const {
   const float nan = std::numeric_limits<float>::quiet_NaN();
 #pragma omp parallel for schedule(static)
   for (int r = 0; r < o.beams; ++r) {
-    const double el = (o.elevation_min_deg +
-                       (o.elevation_max_deg - o.elevation_min_deg) * r / (o.beams - 1)) *
-                      M_PI / 180.0;
+    const double el =
+        (o.elevation_min_deg + (o.elevation_max_deg - o.elevation_min_deg) * r / (o.beams - 1)) *
+        M_PI / 180.0;
     for (int k = 0; k < o.azimuth_steps; ++k) {
       const double az = 2 * M_PI * k / o.azimuth_steps;
       const Eigen::Vector3d d_S(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),

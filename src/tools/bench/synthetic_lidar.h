@@ -3,10 +3,9 @@
 // workload in the benchmark until fragg_map_sim exists.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "fragg_map/io/dataset.h"
 
@@ -19,7 +18,7 @@ struct SyntheticLidarOptions {
   double elevation_max_deg = 15.0;
   double max_return_m = 80.0;  // no return (NaN) beyond this
   double sensor_height_m = 1.8;
-  double step_m = 0.5;         // distance between scans along the path
+  double step_m = 0.5;  // distance between scans along the path
   uint32_t seed = 1;
 };
 

@@ -1,14 +1,13 @@
 // fragg_map build INPUT -o MAP.fgm: integrates every scan of a dataset into a map.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <fmt/format.h>
-
-#include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
 #include "cli/progress.h"
@@ -47,10 +46,9 @@ SensorModel sensorFrom(const BuildOptions& o) {
         throw InvalidArgument("--sensor pinhole needs --hfov and --vfov (degrees)");
       if (o.optical_axis != "z" && o.optical_axis != "x")
         throw InvalidArgument("--optical-axis must be z (camera optical frame) or x (body frame)");
-      return SensorModel::pinhole(o.hfov_deg * kDeg, o.vfov_deg * kDeg, o.min_range_m,
-                                  o.max_range_m,
-                                  o.optical_axis == "x" ? OpticalAxis::kXForward
-                                                        : OpticalAxis::kZForward);
+      return SensorModel::pinhole(
+          o.hfov_deg * kDeg, o.vfov_deg * kDeg, o.min_range_m, o.max_range_m,
+          o.optical_axis == "x" ? OpticalAxis::kXForward : OpticalAxis::kZForward);
     case SensorType::kSpinningLidar:
       return SensorModel::spinningLidar(o.elevation_min_deg * kDeg, o.elevation_max_deg * kDeg,
                                         o.min_range_m, o.max_range_m);
@@ -104,7 +102,8 @@ void runBuild(const BuildOptions& o) {
     progress.update(ms_per_scan.size());
   }
   progress.finish();
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (ms_per_scan.empty()) throw IoError(o.input + ": no scans with points found");
   map.save(o.output);
 
@@ -117,37 +116,38 @@ void runBuild(const BuildOptions& o) {
     std::fprintf(stderr,
                  "fragg_map: warning: %llu points fell outside the %s sensor model's frustum "
                  "and were dropped (widen --hfov/--vfov or use --sensor auto)\n",
-                 static_cast<unsigned long long>(total.dropped_outside_frustum),
-                 o.sensor.c_str());
+                 static_cast<unsigned long long>(total.dropped_outside_frustum), o.sensor.c_str());
   if (o.json) {
-    nlohmann::json j = {
-        {"output", o.output},
-        {"input", source->describe()},
-        {"backend", map.backendName()},
-        {"resolution_m", params.resolution_m},
-        {"scans", ms_per_scan.size()},
-        {"points", total.points_in},
-        {"rays_hit", total.rays_hit},
-        {"rays_free_only", total.rays_free_only},
-        {"rays_no_return", total.rays_no_return},
-        {"dropped_invalid", total.dropped_invalid},
-        {"dropped_min_range", total.dropped_min_range},
-        {"dropped_outside_frustum", total.dropped_outside_frustum},
-        {"scans_skipped", source->skipped()},
-        {"voxel_visits", total.voxel_visits},
-        {"seconds", seconds},
-        {"insert_seconds", total.seconds_total},
-        {"ms_per_scan", {{"median", median}, {"p99", p99},
-                         {"mean", total.seconds_total * 1e3 / ms_per_scan.size()}}},
-        {"known_voxels", mem.known_voxels},
-        {"blocks", mem.blocks},
-        {"host_bytes", mem.host_block_bytes},
-        {"culling", {{"blocks_tested", total.culling.blocks_tested},
-                     {"blocks_visible", total.culling.blocks_visible},
-                     {"tests_run", total.culling.tests_run},
-                     {"saved_by_plane_memory", total.culling.saved_by_plane_memory},
-                     {"saved_by_rotation", total.culling.saved_by_rotation},
-                     {"saved_by_translation", total.culling.saved_by_translation}}}};
+    nlohmann::json j = {{"output", o.output},
+                        {"input", source->describe()},
+                        {"backend", map.backendName()},
+                        {"resolution_m", params.resolution_m},
+                        {"scans", ms_per_scan.size()},
+                        {"points", total.points_in},
+                        {"rays_hit", total.rays_hit},
+                        {"rays_free_only", total.rays_free_only},
+                        {"rays_no_return", total.rays_no_return},
+                        {"dropped_invalid", total.dropped_invalid},
+                        {"dropped_min_range", total.dropped_min_range},
+                        {"dropped_outside_frustum", total.dropped_outside_frustum},
+                        {"scans_skipped", source->skipped()},
+                        {"voxel_visits", total.voxel_visits},
+                        {"seconds", seconds},
+                        {"insert_seconds", total.seconds_total},
+                        {"ms_per_scan",
+                         {{"median", median},
+                          {"p99", p99},
+                          {"mean", total.seconds_total * 1e3 / ms_per_scan.size()}}},
+                        {"known_voxels", mem.known_voxels},
+                        {"blocks", mem.blocks},
+                        {"host_bytes", mem.host_block_bytes},
+                        {"culling",
+                         {{"blocks_tested", total.culling.blocks_tested},
+                          {"blocks_visible", total.culling.blocks_visible},
+                          {"tests_run", total.culling.tests_run},
+                          {"saved_by_plane_memory", total.culling.saved_by_plane_memory},
+                          {"saved_by_rotation", total.culling.saved_by_rotation},
+                          {"saved_by_translation", total.culling.saved_by_translation}}}};
     std::printf("%s\n", j.dump().c_str());
   } else {
     std::printf("%s\n",
@@ -164,8 +164,9 @@ void runBuild(const BuildOptions& o) {
 
 void addBuildCommand(CLI::App& app) {
   auto o = std::make_shared<BuildOptions>();
-  CLI::App* c = app.add_subcommand("build", "Build a map from a dataset (bag, KITTI, graph, PCD "
-                                            "folder + TUM poses, depth images, point file)");
+  CLI::App* c = app.add_subcommand("build",
+                                   "Build a map from a dataset (bag, KITTI, graph, PCD "
+                                   "folder + TUM poses, depth images, point file)");
   c->add_option("input", o->input, "Dataset to read")->required();
   c->add_option("-o,--output", o->output, "Map file to write (.fgm)")->required();
   c->add_option("--resolution", o->resolution_m, "Voxel edge in metres")->capture_default_str();

@@ -1,12 +1,10 @@
 // fragg_map stats MAP: what a map holds.
+#include <fmt/format.h>
 #include <sys/stat.h>
 
 #include <cstdio>
-#include <string>
-
-#include <fmt/format.h>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "cli/commands.h"
 #include "cli/map_input.h"

@@ -13,5 +13,4 @@ void addExportCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);
 void addCompareCommand(CLI::App& app);
 
-
 }  // namespace fragg::cli

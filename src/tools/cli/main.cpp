@@ -1,15 +1,15 @@
 // fragg_map: build, inspect, export, render and compare occupancy maps.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
-
-#include <CLI/CLI.hpp>
 
 #include "cli/commands.h"
 #include "fragg_map/errors.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{"fragg_map: GPU-accelerated 3D occupancy maps (build, stats, export, render, "
-               "compare)"};
+  CLI::App app{
+      "fragg_map: GPU-accelerated 3D occupancy maps (build, stats, export, render, "
+      "compare)"};
   app.require_subcommand(1);
   fragg::cli::addBuildCommand(app);
   fragg::cli::addStatsCommand(app);
