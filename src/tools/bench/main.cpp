@@ -209,7 +209,7 @@ int main(int argc, char** argv) {
           {"rgbd (5 x 640x480 Kinect)", readAll(d + "slambook2_ch5_rgbd"), 0.05, -1.0});
     for (double range : {30.0, 50.0}) {
       const std::string name = fmt::format("synthetic lidar360 (180k pts, {:.0f} m)", range);
-      if (!want("synthetic") || synthetic_scans <= 0) continue;
+      if (!want(name) || synthetic_scans <= 0) continue;
       SyntheticLidarOptions so;
       SyntheticLidar sim(so);
       Workload w{name, {}, synthetic_res, range};
