@@ -31,24 +31,28 @@ if fragg_build_ws; then
     run_tests_rc=$?
   fi
   fragg_step "test results"
-  if summary="$(catkin_test_results --verbose "$FRAGG_WS/build/test_results")"; then
+  # catkin_test_results is the gate (non-zero on any failure or missing result). Its counts
+  # add up gtest's <testsuites> and <testsuite> totals, i.e. twice the test cases, so the
+  # counts below come from the <testcase> elements of the result files themselves.
+  if catkin_test_results "$FRAGG_WS/build/test_results"; then
     results_rc=0
   else
     results_rc=$?
   fi
-  echo "$summary"
-  summary_line="$(printf '%s\n' "$summary" | grep '^Summary:' | tail -n 1 || true)"
+  counts="$(/usr/bin/python3 "$FRAGG_REPO/scripts/test_counts.py" "$FRAGG_WS/build/test_results")"
+  echo "$counts"
+  counts_line="$(printf '%s\n' "$counts" | tail -n 1)"
   if [ "$run_tests_rc" -ne 0 ]; then
-    tests="FAILED: catkin_make run_tests exited $run_tests_rc (a test did not build?) ${summary_line}"
+    tests="FAILED: catkin_make run_tests exited $run_tests_rc (a test did not build?); $counts_line"
     failed=1
   elif [ "$results_rc" -ne 0 ]; then
-    tests="FAILED: ${summary_line:-catkin_test_results exited $results_rc}"
+    tests="FAILED: $counts_line"
     failed=1
-  elif ! printf '%s\n' "$summary_line" | grep -Eq '^Summary: [1-9][0-9]* tests'; then
+  elif ! printf '%s\n' "$counts_line" | grep -Eq '^[1-9][0-9]* test cases'; then
     tests="FAILED: no test results in $FRAGG_WS/build/test_results"
     failed=1
   else
-    tests="OK: $summary_line"
+    tests="OK: $counts_line"
   fi
 else
   build="FAILED (catkin_make)"
