@@ -14,6 +14,13 @@
 
 namespace fragg {
 
+/// How a visited cell relates to the previous one, passed to visitors so that they can follow
+/// a block to its face neighbour instead of looking the new block up.
+constexpr int kSameBlock = -1;     ///< same block as the previous cell
+constexpr int kUnknownBlock = -2;  ///< first cell of the ray, or a diagonal move (Bresenham)
+/// Otherwise: the face crossed into a new block, 2 * axis + (step > 0 ? 1 : 0).
+FRAGG_HD int blockFace(int axis, int step) { return 2 * axis + (step > 0 ? 1 : 0); }
+
 /// One ray in voxel units: `start_v` and `end_v` are relative to `ref` (a voxel key).
 struct RayVox {
   VoxelKey ref;
@@ -53,49 +60,57 @@ struct DdaAxis {
       t_max = INFINITY;
     }
   }
-  FRAGG_HD void advance() {
+  /// Steps to the next cell; returns true when that cell is in a new block.
+  FRAGG_HD bool advance() {
     cur += step;
     --remaining;
     t_max = remaining ? t_max + t_delta : INFINITY;
+    return (cur & kBlockMask) == (step > 0 ? 0 : kBlockMask);
   }
 };
 
 /// Exact 3D DDA (Amanatides & Woo). Visits every cell the segment passes through, in order,
 /// 6-connected; the per-axis step counts are fixed up front, so the walk always ends in the
-/// endpoint's cell. `visit(key, is_hit)` is called once per cell.
+/// endpoint's cell. `visit(key, is_hit, entry)` is called once per cell (entry: kSameBlock,
+/// kUnknownBlock or the face crossed into a new block); returns how many cells it visited.
 template <class Visit>
-FRAGG_HD void traverseDda(const RayVox& ray, Visit& visit) {
+FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
   DdaAxis x, y, z;
   x.init(ray.ref.x, ray.start_v[0], ray.end_v[0]);
   y.init(ray.ref.y, ray.start_v[1], ray.end_v[1]);
   z.init(ray.ref.z, ray.start_v[2], ray.end_v[2]);
   int total = x.remaining + y.remaining + z.remaining;
+  const int visited = total + (ray.end_is_hit ? 1 : 0);
+  int entry = kUnknownBlock;
   while (total > 0) {
-    visit(VoxelKey{x.cur, y.cur, z.cur}, false);
+    visit(VoxelKey{x.cur, y.cur, z.cur}, false, entry);
     // Smallest t_max advances; ties go to the later axis, as in OctoMap's computeRayKeys. An
     // exhausted axis has an infinite t_max, and an axis with steps left a finite one, so an
     // exhausted axis is never chosen while steps remain.
     if (x.t_max < y.t_max) {
       if (x.t_max < z.t_max)
-        x.advance();
+        entry = x.advance() ? blockFace(0, x.step) : kSameBlock;
       else
-        z.advance();
+        entry = z.advance() ? blockFace(2, z.step) : kSameBlock;
     } else {
       if (y.t_max < z.t_max)
-        y.advance();
+        entry = y.advance() ? blockFace(1, y.step) : kSameBlock;
       else
-        z.advance();
+        entry = z.advance() ? blockFace(2, z.step) : kSameBlock;
     }
     --total;
   }
-  if (ray.end_is_hit) visit(VoxelKey{x.cur, y.cur, z.cur}, true);
+  if (ray.end_is_hit) visit(VoxelKey{x.cur, y.cur, z.cur}, true, entry);
+  return visited;
 }
 
 FRAGG_HD int absInt(int v) { return v < 0 ? -v : v; }
 
-/// 3D Bresenham line between the start and end cells (26-connected, integer only).
+/// 3D Bresenham line between the start and end cells (26-connected, integer only). Calls
+/// `visit(key, is_hit, entry)` like traverseDda (entry is kSameBlock or kUnknownBlock) and
+/// returns how many cells it visited.
 template <class Visit>
-FRAGG_HD void traverseBresenham(const RayVox& ray, Visit& visit) {
+FRAGG_HD int traverseBresenham(const RayVox& ray, Visit& visit) {
   int cur[3], d[3], s[3];
   for (int a = 0; a < 3; ++a) {
     cur[a] = floorToInt(ray.start_v[a]);
@@ -108,8 +123,16 @@ FRAGG_HD void traverseBresenham(const RayVox& ray, Visit& visit) {
   int err1 = 2 * d[a1] - d[major];
   int err2 = 2 * d[a2] - d[major];
   const VoxelKey& r = ray.ref;
+  VoxelKey previous{};
+  int entry = kUnknownBlock;
   for (int i = 0; i < d[major]; ++i) {
-    visit(VoxelKey{r.x + cur[0], r.y + cur[1], r.z + cur[2]}, false);
+    const VoxelKey key{r.x + cur[0], r.y + cur[1], r.z + cur[2]};
+    if (i > 0)
+      entry = ((key.x ^ previous.x) | (key.y ^ previous.y) | (key.z ^ previous.z)) & ~kBlockMask
+                  ? kUnknownBlock
+                  : kSameBlock;
+    visit(key, false, entry);
+    previous = key;
     if (err1 > 0) {
       cur[a1] += s[a1];
       err1 -= 2 * d[major];
@@ -122,7 +145,15 @@ FRAGG_HD void traverseBresenham(const RayVox& ray, Visit& visit) {
     err2 += 2 * d[a2];
     cur[major] += s[major];
   }
-  if (ray.end_is_hit) visit(VoxelKey{r.x + cur[0], r.y + cur[1], r.z + cur[2]}, true);
+  if (ray.end_is_hit) {
+    const VoxelKey key{r.x + cur[0], r.y + cur[1], r.z + cur[2]};
+    if (d[major] > 0)
+      entry = ((key.x ^ previous.x) | (key.y ^ previous.y) | (key.z ^ previous.z)) & ~kBlockMask
+                  ? kUnknownBlock
+                  : kSameBlock;
+    visit(key, true, entry);
+  }
+  return d[major] + (ray.end_is_hit ? 1 : 0);
 }
 
 }  // namespace fragg

@@ -16,8 +16,9 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/// Marks the cells of rays in the scratch. Remembers the current block between cells and, in
-/// a small direct-mapped cache, the blocks of recent rays (neighbouring rays share blocks).
+/// Marks the cells of rays in the scratch. Follows the ray from block to block through the
+/// blocks' face-neighbour links; other lookups go through a small direct-mapped cache of
+/// recent blocks (neighbouring rays share blocks) before the scratch's table.
 struct MarkCells {
   static constexpr int kCacheSize = 256;
   struct CacheEntry {
@@ -26,8 +27,6 @@ struct MarkCells {
   };
   ScanScratch* scratch = nullptr;
   ScratchBlock* current = nullptr;
-  BlockKey current_key;
-  uint64_t visits = 0;
   CacheEntry cache[kCacheSize];
 
   ScratchBlock* lookup(const BlockKey& b) {
@@ -42,12 +41,13 @@ struct MarkCells {
     return e.block;
   }
 
-  void operator()(const VoxelKey& v, bool hit) {
-    ++visits;
-    const BlockKey b = blockKeyOf(v);
-    if (!current || b != current_key) {
-      current = lookup(b);
-      current_key = b;
+  void operator()(const VoxelKey& v, bool hit, int entry) {
+    if (entry >= 0) {
+      ScratchBlock*& next = current->neighbour[entry];
+      if (!next) next = lookup(blockKeyOf(v));
+      current = next;
+    } else if (entry == kUnknownBlock) {
+      current = lookup(blockKeyOf(v));
     }
     current->mark(cellIndexOf(v), hit);
   }
@@ -100,13 +100,9 @@ void CpuIntegrator::integrate(const PreparedScan& scan, const OccupancyModel& mo
 #pragma omp for schedule(dynamic, 512)
     for (long i = 0; i < n; ++i) {
       const RayVox ray = scan.ray(static_cast<size_t>(i));
-      mark.current = nullptr;  // a new ray starts anywhere
-      if (raycast == RayCast::kBresenham)
-        traverseBresenham(ray, mark);
-      else
-        traverseDda(ray, mark);
+      visits += raycast == RayCast::kBresenham ? traverseBresenham(ray, mark)
+                                               : traverseDda(ray, mark);
     }
-    visits += mark.visits;
   }
   // 2. Merge the threads' marks into the first scratch.
   ScanScratch& merged = *scratch_[0];

@@ -18,11 +18,34 @@ auto tupleOf(const VoxelKey& k) { return std::make_tuple(k.x, k.y, k.z); }
 struct Collect {
   Cells cells;
   std::vector<bool> hits;
-  void operator()(const VoxelKey& k, bool hit) {
+  std::vector<int> entries;
+  void operator()(const VoxelKey& k, bool hit, int entry) {
     cells.push_back(k);
     hits.push_back(hit);
+    entries.push_back(entry);
   }
 };
+
+/// The entry codes say whether each cell is in the previous cell's block, and through which
+/// face a new block was entered.
+void expectEntriesMatchBlocks(const Collect& got, bool faces) {
+  ASSERT_FALSE(got.entries.empty());
+  EXPECT_EQ(got.entries[0], kUnknownBlock);
+  for (size_t i = 1; i < got.cells.size(); ++i) {
+    const BlockKey a = blockKeyOf(got.cells[i - 1]), b = blockKeyOf(got.cells[i]);
+    if (a == b) {
+      EXPECT_EQ(got.entries[i], kSameBlock) << i;
+    } else if (!faces) {
+      EXPECT_EQ(got.entries[i], kUnknownBlock) << i;
+    } else {
+      const int d[3] = {b.x - a.x, b.y - a.y, b.z - a.z};
+      int face = -100;
+      for (int axis = 0; axis < 3; ++axis)
+        if (d[axis] != 0) face = blockFace(axis, d[axis]);
+      EXPECT_EQ(got.entries[i], face) << i;
+    }
+  }
+}
 
 /// Does the segment a->b intersect the unit cube at `cell` grown by `grow` on every side?
 bool segmentHitsCell(const float a[3], const float b[3], const VoxelKey& cell, double grow) {
@@ -64,6 +87,7 @@ TEST(RaycastTest, DdaVisitsExactlyTheCellsTheSegmentCrosses) {
       const VoxelKey &p = got.cells[i], &q = got.cells[i + 1];
       EXPECT_EQ(std::abs(p.x - q.x) + std::abs(p.y - q.y) + std::abs(p.z - q.z), 1);
     }
+    expectEntriesMatchBlocks(got, /*faces=*/true);
     std::set<std::tuple<int, int, int>> visited;
     for (const auto& k : got.cells) visited.insert(tupleOf(k));
     EXPECT_EQ(visited.size(), got.cells.size()) << "a cell was visited twice";
@@ -123,6 +147,7 @@ TEST(RaycastTest, BresenhamConnectsStartToEnd) {
     EXPECT_EQ(got.cells.back(),
               (VoxelKey{-100 + floorToInt(ray.end_v[0]), 200 + floorToInt(ray.end_v[1]),
                         floorToInt(ray.end_v[2])}));
+    expectEntriesMatchBlocks(got, /*faces=*/false);
     for (size_t i = 0; i + 1 < got.cells.size(); ++i) {
       const VoxelKey &p = got.cells[i], &q = got.cells[i + 1];
       EXPECT_LE(std::max({std::abs(p.x - q.x), std::abs(p.y - q.y), std::abs(p.z - q.z)}), 1);

@@ -16,6 +16,7 @@ namespace fragg {
 struct ScratchBlock {
   uint64_t free[kCellsPerBlock / 64];  ///< bit c: a ray passed through cell c
   uint64_t hit[kCellsPerBlock / 64];   ///< bit c: a ray ended in cell c
+  ScratchBlock* neighbour[6];          ///< face neighbours found so far (see raycast.h)
   BlockKey key;
 
   void mark(int c, bool is_hit) { (is_hit ? hit : free)[c >> 6] |= uint64_t{1} << (c & 63); }
