@@ -95,6 +95,22 @@ Eigen::Isometry3d readKittiCalibTr(const std::string& path) {
   throwIo(path, "no 'Tr:' line (velodyne to camera transform) in the KITTI calibration");
 }
 
+Eigen::Isometry3d readMatrix4(const std::string& path) {
+  std::vector<double> v;
+  int last_line = 0;
+  for (const TextLine& line : internal::readDataLines(path)) {
+    const std::vector<std::string> tokens = internal::splitTokens(line.text, /*commas=*/true);
+    const std::vector<double> row = parseNumbers(path, line, tokens);
+    v.insert(v.end(), row.begin(), row.end());
+    last_line = line.number;
+  }
+  if (v.size() != 16)
+    throwIo(path, "expected a 4x4 matrix (16 numbers), got " + std::to_string(v.size()));
+  if (v[12] != 0.0 || v[13] != 0.0 || v[14] != 0.0 || v[15] != 1.0)
+    throwIo(path, "the last row of a rigid transform must be 0 0 0 1");
+  return isometryFrom3x4(path, last_line, v.data());
+}
+
 std::vector<double> readKittiTimes(const std::string& path) {
   std::vector<double> times;
   for (const TextLine& line : internal::readDataLines(path)) {

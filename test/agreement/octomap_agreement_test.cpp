@@ -10,23 +10,13 @@
 
 #include "fragg_map/io/dataset.h"
 #include "fragg_map/io/point_file.h"
+#include "fragg_map/io/pose_file.h"
 #include "octomap_reference.h"
 
 namespace fragg {
 namespace {
 
 const std::string kData = FRAGG_REAL_DATA;
-
-Eigen::Isometry3d readMatrix4(const std::string& path) {
-  std::ifstream in(path);
-  Eigen::Matrix4d m;
-  for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 4; ++c) in >> m(r, c);
-  EXPECT_TRUE(in.good() || in.eof()) << path;
-  Eigen::Isometry3d T;
-  T.matrix() = m;
-  return T;
-}
 
 /// Builds both maps from `scans` and checks the agreement figures.
 void expectAgreement(const std::vector<Scan>& scans, double resolution_m, double max_range_m,

@@ -38,15 +38,6 @@ std::vector<Scan> readAll(ScanSource& source) {
   return scans;
 }
 
-Eigen::Isometry3d readMatrix4(const std::string& path) {
-  std::ifstream in(path);
-  Eigen::Matrix4d m;
-  for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 4; ++c) in >> m(r, c);
-  EXPECT_TRUE(in.good() || in.eof()) << path;
-  return Eigen::Isometry3d(m);
-}
-
 Eigen::Isometry3d pose(double x, double y, double z, double roll, double pitch, double yaw) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
@@ -321,6 +312,19 @@ TEST(Dataset, TumPoseErrors) {
   expectIoError([&] { readTumPoses(path); }, {path, "line 2", "'x' is not a finite number"});
   writeBytes(path, "2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n");
   expectIoError([&] { readTumPoses(path); }, {path, "backwards"});
+}
+
+TEST(Dataset, Matrix4Files) {
+  const Eigen::Isometry3d T = readMatrix4(realData("small_gicp_pair/T_target_source.txt"));
+  EXPECT_NEAR(T.linear().determinant(), 1.0, 1e-9);
+  EXPECT_GT(T.translation().norm(), 0.1);  // the two scans are taken from different places
+  const std::string path = scratchDir() + "/T.txt";
+  writeBytes(path, "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0\n");
+  expectIoError([&] { readMatrix4(path); }, {path, "16 numbers", "got 15"});
+  writeBytes(path, "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n");
+  expectIoError([&] { readMatrix4(path); }, {path, "0 0 0 1"});
+  writeBytes(path, "2 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  expectIoError([&] { readMatrix4(path); }, {path, "not a rotation"});
 }
 
 // ---------------------------------------------------------------- depth images

@@ -24,6 +24,10 @@ std::vector<Eigen::Isometry3d> readKittiPoses(const std::string& path);
 /// T_cam_velo, the velodyne pose in the camera frame.
 Eigen::Isometry3d readKittiCalibTr(const std::string& path);
 
+/// A 4x4 rigid transform as text, row-major (16 numbers over any lines; last row 0 0 0 1),
+/// e.g. small_gicp's T_target_source.txt.
+Eigen::Isometry3d readMatrix4(const std::string& path);
+
 /// KITTI times.txt: one time in seconds per line.
 std::vector<double> readKittiTimes(const std::string& path);
 

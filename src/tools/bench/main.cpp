@@ -18,9 +18,13 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/io/dataset.h"
 #include "fragg_map/io/point_file.h"
+#include "fragg_map/io/pose_file.h"
 #include "fragg_map/map.h"
 #ifdef FRAGG_HAVE_OCTOMAP
 #include <octomap/octomap.h>
+
+#include "fragg_map/interop/compare.h"
+#include "fragg_map/interop/octomap_io.h"
 #endif
 
 namespace fragg::bench {
@@ -105,32 +109,14 @@ OctomapRun runOctomap(const Workload& w, size_t count, const Map& fragg_map) {
     out.figures.seconds += sec;
   }
   out.figures.bytes = tree.memoryUsage();
-  // Agreement, cell by cell (OctoMap leaves expanded to voxels).
-  uint64_t both = 0, same = 0, only_octo = 0, known_octo = 0;
-  const int depth = static_cast<int>(tree.getTreeDepth());
-  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
-    const int span = 1 << (depth - static_cast<int>(it.getDepth()));
-    const octomap::OcTreeKey k = it.getIndexKey();
-    const bool occ = tree.isNodeOccupied(*it);
-    for (int dx = 0; dx < span; ++dx)
-      for (int dy = 0; dy < span; ++dy)
-        for (int dz = 0; dz < span; ++dz) {
-          ++known_octo;
-          const Cell* c = fragg_map.findCell(
-              {int(k[0]) - 32768 + dx, int(k[1]) - 32768 + dy, int(k[2]) - 32768 + dz});
-          if (!c || !c->observed()) {
-            ++only_octo;
-            continue;
-          }
-          ++both;
-          same += (c->log_odds_fx > 0) == occ ? 1 : 0;
-        }
-  }
-  out.figures.known = known_octo;
-  const uint64_t only_fragg = fragg_map.knownVoxelCount() - both;
-  out.both = both ? double(same) / both : 0.0;
-  const uint64_t either = both + only_fragg + only_octo;
-  out.either = either ? double(same) / either : 0.0;
+  // Agreement, cell by cell, with OctoMap's occupancy rule on both sides.
+  const Map octo_map = fromOcTree(tree);
+  CompareOptions rule;
+  rule.octomap_threshold = true;
+  const MapComparison c = compareMaps(fragg_map, octo_map, rule);
+  out.figures.known = c.known_in_b;
+  out.both = c.agreementInBoth();
+  out.either = c.agreementInEither();
   return out;
 }
 #endif
@@ -182,11 +168,7 @@ int main(int argc, char** argv) {
     };
     const std::string d = data + "/";
     if (want("velodyne_pair")) {
-      std::ifstream in(d + "small_gicp_pair/T_target_source.txt");
-      Eigen::Matrix4d m;
-      for (int i = 0; i < 16; ++i) in >> m(i / 4, i % 4);
-      Eigen::Isometry3d T;
-      T.matrix() = m;
+      const Eigen::Isometry3d T = readMatrix4(d + "small_gicp_pair/T_target_source.txt");
       workloads.push_back({"velodyne_pair (HDL-32E, 2 scans)",
                            {fileScan(d + "small_gicp_pair/target.ply"),
                             fileScan(d + "small_gicp_pair/source.ply", T)},
