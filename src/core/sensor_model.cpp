@@ -2,7 +2,6 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <sstream>
 
@@ -120,7 +119,6 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud)
   SensorModel out = model;
   double max_dist = 0.0;
   Eigen::Vector3d mean_dir = Eigen::Vector3d::Zero();
-  std::array<bool, 36> azimuth_bins{};
   size_t valid = 0;
   double el_min = M_PI / 2, el_max = -M_PI / 2;
   for (const auto& p : cloud.points_S) {
@@ -129,8 +127,6 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud)
     const double r = d.norm();
     max_dist = std::max(max_dist, r);
     mean_dir += d / r;
-    const double az = std::atan2(d.y(), d.x());
-    azimuth_bins[std::min(35, static_cast<int>((az + M_PI) / (2 * M_PI) * 36))] = true;
     const double el = std::atan2(d.z(), std::hypot(d.x(), d.y()));
     el_min = std::min(el_min, el);
     el_max = std::max(el_max, el);
@@ -143,10 +139,10 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud)
     out.elevation_max_rad = M_PI / 2;
     return out;
   }
-  const int bins = static_cast<int>(std::count(azimuth_bins.begin(), azimuth_bins.end(), true));
+  // A pinhole pyramid around the mean direction when every point lies well in front of the
+  // sensor; otherwise (the points surround it, or the pyramid would be too wide) a LiDAR shell.
   Eigen::Vector3d axis = mean_dir / static_cast<double>(valid);
-  const bool surrounds = bins >= 24 || axis.norm() < 0.3;
-  if (!surrounds) {
+  if (axis.norm() > 0.3) {
     axis.normalize();
     // Snap to a sensor axis when close, so camera clouds keep the same frustum scan to scan.
     for (int a = 0; a < 3; ++a) {
@@ -157,7 +153,7 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud)
       }
     }
     const Eigen::Vector3d hint =
-        std::fabs(axis.z()) < 0.9 ? Eigen::Vector3d(0, 0, 1) : Eigen::Vector3d(0, -1, 0);
+        std::fabs(axis.z()) < 0.9 ? Eigen::Vector3d(0, 0, 1) : Eigen::Vector3d(0, 1, 0);
     const Eigen::Vector3d right = hint.cross(axis).normalized();
     const Eigen::Vector3d vertical = axis.cross(right);
     double half_h = 0.0, half_v = 0.0;

@@ -127,6 +127,59 @@ TEST(FrustumTest, CoherenceNeverChangesTheVisibleSet) {
   EXPECT_GT(lidar_counters.saved_by_rotation, 0u);
 }
 
+/// Every valid point of `cloud` lies inside the frustum of `model` at the identity pose.
+void expectCloudInside(const SensorModel& model, const PointCloud& cloud) {
+  const Frustum f = buildFrustum(model, Eigen::Isometry3d::Identity(), kRes);
+  for (const auto& p : cloud.points_S) {
+    if (!p.allFinite()) continue;
+    const float q[3] = {p.x(), p.y(), p.z()};
+    ASSERT_TRUE(frustumContains(f, q, 1e-4f)) << p.transpose();
+  }
+}
+
+TEST(FrustumTest, AutoSensorFollowsTheCloudsExtent) {
+  // A spinning LiDAR: 360 degrees of azimuth, -25..+15 degrees of elevation.
+  PointCloud lidar;
+  for (int r = 0; r < 16; ++r)
+    for (int k = 0; k < 360; ++k) {
+      const double el = (-25.0 + 40.0 * r / 15) * kDeg, az = k * kDeg;
+      lidar.points_S.emplace_back(Eigen::Vector3d(12 * std::cos(el) * std::cos(az),
+                                                  12 * std::cos(el) * std::sin(az),
+                                                  12 * std::sin(el))
+                                      .cast<float>());
+    }
+  const SensorModel l = resolveAutoSensor(SensorModel::autoFromCloud(0.0, -1.0), lidar);
+  EXPECT_EQ(l.type, SensorType::kSpinningLidar);
+  EXPECT_LE(l.elevation_min_rad, -25 * kDeg);
+  EXPECT_GE(l.elevation_max_rad, 15 * kDeg);
+  EXPECT_LE(l.elevation_max_rad, 17 * kDeg);  // tight: a degree of slack, rounded
+  EXPECT_GE(l.max_range_m, 12.0);  // the farthest point, rounded up to whole metres
+  EXPECT_LE(l.max_range_m, 13.0);
+  expectCloudInside(l, lidar);
+
+  // A depth camera (optical frame, z forward) with a 58 x 45 degree view.
+  PointCloud cam;
+  for (int v = 0; v < 30; ++v)
+    for (int u = 0; u < 40; ++u) {
+      const double x = std::tan(29 * kDeg) * (2.0 * u / 39 - 1);
+      const double y = std::tan(22.5 * kDeg) * (2.0 * v / 29 - 1);
+      cam.points_S.emplace_back(Eigen::Vector3d(x, y, 1.0).cast<float>() * 3.0f);
+    }
+  const SensorModel c = resolveAutoSensor(SensorModel::autoFromCloud(0.0, 8.0), cam);
+  EXPECT_EQ(c.type, SensorType::kPinhole);
+  EXPECT_EQ(c.forward_S, Eigen::Vector3d::UnitZ());
+  EXPECT_GE(c.hfov_rad, 58 * kDeg);
+  EXPECT_LE(c.hfov_rad, 62 * kDeg);
+  EXPECT_GE(c.vfov_rad, 45 * kDeg);
+  EXPECT_LE(c.vfov_rad, 49 * kDeg);
+  EXPECT_EQ(c.max_range_m, 8.0);
+  expectCloudInside(c, cam);
+  // The same cloud twice resolves to the same model (so coherence can carry over).
+  const SensorModel again = resolveAutoSensor(SensorModel::autoFromCloud(0.0, 8.0), cam);
+  EXPECT_EQ(again.hfov_rad, c.hfov_rad);
+  EXPECT_EQ(again.vfov_rad, c.vfov_rad);
+}
+
 TEST(FrustumTest, VoxelEstimateFollowsThePaperFormula) {
   // x = 0: a cone of depth D with base pi/4 (tan(fov/2) D)^2 -> V = D/3 * S2.
   const double fov = 60 * kDeg, D = 10.0, r = 0.1;
