@@ -100,8 +100,8 @@ void CpuIntegrator::integrate(const PreparedScan& scan, const OccupancyModel& mo
 #pragma omp for schedule(dynamic, 512)
     for (long i = 0; i < n; ++i) {
       const RayVox ray = scan.ray(static_cast<size_t>(i));
-      visits += raycast == RayCast::kBresenham ? traverseBresenham(ray, mark)
-                                               : traverseDda(ray, mark);
+      visits +=
+          raycast == RayCast::kBresenham ? traverseBresenham(ray, mark) : traverseDda(ray, mark);
     }
   }
   // 2. Merge the threads' marks into the first scratch.

@@ -44,7 +44,7 @@ ScratchBlock& ScanScratch::blockFor(const BlockKey& key) {
   if (!block) {
     if (used_blocks_ == blocks_.size()) blocks_.push_back(std::make_unique<ScratchBlock>());
     block = blocks_[used_blocks_++].get();
-    std::memset(block, 0, sizeof(ScratchBlock));
+    *block = ScratchBlock{};
     block->key = key;
   }
   return *block;

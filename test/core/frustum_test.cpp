@@ -153,7 +153,7 @@ TEST(FrustumTest, AutoSensorFollowsTheCloudsExtent) {
   EXPECT_LE(l.elevation_min_rad, -25 * kDeg);
   EXPECT_GE(l.elevation_max_rad, 15 * kDeg);
   EXPECT_LE(l.elevation_max_rad, 17 * kDeg);  // tight: a degree of slack, rounded
-  EXPECT_GE(l.max_range_m, 12.0);  // the farthest point, rounded up to whole metres
+  EXPECT_GE(l.max_range_m, 12.0);             // the farthest point, rounded up to whole metres
   EXPECT_LE(l.max_range_m, 13.0);
   expectCloudInside(l, lidar);
 
