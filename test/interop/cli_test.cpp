@@ -15,29 +15,11 @@ using test::fileExists;
 using test::listDir;
 using test::paramsAt;
 using test::readBytes;
+using test::runCli;
+using test::RunResult;
 using test::setCell;
 using test::testDir;
 using test::writeBytes;
-
-struct RunResult {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-RunResult runCli(const std::string& dir, const std::string& args) {
-  const std::string out = dir + "/stdout.txt", err = dir + "/stderr.txt";
-  const std::string cmd =
-      std::string("'") + FRAGG_CLI_PATH + "' " + args + " > '" + out + "' 2> '" + err + "'";
-  const int status = std::system(cmd.c_str());
-  RunResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  r.out = readBytes(out);
-  r.err = readBytes(err);
-  std::remove(out.c_str());
-  std::remove(err.c_str());
-  return r;
-}
 
 /// In `dir`: map.fgm (a few free and occupied cells at 5 cm), coarse.fgm (10 cm),
 /// empty.fgm, corrupt.fgm, map.txt; and an empty out/ directory for the outputs.

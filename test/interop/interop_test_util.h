@@ -3,6 +3,7 @@
 
 #include <dirent.h>
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cstdint>
 #include <fstream>
@@ -73,5 +74,31 @@ inline std::vector<std::string> listDir(const std::string& dir) {
   }
   return names;
 }
+
+#ifdef FRAGG_CLI_PATH
+inline const char* cliPath() { return FRAGG_CLI_PATH; }
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+/// Runs the fragg_map binary with `args` (shell words), capturing its output in `dir`.
+inline RunResult runCli(const std::string& dir, const std::string& args) {
+  const std::string out = dir + "/stdout.txt", err = dir + "/stderr.txt";
+  const std::string cmd =
+      std::string("'") + cliPath() + "' " + args + " > '" + out + "' 2> '" + err + "'";
+  const int status = std::system(cmd.c_str());
+  RunResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.out = readBytes(out);
+  r.err = readBytes(err);
+  std::remove(out.c_str());
+  std::remove(err.c_str());
+  return r;
+}
+
+#endif
 
 }  // namespace fragg::test

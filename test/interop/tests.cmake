@@ -25,3 +25,13 @@ if(TARGET interop_cli_test)
     FRAGG_CLI_PATH="$<TARGET_FILE:fragg_map_cli>"
     $<$<TARGET_EXISTS:fragg_map_octomap>:FRAGG_CLI_HAS_OCTOMAP=1>)
 endif()
+
+# Runs the built `fragg_map` binary: build and stats, good and bad input.
+fragg_add_test(cli_build_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/cli_build_test.cpp
+  LIBS fragg_map_core nlohmann_json::nlohmann_json
+  LABELS cli)
+if(TARGET cli_build_test)
+  add_dependencies(cli_build_test fragg_map_cli)
+  target_compile_definitions(cli_build_test PRIVATE FRAGG_CLI_PATH="$<TARGET_FILE:fragg_map_cli>")
+endif()

@@ -1,0 +1,102 @@
+// The fragg_map tool's build and stats subcommands, run as a user would: real input, JSON
+// output, and bad arguments or input (one-line error, exit code, no file left behind).
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "interop_test_util.h"
+
+namespace fragg {
+namespace {
+
+using test::fileExists;
+using test::listDir;
+using test::readBytes;
+using test::runCli;
+using test::testDir;
+using test::writeBytes;
+
+const std::string kPly = std::string(FRAGG_REAL_DATA) + "/small_gicp_pair/target.ply";
+
+TEST(CliBuild, BuildsARealScanAndStatsAgrees) {
+  const std::string dir = testDir();
+  const std::string map = dir + "/velodyne.fgm";
+  auto r =
+      runCli(dir, "build '" + kPly + "' -o '" + map + "' --resolution 0.1 --max-range 30 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json b = nlohmann::json::parse(r.out);
+  EXPECT_EQ(b["scans"], 1);
+  EXPECT_EQ(b["points"], 69088);
+  EXPECT_EQ(b["dropped_invalid"], 5032);  // the scan's (0, 0, 0) no-return points
+  EXPECT_GT(b["known_voxels"].get<int64_t>(), 100000);
+  EXPECT_EQ(b["backend"], "cpu");
+  ASSERT_TRUE(fileExists(map));
+
+  r = runCli(dir, "stats '" + map + "' --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(r.out);
+  EXPECT_EQ(s["known_voxels"], b["known_voxels"]);
+  EXPECT_EQ(s["scans"], 1);
+  EXPECT_DOUBLE_EQ(s["resolution_m"].get<double>(), 0.1);
+  EXPECT_GT(s["occupied"].get<int64_t>(), 1000);
+  EXPECT_GT(s["free"].get<int64_t>(), s["occupied"].get<int64_t>());
+
+  // Without --json: one summary line naming the output.
+  r = runCli(dir, "build '" + kPly + "' -o '" + map + "' --resolution 0.1 --max-range 30");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("built " + map + ": 1 scans, 69088 points", 0), 0u) << r.out;
+}
+
+TEST(CliBuild, ExplicitSensorReportsPointsOutsideItsFrustum) {
+  const std::string dir = testDir();
+  // A forward-looking 90 x 40 degree camera model cannot hold a 360-degree scan.
+  auto r = runCli(dir, "build '" + kPly + "' -o '" + dir +
+                           "/m.fgm' --resolution 0.2 --sensor "
+                           "pinhole --hfov 90 --vfov 40 --optical-axis x --max-range 30 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_GT(nlohmann::json::parse(r.out)["dropped_outside_frustum"].get<int64_t>(), 30000);
+  EXPECT_NE(r.err.find("outside"), std::string::npos) << r.err;
+}
+
+TEST(CliBuild, BadArgumentsAndInputsFailCleanly) {
+  const std::string dir = testDir();
+  writeBytes(dir + "/truncated.ply", readBytes(kPly).substr(0, 5000));
+  writeBytes(dir + "/corrupt.fgm", "FRAGGMAP not really\n");
+  const std::string out = dir + "/out";
+  ASSERT_EQ(std::system(("mkdir -p '" + out + "'").c_str()), 0);
+  struct Case {
+    std::string args;
+    int exit_code;
+    std::string says;
+  };
+  const Case cases[] = {
+      {"build '" + dir + "/missing.ply' -o '" + out + "/m.fgm'", 1, "no such file"},
+      {"build '" + dir + "/truncated.ply' -o '" + out + "/m.fgm'", 1, "truncated.ply"},
+      {"build '" + kPly + "' -o '" + out + "/m.fgm' --resolution -1", 2, "resolution"},
+      {"build '" + kPly + "' -o '" + out + "/m.fgm' --resolution nan", 2, "resolution"},
+      {"build '" + kPly + "' -o '" + out + "/m.bt'", 2, ".fgm"},
+      {"build '" + kPly + "' -o '" + dir + "/no_such_dir/m.fgm'", 1, "no_such_dir"},
+      {"build '" + kPly + "' -o '" + out + "/m.fgm' --sensor pinhole", 2, "--hfov"},
+      {"build '" + kPly + "' -o '" + out + "/m.fgm' --sensor sonar", 2, "sensor"},
+      {"build '" + kPly + "' -o '" + out + "/m.fgm' --backend cuda", 2, "CUDA"},
+      {"build '" + kPly + "' -o '" + out + "/m.fgm' --hit 0.3", 2, "hit"},
+      {"build '" + kPly + "' -o '" + out + "/m.fgm' --min-range 5 --max-range 2", 2, "range"},
+      {"build '" + kPly + "'", 2, "output"},
+      {"stats '" + dir + "/missing.fgm'", 1, "missing.fgm"},
+      {"stats '" + dir + "/corrupt.fgm'", 1, "corrupt.fgm"},
+      {"stats", 2, "map"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.args);
+    const auto r = runCli(dir, c.args);
+    EXPECT_EQ(r.exit_code, c.exit_code) << r.err;
+    EXPECT_EQ(r.err.rfind("fragg_map: error: ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_TRUE(listDir(out).empty()) << "left behind: " << listDir(out).front();
+  }
+}
+
+}  // namespace
+}  // namespace fragg
