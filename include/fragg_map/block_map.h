@@ -33,7 +33,6 @@ struct BlockMeta {
   BlockKey key;
   uint64_t changed_at = 0;  ///< map revision of the last change (for incremental publishing)
   CullMemory cull;
-  bool live = false;
 };
 
 /// Inclusive voxel-key bounds of the observed map.
@@ -78,8 +77,6 @@ class BlockMap {
 
   size_t size() const { return index_.size(); }
   bool empty() const { return index_.empty(); }
-  /// Upper bound (exclusive) of live block indices, for parallel loops over meta().live.
-  BlockIndex indexEnd() const { return static_cast<BlockIndex>(meta_.size()); }
 
   /// Calls `fn(index)` for every live block whose key lies in [lo, hi] (inclusive), using the
   /// coarse spatial index so the cost follows the blocks there, not the box volume.
@@ -88,13 +85,10 @@ class BlockMap {
   /// Every live block, in unspecified order.
   void forEach(const std::function<void(BlockIndex)>& fn) const;
 
-  /// Blocks' key bounds (kept as blocks are created).
-  bool blockBounds(BlockKey* lo, BlockKey* hi) const;
   /// Exact bounds of observed cells (scans the boundary blocks).
   KeyBounds observedBounds() const;
 
   size_t hostBytes() const;
-  const char* allocatorName() const { return allocator_->name(); }
 
  private:
   struct SuperKeyHash {
@@ -110,7 +104,6 @@ class BlockMap {
   std::vector<BlockIndex> free_;
   std::unordered_map<BlockKey, BlockIndex, BlockKeyHash> index_;
   std::unordered_map<BlockKey, std::vector<BlockIndex>, SuperKeyHash> super_;
-  BlockKey lo_, hi_;
 };
 
 }  // namespace fragg

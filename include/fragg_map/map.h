@@ -14,7 +14,6 @@
 #include <string>
 
 #include "fragg_map/block_map.h"
-#include "fragg_map/frustum.h"
 #include "fragg_map/insert_stats.h"
 #include "fragg_map/map_params.h"
 #include "fragg_map/occupancy.h"
@@ -57,9 +56,6 @@ class Map {
   void clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map);
   void reset();
 
-  /// The frustum of the last insertion (for visualisation).
-  const Frustum& lastFrustum() const { return last_frustum_; }
-
   const MapParams& params() const { return params_; }
   const OccupancyModel& model() const { return model_; }
   double resolution() const { return params_.resolution_m; }
@@ -83,7 +79,6 @@ class Map {
   BlockMap blocks_;
   std::unique_ptr<Culler> culler_;
   std::unique_ptr<Integrator> integrator_;
-  Frustum last_frustum_;
   uint64_t revision_ = 0;
   size_t scans_ = 0;
 };

@@ -45,8 +45,6 @@ BlockMap& BlockMap::operator=(BlockMap&& o) noexcept {
   free_ = std::move(o.free_);
   index_ = std::move(o.index_);
   super_ = std::move(o.super_);
-  lo_ = o.lo_;
-  hi_ = o.hi_;
   o.allocator_ = allocator_;
   o.chunks_.clear();
   o.clear();
@@ -99,13 +97,6 @@ BlockIndex BlockMap::findOrCreate(const BlockKey& key, bool* created, bool initi
   BlockMeta& m = meta_[i];
   m = BlockMeta();
   m.key = key;
-  m.live = true;
-  if (index_.size() == 1) {
-    lo_ = hi_ = key;
-  } else {
-    lo_ = {std::min(lo_.x, key.x), std::min(lo_.y, key.y), std::min(lo_.z, key.z)};
-    hi_ = {std::max(hi_.x, key.x), std::max(hi_.y, key.y), std::max(hi_.z, key.z)};
-  }
   return i;
 }
 
@@ -120,21 +111,14 @@ void BlockMap::erase(const BlockKey& key) {
     v.erase(std::remove(v.begin(), v.end(), i), v.end());
     if (v.empty()) super_.erase(sit);
   }
-  meta_[i].live = false;
   free_.push_back(i);
-  // Bounds stay conservative after erasures; recompute them when the map empties.
-  if (index_.empty()) lo_ = hi_ = BlockKey();
 }
 
 void BlockMap::clear() {
   index_.clear();
   super_.clear();
   free_.clear();
-  for (BlockIndex i = static_cast<BlockIndex>(meta_.size()); i-- > 0;) {
-    meta_[i].live = false;
-    free_.push_back(i);
-  }
-  lo_ = hi_ = BlockKey();
+  for (BlockIndex i = static_cast<BlockIndex>(meta_.size()); i-- > 0;) free_.push_back(i);
 }
 
 void BlockMap::forEachInBox(const BlockKey& lo, const BlockKey& hi,
@@ -168,13 +152,6 @@ void BlockMap::forEachInBox(const BlockKey& lo, const BlockKey& hi,
 
 void BlockMap::forEach(const std::function<void(BlockIndex)>& fn) const {
   for (const auto& kv : index_) fn(kv.second);
-}
-
-bool BlockMap::blockBounds(BlockKey* lo, BlockKey* hi) const {
-  if (index_.empty()) return false;
-  *lo = lo_;
-  *hi = hi_;
-  return true;
 }
 
 KeyBounds BlockMap::observedBounds() const {

@@ -74,7 +74,6 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   integrator_->integrate(scan, model_, params_.raycast, revision_ + 1, blocks_, stats);
   ++revision_;
   ++scans_;
-  last_frustum_ = frustum;
   stats.seconds_total =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;

@@ -116,20 +116,18 @@ std::string SensorModel::describe() const {
 }
 
 SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud) {
+  // Runs once per scan over every point: only products and square roots per point; the
+  // angles come from the extreme ratios at the end (atan and asin are monotonic).
   SensorModel out = model;
   double max_dist = 0.0;
   Eigen::Vector3d mean_dir = Eigen::Vector3d::Zero();
   size_t valid = 0;
-  double el_min = M_PI / 2, el_max = -M_PI / 2;
   for (const auto& p : cloud.points_S) {
     if (!validPoint(p)) continue;
     const Eigen::Vector3d d = p.cast<double>();
     const double r = d.norm();
     max_dist = std::max(max_dist, r);
     mean_dir += d / r;
-    const double el = std::atan2(d.z(), std::hypot(d.x(), d.y()));
-    el_min = std::min(el_min, el);
-    el_max = std::max(el_max, el);
     ++valid;
   }
   if (out.max_range_m <= 0.0) out.max_range_m = std::max(1.0, std::ceil(max_dist));
@@ -156,21 +154,23 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud)
         std::fabs(axis.z()) < 0.9 ? Eigen::Vector3d(0, 0, 1) : Eigen::Vector3d(0, 1, 0);
     const Eigen::Vector3d right = hint.cross(axis).normalized();
     const Eigen::Vector3d vertical = axis.cross(right);
-    double half_h = 0.0, half_v = 0.0;
+    const double kMinForward = std::cos(85 * kDeg);  // wider than 170 degrees: a lidar
+    double tan_h = 0.0, tan_v = 0.0;
     bool fits = true;
     for (const auto& p : cloud.points_S) {
       if (!validPoint(p)) continue;
       const Eigen::Vector3d d = p.cast<double>();
       const double z = d.dot(axis);
-      if (z <= 0.0) {
+      if (z <= kMinForward * d.norm()) {
         fits = false;
         break;
       }
-      half_h = std::max(half_h, std::atan2(std::fabs(d.dot(right)), z));
-      half_v = std::max(half_v, std::atan2(std::fabs(d.dot(vertical)), z));
+      tan_h = std::max(tan_h, std::fabs(d.dot(right)) / z);
+      tan_v = std::max(tan_v, std::fabs(d.dot(vertical)) / z);
     }
-    // One degree of slack, rounded up to whole degrees; wider than 170 degrees: use a lidar.
-    const double hfov = ceilDeg(2 * half_h + 2 * kDeg), vfov = ceilDeg(2 * half_v + 2 * kDeg);
+    // One degree of slack, rounded up to whole degrees.
+    const double hfov = ceilDeg(2 * std::atan(tan_h) + 2 * kDeg);
+    const double vfov = ceilDeg(2 * std::atan(tan_v) + 2 * kDeg);
     if (fits && hfov < 170 * kDeg && vfov < 170 * kDeg) {
       out.type = SensorType::kPinhole;
       out.hfov_rad = hfov;
@@ -180,9 +180,16 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud)
       return out;
     }
   }
+  double sin_min = 1.0, sin_max = -1.0;  // sine of the elevation about the sensor z axis
+  for (const auto& p : cloud.points_S) {
+    if (!validPoint(p)) continue;
+    const double s = std::clamp(static_cast<double>(p.z()) / p.cast<double>().norm(), -1.0, 1.0);
+    sin_min = std::min(sin_min, s);
+    sin_max = std::max(sin_max, s);
+  }
   out.type = SensorType::kSpinningLidar;
-  out.elevation_min_rad = std::max(-M_PI / 2, floorDeg(el_min - kDeg));
-  out.elevation_max_rad = std::min(M_PI / 2, ceilDeg(el_max + kDeg));
+  out.elevation_min_rad = std::max(-M_PI / 2, floorDeg(std::asin(sin_min) - kDeg));
+  out.elevation_max_rad = std::min(M_PI / 2, ceilDeg(std::asin(sin_max) + kDeg));
   return out;
 }
 

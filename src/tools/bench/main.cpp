@@ -20,6 +20,7 @@
 #include "fragg_map/io/point_file.h"
 #include "fragg_map/io/pose_file.h"
 #include "fragg_map/map.h"
+#include "percentile.h"
 #ifdef FRAGG_HAVE_OCTOMAP
 #include <octomap/octomap.h>
 
@@ -29,6 +30,8 @@
 
 namespace fragg::bench {
 namespace {
+
+using tools::percentile;
 
 using Clock = std::chrono::steady_clock;
 
@@ -46,13 +49,6 @@ struct Figures {
   size_t known = 0;
   size_t bytes = 0;
 };
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const size_t i = static_cast<size_t>(std::ceil(q * v.size()));
-  return v[std::min(v.size() - 1, i == 0 ? 0 : i - 1)];
-}
 
 Figures runFragg(const Workload& w, size_t count, int repeats, int threads, Map* keep) {
   Figures f;

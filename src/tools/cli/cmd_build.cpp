@@ -15,6 +15,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/io/dataset.h"
 #include "fragg_map/map.h"
+#include "percentile.h"
 #ifdef FRAGG_HAVE_ROSBAG
 #include "fragg_map/io/rosbag_source.h"
 #endif
@@ -22,6 +23,8 @@
 namespace fragg::cli {
 
 namespace {
+using tools::percentile;
+
 struct BuildOptions {
   std::string input, output;
   double resolution_m = MapParams().resolution_m;
@@ -56,13 +59,6 @@ SensorModel sensorFrom(const BuildOptions& o) {
       break;
   }
   return SensorModel::autoFromCloud(o.min_range_m, o.max_range_m);
-}
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const size_t i = static_cast<size_t>(std::ceil(q * v.size())) - (q > 0 ? 1 : 0);
-  return v[std::min(i, v.size() - 1)];
 }
 
 void runBuild(const BuildOptions& o) {
