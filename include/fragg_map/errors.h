@@ -24,4 +24,10 @@ class CudaError : public std::runtime_error {
   explicit CudaError(const std::string& what) : std::runtime_error(what) {}
 };
 
+/// The device ran out of memory (the CUDA backend falls back to the CPU on it).
+class CudaOutOfMemory : public CudaError {
+ public:
+  explicit CudaOutOfMemory(const std::string& what) : CudaError(what) {}
+};
+
 }  // namespace fragg

@@ -19,6 +19,8 @@ struct InsertStats {
   uint64_t cells_updated = 0;            ///< cells whose log-odds were updated (once per scan)
   uint64_t blocks_touched = 0;
   uint64_t blocks_created = 0;
+  uint64_t blocks_uploaded = 0;  ///< CUDA: host blocks copied to the device for this scan
+  uint64_t blocks_evicted = 0;   ///< CUDA: device slots given back to make room
   CullCounters culling;
   double seconds_total = 0;
   double seconds_prepare = 0;  ///< transform + filter

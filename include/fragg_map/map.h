@@ -48,7 +48,7 @@ class Map {
 
   CellState query(const Eigen::Vector3d& p_map) const;
   CellState state(const Cell& c) const { return model_.state(c); }
-  const Cell* findCell(const VoxelKey& key) const { return blocks_.findCell(key); }
+  const Cell* findCell(const VoxelKey& key) const { return blocks().findCell(key); }
   VoxelKey keyOf(const Eigen::Vector3d& p_map) const;  ///< throws if beyond the int32 range
   Eigen::Vector3d centerOf(const VoxelKey& key) const;
 
@@ -59,26 +59,36 @@ class Map {
   const MapParams& params() const { return params_; }
   const OccupancyModel& model() const { return model_; }
   double resolution() const { return params_.resolution_m; }
+  /// The host map, complete: with the CUDA backend, device-side changes are written back
+  /// first (a write-back cache), so every host reader goes through here.
   const BlockMap& blocks() const;
-  /// Write access for loaders, importers and merging; bumps the map revision.
+  /// Write access for loaders, importers and merging; bumps the map revision and drops the
+  /// device copies.
   BlockMap& mutableBlocks();
   uint64_t revision() const { return revision_; }
   size_t scanCount() const { return scans_; }
   const char* backendName() const;
+  /// Why that backend ("auto: CUDA device 0 (...)", "auto: CPU backend (no CUDA device)").
+  const std::string& backendReason() const { return backend_reason_; }
 
   MemoryStats memory() const;
   size_t knownVoxelCount() const;
   KeyBounds bounds() const { return blocks().observedBounds(); }
 
   void save(const std::string& path) const;
-  static Map load(const std::string& path);
+  /// Reads a .fgm file into a new map integrating with `backend`.
+  static Map load(const std::string& path, Backend backend = Backend::kAuto);
 
  private:
+  void fallBackToCpu(const std::string& why);
+
   MapParams params_;
   OccupancyModel model_;
-  BlockMap blocks_;
-  std::unique_ptr<Culler> culler_;
   std::unique_ptr<Integrator> integrator_;
+  std::string backend_reason_;
+  // The host copy may lag the device cache; blocks() synchronises it, hence mutable.
+  mutable BlockMap blocks_;
+  std::unique_ptr<Culler> culler_;
   uint64_t revision_ = 0;
   size_t scans_ = 0;
 };

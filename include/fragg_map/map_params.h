@@ -1,6 +1,7 @@
 // Every parameter of a map, with its default. The one place defaults live.
 #pragma once
 
+#include <cstddef>
 #include <string>
 
 #include "fragg_map/occupancy.h"
@@ -22,6 +23,21 @@ struct CullingParams {
   int coherence_ttl_scans = 8;        ///< how long a rejection may be reused
 };
 
+/// The CUDA backend's knobs (ignored by the CPU backend).
+struct CudaParams {
+  int device = 0;
+  /// Initial device pool, as a multiple of the sensor's frustum volume in blocks (the paper's
+  /// formula (1)-(4)); the pool grows when a scan needs more, up to `pool_max_bytes`.
+  double pool_margin = 1.5;
+  /// Most device memory the block pool may take; 0 = half of the device's free memory. When
+  /// the pool is full, least recently visible blocks are evicted to the host.
+  size_t pool_max_bytes = 0;
+  /// Host blocks in pinned memory (off: pageable, for the ablation).
+  bool pinned_host_blocks = true;
+  /// Rays read through the read-only data cache (off: plain loads, for the ablation).
+  bool readonly_ray_loads = true;
+};
+
 struct MapParams {
   double resolution_m = 0.05;
   OccupancyParams occupancy;
@@ -32,6 +48,7 @@ struct MapParams {
   CullingParams culling;
   /// Worker threads for the CPU backend; 0 = every core.
   int threads = 0;
+  CudaParams cuda;
 
   /// Throws InvalidArgument naming the bad field.
   void validate() const;

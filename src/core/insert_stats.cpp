@@ -14,6 +14,8 @@ void InsertStats::add(const InsertStats& o) {
   cells_updated += o.cells_updated;
   blocks_touched += o.blocks_touched;
   blocks_created += o.blocks_created;
+  blocks_uploaded += o.blocks_uploaded;
+  blocks_evicted += o.blocks_evicted;
   culling.add(o.culling);
   seconds_total += o.seconds_total;
   seconds_prepare += o.seconds_prepare;

@@ -5,18 +5,18 @@
 #include <string>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/internal/cpu_integrator.h"
 #include "fragg_map/internal/culler.h"
 #include "fragg_map/internal/frustum_builder.h"
-#include "fragg_map/internal/prepared_scan.h"
+#include "fragg_map/log.h"
 
 namespace fragg {
 
 namespace {
-std::unique_ptr<Integrator> makeIntegrator(const MapParams& p) {
-  if (p.backend == Backend::kCuda)
-    throw InvalidArgument("backend cuda requested, but this build has no CUDA backend");
-  return std::make_unique<CpuIntegrator>(p.threads);
+const MapParams& validated(const MapParams& p) {
+  p.validate();
+  return p;
 }
 
 void validatePose(const Eigen::Isometry3d& T) {
@@ -36,11 +36,12 @@ double farthestPoint(const PointCloud& cloud) {
 }  // namespace
 
 Map::Map(const MapParams& params)
-    : params_(params),
-      model_(OccupancyModel::fromParams(params.occupancy)),
-      culler_(std::make_unique<Culler>(params.culling)) {
-  params_.validate();
-  integrator_ = makeIntegrator(params_);
+    : params_(validated(params)), model_(OccupancyModel::fromParams(params.occupancy)) {
+  BackendChoice choice = makeBackend(params_);
+  integrator_ = std::move(choice.integrator);
+  backend_reason_ = std::move(choice.reason);
+  blocks_ = BlockMap(integrator_->hostAllocator());
+  culler_ = std::make_unique<Culler>(params_.culling);
 }
 
 Map::~Map() = default;
@@ -61,17 +62,24 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   InsertStats stats;
   const Frustum frustum = buildFrustum(model, T_map_sensor, params_.resolution_m);
   auto t = std::chrono::steady_clock::now();
-  stats.culling =
-      culler_->cull(frustum, model, T_map_sensor, params_.resolution_m, blocks_, nullptr);
+  std::vector<BlockIndex> visible;
+  stats.culling = culler_->cull(frustum, model, T_map_sensor, params_.resolution_m, blocks_,
+                                integrator_->usesVisibleBlocks() ? &visible : nullptr);
+  const CullContext cull = culler_->context(frustum, T_map_sensor);
   stats.seconds_cull = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 
-  t = std::chrono::steady_clock::now();
-  PreparedScan scan;
-  prepareScan(cloud, T_map_sensor, model, frustum, explicit_model, params_, scan, stats);
-  stats.seconds_prepare =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-
-  integrator_->integrate(scan, model_, params_.raycast, revision_ + 1, blocks_, stats);
+  const ScanInput scan{cloud, T_map_sensor, model, frustum, explicit_model, cull, visible};
+  try {
+    integrator_->integrate(scan, params_, model_, revision_ + 1, blocks_, stats);
+  } catch (const CudaOutOfMemory& e) {
+    // The device backend applies a scan all at once or not at all: the map is intact.
+    fallBackToCpu(e.what());
+    InsertStats cpu_stats;
+    cpu_stats.culling = stats.culling;
+    cpu_stats.seconds_cull = stats.seconds_cull;
+    integrator_->integrate(scan, params_, model_, revision_ + 1, blocks_, cpu_stats);
+    stats = cpu_stats;
+  }
   ++revision_;
   ++scans_;
   stats.seconds_total =
@@ -92,8 +100,16 @@ Eigen::Vector3d Map::centerOf(const VoxelKey& key) const {
          params_.resolution_m;
 }
 
+void Map::fallBackToCpu(const std::string& why) {
+  integrator_->syncToHost(blocks_);
+  integrator_->dropDeviceCopies();
+  integrator_ = std::make_unique<CpuIntegrator>(params_.threads);
+  backend_reason_ = "cpu: fell back from CUDA (" + why + ")";
+  logMessage(LogLevel::kWarning, "GPU memory exhausted, continuing on the CPU backend: " + why);
+}
+
 CellState Map::query(const Eigen::Vector3d& p_map) const {
-  const Cell* c = blocks_.findCell(keyOf(p_map));
+  const Cell* c = blocks().findCell(keyOf(p_map));
   return c ? model_.state(*c) : CellState::kUnknown;
 }
 
@@ -104,6 +120,8 @@ void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_ma
     throw InvalidArgument("clear box min corner must not exceed the max corner");
   const VoxelKey lo = keyOf(min_map), hi = keyOf(max_map);
   const BlockKey blo = blockKeyOf(lo), bhi = blockKeyOf(hi);
+  integrator_->syncToHost(blocks_);
+  integrator_->dropDeviceCopies();
   std::vector<BlockIndex> hit;
   blocks_.forEachInBox(blo, bhi, [&](BlockIndex i) { hit.push_back(i); });
   ++revision_;
@@ -128,15 +146,21 @@ void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_ma
 }
 
 void Map::reset() {
+  integrator_->dropDeviceCopies();
   blocks_.clear();
   culler_->reset();
   ++revision_;
   scans_ = 0;
 }
 
-const BlockMap& Map::blocks() const { return blocks_; }
+const BlockMap& Map::blocks() const {
+  integrator_->syncToHost(blocks_);
+  return blocks_;
+}
 
 BlockMap& Map::mutableBlocks() {
+  integrator_->syncToHost(blocks_);
+  integrator_->dropDeviceCopies();
   ++revision_;
   return blocks_;
 }
@@ -145,16 +169,18 @@ const char* Map::backendName() const { return integrator_->name(); }
 
 size_t Map::knownVoxelCount() const {
   size_t n = 0;
-  blocks_.forEach([&](BlockIndex i) {
-    for (const Cell& c : blocks_.block(i).cells) n += c.observed() ? 1 : 0;
+  const BlockMap& host = blocks();
+  host.forEach([&](BlockIndex i) {
+    for (const Cell& c : host.block(i).cells) n += c.observed() ? 1 : 0;
   });
   return n;
 }
 
 MemoryStats Map::memory() const {
   MemoryStats m;
-  m.host_block_bytes = blocks_.hostBytes();
+  m.host_block_bytes = blocks().hostBytes();
   m.blocks = blocks_.size();
+  m.device_bytes = integrator_->deviceBytes();
   m.known_voxels = knownVoxelCount();
   return m;
 }

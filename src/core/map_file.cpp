@@ -13,6 +13,7 @@
 
 #include "fragg_map/atomic_file.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/integrator.h"
 #include "fragg_map/map.h"
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the .fgm writer assumes little-endian");
@@ -79,6 +80,7 @@ std::vector<uint8_t> readWholeFile(const std::string& path) {
 }  // namespace
 
 void Map::save(const std::string& path) const {
+  integrator_->syncToHost(blocks_);
   const OccupancyParams& occ = params_.occupancy;
   std::vector<BlockIndex> order;
   order.reserve(blocks_.size());
@@ -120,7 +122,7 @@ void Map::save(const std::string& path) const {
   file.commit();
 }
 
-Map Map::load(const std::string& path) {
+Map Map::load(const std::string& path, Backend backend) {
   const std::vector<uint8_t> bytes = readWholeFile(path);
   if (bytes.size() < kHeaderBytes + 4)
     throw IoError(path + ": not a valid .fgm map: file too short (" + std::to_string(bytes.size()) +
@@ -161,6 +163,7 @@ Map Map::load(const std::string& path) {
   // Every block takes at least 16 bytes: reject absurd counts before allocating.
   if (count > r.remaining() / 16) r.fail("block count larger than the file");
 
+  params.backend = backend;
   Map map(params);
   const OccupancyModel& model = map.model();
   std::vector<uint8_t> packed;

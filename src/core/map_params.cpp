@@ -43,6 +43,10 @@ void MapParams::validate() const {
     throw InvalidArgument("culling coherence TTL must be in [1, 32] scans, got " +
                           std::to_string(culling.coherence_ttl_scans));
   if (threads < 0) throw InvalidArgument("threads must be >= 0 (0 = every core)");
+  if (!std::isfinite(cuda.pool_margin) || cuda.pool_margin <= 0.0 || cuda.pool_margin > 100.0)
+    throw InvalidArgument("cuda pool margin must be in (0, 100], got " +
+                          std::to_string(cuda.pool_margin));
+  if (cuda.device < 0) throw InvalidArgument("cuda device must be >= 0");
 }
 
 }  // namespace fragg

@@ -8,9 +8,6 @@
 namespace fragg {
 
 namespace {
-// Keys must stay inside int32 with room for a ray's traversal.
-constexpr double kMaxAbsVoxel = 2147483647.0 - 1048576.0;
-
 bool finitePoint(const Eigen::Vector3f& p) {
   return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
 }
@@ -44,35 +41,39 @@ bool interpolateDirection(const PointCloud& cloud, uint32_t row, uint32_t col,
 }
 }  // namespace
 
-void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
-                 const SensorModel& model, const Frustum& frustum, bool explicit_model,
-                 const MapParams& params, PreparedScan& out, InsertStats& stats) {
+RayPrepParams rayPrepParams(const Eigen::Isometry3d& T_map_sensor, const SensorModel& model,
+                            bool explicit_model, const MapParams& params, PreparedScan& out) {
+  RayPrepParams p;
   const Eigen::Matrix3d R = T_map_sensor.linear();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) p.R[3 * r + c] = R(r, c);
   const Eigen::Vector3d o = T_map_sensor.translation();
-  const double inv_res = 1.0 / params.resolution_m;
-  const Eigen::Vector3d o_v = o * inv_res;
+  p.inv_res = 1.0 / params.resolution_m;
+  const Eigen::Vector3d o_v = o * p.inv_res;
   if (o_v.cwiseAbs().maxCoeff() > kMaxAbsVoxel)
     throw InvalidArgument("sensor origin is outside the map's int32 key range");
   out.ref = {static_cast<int32_t>(std::floor(o_v.x())), static_cast<int32_t>(std::floor(o_v.y())),
              static_cast<int32_t>(std::floor(o_v.z()))};
-  const Eigen::Vector3d ref_v(out.ref.x, out.ref.y, out.ref.z);
-  for (int a = 0; a < 3; ++a) out.start_v[a] = static_cast<float>(o_v[a] - ref_v[a]);
+  const double ref_v[3] = {double(out.ref.x), double(out.ref.y), double(out.ref.z)};
+  for (int a = 0; a < 3; ++a) {
+    p.origin_m[a] = o[a];
+    p.ref_v[a] = ref_v[a];
+    out.start_v[a] = static_cast<float>(o_v[a] - ref_v[a]);
+  }
+  p.min_range_m = model.min_range_m;
+  p.max_range_m = model.max_range_m;  // > 0: the model is resolved
+  p.explicit_model = explicit_model;
+  p.slack_m = static_cast<float>(1e-3 + params.resolution_m);
+  return p;
+}
 
-  const double min_range = model.min_range_m;
-  const double max_range = model.max_range_m;  // > 0: the model is resolved
-  const float slack_m = static_cast<float>(1e-3 + params.resolution_m);
+void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
+                 const SensorModel& model, const Frustum& frustum, bool explicit_model,
+                 const MapParams& params, PreparedScan& out, InsertStats& stats) {
+  const RayPrepParams prep = rayPrepParams(T_map_sensor, model, explicit_model, params, out);
   const size_t n = cloud.size();
   stats.points_in += n;
   out.rays.clear();
-
-  // Builds the ray towards map-frame point `end` (relative to o, metres).
-  auto makeRay = [&](const Eigen::Vector3d& rel_m, bool hit, RayEnd* ray) {
-    const Eigen::Vector3d end_v = (o + rel_m) * inv_res;
-    if (end_v.cwiseAbs().maxCoeff() > kMaxAbsVoxel) return false;
-    for (int a = 0; a < 3; ++a) ray->end_v[a] = static_cast<float>(end_v[a] - ref_v[a]);
-    ray->hit = hit ? 1u : 0u;
-    return true;
-  };
 
   const int threads = params.threads > 0 ? params.threads : omp_get_max_threads();
   std::vector<std::vector<RayEnd>> per_thread(threads);
@@ -87,44 +88,40 @@ void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
     for (long i = 0; i < static_cast<long>(n); ++i) {
       const Eigen::Vector3f& p = cloud.points_S[i];
       RayEnd ray;
-      if (!finitePoint(p)) {
+      if (clear_no_return && !finitePoint(p)) {
         Eigen::Vector3d dir_S;
-        if (clear_no_return &&
-            interpolateDirection(cloud, static_cast<uint32_t>(i / cloud.width),
-                                 static_cast<uint32_t>(i % cloud.width), &dir_S) &&
-            makeRay(R * dir_S * max_range, false, &ray)) {
+        if (interpolateDirection(cloud, static_cast<uint32_t>(i / cloud.width),
+                                 static_cast<uint32_t>(i % cloud.width), &dir_S)) {
+          const double s[3] = {dir_S.x() * prep.max_range_m, dir_S.y() * prep.max_range_m,
+                               dir_S.z() * prep.max_range_m};
+          if (rayEndFromSensor(prep, s, false, &ray)) {
+            local.push_back(ray);
+            ++no_return;
+            continue;
+          }
+        }
+        ++invalid;
+        continue;
+      }
+      switch (prepareRay(prep, frustum, p.x(), p.y(), p.z(), &ray)) {
+        case RayPrep::kHit:
           local.push_back(ray);
-          ++no_return;
-        } else {
+          ++hits;
+          break;
+        case RayPrep::kFreeOnly:
+          local.push_back(ray);
+          ++free_only;
+          break;
+        case RayPrep::kInvalid:
           ++invalid;
-        }
-        continue;
-      }
-      const Eigen::Vector3d p_S = p.cast<double>();
-      const double range = p_S.norm();
-      if (range == 0.0) {  // (0, 0, 0): a common "no return" marker
-        ++invalid;
-        continue;
-      }
-      if (range < min_range) {
-        ++too_close;
-        continue;
-      }
-      const bool clipped = range > max_range;
-      const Eigen::Vector3d rel = R * (clipped ? Eigen::Vector3d(p_S * (max_range / range)) : p_S);
-      if (explicit_model) {
-        const float rel_f[3] = {float(rel.x()), float(rel.y()), float(rel.z())};
-        if (!frustumContains(frustum, rel_f, slack_m)) {
+          break;
+        case RayPrep::kTooClose:
+          ++too_close;
+          break;
+        case RayPrep::kOutside:
           ++outside;
-          continue;
-        }
+          break;
       }
-      if (!makeRay(rel, !clipped, &ray)) {
-        ++invalid;
-        continue;
-      }
-      local.push_back(ray);
-      ++(clipped ? free_only : hits);
     }
   }
   size_t total = 0;

@@ -10,6 +10,8 @@ set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/scan_scratch.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cpu_integrator.cpp
   ${CMAKE_CURRENT_LIST_DIR}/insert_stats.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/log.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/backend_factory.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_file.cpp
 )

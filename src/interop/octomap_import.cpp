@@ -30,7 +30,7 @@ std::string readWholeFile(const std::string& path) {
 /// readData, without its header parser and the debug lines it prints).
 template <class Tree>
 Map readTree(const std::string& bytes, const internal::OctomapFileHeader& header,
-             const std::string& path) {
+             const std::string& path, Backend backend) {
   Tree tree(header.resolution);
   if (header.size > 0) {
     std::istringstream in(bytes, std::ios::in | std::ios::binary);
@@ -44,22 +44,26 @@ Map readTree(const std::string& bytes, const internal::OctomapFileHeader& header
       throw IoError(fmt::format("{}: corrupt OctoMap file: read {} nodes of {}", path, tree.size(),
                                 header.size));
   }
-  return internal::mapFromTree(tree, path);
+  return internal::mapFromTree(tree, path, backend);
 }
 
 }  // namespace
 
-Map fromOcTree(const octomap::OcTree& tree) { return internal::mapFromTree(tree, "OcTree"); }
+Map fromOcTree(const octomap::OcTree& tree, Backend backend) {
+  return internal::mapFromTree(tree, "OcTree", backend);
+}
 
-Map importOctomap(const std::string& path) {
+Map importOctomap(const std::string& path, Backend backend) {
   const std::string bytes = readWholeFile(path);
   const internal::OctomapFileHeader header = internal::parseOctomapHeader(bytes, path);
   internal::checkOctomapData(bytes, header, path);
   // A .bt holds occupancy bits only, whatever tree type wrote it.
   if (header.kind == internal::OctomapFileKind::kBinary || header.id == "OcTree")
-    return readTree<octomap::OcTree>(bytes, header, path);
-  if (header.id == "ColorOcTree") return readTree<octomap::ColorOcTree>(bytes, header, path);
-  if (header.id == "OcTreeStamped") return readTree<octomap::OcTreeStamped>(bytes, header, path);
+    return readTree<octomap::OcTree>(bytes, header, path, backend);
+  if (header.id == "ColorOcTree")
+    return readTree<octomap::ColorOcTree>(bytes, header, path, backend);
+  if (header.id == "OcTreeStamped")
+    return readTree<octomap::OcTreeStamped>(bytes, header, path, backend);
   throw IoError(fmt::format("{}: OctoMap tree type '{}' is not supported", path, header.id));
 }
 

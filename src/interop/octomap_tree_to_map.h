@@ -29,9 +29,12 @@ int16_t logOddsFxOfNode(float log_odds, const std::string& source);
 void fillCube(const VoxelKey& lo, int32_t edge, int16_t fx, BlockMap& blocks);
 
 template <class Tree>
-Map mapFromTree(const Tree& tree, const std::string& source) {
-  Map map(mapParamsOfTree(tree.getResolution(), tree.getProbHit(), tree.getProbMiss(),
-                          tree.getClampingThresMin(), tree.getClampingThresMax(), source));
+Map mapFromTree(const Tree& tree, const std::string& source, Backend backend) {
+  MapParams params =
+      mapParamsOfTree(tree.getResolution(), tree.getProbHit(), tree.getProbMiss(),
+                      tree.getClampingThresMin(), tree.getClampingThresMax(), source);
+  params.backend = backend;
+  Map map(params);
   const int depth = static_cast<int>(tree.getTreeDepth());
   const int32_t key_offset = int32_t{1} << (depth - 1);  // OctoMap's tree_max_val
   uint64_t voxels = 0;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "fragg_map/internal/integrator.h"
+#include "fragg_map/internal/prepared_scan.h"
 #include "fragg_map/internal/scan_scratch.h"
 
 namespace fragg {
@@ -14,13 +15,17 @@ namespace fragg {
 class CpuIntegrator : public Integrator {
  public:
   explicit CpuIntegrator(int threads) : threads_(threads) {}
-  void integrate(const PreparedScan& scan, const OccupancyModel& model, RayCast raycast,
+  void integrate(const ScanInput& scan, const MapParams& params, const OccupancyModel& model,
                  uint64_t revision, BlockMap& blocks, InsertStats& stats) override;
+  /// The ray cast and update of a prepared scan (also used by the CUDA backend's fallback).
+  void integratePrepared(const PreparedScan& scan, const OccupancyModel& model, RayCast raycast,
+                         uint64_t revision, BlockMap& blocks, InsertStats& stats);
   const char* name() const override { return "cpu"; }
 
  private:
   int threads_;
   std::vector<std::unique_ptr<ScanScratch>> scratch_;  // one per thread
+  PreparedScan prepared_;
 };
 
 }  // namespace fragg

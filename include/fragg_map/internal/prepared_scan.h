@@ -7,18 +7,13 @@
 
 #include "fragg_map/frustum.h"
 #include "fragg_map/insert_stats.h"
+#include "fragg_map/internal/ray_prep.h"
 #include "fragg_map/map_params.h"
 #include "fragg_map/point_cloud.h"
 #include "fragg_map/raycast.h"
 #include "fragg_map/sensor_model.h"
 
 namespace fragg {
-
-struct RayEnd {
-  float end_v[3];  ///< relative to PreparedScan::ref, voxel units
-  uint32_t hit;    ///< 1: the end cell is a hit; 0: free-only ray (clipped or no return)
-};
-static_assert(sizeof(RayEnd) == 16, "RayEnd is 16 bytes");
 
 struct PreparedScan {
   VoxelKey ref;                  ///< the sensor origin's voxel
@@ -33,6 +28,11 @@ struct PreparedScan {
                   e.hit != 0};
   }
 };
+
+/// The pose and sensor data the rays of one scan are built from; sets `ref` and `start_v`
+/// of `out`. Throws InvalidArgument when the sensor origin is outside the int32 key range.
+RayPrepParams rayPrepParams(const Eigen::Isometry3d& T_map_sensor, const SensorModel& model,
+                            bool explicit_model, const MapParams& params, PreparedScan& out);
 
 /// Transforms, filters and clips a cloud (OctoMap semantics: NaN/Inf and points closer than
 /// min range dropped; points beyond max range become free-only rays ending at max range).

@@ -37,13 +37,13 @@ void exportOctomap(const Map& map, const std::string& path_bt);
 /// expanded into voxels at the tree's resolution. Log-odds are rounded to fixed point and
 /// clamped to the int16 range. Throws IoError for a tree whose leaves would expand to more
 /// than kMaxImportVoxels voxels or hold a non-finite value.
-Map fromOcTree(const octomap::OcTree& tree);
+Map fromOcTree(const octomap::OcTree& tree, Backend backend = Backend::kAuto);
 
 /// Reads an OctoMap file: binary (.bt, "# Octomap OcTree binary file") or full (.ot,
 /// "# Octomap OcTree file" with id OcTree, ColorOcTree or OcTreeStamped); the kind is taken
 /// from the file's first line, not its name. The data is checked for structure before
 /// liboctomap parses it. Throws IoError for a missing, truncated or corrupt file.
-Map importOctomap(const std::string& path);
+Map importOctomap(const std::string& path, Backend backend = Backend::kAuto);
 
 /// Upper bound on the voxels an import may create (2^28 voxels: 1 GiB of cells).
 constexpr uint64_t kMaxImportVoxels = uint64_t{1} << 28;

@@ -117,6 +117,10 @@ void runBuild(const BuildOptions& o) {
     nlohmann::json j = {{"output", o.output},
                         {"input", source->describe()},
                         {"backend", map.backendName()},
+                        {"backend_reason", map.backendReason()},
+                        {"device_bytes", mem.device_bytes},
+                        {"blocks_uploaded", total.blocks_uploaded},
+                        {"blocks_evicted", total.blocks_evicted},
                         {"resolution_m", params.resolution_m},
                         {"scans", ms_per_scan.size()},
                         {"points", total.points_in},
@@ -146,14 +150,15 @@ void runBuild(const BuildOptions& o) {
                           {"saved_by_translation", total.culling.saved_by_translation}}}};
     std::printf("%s\n", j.dump().c_str());
   } else {
-    std::printf("%s\n",
-                fmt::format("built {}: {} scans, {} points, {:.2f} s, {:.1f} ms/scan (median "
-                            "{:.1f}, p99 {:.1f}), {} known voxels, {:.1f} MiB host memory, "
-                            "backend {}",
-                            o.output, ms_per_scan.size(), total.points_in, seconds,
-                            total.seconds_total * 1e3 / ms_per_scan.size(), median, p99,
-                            mem.known_voxels, mem.host_block_bytes / 1048576.0, map.backendName())
-                    .c_str());
+    std::printf(
+        "%s\n",
+        fmt::format("built {}: {} scans, {} points, {:.2f} s, {:.1f} ms/scan (median "
+                    "{:.1f}, p99 {:.1f}), {} known voxels, {:.1f} MiB host memory, "
+                    "backend {} ({})",
+                    o.output, ms_per_scan.size(), total.points_in, seconds,
+                    total.seconds_total * 1e3 / ms_per_scan.size(), median, p99, mem.known_voxels,
+                    mem.host_block_bytes / 1048576.0, map.backendName(), map.backendReason())
+            .c_str());
   }
 }
 }  // namespace

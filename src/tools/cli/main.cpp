@@ -5,12 +5,18 @@
 
 #include "cli/commands.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/log.h"
 
 int main(int argc, char** argv) {
   CLI::App app{
       "fragg_map: GPU-accelerated 3D occupancy maps (build, stats, export, render, "
       "compare)"};
   app.require_subcommand(1);
+  // The backend choice is part of each command's summary line; warnings go to stderr.
+  fragg::setLogSink([](fragg::LogLevel level, const std::string& message) {
+    if (level == fragg::LogLevel::kWarning)
+      std::fprintf(stderr, "fragg_map: warning: %s\n", message.c_str());
+  });
   fragg::cli::addBuildCommand(app);
   fragg::cli::addStatsCommand(app);
   fragg::cli::addExportCommand(app);

@@ -22,6 +22,8 @@ std::string extensionOf(const std::string& path) {
 }
 
 fragg::Map loadMapFile(const std::string& path) {
+  // Reading commands never insert: the CPU backend, no device set up.
+  const Backend backend = Backend::kCpu;
   const std::string ext = extensionOf(path);
   if (ext != "fgm" && ext != "bt" && ext != "ot")
     throw InvalidArgument(fmt::format(
@@ -31,9 +33,9 @@ fragg::Map loadMapFile(const std::string& path) {
     throw IoError(fmt::format("cannot read {}: no such file", path));
   if (std::filesystem::is_directory(path, ec))
     throw IoError(fmt::format("cannot read {}: is a directory", path));
-  if (ext == "fgm") return fragg::Map::load(path);
+  if (ext == "fgm") return fragg::Map::load(path, backend);
 #ifdef FRAGG_HAVE_OCTOMAP
-  return fragg::importOctomap(path);
+  return fragg::importOctomap(path, backend);
 #else
   throw IoError(
       fmt::format("cannot read {}: this fragg_map was built without liboctomap, so "

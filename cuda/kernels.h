@@ -1,0 +1,60 @@
+// Launchers of the CUDA backend's kernels (host-callable; definitions in the .cu files).
+// Every launcher runs on the given stream and checks the launch.
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include "device_types.h"
+#include "fragg_map/frustum.h"
+#include "fragg_map/internal/ray_prep.h"
+#include "fragg_map/map_params.h"
+#include "fragg_map/occupancy.h"
+
+namespace fragg::cuda {
+
+/// Points (x, y, z float triples, sensor frame) -> compacted rays; counts points by outcome
+/// and bounds the rays (ScanCounters::lo_v / hi_v).
+void launchPrepare(const float* points_S, uint32_t n, const RayPrepParams& p, const Frustum& f,
+                   RayEnd* rays, ScanCounters* counters, cudaStream_t stream);
+
+struct RaycastArgs {
+  const RayEnd* rays;
+  uint32_t num_rays;
+  VoxelKey ref;
+  float start_v[3];
+  Window window;
+  SlotArrays slots;
+  int32_t* miss_list;  ///< window indices of host-only blocks the rays needed
+  uint32_t miss_capacity;
+  ScanCounters* counters;
+  uint32_t scan;
+};
+/// One thread a ray: marks FREE / HIT scratch bits, allocating slots for new blocks.
+void launchRaycast(const RaycastArgs& args, RayCast mode, bool readonly_loads, cudaStream_t stream);
+
+/// Over the touched slots (only when the ray pass had no miss and no overflow): applies the
+/// marks, clears the scratch, sets dirty / changed_at / last_used.
+void launchApply(const SlotArrays& slots, const OccupancyModel& model, uint64_t revision,
+                 uint32_t scan, ScanCounters* counters, int grid, cudaStream_t stream);
+
+/// Window entries: every one kWindowEmpty, then each resident slot whose block is inside.
+void launchWindowFill(const Window& w, const SlotArrays& slots, cudaStream_t stream);
+/// entries[index[j]] = value[j].
+void launchWindowSet(const Window& w, const int64_t* index, const int32_t* value, uint32_t n,
+                     cudaStream_t stream);
+
+/// Copies block j from src[j] (device-visible: device staging or mapped pinned host memory)
+/// into slot slots[j]; sets its key, clears dirty and fresh, stamps last_used.
+void launchUpload(const SlotArrays& s, const Block* const* src, const int32_t* slots,
+                  const BlockKey* keys, uint32_t n, uint32_t scan, cudaStream_t stream);
+/// Copies slot slots[j] to dst[j] and its key / changed_at to keys[j] / changed_at[j];
+/// clears dirty.
+void launchDownload(const SlotArrays& s, Block* const* dst, const int32_t* slots, uint32_t n,
+                    BlockKey* keys, uint64_t* changed_at, cudaStream_t stream);
+
+/// Device frustum pass over the resident slots (cullBlock, the same test as the host's, with
+/// per-slot plane memory): stamps last_used of visible slots.
+void launchCullSlots(const SlotArrays& s, const Frustum& f, const CullContext& ctx, double block_m,
+                     uint32_t scan, ScanCounters* counters, cudaStream_t stream);
+
+}  // namespace fragg::cuda

@@ -1,0 +1,133 @@
+// The ray pass: one thread a ray, the same traversal as the CPU backend (raycast.h), marking
+// FREE / HIT bits in the scratch of the block's slot. Blocks without a slot get one from the
+// free stack the first time a ray enters them.
+#include "cuda_check.h"
+#include "fragg_map/raycast.h"
+#include "kernels.h"
+#include "warp_reduce.cuh"
+
+namespace fragg::cuda {
+
+namespace {
+constexpr unsigned kThreads = 128;
+
+__device__ __forceinline__ int32_t loadEntry(const int32_t* e) {
+  return *reinterpret_cast<const volatile int32_t*>(e);
+}
+
+/// The slot of block `b` for this scan, or -1 when the ray must skip its cells (host-only
+/// block not uploaded yet, pool full): the host then fixes that and runs the pass again.
+__device__ int32_t resolveSlot(const RaycastArgs& a, const BlockKey& b) {
+  const int64_t idx = a.window.indexOf(b);
+  if (idx < 0) {
+    atomicAdd(&a.counters->outside_window, 1u);
+    return -1;
+  }
+  int32_t* entry = a.window.entries + idx;
+  int32_t v = loadEntry(entry);
+  for (;;) {
+    if (v >= 0) break;
+    if (v == kWindowEmpty) {
+      const int32_t prev = atomicCAS(entry, kWindowEmpty, kWindowBusy);
+      if (prev != kWindowEmpty) {
+        v = prev;
+        continue;
+      }
+      const int32_t pos = atomicSub(&a.counters->free_top, 1) - 1;
+      if (pos < 0) {
+        atomicAdd(&a.counters->overflow, 1u);
+        atomicExch(entry, kWindowOverflow);
+        return -1;
+      }
+      const int32_t slot = a.slots.free_stack[pos];
+      a.slots.keys[slot] = b;
+      a.slots.fresh[slot] = 1;
+      a.slots.resident[slot] = 1;
+      atomicAdd(&a.counters->created, 1u);
+      __threadfence();
+      atomicExch(entry, slot);
+      v = slot;
+      break;
+    }
+    if (v == kWindowBusy) {  // another ray is allocating it: wait (independent scheduling)
+      v = loadEntry(entry);
+      continue;
+    }
+    if (v == kWindowHostOnly &&
+        atomicCAS(entry, kWindowHostOnly, kWindowMissed) == kWindowHostOnly) {
+      const uint32_t k = atomicAdd(&a.counters->misses, 1u);
+      if (k < a.miss_capacity) a.miss_list[k] = static_cast<int32_t>(idx);
+    }
+    return -1;  // host-only, missed, overflow
+  }
+  // First ray of the scan in this slot: put it in the touched list.
+  if (a.slots.touched[v] == 0 && atomicExch(&a.slots.touched[v], 1u) == 0u) {
+    a.slots.touched_list[atomicAdd(&a.counters->touched, 1u)] = v;
+    a.slots.last_used[v] = a.scan;  // never evicted while its marks are pending
+  }
+  return v;
+}
+
+struct DeviceMarker {
+  const RaycastArgs& a;
+  int32_t slot = -1;
+  bool have_block = false;
+
+  __device__ void operator()(const VoxelKey& v, bool hit, int entry) {
+    if (entry != kSameBlock || !have_block) {
+      slot = resolveSlot(a, blockKeyOf(v));
+      have_block = true;
+    }
+    if (slot < 0) return;
+    const int cell = cellIndexOf(v);
+    SlotScratch& s = a.slots.scratch[slot];
+    uint32_t* word = (hit ? s.hit : s.free) + (cell >> 5);
+    const uint32_t bit = 1u << (cell & 31);
+    if (!(*word & bit)) atomicOr(word, bit);  // most repeat visits skip the atomic
+  }
+};
+
+template <bool kReadOnly, bool kBresenham>
+__global__ void __launch_bounds__(kThreads) raycastKernel(RaycastArgs a) {
+  const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+  unsigned long long visits = 0;
+  if (i < a.num_rays) {
+    RayEnd e;
+    if (kReadOnly) {
+      const float4 raw = __ldg(reinterpret_cast<const float4*>(a.rays) + i);
+      e.end_v[0] = raw.x;
+      e.end_v[1] = raw.y;
+      e.end_v[2] = raw.z;
+      e.hit = __float_as_uint(raw.w);
+    } else {
+      e = a.rays[i];
+    }
+    const RayVox ray{a.ref,
+                     {a.start_v[0], a.start_v[1], a.start_v[2]},
+                     {e.end_v[0], e.end_v[1], e.end_v[2]},
+                     e.hit != 0};
+    DeviceMarker mark{a};
+    visits = kBresenham ? traverseBresenham(ray, mark) : traverseDda(ray, mark);
+  }
+  visits = warpSum(visits);
+  if ((threadIdx.x & 31) == 0 && visits) atomicAdd(&a.counters->visits, visits);
+}
+}  // namespace
+
+void launchRaycast(const RaycastArgs& args, RayCast mode, bool readonly_loads,
+                   cudaStream_t stream) {
+  if (args.num_rays == 0) return;
+  const unsigned grid = blocksFor(args.num_rays, kThreads);
+  const bool bresenham = mode == RayCast::kBresenham;
+  if (readonly_loads && !bresenham)
+    raycastKernel<true, false><<<grid, kThreads, 0, stream>>>(args);
+  else if (readonly_loads)
+    raycastKernel<true, true><<<grid, kThreads, 0, stream>>>(args);
+  else if (!bresenham)
+    raycastKernel<false, false><<<grid, kThreads, 0, stream>>>(args);
+  else
+    raycastKernel<false, true><<<grid, kThreads, 0, stream>>>(args);
+  FRAGG_CUDA_CHECK_LAUNCH("raycastKernel");
+}
+
+}  // namespace fragg::cuda

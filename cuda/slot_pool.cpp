@@ -1,0 +1,126 @@
+#include "slot_pool.h"
+
+#include <algorithm>
+
+namespace fragg::cuda {
+
+namespace {
+/// Reallocates `a` to `n` elements, copying the first `keep` on the stream and zeroing the
+/// rest. The new array is allocated before the old one is freed.
+template <class T>
+void regrow(DeviceArray<T>& a, size_t keep, size_t n, cudaStream_t s) {
+  DeviceArray<T> bigger(n);
+  if (keep)
+    FRAGG_CUDA_CHECK(
+        cudaMemcpyAsync(bigger.get(), a.get(), keep * sizeof(T), cudaMemcpyDeviceToDevice, s));
+  if (n > keep)
+    FRAGG_CUDA_CHECK(cudaMemsetAsync(bigger.get() + keep, 0, (n - keep) * sizeof(T), s));
+  FRAGG_CUDA_CHECK(cudaStreamSynchronize(s));  // the old array may go now
+  a = std::move(bigger);
+}
+}  // namespace
+
+size_t SlotPool::bytesPerSlot() {
+  return sizeof(Block) + sizeof(BlockKey) + sizeof(SlotScratch) + sizeof(uint32_t) +
+         sizeof(int32_t) + 2 * sizeof(uint8_t) + sizeof(uint32_t) + sizeof(uint64_t) +
+         sizeof(CullMemory) + sizeof(int32_t) + sizeof(uint8_t);
+}
+
+void SlotPool::grow(int32_t capacity) {
+  if (capacity <= capacity_) return;
+  // Check the room first, so that a failure leaves every array as it was.
+  size_t free_bytes = 0, total_bytes = 0;
+  FRAGG_CUDA_CHECK(cudaMemGetInfo(&free_bytes, &total_bytes));
+  const size_t need = size_t(capacity) * bytesPerSlot() + (64u << 20);
+  if (need > free_bytes)
+    throw CudaOutOfMemory("device block pool cannot grow to " + std::to_string(capacity) +
+                          " slots (" + std::to_string(need >> 20) + " MiB needed, " +
+                          std::to_string(free_bytes >> 20) + " MiB free)");
+  const size_t keep = size_t(capacity_), n = size_t(capacity);
+  regrow(cells_, keep, n, stream_);
+  regrow(keys_, keep, n, stream_);
+  regrow(scratch_, keep, n, stream_);
+  regrow(touched_, keep, n, stream_);
+  regrow(touched_list_, keep, n, stream_);
+  regrow(fresh_, keep, n, stream_);
+  regrow(dirty_, keep, n, stream_);
+  regrow(last_used_, keep, n, stream_);
+  regrow(changed_at_, keep, n, stream_);
+  regrow(cull_, keep, n, stream_);
+  regrow(free_stack_, size_t(free_top_), n, stream_);
+  regrow(resident_, keep, n, stream_);
+  const int32_t old = capacity_;
+  capacity_ = capacity;
+  free_host_.resize(n);
+  resident_host_.resize(n, 0);
+  std::vector<int32_t> fresh_slots;
+  fresh_slots.reserve(n - keep);
+  for (int32_t s = capacity - 1; s >= old; --s) fresh_slots.push_back(s);
+  push(fresh_slots);
+}
+
+void SlotPool::clear() {
+  if (capacity_ == 0) return;
+  const size_t n = size_t(capacity_);
+  FRAGG_CUDA_CHECK(cudaMemsetAsync(scratch_.get(), 0, n * sizeof(SlotScratch), stream_));
+  FRAGG_CUDA_CHECK(cudaMemsetAsync(touched_.get(), 0, n * sizeof(uint32_t), stream_));
+  FRAGG_CUDA_CHECK(cudaMemsetAsync(fresh_.get(), 0, n, stream_));
+  FRAGG_CUDA_CHECK(cudaMemsetAsync(dirty_.get(), 0, n, stream_));
+  FRAGG_CUDA_CHECK(cudaMemsetAsync(resident_.get(), 0, n, stream_));
+  std::fill(resident_host_.begin(), resident_host_.end(), 0);
+  free_top_ = 0;
+  std::vector<int32_t> all;
+  all.reserve(n);
+  for (int32_t s = capacity_ - 1; s >= 0; --s) all.push_back(s);
+  push(all);
+}
+
+SlotArrays SlotPool::arrays() const {
+  SlotArrays a;
+  a.cells = cells_.get();
+  a.keys = keys_.get();
+  a.scratch = scratch_.get();
+  a.touched = touched_.get();
+  a.touched_list = touched_list_.get();
+  a.fresh = fresh_.get();
+  a.dirty = dirty_.get();
+  a.last_used = last_used_.get();
+  a.changed_at = changed_at_.get();
+  a.cull = cull_.get();
+  a.free_stack = free_stack_.get();
+  a.resident = resident_.get();
+  a.capacity = capacity_;
+  return a;
+}
+
+std::vector<int32_t> SlotPool::pop(int32_t n) {
+  n = std::min(n, free_top_);
+  std::vector<int32_t> out(free_host_.begin() + (free_top_ - n), free_host_.begin() + free_top_);
+  free_top_ -= n;
+  return out;
+}
+
+std::vector<int32_t> SlotPool::takenByDevice(int32_t new_top) {
+  new_top = std::max(new_top, 0);
+  std::vector<int32_t> out;
+  if (new_top >= free_top_) return out;
+  out.assign(free_host_.begin() + new_top, free_host_.begin() + free_top_);
+  free_top_ = new_top;
+  return out;
+}
+
+void SlotPool::push(const std::vector<int32_t>& slots) {
+  if (slots.empty()) return;
+  std::copy(slots.begin(), slots.end(), free_host_.begin() + free_top_);
+  copyToDevice(free_stack_.get() + free_top_, free_host_.data() + free_top_, slots.size(), stream_);
+  free_top_ += static_cast<int32_t>(slots.size());
+  // The host vector is read by the copy: wait before it can change again.
+  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+}
+
+void SlotPool::uploadResident() {
+  copyToDevice(resident_.get(), resident_host_.data(), resident_host_.size(), stream_);
+  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+}
+
+}  // namespace fragg::cuda

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# On the GPU machine (plain CMake, no ROS): build, run the `gpu` tests, optionally under
+# compute-sanitizer, and the benchmark. Data and liboctomap come staged under .device/
+# (real/ copied from ../shared/data/real, octomap/ from ../shared/tools/stage-octomap.sh).
+# Usage: bash scripts/device_check.sh [tests] [sanitize] [bench ARGS...]
+# Logs go to $OUT when set (the device tool brings them back).
+set -uo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+out="${OUT:-$root/out/device}"
+mkdir -p "$out"
+build="$root/build-device"
+cmake -S "$root" -B "$build" -DFRAGG_WITH_ROS=OFF -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_CUDA_ARCHITECTURES=90 -DFRAGG_REAL_DATA="$root/.device/real" \
+  -DOCTOMAP_ROOT="$root/.device/octomap" >"$out/cmake.log" 2>&1 || { tail -30 "$out/cmake.log"; exit 1; }
+cmake --build "$build" -j "$(nproc)" >"$out/build.log" 2>&1 || { grep -E "error" "$out/build.log" | head -30; exit 1; }
+echo "build ok"
+export LD_LIBRARY_PATH="$root/.device/octomap/lib:${LD_LIBRARY_PATH:-}"
+status=0
+while [ $# -gt 0 ]; do
+  case "$1" in
+    tests)
+      (cd "$build" && ctest -L gpu --output-on-failure -j1 >"$out/gpu_tests.log" 2>&1) || status=1
+      grep -E "^\[gpu\]|tests passed|Failed|FAILED|Skipped" "$out/gpu_tests.log" | head -40
+      "$build/test/fragg_gpu_test" >"$out/gpu_test_verbose.log" 2>&1 || status=1
+      grep -E "^\[gpu\]|PASSED|FAILED|Failure|Expected|Which is|actual" "$out/gpu_test_verbose.log" | head -60
+      shift ;;
+    sanitize)
+      for tool in memcheck racecheck; do
+        compute-sanitizer --tool "$tool" --error-exitcode 9 \
+          "$build/test/fragg_gpu_test" \
+          --gtest_filter='*PrepareKernel*:*HostReaders*:*TinyPool*:*VelodynePair*' \
+          >"$out/sanitizer_$tool.log" 2>&1
+        echo "compute-sanitizer $tool: exit $?"; tail -3 "$out/sanitizer_$tool.log"
+      done
+      shift ;;
+    bench)
+      shift
+      "$build/bin/fragg_map_bench" "$@" 2>&1 | tee "$out/bench.log" | tail -40
+      break ;;
+    *) echo "unknown step $1"; exit 2 ;;
+  esac
+done
+exit $status

@@ -1,0 +1,66 @@
+#include "fragg_map/internal/backend_factory.h"
+
+#include <atomic>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/internal/cpu_integrator.h"
+#include "fragg_map/log.h"
+#if FRAGG_HAVE_CUDA
+#include "fragg_map/internal/cuda_backend.h"
+#endif
+
+namespace fragg {
+
+bool builtWithCuda() { return FRAGG_HAVE_CUDA != 0; }
+
+#if !FRAGG_HAVE_CUDA
+std::string cudaDeviceName(int, std::string* why_not) {
+  if (why_not) *why_not = "built without CUDA";
+  return "";
+}
+#endif
+
+namespace {
+/// `auto` says what it chose once per process, not once per map.
+void logAutoChoiceOnce(LogLevel level, const std::string& line) {
+  static std::atomic<bool> said{false};
+  if (!said.exchange(true)) logMessage(level, line);
+}
+}  // namespace
+
+BackendChoice makeBackend(const MapParams& p) {
+  BackendChoice c;
+  if (p.backend == Backend::kCpu) {
+    c.integrator = std::make_unique<CpuIntegrator>(p.threads);
+    c.reason = "cpu: requested";
+    return c;
+  }
+#if FRAGG_HAVE_CUDA
+  std::string why_not;
+  const std::string name = cudaDeviceName(p.cuda.device, &why_not);
+  if (!name.empty()) {
+    try {
+      c.integrator = makeCudaIntegrator(p);
+      c.reason = std::string(p.backend == Backend::kAuto ? "auto" : "requested") +
+                 ": CUDA device " + std::to_string(p.cuda.device) + " (" + name + ")";
+    } catch (const CudaError& e) {
+      why_not = e.what();
+    }
+  }
+  if (!c.integrator && p.backend == Backend::kCuda)
+    throw InvalidArgument("backend cuda requested, but " + why_not);
+  if (!c.integrator) {
+    c.integrator = std::make_unique<CpuIntegrator>(p.threads);
+    c.reason = "auto: CPU backend (" + why_not + ")";
+  }
+#else
+  if (p.backend == Backend::kCuda)
+    throw InvalidArgument("backend cuda requested, but this build has no CUDA backend");
+  c.integrator = std::make_unique<CpuIntegrator>(p.threads);
+  c.reason = "auto: CPU backend (built without CUDA)";
+#endif
+  if (p.backend == Backend::kAuto) logAutoChoiceOnce(LogLevel::kInfo, "backend " + c.reason);
+  return c;
+}
+
+}  // namespace fragg

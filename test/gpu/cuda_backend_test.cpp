@@ -1,0 +1,284 @@
+// The CUDA backend against the CPU backend: same input, byte-identical blocks. Labelled `gpu`;
+// every test but the backend-selection one is skipped (with a message) where there is no CUDA
+// device, so the suite also runs on the CI machine.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "bench/synthetic_lidar.h"
+#include "fragg_map/errors.h"
+#include "fragg_map/internal/backend_factory.h"
+#include "fragg_map/io/dataset.h"
+#include "fragg_map/io/point_file.h"
+#include "fragg_map/io/pose_file.h"
+#include "fragg_map/map.h"
+
+namespace fragg {
+namespace {
+
+const std::string kData = FRAGG_REAL_DATA;
+
+std::string deviceName() {
+  std::string why;
+  return cudaDeviceName(0, &why);
+}
+
+#define REQUIRE_DEVICE()                                                     \
+  do {                                                                       \
+    std::string why;                                                         \
+    if (cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "skipped: " << why; \
+  } while (0)
+
+MapParams paramsFor(Backend b, double res) {
+  MapParams p;
+  p.resolution_m = res;
+  p.backend = b;
+  return p;
+}
+
+/// Every block of `a` is in `b` with the same 2 KiB, and the other way round.
+void expectSameBlocks(const Map& a, const Map& b, const char* what) {
+  const BlockMap& ba = a.blocks();
+  const BlockMap& bb = b.blocks();
+  size_t differing = 0, missing = 0, observed_cells = 0;
+  ba.forEach([&](BlockIndex i) {
+    const Block* other = bb.findBlock(ba.meta(i).key);
+    if (!other) {
+      ++missing;
+      return;
+    }
+    if (std::memcmp(&ba.block(i), other, sizeof(Block)) != 0) ++differing;
+    for (const Cell& c : ba.block(i).cells) observed_cells += c.observed();
+  });
+  EXPECT_EQ(ba.size(), bb.size()) << what;
+  EXPECT_EQ(missing, 0u) << what;
+  EXPECT_EQ(differing, 0u) << what << ": blocks whose bytes differ";
+  EXPECT_GT(observed_cells, 1000u) << what;
+  std::printf("[gpu] %s: %zu blocks, %zu observed cells, %zu differing\n", what, ba.size(),
+              observed_cells, differing);
+}
+
+struct Input {
+  PointCloud cloud;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+};
+
+void insertAll(Map& m, const std::vector<Input>& in, const SensorModel& sensor) {
+  for (const Input& s : in) m.insert(s.cloud, s.T, sensor);
+}
+
+std::vector<Input> velodynePair() {
+  const std::string dir = kData + "/small_gicp_pair/";
+  return {{readPointFile(dir + "target.ply"), Eigen::Isometry3d::Identity()},
+          {readPointFile(dir + "source.ply"), readMatrix4(dir + "T_target_source.txt")}};
+}
+
+std::vector<Input> rgbdFrames() {
+  auto source = openDataset(kData + "/slambook2_ch5_rgbd");
+  std::vector<Input> out;
+  Scan s;
+  while (source->next(s)) out.push_back({s.cloud, s.T_map_sensor});
+  return out;
+}
+
+std::vector<Input> syntheticLidar(int scans, double step_m) {
+  bench::SyntheticLidarOptions o;
+  o.step_m = step_m;
+  bench::SyntheticLidar lidar(o);
+  std::vector<Input> out;
+  for (int i = 0; i < scans; ++i) {
+    Scan s = lidar.scan(i);
+    out.push_back({s.cloud, s.T_map_sensor});
+  }
+  return out;
+}
+
+void expectBackendsAgree(const std::vector<Input>& in, MapParams p, const SensorModel& sensor,
+                         const char* what) {
+  p.backend = Backend::kCpu;
+  Map cpu(p);
+  p.backend = Backend::kCuda;
+  Map gpu(p);
+  ASSERT_STREQ(gpu.backendName(), "cuda");
+  insertAll(cpu, in, sensor);
+  insertAll(gpu, in, sensor);
+  expectSameBlocks(cpu, gpu, what);
+}
+
+TEST(CudaBackendTest, AutoPicksCudaWithADeviceAndTheCpuOtherwise) {
+  Map m(paramsFor(Backend::kAuto, 0.05));
+  if (builtWithCuda() && !deviceName().empty()) {
+    EXPECT_STREQ(m.backendName(), "cuda");
+    EXPECT_NE(m.backendReason().find(deviceName()), std::string::npos) << m.backendReason();
+  } else {
+    EXPECT_STREQ(m.backendName(), "cpu");
+    EXPECT_EQ(m.backendReason().rfind("auto: CPU backend (", 0), 0u) << m.backendReason();
+    EXPECT_THROW(Map(paramsFor(Backend::kCuda, 0.05)), InvalidArgument);
+  }
+  EXPECT_STREQ(Map(paramsFor(Backend::kCpu, 0.05)).backendName(), "cpu");
+}
+
+TEST(CudaBackendTest, RealVelodynePairIsByteIdentical) {
+  REQUIRE_DEVICE();
+  expectBackendsAgree(velodynePair(), paramsFor(Backend::kCuda, 0.05),
+                      SensorModel::autoFromCloud(0.0, 30.0), "velodyne pair 5 cm 30 m");
+}
+
+TEST(CudaBackendTest, RealRgbdFramesAreByteIdentical) {
+  REQUIRE_DEVICE();
+  expectBackendsAgree(rgbdFrames(), paramsFor(Backend::kCuda, 0.03),
+                      SensorModel::autoFromCloud(0.0, -1.0), "rgbd 3 cm");
+}
+
+TEST(CudaBackendTest, RealRoomScansAreByteIdentical) {
+  REQUIRE_DEVICE();
+  const std::string dir = kData + "/pcl_room_scans/";
+  expectBackendsAgree(
+      {{readPointFile(dir + "room_scan1.pcd")}, {readPointFile(dir + "room_scan2.pcd")}},
+      paramsFor(Backend::kCuda, 0.05), SensorModel::autoFromCloud(0.0, -1.0), "room scans 5 cm");
+}
+
+TEST(CudaBackendTest, SyntheticLidar180kIsByteIdenticalAt30And50Metres) {
+  REQUIRE_DEVICE();
+  const auto scans = syntheticLidar(6, 2.0);
+  expectBackendsAgree(scans, paramsFor(Backend::kCuda, 0.05), SensorModel::autoFromCloud(0.0, 30.0),
+                      "synthetic 180k 30 m");
+  expectBackendsAgree(scans, paramsFor(Backend::kCuda, 0.05), SensorModel::autoFromCloud(0.0, 50.0),
+                      "synthetic 180k 50 m");
+}
+
+TEST(CudaBackendTest, OptionsMatchTheCpu) {
+  REQUIRE_DEVICE();
+  const auto scans = syntheticLidar(3, 3.0);
+  MapParams p = paramsFor(Backend::kCuda, 0.1);
+  p.raycast = RayCast::kBresenham;
+  expectBackendsAgree(scans, p, SensorModel::autoFromCloud(0.0, 30.0), "bresenham");
+  p = paramsFor(Backend::kCuda, 0.1);
+  p.cuda.readonly_ray_loads = false;
+  p.cuda.pinned_host_blocks = false;
+  expectBackendsAgree(scans, p, SensorModel::autoFromCloud(0.0, 30.0), "plain loads, pageable");
+  p = paramsFor(Backend::kCuda, 0.1);
+  p.clear_no_return_rays = true;
+  expectBackendsAgree(scans, p, SensorModel::autoFromCloud(0.0, 30.0), "no-return clearing");
+  p = paramsFor(Backend::kCuda, 0.1);
+  expectBackendsAgree(scans, p,
+                      SensorModel::spinningLidar(-20 * M_PI / 180, 10 * M_PI / 180, 1.0, 25.0),
+                      "explicit lidar model, min range");
+}
+
+TEST(CudaBackendTest, PrepareKernelCountsLikeTheCpu) {
+  REQUIRE_DEVICE();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-40.f, 40.f);
+  PointCloud cloud;
+  for (int i = 0; i < 50000; ++i) cloud.points_S.emplace_back(u(rng), u(rng), u(rng) * 0.3f);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int i = 0; i < 100; ++i) {
+    cloud.points_S.emplace_back(nan, 1.f, 1.f);
+    cloud.points_S.emplace_back(1.f, inf, 1.f);
+    cloud.points_S.emplace_back(0.f, 0.f, 0.f);
+    cloud.points_S.emplace_back(0.1f, 0.1f, 0.f);  // closer than min range
+  }
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translate(Eigen::Vector3d(1.234, -5.678, 0.9));
+  T.rotate(Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.2, 0.3, 1).normalized()));
+  const SensorModel sensor = SensorModel::pinhole(1.2, 0.8, 0.5, 30.0);
+  Map cpu(paramsFor(Backend::kCpu, 0.1)), gpu(paramsFor(Backend::kCuda, 0.1));
+  const InsertStats a = cpu.insert(cloud, T, sensor), b = gpu.insert(cloud, T, sensor);
+  EXPECT_EQ(a.points_in, b.points_in);
+  EXPECT_EQ(a.rays_hit, b.rays_hit);
+  EXPECT_EQ(a.rays_free_only, b.rays_free_only);
+  EXPECT_EQ(a.dropped_invalid, b.dropped_invalid);
+  EXPECT_EQ(a.dropped_min_range, b.dropped_min_range);
+  EXPECT_EQ(a.dropped_outside_frustum, b.dropped_outside_frustum);
+  EXPECT_GT(a.dropped_outside_frustum, 1000u);
+  EXPECT_EQ(a.voxel_visits, b.voxel_visits);
+  EXPECT_EQ(a.cells_updated, b.cells_updated);
+  EXPECT_EQ(a.blocks_touched, b.blocks_touched);
+  EXPECT_EQ(a.blocks_created, b.blocks_created);
+  expectSameBlocks(cpu, gpu, "random cloud, pinhole");
+}
+
+TEST(CudaBackendTest, TinyPoolEvictsWritesBackAndReuploads) {
+  REQUIRE_DEVICE();
+  // A pool of ~6,000 slots against a drive that touches far more: blocks go back and forth.
+  // The path goes out and back, so evicted blocks are uploaded again.
+  auto scans = syntheticLidar(8, 4.0);
+  auto back = scans;
+  std::reverse(back.begin(), back.end());
+  scans.insert(scans.end(), back.begin(), back.end());
+  MapParams p = paramsFor(Backend::kCuda, 0.1);
+  p.cuda.pool_max_bytes = size_t(6000) * 2300;
+  Map gpu(p);
+  p.backend = Backend::kCpu;
+  Map cpu(p);
+  const SensorModel sensor = SensorModel::autoFromCloud(0.0, 20.0);
+  InsertStats total;
+  for (size_t i = 0; i < scans.size(); ++i) {
+    cpu.insert(scans[i].cloud, scans[i].T, sensor);
+    total.add(gpu.insert(scans[i].cloud, scans[i].T, sensor));
+    if (i == 5) {  // a host reader in the middle: write-back, then the device goes on
+      const Eigen::Vector3d p_map = scans[0].T.translation() + Eigen::Vector3d(3, 0, -1.7);
+      EXPECT_EQ(cpu.query(p_map), gpu.query(p_map));
+    }
+  }
+  ASSERT_STREQ(gpu.backendName(), "cuda") << gpu.backendReason();
+  EXPECT_GT(total.blocks_evicted, 1000u);
+  EXPECT_GT(total.blocks_uploaded, 1000u);
+  std::printf("[gpu] tiny pool: %llu evicted, %llu uploaded, device %zu MiB\n",
+              static_cast<unsigned long long>(total.blocks_evicted),
+              static_cast<unsigned long long>(total.blocks_uploaded),
+              gpu.memory().device_bytes >> 20);
+  expectSameBlocks(cpu, gpu, "tiny pool, out and back");
+}
+
+TEST(CudaBackendTest, HostReadersSeeDeviceChanges) {
+  REQUIRE_DEVICE();
+  const auto scans = syntheticLidar(4, 2.0);
+  const SensorModel sensor = SensorModel::autoFromCloud(0.0, 30.0);
+  Map cpu(paramsFor(Backend::kCpu, 0.1)), gpu(paramsFor(Backend::kCuda, 0.1));
+  insertAll(cpu, {scans[0], scans[1]}, sensor);
+  insertAll(gpu, {scans[0], scans[1]}, sensor);
+  // save (write-back), clear a box on the host (device copies dropped), insert more.
+  const std::string path = std::string(FRAGG_TEST_TMP) + "/gpu_save.fgm";
+  gpu.save(path);
+  expectSameBlocks(cpu, Map::load(path), "saved after 2 scans");
+  const Eigen::Vector3d lo = scans[1].T.translation() - Eigen::Vector3d(4, 4, 2);
+  const Eigen::Vector3d hi = scans[1].T.translation() + Eigen::Vector3d(4, 4, 2);
+  cpu.clearBox(lo, hi);
+  gpu.clearBox(lo, hi);
+  insertAll(cpu, {scans[2], scans[3]}, sensor);
+  insertAll(gpu, {scans[2], scans[3]}, sensor);
+  EXPECT_EQ(cpu.knownVoxelCount(), gpu.knownVoxelCount());
+  expectSameBlocks(cpu, gpu, "clear box, then 2 more scans");
+  gpu.reset();
+  cpu.reset();
+  insertAll(cpu, {scans[3]}, sensor);
+  insertAll(gpu, {scans[3]}, sensor);
+  expectSameBlocks(cpu, gpu, "after reset");
+}
+
+TEST(CudaBackendTest, PoolTooSmallForOneScanFallsBackToTheCpu) {
+  REQUIRE_DEVICE();
+  const auto scans = syntheticLidar(3, 2.0);
+  MapParams p = paramsFor(Backend::kCuda, 0.05);
+  p.cuda.pool_max_bytes = size_t(200) * 2300;  // far fewer slots than one scan touches
+  Map gpu(p);
+  p.backend = Backend::kCpu;
+  Map cpu(p);
+  const SensorModel sensor = SensorModel::autoFromCloud(0.0, 30.0);
+  insertAll(cpu, scans, sensor);
+  insertAll(gpu, scans, sensor);
+  EXPECT_STREQ(gpu.backendName(), "cpu");
+  EXPECT_NE(gpu.backendReason().find("fell back from CUDA"), std::string::npos);
+  expectSameBlocks(cpu, gpu, "after the fallback");
+}
+
+}  // namespace
+}  // namespace fragg

@@ -1,0 +1,8 @@
+# The CUDA backend against the CPU backend (label gpu). Built wherever the core is; the tests
+# that need a device skip themselves without one.
+fragg_add_test(fragg_gpu_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/cuda_backend_test.cpp
+          ${PROJECT_SOURCE_DIR}/src/tools/bench/synthetic_lidar.cpp
+  LIBS fragg_map_core
+  LABELS gpu)
+target_include_directories(fragg_gpu_test PRIVATE ${PROJECT_SOURCE_DIR}/src/tools)
