@@ -171,7 +171,9 @@ MapQuality evaluateMapQuality(const Map& map, const MeshBvh& scene,
   q.surface_observed = surface.size();
   for (const VoxelKey& k : surface) {
     const Cell* c = map.findCell(k);
-    if (c && c->observed() && occupied(*c)) ++q.surface_observed_occupied;
+    if (!c || !c->observed()) continue;
+    ++q.surface_known;
+    if (occupied(*c)) ++q.surface_observed_occupied;
   }
   return q;
 }

@@ -11,6 +11,7 @@ namespace {
 
 constexpr uint32_t kLeafSize = 4;
 constexpr int kStackSize = 64;
+constexpr float kEdgeEps = 1e-5f;
 
 // Slab test; returns the entry distance or INFINITY when the box is missed within [0, t_max].
 inline float boxEntry(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
@@ -38,18 +39,18 @@ inline float boxDistanceSq(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
 }  // namespace
 
 float rayTriangle(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
-                  const Eigen::Vector3f& v0, const Eigen::Vector3f& e1,
-                  const Eigen::Vector3f& e2) {
+                  const Eigen::Vector3f& v0, const Eigen::Vector3f& e1, const Eigen::Vector3f& e2,
+                  float edge_eps) {
   const Eigen::Vector3f pv = dir.cross(e2);
   const float det = e1.dot(pv);
   if (std::abs(det) < 1e-12f) return -1.f;
   const float inv = 1.f / det;
   const Eigen::Vector3f tv = origin - v0;
   const float u = tv.dot(pv) * inv;
-  if (u < 0.f || u > 1.f) return -1.f;
+  if (u < -edge_eps || u > 1.f + edge_eps) return -1.f;
   const Eigen::Vector3f qv = tv.cross(e1);
   const float v = dir.dot(qv) * inv;
-  if (v < 0.f || u + v > 1.f) return -1.f;
+  if (v < -edge_eps || u + v > 1.f + edge_eps) return -1.f;
   return e2.dot(qv) * inv;
 }
 
@@ -144,7 +145,7 @@ Eigen::AlignedBox3f MeshBvh::bounds() const {
 
 template <typename Visit>
 void MeshBvh::traverseRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, float t_max,
-                          Visit&& visit) const {
+                          float edge_eps, Visit&& visit) const {
   // visit(leaf slot, t) may lower t_max (nearest hit) through its return value.
   if (nodes_.empty()) return;
   const Eigen::Vector3f inv_dir = dir.cwiseInverse();
@@ -156,7 +157,7 @@ void MeshBvh::traverseRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& 
     if (boxEntry(node.lo, node.hi, origin, inv_dir, t_max) == INFINITY) continue;
     if (node.count > 0) {
       for (uint32_t i = node.first; i < node.first + node.count; ++i) {
-        const float t = rayTriangle(origin, dir, tris_[i].v0, tris_[i].e1, tris_[i].e2);
+        const float t = rayTriangle(origin, dir, tris_[i].v0, tris_[i].e1, tris_[i].e2, edge_eps);
         if (t > 0.f && t < t_max) t_max = visit(i, t, t_max);
       }
       continue;
@@ -179,7 +180,9 @@ bool MeshBvh::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& di
                         float t_max_m, RayHit* hit) const {
   int32_t best = -1;
   float best_t = t_max_m;
-  traverseRay(origin, dir_unit, t_max_m, [&](uint32_t slot, float t, float) {
+  // A ray through the edge shared by two triangles must hit one of them: a small tolerance
+  // on the barycentric limits closes the cracks float rounding opens there.
+  traverseRay(origin, dir_unit, t_max_m, kEdgeEps, [&](uint32_t slot, float t, float) {
     best = static_cast<int32_t>(slot);
     best_t = t;
     return t;
@@ -197,7 +200,8 @@ bool MeshBvh::inside(const Eigen::Vector3f& p) const {
   int parity[32];
   int n = 0;
   bool overflow = false;
-  traverseRay(p, kDir, INFINITY, [&](uint32_t slot, float, float t_max) {
+  // Exact limits here: a crossing counted twice would flip the parity.
+  traverseRay(p, kDir, INFINITY, 0.f, [&](uint32_t slot, float, float t_max) {
     const int32_t s = mesh_.solid_of_triangle[order_[slot]];
     int k = 0;
     while (k < n && solids[k] != s) ++k;

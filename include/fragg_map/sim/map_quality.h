@@ -27,6 +27,7 @@ struct MapQuality {
   uint64_t occupied_near_surface = 0;
   uint64_t surface_observed = 0;           ///< surface voxels in the observed region
   uint64_t surface_observed_occupied = 0;  ///< ... that are occupied
+  uint64_t surface_known = 0;              ///< surface voxels that are known themselves
   uint64_t free = 0;
   uint64_t free_inside = 0;
   uint64_t free_inside_deep = 0;
@@ -34,6 +35,9 @@ struct MapQuality {
   double precision() const { return occupied ? double(occupied_near_surface) / occupied : 0.0; }
   double recall() const {
     return surface_observed ? double(surface_observed_occupied) / surface_observed : 0.0;
+  }
+  double knownSurfaceRecall() const {
+    return surface_known ? double(surface_observed_occupied) / surface_known : 0.0;
   }
   double freeError() const { return free ? double(free_inside) / free : 0.0; }
   double freeErrorDeep() const { return free ? double(free_inside_deep) / free : 0.0; }

@@ -51,7 +51,7 @@ class MeshBvh {
   uint32_t build(uint32_t begin, uint32_t end, std::vector<Eigen::Vector3f>& centroids);
   template <typename Visit>
   void traverseRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, float t_max,
-                   Visit&& visit) const;
+                   float edge_eps, Visit&& visit) const;
 
   TriangleMesh mesh_;
   std::vector<Node> nodes_;
@@ -64,8 +64,9 @@ float pointTriangleDistanceSq(const Eigen::Vector3f& p, const Eigen::Vector3f& a
                               const Eigen::Vector3f& b, const Eigen::Vector3f& c);
 
 /// Möller-Trumbore: distance t along dir to the triangle (v0, v0 + e1, v0 + e2), or a negative
-/// value when the line misses it.
+/// value when the line misses it. Barycentric limits are widened by edge_eps.
 float rayTriangle(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
-                  const Eigen::Vector3f& v0, const Eigen::Vector3f& e1, const Eigen::Vector3f& e2);
+                  const Eigen::Vector3f& v0, const Eigen::Vector3f& e1, const Eigen::Vector3f& e2,
+                  float edge_eps = 0.f);
 
 }  // namespace fragg::sim

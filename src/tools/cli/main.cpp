@@ -9,13 +9,15 @@
 int main(int argc, char** argv) {
   CLI::App app{
       "fragg_map: GPU-accelerated 3D occupancy maps (build, stats, export, render, "
-      "compare)"};
+      "compare, eval, octomap-build)"};
   app.require_subcommand(1);
   fragg::cli::addBuildCommand(app);
   fragg::cli::addStatsCommand(app);
   fragg::cli::addExportCommand(app);
   fragg::cli::addRenderCommand(app);
   fragg::cli::addCompareCommand(app);
+  fragg::cli::addEvalCommand(app);
+  fragg::cli::addOctomapBuildCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
