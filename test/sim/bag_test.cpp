@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "fragg_map/io/rosbag_source.h"
 #include "fragg_map/sim/lidar_sensor.h"
 #include "sim_test_util.h"
@@ -61,6 +63,24 @@ TEST(SimBag, CloudsAndTfReadBackThroughTheCoreBagReader) {
   }
   EXPECT_EQ(i, poses.size());
   EXPECT_EQ(source->skipped(), 0u);
+}
+
+// The smoke workload the build generates (cmake/sim_workloads.cmake): small, complete, placed.
+TEST(SimBag, SmokeWorkloadBagIsSmallAndReadable) {
+  std::ifstream f(FRAGG_SMOKE_BAG, std::ios::binary | std::ios::ate);
+  ASSERT_TRUE(f.good()) << FRAGG_SMOKE_BAG;
+  EXPECT_LT(static_cast<long>(f.tellg()), 2L * 1024 * 1024);
+  registerRosbagReader();
+  auto source = openDataset(FRAGG_SMOKE_BAG);  // the only PointCloud2 topic, frame "map"
+  Scan s;
+  size_t scans = 0;
+  while (source->next(s)) {
+    EXPECT_EQ(s.cloud.width, 360u);
+    EXPECT_EQ(s.cloud.height, 16u);
+    EXPECT_GT(s.T_map_sensor.translation().z(), 1.0);  // 1.8 m above the sloped ground
+    ++scans;
+  }
+  EXPECT_EQ(scans, 10u);
 }
 
 }  // namespace

@@ -21,4 +21,6 @@ if(TARGET fragg_map_sim_bag AND TARGET fragg_map_rosbag)
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/bag_test.cpp
     LIBS fragg_map_sim_bag fragg_map_rosbag
     LABELS sim ros)
+  add_dependencies(sim_bag_test fragg_map_smoke_workload)
+  target_compile_definitions(sim_bag_test PRIVATE FRAGG_SMOKE_BAG="${FRAGG_SMOKE_BAG}")
 endif()

@@ -12,6 +12,14 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   fragg::sim::tool::addSceneCommand(app);
   fragg::sim::tool::addRecordCommand(app);
+  app.add_subcommand("info", "Print what this build can write (bag output needs ROS)")
+      ->callback([] {
+#ifdef FRAGG_HAVE_SIM_BAG
+        std::printf("bag_output yes\n");
+#else
+        std::printf("bag_output no\n");
+#endif
+      });
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
