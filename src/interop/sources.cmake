@@ -12,6 +12,7 @@ set(FRAGG_OCTOMAP_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/octomap_file_check.cpp
   ${CMAKE_CURRENT_LIST_DIR}/octomap_tree_to_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/octomap_import.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/octomap_insert.cpp
 )
 # `fragg_map export | render | compare` and the map loader they share (src/tools/CMakeLists).
 set(FRAGG_CLI_EXTRA_SOURCES

@@ -37,6 +37,7 @@ struct BuildOptions {
   OccupancyParams occupancy;
   bool clear_no_return = false;
   int threads = 0;
+  size_t max_scans = 0;
   bool json = false;
 };
 
@@ -90,7 +91,7 @@ void runBuild(const BuildOptions& o) {
   std::vector<double> ms_per_scan;
   Scan scan;
   const auto t0 = std::chrono::steady_clock::now();
-  while (source->next(scan)) {
+  while ((o.max_scans == 0 || ms_per_scan.size() < o.max_scans) && source->next(scan)) {
     if (scan.cloud.empty()) continue;  // an empty message carries nothing to integrate
     const InsertStats s = map.insert(scan.cloud, scan.T_map_sensor, sensor, scan.stamp_ns);
     total.add(s);
@@ -201,6 +202,8 @@ void addBuildCommand(CLI::App& app) {
   c->add_flag("--clear-no-return", o->clear_no_return,
               "Organised clouds: clear free space along rays without a return");
   c->add_option("--threads", o->threads, "CPU threads (0 = every core)")->capture_default_str();
+  c->add_option("--scans", o->max_scans, "Integrate only the first N scans (0 = all)")
+      ->capture_default_str();
   c->add_flag("--json", o->json, "Print one JSON object on stdout");
   c->callback([o] { runBuild(*o); });
 }

@@ -12,5 +12,7 @@ void addStatsCommand(CLI::App& app);
 void addExportCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);
 void addCompareCommand(CLI::App& app);
+void addEvalCommand(CLI::App& app);
+void addOctomapBuildCommand(CLI::App& app);
 
 }  // namespace fragg::cli

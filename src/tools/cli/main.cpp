@@ -10,7 +10,7 @@
 int main(int argc, char** argv) {
   CLI::App app{
       "fragg_map: GPU-accelerated 3D occupancy maps (build, stats, export, render, "
-      "compare)"};
+      "compare, eval, octomap-build)"};
   app.require_subcommand(1);
   // The backend choice is part of each command's summary line; warnings go to stderr.
   fragg::setLogSink([](fragg::LogLevel level, const std::string& message) {
@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
   fragg::cli::addExportCommand(app);
   fragg::cli::addRenderCommand(app);
   fragg::cli::addCompareCommand(app);
+  fragg::cli::addEvalCommand(app);
+  fragg::cli::addOctomapBuildCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

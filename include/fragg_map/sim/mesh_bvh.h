@@ -1,0 +1,72 @@
+// A bounding volume hierarchy over a triangle mesh: nearest ray hit (the simulator's sensors),
+// "is a point within r of the surface" and "is a point inside a solid" (map evaluation).
+// Immutable after construction; every query is thread-safe.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+#include "fragg_map/sim/triangle_mesh.h"
+
+namespace fragg::sim {
+
+struct RayHit {
+  float t_m = 0.f;        ///< distance along the (unit) ray direction
+  int32_t triangle = -1;  ///< index into the mesh's triangles
+};
+
+class MeshBvh {
+ public:
+  /// Builds the hierarchy (median splits on the longest centroid axis, <= 4 triangles a leaf).
+  explicit MeshBvh(TriangleMesh mesh);
+
+  const TriangleMesh& mesh() const { return mesh_; }
+  Eigen::AlignedBox3f bounds() const;
+
+  /// Nearest hit with 0 < t < t_max_m along origin + t * dir_unit; false when none.
+  bool intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir_unit, float t_max_m,
+                 RayHit* hit) const;
+
+  /// Whether some triangle is within distance r_m of p (stops at the first one found).
+  bool withinDistance(const Eigen::Vector3f& p, float r_m) const;
+
+  /// Distance from p to the surface, or max_m when the surface is farther than that.
+  float distance(const Eigen::Vector3f& p, float max_m) const;
+
+  /// Whether p is inside one of the mesh's closed solids: ray parity per solid, along a fixed
+  /// direction that no scene edge or face is aligned with.
+  bool inside(const Eigen::Vector3f& p) const;
+
+ private:
+  struct Node {
+    Eigen::Vector3f lo, hi;
+    uint32_t first = 0;  ///< leaf: first triangle (in order_); inner: right child
+    uint32_t count = 0;  ///< leaf: triangle count; inner: 0 (left child is the next node)
+  };
+  struct Tri {
+    Eigen::Vector3f v0, e1, e2;
+  };
+  uint32_t build(uint32_t begin, uint32_t end, std::vector<Eigen::Vector3f>& centroids);
+  template <typename Visit>
+  void traverseRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, float t_max,
+                   float edge_eps, Visit&& visit) const;
+
+  TriangleMesh mesh_;
+  std::vector<Node> nodes_;
+  std::vector<uint32_t> order_;  ///< triangle index of each leaf slot
+  std::vector<Tri> tris_;        ///< in leaf order
+};
+
+/// Squared distance from p to the triangle (a, b, c).
+float pointTriangleDistanceSq(const Eigen::Vector3f& p, const Eigen::Vector3f& a,
+                              const Eigen::Vector3f& b, const Eigen::Vector3f& c);
+
+/// Möller-Trumbore: distance t along dir to the triangle (v0, v0 + e1, v0 + e2), or a negative
+/// value when the line misses it. Barycentric limits are widened by edge_eps.
+float rayTriangle(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
+                  const Eigen::Vector3f& v0, const Eigen::Vector3f& e1, const Eigen::Vector3f& e2,
+                  float edge_eps = 0.f);
+
+}  // namespace fragg::sim

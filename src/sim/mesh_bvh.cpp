@@ -1,0 +1,277 @@
+#include "fragg_map/sim/mesh_bvh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "fragg_map/errors.h"
+
+namespace fragg::sim {
+namespace {
+
+constexpr uint32_t kLeafSize = 4;
+constexpr int kStackSize = 64;
+constexpr float kEdgeEps = 1e-5f;
+
+// Slab test; returns the entry distance or INFINITY when the box is missed within [0, t_max].
+inline float boxEntry(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
+                      const Eigen::Vector3f& origin, const Eigen::Vector3f& inv_dir, float t_max) {
+  float t0 = 0.f, t1 = t_max;
+  for (int a = 0; a < 3; ++a) {
+    float near = (lo[a] - origin[a]) * inv_dir[a];
+    float far = (hi[a] - origin[a]) * inv_dir[a];
+    if (near > far) std::swap(near, far);
+    if (std::isnan(near)) near = -INFINITY;  // 0 * inf: origin on the slab plane
+    if (std::isnan(far)) far = INFINITY;
+    t0 = std::max(t0, near);
+    t1 = std::min(t1, far);
+    if (t0 > t1) return INFINITY;
+  }
+  return t0;
+}
+
+inline float boxDistanceSq(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
+                           const Eigen::Vector3f& p) {
+  const Eigen::Vector3f d = (lo - p).cwiseMax(p - hi).cwiseMax(0.f);
+  return d.squaredNorm();
+}
+
+}  // namespace
+
+float rayTriangle(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
+                  const Eigen::Vector3f& v0, const Eigen::Vector3f& e1, const Eigen::Vector3f& e2,
+                  float edge_eps) {
+  const Eigen::Vector3f pv = dir.cross(e2);
+  const float det = e1.dot(pv);
+  if (std::abs(det) < 1e-12f) return -1.f;
+  const float inv = 1.f / det;
+  const Eigen::Vector3f tv = origin - v0;
+  const float u = tv.dot(pv) * inv;
+  if (u < -edge_eps || u > 1.f + edge_eps) return -1.f;
+  const Eigen::Vector3f qv = tv.cross(e1);
+  const float v = dir.dot(qv) * inv;
+  if (v < -edge_eps || u + v > 1.f + edge_eps) return -1.f;
+  return e2.dot(qv) * inv;
+}
+
+float pointTriangleDistanceSq(const Eigen::Vector3f& p, const Eigen::Vector3f& a,
+                              const Eigen::Vector3f& b, const Eigen::Vector3f& c) {
+  // Closest point by Voronoi region (Ericson, Real-Time Collision Detection, 5.1.5).
+  const Eigen::Vector3f ab = b - a, ac = c - a, ap = p - a;
+  const float d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.f && d2 <= 0.f) return ap.squaredNorm();
+  const Eigen::Vector3f bp = p - b;
+  const float d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.f && d4 <= d3) return bp.squaredNorm();
+  const float vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.f && d1 >= 0.f && d3 <= 0.f) return (ap - ab * (d1 / (d1 - d3))).squaredNorm();
+  const Eigen::Vector3f cp = p - c;
+  const float d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.f && d5 <= d6) return cp.squaredNorm();
+  const float vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.f && d2 >= 0.f && d6 <= 0.f) return (ap - ac * (d2 / (d2 - d6))).squaredNorm();
+  const float va = d3 * d6 - d5 * d4;
+  if (va <= 0.f && (d4 - d3) >= 0.f && (d5 - d6) >= 0.f) {
+    const float w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return (bp - (c - b) * w).squaredNorm();
+  }
+  const float denom = 1.f / (va + vb + vc);
+  const float v = vb * denom, w = vc * denom;
+  return (ap - ab * v - ac * w).squaredNorm();
+}
+
+MeshBvh::MeshBvh(TriangleMesh mesh) : mesh_(std::move(mesh)) {
+  if (mesh_.solid_of_triangle.size() != mesh_.triangles.size())
+    throw InvalidArgument("mesh: one solid id per triangle is required");
+  const size_t n = mesh_.triangles.size();
+  for (const Eigen::Vector3i& t : mesh_.triangles)
+    for (int k = 0; k < 3; ++k)
+      if (t[k] < 0 || static_cast<size_t>(t[k]) >= mesh_.vertices_m.size())
+        throw InvalidArgument("mesh: a triangle refers to a vertex that does not exist");
+  order_.resize(n);
+  std::iota(order_.begin(), order_.end(), 0u);
+  std::vector<Eigen::Vector3f> centroids(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3i& t = mesh_.triangles[i];
+    centroids[i] = (mesh_.vertices_m[t[0]] + mesh_.vertices_m[t[1]] + mesh_.vertices_m[t[2]]) / 3.f;
+  }
+  nodes_.reserve(2 * n / kLeafSize + 2);
+  if (n > 0) build(0, static_cast<uint32_t>(n), centroids);
+  tris_.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3i& t = mesh_.triangles[order_[i]];
+    const Eigen::Vector3f& a = mesh_.vertices_m[t[0]];
+    tris_[i] = {a, mesh_.vertices_m[t[1]] - a, mesh_.vertices_m[t[2]] - a};
+  }
+}
+
+uint32_t MeshBvh::build(uint32_t begin, uint32_t end, std::vector<Eigen::Vector3f>& centroids) {
+  const uint32_t index = static_cast<uint32_t>(nodes_.size());
+  nodes_.emplace_back();
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(INFINITY), hi = -lo;
+  Eigen::Vector3f clo = lo, chi = hi;
+  for (uint32_t i = begin; i < end; ++i) {
+    const Eigen::Vector3i& t = mesh_.triangles[order_[i]];
+    for (int k = 0; k < 3; ++k) {
+      lo = lo.cwiseMin(mesh_.vertices_m[t[k]]);
+      hi = hi.cwiseMax(mesh_.vertices_m[t[k]]);
+    }
+    clo = clo.cwiseMin(centroids[order_[i]]);
+    chi = chi.cwiseMax(centroids[order_[i]]);
+  }
+  nodes_[index].lo = lo;
+  nodes_[index].hi = hi;
+  if (end - begin <= kLeafSize) {
+    nodes_[index].first = begin;
+    nodes_[index].count = end - begin;
+    return index;
+  }
+  int axis = 0;
+  (chi - clo).maxCoeff(&axis);
+  const uint32_t mid = begin + (end - begin) / 2;
+  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+                   [&](uint32_t a, uint32_t b) { return centroids[a][axis] < centroids[b][axis]; });
+  build(begin, mid, centroids);
+  const uint32_t right = build(mid, end, centroids);
+  nodes_[index].first = right;
+  nodes_[index].count = 0;
+  return index;
+}
+
+Eigen::AlignedBox3f MeshBvh::bounds() const {
+  if (nodes_.empty()) return Eigen::AlignedBox3f();
+  return Eigen::AlignedBox3f(nodes_[0].lo, nodes_[0].hi);
+}
+
+template <typename Visit>
+void MeshBvh::traverseRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, float t_max,
+                          float edge_eps, Visit&& visit) const {
+  // visit(leaf slot, t) may lower t_max (nearest hit) through its return value.
+  if (nodes_.empty()) return;
+  const Eigen::Vector3f inv_dir = dir.cwiseInverse();
+  uint32_t stack[kStackSize];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[stack[--top]];
+    if (boxEntry(node.lo, node.hi, origin, inv_dir, t_max) == INFINITY) continue;
+    if (node.count > 0) {
+      for (uint32_t i = node.first; i < node.first + node.count; ++i) {
+        const float t = rayTriangle(origin, dir, tris_[i].v0, tris_[i].e1, tris_[i].e2, edge_eps);
+        if (t > 0.f && t < t_max) t_max = visit(i, t, t_max);
+      }
+      continue;
+    }
+    const uint32_t left = static_cast<uint32_t>(&node - nodes_.data()) + 1, right = node.first;
+    const float tl = boxEntry(nodes_[left].lo, nodes_[left].hi, origin, inv_dir, t_max);
+    const float tr = boxEntry(nodes_[right].lo, nodes_[right].hi, origin, inv_dir, t_max);
+    // Push the farther child first so that the nearer one is visited first.
+    if (tl <= tr) {
+      if (tr != INFINITY) stack[top++] = right;
+      if (tl != INFINITY) stack[top++] = left;
+    } else {
+      if (tl != INFINITY) stack[top++] = left;
+      if (tr != INFINITY) stack[top++] = right;
+    }
+  }
+}
+
+bool MeshBvh::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir_unit,
+                        float t_max_m, RayHit* hit) const {
+  int32_t best = -1;
+  float best_t = t_max_m;
+  // A ray through the edge shared by two triangles must hit one of them: a small tolerance
+  // on the barycentric limits closes the cracks float rounding opens there.
+  traverseRay(origin, dir_unit, t_max_m, kEdgeEps, [&](uint32_t slot, float t, float) {
+    best = static_cast<int32_t>(slot);
+    best_t = t;
+    return t;
+  });
+  if (best < 0) return false;
+  if (hit) *hit = {best_t, static_cast<int32_t>(order_[best])};
+  return true;
+}
+
+bool MeshBvh::inside(const Eigen::Vector3f& p) const {
+  // An irrational-looking direction, steep upwards: few solids lie above a point, and no
+  // axis-aligned face or edge of the scene is parallel to it.
+  static const Eigen::Vector3f kDir = Eigen::Vector3f(0.0917f, 0.0531f, 1.0f).normalized();
+  int32_t solids[32];
+  int parity[32];
+  int n = 0;
+  bool overflow = false;
+  // Exact limits here: a crossing counted twice would flip the parity.
+  traverseRay(p, kDir, INFINITY, 0.f, [&](uint32_t slot, float, float t_max) {
+    const int32_t s = mesh_.solid_of_triangle[order_[slot]];
+    int k = 0;
+    while (k < n && solids[k] != s) ++k;
+    if (k == n) {
+      if (n == 32) {
+        overflow = true;
+        return t_max;
+      }
+      solids[n] = s;
+      parity[n++] = 0;
+    }
+    parity[k] ^= 1;
+    return t_max;
+  });
+  if (overflow) throw InvalidArgument("inside test: more than 32 solids above one point");
+  for (int k = 0; k < n; ++k)
+    if (parity[k]) return true;
+  return false;
+}
+
+bool MeshBvh::withinDistance(const Eigen::Vector3f& p, float r_m) const {
+  if (nodes_.empty()) return false;
+  const float r2 = r_m * r_m;
+  uint32_t stack[kStackSize];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[stack[--top]];
+    if (boxDistanceSq(node.lo, node.hi, p) > r2) continue;
+    if (node.count > 0) {
+      for (uint32_t i = node.first; i < node.first + node.count; ++i) {
+        const Tri& t = tris_[i];
+        if (pointTriangleDistanceSq(p, t.v0, t.v0 + t.e1, t.v0 + t.e2) <= r2) return true;
+      }
+      continue;
+    }
+    stack[top++] = node.first;
+    stack[top++] = static_cast<uint32_t>(&node - nodes_.data()) + 1;
+  }
+  return false;
+}
+
+float MeshBvh::distance(const Eigen::Vector3f& p, float max_m) const {
+  float best2 = max_m * max_m;
+  if (nodes_.empty()) return max_m;
+  uint32_t stack[kStackSize];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[stack[--top]];
+    if (boxDistanceSq(node.lo, node.hi, p) >= best2) continue;
+    if (node.count > 0) {
+      for (uint32_t i = node.first; i < node.first + node.count; ++i) {
+        const Tri& t = tris_[i];
+        best2 = std::min(best2, pointTriangleDistanceSq(p, t.v0, t.v0 + t.e1, t.v0 + t.e2));
+      }
+      continue;
+    }
+    const uint32_t left = static_cast<uint32_t>(&node - nodes_.data()) + 1, right = node.first;
+    const float dl = boxDistanceSq(nodes_[left].lo, nodes_[left].hi, p);
+    const float dr = boxDistanceSq(nodes_[right].lo, nodes_[right].hi, p);
+    if (dl <= dr) {
+      stack[top++] = right;
+      stack[top++] = left;
+    } else {
+      stack[top++] = left;
+      stack[top++] = right;
+    }
+  }
+  return std::sqrt(best2);
+}
+
+}  // namespace fragg::sim

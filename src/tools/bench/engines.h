@@ -1,0 +1,39 @@
+// Timed runs of one workload through one engine: fragg with a given backend (the map params'
+// `backend`, so a CUDA column is one more value) or OctoMap's insertPointCloud.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "bench/workloads.h"
+#include "fragg_map/map.h"
+
+namespace fragg::bench {
+
+struct Figures {
+  std::vector<double> ms;  ///< per scan (all repeats)
+  uint64_t visits = 0;     ///< fragg: cell visits of the traversal
+  double seconds = 0;
+  size_t known = 0;  ///< known voxels of the last run's map
+  size_t bytes = 0;  ///< host bytes of the last run's map
+};
+
+/// Inserts the first `count` scans into an empty map `repeats` times; the last map is moved
+/// into `keep` when given. unknown_band 0 (OctoMap's rule, for agreement figures).
+Figures runFragg(const Workload& w, Backend backend, size_t count, int repeats, int threads,
+                 Map* keep);
+
+#ifdef FRAGG_HAVE_OCTOMAP
+struct OctomapRun {
+  Figures figures;
+  Map map;  ///< OctoMap's tree as a map (coarse leaves expanded), for agreement figures
+};
+OctomapRun runOctomap(const Workload& w, size_t count);
+
+/// Cell agreement of a fragg map with OctoMap's, OctoMap's rule on both sides: among cells
+/// both know, and among cells either knows.
+std::pair<double, double> agreementWithOctomap(const Map& fragg_map, const Map& octomap_map);
+#endif
+
+}  // namespace fragg::bench

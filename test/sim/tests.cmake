@@ -1,0 +1,26 @@
+# Simulator and map-quality suites: analytic ray hits, sensors (NaN for no return, noise and
+# dropout statistics), determinism, OBJ round trip, evaluation metrics on a hand-made map, and
+# (ROS builds) the bag read back by the core's bag reader.
+fragg_add_test(sim_geometry_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/geometry_test.cpp
+  LIBS fragg_map_sim_lib
+  LABELS sim)
+
+fragg_add_test(sim_sensor_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/sensor_test.cpp
+  LIBS fragg_map_sim_lib
+  LABELS sim)
+
+fragg_add_test(sim_map_quality_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/map_quality_test.cpp
+  LIBS fragg_map_sim_lib
+  LABELS sim)
+
+if(TARGET fragg_map_sim_bag AND TARGET fragg_map_rosbag)
+  fragg_add_test(sim_bag_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/bag_test.cpp
+    LIBS fragg_map_sim_bag fragg_map_rosbag
+    LABELS sim ros)
+  add_dependencies(sim_bag_test fragg_map_smoke_workload)
+  target_compile_definitions(sim_bag_test PRIVATE FRAGG_SMOKE_BAG="${FRAGG_SMOKE_BAG}")
+endif()
