@@ -105,22 +105,23 @@ void CudaIntegrator::setSlotOf(BlockIndex i, int32_t slot) {
   slot_of_block_[i] = slot;
 }
 
-void CudaIntegrator::makeRoom(int32_t n, BlockMap& blocks) {
-  if (pool_.freeTop() >= n) return;
+void CudaIntegrator::makeRoom(int32_t need, int32_t want, BlockMap& blocks) {
+  want = std::max(want, need);
+  if (pool_.freeTop() >= want) return;
   const int32_t cap = pool_.capacity();
   const int32_t limit = slotLimit();
-  const int64_t want =
-      std::max<int64_t>(int64_t(cap) + cap / 2, int64_t(cap) + n - pool_.freeTop());
+  const int64_t grown =
+      std::max<int64_t>(int64_t(cap) + cap / 2, int64_t(cap) + want - pool_.freeTop());
   if (cap < limit) {
     try {
-      pool_.grow(static_cast<int32_t>(std::min<int64_t>(want, limit)));
+      pool_.grow(static_cast<int32_t>(std::min<int64_t>(grown, limit)));
       block_of_slot_.resize(size_t(pool_.capacity()), kNoBlock);
     } catch (const CudaOutOfMemory&) {
       // Stay at this size; evict below.
     }
   }
-  if (pool_.freeTop() < n) evict(n - pool_.freeTop(), blocks);
-  if (pool_.freeTop() < n)
+  if (pool_.freeTop() < want) evict(want - pool_.freeTop(), blocks);
+  if (pool_.freeTop() < need)
     throw CudaOutOfMemory("device block pool of " + std::to_string(pool_.capacity()) +
                           " slots cannot hold the blocks of one scan");
 }
@@ -424,7 +425,8 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
                   counters_dev_.get(), stream_.get());
   const int32_t expected_new = std::max<int32_t>(1024, last_created_ + last_created_ / 4);
   const uint64_t evicted_pre = evicted_;
-  makeRoom(static_cast<int32_t>(to_upload.size()) + expected_new, blocks);
+  makeRoom(static_cast<int32_t>(to_upload.size()),
+           static_cast<int32_t>(to_upload.size()) + expected_new, blocks);
   if (evicted_ != evicted_pre) classify(true);  // evicted window blocks: host-only now
   upload(to_upload, blocks);
 
@@ -470,10 +472,12 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
         if (i == kNoBlock) throw CudaError("missed block is not on the host (residency bug)");
         needed.push_back(i);
       }
-      makeRoom(static_cast<int32_t>(needed.size()), blocks);
+      makeRoom(static_cast<int32_t>(needed.size()), static_cast<int32_t>(needed.size()), blocks);
       upload(needed, blocks);
     }
-    if (c.overflow > 0) makeRoom(static_cast<int32_t>(c.overflow) * 2 + expected_new, blocks);
+    if (c.overflow > 0)
+      makeRoom(static_cast<int32_t>(c.overflow),
+               static_cast<int32_t>(c.overflow) * 2 + expected_new, blocks);
     // Evictions may have touched the window's blocks: build the table again.
     classify(false);
     fillWindow(host_only, blocks);

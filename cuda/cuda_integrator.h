@@ -27,6 +27,9 @@ class CudaIntegrator : public Integrator {
   void syncToHost(BlockMap& blocks) override;
   void dropDeviceCopies() override;
   size_t deviceBytes() const override;
+  size_t deviceEstimateBytes() const override {
+    return size_t(estimate_blocks_) * SlotPool::bytesPerSlot();
+  }
   std::shared_ptr<ChunkAllocator> hostAllocator() const override { return host_allocator_; }
 
   /// Slots the paper's frustum formula gives for the first scan's sensor (0 before it).
@@ -39,9 +42,10 @@ class CudaIntegrator : public Integrator {
  private:
   void sizePool(const SensorModel& model, double resolution_m);
   int32_t slotLimit() const;
-  /// Makes `n` slots free: grows the pool, else evicts least recently used slots (never one
-  /// used by the current scan). Throws CudaOutOfMemory when neither is possible.
-  void makeRoom(int32_t n, BlockMap& blocks);
+  /// Makes `want` slots free if it can, `need` or more in any case: grows the pool, else
+  /// evicts least recently used slots (never one used by the current scan). Throws
+  /// CudaOutOfMemory when fewer than `need` can be had.
+  void makeRoom(int32_t need, int32_t want, BlockMap& blocks);
   void evict(int32_t n, BlockMap& blocks);
   void writeBack(const std::vector<int32_t>& slots, BlockMap& blocks);
   std::vector<int32_t> upload(const std::vector<BlockIndex>& host_blocks, BlockMap& blocks);

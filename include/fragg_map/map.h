@@ -28,6 +28,8 @@ class Culler;
 struct MemoryStats {
   size_t host_block_bytes = 0;  ///< cells + per-block metadata + index
   size_t device_bytes = 0;      ///< CUDA backend only
+  /// CUDA: the sensor's frustum volume (paper formula (1)) in blocks, as device bytes.
+  size_t device_estimate_bytes = 0;
   size_t blocks = 0;
   size_t known_voxels = 0;  ///< observed cells
 };

@@ -181,6 +181,7 @@ MemoryStats Map::memory() const {
   m.host_block_bytes = blocks().hostBytes();
   m.blocks = blocks_.size();
   m.device_bytes = integrator_->deviceBytes();
+  m.device_estimate_bytes = integrator_->deviceEstimateBytes();
   m.known_voxels = knownVoxelCount();
   return m;
 }

@@ -207,14 +207,14 @@ TEST(CudaBackendTest, PrepareKernelCountsLikeTheCpu) {
 
 TEST(CudaBackendTest, TinyPoolEvictsWritesBackAndReuploads) {
   REQUIRE_DEVICE();
-  // A pool of ~6,000 slots against a drive that touches far more: blocks go back and forth.
+  // A pool of ~12,000 slots against a drive that touches far more: blocks go back and forth.
   // The path goes out and back, so evicted blocks are uploaded again.
   auto scans = syntheticLidar(8, 4.0);
   auto back = scans;
   std::reverse(back.begin(), back.end());
   scans.insert(scans.end(), back.begin(), back.end());
   MapParams p = paramsFor(Backend::kCuda, 0.1);
-  p.cuda.pool_max_bytes = size_t(6000) * 2300;
+  p.cuda.pool_max_bytes = size_t(12000) * 2300;
   Map gpu(p);
   p.backend = Backend::kCpu;
   Map cpu(p);

@@ -47,6 +47,8 @@ class Integrator {
   /// changed directly (load, clear box, reset, import).
   virtual void dropDeviceCopies() {}
   virtual size_t deviceBytes() const { return 0; }
+  /// The paper's formula (1): the sensor's visible volume in blocks, as device bytes.
+  virtual size_t deviceEstimateBytes() const { return 0; }
   /// Where the host map's blocks are allocated (pinned memory for the CUDA backend).
   virtual std::shared_ptr<ChunkAllocator> hostAllocator() const { return plainChunkAllocator(); }
 };

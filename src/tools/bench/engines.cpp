@@ -1,6 +1,9 @@
 #include "bench/engines.h"
 
+#include <algorithm>
 #include <chrono>
+
+#include "fragg_map/errors.h"
 
 #ifdef FRAGG_HAVE_OCTOMAP
 #include <octomap/octomap.h>
@@ -14,14 +17,43 @@ namespace fragg::bench {
 
 using Clock = std::chrono::steady_clock;
 
-Figures runFragg(const Workload& w, Backend backend, size_t count, int repeats, int threads,
-                 Map* keep) {
+MapParams engineParams(const std::string& engine, const MapParams& base) {
+  MapParams p = base;
+  size_t begin = 0;
+  bool first = true;
+  while (begin <= engine.size()) {
+    const size_t end = std::min(engine.find('+', begin), engine.size());
+    const std::string token = engine.substr(begin, end - begin);
+    if (first) {
+      p.backend = backendFromString(token);
+      first = false;
+    } else if (token == "pageable") {
+      p.cuda.pinned_host_blocks = false;
+    } else if (token == "plain-loads") {
+      p.cuda.readonly_ray_loads = false;
+    } else if (token == "no-coherence") {
+      p.culling.plane_memory = false;
+      p.culling.rotation_coherence = false;
+      p.culling.translation_coherence = false;
+    } else if (token == "bresenham") {
+      p.raycast = RayCast::kBresenham;
+    } else {
+      throw InvalidArgument("unknown engine option '" + token + "' in '" + engine +
+                            "' (pageable, plain-loads, no-coherence, bresenham)");
+    }
+    begin = end + 1;
+  }
+  return p;
+}
+
+Figures runFragg(const Workload& w, const std::string& engine, size_t count, int repeats,
+                 int threads, Map* keep) {
   Figures f;
-  MapParams p;
-  p.resolution_m = w.resolution_m;
-  p.occupancy.unknown_band = 0.0;  // OctoMap's rule, for the agreement figures
-  p.threads = threads;
-  p.backend = backend;
+  MapParams base;
+  base.resolution_m = w.resolution_m;
+  base.occupancy.unknown_band = 0.0;  // OctoMap's rule, for the agreement figures
+  base.threads = threads;
+  const MapParams p = engineParams(engine, base);
   for (int r = 0; r < repeats; ++r) {
     Map map(p);
     for (size_t i = 0; i < count; ++i) {
@@ -33,11 +65,14 @@ Figures runFragg(const Workload& w, Backend backend, size_t count, int repeats, 
       f.ms.push_back(sec * 1e3);
       f.seconds += sec;
       f.visits += st.voxel_visits;
+      if (r + 1 == repeats) f.totals.add(st);
     }
     if (r + 1 == repeats) {
       const MemoryStats m = map.memory();
       f.known = m.known_voxels;
       f.bytes = m.host_block_bytes;
+      f.device_bytes = m.device_bytes;
+      f.device_estimate_bytes = m.device_estimate_bytes;
       if (keep) *keep = std::move(map);
     }
   }

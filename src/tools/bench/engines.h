@@ -15,14 +15,21 @@ struct Figures {
   std::vector<double> ms;  ///< per scan (all repeats)
   uint64_t visits = 0;     ///< fragg: cell visits of the traversal
   double seconds = 0;
-  size_t known = 0;  ///< known voxels of the last run's map
-  size_t bytes = 0;  ///< host bytes of the last run's map
+  size_t known = 0;                                    ///< known voxels of the last run's map
+  size_t bytes = 0;                                    ///< host bytes of the last run's map
+  size_t device_bytes = 0, device_estimate_bytes = 0;  ///< CUDA: in use / formula (1)
+  InsertStats totals;                                  ///< summed over the last run
 };
+
+/// An engine name: a backend, then options joined by '+': cpu, cuda, cuda+pageable (host
+/// blocks in pageable memory), cuda+plain-loads (no read-only cache path for rays),
+/// cuda+no-coherence (frustum coherence off), cuda+bresenham. Throws InvalidArgument.
+MapParams engineParams(const std::string& engine, const MapParams& base);
 
 /// Inserts the first `count` scans into an empty map `repeats` times; the last map is moved
 /// into `keep` when given. unknown_band 0 (OctoMap's rule, for agreement figures).
-Figures runFragg(const Workload& w, Backend backend, size_t count, int repeats, int threads,
-                 Map* keep);
+Figures runFragg(const Workload& w, const std::string& engine, size_t count, int repeats,
+                 int threads, Map* keep);
 
 #ifdef FRAGG_HAVE_OCTOMAP
 struct OctomapRun {

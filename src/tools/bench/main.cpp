@@ -52,10 +52,13 @@ WorkloadResult runWorkload(const Workload& w, const Options& o) {
   std::vector<Map> same_maps;
   std::vector<double> same_medians;
   for (const std::string& name : o.backends) {
-    const Backend backend = backendFromString(name);
-    const Figures all = runFragg(w, backend, w.scans.size(), o.repeats, o.threads, nullptr);
+    const Figures all = runFragg(w, name, w.scans.size(), o.repeats, o.threads, nullptr);
     EngineRow row;
     row.engine = std::string("fragg-") + name;
+    row.device_mib = all.device_bytes / 1048576.0;
+    row.device_estimate_mib = all.device_estimate_bytes / 1048576.0;
+    row.blocks_uploaded = all.totals.blocks_uploaded;
+    row.blocks_evicted = all.totals.blocks_evicted;
     row.scans_timed = w.scans.size();
     row.repeats = o.repeats;
     row.ms_median = percentile(all.ms, 0.5);
@@ -65,12 +68,16 @@ WorkloadResult runWorkload(const Workload& w, const Options& o) {
     row.known_voxels = all.known;
     if (with_octomap) {
       Map same;
-      const Figures f = runFragg(w, backend, n_octo, o.repeats, o.threads, &same);
+      const Figures f = runFragg(w, name, n_octo, o.repeats, o.threads, &same);
       row.ms_median_same_scans = percentile(f.ms, 0.5);
       same_maps.push_back(std::move(same));
     }
     r.rows.push_back(row);
   }
+  // Against the CPU backend (all host cores) in the same run, when it has a row.
+  for (const EngineRow& cpu : r.rows)
+    if (cpu.engine == "fragg-cpu")
+      for (EngineRow& row : r.rows) row.speedup_vs_cpu = cpu.ms_median / row.ms_median;
 #ifdef FRAGG_HAVE_OCTOMAP
   if (with_octomap) {
     const OctomapRun octo = runOctomap(w, n_octo);
@@ -111,7 +118,9 @@ int main(int argc, char** argv) {
   app.add_option("--workload-scans", o.workload_scans,
                  "Use only the first N scans of W1 and W2 (0 = all)")
       ->capture_default_str();
-  app.add_option("--backends", o.backends, "fragg backends, one row each (cpu, cuda)")
+  app.add_option("--backends", o.backends,
+                 "fragg engines, one row each: cpu, cuda, and CUDA ablations cuda+pageable, "
+                 "cuda+plain-loads, cuda+no-coherence, cuda+bresenham")
       ->capture_default_str();
   app.add_option("--synthetic-scans", o.synthetic_scans, "Synthetic 180k-point scans")
       ->capture_default_str();
@@ -129,7 +138,7 @@ int main(int argc, char** argv) {
 
   try {
     if (o.repeats < 1) throw InvalidArgument("--repeats must be >= 1");
-    for (const std::string& b : o.backends) backendFromString(b);  // reject typos up front
+    for (const std::string& b : o.backends) engineParams(b, MapParams());  // reject typos now
     const WantFn want = [&](const std::string& n) {
       return o.only.empty() || n.find(o.only) != std::string::npos;
     };

@@ -5,9 +5,11 @@
 namespace fragg::bench {
 
 std::string markdownHeader() {
-  return "| workload | res m | range m | scans | pts/scan | engine | scans timed | ms/scan median | "
-         "p99 | voxel visits/s | B/voxel | speed-up vs OctoMap | agree (both know) | agree "
-         "(either knows) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  return "| workload | res m | range m | scans | pts/scan | engine | scans timed | ms/scan median "
+         "| "
+         "p99 | voxel visits/s | B/voxel | speed-up vs OctoMap | vs CPU | GPU MiB (formula 1) | "
+         "agree (both know) | agree (either knows) |\n"
+         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
 }
 
 std::string markdownRows(const WorkloadResult& r) {
@@ -17,13 +19,15 @@ std::string markdownRows(const WorkloadResult& r) {
   std::string out;
   for (const EngineRow& e : r.rows) {
     out += fmt::format(
-        "| {} | {:.2f} | {} | {} | {} | {} | {} x {} | {:.1f} | {:.1f} | {} | {:.1f} | {} | {} | "
-        "{} |\n",
+        "| {} | {:.2f} | {} | {} | {} | {} | {} x {} | {:.2f} | {:.2f} | {} | {:.1f} | {} | {} | "
+        "{} | {} | {} |\n",
         r.name, r.resolution_m, r.max_range_m > 0 ? fmt::format("{:.0f}", r.max_range_m) : "none",
         r.scans, r.points_per_scan, e.engine, e.scans_timed, e.repeats, e.ms_median, e.ms_p99,
-        e.visits_per_s > 0 ? fmt::format("{:.3g}", e.visits_per_s) : "-",
-        e.bytes_per_known_voxel, opt(e.speedup, "{:.1f}x"), opt(e.agree_both, "{:.4f} %", 100),
-        opt(e.agree_either, "{:.4f} %", 100));
+        e.visits_per_s > 0 ? fmt::format("{:.3g}", e.visits_per_s) : "-", e.bytes_per_known_voxel,
+        opt(e.speedup, "{:.1f}x"), opt(e.speedup_vs_cpu, "{:.1f}x"),
+        e.device_mib > 0 ? fmt::format("{:.0f} ({:.0f})", e.device_mib, e.device_estimate_mib)
+                         : std::string("-"),
+        opt(e.agree_both, "{:.4f} %", 100), opt(e.agree_either, "{:.4f} %", 100));
   }
   return out;
 }
@@ -43,11 +47,22 @@ nlohmann::json toJson(const WorkloadResult& r) {
     if (e.speedup) j["speedup_vs_octomap"] = *e.speedup;
     if (e.agree_both) j["agreement_both"] = *e.agree_both;
     if (e.agree_either) j["agreement_either"] = *e.agree_either;
+    if (e.speedup_vs_cpu) j["speedup_vs_cpu"] = *e.speedup_vs_cpu;
+    if (e.device_mib > 0) {
+      j["device_mib"] = e.device_mib;
+      j["device_estimate_mib"] = e.device_estimate_mib;
+      j["blocks_uploaded"] = e.blocks_uploaded;
+      j["blocks_evicted"] = e.blocks_evicted;
+    }
     rows.push_back(j);
   }
-  return {{"workload", r.name},     {"group", r.group},   {"resolution_m", r.resolution_m},
-          {"max_range_m", r.max_range_m}, {"scans", r.scans},
-          {"points_per_scan", r.points_per_scan}, {"results", rows}};
+  return {{"workload", r.name},
+          {"group", r.group},
+          {"resolution_m", r.resolution_m},
+          {"max_range_m", r.max_range_m},
+          {"scans", r.scans},
+          {"points_per_scan", r.points_per_scan},
+          {"results", rows}};
 }
 
 }  // namespace fragg::bench

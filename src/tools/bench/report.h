@@ -2,6 +2,7 @@
 // row per workload; printed as a markdown table and written as JSON.
 #pragma once
 
+#include <cstdint>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -20,6 +21,9 @@ struct EngineRow {
   std::optional<double> ms_median_same_scans;  ///< over the scans OctoMap was given
   std::optional<double> speedup;               ///< OctoMap median / this, same scans
   std::optional<double> agree_both, agree_either;
+  std::optional<double> speedup_vs_cpu;              ///< fragg-cpu median / this, same run
+  double device_mib = 0, device_estimate_mib = 0;    ///< CUDA: GPU memory, formula (1)
+  uint64_t blocks_uploaded = 0, blocks_evicted = 0;  ///< CUDA, last run
 };
 
 struct WorkloadResult {
