@@ -2,7 +2,8 @@
 # On the GPU machine (plain CMake, no ROS): build, run the `gpu` tests, optionally under
 # compute-sanitizer, and the benchmark. Data and liboctomap come staged under .device/
 # (real/ copied from ../shared/data/real, octomap/ from ../shared/tools/stage-octomap.sh).
-# Usage: bash scripts/device_check.sh [tests] [sanitize] [bench ARGS...]
+# Usage: bash scripts/device_check.sh [tests] [sanitize] [workloads LIST] [bench ARGS...]
+# (workloads go to .device/workloads; bench ARGS are fragg_map_bench's).
 # Logs go to $OUT when set (the device tool brings them back).
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -33,6 +34,10 @@ while [ $# -gt 0 ]; do
         echo "compute-sanitizer $tool: exit $?"; tail -3 "$out/sanitizer_$tool.log"
       done
       shift ;;
+    workloads)
+      bash "$root/scripts/make_workloads.sh" --out "$root/.device/workloads" --only "$2" \
+        --sim "$build/bin/fragg_map_sim" 2>&1 | grep -v "^  " | tail -8
+      shift 2 ;;
     bench)
       shift
       "$build/bin/fragg_map_bench" "$@" 2>&1 | tee "$out/bench.log" | tail -40
