@@ -53,6 +53,7 @@ CudaIntegrator::CudaIntegrator(const MapParams& params)
   FRAGG_CUDA_CHECK(
       cudaDeviceGetAttribute(&unified, cudaDevAttrUnifiedAddressing, params.cuda.device));
   if (!unified) direct_uploads_ = false;  // pinned host memory not addressable in place
+  FRAGG_CUDA_CHECK(cudaEventCreate(&ray_start_));
   FRAGG_CUDA_CHECK(cudaEventCreate(&apply_start_));
   FRAGG_CUDA_CHECK(cudaEventCreate(&apply_end_));
   counters_dev_.resize(1);
@@ -60,6 +61,7 @@ CudaIntegrator::CudaIntegrator(const MapParams& params)
 }
 
 CudaIntegrator::~CudaIntegrator() {
+  if (ray_start_) cudaEventDestroy(ray_start_);
   if (apply_start_) cudaEventDestroy(apply_start_);
   if (apply_end_) cudaEventDestroy(apply_end_);
 }
@@ -148,7 +150,11 @@ void CudaIntegrator::evict(int32_t n, BlockMap& blocks) {
   writeBack(dirty, blocks);
   for (int32_t s : candidates) {
     resident[s] = 0;
-    if (block_of_slot_[s] != kNoBlock) setSlotOf(block_of_slot_[s], -1);
+    const BlockIndex i = block_of_slot_[s];  // kNoBlock: device-only and never applied
+    if (i != kNoBlock) {
+      setSlotOf(i, -1);
+      host_only_.add(i, blocks.meta(i).key);
+    }
     block_of_slot_[s] = kNoBlock;
   }
   pool_.uploadResident();
@@ -243,6 +249,7 @@ std::vector<int32_t> CudaIntegrator::upload(const std::vector<BlockIndex>& host_
     resident[slots[j]] = 1;
     block_of_slot_[slots[j]] = host_blocks[j];
     setSlotOf(host_blocks[j], slots[j]);
+    host_only_.remove(host_blocks[j], blocks.meta(host_blocks[j]).key);
   }
   uploaded_ += host_blocks.size();
   return slots;
@@ -398,21 +405,27 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
 
   // 2. Residency. Visible host blocks of the window are uploaded now; the window's other host
   // blocks are marked host-only (a ray that needs one reports it and the pass is redone).
-  if (visible_at_.size() < slot_of_block_.size()) visible_at_.resize(slot_of_block_.size(), 0);
-  for (BlockIndex i : in.visible) {
-    if (i >= visible_at_.size()) visible_at_.resize(size_t(i) + 1 + i / 2, 0);
-    visible_at_[i] = scan_;
+  if (host_only_stale_) {
+    host_only_.rebuild(blocks);
+    host_only_stale_ = false;
   }
   const BlockKey wlo{w.lo[0], w.lo[1], w.lo[2]};
   const BlockKey whi{w.lo[0] + w.dim[0] - 1, w.lo[1] + w.dim[1] - 1, w.lo[2] + w.dim[2] - 1};
   std::vector<BlockIndex> to_upload, host_only;
-  // eager: visible blocks go to the upload list (else every non-resident block is host-only).
+  // Host blocks of the window without a slot. eager: those in the frustum (the same
+  // cullBlock() test as the CPU's) go to the upload list; the others are host-only.
+  const double block_m = params.resolution_m * kBlockSize;
   auto classify = [&](bool eager) {
     to_upload.clear();
     host_only.clear();
-    blocks.forEachInBox(wlo, whi, [&](BlockIndex i) {
-      if (slotOf(i) >= 0) return;
-      if (eager && i < visible_at_.size() && visible_at_[i] == scan_)
+    host_only_.forEachInBox(blocks, wlo, whi, [&](BlockIndex i) {
+      BlockMeta& m = blocks.meta(i);
+      float centre[3];
+      const int32_t k[3] = {m.key.x, m.key.y, m.key.z};
+      for (int a = 0; a < 3; ++a)
+        centre[a] = static_cast<float>((double(k[a]) + 0.5) * block_m - in.frustum.origin_m[a]);
+      if (eager && cullBlock(in.frustum, in.cull, centre, static_cast<float>(block_m / 2), m.cull,
+                             stats.culling))
         to_upload.push_back(i);
       else
         host_only.push_back(i);
@@ -421,8 +434,7 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
   classify(true);
   const SlotArrays before = pool_.arrays();
   CullContext ctx = in.cull;
-  launchCullSlots(before, in.frustum, ctx, params.resolution_m * kBlockSize, scan_,
-                  counters_dev_.get(), stream_.get());
+  launchCullSlots(before, in.frustum, ctx, block_m, scan_, counters_dev_.get(), stream_.get());
   const int32_t expected_new = std::max<int32_t>(1024, last_created_ + last_created_ / 4);
   const uint64_t evicted_pre = evicted_;
   makeRoom(static_cast<int32_t>(to_upload.size()),
@@ -449,6 +461,7 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
     args.miss_capacity = static_cast<uint32_t>(miss_dev_.size());
     args.counters = counters_dev_.get();
     args.scan = scan_;
+    FRAGG_CUDA_CHECK(cudaEventRecord(ray_start_, stream_.get()));
     launchRaycast(args, params.raycast, params.cuda.readonly_ray_loads, stream_.get());
     FRAGG_CUDA_CHECK(cudaEventRecord(apply_start_, stream_.get()));
     launchApply(pool_.arrays(), model, revision, scan_, counters_dev_.get(), 4 * sm_count_,
@@ -488,7 +501,8 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
     copyToDevice(counters_dev_.get(), counters_host_.get(), 1, stream_.get());
   }
   adoptDeviceSlots(c.free_top);
-  float apply_ms = 0.f;
+  float ray_ms = 0.f, apply_ms = 0.f;
+  FRAGG_CUDA_CHECK(cudaEventElapsedTime(&ray_ms, ray_start_, apply_start_));
   FRAGG_CUDA_CHECK(cudaEventElapsedTime(&apply_ms, apply_start_, apply_end_));
   if (c.changed > 0) any_dirty_ = true;
   last_created_ = static_cast<int32_t>(c.created);
@@ -499,7 +513,8 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
   stats.blocks_uploaded += uploaded_ - uploaded_before;
   stats.blocks_evicted += evicted_ - evicted_before;
   stats.seconds_apply += apply_ms * 1e-3;
-  stats.seconds_raycast += std::max(0.0, secondsSince(t_ray) - apply_ms * 1e-3);
+  stats.seconds_raycast += ray_ms * 1e-3;
+  stats.seconds_residency += std::max(0.0, secondsSince(t_ray) - (ray_ms + apply_ms) * 1e-3);
 }
 
 void CudaIntegrator::syncToHost(BlockMap& blocks) {
@@ -519,7 +534,8 @@ void CudaIntegrator::dropDeviceCopies() {
   pool_.clear();
   std::fill(block_of_slot_.begin(), block_of_slot_.end(), kNoBlock);
   std::fill(slot_of_block_.begin(), slot_of_block_.end(), -1);
-  std::fill(visible_at_.begin(), visible_at_.end(), 0);
+  host_only_.clear();
+  host_only_stale_ = true;  // the host map is about to change: rebuilt at the next scan
   any_dirty_ = false;
 }
 

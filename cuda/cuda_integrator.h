@@ -11,6 +11,7 @@
 #include "device_types.h"
 #include "fragg_map/internal/cpu_integrator.h"
 #include "fragg_map/internal/integrator.h"
+#include "host_only_index.h"
 #include "slot_pool.h"
 
 namespace fragg::cuda {
@@ -23,7 +24,7 @@ class CudaIntegrator : public Integrator {
   void integrate(const ScanInput& scan, const MapParams& params, const OccupancyModel& model,
                  uint64_t revision, BlockMap& blocks, InsertStats& stats) override;
   const char* name() const override { return "cuda"; }
-  bool usesVisibleBlocks() const override { return true; }
+  bool cullsOnItsOwn() const override { return true; }
   void syncToHost(BlockMap& blocks) override;
   void dropDeviceCopies() override;
   size_t deviceBytes() const override;
@@ -65,7 +66,7 @@ class CudaIntegrator : public Integrator {
   int device_;           ///< selected before the stream is made
   int sm_count_ = 0;
   CudaStream stream_;
-  cudaEvent_t apply_start_ = nullptr, apply_end_ = nullptr;
+  cudaEvent_t ray_start_ = nullptr, apply_start_ = nullptr, apply_end_ = nullptr;
   SlotPool pool_;
   CpuIntegrator cpu_;  ///< for scans whose window would not fit
   uint32_t scan_ = 0;
@@ -77,7 +78,8 @@ class CudaIntegrator : public Integrator {
   // Host side of residency.
   std::vector<BlockIndex> block_of_slot_;  ///< kNoBlock: free, or created on the device only
   std::vector<int32_t> slot_of_block_;     ///< by host block index; -1 when not resident
-  std::vector<uint32_t> visible_at_;       ///< by host block index: scan the host culler saw it
+  HostOnlyIndex host_only_;                ///< host blocks without a slot
+  bool host_only_stale_ = true;            ///< rebuild before the next scan
 
   // Per-scan buffers.
   VoxelKey ref_;

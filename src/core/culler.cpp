@@ -46,9 +46,8 @@ CullContext Culler::context(const Frustum& f, const Eigen::Isometry3d& T_map_sen
   return ctx;
 }
 
-CullCounters Culler::cull(const Frustum& f, const SensorModel& model,
-                          const Eigen::Isometry3d& T_map_sensor, double resolution_m,
-                          BlockMap& blocks, std::vector<BlockIndex>* visible) {
+CullContext Culler::beginScan(const Frustum& f, const SensorModel& model,
+                              const Eigen::Isometry3d& T_map_sensor) {
   if (!sameModel(model)) {
     reset();
     last_model_ = model;
@@ -57,6 +56,13 @@ CullCounters Culler::cull(const Frustum& f, const SensorModel& model,
   ++scan_;
   const CullContext ctx = context(f, T_map_sensor);
   history_[scan_ % kMaxCoherenceTtl] = {true, T_map_sensor};
+  return ctx;
+}
+
+CullCounters Culler::cull(const Frustum& f, const SensorModel& model,
+                          const Eigen::Isometry3d& T_map_sensor, double resolution_m,
+                          BlockMap& blocks, std::vector<BlockIndex>* visible) {
+  const CullContext ctx = beginScan(f, model, T_map_sensor);
 
   std::vector<BlockIndex> candidates;
   blocks.forEachInBox(f.aabb_min, f.aabb_max, [&](BlockIndex i) { candidates.push_back(i); });

@@ -20,6 +20,7 @@ void InsertStats::add(const InsertStats& o) {
   seconds_total += o.seconds_total;
   seconds_prepare += o.seconds_prepare;
   seconds_cull += o.seconds_cull;
+  seconds_residency += o.seconds_residency;
   seconds_raycast += o.seconds_raycast;
   seconds_apply += o.seconds_apply;
 }

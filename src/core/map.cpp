@@ -62,13 +62,17 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   InsertStats stats;
   const Frustum frustum = buildFrustum(model, T_map_sensor, params_.resolution_m);
   auto t = std::chrono::steady_clock::now();
-  std::vector<BlockIndex> visible;
-  stats.culling = culler_->cull(frustum, model, T_map_sensor, params_.resolution_m, blocks_,
-                                integrator_->usesVisibleBlocks() ? &visible : nullptr);
-  const CullContext cull = culler_->context(frustum, T_map_sensor);
+  CullContext cull;
+  if (integrator_->cullsOnItsOwn()) {
+    cull = culler_->beginScan(frustum, model, T_map_sensor);
+  } else {
+    stats.culling =
+        culler_->cull(frustum, model, T_map_sensor, params_.resolution_m, blocks_, nullptr);
+    cull = culler_->context(frustum, T_map_sensor);
+  }
   stats.seconds_cull = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 
-  const ScanInput scan{cloud, T_map_sensor, model, frustum, explicit_model, cull, visible};
+  const ScanInput scan{cloud, T_map_sensor, model, frustum, explicit_model, cull};
   try {
     integrator_->integrate(scan, params_, model_, revision_ + 1, blocks_, stats);
   } catch (const CudaOutOfMemory& e) {

@@ -118,17 +118,42 @@ std::string SensorModel::describe() const {
 SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud) {
   // Runs once per scan over every point: only products and square roots per point; the
   // angles come from the extreme ratios at the end (atan and asin are monotonic).
+  // In parallel over a fixed number of chunks, summed in chunk order: the same result for
+  // any thread count. Elevation extremes come along for the LiDAR case.
   SensorModel out = model;
-  double max_dist = 0.0;
+  constexpr int kChunks = 64;
+  struct Partial {
+    double max_dist = 0.0, sin_min = 1.0, sin_max = -1.0;
+    Eigen::Vector3d dir_sum = Eigen::Vector3d::Zero();
+    size_t valid = 0;
+  };
+  Partial part[kChunks];
+  const size_t n = cloud.points_S.size();
+#pragma omp parallel for schedule(static)
+  for (int c = 0; c < kChunks; ++c) {
+    Partial& q = part[c];
+    for (size_t i = n * c / kChunks; i < n * (c + 1) / kChunks; ++i) {
+      const Eigen::Vector3f& p = cloud.points_S[i];
+      if (!validPoint(p)) continue;
+      const Eigen::Vector3d d = p.cast<double>();
+      const double r = d.norm();
+      q.max_dist = std::max(q.max_dist, r);
+      q.dir_sum += d / r;
+      const double s = std::clamp(d.z() / r, -1.0, 1.0);
+      q.sin_min = std::min(q.sin_min, s);
+      q.sin_max = std::max(q.sin_max, s);
+      ++q.valid;
+    }
+  }
+  double max_dist = 0.0, sin_min = 1.0, sin_max = -1.0;
   Eigen::Vector3d mean_dir = Eigen::Vector3d::Zero();
   size_t valid = 0;
-  for (const auto& p : cloud.points_S) {
-    if (!validPoint(p)) continue;
-    const Eigen::Vector3d d = p.cast<double>();
-    const double r = d.norm();
-    max_dist = std::max(max_dist, r);
-    mean_dir += d / r;
-    ++valid;
+  for (const Partial& q : part) {
+    max_dist = std::max(max_dist, q.max_dist);
+    sin_min = std::min(sin_min, q.sin_min);
+    sin_max = std::max(sin_max, q.sin_max);
+    mean_dir += q.dir_sum;
+    valid += q.valid;
   }
   if (out.max_range_m <= 0.0) out.max_range_m = std::max(1.0, std::ceil(max_dist));
   if (valid == 0) {  // nothing to see: a lidar model keeps culling well defined
@@ -157,13 +182,15 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud)
     const double kMinForward = std::cos(85 * kDeg);  // wider than 170 degrees: a lidar
     double tan_h = 0.0, tan_v = 0.0;
     bool fits = true;
-    for (const auto& p : cloud.points_S) {
-      if (!validPoint(p)) continue;
+#pragma omp parallel for schedule(static) reduction(max : tan_h, tan_v) reduction(&& : fits)
+    for (long i = 0; i < static_cast<long>(n); ++i) {
+      const Eigen::Vector3f& p = cloud.points_S[i];
+      if (!fits || !validPoint(p)) continue;
       const Eigen::Vector3d d = p.cast<double>();
       const double z = d.dot(axis);
       if (z <= kMinForward * d.norm()) {
         fits = false;
-        break;
+        continue;
       }
       tan_h = std::max(tan_h, std::fabs(d.dot(right)) / z);
       tan_v = std::max(tan_v, std::fabs(d.dot(vertical)) / z);
@@ -179,13 +206,6 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud)
       out.right_S = right;
       return out;
     }
-  }
-  double sin_min = 1.0, sin_max = -1.0;  // sine of the elevation about the sensor z axis
-  for (const auto& p : cloud.points_S) {
-    if (!validPoint(p)) continue;
-    const double s = std::clamp(static_cast<double>(p.z()) / p.cast<double>().norm(), -1.0, 1.0);
-    sin_min = std::min(sin_min, s);
-    sin_max = std::max(sin_max, s);
   }
   out.type = SensorType::kSpinningLidar;
   out.elevation_min_rad = std::max(-M_PI / 2, floorDeg(std::asin(sin_min) - kDeg));

@@ -23,6 +23,11 @@ class Culler {
                     const Eigen::Isometry3d& T_map_sensor, double resolution_m, BlockMap& blocks,
                     std::vector<BlockIndex>* visible);
 
+  /// Starts a scan: records its pose for coherence and returns its context (what a backend
+  /// that culls its own blocks needs). cull() calls it.
+  CullContext beginScan(const Frustum& f, const SensorModel& model,
+                        const Eigen::Isometry3d& T_map_sensor);
+
   /// Context for the current scan (also what a device-side culling pass would upload).
   CullContext context(const Frustum& f, const Eigen::Isometry3d& T_map_sensor) const;
 

@@ -24,8 +24,7 @@ struct ScanInput {
   const SensorModel& model;
   const Frustum& frustum;
   bool explicit_model;
-  const CullContext& cull;                 ///< coherence context of this scan
-  const std::vector<BlockIndex>& visible;  ///< host blocks the host culler found visible
+  const CullContext& cull;  ///< coherence context of this scan
 };
 
 class Integrator {
@@ -38,8 +37,9 @@ class Integrator {
                          const OccupancyModel& model, uint64_t revision, BlockMap& blocks,
                          InsertStats& stats) = 0;
   virtual const char* name() const = 0;
-  /// Whether integrate() uses ScanInput::visible (the host culler fills it only then).
-  virtual bool usesVisibleBlocks() const { return false; }
+  /// Whether the backend culls the blocks it needs itself (else the map's host culler runs
+  /// over the host blocks in the frustum's box).
+  virtual bool cullsOnItsOwn() const { return false; }
   /// Writes changes held on the device back into `blocks` (a write-back cache); after it the
   /// host map is complete. Cheap when nothing changed since the last call.
   virtual void syncToHost(BlockMap& blocks) { (void)blocks; }

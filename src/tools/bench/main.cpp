@@ -59,6 +59,16 @@ WorkloadResult runWorkload(const Workload& w, const Options& o) {
     row.device_estimate_mib = all.device_estimate_bytes / 1048576.0;
     row.blocks_uploaded = all.totals.blocks_uploaded;
     row.blocks_evicted = all.totals.blocks_evicted;
+    const InsertStats& t = all.totals;
+    const double per_scan = w.scans.empty() ? 0.0 : 1e3 / w.scans.size();
+    row.stages_ms = {
+        {"cull", t.seconds_cull * per_scan},           {"prepare", t.seconds_prepare * per_scan},
+        {"residency", t.seconds_residency * per_scan}, {"raycast", t.seconds_raycast * per_scan},
+        {"apply", t.seconds_apply * per_scan},         {"total", t.seconds_total * per_scan}};
+    std::string line;
+    for (const auto& [stage, ms] : row.stages_ms) line += fmt::format(" {} {:.3f}", stage, ms);
+    std::fprintf(stderr, "[stages ms/scan] %s %s:%s\n", w.name.c_str(), row.engine.c_str(),
+                 line.c_str());
     row.scans_timed = w.scans.size();
     row.repeats = o.repeats;
     row.ms_median = percentile(all.ms, 0.5);

@@ -48,6 +48,7 @@ nlohmann::json toJson(const WorkloadResult& r) {
     if (e.agree_both) j["agreement_both"] = *e.agree_both;
     if (e.agree_either) j["agreement_either"] = *e.agree_either;
     if (e.speedup_vs_cpu) j["speedup_vs_cpu"] = *e.speedup_vs_cpu;
+    for (const auto& [stage, ms] : e.stages_ms) j["stages_ms_mean"][stage] = ms;
     if (e.device_mib > 0) {
       j["device_mib"] = e.device_mib;
       j["device_estimate_mib"] = e.device_estimate_mib;

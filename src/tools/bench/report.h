@@ -24,6 +24,9 @@ struct EngineRow {
   std::optional<double> speedup_vs_cpu;              ///< fragg-cpu median / this, same run
   double device_mib = 0, device_estimate_mib = 0;    ///< CUDA: GPU memory, formula (1)
   uint64_t blocks_uploaded = 0, blocks_evicted = 0;  ///< CUDA, last run
+  /// Mean ms per scan of each stage of Map::insert (last run): cull, prepare, residency,
+  /// raycast, apply, total.
+  std::vector<std::pair<std::string, double>> stages_ms;
 };
 
 struct WorkloadResult {
