@@ -464,7 +464,7 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
     FRAGG_CUDA_CHECK(cudaEventRecord(ray_start_, stream_.get()));
     launchRaycast(args, params.raycast, params.cuda.readonly_ray_loads, stream_.get());
     FRAGG_CUDA_CHECK(cudaEventRecord(apply_start_, stream_.get()));
-    launchApply(pool_.arrays(), model, revision, scan_, counters_dev_.get(), 4 * sm_count_,
+    launchApply(pool_.arrays(), model, revision, scan_, counters_dev_.get(), 16 * sm_count_,
                 stream_.get());
     FRAGG_CUDA_CHECK(cudaEventRecord(apply_end_, stream_.get()));
     copyToHost(counters_host_.get(), counters_dev_.get(), 1, stream_.get());

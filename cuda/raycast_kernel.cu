@@ -15,6 +15,15 @@ __device__ __forceinline__ int32_t loadEntry(const int32_t* e) {
   return *reinterpret_cast<const volatile int32_t*>(e);
 }
 
+/// Per-CTA filter of scratch words this CTA has already OR-ed a bit into: rays start in the
+/// same cell and share the cells near the sensor, and thousands of atomics on one word would
+/// serialise in L2. An entry is (tag = slot * 32 + word) << 32 | bits; a bit is set in it only
+/// after its global atomicOr was issued, so skipping on a set bit never loses a mark.
+constexpr int kFilterEntries = 512;
+struct MarkFilter {
+  unsigned long long* entries;  // shared memory
+};
+
 /// The slot of block `b` for this scan, or -1 when the ray must skip its cells (host-only
 /// block not uploaded yet, pool full): the host then fixes that and runs the pass again.
 __device__ int32_t resolveSlot(const RaycastArgs& a, const BlockKey& b) {
@@ -24,7 +33,10 @@ __device__ int32_t resolveSlot(const RaycastArgs& a, const BlockKey& b) {
     return -1;
   }
   int32_t* entry = a.window.entries + idx;
-  int32_t v = loadEntry(entry);
+  // A slot, once in the window, never changes during the pass: a cached (maybe stale) read
+  // that shows one is right; anything else is read again coherently.
+  int32_t v = *entry;
+  if (v < 0) v = loadEntry(entry);
   for (;;) {
     if (v >= 0) break;
     if (v == kWindowEmpty) {
@@ -70,6 +82,7 @@ __device__ int32_t resolveSlot(const RaycastArgs& a, const BlockKey& b) {
 
 struct DeviceMarker {
   const RaycastArgs& a;
+  MarkFilter filter;
   int32_t slot = -1;
   bool have_block = false;
 
@@ -80,15 +93,26 @@ struct DeviceMarker {
     }
     if (slot < 0) return;
     const int cell = cellIndexOf(v);
+    const uint32_t word_index = (hit ? kScratchWords : 0) + (cell >> 5);
+    const uint32_t bit = 1u << (cell & 31);
+    const uint32_t tag = static_cast<uint32_t>(slot) * 32u + word_index;
+    unsigned long long* f = filter.entries + (((tag * 2654435761u) >> 23) & (kFilterEntries - 1));
+    const unsigned long long seen = *reinterpret_cast<volatile unsigned long long*>(f);
+    if ((seen >> 32) == tag && (seen & bit)) return;
     SlotScratch& s = a.slots.scratch[slot];
     uint32_t* word = (hit ? s.hit : s.free) + (cell >> 5);
-    const uint32_t bit = 1u << (cell & 31);
-    if (!(*word & bit)) atomicOr(word, bit);  // most repeat visits skip the atomic
+    if (!(*word & bit)) atomicOr(word, bit);
+    const unsigned long long want =
+        (seen >> 32) == tag ? (seen | bit) : ((static_cast<unsigned long long>(tag) << 32) | bit);
+    atomicCAS(f, seen, want);  // a cache: losing the race only costs a later atomic
   }
 };
 
 template <bool kReadOnly, bool kBresenham>
 __global__ void __launch_bounds__(kThreads) raycastKernel(RaycastArgs a) {
+  __shared__ unsigned long long filter[kFilterEntries];
+  for (int k = threadIdx.x; k < kFilterEntries; k += blockDim.x) filter[k] = ~0ull << 32;
+  __syncthreads();
   const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   unsigned long long visits = 0;
   if (i < a.num_rays) {
@@ -106,7 +130,7 @@ __global__ void __launch_bounds__(kThreads) raycastKernel(RaycastArgs a) {
                      {a.start_v[0], a.start_v[1], a.start_v[2]},
                      {e.end_v[0], e.end_v[1], e.end_v[2]},
                      e.hit != 0};
-    DeviceMarker mark{a};
+    DeviceMarker mark{a, MarkFilter{filter}};
     visits = kBresenham ? traverseBresenham(ray, mark) : traverseDda(ray, mark);
   }
   visits = warpSum(visits);

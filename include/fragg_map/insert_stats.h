@@ -24,7 +24,7 @@ struct InsertStats {
   CullCounters culling;
   double seconds_total = 0;
   double seconds_prepare = 0;  ///< transform + filter
-  double seconds_cull = 0;
+  double seconds_cull = 0;  ///< sensor model (auto), frustum and host culling
   double seconds_residency = 0;  ///< CUDA: window, uploads, evictions (host side)
   double seconds_raycast = 0;
   double seconds_apply = 0;

@@ -56,12 +56,12 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   sensor.validate();
   if (cloud.empty()) throw InvalidArgument("point cloud is empty");
   const bool explicit_model = sensor.type != SensorType::kAuto;
+  auto t = std::chrono::steady_clock::now();  // sensor model, frustum and culling
   SensorModel model = explicit_model ? sensor : resolveAutoSensor(sensor, cloud);
   if (model.max_range_m <= 0.0) model.max_range_m = farthestPoint(cloud);
 
   InsertStats stats;
   const Frustum frustum = buildFrustum(model, T_map_sensor, params_.resolution_m);
-  auto t = std::chrono::steady_clock::now();
   CullContext cull;
   if (integrator_->cullsOnItsOwn()) {
     cull = culler_->beginScan(frustum, model, T_map_sensor);
