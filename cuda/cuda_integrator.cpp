@@ -281,12 +281,14 @@ void CudaIntegrator::fillWindow(const std::vector<BlockIndex>& host_only, const 
   miss_host_.reserve(std::max<size_t>(host_only.size(), 1));
 }
 
-void CudaIntegrator::adoptDeviceSlots(int32_t new_free_top) {
+uint32_t CudaIntegrator::adoptDeviceSlots(int32_t new_free_top) {
   // Slots the rays took are resident blocks that exist on the device only, until written back.
-  for (int32_t s : pool_.takenByDevice(new_free_top)) {
+  const std::vector<int32_t> taken = pool_.takenByDevice(new_free_top);
+  for (int32_t s : taken) {
     pool_.residentHost()[s] = 1;
     block_of_slot_[s] = kNoBlock;
   }
+  return static_cast<uint32_t>(taken.size());
 }
 
 bool CudaIntegrator::prepareOnDevice(const ScanInput& in, const MapParams& params,
@@ -448,6 +450,7 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
   // 4. Ray pass and apply; redone after a miss or an overflow (marks are idempotent).
   c.free_top = pool_.freeTop();
   copyToDevice(counters_dev_.get(), counters_host_.get(), 1, stream_.get());
+  uint32_t created = 0;
   for (int attempt = 0;; ++attempt) {
     if (attempt > 8) throw CudaError("ray pass did not converge (residency bug)");
     RaycastArgs args;
@@ -463,6 +466,7 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
     args.scan = scan_;
     FRAGG_CUDA_CHECK(cudaEventRecord(ray_start_, stream_.get()));
     launchRaycast(args, params.raycast, params.cuda.readonly_ray_loads, stream_.get());
+    launchCompactTouched(pool_.arrays(), counters_dev_.get(), stream_.get());
     FRAGG_CUDA_CHECK(cudaEventRecord(apply_start_, stream_.get()));
     launchApply(pool_.arrays(), model, revision, scan_, counters_dev_.get(), 16 * sm_count_,
                 stream_.get());
@@ -474,7 +478,7 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
                       " cells): residency bug");
     if (c.applied) break;
     // The pass is redone from a clean count: the marks and allocations stay.
-    adoptDeviceSlots(c.free_top);
+    created += adoptDeviceSlots(c.free_top);
     if (c.misses > 0) {
       std::vector<BlockIndex> needed;
       const uint32_t listed = std::min<uint32_t>(c.misses, uint32_t(miss_dev_.size()));
@@ -497,19 +501,20 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
     c.misses = 0;
     c.overflow = 0;
     c.visits = 0;
+    c.touched = 0;  // listed again after the next pass
     c.free_top = pool_.freeTop();
     copyToDevice(counters_dev_.get(), counters_host_.get(), 1, stream_.get());
   }
-  adoptDeviceSlots(c.free_top);
+  created += adoptDeviceSlots(c.free_top);
   float ray_ms = 0.f, apply_ms = 0.f;
   FRAGG_CUDA_CHECK(cudaEventElapsedTime(&ray_ms, ray_start_, apply_start_));
   FRAGG_CUDA_CHECK(cudaEventElapsedTime(&apply_ms, apply_start_, apply_end_));
   if (c.changed > 0) any_dirty_ = true;
-  last_created_ = static_cast<int32_t>(c.created);
+  last_created_ = static_cast<int32_t>(created);
   stats.voxel_visits += c.visits;
   stats.cells_updated += c.cells_updated;
   stats.blocks_touched += c.touched;
-  stats.blocks_created += c.created;
+  stats.blocks_created += created;
   stats.blocks_uploaded += uploaded_ - uploaded_before;
   stats.blocks_evicted += evicted_ - evicted_before;
   stats.seconds_apply += apply_ms * 1e-3;

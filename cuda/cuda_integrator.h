@@ -53,7 +53,8 @@ class CudaIntegrator : public Integrator {
   void setWindowEntries(const std::vector<int64_t>& index, const std::vector<int32_t>& value);
   /// Window entries from the resident slots, then `host_only` marked kWindowHostOnly.
   void fillWindow(const std::vector<BlockIndex>& host_only, const BlockMap& blocks);
-  void adoptDeviceSlots(int32_t new_free_top);
+  /// Takes the slots the rays allocated as resident, device-only blocks; returns how many.
+  uint32_t adoptDeviceSlots(int32_t new_free_top);
   int32_t slotOf(BlockIndex i) const { return i < slot_of_block_.size() ? slot_of_block_[i] : -1; }
   void setSlotOf(BlockIndex i, int32_t slot);
   bool prepareOnDevice(const ScanInput& scan, const MapParams& params, InsertStats& stats);

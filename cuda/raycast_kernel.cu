@@ -55,8 +55,8 @@ __device__ int32_t resolveSlot(const RaycastArgs& a, const BlockKey& b) {
       a.slots.keys[slot] = b;
       a.slots.fresh[slot] = 1;
       a.slots.resident[slot] = 1;
-      atomicAdd(&a.counters->created, 1u);
-      __threadfence();
+      // No fence: rays that read the slot from the entry only touch its scratch; the keys
+      // and flags written above are read by later kernels.
       atomicExch(entry, slot);
       v = slot;
       break;
@@ -72,10 +72,10 @@ __device__ int32_t resolveSlot(const RaycastArgs& a, const BlockKey& b) {
     }
     return -1;  // host-only, missed, overflow
   }
-  // First ray of the scan in this slot: put it in the touched list.
-  if (a.slots.touched[v] == 0 && atomicExch(&a.slots.touched[v], 1u) == 0u) {
-    a.slots.touched_list[atomicAdd(&a.counters->touched, 1u)] = v;
-    a.slots.last_used[v] = a.scan;  // never evicted while its marks are pending
+  // Touched this scan: listed by compactTouched() after the pass; never evicted meanwhile.
+  if (a.slots.touched[v] == 0) {
+    a.slots.touched[v] = 1u;
+    a.slots.last_used[v] = a.scan;
   }
   return v;
 }
@@ -101,12 +101,26 @@ struct DeviceMarker {
     if ((seen >> 32) == tag && (seen & bit)) return;
     SlotScratch& s = a.slots.scratch[slot];
     uint32_t* word = (hit ? s.hit : s.free) + (cell >> 5);
-    if (!(*word & bit)) atomicOr(word, bit);
+    atomicOr(word, bit);  // result unused: a fire-and-forget reduction
     const unsigned long long want =
         (seen >> 32) == tag ? (seen | bit) : ((static_cast<unsigned long long>(tag) << 32) | bit);
-    atomicCAS(f, seen, want);  // a cache: losing the race only costs a later atomic
+    // A plain store: every bit in `seen` was issued by someone, so whatever store wins, a set
+    // bit still means an issued atomic; a lost bit only costs a later atomic.
+    *reinterpret_cast<volatile unsigned long long*>(f) = want;
   }
 };
+
+__global__ void compactTouchedKernel(SlotArrays s, ScanCounters* c) {
+  const int32_t slot = blockIdx.x * blockDim.x + threadIdx.x;
+  const bool touched = slot < s.capacity && s.touched[slot] != 0u;
+  const unsigned mask = __ballot_sync(kFullMask, touched);
+  if (!mask) return;
+  const unsigned lane = threadIdx.x & 31;
+  uint32_t base = 0;
+  if (lane == 0) base = atomicAdd(&c->touched, __popc(mask));
+  base = __shfl_sync(kFullMask, base, 0);
+  if (touched) s.touched_list[base + __popc(mask & ((1u << lane) - 1u))] = slot;
+}
 
 template <bool kReadOnly, bool kBresenham>
 __global__ void __launch_bounds__(kThreads) raycastKernel(RaycastArgs a) {
@@ -152,6 +166,12 @@ void launchRaycast(const RaycastArgs& args, RayCast mode, bool readonly_loads,
   else
     raycastKernel<false, true><<<grid, kThreads, 0, stream>>>(args);
   FRAGG_CUDA_CHECK_LAUNCH("raycastKernel");
+}
+
+void launchCompactTouched(const SlotArrays& slots, ScanCounters* counters, cudaStream_t stream) {
+  if (slots.capacity == 0) return;
+  compactTouchedKernel<<<blocksFor(slots.capacity, 256), 256, 0, stream>>>(slots, counters);
+  FRAGG_CUDA_CHECK_LAUNCH("compactTouchedKernel");
 }
 
 }  // namespace fragg::cuda
