@@ -1,6 +1,8 @@
 // The ray pass: one thread a ray, the same traversal as the CPU backend (raycast.h), marking
 // FREE / HIT bits in the scratch of the block's slot. Blocks without a slot get one from the
 // free stack the first time a ray enters them.
+#include <cuda/atomic>
+
 #include "cuda_check.h"
 #include "fragg_map/raycast.h"
 #include "kernels.h"
@@ -97,16 +99,17 @@ struct DeviceMarker {
     const uint32_t bit = 1u << (cell & 31);
     const uint32_t tag = static_cast<uint32_t>(slot) * 32u + word_index;
     unsigned long long* f = filter.entries + (((tag * 2654435761u) >> 23) & (kFilterEntries - 1));
-    const unsigned long long seen = *reinterpret_cast<volatile unsigned long long*>(f);
+    ::cuda::atomic_ref<unsigned long long, ::cuda::thread_scope_block> entry(*f);
+    const unsigned long long seen = entry.load(::cuda::std::memory_order_relaxed);
     if ((seen >> 32) == tag && (seen & bit)) return;
     SlotScratch& s = a.slots.scratch[slot];
     uint32_t* word = (hit ? s.hit : s.free) + (cell >> 5);
     atomicOr(word, bit);  // result unused: a fire-and-forget reduction
     const unsigned long long want =
         (seen >> 32) == tag ? (seen | bit) : ((static_cast<unsigned long long>(tag) << 32) | bit);
-    // A plain store: every bit in `seen` was issued by someone, so whatever store wins, a set
+    // A relaxed store: every bit in `seen` was issued by someone, so whatever store wins, a set
     // bit still means an issued atomic; a lost bit only costs a later atomic.
-    *reinterpret_cast<volatile unsigned long long*>(f) = want;
+    entry.store(want, ::cuda::std::memory_order_relaxed);
   }
 };
 
