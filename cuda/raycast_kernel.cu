@@ -99,8 +99,8 @@ struct DeviceMarker {
     const uint32_t bit = 1u << (cell & 31);
     const uint32_t tag = static_cast<uint32_t>(slot) * 32u + word_index;
     unsigned long long* f = filter.entries + (((tag * 2654435761u) >> 23) & (kFilterEntries - 1));
-    ::cuda::atomic_ref<unsigned long long, ::cuda::thread_scope_block> entry(*f);
-    const unsigned long long seen = entry.load(::cuda::std::memory_order_relaxed);
+    ::cuda::atomic_ref<unsigned long long, ::cuda::thread_scope_block> cached(*f);
+    const unsigned long long seen = cached.load(::cuda::std::memory_order_relaxed);
     if ((seen >> 32) == tag && (seen & bit)) return;
     SlotScratch& s = a.slots.scratch[slot];
     uint32_t* word = (hit ? s.hit : s.free) + (cell >> 5);
@@ -109,7 +109,7 @@ struct DeviceMarker {
         (seen >> 32) == tag ? (seen | bit) : ((static_cast<unsigned long long>(tag) << 32) | bit);
     // A relaxed store: every bit in `seen` was issued by someone, so whatever store wins, a set
     // bit still means an issued atomic; a lost bit only costs a later atomic.
-    entry.store(want, ::cuda::std::memory_order_relaxed);
+    cached.store(want, ::cuda::std::memory_order_relaxed);
   }
 };
 
