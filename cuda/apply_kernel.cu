@@ -45,7 +45,6 @@ __global__ void __launch_bounds__(kThreads)
       words[threadIdx.x % kScratchWords] = 0u;
     }
     if (threadIdx.x == 0) {
-      s.touched[slot] = 0u;
       s.fresh[slot] = 0;
       s.last_used[slot] = scan;
       if (any_changed) {

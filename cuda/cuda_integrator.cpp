@@ -466,7 +466,7 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
     args.scan = scan_;
     FRAGG_CUDA_CHECK(cudaEventRecord(ray_start_, stream_.get()));
     launchRaycast(args, params.raycast, params.cuda.readonly_ray_loads, stream_.get());
-    launchCompactTouched(pool_.arrays(), counters_dev_.get(), stream_.get());
+    launchCompactTouched(pool_.arrays(), scan_, counters_dev_.get(), stream_.get());
     FRAGG_CUDA_CHECK(cudaEventRecord(apply_start_, stream_.get()));
     launchApply(pool_.arrays(), model, revision, scan_, counters_dev_.get(), 16 * sm_count_,
                 stream_.get());

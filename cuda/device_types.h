@@ -50,7 +50,6 @@ struct SlotArrays {
   Block* cells = nullptr;
   BlockKey* keys = nullptr;
   SlotScratch* scratch = nullptr;
-  uint32_t* touched = nullptr;      ///< 1 while the slot is in this scan's touched list
   int32_t* touched_list = nullptr;  ///< slots with marks this scan
   uint8_t* fresh = nullptr;         ///< allocated this scan: cells not initialised yet
   uint8_t* dirty = nullptr;         ///< changed since last written back to the host

@@ -32,8 +32,9 @@ struct RaycastArgs {
 /// One thread a ray: marks FREE / HIT scratch bits, allocating slots for new blocks.
 void launchRaycast(const RaycastArgs& args, RayCast mode, bool readonly_loads, cudaStream_t stream);
 
-/// Lists the slots the ray pass touched (ScanCounters::touched must be 0 before).
-void launchCompactTouched(const SlotArrays& slots, ScanCounters* counters, cudaStream_t stream);
+/// Lists (and stamps) the slots the ray pass marked (ScanCounters::touched must be 0 before).
+void launchCompactTouched(const SlotArrays& slots, uint32_t scan, ScanCounters* counters,
+                          cudaStream_t stream);
 
 /// Over the touched slots (only when the ray pass had no miss and no overflow): applies the
 /// marks, clears the scratch, sets dirty / changed_at / last_used.

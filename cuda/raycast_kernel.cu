@@ -1,8 +1,6 @@
 // The ray pass: one thread a ray, the same traversal as the CPU backend (raycast.h), marking
 // FREE / HIT bits in the scratch of the block's slot. Blocks without a slot get one from the
 // free stack the first time a ray enters them.
-#include <cuda/atomic>
-
 #include "cuda_check.h"
 #include "fragg_map/raycast.h"
 #include "kernels.h"
@@ -74,11 +72,6 @@ __device__ int32_t resolveSlot(const RaycastArgs& a, const BlockKey& b) {
     }
     return -1;  // host-only, missed, overflow
   }
-  // Touched this scan: listed by compactTouched() after the pass; never evicted meanwhile.
-  if (a.slots.touched[v] == 0) {
-    a.slots.touched[v] = 1u;
-    a.slots.last_used[v] = a.scan;
-  }
   return v;
 }
 
@@ -99,30 +92,33 @@ struct DeviceMarker {
     const uint32_t bit = 1u << (cell & 31);
     const uint32_t tag = static_cast<uint32_t>(slot) * 32u + word_index;
     unsigned long long* f = filter.entries + (((tag * 2654435761u) >> 23) & (kFilterEntries - 1));
-    ::cuda::atomic_ref<unsigned long long, ::cuda::thread_scope_block> cached(*f);
-    const unsigned long long seen = cached.load(::cuda::std::memory_order_relaxed);
+    const unsigned long long seen = *reinterpret_cast<volatile unsigned long long*>(f);
     if ((seen >> 32) == tag && (seen & bit)) return;
     SlotScratch& s = a.slots.scratch[slot];
     uint32_t* word = (hit ? s.hit : s.free) + (cell >> 5);
     atomicOr(word, bit);  // result unused: a fire-and-forget reduction
     const unsigned long long want =
         (seen >> 32) == tag ? (seen | bit) : ((static_cast<unsigned long long>(tag) << 32) | bit);
-    // A relaxed store: every bit in `seen` was issued by someone, so whatever store wins, a set
-    // bit still means an issued atomic; a lost bit only costs a later atomic.
-    cached.store(want, ::cuda::std::memory_order_relaxed);
+    // Every bit in `seen` was issued by someone, so whichever exchange wins, a set bit still
+    // means an issued atomic; a lost bit only costs a later atomic.
+    atomicExch(f, want);
   }
 };
 
-__global__ void compactTouchedKernel(SlotArrays s, ScanCounters* c) {
-  const int32_t slot = blockIdx.x * blockDim.x + threadIdx.x;
-  const bool touched = slot < s.capacity && s.touched[slot] != 0u;
-  const unsigned mask = __ballot_sync(kFullMask, touched);
-  if (!mask) return;
+/// A slot is touched when its scratch has a mark: one warp reads a slot's 128 B of scratch.
+/// Touched slots are listed for the apply kernel and stamped, so that an eviction between a
+/// failed pass and its retry never takes one.
+__global__ void compactTouchedKernel(SlotArrays s, uint32_t scan, ScanCounters* c) {
+  const int64_t warp = (int64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32;
   const unsigned lane = threadIdx.x & 31;
-  uint32_t base = 0;
-  if (lane == 0) base = atomicAdd(&c->touched, __popc(mask));
-  base = __shfl_sync(kFullMask, base, 0);
-  if (touched) s.touched_list[base + __popc(mask & ((1u << lane) - 1u))] = slot;
+  if (warp >= s.capacity) return;
+  const int32_t slot = static_cast<int32_t>(warp);
+  const uint32_t word = reinterpret_cast<const uint32_t*>(&s.scratch[slot])[lane];
+  if (!__any_sync(kFullMask, word != 0u)) return;
+  if (lane == 0) {
+    s.touched_list[atomicAdd(&c->touched, 1u)] = slot;
+    s.last_used[slot] = scan;
+  }
 }
 
 template <bool kReadOnly, bool kBresenham>
@@ -171,9 +167,11 @@ void launchRaycast(const RaycastArgs& args, RayCast mode, bool readonly_loads,
   FRAGG_CUDA_CHECK_LAUNCH("raycastKernel");
 }
 
-void launchCompactTouched(const SlotArrays& slots, ScanCounters* counters, cudaStream_t stream) {
+void launchCompactTouched(const SlotArrays& slots, uint32_t scan, ScanCounters* counters,
+                          cudaStream_t stream) {
   if (slots.capacity == 0) return;
-  compactTouchedKernel<<<blocksFor(slots.capacity, 256), 256, 0, stream>>>(slots, counters);
+  compactTouchedKernel<<<blocksFor(uint64_t(slots.capacity) * 32, 256), 256, 0, stream>>>(
+      slots, scan, counters);
   FRAGG_CUDA_CHECK_LAUNCH("compactTouchedKernel");
 }
 

@@ -34,7 +34,6 @@ __global__ void __launch_bounds__(kCopyThreads)
     s.resident[slot] = 1;
     s.dirty[slot] = 0;
     s.fresh[slot] = 0;
-    s.touched[slot] = 0u;
     s.last_used[slot] = scan;
     s.changed_at[slot] = 0;
     s.cull[slot] = CullMemory();

@@ -21,9 +21,9 @@ void regrow(DeviceArray<T>& a, size_t keep, size_t n, cudaStream_t s) {
 }  // namespace
 
 size_t SlotPool::bytesPerSlot() {
-  return sizeof(Block) + sizeof(BlockKey) + sizeof(SlotScratch) + sizeof(uint32_t) +
-         sizeof(int32_t) + 2 * sizeof(uint8_t) + sizeof(uint32_t) + sizeof(uint64_t) +
-         sizeof(CullMemory) + sizeof(int32_t) + sizeof(uint8_t);
+  return sizeof(Block) + sizeof(BlockKey) + sizeof(SlotScratch) + sizeof(int32_t) +
+         2 * sizeof(uint8_t) + sizeof(uint32_t) + sizeof(uint64_t) + sizeof(CullMemory) +
+         sizeof(int32_t) + sizeof(uint8_t);
 }
 
 void SlotPool::grow(int32_t capacity) {
@@ -40,7 +40,6 @@ void SlotPool::grow(int32_t capacity) {
   regrow(cells_, keep, n, stream_);
   regrow(keys_, keep, n, stream_);
   regrow(scratch_, keep, n, stream_);
-  regrow(touched_, keep, n, stream_);
   regrow(touched_list_, keep, n, stream_);
   regrow(fresh_, keep, n, stream_);
   regrow(dirty_, keep, n, stream_);
@@ -63,7 +62,6 @@ void SlotPool::clear() {
   if (capacity_ == 0) return;
   const size_t n = size_t(capacity_);
   FRAGG_CUDA_CHECK(cudaMemsetAsync(scratch_.get(), 0, n * sizeof(SlotScratch), stream_));
-  FRAGG_CUDA_CHECK(cudaMemsetAsync(touched_.get(), 0, n * sizeof(uint32_t), stream_));
   FRAGG_CUDA_CHECK(cudaMemsetAsync(fresh_.get(), 0, n, stream_));
   FRAGG_CUDA_CHECK(cudaMemsetAsync(dirty_.get(), 0, n, stream_));
   FRAGG_CUDA_CHECK(cudaMemsetAsync(resident_.get(), 0, n, stream_));
@@ -80,7 +78,6 @@ SlotArrays SlotPool::arrays() const {
   a.cells = cells_.get();
   a.keys = keys_.get();
   a.scratch = scratch_.get();
-  a.touched = touched_.get();
   a.touched_list = touched_list_.get();
   a.fresh = fresh_.get();
   a.dirty = dirty_.get();

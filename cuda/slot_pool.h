@@ -47,7 +47,6 @@ class SlotPool {
   DeviceArray<Block> cells_;
   DeviceArray<BlockKey> keys_;
   DeviceArray<SlotScratch> scratch_;
-  DeviceArray<uint32_t> touched_;
   DeviceArray<int32_t> touched_list_;
   DeviceArray<uint8_t> fresh_;
   DeviceArray<uint8_t> dirty_;
