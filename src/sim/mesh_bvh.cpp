@@ -145,7 +145,8 @@ uint32_t MeshBvh::build(uint32_t begin, uint32_t end, const std::vector<Eigen::V
     uint32_t bin_count[kBins] = {};
     const float scale = kBins / extent[axis];
     for (uint32_t i = begin; i < end; ++i) {
-      const int bin = std::min(kBins - 1, int((centroids[order_[i]][axis] - cbox.min()[axis]) * scale));
+      const int bin =
+          std::min(kBins - 1, int((centroids[order_[i]][axis] - cbox.min()[axis]) * scale));
       bin_box[bin].extend(boxes[order_[i]]);
       ++bin_count[bin];
     }
@@ -178,8 +179,9 @@ uint32_t MeshBvh::build(uint32_t begin, uint32_t end, const std::vector<Eigen::V
     // Deep (or all centroids in one point): a median split bounds the depth by log2(n).
     int axis = 0;
     extent.maxCoeff(&axis);
-    std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
-                     [&](uint32_t a, uint32_t b) { return centroids[a][axis] < centroids[b][axis]; });
+    std::nth_element(
+        order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+        [&](uint32_t a, uint32_t b) { return centroids[a][axis] < centroids[b][axis]; });
   } else {
     const float lo = cbox.min()[best_axis], scale = kBins / extent[best_axis];
     mid = static_cast<uint32_t>(

@@ -5,7 +5,8 @@
 namespace fragg::bench {
 
 std::string markdownHeader() {
-  return "| workload | res m | range m | scans | pts/scan | engine | scans timed | ms/scan median | "
+  return "| workload | res m | range m | scans | pts/scan | engine | scans timed | ms/scan median "
+         "| "
          "p99 | voxel visits/s | B/voxel | speed-up vs OctoMap | agree (both know) | agree "
          "(either knows) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
 }
@@ -21,8 +22,8 @@ std::string markdownRows(const WorkloadResult& r) {
         "{} |\n",
         r.name, r.resolution_m, r.max_range_m > 0 ? fmt::format("{:.0f}", r.max_range_m) : "none",
         r.scans, r.points_per_scan, e.engine, e.scans_timed, e.repeats, e.ms_median, e.ms_p99,
-        e.visits_per_s > 0 ? fmt::format("{:.3g}", e.visits_per_s) : "-",
-        e.bytes_per_known_voxel, opt(e.speedup, "{:.1f}x"), opt(e.agree_both, "{:.4f} %", 100),
+        e.visits_per_s > 0 ? fmt::format("{:.3g}", e.visits_per_s) : "-", e.bytes_per_known_voxel,
+        opt(e.speedup, "{:.1f}x"), opt(e.agree_both, "{:.4f} %", 100),
         opt(e.agree_either, "{:.4f} %", 100));
   }
   return out;
@@ -45,9 +46,13 @@ nlohmann::json toJson(const WorkloadResult& r) {
     if (e.agree_either) j["agreement_either"] = *e.agree_either;
     rows.push_back(j);
   }
-  return {{"workload", r.name},     {"group", r.group},   {"resolution_m", r.resolution_m},
-          {"max_range_m", r.max_range_m}, {"scans", r.scans},
-          {"points_per_scan", r.points_per_scan}, {"results", rows}};
+  return {{"workload", r.name},
+          {"group", r.group},
+          {"resolution_m", r.resolution_m},
+          {"max_range_m", r.max_range_m},
+          {"scans", r.scans},
+          {"points_per_scan", r.points_per_scan},
+          {"results", rows}};
 }
 
 }  // namespace fragg::bench

@@ -55,8 +55,8 @@ std::vector<Workload> realWorkloads(const std::string& data_dir, const WantFn& w
                    30.0,
                    "real"});
   if (want("rgbd"))
-    out.push_back({"rgbd (5 x 640x480 Kinect)", readAll(d + "slambook2_ch5_rgbd"), 0.05, -1.0,
-                   "real"});
+    out.push_back(
+        {"rgbd (5 x 640x480 Kinect)", readAll(d + "slambook2_ch5_rgbd"), 0.05, -1.0, "real"});
   return out;
 }
 
