@@ -20,7 +20,9 @@ for w in json.load(open(sys.argv[1])):
 if not rows:
     sys.exit("plot_fig5b: no W2 rows in the JSON (run fragg_map_bench --workloads DIR)")
 for engine, pts in rows.items():
-    print(f"# {engine}")
+    n = sorted(set(p[2] for p in pts))
+    frames = "/".join(str(x) for x in n)
+    print(f"# {engine}_({frames}_frames)")
     for res, ms, n in sorted(pts):
         print(f"{res:g} {ms:.3f} {n}")
     print("\n")
@@ -29,7 +31,7 @@ engines="$(grep '^# ' "$data" | sed 's/^# //')"
 plot=""
 i=0
 for e in $engines; do
-  plot="$plot${plot:+, }'$data' index $i using 1:2 with linespoints lw 2 pt 7 title '$e'"
+  plot="$plot${plot:+, }'$data' index $i using 1:2 with linespoints lw 2 pt 7 title '${e//_/ }'"
   i=$((i + 1))
 done
 gnuplot <<GP
