@@ -81,6 +81,21 @@ TEST(SimGeometry, DistanceAndInsidePerSolidEvenWhereSolidsOverlap) {
   EXPECT_FALSE(bvh.withinDistance({-0.5f, 1.0f, 1.0f}, 0.49f));
 }
 
+TEST(SimGeometry, SceneMeshObjectsComeFromObjFilesRelativeToTheScene) {
+  const std::string dir = test::testDir();
+  TriangleMesh tank;
+  tank.appendSolid(makeBox({0, 0, 0}, {1, 1, 2}));
+  tank.appendSolid(makeSphere({0.5, 0.5, 2}, 0.5, 4, 8));
+  writeObj(tank, dir + "/tank.obj");
+  const Scene s = sceneFromJson(
+      R"({"objects": [{"type": "mesh", "obj": "tank.obj", "offset": [10, 20, 0]}]})", dir);
+  EXPECT_EQ(s.mesh.solid_count, 2);
+  const MeshBvh bvh(s.mesh);
+  EXPECT_TRUE(bvh.inside({10.5f, 20.5f, 1.0f}));
+  EXPECT_FALSE(bvh.inside({0.5f, 0.5f, 1.0f}));  // moved by the offset
+  EXPECT_NEAR(hitDistance(bvh, {10.5f, 20.5f, 10.f}, {0, 0, -1}), 7.5f, 1e-5f);  // sphere top
+}
+
 TEST(SimGeometry, TriangleBoxOverlap) {
   const Eigen::Vector3d c(0, 0, 0), h(0.5, 0.5, 0.5);
   // A large triangle in the plane z = 0.4 covers the box; z = 0.6 misses it.
@@ -146,6 +161,7 @@ TEST(SimGeometry, SceneFileObjectsAndErrors) {
   ASSERT_TRUE(bvh.intersect({1.0f, 1.0f, 10.f}, {0, 0, -1}, 100.f, &hit));
   EXPECT_NEAR(hit.t_m, 10.f - 3.1f, 1e-5f);
   EXPECT_THROW(sceneFromJson(R"({"objects": [{"type": "cone"}]})"), InvalidArgument);
+  EXPECT_THROW(sceneFromJson(R"({"objects": [{"type": "mesh", "obj": "missing.obj"}]})"), IoError);
   EXPECT_THROW(sceneFromJson(R"({"objects": [{"type": "box", "min": [0, 0]}]})"), InvalidArgument);
   EXPECT_THROW(sceneFromJson("{not json"), IoError);
 }

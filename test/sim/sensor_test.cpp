@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
+#include <string>
 
 #include "fragg_map/io/dataset.h"
 #include "fragg_map/map.h"
