@@ -93,7 +93,9 @@ for w in ${only//,/ }; do
   esac
 done
 
-(cd "$out" && find . -type f ! -name MANIFEST.sha256 | LC_ALL=C sort | xargs sha256sum) \
+# Checksums of the workloads (not of eval/, where scripts/eval_workloads.sh puts its maps).
+(cd "$out" && find . -type f ! -name MANIFEST.sha256 ! -path './eval/*' | LC_ALL=C sort |
+  xargs sha256sum) \
   > "$out/MANIFEST.sha256"
 echo "make_workloads: done; checksums in $out/MANIFEST.sha256"
 du -sh "$out"/* | sed 's/^/  /'

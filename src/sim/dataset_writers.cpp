@@ -45,7 +45,8 @@ std::string kittiPoseLines(const std::vector<Eigen::Isometry3d>& poses) {
   for (const Eigen::Isometry3d& T : poses) {
     const Eigen::Matrix4d& m = T.matrix();
     for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 4; ++c) out += fmt::format("{:.9g}{}", m(r, c), r == 2 && c == 3 ? "\n" : " ");
+      for (int c = 0; c < 4; ++c)
+        out += fmt::format("{:.9g}{}", m(r, c), r == 2 && c == 3 ? "\n" : " ");
   }
   return out;
 }

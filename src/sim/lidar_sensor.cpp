@@ -24,9 +24,9 @@ void LidarSpec::validate() const {
 }
 
 Eigen::Vector3f LidarSpec::direction(int beam, int column) const {
-  const double el_deg = beams == 1 ? elevation_max_deg
-                                   : elevation_max_deg - (elevation_max_deg - elevation_min_deg) *
-                                                             beam / (beams - 1);
+  const double el_deg =
+      beams == 1 ? elevation_max_deg
+                 : elevation_max_deg - (elevation_max_deg - elevation_min_deg) * beam / (beams - 1);
   const double el = el_deg * M_PI / 180.0, az = 2.0 * M_PI * column / azimuth_steps;
   return Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el))
       .cast<float>();

@@ -83,8 +83,7 @@ MapQuality evaluateMapQuality(const Map& map, const MeshBvh& scene,
   const Eigen::AlignedBox3f bounds = scene.bounds();
 
   auto occupied = [&](const Cell& c) {
-    return options.octomap_threshold ? c.log_odds_fx >= 0
-                                     : map.state(c) == CellState::kOccupied;
+    return options.octomap_threshold ? c.log_odds_fx >= 0 : map.state(c) == CellState::kOccupied;
   };
   auto isFree = [&](const Cell& c) {
     return options.octomap_threshold ? c.log_odds_fx < 0 : map.state(c) == CellState::kFree;
@@ -144,7 +143,8 @@ MapQuality evaluateMapQuality(const Map& map, const MeshBvh& scene,
                           [&](BlockIndex i) { near_blocks.push_back(i); });
       for (BlockIndex bi : near_blocks) {
         const BlockKey bk = blocks.meta(bi).key;
-        const VoxelKey b0{std::max(k0.x, bk.x * kBlockSize - 1), std::max(k0.y, bk.y * kBlockSize - 1),
+        const VoxelKey b0{std::max(k0.x, bk.x * kBlockSize - 1),
+                          std::max(k0.y, bk.y * kBlockSize - 1),
                           std::max(k0.z, bk.z * kBlockSize - 1)};
         const VoxelKey b1{std::min(k1.x, bk.x * kBlockSize + kBlockSize),
                           std::min(k1.y, bk.y * kBlockSize + kBlockSize),

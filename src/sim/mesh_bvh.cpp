@@ -10,7 +10,10 @@ namespace fragg::sim {
 namespace {
 
 constexpr uint32_t kLeafSize = 4;
-constexpr int kStackSize = 64;
+constexpr int kBins = 16;
+// SAH splits down to kMaxSahDepth, median splits below (depth <= 48 + log2(n) < kStackSize).
+constexpr int kMaxSahDepth = 48;
+constexpr int kStackSize = 96;
 constexpr float kEdgeEps = 1e-5f;
 
 // Slab test; returns the entry distance or INFINITY when the box is missed within [0, t_max].
@@ -91,12 +94,14 @@ MeshBvh::MeshBvh(TriangleMesh mesh) : mesh_(std::move(mesh)) {
   order_.resize(n);
   std::iota(order_.begin(), order_.end(), 0u);
   std::vector<Eigen::Vector3f> centroids(n);
+  std::vector<Eigen::AlignedBox3f> boxes(n);
   for (size_t i = 0; i < n; ++i) {
     const Eigen::Vector3i& t = mesh_.triangles[i];
     centroids[i] = (mesh_.vertices_m[t[0]] + mesh_.vertices_m[t[1]] + mesh_.vertices_m[t[2]]) / 3.f;
+    for (int k = 0; k < 3; ++k) boxes[i].extend(mesh_.vertices_m[t[k]]);
   }
   nodes_.reserve(2 * n / kLeafSize + 2);
-  if (n > 0) build(0, static_cast<uint32_t>(n), centroids);
+  if (n > 0) build(0, static_cast<uint32_t>(n), centroids, boxes, 0);
   tris_.resize(n);
   for (size_t i = 0; i < n; ++i) {
     const Eigen::Vector3i& t = mesh_.triangles[order_[i]];
@@ -105,34 +110,91 @@ MeshBvh::MeshBvh(TriangleMesh mesh) : mesh_(std::move(mesh)) {
   }
 }
 
-uint32_t MeshBvh::build(uint32_t begin, uint32_t end, std::vector<Eigen::Vector3f>& centroids) {
+uint32_t MeshBvh::build(uint32_t begin, uint32_t end, const std::vector<Eigen::Vector3f>& centroids,
+                        const std::vector<Eigen::AlignedBox3f>& boxes, int depth) {
   const uint32_t index = static_cast<uint32_t>(nodes_.size());
   nodes_.emplace_back();
-  Eigen::Vector3f lo = Eigen::Vector3f::Constant(INFINITY), hi = -lo;
-  Eigen::Vector3f clo = lo, chi = hi;
+  Eigen::AlignedBox3f box, cbox;
   for (uint32_t i = begin; i < end; ++i) {
-    const Eigen::Vector3i& t = mesh_.triangles[order_[i]];
-    for (int k = 0; k < 3; ++k) {
-      lo = lo.cwiseMin(mesh_.vertices_m[t[k]]);
-      hi = hi.cwiseMax(mesh_.vertices_m[t[k]]);
-    }
-    clo = clo.cwiseMin(centroids[order_[i]]);
-    chi = chi.cwiseMax(centroids[order_[i]]);
+    box.extend(boxes[order_[i]]);
+    cbox.extend(centroids[order_[i]]);
   }
-  nodes_[index].lo = lo;
-  nodes_[index].hi = hi;
-  if (end - begin <= kLeafSize) {
+  nodes_[index].lo = box.min();
+  nodes_[index].hi = box.max();
+  const uint32_t n = end - begin;
+  auto makeLeaf = [&] {
     nodes_[index].first = begin;
-    nodes_[index].count = end - begin;
+    nodes_[index].count = n;
     return index;
+  };
+  if (n <= kLeafSize) return makeLeaf();
+
+  // Binned surface area heuristic: the split plane (kBins per axis) that minimises
+  // area(left) * n_left + area(right) * n_right.
+  auto area = [](const Eigen::AlignedBox3f& b) {
+    if (b.isEmpty()) return 0.f;
+    const Eigen::Vector3f d = b.sizes();
+    return d.x() * d.y() + d.y() * d.z() + d.z() * d.x();
+  };
+  float best_cost = INFINITY;
+  int best_axis = -1, best_split = 0;
+  const Eigen::Vector3f extent = cbox.sizes();
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!(extent[axis] > 0)) continue;
+    Eigen::AlignedBox3f bin_box[kBins];
+    uint32_t bin_count[kBins] = {};
+    const float scale = kBins / extent[axis];
+    for (uint32_t i = begin; i < end; ++i) {
+      const int bin =
+          std::min(kBins - 1, int((centroids[order_[i]][axis] - cbox.min()[axis]) * scale));
+      bin_box[bin].extend(boxes[order_[i]]);
+      ++bin_count[bin];
+    }
+    float right_area[kBins];
+    uint32_t right_count[kBins];
+    Eigen::AlignedBox3f acc;
+    uint32_t count = 0;
+    for (int b = kBins - 1; b > 0; --b) {
+      acc.extend(bin_box[b]);
+      count += bin_count[b];
+      right_area[b] = area(acc);
+      right_count[b] = count;
+    }
+    acc.setEmpty();
+    count = 0;
+    for (int b = 0; b < kBins - 1; ++b) {
+      acc.extend(bin_box[b]);
+      count += bin_count[b];
+      if (count == 0 || right_count[b + 1] == 0) continue;
+      const float cost = area(acc) * count + right_area[b + 1] * right_count[b + 1];
+      if (cost < best_cost) {
+        best_cost = cost;
+        best_axis = axis;
+        best_split = b;
+      }
+    }
   }
-  int axis = 0;
-  (chi - clo).maxCoeff(&axis);
-  const uint32_t mid = begin + (end - begin) / 2;
-  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
-                   [&](uint32_t a, uint32_t b) { return centroids[a][axis] < centroids[b][axis]; });
-  build(begin, mid, centroids);
-  const uint32_t right = build(mid, end, centroids);
+  uint32_t mid = begin + n / 2;
+  if (depth >= kMaxSahDepth || best_axis < 0) {
+    // Deep (or all centroids in one point): a median split bounds the depth by log2(n).
+    int axis = 0;
+    extent.maxCoeff(&axis);
+    std::nth_element(
+        order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+        [&](uint32_t a, uint32_t b) { return centroids[a][axis] < centroids[b][axis]; });
+  } else {
+    const float lo = cbox.min()[best_axis], scale = kBins / extent[best_axis];
+    mid = static_cast<uint32_t>(
+        std::partition(order_.begin() + begin, order_.begin() + end,
+                       [&](uint32_t t) {
+                         return std::min(kBins - 1, int((centroids[t][best_axis] - lo) * scale)) <=
+                                best_split;
+                       }) -
+        order_.begin());
+    if (mid == begin || mid == end) mid = begin + n / 2;
+  }
+  build(begin, mid, centroids, boxes, depth + 1);
+  const uint32_t right = build(mid, end, centroids, boxes, depth + 1);
   nodes_[index].first = right;
   nodes_[index].count = 0;
   return index;

@@ -36,8 +36,7 @@ TriangleMesh solid() {
 
 TriangleMesh makeOrientedBox(const Eigen::Vector3d& centre_m, const Eigen::Vector3d& half_m,
                              double yaw_rad) {
-  if (!(half_m.array() > 0).all())
-    throw InvalidArgument("box: every half extent must be > 0");
+  if (!(half_m.array() > 0).all()) throw InvalidArgument("box: every half extent must be > 0");
   TriangleMesh m = solid();
   const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).matrix();
   int32_t v[8];
@@ -58,8 +57,8 @@ TriangleMesh makeBox(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m)
   return makeOrientedBox(0.5 * (min_m + max_m), 0.5 * (max_m - min_m), 0.0);
 }
 
-TriangleMesh makeCylinder(const Eigen::Vector3d& a_m, const Eigen::Vector3d& b_m,
-                          double radius_m, int segments) {
+TriangleMesh makeCylinder(const Eigen::Vector3d& a_m, const Eigen::Vector3d& b_m, double radius_m,
+                          int segments) {
   const Eigen::Vector3d axis = b_m - a_m;
   if (!(radius_m > 0) || axis.norm() <= 0 || segments < 3)
     throw InvalidArgument("cylinder: needs radius > 0, two distinct ends and >= 3 segments");
@@ -84,8 +83,7 @@ TriangleMesh makeCylinder(const Eigen::Vector3d& a_m, const Eigen::Vector3d& b_m
   return m;
 }
 
-TriangleMesh makeSphere(const Eigen::Vector3d& centre_m, double radius_m, int rings,
-                        int segments) {
+TriangleMesh makeSphere(const Eigen::Vector3d& centre_m, double radius_m, int rings, int segments) {
   if (!(radius_m > 0) || rings < 2 || segments < 3)
     throw InvalidArgument("sphere: needs radius > 0, >= 2 rings and >= 3 segments");
   TriangleMesh m = solid();
@@ -96,18 +94,18 @@ TriangleMesh makeSphere(const Eigen::Vector3d& centre_m, double radius_m, int ri
     const double theta = -M_PI / 2 + M_PI * r / rings;
     for (int s = 0; s < segments; ++s) {
       const double phi = 2.0 * M_PI * s / segments;
-      ring[r - 1][s] = addVertex(m, centre_m + radius_m * Eigen::Vector3d(
-                                                              std::cos(theta) * std::cos(phi),
-                                                              std::cos(theta) * std::sin(phi),
-                                                              std::sin(theta)));
+      ring[r - 1][s] =
+          addVertex(m, centre_m + radius_m * Eigen::Vector3d(std::cos(theta) * std::cos(phi),
+                                                             std::cos(theta) * std::sin(phi),
+                                                             std::sin(theta)));
     }
   }
   for (int s = 0; s < segments; ++s) {
     const int t = (s + 1) % segments;
     addTri(m, south, ring[0][t], ring[0][s]);
     addTri(m, north, ring[rings - 2][s], ring[rings - 2][t]);
-    for (int r = 0; r + 1 < rings - 1; ++r) addQuad(m, ring[r][s], ring[r][t], ring[r + 1][t],
-                                                     ring[r + 1][s]);
+    for (int r = 0; r + 1 < rings - 1; ++r)
+      addQuad(m, ring[r][s], ring[r][t], ring[r + 1][t], ring[r + 1][s]);
   }
   return m;
 }

@@ -95,7 +95,8 @@ TriangleMesh readObject(const json& o, const Terrain& terrain, const std::string
     const double z_top = std::max(terrain.heightAt(a[0], a[1]), terrain.heightAt(b[0], b[1])) + h;
     const double bottom = z0 - kEmbedM;
     const Eigen::Vector3d centre(0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (bottom + z_top));
-    return makeOrientedBox(centre, Eigen::Vector3d(0.5 * d.norm(), 0.5 * thick, 0.5 * (z_top - bottom)),
+    return makeOrientedBox(centre,
+                           Eigen::Vector3d(0.5 * d.norm(), 0.5 * thick, 0.5 * (z_top - bottom)),
                            std::atan2(d.y(), d.x()));
   }
   if (type == "tree") {  // trunk (cylinder) + crown (sphere), two solids

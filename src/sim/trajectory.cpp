@@ -34,16 +34,13 @@ class Polyline {
   std::vector<double> s_;
 };
 
-double yawOf(const Eigen::Isometry3d& T) {
-  return std::atan2(T.linear()(1, 0), T.linear()(0, 0));
-}
+double yawOf(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
 
 }  // namespace
 
 std::vector<PoseSample> sampleTrajectory(const TrajectorySpec& spec,
                                          const std::function<double(double, double)>& ground_m,
-                                         const DriftSpec& drift, uint64_t seed,
-                                         size_t max_frames) {
+                                         const DriftSpec& drift, uint64_t seed, size_t max_frames) {
   if (spec.waypoints_m.size() < 2)
     throw InvalidArgument("trajectory: needs at least two waypoints");
   if (!(spec.speed_mps > 0) || !(spec.rate_hz > 0))

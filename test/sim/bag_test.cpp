@@ -1,12 +1,11 @@
 // The simulator's bag read back by the core's bag reader: organised clouds with their NaNs,
 // sensor poses from map -> odom -> base_link (drifting odometry) -> sensor.
-#include "fragg_map/sim/bag_writer.h"
-
 #include <gtest/gtest.h>
 
 #include <fstream>
 
 #include "fragg_map/io/rosbag_source.h"
+#include "fragg_map/sim/bag_writer.h"
 #include "fragg_map/sim/lidar_sensor.h"
 #include "sim_test_util.h"
 
@@ -25,7 +24,8 @@ TEST(SimBag, CloudsAndTfReadBackThroughTheCoreBagReader) {
   DriftSpec drift;
   drift.drift_m_per_m = 0.05;
   drift.drift_rad_per_m = 0.02;
-  const auto poses = sampleTrajectory(traj, [](double, double) { return 0.0; }, drift, 4);
+  const auto poses = sampleTrajectory(
+      traj, [](double, double) { return 0.0; }, drift, 4);
   ASSERT_GT(poses.size(), 5u);
   Eigen::Isometry3d T_base_sensor = Eigen::Isometry3d::Identity();
   T_base_sensor.translation() = Eigen::Vector3d(0.1, 0, 1.8);

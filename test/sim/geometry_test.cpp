@@ -52,7 +52,7 @@ TEST(SimGeometry, RayHitsTerrainPlaneCylinderCapAndSphere) {
   // The tessellated sphere lies inside the true sphere, by at most its sag r (1 - cos(pi/12)).
   const float sag = 2.f * (1.f - std::cos(float(M_PI) / 12.f));
   for (const Eigen::Vector3f& d : {Eigen::Vector3f(0, 1, 0), Eigen::Vector3f(0.1f, 1, 0.05f),
-                                  Eigen::Vector3f(-0.05f, 1, -0.08f)}) {
+                                   Eigen::Vector3f(-0.05f, 1, -0.08f)}) {
     const Eigen::Vector3f o(0, 20, 5), u = d.normalized();
     // Analytic: |o + t u - c| = r.
     const Eigen::Vector3f oc = o - Eigen::Vector3f(0, 30, 5);
@@ -81,15 +81,28 @@ TEST(SimGeometry, DistanceAndInsidePerSolidEvenWhereSolidsOverlap) {
   EXPECT_FALSE(bvh.withinDistance({-0.5f, 1.0f, 1.0f}, 0.49f));
 }
 
+TEST(SimGeometry, SceneMeshObjectsComeFromObjFilesRelativeToTheScene) {
+  const std::string dir = test::testDir();
+  TriangleMesh tank;
+  tank.appendSolid(makeBox({0, 0, 0}, {1, 1, 2}));
+  tank.appendSolid(makeSphere({0.5, 0.5, 2}, 0.5, 4, 8));
+  writeObj(tank, dir + "/tank.obj");
+  const Scene s = sceneFromJson(
+      R"({"objects": [{"type": "mesh", "obj": "tank.obj", "offset": [10, 20, 0]}]})", dir);
+  EXPECT_EQ(s.mesh.solid_count, 2);
+  const MeshBvh bvh(s.mesh);
+  EXPECT_TRUE(bvh.inside({10.5f, 20.5f, 1.0f}));
+  EXPECT_FALSE(bvh.inside({0.5f, 0.5f, 1.0f}));  // moved by the offset
+  EXPECT_NEAR(hitDistance(bvh, {10.5f, 20.5f, 10.f}, {0, 0, -1}), 7.5f, 1e-5f);  // sphere top
+}
+
 TEST(SimGeometry, TriangleBoxOverlap) {
   const Eigen::Vector3d c(0, 0, 0), h(0.5, 0.5, 0.5);
   // A large triangle in the plane z = 0.4 covers the box; z = 0.6 misses it.
   EXPECT_TRUE(triangleBoxOverlap(c, h, {-5, -5, 0.4}, {5, -5, 0.4}, {0, 5, 0.4}));
   EXPECT_FALSE(triangleBoxOverlap(c, h, {-5, -5, 0.6}, {5, -5, 0.6}, {0, 5, 0.6}));
   // A tilted one passing near the corner: x + y + z = 1.6 misses (corner sum 1.5), 1.4 hits.
-  auto tilted = [&](double s) {
-    return triangleBoxOverlap(c, h, {s, 0, 0}, {0, s, 0}, {0, 0, s});
-  };
+  auto tilted = [&](double s) { return triangleBoxOverlap(c, h, {s, 0, 0}, {0, s, 0}, {0, 0, s}); };
   EXPECT_TRUE(tilted(1.4));
   EXPECT_FALSE(tilted(1.6));
   // A vertical triangle beside a box edge.
@@ -148,8 +161,8 @@ TEST(SimGeometry, SceneFileObjectsAndErrors) {
   ASSERT_TRUE(bvh.intersect({1.0f, 1.0f, 10.f}, {0, 0, -1}, 100.f, &hit));
   EXPECT_NEAR(hit.t_m, 10.f - 3.1f, 1e-5f);
   EXPECT_THROW(sceneFromJson(R"({"objects": [{"type": "cone"}]})"), InvalidArgument);
-  EXPECT_THROW(sceneFromJson(R"({"objects": [{"type": "box", "min": [0, 0]}]})"),
-               InvalidArgument);
+  EXPECT_THROW(sceneFromJson(R"({"objects": [{"type": "mesh", "obj": "missing.obj"}]})"), IoError);
+  EXPECT_THROW(sceneFromJson(R"({"objects": [{"type": "box", "min": [0, 0]}]})"), InvalidArgument);
   EXPECT_THROW(sceneFromJson("{not json"), IoError);
 }
 

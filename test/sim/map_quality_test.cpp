@@ -29,7 +29,7 @@ struct Fixture {
     setCell(map, {2, 2, 0}, free);   // inside, 0.25 deep (a surface voxel)
     setCell(map, {2, 2, -2}, free);  // outside
     setCell(map, {10, 10, 10}, free);
-    setCell(map, {1, 1, 1}, 100);    // in the unknown band: neither occupied nor free
+    setCell(map, {1, 1, 1}, 100);  // in the unknown band: neither occupied nor free
   }
   static MapParams params() {
     MapParams p;

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
+#include <string>
 
 #include "fragg_map/io/dataset.h"
 #include "fragg_map/map.h"
@@ -108,7 +110,8 @@ TEST(SimDepthCamera, DepthIsTheDistanceAlongTheOpticalAxis) {
     for (int u = 0; u < spec.width; ++u) {
       const Eigen::Vector3f& p = c.points_S[v * spec.width + u];
       // The pixel ray meets the plane x = 5 at lateral offsets (u - cx) / fx * 5.
-      const double lateral = std::abs((u - k.cx) / k.fx * 5), vertical = std::abs((v - k.cy) / k.fy * 5);
+      const double lateral = std::abs((u - k.cx) / k.fx * 5),
+                   vertical = std::abs((v - k.cy) / k.fy * 5);
       const bool on_wall = lateral < 3 && vertical < 2;
       if (!on_wall) {
         EXPECT_FALSE(p.allFinite());
@@ -140,7 +143,8 @@ void record(const std::string& dir, uint64_t seed) {
   DriftSpec drift;
   drift.drift_m_per_m = 0.02;
   drift.drift_rad_per_m = 0.01;
-  const auto poses = sampleTrajectory(traj, [](double, double) { return 0.0; }, drift, seed);
+  const auto poses = sampleTrajectory(
+      traj, [](double, double) { return 0.0; }, drift, seed);
   Eigen::Isometry3d T_base_lidar = at(0, 0, kSensorHeightM);
   Eigen::Isometry3d T_base_cam = at(0, 0, 1);
   T_base_cam.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
@@ -151,8 +155,8 @@ void record(const std::string& dir, uint64_t seed) {
     const Eigen::Isometry3d T_c = poses[i].T_map_base * T_base_cam;
     kitti.add(simulateLidar(bvh, lidar, T_l, seed, i), T_l, poses[i].T_odom_base * T_base_lidar,
               poses[i].stamp_s);
-    depth.add(simulateDepthCamera(bvh, cam, T_c, seed, i), T_c,
-              poses[i].T_odom_base * T_base_cam, poses[i].stamp_s);
+    depth.add(simulateDepthCamera(bvh, cam, T_c, seed, i), T_c, poses[i].T_odom_base * T_base_cam,
+              poses[i].stamp_s);
   }
   kitti.finish();
   depth.finish();
@@ -240,10 +244,10 @@ TEST(SimTrajectory, OdometryDriftsAsConfiguredAndGroundTruthFollowsTheWaypoints)
   drift.drift_m_per_m = 0.01;
   traj.follow_ground = true;
   const auto drifting = sampleTrajectory(traj, flat, drift, 1);
-  const double err_mid = (drifting[100].T_odom_base.translation() -
-                          drifting[100].T_map_base.translation()).norm();
-  const double err_end = (drifting.back().T_odom_base.translation() -
-                          drifting.back().T_map_base.translation()).norm();
+  const double err_mid =
+      (drifting[100].T_odom_base.translation() - drifting[100].T_map_base.translation()).norm();
+  const double err_end =
+      (drifting.back().T_odom_base.translation() - drifting.back().T_map_base.translation()).norm();
   EXPECT_GT(err_mid, 0.3);  // 50 m with 1 % translation and 0.1 rad heading error
   EXPECT_GT(err_end, err_mid);
   EXPECT_NEAR(drifting[0].T_map_base.translation().z(), 1.5, 1e-12);

@@ -24,3 +24,18 @@ if(TARGET fragg_map_sim_bag AND TARGET fragg_map_rosbag)
   add_dependencies(sim_bag_test fragg_map_smoke_workload)
   target_compile_definitions(sim_bag_test PRIVATE FRAGG_SMOKE_BAG="${FRAGG_SMOKE_BAG}")
 endif()
+
+# Runs the built fragg_map_sim and fragg_map (eval, octomap-build) on the smoke workload.
+fragg_add_test(sim_cli_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/cli_sim_eval_test.cpp
+  LIBS fragg_map_core nlohmann_json::nlohmann_json
+  LABELS sim cli)
+if(TARGET sim_cli_test)
+  add_dependencies(sim_cli_test fragg_map_cli fragg_map_sim fragg_map_smoke_workload)
+  target_compile_definitions(sim_cli_test PRIVATE
+    FRAGG_CLI_PATH="$<TARGET_FILE:fragg_map_cli>"
+    FRAGG_SIM_PATH="$<TARGET_FILE:fragg_map_sim>"
+    FRAGG_SMOKE_DIR="${FRAGG_SMOKE_DIR}"
+    FRAGG_SCENES_DIR="${PROJECT_SOURCE_DIR}/config/scenes"
+    $<$<TARGET_EXISTS:fragg_map_octomap>:FRAGG_CLI_HAS_OCTOMAP=1>)
+endif()

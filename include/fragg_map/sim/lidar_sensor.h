@@ -16,8 +16,8 @@ struct LidarSpec {
   int azimuth_steps = 1024;
   double elevation_min_deg = -25.0;
   double elevation_max_deg = 15.0;
-  double min_range_m = 0.3;   ///< closer hits give no return
-  double max_range_m = 80.0;  ///< farther hits give no return
+  double min_range_m = 0.3;    ///< closer hits give no return
+  double max_range_m = 80.0;   ///< farther hits give no return
   double range_noise_m = 0.0;  ///< standard deviation, added along the ray
   double dropout = 0.0;        ///< probability that a return is lost
 

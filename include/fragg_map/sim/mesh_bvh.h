@@ -19,7 +19,7 @@ struct RayHit {
 
 class MeshBvh {
  public:
-  /// Builds the hierarchy (median splits on the longest centroid axis, <= 4 triangles a leaf).
+  /// Builds the hierarchy (binned surface area heuristic, <= 4 triangles a leaf).
   explicit MeshBvh(TriangleMesh mesh);
 
   const TriangleMesh& mesh() const { return mesh_; }
@@ -48,7 +48,8 @@ class MeshBvh {
   struct Tri {
     Eigen::Vector3f v0, e1, e2;
   };
-  uint32_t build(uint32_t begin, uint32_t end, std::vector<Eigen::Vector3f>& centroids);
+  uint32_t build(uint32_t begin, uint32_t end, const std::vector<Eigen::Vector3f>& centroids,
+                 const std::vector<Eigen::AlignedBox3f>& boxes, int depth);
   template <typename Visit>
   void traverseRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, float t_max,
                    float edge_eps, Visit&& visit) const;

@@ -17,8 +17,8 @@ TriangleMesh makeOrientedBox(const Eigen::Vector3d& centre_m, const Eigen::Vecto
                              double yaw_rad);
 
 /// A capped cylinder from `a_m` to `b_m` (any direction) with `segments` sides.
-TriangleMesh makeCylinder(const Eigen::Vector3d& a_m, const Eigen::Vector3d& b_m,
-                          double radius_m, int segments = 24);
+TriangleMesh makeCylinder(const Eigen::Vector3d& a_m, const Eigen::Vector3d& b_m, double radius_m,
+                          int segments = 24);
 
 /// A UV sphere with `rings` latitude bands and `segments` longitude sectors.
 TriangleMesh makeSphere(const Eigen::Vector3d& centre_m, double radius_m, int rings = 12,

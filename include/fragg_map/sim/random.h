@@ -24,7 +24,8 @@ inline double uniform01(uint64_t key) { return ((key >> 11) + 0.5) * (1.0 / 9007
 
 /// Standard normal (Box-Muller over two derived keys).
 inline double gaussian(uint64_t key) {
-  const double u1 = uniform01(mix64(key ^ 0x1234567ULL)), u2 = uniform01(mix64(key ^ 0x89abcdefULL));
+  const double u1 = uniform01(mix64(key ^ 0x1234567ULL)),
+               u2 = uniform01(mix64(key ^ 0x89abcdefULL));
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
 }
 

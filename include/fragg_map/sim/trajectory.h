@@ -13,8 +13,8 @@ struct TrajectorySpec {
   std::vector<Eigen::Vector3d> waypoints_m;  ///< map frame; z above ground when follow_ground
   double speed_mps = 1.0;
   double rate_hz = 10.0;
-  bool follow_ground = false;  ///< base z = terrain height + waypoint z
-  bool closed = false;         ///< drive back to the first waypoint (a loop)
+  bool follow_ground = false;     ///< base z = terrain height + waypoint z
+  bool closed = false;            ///< drive back to the first waypoint (a loop)
   double heading_window_m = 1.0;  ///< heading = direction between s - w and s + w (smooth turns)
 };
 

@@ -62,8 +62,7 @@ void runEval(const EvalOptions& o) {
   const std::string ext = extensionOf(o.scene);
   if (ext != "obj" && ext != "json")
     throw InvalidArgument("--scene must be an OBJ file or a fragg_map_sim scene (.json)");
-  sim::TriangleMesh mesh =
-      ext == "obj" ? sim::readObj(o.scene) : sim::loadScene(o.scene).mesh;
+  sim::TriangleMesh mesh = ext == "obj" ? sim::readObj(o.scene) : sim::loadScene(o.scene).mesh;
   const sim::MeshBvh scene(std::move(mesh));
   sim::MapQualityOptions options;
   options.octomap_threshold = o.octomap_threshold;
@@ -86,11 +85,12 @@ void runEval(const EvalOptions& o) {
     std::printf("%s\n", j.dump().c_str());
     return;
   }
-  std::string out = fmt::format("scene {} ({} triangles), states: {}\n", o.scene,
-                                scene.mesh().size(),
-                                o.octomap_threshold ? "OctoMap's rule" : "each map's own rule");
+  std::string out =
+      fmt::format("scene {} ({} triangles), states: {}\n", o.scene, scene.mesh().size(),
+                  o.octomap_threshold ? "OctoMap's rule" : "each map's own rule");
   out += fmt::format("{:<28}", "");
-  for (const std::string& p : paths) out += fmt::format(" | {:>26}", p.size() > 26 ? "..." + p.substr(p.size() - 23) : p);
+  for (const std::string& p : paths)
+    out += fmt::format(" | {:>26}", p.size() > 26 ? "..." + p.substr(p.size() - 23) : p);
   out += "\n";
   auto row = [&](const char* name, auto value) {
     out += fmt::format("{:<28}", name);

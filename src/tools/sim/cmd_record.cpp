@@ -61,8 +61,10 @@ void runRecord(const RecordOptions& o) {
     throw InvalidArgument("--sensor must be lidar or depth, not '" + o.sensor + "'");
   if (o.mount.size() != 0 && o.mount.size() != 3)
     throw InvalidArgument("--mount takes three numbers (x y z in base_link)");
-  if (lidar) o.lidar.validate();
-  else o.depth.validate();
+  if (lidar)
+    o.lidar.validate();
+  else
+    o.depth.validate();
   if (!lidar && !o.kitti.empty())
     throw InvalidArgument("--kitti is for the LiDAR; a depth camera writes --depth-folder");
   if (lidar && !o.depth_folder.empty())
@@ -131,8 +133,8 @@ void runRecord(const RecordOptions& o) {
   std::printf("%s", fmt::format("{} / {}: {} frames of {} points ({:.1f} % returns), ray casting "
                                 "{:.1f} ms/frame on {} triangles\n",
                                 o.scene, o.trajectory, n, n ? points / n : 0,
-                                points ? 100.0 * returns / points : 0.0,
-                                n ? 1e3 * cast_s / n : 0.0, bvh.mesh().size())
+                                points ? 100.0 * returns / points : 0.0, n ? 1e3 * cast_s / n : 0.0,
+                                bvh.mesh().size())
                         .c_str());
 }
 
@@ -177,8 +179,9 @@ void addRecordCommand(CLI::App& app) {
   c->add_option("--depth-dropout", o->depth.dropout, "Probability of a lost pixel")
       ->capture_default_str();
   // Mount and odometry
-  c->add_option("--mount", o->mount, "Sensor position in base_link: x y z (default LiDAR 0 0 "
-                                     "1.8, camera 0 0 0)")
+  c->add_option("--mount", o->mount,
+                "Sensor position in base_link: x y z (default LiDAR 0 0 "
+                "1.8, camera 0 0 0)")
       ->expected(3);
   c->add_option("--mount-pitch", o->mount_pitch_deg, "Sensor pitch, positive looks down (deg)")
       ->capture_default_str();

@@ -16,8 +16,7 @@ void addSceneCommand(CLI::App& app) {
   auto o = std::make_shared<Options>();
   CLI::App* c = app.add_subcommand(
       "scene", "Write a scene's ground truth as an OBJ file (one closed solid per object)");
-  c->add_option("scene", o->scene, "Scene file (JSON, e.g. config/scenes/campus.json)")
-      ->required();
+  c->add_option("scene", o->scene, "Scene file (JSON, e.g. config/scenes/campus.json)")->required();
   c->add_option("-o,--output", o->obj, "OBJ file to write")->required();
   c->callback([o] {
     const Scene scene = loadScene(o->scene);
