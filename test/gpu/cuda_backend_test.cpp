@@ -17,6 +17,10 @@
 #include "fragg_map/io/point_file.h"
 #include "fragg_map/io/pose_file.h"
 #include "fragg_map/map.h"
+#include "fragg_map/sim/lidar_sensor.h"
+#include "fragg_map/sim/mesh_bvh.h"
+#include "fragg_map/sim/scene.h"
+#include "fragg_map/sim/trajectory.h"
 
 namespace fragg {
 namespace {
@@ -98,6 +102,33 @@ std::vector<Input> syntheticLidar(int scans, double step_m) {
   return out;
 }
 
+/// W1 itself (config/workloads/w1_lidar360.args): the campus street, 128 x 1406 LiDAR at
+/// 1.8 m, -25..15 deg, 2 cm noise, seed 101; every `step`-th of the first 100 frames.
+std::vector<Input> simulatedW1(int step) {
+  sim::Scene scene = sim::loadScene(std::string(FRAGG_SOURCE_DIR) + "/config/scenes/campus.json");
+  const sim::Terrain terrain = scene.terrain;
+  const auto poses = sim::sampleTrajectory(
+      scene.trajectories.at("street"),
+      [&terrain](double x, double y) { return terrain.heightAt(x, y); }, sim::DriftSpec(), 101,
+      100);
+  const sim::MeshBvh bvh(std::move(scene.mesh));
+  sim::LidarSpec spec;
+  spec.beams = 128;
+  spec.azimuth_steps = 1406;
+  spec.elevation_min_deg = -25;
+  spec.elevation_max_deg = 15;
+  spec.max_range_m = 80;
+  spec.range_noise_m = 0.02;
+  Eigen::Isometry3d T_base_sensor = Eigen::Isometry3d::Identity();
+  T_base_sensor.translation().z() = 1.8;
+  std::vector<Input> out;
+  for (size_t i = 0; i < poses.size(); i += step) {
+    const Eigen::Isometry3d T = poses[i].T_map_base * T_base_sensor;
+    out.push_back({sim::simulateLidar(bvh, spec, T, 101, i), T});
+  }
+  return out;
+}
+
 void expectBackendsAgree(const std::vector<Input>& in, MapParams p, const SensorModel& sensor,
                          const char* what) {
   p.backend = Backend::kCpu;
@@ -150,6 +181,16 @@ TEST(CudaBackendTest, SyntheticLidar180kIsByteIdenticalAt30And50Metres) {
                       "synthetic 180k 30 m");
   expectBackendsAgree(scans, paramsFor(Backend::kCuda, 0.05), SensorModel::autoFromCloud(0.0, 50.0),
                       "synthetic 180k 50 m");
+}
+
+TEST(CudaBackendTest, SimulatedW1IsByteIdenticalAt30And50Metres) {
+  REQUIRE_DEVICE();
+  const auto scans = simulatedW1(5);
+  ASSERT_EQ(scans.size(), 20u);
+  expectBackendsAgree(scans, paramsFor(Backend::kCuda, 0.05), SensorModel::autoFromCloud(0.0, 30.0),
+                      "W1 (20 of 100 scans) 30 m");
+  expectBackendsAgree(scans, paramsFor(Backend::kCuda, 0.05), SensorModel::autoFromCloud(0.0, 50.0),
+                      "W1 (20 of 100 scans) 50 m");
 }
 
 TEST(CudaBackendTest, OptionsMatchTheCpu) {

@@ -3,6 +3,7 @@
 fragg_add_test(fragg_gpu_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/cuda_backend_test.cpp
           ${PROJECT_SOURCE_DIR}/src/tools/bench/synthetic_lidar.cpp
-  LIBS fragg_map_core
+  LIBS fragg_map_core fragg_map_sim_lib
   LABELS gpu)
 target_include_directories(fragg_gpu_test PRIVATE ${PROJECT_SOURCE_DIR}/src/tools)
+target_compile_definitions(fragg_gpu_test PRIVATE FRAGG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
