@@ -23,8 +23,8 @@ struct InsertStats {
   uint64_t blocks_evicted = 0;   ///< CUDA: device slots given back to make room
   CullCounters culling;
   double seconds_total = 0;
-  double seconds_prepare = 0;  ///< transform + filter
-  double seconds_cull = 0;  ///< sensor model (auto), frustum and host culling
+  double seconds_prepare = 0;    ///< transform + filter
+  double seconds_cull = 0;       ///< sensor model (auto), frustum and host culling
   double seconds_residency = 0;  ///< CUDA: window, uploads, evictions (host side)
   double seconds_raycast = 0;
   double seconds_apply = 0;
