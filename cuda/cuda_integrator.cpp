@@ -162,18 +162,24 @@ void CudaIntegrator::evict(int32_t n, BlockMap& blocks) {
   evicted_ += candidates.size();
 }
 
+void CudaIntegrator::reserveTransfer(size_t n, bool staging) {
+  ptrs_host_.reserve(n);
+  ptrs_dev_.reserve(n);
+  slots_host_.reserve(n);
+  slots_dev_.reserve(n);
+  keys_host_.reserve(n);
+  keys_dev_.reserve(n);
+  if (staging) {
+    staging_host_.reserve(n);
+    staging_dev_.reserve(n);
+  }
+}
+
 void CudaIntegrator::writeBack(const std::vector<int32_t>& slots, BlockMap& blocks) {
   const SlotArrays a = pool_.arrays();
   for (size_t begin = 0; begin < slots.size(); begin += kTransferBatch) {
     const size_t n = std::min(kTransferBatch, slots.size() - begin);
-    staging_dev_.reserve(n);
-    staging_host_.reserve(n);
-    ptrs_host_.reserve(n);
-    ptrs_dev_.reserve(n);
-    slots_host_.reserve(n);
-    slots_dev_.reserve(n);
-    keys_host_.reserve(n);
-    keys_dev_.reserve(n);
+    reserveTransfer(n, /*staging=*/true);
     changed_host_.reserve(n);
     changed_dev_.reserve(n);
     for (size_t j = 0; j < n; ++j) {
@@ -214,16 +220,7 @@ std::vector<int32_t> CudaIntegrator::upload(const std::vector<BlockIndex>& host_
   const SlotArrays a = pool_.arrays();
   for (size_t begin = 0; begin < host_blocks.size(); begin += kTransferBatch) {
     const size_t n = std::min(kTransferBatch, host_blocks.size() - begin);
-    ptrs_host_.reserve(n);
-    ptrs_dev_.reserve(n);
-    slots_host_.reserve(n);
-    slots_dev_.reserve(n);
-    keys_host_.reserve(n);
-    keys_dev_.reserve(n);
-    if (!direct_uploads_) {
-      staging_host_.reserve(n);
-      staging_dev_.reserve(n);
-    }
+    reserveTransfer(n, /*staging=*/!direct_uploads_);
 #pragma omp parallel for schedule(static)
     for (long j = 0; j < static_cast<long>(n); ++j) {
       const BlockIndex i = host_blocks[begin + j];

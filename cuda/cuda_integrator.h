@@ -48,6 +48,8 @@ class CudaIntegrator : public Integrator {
   /// CudaOutOfMemory when fewer than `need` can be had.
   void makeRoom(int32_t need, int32_t want, BlockMap& blocks);
   void evict(int32_t n, BlockMap& blocks);
+  /// Transfer buffers for a batch of `n` blocks (staging: through pinned staging memory).
+  void reserveTransfer(size_t n, bool staging);
   void writeBack(const std::vector<int32_t>& slots, BlockMap& blocks);
   std::vector<int32_t> upload(const std::vector<BlockIndex>& host_blocks, BlockMap& blocks);
   void setWindowEntries(const std::vector<int64_t>& index, const std::vector<int32_t>& value);
