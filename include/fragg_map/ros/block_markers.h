@@ -1,0 +1,63 @@
+// fragg::Map -> visualization_msgs/MarkerArray, one CUBE_LIST marker per 8x8x8 block, so that
+// a publisher can send only the blocks that changed (BlockMeta::changed_at) and DELETE the
+// blocks that no longer hold a cell of the drawn state.
+#pragma once
+
+#include <ros/time.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+
+#include "fragg_map/key.h"
+#include "fragg_map/map.h"
+
+namespace fragg_ros {
+
+struct MarkerStyle {
+  std::string frame_id = "map";
+  std::string ns = "occupied";
+  fragg::CellState state = fragg::CellState::kOccupied;  ///< the cells drawn
+  double color_min_z_m = -1.0;                           ///< bottom of the height colour ramp
+  double color_max_z_m = 4.0;                            ///< top of the height colour ramp
+  float alpha = 1.0f;
+};
+
+/// Which blocks a marker topic shows, with the marker id each block got, and the map revision
+/// published last. Owned by the publisher; the converters below read and update it.
+class MarkerLedger {
+ public:
+  uint64_t publishedRevision() const { return published_revision_; }
+  size_t shownBlocks() const { return ids_.size(); }
+  /// The id of `key`'s marker, or -1 when the block is not shown.
+  int32_t idOf(const fragg::BlockKey& key) const;
+
+ private:
+  friend visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map&, const MarkerStyle&,
+                                                             const ros::Time&, MarkerLedger*);
+  friend visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map&, const MarkerStyle&,
+                                                         const ros::Time&, MarkerLedger*);
+  std::unordered_map<fragg::BlockKey, int32_t, fragg::BlockKeyHash> ids_;
+  int32_t next_id_ = 0;
+  uint64_t published_revision_ = 0;
+};
+
+/// The CUBE_LIST marker of one block: centres of its cells in `style.state`, coloured by
+/// height; empty `points` when it has none.
+visualization_msgs::Marker blockMarker(const fragg::Map& map, fragg::BlockIndex block,
+                                       const MarkerStyle& style, const ros::Time& stamp,
+                                       int32_t id);
+
+/// Markers for the blocks changed since `ledger->publishedRevision()`: ADD (or modify) for a
+/// changed block with cells in `style.state`, DELETE for a shown block that lost them all or
+/// no longer exists. Updates the ledger to the map's revision.
+visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
+                                                    const ros::Time& stamp, MarkerLedger* ledger);
+
+/// A full republish (after reset or load, or for a late subscriber): a DELETEALL marker in
+/// `style.ns`, then one ADD per block with cells in `style.state`. Rebuilds the ledger.
+visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
+                                                const ros::Time& stamp, MarkerLedger* ledger);
+
+}  // namespace fragg_ros

@@ -1,0 +1,31 @@
+// sensor_msgs/PointCloud2 -> fragg::PointCloud (fragg_map_ros, stateless).
+//
+// Packed little-endian float32 x, y, z at offsets 0, 4, 8 (the common LiDAR and depth-camera
+// layout) are copied point by point with memcpy (one memcpy for the whole cloud when
+// point_step is 12); any other layout (other offsets, float64 fields, other byte order) goes
+// through a strided field reader. Organised clouds (height > 1) stay organised, NaN included.
+#pragma once
+
+#include <sensor_msgs/PointCloud2.h>
+
+#include <cstddef>
+#include <string>
+
+#include "fragg_map/point_cloud.h"
+
+namespace fragg_ros {
+
+/// How a message was converted (for statistics and tests).
+enum class CloudLayout { kPackedFloat32, kStrided };
+
+/// Converts `msg` into a cloud in the message's own frame. Throws fragg::InvalidArgument
+/// naming the problem for a malformed message: a missing x, y or z field, a field that is not
+/// FLOAT32 or FLOAT64 (e.g. INT16), a field ending past point_step, row_step smaller than
+/// width x point_step, data shorter than the points it declares, no points at all, or no
+/// finite point. `layout` (optional) tells which path converted it.
+fragg::PointCloud cloudFromMsg(const sensor_msgs::PointCloud2& msg, CloudLayout* layout = nullptr);
+
+/// Points of `cloud` with finite coordinates.
+size_t finitePointCount(const fragg::PointCloud& cloud);
+
+}  // namespace fragg_ros

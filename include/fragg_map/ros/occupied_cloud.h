@@ -1,0 +1,18 @@
+// fragg::Map -> sensor_msgs/PointCloud2 of the centres of its occupied voxels.
+#pragma once
+
+#include <ros/time.h>
+#include <sensor_msgs/PointCloud2.h>
+
+#include <string>
+
+#include "fragg_map/map.h"
+
+namespace fragg_ros {
+
+/// An unorganised cloud (height 1) with packed float32 fields x, y, z (point_step 12) holding
+/// the centre of every occupied voxel, in `frame_id`.
+sensor_msgs::PointCloud2 occupiedCloud(const fragg::Map& map, const std::string& frame_id,
+                                       const ros::Time& stamp);
+
+}  // namespace fragg_ros

@@ -1,0 +1,43 @@
+// The map server's parameters: MapParams and the sensor model (the core's structs, where the
+// defaults live) plus what only the ROS server needs. Names follow octomap_server where the
+// meaning is the same; config/default.yaml lists them all.
+#pragma once
+
+#include <ros/node_handle.h>
+#include <xmlrpcpp/XmlRpcValue.h>
+
+#include <limits>
+#include <string>
+
+#include "fragg_map/map_params.h"
+#include "fragg_map/sensor_model.h"
+
+namespace fragg_ros {
+
+struct ServerParams {
+  fragg::MapParams map;       ///< resolution, sensor_model/hit|miss|min|max, backend, raycast
+  fragg::SensorModel sensor;  ///< sensor/type|hfov|vfov, sensor_model/min_range|max_range
+  std::string frame_id = "map";
+  /// Points of a cloud outside [min, max] (map frame z) are not inserted.
+  double pointcloud_min_z_m = -std::numeric_limits<double>::infinity();
+  double pointcloud_max_z_m = std::numeric_limits<double>::infinity();
+  /// Heights projected into projected_map.
+  double occupancy_min_z_m = -std::numeric_limits<double>::infinity();
+  double occupancy_max_z_m = std::numeric_limits<double>::infinity();
+  bool latch = false;               ///< latched topics; full marker republish to late subscribers
+  bool publish_free_space = false;  ///< free_cells_vis_array
+  int queue_size = 5;               ///< clouds waiting for insertion; the oldest are dropped
+  double tf_tolerance_s = 0.5;      ///< how long a cloud may wait for its transform
+  double color_min_z_m = -1.0;      ///< marker colour ramp (markers/color_min_z)
+  double color_max_z_m = 4.0;       ///< marker colour ramp (markers/color_max_z)
+};
+
+/// Fills ServerParams from a struct of parameters (the private namespace as one
+/// XmlRpcValue; absent names keep their defaults) and validates every value. Throws
+/// fragg::InvalidArgument naming the parameter for a wrong type or an invalid value.
+ServerParams parseParameters(const XmlRpc::XmlRpcValue& params);
+
+/// Reads the node's private namespace and parses it as above.
+ServerParams readParameters(const ros::NodeHandle& private_nh);
+
+}  // namespace fragg_ros

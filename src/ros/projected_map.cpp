@@ -1,0 +1,62 @@
+// Column projection of the map between two heights into an OccupancyGrid.
+#include "fragg_map/ros/projected_map.h"
+
+#include <cmath>
+#include <cstdint>
+
+#include "fragg_map/errors.h"
+
+namespace fragg_ros {
+namespace {
+
+constexpr int8_t kUnknown = -1;
+constexpr int8_t kFree = 0;
+constexpr int8_t kOccupied = 100;
+
+}  // namespace
+
+nav_msgs::OccupancyGrid projectedMap(const fragg::Map& map, double min_z_m, double max_z_m,
+                                     const std::string& frame_id, const ros::Time& stamp) {
+  if (std::isnan(min_z_m) || std::isnan(max_z_m))
+    throw fragg::InvalidArgument("projected map heights must not be NaN");
+  if (min_z_m > max_z_m)
+    throw fragg::InvalidArgument("projected map: occupancy_min_z exceeds occupancy_max_z");
+  nav_msgs::OccupancyGrid grid;
+  grid.header.frame_id = frame_id;
+  grid.header.stamp = stamp;
+  grid.info.map_load_time = stamp;
+  const double res_m = map.resolution();
+  grid.info.resolution = static_cast<float>(res_m);
+  grid.info.origin.orientation.w = 1.0;
+  const fragg::KeyBounds bounds = map.bounds();
+  if (bounds.empty) return grid;
+  const int64_t width = int64_t{bounds.max.x} - bounds.min.x + 1;
+  const int64_t height = int64_t{bounds.max.y} - bounds.min.y + 1;
+  grid.info.width = static_cast<uint32_t>(width);
+  grid.info.height = static_cast<uint32_t>(height);
+  grid.info.origin.position.x = bounds.min.x * res_m;
+  grid.info.origin.position.y = bounds.min.y * res_m;
+  grid.info.origin.position.z = 0.0;
+  grid.data.assign(static_cast<size_t>(width * height), kUnknown);
+  const fragg::BlockMap& blocks = map.blocks();
+  blocks.forEach([&](fragg::BlockIndex i) {
+    const fragg::BlockKey key = blocks.meta(i).key;
+    const fragg::Block& b = blocks.block(i);
+    for (int c = 0; c < fragg::kCellsPerBlock; ++c) {
+      const fragg::CellState s = map.state(b.cells[c]);
+      if (s == fragg::CellState::kUnknown) continue;
+      const fragg::VoxelKey v = fragg::voxelKeyOf(key, c);
+      const double z_m = (v.z + 0.5) * res_m;
+      if (z_m < min_z_m || z_m > max_z_m) continue;
+      int8_t& cell = grid.data[static_cast<size_t>((int64_t{v.y} - bounds.min.y) * width +
+                                                   (int64_t{v.x} - bounds.min.x))];
+      if (s == fragg::CellState::kOccupied)
+        cell = kOccupied;
+      else if (cell == kUnknown)
+        cell = kFree;
+    }
+  });
+  return grid;
+}
+
+}  // namespace fragg_ros

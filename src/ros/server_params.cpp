@@ -1,0 +1,200 @@
+// Parameters of the map server: one read of the private namespace, typed lookups by path
+// ("sensor_model/hit"), validation naming the parameter.
+#include "fragg_map/ros/server_params.h"
+
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include "fragg_map/errors.h"
+
+namespace fragg_ros {
+namespace {
+
+using XmlRpc::XmlRpcValue;
+
+[[noreturn]] void badParam(const std::string& name, const std::string& problem) {
+  throw fragg::InvalidArgument("parameter '" + name + "': " + problem);
+}
+
+// The value at `path` ("a/b/c") in `root`, or nullptr when absent.
+const XmlRpcValue* lookup(const XmlRpcValue& root, const std::string& path) {
+  const XmlRpcValue* node = &root;
+  std::stringstream parts(path);
+  std::string part;
+  while (std::getline(parts, part, '/')) {
+    if (node->getType() != XmlRpcValue::TypeStruct || !node->hasMember(part)) return nullptr;
+    node = &(*const_cast<XmlRpcValue*>(node))[part];
+  }
+  return node;
+}
+
+void readDouble(const XmlRpcValue& root, const std::string& name, double* out) {
+  const XmlRpcValue* v = lookup(root, name);
+  if (!v) return;
+  XmlRpcValue copy = *v;
+  if (copy.getType() == XmlRpcValue::TypeDouble)
+    *out = static_cast<double>(copy);
+  else if (copy.getType() == XmlRpcValue::TypeInt)
+    *out = static_cast<int>(copy);
+  else
+    badParam(name, "expected a number");
+  if (std::isnan(*out)) badParam(name, "is NaN");
+}
+
+void readInt(const XmlRpcValue& root, const std::string& name, int* out) {
+  const XmlRpcValue* v = lookup(root, name);
+  if (!v) return;
+  XmlRpcValue copy = *v;
+  if (copy.getType() != XmlRpcValue::TypeInt) badParam(name, "expected an integer");
+  *out = static_cast<int>(copy);
+}
+
+void readBool(const XmlRpcValue& root, const std::string& name, bool* out) {
+  const XmlRpcValue* v = lookup(root, name);
+  if (!v) return;
+  XmlRpcValue copy = *v;
+  if (copy.getType() != XmlRpcValue::TypeBoolean) badParam(name, "expected true or false");
+  *out = static_cast<bool>(copy);
+}
+
+void readString(const XmlRpcValue& root, const std::string& name, std::string* out) {
+  const XmlRpcValue* v = lookup(root, name);
+  if (!v) return;
+  XmlRpcValue copy = *v;
+  if (copy.getType() != XmlRpcValue::TypeString) badParam(name, "expected a string");
+  *out = static_cast<std::string>(copy);
+}
+
+void requireProbability(const std::string& name, double p) {
+  if (!(p > 0.0 && p < 1.0)) badParam(name, "must be in (0, 1), got " + std::to_string(p));
+}
+
+void requireOrdered(const std::string& lo_name, double lo, const std::string& hi_name, double hi) {
+  if (lo > hi)
+    badParam(lo_name, std::to_string(lo) + " exceeds " + hi_name + " " + std::to_string(hi));
+}
+
+// Runs a core validate() and names the parameters it covers when it throws.
+template <typename Fn>
+void validateAs(const std::string& names, Fn&& validate) {
+  try {
+    validate();
+  } catch (const fragg::InvalidArgument& e) {
+    badParam(names, e.what());
+  }
+}
+
+void readSensor(const XmlRpcValue& root, ServerParams& p) {
+  std::string type = "auto", axis = "z";
+  double hfov = 0.0, vfov = 0.0, min_range = 0.0, max_range = -1.0;
+  double elevation_min = -M_PI / 2, elevation_max = M_PI / 2;
+  readString(root, "sensor/type", &type);
+  readDouble(root, "sensor/hfov", &hfov);
+  readDouble(root, "sensor/vfov", &vfov);
+  readString(root, "sensor/optical_axis", &axis);
+  readDouble(root, "sensor/elevation_min", &elevation_min);
+  readDouble(root, "sensor/elevation_max", &elevation_max);
+  readDouble(root, "sensor_model/min_range", &min_range);
+  readDouble(root, "sensor_model/max_range", &max_range);
+  fragg::SensorType sensor_type{};
+  validateAs("sensor/type", [&] { sensor_type = fragg::sensorTypeFromString(type); });
+  if (axis != "z" && axis != "x") badParam("sensor/optical_axis", "must be z or x");
+  if (!std::isfinite(min_range) || min_range < 0.0)
+    badParam("sensor_model/min_range", "must be >= 0 m");
+  if (!std::isfinite(max_range)) badParam("sensor_model/max_range", "must be finite");
+  if (max_range > 0.0 && max_range <= min_range)
+    badParam("sensor_model/max_range", "must exceed sensor_model/min_range (or be <= 0)");
+  switch (sensor_type) {
+    case fragg::SensorType::kPinhole:
+      if (!(hfov > 0.0 && hfov < M_PI)) badParam("sensor/hfov", "must be in (0, pi) rad");
+      if (!(vfov > 0.0 && vfov < M_PI)) badParam("sensor/vfov", "must be in (0, pi) rad");
+      p.sensor = fragg::SensorModel::pinhole(
+          hfov, vfov, min_range, max_range,
+          axis == "x" ? fragg::OpticalAxis::kXForward : fragg::OpticalAxis::kZForward);
+      break;
+    case fragg::SensorType::kSpinningLidar:
+      p.sensor =
+          fragg::SensorModel::spinningLidar(elevation_min, elevation_max, min_range, max_range);
+      break;
+    default:
+      p.sensor = fragg::SensorModel::autoFromCloud(min_range, max_range);
+  }
+  validateAs("sensor", [&] { p.sensor.validate(); });
+}
+
+}  // namespace
+
+ServerParams parseParameters(const XmlRpcValue& root) {
+  if (root.valid() && root.getType() != XmlRpcValue::TypeStruct)
+    badParam("~", "the private namespace is not a struct");
+  ServerParams p;
+  fragg::MapParams& m = p.map;
+  readDouble(root, "resolution", &m.resolution_m);
+  if (!(m.resolution_m > 0.0) || !std::isfinite(m.resolution_m))
+    badParam("resolution", "must be a positive number of metres");
+  readString(root, "frame_id", &p.frame_id);
+  if (p.frame_id.empty()) badParam("frame_id", "must not be empty");
+
+  readDouble(root, "sensor_model/hit", &m.occupancy.prob_hit);
+  readDouble(root, "sensor_model/miss", &m.occupancy.prob_miss);
+  readDouble(root, "sensor_model/min", &m.occupancy.clamp_min);
+  readDouble(root, "sensor_model/max", &m.occupancy.clamp_max);
+  readDouble(root, "unknown_band", &m.occupancy.unknown_band);
+  requireProbability("sensor_model/hit", m.occupancy.prob_hit);
+  requireProbability("sensor_model/miss", m.occupancy.prob_miss);
+  requireProbability("sensor_model/min", m.occupancy.clamp_min);
+  requireProbability("sensor_model/max", m.occupancy.clamp_max);
+  if (m.occupancy.prob_hit <= 0.5) badParam("sensor_model/hit", "must exceed 0.5");
+  if (m.occupancy.prob_miss >= 0.5) badParam("sensor_model/miss", "must be below 0.5");
+  requireOrdered("sensor_model/min", m.occupancy.clamp_min, "sensor_model/max",
+                 m.occupancy.clamp_max);
+  validateAs("sensor_model/* or unknown_band", [&] { m.occupancy.validate(); });
+
+  std::string backend = "auto", raycast = "dda";
+  readString(root, "backend", &backend);
+  readString(root, "raycast", &raycast);
+  validateAs("backend", [&] { m.backend = fragg::backendFromString(backend); });
+  validateAs("raycast", [&] { m.raycast = fragg::rayCastFromString(raycast); });
+  readBool(root, "clear_no_return_rays", &m.clear_no_return_rays);
+  readInt(root, "threads", &m.threads);
+  if (m.threads < 0) badParam("threads", "must be >= 0 (0 = every core)");
+  readBool(root, "culling/plane_memory", &m.culling.plane_memory);
+  readBool(root, "culling/rotation_coherence", &m.culling.rotation_coherence);
+  readBool(root, "culling/translation_coherence", &m.culling.translation_coherence);
+  readInt(root, "culling/coherence_ttl_scans", &m.culling.coherence_ttl_scans);
+  if (m.culling.coherence_ttl_scans < 1 || m.culling.coherence_ttl_scans > 32)
+    badParam("culling/coherence_ttl_scans", "must be in [1, 32]");
+  validateAs("resolution", [&] { m.validate(); });
+
+  readSensor(root, p);
+
+  readDouble(root, "pointcloud_min_z", &p.pointcloud_min_z_m);
+  readDouble(root, "pointcloud_max_z", &p.pointcloud_max_z_m);
+  requireOrdered("pointcloud_min_z", p.pointcloud_min_z_m, "pointcloud_max_z",
+                 p.pointcloud_max_z_m);
+  readDouble(root, "occupancy_min_z", &p.occupancy_min_z_m);
+  readDouble(root, "occupancy_max_z", &p.occupancy_max_z_m);
+  requireOrdered("occupancy_min_z", p.occupancy_min_z_m, "occupancy_max_z", p.occupancy_max_z_m);
+  readBool(root, "latch", &p.latch);
+  readBool(root, "publish_free_space", &p.publish_free_space);
+  readInt(root, "queue_size", &p.queue_size);
+  if (p.queue_size < 1) badParam("queue_size", "must be >= 1");
+  readDouble(root, "tf_tolerance", &p.tf_tolerance_s);
+  if (!(p.tf_tolerance_s >= 0.0) || !std::isfinite(p.tf_tolerance_s))
+    badParam("tf_tolerance", "must be a finite number of seconds >= 0");
+  readDouble(root, "markers/color_min_z", &p.color_min_z_m);
+  readDouble(root, "markers/color_max_z", &p.color_max_z_m);
+  if (!std::isfinite(p.color_min_z_m) || !std::isfinite(p.color_max_z_m) ||
+      !(p.color_min_z_m < p.color_max_z_m))
+    badParam("markers/color_min_z", "must be finite and below markers/color_max_z");
+  return p;
+}
+
+ServerParams readParameters(const ros::NodeHandle& private_nh) {
+  XmlRpcValue root;  // stays invalid (every default) when the namespace holds nothing
+  private_nh.getParam(private_nh.getNamespace(), root);
+  return parseParameters(root);
+}
+
+}  // namespace fragg_ros

@@ -1,0 +1,11 @@
+# fragg_map_ros (ROS builds only): stateless converters between ROS messages and the map, and
+# the server's parameters.
+set(FRAGG_ROS_SOURCES
+  ${CMAKE_CURRENT_LIST_DIR}/cloud_from_msg.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/height_color.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/block_markers.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/occupied_cloud.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/projected_map.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/server_params.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/timing_stats.cpp
+)

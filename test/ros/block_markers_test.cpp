@@ -1,0 +1,191 @@
+// Map -> per-block CUBE_LIST markers: content, incrementality (BlockMeta::changed_at), DELETE
+// for emptied and erased blocks, full republish, height colours.
+#include "fragg_map/ros/block_markers.h"
+
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "fragg_map/ros/height_color.h"
+#include "map_fixtures.h"
+
+namespace {
+
+using fragg_ros::MarkerLedger;
+using fragg_ros::MarkerStyle;
+using visualization_msgs::Marker;
+using visualization_msgs::MarkerArray;
+
+const ros::Time kStamp(12, 34);
+
+size_t countAction(const MarkerArray& a, int32_t action) {
+  size_t n = 0;
+  for (const Marker& m : a.markers) n += m.action == action;
+  return n;
+}
+
+// The block a marker's points lie in (all of them must share it).
+fragg::BlockKey blockOfMarker(const fragg::Map& map, const Marker& m) {
+  const fragg::BlockKey key =
+      fragg::blockKeyOf(map.keyOf(Eigen::Vector3d(m.points[0].x, m.points[0].y, m.points[0].z)));
+  for (const auto& p : m.points)
+    EXPECT_EQ(fragg::blockKeyOf(map.keyOf(Eigen::Vector3d(p.x, p.y, p.z))), key);
+  return key;
+}
+
+TEST(BlockMarkers, FirstUpdateShowsEveryOccupiedCellOncePerBlock) {
+  fragg::Map map(fragg_ros_test::cpuParams());
+  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  MarkerLedger ledger;
+  MarkerStyle style;
+  const MarkerArray a = fragg_ros::changedBlockMarkers(map, style, kStamp, &ledger);
+  const auto occupied = fragg_ros_test::centresIn(map, fragg::CellState::kOccupied);
+  ASSERT_FALSE(occupied.empty());
+  size_t points = 0;
+  std::set<int32_t> ids;
+  std::set<std::tuple<int, int, int>> blocks;
+  for (const Marker& m : a.markers) {
+    EXPECT_EQ(m.action, Marker::ADD);
+    EXPECT_EQ(m.type, Marker::CUBE_LIST);
+    EXPECT_EQ(m.header.frame_id, "map");
+    EXPECT_EQ(m.header.stamp, kStamp);
+    EXPECT_EQ(m.ns, "occupied");
+    EXPECT_DOUBLE_EQ(m.scale.x, 0.1);
+    ASSERT_FALSE(m.points.empty());
+    EXPECT_EQ(m.points.size(), m.colors.size());
+    const fragg::BlockKey key = blockOfMarker(map, m);
+    EXPECT_TRUE(blocks.insert({key.x, key.y, key.z}).second) << "two markers for one block";
+    EXPECT_TRUE(ids.insert(m.id).second) << "duplicate id " << m.id;
+    EXPECT_EQ(ledger.idOf(key), m.id);
+    for (const auto& p : m.points)
+      EXPECT_EQ(map.query(Eigen::Vector3d(p.x, p.y, p.z)), fragg::CellState::kOccupied);
+    points += m.points.size();
+  }
+  EXPECT_EQ(points, occupied.size());
+  EXPECT_EQ(ledger.shownBlocks(), a.markers.size());
+  EXPECT_EQ(ledger.publishedRevision(), map.revision());
+}
+
+TEST(BlockMarkers, NothingChangedMeansNothingSent) {
+  fragg::Map map(fragg_ros_test::cpuParams());
+  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  MarkerLedger ledger;
+  fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  EXPECT_TRUE(fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.empty());
+}
+
+TEST(BlockMarkers, SecondScanSendsOnlyTheBlocksItChanged) {
+  fragg::Map map(fragg_ros_test::cpuParams());
+  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  MarkerLedger ledger;
+  const MarkerArray first = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  ASSERT_FALSE(first.markers.empty());
+  const uint64_t before = map.revision();
+  // A second wall 10 m to the side (y in [9, 11] m): its rays never reach the first wall's
+  // blocks (y in [-1, 1] m), so only its own blocks change.
+  fragg_ros_test::insertWall(map, Eigen::Vector3d(0.0, 10.0, 0.0), 3.0);
+  const MarkerArray second = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  std::set<std::tuple<int, int, int>> far_occupied_blocks;
+  for (const Eigen::Vector3d& c : fragg_ros_test::centresIn(map, fragg::CellState::kOccupied)) {
+    const fragg::BlockKey k = fragg::blockKeyOf(map.keyOf(c));
+    if (c.y() > 8.0) far_occupied_blocks.insert({k.x, k.y, k.z});
+  }
+  ASSERT_FALSE(far_occupied_blocks.empty());
+  EXPECT_EQ(second.markers.size(), far_occupied_blocks.size());
+  std::set<int32_t> first_ids;
+  for (const Marker& m : first.markers) first_ids.insert(m.id);
+  for (const Marker& m : second.markers) {
+    ASSERT_EQ(m.action, Marker::ADD);
+    const fragg::BlockKey k = blockOfMarker(map, m);
+    EXPECT_EQ(far_occupied_blocks.count({k.x, k.y, k.z}), 1u);
+    EXPECT_GT(map.blocks().meta(map.blocks().find(k)).changed_at, before);
+    EXPECT_EQ(first_ids.count(m.id), 0u) << "a new block reused a shown block's id";
+  }
+  EXPECT_EQ(ledger.shownBlocks(), first.markers.size() + second.markers.size());
+  // Re-observing the first wall sends some of its blocks again, under their old ids.
+  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  const MarkerArray third = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  ASSERT_FALSE(third.markers.empty());
+  for (const Marker& m : third.markers) EXPECT_EQ(first_ids.count(m.id), 1u);
+}
+
+TEST(BlockMarkers, BlockThatLosesItsOccupiedCellsIsDeleted) {
+  fragg::Map map(fragg_ros_test::cpuParams());
+  const fragg::VoxelKey a{1, 2, 3}, b{40, 2, 3};
+  fragg_ros_test::setCell(map, a, fragg::CellState::kOccupied);
+  fragg_ros_test::setCell(map, b, fragg::CellState::kOccupied);
+  MarkerLedger ledger;
+  const MarkerArray first = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  ASSERT_EQ(first.markers.size(), 2u);
+  const int32_t id_a = ledger.idOf(fragg::blockKeyOf(a));
+  ASSERT_GE(id_a, 0);
+  fragg_ros_test::setCell(map, a, fragg::CellState::kFree);  // the block still exists
+  const MarkerArray second = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  ASSERT_EQ(second.markers.size(), 1u);
+  EXPECT_EQ(second.markers[0].action, Marker::DELETE);
+  EXPECT_EQ(second.markers[0].id, id_a);
+  EXPECT_EQ(second.markers[0].ns, "occupied");
+  EXPECT_EQ(ledger.idOf(fragg::blockKeyOf(a)), -1);
+  EXPECT_EQ(ledger.shownBlocks(), 1u);
+  // The free-space topic shows that block now.
+  MarkerLedger free_ledger;
+  MarkerStyle free_style;
+  free_style.ns = "free";
+  free_style.state = fragg::CellState::kFree;
+  const MarkerArray free = fragg_ros::changedBlockMarkers(map, free_style, kStamp, &free_ledger);
+  ASSERT_EQ(free.markers.size(), 1u);
+  EXPECT_EQ(free.markers[0].points.size(), 1u);
+  EXPECT_EQ(free.markers[0].ns, "free");
+}
+
+TEST(BlockMarkers, ClearedBoxDeletesTheErasedBlocks) {
+  fragg::Map map(fragg_ros_test::cpuParams());
+  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  MarkerLedger ledger;
+  const MarkerArray first = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  std::set<int32_t> shown;
+  for (const Marker& m : first.markers) shown.insert(m.id);
+  map.clearBox(Eigen::Vector3d(-100, -100, -100), Eigen::Vector3d(100, 100, 100));
+  ASSERT_TRUE(map.blocks().empty());
+  const MarkerArray second = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  EXPECT_EQ(countAction(second, Marker::DELETE), shown.size());
+  EXPECT_EQ(second.markers.size(), shown.size());
+  for (const Marker& m : second.markers) EXPECT_EQ(shown.count(m.id), 1u);
+  EXPECT_EQ(ledger.shownBlocks(), 0u);
+}
+
+TEST(BlockMarkers, FullRepublishStartsWithDeleteAll) {
+  fragg::Map map(fragg_ros_test::cpuParams());
+  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  MarkerLedger incremental, full;
+  const MarkerArray inc = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &incremental);
+  const MarkerArray all = fragg_ros::allBlockMarkers(map, MarkerStyle(), kStamp, &full);
+  ASSERT_EQ(all.markers.size(), inc.markers.size() + 1);
+  EXPECT_EQ(all.markers[0].action, Marker::DELETEALL);
+  EXPECT_EQ(countAction(all, Marker::ADD), inc.markers.size());
+  EXPECT_EQ(full.shownBlocks(), incremental.shownBlocks());
+  // After a reset the full republish is the DELETEALL alone.
+  map.reset();
+  const MarkerArray after_reset = fragg_ros::allBlockMarkers(map, MarkerStyle(), kStamp, &full);
+  ASSERT_EQ(after_reset.markers.size(), 1u);
+  EXPECT_EQ(after_reset.markers[0].action, Marker::DELETEALL);
+  EXPECT_EQ(full.shownBlocks(), 0u);
+}
+
+TEST(HeightColor, RampEndsAndClamping) {
+  const auto low = fragg_ros::heightColor(-5.0, 0.0, 2.0, 0.5f);
+  EXPECT_FLOAT_EQ(low.r, 1.f);
+  EXPECT_FLOAT_EQ(low.g, 0.f);
+  EXPECT_FLOAT_EQ(low.b, 0.f);
+  EXPECT_FLOAT_EQ(low.a, 0.5f);
+  const auto high = fragg_ros::heightColor(9.0, 0.0, 2.0, 1.f);
+  EXPECT_FLOAT_EQ(high.r, 1.f);
+  EXPECT_FLOAT_EQ(high.g, 0.f);
+  EXPECT_FLOAT_EQ(high.b, 1.f);
+  const auto mid = fragg_ros::heightColor(1.0, 0.0, 2.0, 1.f);  // hue 2.5 sectors: cyan-green
+  EXPECT_FLOAT_EQ(mid.r, 0.f);
+  EXPECT_FLOAT_EQ(mid.g, 1.f);
+  EXPECT_FLOAT_EQ(mid.b, 0.5f);
+}
+
+}  // namespace

@@ -1,0 +1,221 @@
+// parseParameters: defaults, octomap_server names, and one failure per invalid value, naming
+// the parameter.
+#include "fragg_map/ros/server_params.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "fragg_map/errors.h"
+
+namespace {
+
+using XmlRpc::XmlRpcValue;
+
+// Sets root["a"]["b"] = value for path "a/b".
+void set(XmlRpcValue& root, const std::string& path, const XmlRpcValue& value) {
+  XmlRpcValue* node = &root;
+  size_t start = 0;
+  for (size_t slash; (slash = path.find('/', start)) != std::string::npos; start = slash + 1)
+    node = &(*node)[path.substr(start, slash - start)];
+  (*node)[path.substr(start)] = value;
+}
+
+void expectRejected(const std::string& name, const XmlRpcValue& value) {
+  XmlRpcValue root;
+  set(root, name, value);
+  try {
+    fragg_ros::parseParameters(root);
+    FAIL() << name << " = " << const_cast<XmlRpcValue&>(value).toXml() << " was accepted";
+  } catch (const fragg::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("'" + name + "'"), std::string::npos)
+        << "the error does not name " << name << ": " << e.what();
+  }
+}
+
+TEST(ServerParams, EmptyNamespaceGivesTheCoreDefaults) {
+  const fragg_ros::ServerParams p = fragg_ros::parseParameters(XmlRpcValue());
+  const fragg::MapParams core;
+  EXPECT_EQ(p.map.resolution_m, core.resolution_m);
+  EXPECT_EQ(p.map.occupancy.prob_hit, core.occupancy.prob_hit);
+  EXPECT_EQ(p.map.occupancy.clamp_max, core.occupancy.clamp_max);
+  EXPECT_EQ(p.map.backend, core.backend);
+  EXPECT_EQ(p.frame_id, "map");
+  EXPECT_EQ(p.sensor.type, fragg::SensorType::kAuto);
+  EXPECT_LT(p.sensor.max_range_m, 0.0);
+  EXPECT_EQ(p.queue_size, 5);
+  EXPECT_FALSE(p.latch);
+  EXPECT_TRUE(std::isinf(p.pointcloud_min_z_m));
+}
+
+TEST(ServerParams, ReadsEveryName) {
+  XmlRpcValue root;
+  set(root, "resolution", 0.1);
+  set(root, "frame_id", std::string("odom"));
+  set(root, "sensor_model/hit", 0.8);
+  set(root, "sensor_model/miss", 0.3);
+  set(root, "sensor_model/min", 0.1);
+  set(root, "sensor_model/max", 0.95);
+  set(root, "sensor_model/max_range", 30);  // an int where a double is expected
+  set(root, "sensor_model/min_range", 0.5);
+  set(root, "pointcloud_min_z", -2.0);
+  set(root, "pointcloud_max_z", 5.0);
+  set(root, "occupancy_min_z", 0.1);
+  set(root, "occupancy_max_z", 1.8);
+  set(root, "latch", true);
+  set(root, "publish_free_space", true);
+  set(root, "backend", std::string("cpu"));
+  set(root, "raycast", std::string("bresenham"));
+  set(root, "sensor/type", std::string("pinhole"));
+  set(root, "sensor/hfov", 1.2);
+  set(root, "sensor/vfov", 0.9);
+  set(root, "queue_size", 3);
+  set(root, "tf_tolerance", 0.25);
+  const fragg_ros::ServerParams p = fragg_ros::parseParameters(root);
+  EXPECT_EQ(p.map.resolution_m, 0.1);
+  EXPECT_EQ(p.frame_id, "odom");
+  EXPECT_EQ(p.map.occupancy.prob_hit, 0.8);
+  EXPECT_EQ(p.map.occupancy.prob_miss, 0.3);
+  EXPECT_EQ(p.map.occupancy.clamp_min, 0.1);
+  EXPECT_EQ(p.map.occupancy.clamp_max, 0.95);
+  EXPECT_EQ(p.sensor.max_range_m, 30.0);
+  EXPECT_EQ(p.sensor.min_range_m, 0.5);
+  EXPECT_EQ(p.pointcloud_min_z_m, -2.0);
+  EXPECT_EQ(p.pointcloud_max_z_m, 5.0);
+  EXPECT_EQ(p.occupancy_min_z_m, 0.1);
+  EXPECT_EQ(p.occupancy_max_z_m, 1.8);
+  EXPECT_TRUE(p.latch);
+  EXPECT_TRUE(p.publish_free_space);
+  EXPECT_EQ(p.map.backend, fragg::Backend::kCpu);
+  EXPECT_EQ(p.map.raycast, fragg::RayCast::kBresenham);
+  EXPECT_EQ(p.sensor.type, fragg::SensorType::kPinhole);
+  EXPECT_EQ(p.sensor.hfov_rad, 1.2);
+  EXPECT_EQ(p.sensor.vfov_rad, 0.9);
+  EXPECT_EQ(p.queue_size, 3);
+  EXPECT_EQ(p.tf_tolerance_s, 0.25);
+}
+
+TEST(ServerParams, LidarSensor) {
+  XmlRpcValue root;
+  set(root, "sensor/type", std::string("lidar"));
+  set(root, "sensor/elevation_min", -0.3);
+  set(root, "sensor/elevation_max", 0.3);
+  const fragg_ros::ServerParams p = fragg_ros::parseParameters(root);
+  EXPECT_EQ(p.sensor.type, fragg::SensorType::kSpinningLidar);
+  EXPECT_EQ(p.sensor.elevation_min_rad, -0.3);
+  EXPECT_EQ(p.sensor.elevation_max_rad, 0.3);
+}
+
+TEST(ServerParams, InvalidValuesNameTheParameter) {
+  expectRejected("resolution", 0.0);
+  expectRejected("resolution", -0.05);
+  expectRejected("resolution", std::string("fine"));
+  expectRejected("resolution", std::nan(""));
+  expectRejected("frame_id", std::string(""));
+  expectRejected("sensor_model/hit", 0.4);
+  expectRejected("sensor_model/hit", 1.5);
+  expectRejected("sensor_model/miss", 0.6);
+  expectRejected("sensor_model/min", 0.99);
+  expectRejected("sensor_model/max", 0.0);
+  expectRejected("sensor_model/min_range", -1.0);
+  expectRejected("backend", std::string("tpu"));
+  expectRejected("raycast", std::string("bvh"));
+  expectRejected("sensor/type", std::string("sonar"));
+  expectRejected("queue_size", 0);
+  expectRejected("queue_size", 2.5);
+  expectRejected("tf_tolerance", -0.1);
+  expectRejected("latch", 1);
+  expectRejected("threads", -1);
+  expectRejected("culling/coherence_ttl_scans", 0);
+}
+
+TEST(ServerParams, InconsistentPairsNameTheParameter) {
+  XmlRpcValue root;
+  set(root, "pointcloud_min_z", 2.0);
+  set(root, "pointcloud_max_z", 1.0);
+  EXPECT_THROW(
+      {
+        try {
+          fragg_ros::parseParameters(root);
+        } catch (const fragg::InvalidArgument& e) {
+          EXPECT_NE(std::string(e.what()).find("'pointcloud_min_z'"), std::string::npos);
+          throw;
+        }
+      },
+      fragg::InvalidArgument);
+  XmlRpcValue pinhole;
+  set(pinhole, "sensor/type", std::string("pinhole"));  // no hfov/vfov
+  EXPECT_THROW(fragg_ros::parseParameters(pinhole), fragg::InvalidArgument);
+  XmlRpcValue ranges;
+  set(ranges, "sensor_model/min_range", 5.0);
+  set(ranges, "sensor_model/max_range", 2.0);
+  EXPECT_THROW(fragg_ros::parseParameters(ranges), fragg::InvalidArgument);
+  XmlRpcValue occupancy;
+  set(occupancy, "occupancy_min_z", 3.0);
+  set(occupancy, "occupancy_max_z", 0.0);
+  EXPECT_THROW(fragg_ros::parseParameters(occupancy), fragg::InvalidArgument);
+  XmlRpcValue not_a_struct(3);
+  EXPECT_THROW(fragg_ros::parseParameters(not_a_struct), fragg::InvalidArgument);
+}
+
+}  // namespace
+
+namespace {
+
+// The parameters of config/*.yaml files loaded in order, through yaml_to_xmlrpc.py.
+XmlRpcValue loadYaml(const std::vector<std::string>& files) {
+  std::string cmd = std::string(FRAGG_PYTHON3) + " " + FRAGG_YAML_TO_XMLRPC;
+  for (const std::string& f : files) cmd += " " + std::string(FRAGG_CONFIG_DIR) + "/" + f;
+  FILE* pipe = popen(cmd.c_str(), "r");
+  EXPECT_NE(pipe, nullptr);
+  std::string xml;
+  char buf[4096];
+  for (size_t n; pipe && (n = fread(buf, 1, sizeof buf, pipe)) > 0;) xml.append(buf, n);
+  EXPECT_EQ(pipe ? pclose(pipe) : -1, 0) << cmd;
+  int offset = 0;
+  XmlRpcValue v(xml, &offset);
+  EXPECT_TRUE(v.valid()) << xml;
+  return v;
+}
+
+TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
+  const fragg_ros::ServerParams p = fragg_ros::parseParameters(loadYaml({"default.yaml"}));
+  const fragg_ros::ServerParams d = fragg_ros::parseParameters(XmlRpcValue());
+  EXPECT_EQ(p.map.resolution_m, d.map.resolution_m);
+  EXPECT_EQ(p.map.occupancy.prob_hit, d.map.occupancy.prob_hit);
+  EXPECT_EQ(p.map.occupancy.prob_miss, d.map.occupancy.prob_miss);
+  EXPECT_EQ(p.map.occupancy.clamp_min, d.map.occupancy.clamp_min);
+  EXPECT_EQ(p.map.occupancy.clamp_max, d.map.occupancy.clamp_max);
+  EXPECT_EQ(p.map.occupancy.unknown_band, d.map.occupancy.unknown_band);
+  EXPECT_EQ(p.sensor.type, d.sensor.type);
+  EXPECT_EQ(p.sensor.max_range_m, d.sensor.max_range_m);
+  EXPECT_EQ(p.pointcloud_min_z_m, d.pointcloud_min_z_m);
+  EXPECT_EQ(p.occupancy_max_z_m, d.occupancy_max_z_m);
+  EXPECT_EQ(p.queue_size, d.queue_size);
+  EXPECT_EQ(p.tf_tolerance_s, d.tf_tolerance_s);
+  EXPECT_EQ(p.latch, d.latch);
+  EXPECT_EQ(p.color_max_z_m, d.color_max_z_m);
+}
+
+TEST(ServerParamsConfig, LidarYaml) {
+  const fragg_ros::ServerParams p =
+      fragg_ros::parseParameters(loadYaml({"default.yaml", "lidar.yaml"}));
+  EXPECT_EQ(p.sensor.type, fragg::SensorType::kSpinningLidar);
+  EXPECT_EQ(p.sensor.max_range_m, 30.0);
+  EXPECT_EQ(p.occupancy_max_z_m, 2.0);
+  EXPECT_EQ(p.queue_size, 3);
+}
+
+TEST(ServerParamsConfig, DepthCameraYaml) {
+  const fragg_ros::ServerParams p =
+      fragg_ros::parseParameters(loadYaml({"default.yaml", "depth_camera.yaml"}));
+  EXPECT_EQ(p.sensor.type, fragg::SensorType::kPinhole);
+  EXPECT_EQ(p.map.resolution_m, 0.02);
+  EXPECT_NEAR(p.sensor.hfov_rad, 58.0 * M_PI / 180.0, 1e-4);
+  EXPECT_EQ(p.sensor.max_range_m, 4.0);
+}
+
+}  // namespace

@@ -1,0 +1,97 @@
+// The map server's ROS-free parts: the drop-oldest cloud queue and the timing statistics.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <thread>
+#include <vector>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/ros/drop_oldest_queue.h"
+#include "fragg_map/ros/timing_stats.h"
+
+namespace {
+
+using fragg_ros::DropOldestQueue;
+
+TEST(DropOldestQueue, KeepsTheNewestAndCountsTheDropped) {
+  DropOldestQueue<int> q(3);
+  EXPECT_FALSE(q.push(1));
+  EXPECT_FALSE(q.push(2));
+  EXPECT_FALSE(q.push(3));
+  EXPECT_TRUE(q.push(4));  // drops 1
+  EXPECT_TRUE(q.push(5));  // drops 2
+  EXPECT_EQ(q.size(), 3u);
+  EXPECT_EQ(q.dropped(), 2u);
+  int v = 0;
+  for (int want : {3, 4, 5}) {
+    ASSERT_TRUE(q.pop(&v));
+    EXPECT_EQ(v, want);
+  }
+  EXPECT_EQ(q.size(), 0u);
+}
+
+TEST(DropOldestQueue, CloseWakesAWaitingConsumer) {
+  DropOldestQueue<int> q(2);
+  std::atomic<bool> returned{false};
+  bool result = true;
+  std::thread consumer([&] {
+    int v;
+    result = q.pop(&v);
+    returned = true;
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_FALSE(returned.load());
+  q.close();
+  consumer.join();
+  EXPECT_FALSE(result);
+  EXPECT_FALSE(q.push(7));  // discarded after close
+  EXPECT_EQ(q.size(), 0u);
+}
+
+TEST(DropOldestQueue, ProducerConsumerLosesNothingButTheCountedDrops) {
+  DropOldestQueue<int> q(4);
+  std::vector<int> got;
+  std::thread consumer([&] {
+    int v;
+    while (q.pop(&v)) {
+      got.push_back(v);
+      if (v == 999) return;
+    }
+  });
+  for (int i = 0; i < 1000; ++i) q.push(i);
+  consumer.join();
+  q.close();
+  EXPECT_EQ(got.size() + q.dropped(), 1000u);
+  for (size_t i = 1; i < got.size(); ++i) EXPECT_LT(got[i - 1], got[i]);  // order kept
+  EXPECT_EQ(got.back(), 999);  // the newest always survives
+}
+
+TEST(DropOldestQueue, ZeroCapacityIsRejected) {
+  EXPECT_THROW(DropOldestQueue<int>(0), fragg::InvalidArgument);
+}
+
+TEST(TimingStats, LastMeanAndP99) {
+  fragg_ros::TimingStats t(1000);
+  EXPECT_EQ(t.percentileMs(0.99), 0.0);
+  for (int i = 1; i <= 100; ++i) t.add(i);
+  EXPECT_EQ(t.count(), 100u);
+  EXPECT_EQ(t.lastMs(), 100.0);
+  EXPECT_DOUBLE_EQ(t.meanMs(), 50.5);
+  EXPECT_EQ(t.percentileMs(0.99), 99.0);
+  EXPECT_EQ(t.percentileMs(0.5), 50.0);
+  t.clear();
+  EXPECT_EQ(t.count(), 0u);
+  EXPECT_EQ(t.meanMs(), 0.0);
+}
+
+TEST(TimingStats, PercentileFollowsTheWindowMeanFollowsEverything) {
+  fragg_ros::TimingStats t(10);
+  for (int i = 0; i < 10; ++i) t.add(1000.0);
+  for (int i = 0; i < 10; ++i) t.add(1.0);  // pushes every 1000 out of the window
+  EXPECT_EQ(t.percentileMs(0.99), 1.0);
+  EXPECT_DOUBLE_EQ(t.meanMs(), 500.5);
+  EXPECT_THROW(fragg_ros::TimingStats(0), fragg::InvalidArgument);
+}
+
+}  // namespace
