@@ -6,6 +6,7 @@ set(FRAGG_ROS_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/block_markers.cpp
   ${CMAKE_CURRENT_LIST_DIR}/occupied_cloud.cpp
   ${CMAKE_CURRENT_LIST_DIR}/projected_map.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/frustum_marker.cpp
   ${CMAKE_CURRENT_LIST_DIR}/server_params.cpp
   ${CMAKE_CURRENT_LIST_DIR}/timing_stats.cpp
 )

@@ -93,3 +93,44 @@ TEST(ProjectedMap, EmptyMapAndBadHeights) {
 }
 
 }  // namespace
+
+#include "fragg_map/ros/frustum_marker.h"
+
+namespace {
+
+TEST(FrustumMarker, PinholePyramidInTheMapFrame) {
+  const fragg::SensorModel cam = fragg::SensorModel::pinhole(M_PI / 2, M_PI / 2, 0.0, 2.0);
+  Eigen::Isometry3d T_map_sensor = Eigen::Isometry3d::Identity();
+  T_map_sensor.translation() = Eigen::Vector3d(1.0, 2.0, 3.0);
+  const visualization_msgs::Marker m = fragg_ros::frustumMarker(cam, T_map_sensor, "map", kStamp);
+  EXPECT_EQ(m.type, visualization_msgs::Marker::LINE_LIST);
+  ASSERT_EQ(m.points.size(), 16u);  // 4 edges from the apex + 4 far-plane edges
+  for (size_t i = 0; i < m.points.size(); i += 2) {
+    const Eigen::Vector3d a(m.points[i].x, m.points[i].y, m.points[i].z);
+    const Eigen::Vector3d b(m.points[i + 1].x, m.points[i + 1].y, m.points[i + 1].z);
+    if (i % 4 == 0) {
+      EXPECT_LT((a - T_map_sensor.translation()).norm(), 1e-12);  // from the apex
+      EXPECT_NEAR((b - a).norm(), 2.0, 1e-9);                     // to max range
+      EXPECT_GT(b.z(), 3.0);                                      // optical axis is +z
+    }
+  }
+}
+
+TEST(FrustumMarker, LidarRimsAtMaxRangeAndBadModels) {
+  const fragg::SensorModel lidar = fragg::SensorModel::spinningLidar(-0.3, 0.2, 0.0, 10.0);
+  const visualization_msgs::Marker m =
+      fragg_ros::frustumMarker(lidar, Eigen::Isometry3d::Identity(), "map", kStamp, 8);
+  ASSERT_FALSE(m.points.empty());
+  for (const auto& p : m.points) {
+    const double r = Eigen::Vector3d(p.x, p.y, p.z).norm();
+    EXPECT_TRUE(r < 1e-12 || std::abs(r - 10.0) < 1e-9) << r;
+  }
+  EXPECT_THROW(fragg_ros::frustumMarker(fragg::SensorModel::autoFromCloud(0.0, 5.0),
+                                        Eigen::Isometry3d::Identity(), "map", kStamp),
+               fragg::InvalidArgument);
+  EXPECT_THROW(fragg_ros::frustumMarker(fragg::SensorModel::spinningLidar(-0.3, 0.2, 0.0, -1.0),
+                                        Eigen::Isometry3d::Identity(), "map", kStamp),
+               fragg::InvalidArgument);
+}
+
+}  // namespace

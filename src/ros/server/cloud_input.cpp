@@ -1,0 +1,130 @@
+// cloud_in subscriber, drop-oldest queue and the insertion thread.
+#include "cloud_input.h"
+
+#include <ros/console.h>
+#include <tf2/exceptions.h>
+#include <tf2_eigen/tf2_eigen.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/ros/cloud_from_msg.h"
+
+namespace fragg_ros {
+namespace {
+
+std::string withoutLeadingSlash(const std::string& frame) {
+  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
+}
+
+// Points whose map-frame height is outside [min_z, max_z] become NaN (organised clouds keep
+// their layout; NaN points are skipped by the map).
+void filterHeight(const Eigen::Isometry3d& T_map_sensor, double min_z_m, double max_z_m,
+                  fragg::PointCloud* cloud) {
+  if (std::isinf(min_z_m) && std::isinf(max_z_m)) return;
+  const Eigen::Vector3d row_z = T_map_sensor.linear().row(2).transpose();
+  const double tz = T_map_sensor.translation().z();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (Eigen::Vector3f& p : cloud->points_S) {
+    const double z_m = row_z.dot(p.cast<double>()) + tz;
+    if (z_m < min_z_m || z_m > max_z_m) p.setConstant(nan);
+  }
+}
+
+}  // namespace
+
+CloudInput::CloudInput(ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
+                       SharedMap* shared, ServerStats* stats, InsertedFn on_inserted)
+    : params_(params),
+      tf_(tf),
+      shared_(shared),
+      stats_(stats),
+      on_inserted_(std::move(on_inserted)),
+      queue_(static_cast<size_t>(params.queue_size)) {
+  worker_ = std::thread([this] { run(); });
+  sub_ = nh.subscribe("cloud_in", static_cast<uint32_t>(params_.queue_size), &CloudInput::onCloud,
+                      this);
+}
+
+CloudInput::~CloudInput() {
+  sub_.shutdown();
+  stopping_ = true;
+  queue_.close();
+  if (worker_.joinable()) worker_.join();
+}
+
+void CloudInput::onCloud(const sensor_msgs::PointCloud2::ConstPtr& msg) {
+  if (queue_.push(msg)) {
+    stats_->addDroppedQueueFull();
+    ROS_WARN_THROTTLE(5.0,
+                      "fragg_map: clouds arrive faster than they are inserted; dropped the "
+                      "oldest waiting cloud (%lu dropped so far, queue_size %d)",
+                      static_cast<unsigned long>(queue_.dropped()), params_.queue_size);
+  }
+}
+
+void CloudInput::run() {
+  sensor_msgs::PointCloud2::ConstPtr msg;
+  while (queue_.pop(&msg)) {
+    try {
+      process(*msg);
+    } catch (const fragg::InvalidArgument& e) {
+      stats_->addRejected();
+      ROS_ERROR_THROTTLE(5.0, "fragg_map: rejected cloud from '%s': %s",
+                         msg->header.frame_id.c_str(), e.what());
+    } catch (const std::exception& e) {
+      stats_->addRejected();
+      ROS_ERROR_THROTTLE(5.0, "fragg_map: cloud from '%s' not inserted: %s",
+                         msg->header.frame_id.c_str(), e.what());
+    }
+  }
+}
+
+bool CloudInput::waitForTransform(const sensor_msgs::PointCloud2& msg,
+                                  Eigen::Isometry3d* T_map_sensor) {
+  const std::string source = withoutLeadingSlash(msg.header.frame_id);
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::duration<double>(params_.tf_tolerance_s);
+  std::string error;
+  while (!stopping_) {
+    if (tf_.canTransform(params_.frame_id, source, msg.header.stamp, &error)) {
+      *T_map_sensor =
+          tf2::transformToEigen(tf_.lookupTransform(params_.frame_id, source, msg.header.stamp));
+      return true;
+    }
+    if (std::chrono::steady_clock::now() >= deadline) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  if (stopping_) return false;
+  stats_->addDroppedNoTf();
+  ROS_WARN_THROTTLE(5.0,
+                    "fragg_map: no transform %s <- %s at %.3f within tf_tolerance %.2f s; "
+                    "cloud dropped (%lu so far): %s",
+                    params_.frame_id.c_str(), source.c_str(), msg.header.stamp.toSec(),
+                    params_.tf_tolerance_s, static_cast<unsigned long>(stats_->droppedNoTf()),
+                    error.c_str());
+  return false;
+}
+
+void CloudInput::process(const sensor_msgs::PointCloud2& msg) {
+  if (msg.header.frame_id.empty()) throw fragg::InvalidArgument("cloud has no frame_id");
+  fragg::PointCloud cloud = cloudFromMsg(msg);  // validate before waiting for tf
+  Eigen::Isometry3d T_map_sensor;
+  if (!waitForTransform(msg, &T_map_sensor)) return;
+  filterHeight(T_map_sensor, params_.pointcloud_min_z_m, params_.pointcloud_max_z_m, &cloud);
+  const fragg::SensorModel sensor = fragg::resolveAutoSensor(params_.sensor, cloud);
+  const int64_t stamp_ns = static_cast<int64_t>(msg.header.stamp.toNSec());
+  const auto start = std::chrono::steady_clock::now();
+  {
+    std::lock_guard<std::mutex> lock(shared_->mutex);
+    shared_->map.insert(cloud, T_map_sensor, sensor, stamp_ns);
+  }
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  stats_->addInsertion(cloud.size(), ms);
+  if (on_inserted_) on_inserted_(msg.header.stamp, sensor, T_map_sensor);
+}
+
+}  // namespace fragg_ros

@@ -1,0 +1,57 @@
+// Input of the map server: cloud_in -> bounded drop-oldest queue -> insertion thread. The
+// thread waits for each cloud's transform to frame_id at the cloud's stamp (up to
+// tf_tolerance of wall time; then the cloud is dropped and counted), converts the cloud,
+// filters it by height in the map frame and inserts it, so the subscriber thread never does
+// more than enqueue.
+//
+// Why not tf2_ros::MessageFilter: Debian's MessageFilter has no per-message timeout (a cloud
+// whose tf never comes waits until its queue overflows), and it would run the callback on the
+// subscriber's queue; waiting in the insertion thread gives both the bound and the threading.
+#pragma once
+
+#include <ros/node_handle.h>
+#include <ros/subscriber.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_ros/buffer.h>
+
+#include <atomic>
+#include <functional>
+#include <thread>
+
+#include "fragg_map/ros/drop_oldest_queue.h"
+#include "fragg_map/ros/server_params.h"
+#include "server_stats.h"
+#include "shared_map.h"
+
+namespace fragg_ros {
+
+class CloudInput {
+ public:
+  /// Called on the insertion thread after each insertion (the map is not locked).
+  using InsertedFn = std::function<void(const ros::Time& stamp, const fragg::SensorModel&,
+                                        const Eigen::Isometry3d& T_map_sensor)>;
+
+  CloudInput(ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
+             SharedMap* shared, ServerStats* stats, InsertedFn on_inserted);
+  ~CloudInput();  ///< stops the insertion thread
+  CloudInput(const CloudInput&) = delete;
+  CloudInput& operator=(const CloudInput&) = delete;
+
+ private:
+  void onCloud(const sensor_msgs::PointCloud2::ConstPtr& msg);
+  void run();
+  void process(const sensor_msgs::PointCloud2& msg);
+  bool waitForTransform(const sensor_msgs::PointCloud2& msg, Eigen::Isometry3d* T_map_sensor);
+
+  const ServerParams params_;
+  const tf2_ros::Buffer& tf_;
+  SharedMap* shared_;
+  ServerStats* stats_;
+  InsertedFn on_inserted_;
+  DropOldestQueue<sensor_msgs::PointCloud2::ConstPtr> queue_;
+  std::atomic<bool> stopping_{false};
+  ros::Subscriber sub_;
+  std::thread worker_;
+};
+
+}  // namespace fragg_ros

@@ -1,0 +1,98 @@
+// Publishing the map: incremental block markers, occupied cloud, projected map, frustum, stats.
+#include "map_publishers.h"
+
+#include <nav_msgs/OccupancyGrid.h>
+#include <ros/console.h>
+#include <ros/single_subscriber_publisher.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <visualization_msgs/Marker.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include "fragg_map/ros/frustum_marker.h"
+#include "fragg_map/ros/occupied_cloud.h"
+#include "fragg_map/ros/projected_map.h"
+
+namespace fragg_ros {
+
+MapPublishers::MapPublishers(ros::NodeHandle& nh, ros::NodeHandle& private_nh,
+                             const ServerParams& params, SharedMap* shared,
+                             const ServerStats* stats)
+    : params_(params), shared_(shared), stats_(stats) {
+  const bool latch = params_.latch;
+  for (MarkerTopic* topic : {&occupied_markers_, &free_markers_}) {
+    topic->style.frame_id = params_.frame_id;
+    topic->style.color_min_z_m = params_.color_min_z_m;
+    topic->style.color_max_z_m = params_.color_max_z_m;
+  }
+  free_markers_.style.ns = "free";
+  free_markers_.style.state = fragg::CellState::kFree;
+  free_markers_.style.alpha = 0.3f;
+  // A latched topic's late subscriber would only see the last increment: it gets every block.
+  auto connect = [this, latch](MarkerTopic* topic) -> ros::SubscriberStatusCallback {
+    if (!latch) return ros::SubscriberStatusCallback();
+    return
+        [this, topic](const ros::SingleSubscriberPublisher& sub) { sendAllMarkersTo(*topic, sub); };
+  };
+  occupied_markers_.pub = nh.advertise<visualization_msgs::MarkerArray>(
+      "occupied_cells_vis_array", 1, connect(&occupied_markers_), ros::SubscriberStatusCallback(),
+      ros::VoidConstPtr(), latch);
+  if (params_.publish_free_space)
+    free_markers_.pub = nh.advertise<visualization_msgs::MarkerArray>(
+        "free_cells_vis_array", 1, connect(&free_markers_), ros::SubscriberStatusCallback(),
+        ros::VoidConstPtr(), latch);
+  occupied_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("occupied_cells", 1, latch);
+  projected_map_pub_ = nh.advertise<nav_msgs::OccupancyGrid>("projected_map", 1, latch);
+  frustum_pub_ = nh.advertise<visualization_msgs::Marker>("frustum", 1, latch);
+  stats_pub_ = private_nh.advertise<fragg_map::MapStats>("stats", 1, latch);
+}
+
+bool MapPublishers::wanted(const ros::Publisher& pub) const {
+  return pub && (params_.latch || pub.getNumSubscribers() > 0);
+}
+
+void MapPublishers::publishAfterInsert(const ros::Time& stamp, const fragg::SensorModel& sensor,
+                                       const Eigen::Isometry3d& T_map_sensor) {
+  std::lock_guard<std::mutex> lock(shared_->mutex);
+  publishMaps(stamp, false);
+  if (wanted(frustum_pub_) && sensor.type != fragg::SensorType::kAuto && sensor.max_range_m > 0.0)
+    frustum_pub_.publish(frustumMarker(sensor, T_map_sensor, params_.frame_id, stamp));
+}
+
+void MapPublishers::publishFull(const ros::Time& stamp) {
+  std::lock_guard<std::mutex> lock(shared_->mutex);
+  publishMaps(stamp, true);
+}
+
+void MapPublishers::publishMaps(const ros::Time& stamp, bool full_markers) {
+  const fragg::Map& map = shared_->map;
+  publishMarkers(occupied_markers_, stamp, full_markers);
+  if (params_.publish_free_space) publishMarkers(free_markers_, stamp, full_markers);
+  if (wanted(occupied_cloud_pub_))
+    occupied_cloud_pub_.publish(occupiedCloud(map, params_.frame_id, stamp));
+  if (wanted(projected_map_pub_))
+    projected_map_pub_.publish(projectedMap(map, params_.occupancy_min_z_m,
+                                            params_.occupancy_max_z_m, params_.frame_id, stamp));
+  if (wanted(stats_pub_)) stats_pub_.publish(stats_->toMsg(map, params_.frame_id, stamp));
+}
+
+void MapPublishers::publishMarkers(MarkerTopic& topic, const ros::Time& stamp, bool full) {
+  if (!wanted(topic.pub)) {
+    // Nobody sees the markers: the next subscriber starts from a full set.
+    topic.ledger = MarkerLedger();
+    return;
+  }
+  const bool first = topic.ledger.publishedRevision() == 0;
+  visualization_msgs::MarkerArray markers =
+      full || first ? allBlockMarkers(shared_->map, topic.style, stamp, &topic.ledger)
+                    : changedBlockMarkers(shared_->map, topic.style, stamp, &topic.ledger);
+  if (!markers.markers.empty()) topic.pub.publish(markers);
+}
+
+void MapPublishers::sendAllMarkersTo(MarkerTopic& topic,
+                                     const ros::SingleSubscriberPublisher& sub) {
+  std::lock_guard<std::mutex> lock(shared_->mutex);
+  MarkerLedger scratch;  // the topic's own ledger keeps following the incremental stream
+  sub.publish(allBlockMarkers(shared_->map, topic.style, ros::Time::now(), &scratch));
+}
+
+}  // namespace fragg_ros

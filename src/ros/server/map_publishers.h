@@ -1,0 +1,56 @@
+// Every topic the map server publishes. Messages are built only for topics with subscribers
+// (or for every topic when latched). occupied_cells_vis_array and free_cells_vis_array are
+// incremental (one marker per changed block); they are republished in full after a reset or
+// load and, when latched, to each new subscriber.
+#pragma once
+
+#include <ros/node_handle.h>
+#include <ros/publisher.h>
+
+#include <Eigen/Geometry>
+#include <mutex>
+#include <string>
+
+#include "fragg_map/ros/block_markers.h"
+#include "fragg_map/ros/server_params.h"
+#include "server_stats.h"
+#include "shared_map.h"
+
+namespace fragg_ros {
+
+class MapPublishers {
+ public:
+  MapPublishers(ros::NodeHandle& nh, ros::NodeHandle& private_nh, const ServerParams& params,
+                SharedMap* shared, const ServerStats* stats);
+
+  /// After an insertion: incremental markers, occupied cloud, projected map, frustum, stats.
+  /// Locks the map itself.
+  void publishAfterInsert(const ros::Time& stamp, const fragg::SensorModel& sensor,
+                          const Eigen::Isometry3d& T_map_sensor);
+  /// After reset, load or clear: a full marker republish and the other map topics.
+  void publishFull(const ros::Time& stamp);
+
+ private:
+  struct MarkerTopic {
+    ros::Publisher pub;
+    MarkerStyle style;
+    MarkerLedger ledger;
+  };
+  // Callers hold shared_->mutex.
+  void publishMaps(const ros::Time& stamp, bool full_markers);
+  void publishMarkers(MarkerTopic& topic, const ros::Time& stamp, bool full);
+  void sendAllMarkersTo(MarkerTopic& topic, const ros::SingleSubscriberPublisher& sub);
+  bool wanted(const ros::Publisher& pub) const;
+
+  const ServerParams params_;
+  SharedMap* shared_;
+  const ServerStats* stats_;
+  MarkerTopic occupied_markers_;
+  MarkerTopic free_markers_;
+  ros::Publisher occupied_cloud_pub_;
+  ros::Publisher projected_map_pub_;
+  ros::Publisher frustum_pub_;
+  ros::Publisher stats_pub_;
+};
+
+}  // namespace fragg_ros

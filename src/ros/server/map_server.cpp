@@ -1,0 +1,45 @@
+// Wiring of the map server's parts.
+#include "map_server.h"
+
+#include <ros/console.h>
+
+#include "fragg_map/log.h"
+
+namespace fragg_ros {
+
+MapServer::MapServer(ros::NodeHandle& nh, ros::NodeHandle& private_nh)
+    : params_(readParameters(private_nh)), tf_listener_(tf_buffer_, nh) {
+  fragg::setLogSink([](fragg::LogLevel level, const std::string& line) {
+    if (level == fragg::LogLevel::kWarning)
+      ROS_WARN("fragg_map: %s", line.c_str());
+    else
+      ROS_INFO("fragg_map: %s", line.c_str());
+  });
+  shared_ = std::make_unique<SharedMap>(fragg::Map(params_.map));
+  publishers_ = std::make_unique<MapPublishers>(nh, private_nh, params_, shared_.get(), &stats_);
+  services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_,
+                                            [this] { publishers_->publishFull(ros::Time::now()); });
+  input_ = std::make_unique<CloudInput>(
+      nh, params_, tf_buffer_, shared_.get(), &stats_,
+      [this](const ros::Time& stamp, const fragg::SensorModel& sensor,
+             const Eigen::Isometry3d& T_map_sensor) {
+        try {
+          publishers_->publishAfterInsert(stamp, sensor, T_map_sensor);
+        } catch (const std::exception& e) {
+          ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
+        }
+      });
+  publishers_->publishFull(ros::Time::now());
+  ROS_INFO("fragg_map: %s map at %.3f m in '%s', backend %s (%s), sensor %s, queue %d",
+           params_.latch ? "latched" : "unlatched", params_.map.resolution_m,
+           params_.frame_id.c_str(), shared_->map.backendName(),
+           shared_->map.backendReason().c_str(), params_.sensor.describe().c_str(),
+           params_.queue_size);
+}
+
+MapServer::~MapServer() {
+  input_.reset();  // stop the insertion thread before the rest goes
+  fragg::setLogSink(fragg::LogSink());
+}
+
+}  // namespace fragg_ros

@@ -1,0 +1,38 @@
+// The map server: parameters, the shared map, tf, and its three parts (input, publishers,
+// services). MapServerNodelet::onInit builds one; it holds no logic of its own.
+#pragma once
+
+#include <ros/node_handle.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <memory>
+
+#include "cloud_input.h"
+#include "fragg_map/ros/server_params.h"
+#include "map_publishers.h"
+#include "map_services.h"
+#include "server_stats.h"
+#include "shared_map.h"
+
+namespace fragg_ros {
+
+class MapServer {
+ public:
+  /// Reads and validates the parameters (throws fragg::InvalidArgument naming the bad one),
+  /// builds the map and starts the parts.
+  MapServer(ros::NodeHandle& nh, ros::NodeHandle& private_nh);
+  ~MapServer();
+
+ private:
+  ServerParams params_;
+  std::unique_ptr<SharedMap> shared_;
+  ServerStats stats_;
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  std::unique_ptr<MapPublishers> publishers_;
+  std::unique_ptr<MapServices> services_;
+  std::unique_ptr<CloudInput> input_;  // last: its thread uses everything above
+};
+
+}  // namespace fragg_ros

@@ -1,0 +1,65 @@
+// Map server counters -> fragg_map/MapStats.
+#include "server_stats.h"
+
+namespace fragg_ros {
+
+void ServerStats::addInsertion(uint64_t points, double ms) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++scans_;
+  points_ += points;
+  insertion_ms_.add(ms);
+}
+
+void ServerStats::addDroppedNoTf() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++dropped_no_tf_;
+}
+
+void ServerStats::addDroppedQueueFull() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++dropped_queue_full_;
+}
+
+void ServerStats::addRejected() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++rejected_;
+}
+
+void ServerStats::clearInsertions() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  scans_ = 0;
+  points_ = 0;
+  insertion_ms_.clear();
+}
+
+uint64_t ServerStats::droppedNoTf() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return dropped_no_tf_;
+}
+
+fragg_map::MapStats ServerStats::toMsg(const fragg::Map& map, const std::string& frame_id,
+                                       const ros::Time& stamp) const {
+  fragg_map::MapStats msg;
+  msg.header.frame_id = frame_id;
+  msg.header.stamp = stamp;
+  msg.backend = map.backendName();
+  msg.resolution = map.resolution();
+  const fragg::MemoryStats memory = map.memory();
+  msg.known_voxels = memory.known_voxels;
+  msg.blocks = memory.blocks;
+  msg.host_bytes = memory.host_block_bytes;
+  msg.gpu_bytes = memory.device_bytes;
+  std::lock_guard<std::mutex> lock(mutex_);
+  msg.scans = scans_;
+  msg.points = points_;
+  msg.dropped_no_tf = dropped_no_tf_;
+  msg.dropped_queue_full = dropped_queue_full_;
+  msg.rejected_clouds = rejected_;
+  msg.dropped_clouds = dropped_no_tf_ + dropped_queue_full_ + rejected_;
+  msg.insertion_ms_last = static_cast<float>(insertion_ms_.lastMs());
+  msg.insertion_ms_mean = static_cast<float>(insertion_ms_.meanMs());
+  msg.insertion_ms_p99 = static_cast<float>(insertion_ms_.percentileMs(0.99));
+  return msg;
+}
+
+}  // namespace fragg_ros

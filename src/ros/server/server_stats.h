@@ -1,0 +1,39 @@
+// Counters of the map server (clouds inserted, dropped and why, insertion times), safe to
+// update from the insertion thread and read from service and publisher threads.
+#pragma once
+
+#include <cstdint>
+#include <mutex>
+#include <string>
+
+#include "fragg_map/MapStats.h"
+#include "fragg_map/map.h"
+#include "fragg_map/ros/timing_stats.h"
+
+namespace fragg_ros {
+
+class ServerStats {
+ public:
+  void addInsertion(uint64_t points, double ms);
+  void addDroppedNoTf();
+  void addDroppedQueueFull();
+  void addRejected();
+  /// Forgets the insertions (after ~reset); the drop counters keep counting.
+  void clearInsertions();
+
+  /// The statistics message; `map` must be locked by the caller.
+  fragg_map::MapStats toMsg(const fragg::Map& map, const std::string& frame_id,
+                            const ros::Time& stamp) const;
+  uint64_t droppedNoTf() const;
+
+ private:
+  mutable std::mutex mutex_;
+  uint64_t scans_ = 0;
+  uint64_t points_ = 0;
+  uint64_t dropped_no_tf_ = 0;
+  uint64_t dropped_queue_full_ = 0;
+  uint64_t rejected_ = 0;
+  TimingStats insertion_ms_;
+};
+
+}  // namespace fragg_ros

@@ -1,0 +1,10 @@
+# The map server (ROS builds only): the nodelet library and the node that loads it.
+set(FRAGG_ROS_SERVER_SOURCES
+  ${CMAKE_CURRENT_LIST_DIR}/server_stats.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/map_publishers.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/map_services.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/cloud_input.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/map_server.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/map_server_nodelet.cpp
+)
+set(FRAGG_ROS_SERVER_NODE_SOURCES ${CMAKE_CURRENT_LIST_DIR}/server_node.cpp)
