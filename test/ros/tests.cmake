@@ -22,3 +22,11 @@ if(FRAGG_HAVE_ROS)
     FRAGG_YAML_TO_XMLRPC="${CMAKE_CURRENT_LIST_DIR}/yaml_to_xmlrpc.py"
     FRAGG_CONFIG_DIR="${PROJECT_SOURCE_DIR}/config")
 endif()
+
+# rostests of the map server (the nodelet) on the smoke bag.
+if(FRAGG_HAVE_ROS AND FRAGG_SMOKE_BAG)
+  find_package(rostest REQUIRED)
+  add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_smoke.test
+    ARGS bag:=${FRAGG_SMOKE_BAG} cli:=${FRAGG_BIN_DIR}/fragg_map
+         tmp:=${CMAKE_CURRENT_BINARY_DIR}/tmp/map_server_smoke)
+endif()

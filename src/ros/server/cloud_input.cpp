@@ -89,6 +89,7 @@ bool CloudInput::waitForTransform(const sensor_msgs::PointCloud2& msg,
       std::chrono::steady_clock::now() + std::chrono::duration<double>(params_.tf_tolerance_s);
   std::string error;
   while (!stopping_) {
+    error.clear();  // canTransform appends its reason
     if (tf_.canTransform(params_.frame_id, source, msg.header.stamp, &error)) {
       *T_map_sensor =
           tf2::transformToEigen(tf_.lookupTransform(params_.frame_id, source, msg.header.stamp));

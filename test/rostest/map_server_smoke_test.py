@@ -1,0 +1,198 @@
+#!/usr/bin/python3
+"""rostest of the map server on the smoke bag: incremental markers, the map saved through
+~save_map against `fragg_map build` on the same bag, the services with good and bad
+arguments, malformed clouds and a cloud whose transform never comes."""
+import json
+import math
+import os
+import subprocess
+import struct
+import time
+import unittest
+
+import rospy
+import rostest
+from geometry_msgs.msg import Point
+from sensor_msgs.msg import PointCloud2, PointField
+from visualization_msgs.msg import Marker, MarkerArray
+
+from fragg_map.srv import ClearBox, GetStats, LoadMap, Reset, SaveMap
+
+SCANS = 10
+NS = "/fragg_map/"
+
+
+def wait_for(predicate, timeout_s, what):
+    deadline = time.monotonic() + timeout_s  # wall clock: sim time stops with the bag
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(0.1)
+    raise AssertionError("timed out waiting for " + what)
+
+
+def xyz_fields(datatype=PointField.FLOAT32, size=4, names=("x", "y", "z")):
+    return [PointField(name=n, offset=i * size, datatype=datatype, count=1)
+            for i, n in enumerate(names)]
+
+
+def cloud(fields, point_step, width, height, data, frame="lidar"):
+    msg = PointCloud2()
+    msg.header.frame_id = frame
+    msg.header.stamp = rospy.Time.now()
+    msg.fields = fields
+    msg.point_step = point_step
+    msg.width = width
+    msg.height = height
+    msg.row_step = point_step * width
+    msg.data = data
+    msg.is_bigendian = False
+    return msg
+
+
+class MapServerSmokeTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("map_server_smoke_test")
+        cls.arrays = []
+        rospy.Subscriber("/occupied_cells_vis_array", MarkerArray, cls.arrays.append,
+                         queue_size=100)
+        for name in ("get_stats", "save_map", "load_map", "reset", "clear_bbox"):
+            rospy.wait_for_service(NS + name, timeout=60)
+        cls.get_stats = rospy.ServiceProxy(NS + "get_stats", GetStats)
+        cls.save = rospy.ServiceProxy(NS + "save_map", SaveMap)
+        cls.load = rospy.ServiceProxy(NS + "load_map", LoadMap)
+        cls.reset = rospy.ServiceProxy(NS + "reset", Reset)
+        cls.clear = rospy.ServiceProxy(NS + "clear_bbox", ClearBox)
+        cls.pub = rospy.Publisher("/points", PointCloud2, queue_size=20)
+        cls.tmp = rospy.get_param("~tmp")
+        os.makedirs(cls.tmp, exist_ok=True)
+        wait_for(lambda: cls.get_stats().stats.scans >= SCANS, 120, "every scan inserted")
+        cls.after_bag = cls.get_stats().stats
+
+    def stats(self):
+        res = self.get_stats()
+        self.assertTrue(res.success, res.message)
+        return res.stats
+
+    def test_1_every_scan_inserted_none_dropped(self):
+        s = self.after_bag
+        self.assertEqual(s.scans, SCANS)
+        self.assertEqual(s.dropped_clouds, 0)
+        self.assertGreater(s.known_voxels, 0)
+        self.assertEqual(s.backend, "cpu")
+        self.assertGreater(s.insertion_ms_mean, 0.0)
+
+    def test_2_markers_are_incremental(self):
+        wait_for(lambda: len(self.arrays) >= 3, 10, "marker arrays")
+        full = [a for a in self.arrays
+                if any(m.action == Marker.DELETEALL for m in a.markers)]
+        self.assertGreaterEqual(len(full), 1, "no full (DELETEALL) republish")
+        shown = {}
+        sizes = []
+        for a in self.arrays:
+            for m in a.markers:
+                if m.action == Marker.DELETEALL:
+                    shown.clear()
+                elif m.action == Marker.DELETE:
+                    shown.pop(m.id, None)
+                else:
+                    self.assertEqual(m.type, Marker.CUBE_LIST)
+                    self.assertEqual(m.ns, "occupied")
+                    self.assertEqual(len(m.points), len(m.colors))
+                    shown[m.id] = len(m.points)
+            sizes.append(len(a.markers))
+        # Later arrays carry only the changed blocks: fewer markers than blocks shown.
+        self.assertLess(min(sizes[1:]), len(shown))
+        # The shown cubes are the occupied voxels (the occupied cloud counts them too).
+        self.assertGreater(sum(shown.values()), 0)
+
+    def test_3_saved_map_equals_cli_build(self):
+        node_map = os.path.join(self.tmp, "node.fgm")
+        res = self.save(node_map)
+        self.assertTrue(res.success, res.message)
+        ref = os.path.join(self.tmp, "cli.fgm")
+        cli = rospy.get_param("~cli")
+        subprocess.run([cli, "build", rospy.get_param("~bag"), "-o", ref, "--topic", "/points",
+                        "--frame", "map", "--backend", "cpu"], check=True,
+                       stdout=subprocess.DEVNULL)
+        out = subprocess.run([cli, "compare", ref, node_map, "--json"], check=True,
+                             stdout=subprocess.PIPE).stdout
+        cmp = json.loads(out)
+        self.assertEqual(cmp["known_in_a"], cmp["known_in_b"])
+        self.assertEqual(cmp["agreeing"], cmp["known_in_either"], cmp)
+
+    def test_4_malformed_clouds_are_rejected_map_intact(self):
+        before = self.stats()
+        good = struct.pack("<3f", 1.0, 2.0, 3.0) * 4
+        nan = struct.pack("<3f", math.nan, math.nan, math.nan) * 4
+        bad = [
+            cloud(xyz_fields(names=("x", "y")), 12, 4, 1, good),          # no z
+            cloud(xyz_fields(), 8, 4, 1, good),                            # point_step too small
+            cloud(xyz_fields(), 12, 4, 1, good[:40]),                      # data too short
+            cloud(xyz_fields(PointField.INT16, 2), 6, 4, 1, b"\0" * 24),   # int16 fields
+            cloud(xyz_fields(), 12, 0, 1, b""),                            # 0 points
+            cloud(xyz_fields(), 12, 4, 1, nan),                            # all NaN
+        ]
+        wait_for(lambda: self.pub.get_num_connections() > 0, 10, "the server to subscribe")
+        for msg in bad:
+            self.pub.publish(msg)
+            time.sleep(0.1)
+        wait_for(lambda: self.stats().rejected_clouds >= before.rejected_clouds + len(bad), 10,
+                 "the malformed clouds to be rejected")
+        after = self.stats()
+        self.assertEqual(after.rejected_clouds, before.rejected_clouds + len(bad))
+        self.assertEqual(after.scans, before.scans)
+        self.assertEqual(after.known_voxels, before.known_voxels)
+
+    def test_5_cloud_without_tf_is_dropped_and_counted(self):
+        before = self.stats()
+        pts = struct.pack("<3f", 1.0, 0.0, 0.0) * 8
+        self.pub.publish(cloud(xyz_fields(), 12, 8, 1, pts, frame="nowhere"))
+        wait_for(lambda: self.stats().dropped_no_tf == before.dropped_no_tf + 1, 10,
+                 "the cloud without tf to be dropped")
+        after = self.stats()
+        self.assertEqual(after.scans, before.scans)
+        self.assertEqual(after.known_voxels, before.known_voxels)
+
+    def test_6_bad_service_arguments_leave_the_map_unchanged(self):
+        before = self.stats().known_voxels
+        p = Point
+        for res in [
+            self.save(os.path.join(self.tmp, "map.xyz")),
+            self.save("/nonexistent-dir/map.fgm"),
+            self.save(""),
+            self.load(os.path.join(self.tmp, "missing.fgm")),
+            self.load(os.path.join(self.tmp, "map.bt")),
+            self.clear(p(1, 1, 1), p(0, 0, 0)),
+            self.clear(p(math.nan, 0, 0), p(1, 1, 1)),
+        ]:
+            self.assertFalse(res.success)
+            self.assertTrue(res.message)
+        self.assertEqual(self.stats().known_voxels, before)
+
+    def test_7_good_service_arguments(self):
+        saved = os.path.join(self.tmp, "before_reset.fgm")
+        self.assertTrue(self.save(saved).success)
+        self.assertTrue(self.save(os.path.join(self.tmp, "map.bt")).success)
+        self.assertGreater(os.path.getsize(os.path.join(self.tmp, "map.bt")), 0)
+        known = self.stats().known_voxels
+        res = self.clear(Point(-2, -2, -2), Point(2, 2, 2))
+        self.assertTrue(res.success, res.message)
+        cleared = self.stats().known_voxels
+        self.assertLess(cleared, known)
+        n = len(self.arrays)
+        res = self.reset()
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(self.stats().known_voxels, 0)
+        self.assertEqual(self.stats().scans, 0)
+        wait_for(lambda: any(m.action == Marker.DELETEALL
+                             for a in self.arrays[n:] for m in a.markers), 10,
+                 "a full marker republish after reset")
+        res = self.load(saved)
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(self.stats().known_voxels, known)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("fragg_map", "map_server_smoke", MapServerSmokeTest)
