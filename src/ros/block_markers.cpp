@@ -25,28 +25,42 @@ visualization_msgs::Marker markerHeader(const MarkerStyle& style, const ros::Tim
 
 int32_t MarkerLedger::idOf(const fragg::BlockKey& key) const {
   const auto it = ids_.find(key);
-  return it == ids_.end() ? -1 : it->second;
+  return it == ids_.end() ? -1 : it->second.id;
+}
+
+CellMask cellMask(const fragg::Map& map, fragg::BlockIndex block, fragg::CellState state) {
+  const fragg::OccupancyModel& model = map.model();
+  const fragg::Cell* cells = map.blocks().block(block).cells;
+  CellMask mask;
+  for (int c = 0; c < fragg::kCellsPerBlock; ++c)
+    if (model.state(cells[c]) == state) mask.set(c);
+  return mask;
 }
 
 visualization_msgs::Marker blockMarker(const fragg::Map& map, fragg::BlockIndex block,
-                                       const MarkerStyle& style, const ros::Time& stamp,
-                                       int32_t id) {
+                                       const CellMask& cells, const MarkerStyle& style,
+                                       const ros::Time& stamp, int32_t id) {
   visualization_msgs::Marker m = markerHeader(style, stamp, id, visualization_msgs::Marker::ADD);
   const double res_m = map.resolution();
   m.scale.x = m.scale.y = m.scale.z = res_m;
   m.color = heightColor(0.0, 0.0, 1.0, style.alpha);  // per-point colours below win
-  const fragg::BlockMap& blocks = map.blocks();
-  const fragg::BlockKey key = blocks.meta(block).key;
-  const fragg::Block& b = blocks.block(block);
+  const fragg::BlockKey key = map.blocks().meta(block).key;
+  m.points.reserve(cells.count());
+  m.colors.reserve(cells.count());
+  // Colours depend on the height only: one per z layer of the block.
+  std_msgs::ColorRGBA layer_color[fragg::kBlockSize];
+  for (int z = 0; z < fragg::kBlockSize; ++z)
+    layer_color[z] = heightColor((key.z * fragg::kBlockSize + z + 0.5) * res_m, style.color_min_z_m,
+                                 style.color_max_z_m, style.alpha);
   for (int c = 0; c < fragg::kCellsPerBlock; ++c) {
-    if (map.state(b.cells[c]) != style.state) continue;
-    const Eigen::Vector3d p_map = map.centerOf(fragg::voxelKeyOf(key, c));
+    if (!cells.test(c)) continue;
+    const fragg::VoxelKey v = fragg::voxelKeyOf(key, c);
     geometry_msgs::Point p;
-    p.x = p_map.x();
-    p.y = p_map.y();
-    p.z = p_map.z();
+    p.x = (v.x + 0.5) * res_m;
+    p.y = (v.y + 0.5) * res_m;
+    p.z = (v.z + 0.5) * res_m;
     m.points.push_back(p);
-    m.colors.push_back(heightColor(p.z, style.color_min_z_m, style.color_max_z_m, style.alpha));
+    m.colors.push_back(layer_color[c >> (2 * fragg::kBlockBits)]);
   }
   return m;
 }
@@ -60,7 +74,7 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
   for (auto it = ledger->ids_.begin(); it != ledger->ids_.end();) {
     if (blocks.find(it->first) == fragg::kNoBlock) {
       out.markers.push_back(
-          markerHeader(style, stamp, it->second, visualization_msgs::Marker::DELETE));
+          markerHeader(style, stamp, it->second.id, visualization_msgs::Marker::DELETE));
       it = ledger->ids_.erase(it);
     } else {
       ++it;
@@ -72,15 +86,20 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
   });
   for (fragg::BlockIndex i : changed) {
     const fragg::BlockKey key = blocks.meta(i).key;
+    const CellMask cells = cellMask(map, i, style.state);
     const auto shown = ledger->ids_.find(key);
-    const int32_t id = shown != ledger->ids_.end() ? shown->second : ledger->next_id_;
-    visualization_msgs::Marker m = blockMarker(map, i, style, stamp, id);
-    if (!m.points.empty()) {
-      if (shown == ledger->ids_.end()) ledger->ids_.emplace(key, ledger->next_id_++);
-      out.markers.push_back(std::move(m));
-    } else if (shown != ledger->ids_.end()) {
-      out.markers.push_back(markerHeader(style, stamp, id, visualization_msgs::Marker::DELETE));
+    if (shown == ledger->ids_.end()) {
+      if (cells.none()) continue;
+      const int32_t id = ledger->next_id_++;
+      ledger->ids_.emplace(key, MarkerLedger::Shown{id, cells});
+      out.markers.push_back(blockMarker(map, i, cells, style, stamp, id));
+    } else if (cells.none()) {
+      out.markers.push_back(
+          markerHeader(style, stamp, shown->second.id, visualization_msgs::Marker::DELETE));
       ledger->ids_.erase(shown);
+    } else if (cells != shown->second.cells) {
+      shown->second.cells = cells;
+      out.markers.push_back(blockMarker(map, i, cells, style, stamp, shown->second.id));
     }
   }
   ledger->published_revision_ = map.revision();
@@ -95,10 +114,11 @@ visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const Mar
   ledger->next_id_ = 0;
   const fragg::BlockMap& blocks = map.blocks();
   blocks.forEach([&](fragg::BlockIndex i) {
-    visualization_msgs::Marker m = blockMarker(map, i, style, stamp, ledger->next_id_);
-    if (m.points.empty()) return;
-    ledger->ids_.emplace(blocks.meta(i).key, ledger->next_id_++);
-    out.markers.push_back(std::move(m));
+    const CellMask cells = cellMask(map, i, style.state);
+    if (cells.none()) return;
+    const int32_t id = ledger->next_id_++;
+    ledger->ids_.emplace(blocks.meta(i).key, MarkerLedger::Shown{id, cells});
+    out.markers.push_back(blockMarker(map, i, cells, style, stamp, id));
   });
   ledger->published_revision_ = map.revision();
   return out;

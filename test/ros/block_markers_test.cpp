@@ -102,11 +102,52 @@ TEST(BlockMarkers, SecondScanSendsOnlyTheBlocksItChanged) {
     EXPECT_EQ(first_ids.count(m.id), 0u) << "a new block reused a shown block's id";
   }
   EXPECT_EQ(ledger.shownBlocks(), first.markers.size() + second.markers.size());
-  // Re-observing the first wall sends some of its blocks again, under their old ids.
+  // Re-observing the first wall: whatever it resends keeps the old ids.
   fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
   const MarkerArray third = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
-  ASSERT_FALSE(third.markers.empty());
   for (const Marker& m : third.markers) EXPECT_EQ(first_ids.count(m.id), 1u);
+}
+
+TEST(BlockMarkers, BlockIsResentOnlyWhenItsDrawnCellsChange) {
+  fragg::Map map(fragg_ros_test::cpuParams());
+  const fragg::VoxelKey a{1, 2, 3}, a_free{2, 2, 3}, a_more{3, 2, 3};
+  fragg_ros_test::setCell(map, a, fragg::CellState::kOccupied);
+  MarkerLedger ledger;
+  ASSERT_EQ(fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.size(), 1u);
+  // Same block, a free cell changes: the block's changed_at moves, its occupied cells do not.
+  fragg_ros_test::setCell(map, a_free, fragg::CellState::kFree);
+  ASSERT_GT(map.blocks().meta(map.blocks().find(fragg::blockKeyOf(a))).changed_at,
+            ledger.publishedRevision());
+  EXPECT_TRUE(fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.empty());
+  // A second occupied cell: the block is sent again, whole, under the same id.
+  const int32_t id = ledger.idOf(fragg::blockKeyOf(a));
+  fragg_ros_test::setCell(map, a_more, fragg::CellState::kOccupied);
+  const MarkerArray again = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  ASSERT_EQ(again.markers.size(), 1u);
+  EXPECT_EQ(again.markers[0].id, id);
+  EXPECT_EQ(again.markers[0].action, Marker::ADD);
+  EXPECT_EQ(again.markers[0].points.size(), 2u);
+}
+
+TEST(BlockMarkers, ColoursFollowHeight) {
+  fragg::Map map(fragg_ros_test::cpuParams(0.5));
+  fragg_ros_test::setCell(map, {0, 0, 0}, fragg::CellState::kOccupied);  // z 0.25 m
+  fragg_ros_test::setCell(map, {0, 0, 7}, fragg::CellState::kOccupied);  // z 3.75 m
+  MarkerLedger ledger;
+  MarkerStyle style;
+  style.color_min_z_m = 0.0;
+  style.color_max_z_m = 4.0;
+  const MarkerArray a = fragg_ros::changedBlockMarkers(map, style, kStamp, &ledger);
+  ASSERT_EQ(a.markers.size(), 1u);
+  const Marker& m = a.markers[0];
+  ASSERT_EQ(m.points.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const auto want = fragg_ros::heightColor(m.points[i].z, 0.0, 4.0, 1.f);
+    EXPECT_FLOAT_EQ(m.colors[i].r, want.r);
+    EXPECT_FLOAT_EQ(m.colors[i].g, want.g);
+    EXPECT_FLOAT_EQ(m.colors[i].b, want.b);
+  }
+  EXPECT_NE(m.colors[0].g, m.colors[1].g);
 }
 
 TEST(BlockMarkers, BlockThatLosesItsOccupiedCellsIsDeleted) {

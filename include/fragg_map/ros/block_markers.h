@@ -6,6 +6,7 @@
 #include <ros/time.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <bitset>
 #include <cstdint>
 #include <string>
 #include <unordered_map>
@@ -24,8 +25,15 @@ struct MarkerStyle {
   float alpha = 1.0f;
 };
 
-/// Which blocks a marker topic shows, with the marker id each block got, and the map revision
-/// published last. Owned by the publisher; the converters below read and update it.
+/// Which cells of a block are drawn (bit i: cell index i).
+using CellMask = std::bitset<fragg::kCellsPerBlock>;
+
+/// The cells of block `block` in `state`.
+CellMask cellMask(const fragg::Map& map, fragg::BlockIndex block, fragg::CellState state);
+
+/// Which blocks a marker topic shows, with the marker id each block got and the cells drawn,
+/// and the map revision published last. Owned by the publisher; the converters below read and
+/// update it.
 class MarkerLedger {
  public:
   uint64_t publishedRevision() const { return published_revision_; }
@@ -38,20 +46,25 @@ class MarkerLedger {
                                                              const ros::Time&, MarkerLedger*);
   friend visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map&, const MarkerStyle&,
                                                          const ros::Time&, MarkerLedger*);
-  std::unordered_map<fragg::BlockKey, int32_t, fragg::BlockKeyHash> ids_;
+  struct Shown {
+    int32_t id;
+    CellMask cells;
+  };
+  std::unordered_map<fragg::BlockKey, Shown, fragg::BlockKeyHash> ids_;
   int32_t next_id_ = 0;
   uint64_t published_revision_ = 0;
 };
 
-/// The CUBE_LIST marker of one block: centres of its cells in `style.state`, coloured by
-/// height; empty `points` when it has none.
+/// The CUBE_LIST marker of one block: centres of the cells in `cells`, coloured by height.
 visualization_msgs::Marker blockMarker(const fragg::Map& map, fragg::BlockIndex block,
-                                       const MarkerStyle& style, const ros::Time& stamp,
-                                       int32_t id);
+                                       const CellMask& cells, const MarkerStyle& style,
+                                       const ros::Time& stamp, int32_t id);
 
 /// Markers for the blocks changed since `ledger->publishedRevision()`: ADD (or modify) for a
-/// changed block with cells in `style.state`, DELETE for a shown block that lost them all or
-/// no longer exists. Updates the ledger to the map's revision.
+/// changed block whose set of cells in `style.state` changed and is not empty, DELETE for a
+/// shown block that lost them all or no longer exists. A block whose drawn cells stayed the
+/// same (e.g. only its free cells changed) is not sent. Updates the ledger to the map's
+/// revision.
 visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
                                                     const ros::Time& stamp, MarkerLedger* ledger);
 
