@@ -23,10 +23,25 @@ if(FRAGG_HAVE_ROS)
     FRAGG_CONFIG_DIR="${PROJECT_SOURCE_DIR}/config")
 endif()
 
-# rostests of the map server (the nodelet) on the smoke bag.
+# rostests of the map server (the nodelet) on recorded bags: the smoke bag (with the service,
+# malformed-cloud and missing-tf tests) and the real Velodyne pair (make_test_bag.py: float32
+# unorganised + float64 organised with NaN, a leading-slash frame, one cloud without tf).
 if(FRAGG_HAVE_ROS AND FRAGG_SMOKE_BAG)
   find_package(rostest REQUIRED)
+  # (add_rostest puts the ARGS into target and file names: keep them short.)
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_smoke.test
-    ARGS bag:=${FRAGG_SMOKE_BAG} cli:=${FRAGG_BIN_DIR}/fragg_map
-         tmp:=${CMAKE_CURRENT_BINARY_DIR}/tmp/map_server_smoke)
+    ARGS bag:=${FRAGG_SMOKE_BAG})
+  if(EXISTS ${FRAGG_REAL_DATA}/small_gicp_pair/target.ply)
+    set(_fragg_velodyne_bag ${CMAKE_BINARY_DIR}/bags/velodyne.bag)
+    add_custom_command(OUTPUT ${_fragg_velodyne_bag}
+      COMMAND ${CMAKE_COMMAND} -E make_directory ${CMAKE_BINARY_DIR}/bags
+      COMMAND /usr/bin/python3 ${CMAKE_CURRENT_LIST_DIR}/../io/make_test_bag.py
+              ${_fragg_velodyne_bag} ${FRAGG_REAL_DATA}/small_gicp_pair
+      DEPENDS ${CMAKE_CURRENT_LIST_DIR}/../io/make_test_bag.py
+      COMMENT "rostest bag: real Velodyne pair"
+      VERBATIM)
+    add_custom_target(fragg_map_rostest_bags ALL DEPENDS ${_fragg_velodyne_bag})
+    add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_bag.test
+      ARGS bag:=${_fragg_velodyne_bag} topic:=/velodyne_points scans:=2 no_tf:=1)
+  endif()
 endif()

@@ -2,33 +2,19 @@
 """rostest of the map server on the smoke bag: incremental markers, the map saved through
 ~save_map against `fragg_map build` on the same bag, the services with good and bad
 arguments, malformed clouds and a cloud whose transform never comes."""
-import json
 import math
 import os
-import subprocess
 import struct
 import time
-import unittest
 
 import rospy
 import rostest
 from geometry_msgs.msg import Point
 from sensor_msgs.msg import PointCloud2, PointField
-from visualization_msgs.msg import Marker, MarkerArray
+from visualization_msgs.msg import Marker
 
-from fragg_map.srv import ClearBox, GetStats, LoadMap, Reset, SaveMap
-
-SCANS = 10
-NS = "/fragg_map/"
-
-
-def wait_for(predicate, timeout_s, what):
-    deadline = time.monotonic() + timeout_s  # wall clock: sim time stops with the bag
-    while time.monotonic() < deadline:
-        if predicate():
-            return
-        time.sleep(0.1)
-    raise AssertionError("timed out waiting for " + what)
+from fragg_map.srv import ClearBox, LoadMap, Reset
+from map_server_checks import NS, MapServerBagChecks, wait_for
 
 
 def xyz_fields(datatype=PointField.FLOAT32, size=4, names=("x", "y", "z")):
@@ -50,77 +36,18 @@ def cloud(fields, point_step, width, height, data, frame="lidar"):
     return msg
 
 
-class MapServerSmokeTest(unittest.TestCase):
+class MapServerSmokeTest(MapServerBagChecks):
+    """The bag checks (tests 1-3), then malformed clouds, a cloud without tf and the services."""
+
     @classmethod
     def setUpClass(cls):
-        rospy.init_node("map_server_smoke_test")
-        cls.arrays = []
-        rospy.Subscriber("/occupied_cells_vis_array", MarkerArray, cls.arrays.append,
-                         queue_size=100)
-        for name in ("get_stats", "save_map", "load_map", "reset", "clear_bbox"):
+        super().setUpClass()
+        for name in ("load_map", "reset", "clear_bbox"):
             rospy.wait_for_service(NS + name, timeout=60)
-        cls.get_stats = rospy.ServiceProxy(NS + "get_stats", GetStats)
-        cls.save = rospy.ServiceProxy(NS + "save_map", SaveMap)
         cls.load = rospy.ServiceProxy(NS + "load_map", LoadMap)
         cls.reset = rospy.ServiceProxy(NS + "reset", Reset)
         cls.clear = rospy.ServiceProxy(NS + "clear_bbox", ClearBox)
         cls.pub = rospy.Publisher("/points", PointCloud2, queue_size=20)
-        cls.tmp = rospy.get_param("~tmp")
-        os.makedirs(cls.tmp, exist_ok=True)
-        wait_for(lambda: cls.get_stats().stats.scans >= SCANS, 120, "every scan inserted")
-        cls.after_bag = cls.get_stats().stats
-
-    def stats(self):
-        res = self.get_stats()
-        self.assertTrue(res.success, res.message)
-        return res.stats
-
-    def test_1_every_scan_inserted_none_dropped(self):
-        s = self.after_bag
-        self.assertEqual(s.scans, SCANS)
-        self.assertEqual(s.dropped_clouds, 0)
-        self.assertGreater(s.known_voxels, 0)
-        self.assertEqual(s.backend, "cpu")
-        self.assertGreater(s.insertion_ms_mean, 0.0)
-
-    def test_2_markers_are_incremental(self):
-        wait_for(lambda: len(self.arrays) >= 3, 10, "marker arrays")
-        full = [a for a in self.arrays
-                if any(m.action == Marker.DELETEALL for m in a.markers)]
-        self.assertGreaterEqual(len(full), 1, "no full (DELETEALL) republish")
-        shown = {}
-        sizes = []
-        for a in self.arrays:
-            for m in a.markers:
-                if m.action == Marker.DELETEALL:
-                    shown.clear()
-                elif m.action == Marker.DELETE:
-                    shown.pop(m.id, None)
-                else:
-                    self.assertEqual(m.type, Marker.CUBE_LIST)
-                    self.assertEqual(m.ns, "occupied")
-                    self.assertEqual(len(m.points), len(m.colors))
-                    shown[m.id] = len(m.points)
-            sizes.append(len(a.markers))
-        # Later arrays carry only the changed blocks: fewer markers than blocks shown.
-        self.assertLess(min(sizes[1:]), len(shown))
-        # The shown cubes are the occupied voxels (the occupied cloud counts them too).
-        self.assertGreater(sum(shown.values()), 0)
-
-    def test_3_saved_map_equals_cli_build(self):
-        node_map = os.path.join(self.tmp, "node.fgm")
-        res = self.save(node_map)
-        self.assertTrue(res.success, res.message)
-        ref = os.path.join(self.tmp, "cli.fgm")
-        cli = rospy.get_param("~cli")
-        subprocess.run([cli, "build", rospy.get_param("~bag"), "-o", ref, "--topic", "/points",
-                        "--frame", "map", "--backend", "cpu"], check=True,
-                       stdout=subprocess.DEVNULL)
-        out = subprocess.run([cli, "compare", ref, node_map, "--json"], check=True,
-                             stdout=subprocess.PIPE).stdout
-        cmp = json.loads(out)
-        self.assertEqual(cmp["known_in_a"], cmp["known_in_b"])
-        self.assertEqual(cmp["agreeing"], cmp["known_in_either"], cmp)
 
     def test_4_malformed_clouds_are_rejected_map_intact(self):
         before = self.stats()
