@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# The main job until the nodelet exists: builds maps from the real scans in
+# The main job: builds maps from the real scans in
 # ../shared/data/real with `fragg_map build`, prints their statistics, renders them to PNG
 # (top-down height image and a horizontal slice) and exports them as OctoMap .bt files; then
-# maps the simulator's smoke workload and scores it against the scene's ground truth.
+# maps the simulator's smoke workload and scores it against the scene's ground truth; then runs
+# the ROS map server nodelet on the smoke bag (scripts/demo_ros.sh).
 # Installs the missing Debian packages and builds the catkin workspace (ws/) first.
 # Outputs go to out/demo/ under the repository root.
 set -euo pipefail
@@ -69,6 +70,11 @@ run "$fragg" build "$smoke/smoke" -o "$out/smoke.fgm" --max-range 30
 run "$fragg" eval "$out/smoke.fgm" --scene "$smoke/campus.obj"
 run "$fragg" render "$out/smoke.fgm" -o "$out/smoke_top.png" --view top
 
+# 4. The ROS map server (fragg_map/MapServerNodelet) on the smoke bag, headless: a master on
+#    loopback, the nodelet, the bag; the map saved through /fragg_map/save_map, rendered, and
+#    compared with `fragg_map build` on the same bag. scripts/demo_ros.sh stops what it starts.
+bash "$FRAGG_REPO/scripts/demo_ros.sh" --no-deps --ws "$FRAGG_WS" --jobs "$FRAGG_JOBS" --out "$out"
+
 fragg_step "outputs ($(fragg_elapsed))"
 cat <<EOF
 Maps, images and OctoMap files are in $out:
@@ -77,5 +83,6 @@ Maps, images and OctoMap files are in $out:
   rgbd_top.png  velodyne_top.png   height images; unknown space is dark
   rgbd_slice_z3.png  velodyne_slice_z0.png   slices: free, occupied and unknown in distinct colours
   smoke.fgm  smoke_bag.fgm  smoke_top.png      the simulated campus (ground truth / odometry poses)
+  node_smoke.fgm  node_smoke_top.png           the same bag mapped by the ROS nodelet (save_map)
 The CLI: $fragg --help
 EOF

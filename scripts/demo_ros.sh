@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# The ROS part of the demo: starts a ROS master on loopback (a free port), the map server
+# nodelet and the smoke bag (launch/demo.launch, headless), waits until every scan is
+# inserted, saves the map through /fragg_map/save_map, renders it to PNG, checks it against
+# `fragg_map build` on the same bag, and stops everything it started.
+# Usage: bash scripts/demo_ros.sh [--out DIR] [common options]
+# (scripts/demo.sh runs it after building the workspace: --no-deps and the same --ws.)
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+out="$FRAGG_REPO/out/demo"
+args=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --out) out="$2"; shift 2 ;;
+    *) args+=("$1"); shift ;;
+  esac
+done
+fragg_usage() {
+  echo "usage: bash scripts/demo_ros.sh [--out DIR]"
+  fragg_usage_common
+}
+fragg_parse_common "${args[@]+"${args[@]}"}"
+fragg_install_deps
+fragg_build_ws
+mkdir -p "$out"
+out="$(cd "$out" && pwd -P)"
+fragg="$FRAGG_WS/devel/lib/fragg_map/fragg_map"
+bag="$FRAGG_WS/build/workloads/smoke.bag"
+
+port="$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')"
+export ROS_MASTER_URI="http://127.0.0.1:$port"
+set +u
+# shellcheck disable=SC1091
+source "$FRAGG_WS/devel/setup.bash"
+set -u
+
+launch_pid=""
+stop() {
+  if [ -n "$launch_pid" ] && kill -0 "$launch_pid" 2>/dev/null; then
+    kill -INT "$launch_pid" 2>/dev/null || true  # roslaunch stops the node and its master
+    for _ in $(seq 50); do kill -0 "$launch_pid" 2>/dev/null || break; sleep 0.2; done
+    kill -TERM "$launch_pid" 2>/dev/null || true
+  fi
+}
+trap stop EXIT
+
+fragg_step "ROS map server on the smoke bag (master on 127.0.0.1:$port)"
+log="$out/demo_ros.log"
+# Played at a quarter of its speed with a deep queue, so every scan is inserted (with the
+# default queue the oldest clouds are dropped, and counted, when insertion falls behind).
+roslaunch "$FRAGG_REPO/launch/demo.launch" bag:="$bag" cloud:=/points rate:=0.25 queue_size:=20 \
+  config:="$FRAGG_REPO/config/default.yaml" >"$log" 2>&1 &
+launch_pid=$!
+echo "roslaunch (pid $launch_pid), log: $log"
+
+stats() { rosservice call /fragg_map/get_stats 2>/dev/null; }
+deadline=$((SECONDS + 120))
+until stats | grep -Eq '^  scans: 10$'; do
+  if [ $SECONDS -ge $deadline ] || ! kill -0 "$launch_pid" 2>/dev/null; then
+    echo "demo_ros: the map server did not insert the 10 scans in time; see $log" >&2
+    stats >&2 || true
+    exit 1
+  fi
+  sleep 1
+done
+stats | grep -E '^  (backend|scans|points|dropped_clouds|insertion_ms_mean|known_voxels|host_bytes):'
+rosservice call /fragg_map/save_map "path: '$out/node_smoke.fgm'"
+stop
+
+fragg_step "the node's map"
+"$fragg" stats "$out/node_smoke.fgm"
+"$fragg" render "$out/node_smoke.fgm" -o "$out/node_smoke_top.png" --view top
+"$fragg" build "$bag" -o "$out/cli_smoke.fgm" --topic /points --frame map >/dev/null
+"$fragg" compare "$out/cli_smoke.fgm" "$out/node_smoke.fgm"
+
+fragg_step "outputs"
+cat <<EOT
+In $out:
+  node_smoke.fgm      the map the nodelet built from smoke.bag, saved through /fragg_map/save_map
+  node_smoke_top.png  its top-down height image
+  cli_smoke.fgm       fragg_map build on the same bag (compared above)
+  demo_ros.log        roslaunch's log
+EOT
