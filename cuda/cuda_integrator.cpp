@@ -433,7 +433,7 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
   classify(true);
   const SlotArrays before = pool_.arrays();
   CullContext ctx = in.cull;
-  launchCullSlots(before, in.frustum, ctx, block_m, scan_, counters_dev_.get(), stream_.get());
+  launchCullSlots(before, in.frustum, ctx, block_m, scan_, stream_.get());
   const int32_t expected_new = std::max<int32_t>(1024, last_created_ + last_created_ / 4);
   const uint64_t evicted_pre = evicted_;
   makeRoom(static_cast<int32_t>(to_upload.size()),

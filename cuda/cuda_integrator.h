@@ -33,13 +33,6 @@ class CudaIntegrator : public Integrator {
   }
   std::shared_ptr<ChunkAllocator> hostAllocator() const override { return host_allocator_; }
 
-  /// Slots the paper's frustum formula gives for the first scan's sensor (0 before it).
-  int64_t frustumEstimateBlocks() const { return estimate_blocks_; }
-  int32_t poolCapacity() const { return pool_.capacity(); }
-  /// Evictions and write-backs so far (for tests and the benchmark).
-  uint64_t evictedBlocks() const { return evicted_; }
-  uint64_t uploadedBlocks() const { return uploaded_; }
-
  private:
   void sizePool(const SensorModel& model, double resolution_m);
   int32_t slotLimit() const;

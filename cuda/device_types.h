@@ -75,7 +75,6 @@ struct ScanCounters {
   uint32_t touched;         ///< slots in the touched list
   uint32_t changed;         ///< touched slots with a changed cell
   uint32_t applied;         ///< 1 when the apply kernel ran (no miss, no overflow)
-  uint32_t visible_slots;   ///< resident slots the device frustum pass found visible
 };
 
 }  // namespace fragg::cuda

@@ -59,6 +59,6 @@ void launchDownload(const SlotArrays& s, Block* const* dst, const int32_t* slots
 /// Device frustum pass over the resident slots (cullBlock, the same test as the host's, with
 /// per-slot plane memory): stamps last_used of visible slots.
 void launchCullSlots(const SlotArrays& s, const Frustum& f, const CullContext& ctx, double block_m,
-                     uint32_t scan, ScanCounters* counters, cudaStream_t stream);
+                     uint32_t scan, cudaStream_t stream);
 
 }  // namespace fragg::cuda

@@ -56,9 +56,8 @@ __global__ void __launch_bounds__(kCopyThreads)
 }
 
 __global__ void cullSlotsKernel(SlotArrays s, Frustum f, CullContext ctx, double block_m,
-                                uint32_t scan, ScanCounters* c) {
+                                uint32_t scan) {
   const int32_t slot = blockIdx.x * blockDim.x + threadIdx.x;
-  bool visible = false;
   if (slot < s.capacity && s.resident[slot]) {
     const BlockKey k = s.keys[slot];
     const int32_t key[3] = {k.x, k.y, k.z};
@@ -66,11 +65,9 @@ __global__ void cullSlotsKernel(SlotArrays s, Frustum f, CullContext ctx, double
     for (int a = 0; a < 3; ++a)
       centre[a] = static_cast<float>((double(key[a]) + 0.5) * block_m - f.origin_m[a]);
     CullCounters unused;
-    visible = cullBlock(f, ctx, centre, static_cast<float>(block_m / 2), s.cull[slot], unused);
-    if (visible) s.last_used[slot] = scan;
+    if (cullBlock(f, ctx, centre, static_cast<float>(block_m / 2), s.cull[slot], unused))
+      s.last_used[slot] = scan;
   }
-  const unsigned n = __popc(__ballot_sync(kFullMask, visible));
-  if ((threadIdx.x & 31) == 0 && n) atomicAdd(&c->visible_slots, n);
 }
 }  // namespace
 
@@ -104,10 +101,10 @@ void launchDownload(const SlotArrays& s, Block* const* dst, const int32_t* slots
 }
 
 void launchCullSlots(const SlotArrays& s, const Frustum& f, const CullContext& ctx, double block_m,
-                     uint32_t scan, ScanCounters* counters, cudaStream_t stream) {
+                     uint32_t scan, cudaStream_t stream) {
   if (s.capacity == 0) return;
   cullSlotsKernel<<<blocksFor(s.capacity, kThreads), kThreads, 0, stream>>>(s, f, ctx, block_m,
-                                                                            scan, counters);
+                                                                            scan);
   FRAGG_CUDA_CHECK_LAUNCH("cullSlotsKernel");
 }
 

@@ -24,7 +24,6 @@ class SlotPool {
   void clear();
 
   SlotArrays arrays() const;
-  uint8_t* residentDevice() const { return resident_.get(); }
   int32_t capacity() const { return capacity_; }
   size_t deviceBytes() const { return size_t(capacity_) * bytesPerSlot(); }
 
