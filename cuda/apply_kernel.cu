@@ -1,4 +1,5 @@
-// The update over touched slots only: the same OccupancyModel::apply() as the CPU backend.
+// The update over touched slots only: the same OccupancyModel::apply() (unapply() when a scan
+// is removed) as the CPU backend.
 #include "cuda_check.h"
 #include "kernels.h"
 #include "warp_reduce.cuh"
@@ -11,7 +12,7 @@ constexpr int kCellsPerThread = kCellsPerBlock / kThreads;
 
 __global__ void __launch_bounds__(kThreads)
     applyKernel(SlotArrays s, OccupancyModel model, uint64_t revision, uint32_t scan,
-                ScanCounters* c) {
+                bool remove, ScanCounters* c) {
   // The ray pass left work undone (a missed host block, a full pool): apply nothing, the host
   // completes the marks and launches this again.
   if (c->misses != 0 || c->overflow != 0 || c->outside_window != 0) return;
@@ -33,7 +34,7 @@ __global__ void __launch_bounds__(kThreads)
       Cell value = fresh ? Cell() : block.cells[cell];
       if (marked) {
         const Cell before = value;
-        model.apply(value, hit);
+        model.update(value, hit, remove);
         changed |= before.log_odds_fx != value.log_odds_fx || before.hits != value.hits;
         ++updated;
       }
@@ -61,8 +62,9 @@ __global__ void __launch_bounds__(kThreads)
 }  // namespace
 
 void launchApply(const SlotArrays& slots, const OccupancyModel& model, uint64_t revision,
-                 uint32_t scan, ScanCounters* counters, int grid, cudaStream_t stream) {
-  applyKernel<<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, counters);
+                 uint32_t scan, bool remove, ScanCounters* counters, int grid,
+                 cudaStream_t stream) {
+  applyKernel<<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, counters);
   FRAGG_CUDA_CHECK_LAUNCH("applyKernel");
 }
 

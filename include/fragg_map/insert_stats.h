@@ -8,6 +8,7 @@
 namespace fragg {
 
 struct InsertStats {
+  uint64_t scan_id = 0;                  ///< the scan's insertion index (not summed by add())
   uint64_t points_in = 0;                ///< points given
   uint64_t rays_hit = 0;                 ///< rays ending in a hit
   uint64_t rays_free_only = 0;           ///< beyond max range: clear up to max range, no hit

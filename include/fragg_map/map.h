@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -18,12 +19,21 @@
 #include "fragg_map/map_params.h"
 #include "fragg_map/occupancy.h"
 #include "fragg_map/point_cloud.h"
+#include "fragg_map/scan_store.h"
 #include "fragg_map/sensor_model.h"
 
 namespace fragg {
 
 class Integrator;
 class Culler;
+
+/// What a pose correction did (Map::correctPoses).
+struct CorrectionStats {
+  size_t scans = 0;
+  InsertStats removal;    ///< the removals, summed
+  InsertStats insertion;  ///< the re-insertions, summed
+  double seconds_total = 0;
+};
 
 struct MemoryStats {
   size_t host_block_bytes = 0;  ///< cells + per-block metadata + index
@@ -32,6 +42,7 @@ struct MemoryStats {
   size_t device_estimate_bytes = 0;
   size_t blocks = 0;
   size_t known_voxels = 0;  ///< observed cells
+  size_t scan_store_bytes = 0;  ///< kept scans' points in memory
 };
 
 class Map {
@@ -45,8 +56,21 @@ class Map {
 
   /// Integrates one scan. `cloud` is in the sensor frame; `T_map_sensor` places the sensor.
   /// Throws InvalidArgument for a non-finite pose or a bad sensor model (map untouched).
+  /// With `params.scans.keep` the scan is kept (quantised: the map integrates the kept
+  /// points) under its insertion index, `InsertStats::scan_id`.
   InsertStats insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                      const SensorModel& sensor, int64_t stamp_ns = 0);
+
+  /// Loop closure: takes a kept scan out of the map, walking its rays again and undoing its
+  /// updates (OccupancyModel::unapply says where that is exact). Throws InvalidArgument for an
+  /// unknown index or a scan whose points are not kept (map untouched).
+  InsertStats remove(ScanId id);
+  /// Moves kept scans to corrected poses (T_map_sensor): every listed scan is removed first,
+  /// then each is inserted again at its new pose, in index order. All arguments are checked
+  /// before anything changes (InvalidArgument: unknown index, points not kept, pose not a
+  /// finite rigid transform). Cost grows with the number of scans, not with the map.
+  CorrectionStats correctPoses(const std::map<ScanId, Eigen::Isometry3d>& T_map_sensor_new);
+  const ScanStore& scanStore() const { return *scan_store_; }
 
   CellState query(const Eigen::Vector3d& p_map) const;
   CellState state(const Cell& c) const { return model_.state(c); }
@@ -83,6 +107,9 @@ class Map {
 
  private:
   void fallBackToCpu(const std::string& why);
+  /// Culling and integration of one prepared scan (insert or remove) with its own ray cast
+  /// mode and no-return setting.
+  InsertStats integrateScan(const PointCloud& cloud, const ScanRecord& how, bool remove);
 
   MapParams params_;
   OccupancyModel model_;
@@ -93,6 +120,8 @@ class Map {
   std::unique_ptr<Culler> culler_;
   uint64_t revision_ = 0;
   size_t scans_ = 0;
+  ScanId next_scan_id_ = 0;
+  std::unique_ptr<ScanStore> scan_store_;
 };
 
 }  // namespace fragg

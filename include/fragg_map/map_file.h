@@ -5,6 +5,9 @@
 //            u64 block count | u64 scans integrated
 //   blocks : i32 x, y, z | u32 payload bytes | payload (512 x {i16 hits, i16 log_odds_fx}),
 //            sorted by key so the same map always gives the same bytes
+//   scans  : only with flag bit 1 (the map keeps its scans for loop closure; version 2):
+//            u64 next scan index | u64 scan count | scans in index order (scan_codec.h:
+//            index, stamp, pose as 12 f64, sensor model, insertion flags, zlib'd points)
 //   footer : u32 CRC-32 (zlib) of everything before it
 // Saved to a temporary file and renamed. The loader checks every field and the checksum.
 #pragma once
@@ -14,7 +17,8 @@
 namespace fragg {
 
 constexpr char kMapFileMagic[8] = {'F', 'R', 'A', 'G', 'G', 'M', 'A', 'P'};
-constexpr uint32_t kMapFileVersion = 1;
+constexpr uint32_t kMapFileVersion = 2;  ///< version 1 (no scan section) is read too
 constexpr uint32_t kMapFileCompressed = 1u;
+constexpr uint32_t kMapFileScans = 2u;
 
 }  // namespace fragg

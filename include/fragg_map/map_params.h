@@ -38,6 +38,14 @@ struct CudaParams {
   bool readonly_ray_loads = true;
 };
 
+/// The scan store for loop-closure correction (see scan_store.h).
+struct ScanStoreParams {
+  bool keep = false;            ///< keep every inserted scan (remove / correctPoses need it)
+  double point_step_m = 0.001;  ///< quantisation step of kept points; 0 = float32 as given
+  size_t max_bytes = 0;         ///< points kept in memory at most; 0 = no limit
+  std::string spill_dir;        ///< where points beyond max_bytes go; empty: they are dropped
+};
+
 struct MapParams {
   double resolution_m = 0.05;
   OccupancyParams occupancy;
@@ -49,6 +57,7 @@ struct MapParams {
   /// Worker threads for the CPU backend; 0 = every core.
   int threads = 0;
   CudaParams cuda;
+  ScanStoreParams scans;
 
   /// Throws InvalidArgument naming the bad field.
   void validate() const;

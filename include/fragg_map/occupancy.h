@@ -52,6 +52,30 @@ struct OccupancyModel {
     c.log_odds_fx = updated(c.log_odds_fx, hit);
     if (hit && c.hits < INT16_MAX) ++c.hits;
   }
+  /// Undoes one update of a scan that is being removed (loop closure): subtracts the
+  /// increment, clamps, and takes the endpoint back from the hit count. A cell left with no hit
+  /// and a log-odds >= 0 holds no evidence any more (only misses can remain without hits, and
+  /// they sum below 0) and becomes unobserved: its state was unknown either way, and a later
+  /// update starts from 0 either way. Exact (the cell ends as if the scan had never been
+  /// inserted) as long as neither that cell's history nor the history without the scan met a
+  /// clamping bound, and its hit count never saturated. An unobserved cell stays so.
+  FRAGG_HD void unapply(Cell& c, bool hit) const {
+    if (!c.observed()) return;
+    if (hit && c.hits > 0 && c.hits < INT16_MAX) --c.hits;
+    const int16_t v = clampFx(int{c.log_odds_fx} - (hit ? hit_fx : miss_fx));
+    if (c.hits == 0 && v >= 0) {
+      c = Cell();
+      return;
+    }
+    c.log_odds_fx = v;
+  }
+  /// apply() or unapply().
+  FRAGG_HD void update(Cell& c, bool hit, bool remove) const {
+    if (remove)
+      unapply(c, hit);
+    else
+      apply(c, hit);
+  }
   FRAGG_HD CellState state(const Cell& c) const {
     if (!c.observed()) return CellState::kUnknown;
     if (c.log_odds_fx > occupied_above_fx) return CellState::kOccupied;

@@ -80,12 +80,12 @@ void CpuIntegrator::integrate(const ScanInput& in, const MapParams& params,
   prepareScan(in.cloud, in.T_map_sensor, in.model, in.frustum, in.explicit_model, params, prepared_,
               stats);
   stats.seconds_prepare += secondsSince(t0);
-  integratePrepared(prepared_, model, params.raycast, revision, blocks, stats);
+  integratePrepared(prepared_, model, params.raycast, revision, blocks, stats, in.remove);
 }
 
 void CpuIntegrator::integratePrepared(const PreparedScan& scan, const OccupancyModel& model,
                                       RayCast raycast, uint64_t revision, BlockMap& blocks,
-                                      InsertStats& stats) {
+                                      InsertStats& stats, bool remove) {
   const int threads = threads_ > 0 ? threads_ : omp_get_max_threads();
   auto t0 = std::chrono::steady_clock::now();
   BlockKey lo, hi;
@@ -134,9 +134,10 @@ void CpuIntegrator::integratePrepared(const PreparedScan& scan, const OccupancyM
   for (long j = 0; j < touched; ++j) target[j] = blocks.find(merged.touched(j).key);
   uint64_t created = 0;
   std::vector<char> fresh(static_cast<size_t>(touched), 0);
-  for (long j = 0; j < touched; ++j) created += target[j] == kNoBlock ? 1 : 0;
+  // A removal has nothing to undo in a block that does not exist: none is created.
+  for (long j = 0; j < touched && !remove; ++j) created += target[j] == kNoBlock ? 1 : 0;
   blocks.reserve(created);
-  for (long j = 0; j < touched; ++j) {
+  for (long j = 0; j < touched && !remove; ++j) {
     if (target[j] != kNoBlock) continue;
     target[j] = blocks.findOrCreate(merged.touched(j).key, nullptr, /*initialise=*/false);
     fresh[j] = 1;
@@ -144,6 +145,7 @@ void CpuIntegrator::integratePrepared(const PreparedScan& scan, const OccupancyM
   uint64_t updated = 0;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 64) reduction(+ : updated)
   for (long j = 0; j < touched; ++j) {
+    if (target[j] == kNoBlock) continue;  // removal only
     const ScratchBlock& marks = merged.touched(j);
     Block& block = blocks.block(target[j]);
     if (fresh[j]) std::fill(std::begin(block.cells), std::end(block.cells), Cell());
@@ -153,7 +155,7 @@ void CpuIntegrator::integratePrepared(const PreparedScan& scan, const OccupancyM
         const int bit = __builtin_ctzll(bits);
         Cell& cell = block.cells[w * 64 + bit];
         const Cell before = cell;
-        model.apply(cell, (marks.hit[w] >> bit) & 1);
+        model.update(cell, (marks.hit[w] >> bit) & 1, remove);
         changed |= before.log_odds_fx != cell.log_odds_fx || before.hits != cell.hits;
         ++updated;
       }

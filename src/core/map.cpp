@@ -42,6 +42,7 @@ Map::Map(const MapParams& params)
   backend_reason_ = std::move(choice.reason);
   blocks_ = BlockMap(integrator_->hostAllocator());
   culler_ = std::make_unique<Culler>(params_.culling);
+  scan_store_ = std::make_unique<ScanStore>(params_.scans);
 }
 
 Map::~Map() = default;
@@ -50,45 +51,123 @@ Map& Map::operator=(Map&&) noexcept = default;
 
 InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                         const SensorModel& sensor, int64_t stamp_ns) {
-  (void)stamp_ns;  // kept with the scan once the scan store exists (loop closure)
   const auto t0 = std::chrono::steady_clock::now();
   validatePose(T_map_sensor);
   sensor.validate();
   if (cloud.empty()) throw InvalidArgument("point cloud is empty");
-  const bool explicit_model = sensor.type != SensorType::kAuto;
-  auto t = std::chrono::steady_clock::now();  // sensor model, frustum and culling
-  SensorModel model = explicit_model ? sensor : resolveAutoSensor(sensor, cloud);
-  if (model.max_range_m <= 0.0) model.max_range_m = farthestPoint(cloud);
+  const bool keep = params_.scans.keep;
+  // A kept scan is integrated as it is kept (quantised), so that its removal is exact.
+  EncodedPoints kept;
+  PointCloud quantised;
+  if (keep) {
+    kept = encodePoints(cloud, params_.scans.point_step_m);
+    quantised = decodePoints(kept);
+  }
+  const PointCloud& used = keep ? quantised : cloud;
 
+  ScanRecord how;
+  how.id = next_scan_id_;
+  how.stamp_ns = stamp_ns;
+  how.T_map_sensor = T_map_sensor;
+  how.explicit_model = sensor.type != SensorType::kAuto;
+  how.model = how.explicit_model ? sensor : resolveAutoSensor(sensor, used);
+  if (how.model.max_range_m <= 0.0) how.model.max_range_m = farthestPoint(used);
+  how.raycast = params_.raycast;
+  how.clear_no_return_rays = params_.clear_no_return_rays;
+  const double seconds_model =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  InsertStats stats = integrateScan(used, how, /*remove=*/false);
+  stats.seconds_cull += seconds_model;
+  if (keep) scan_store_->add(how, std::move(kept));
+  ++next_scan_id_;
+  ++scans_;
+  stats.scan_id = how.id;
+  stats.seconds_total =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return stats;
+}
+
+InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, bool remove) {
+  const auto t = std::chrono::steady_clock::now();  // frustum and culling
+  MapParams params = params_;
+  params.raycast = how.raycast;
+  params.clear_no_return_rays = how.clear_no_return_rays;
   InsertStats stats;
-  const Frustum frustum = buildFrustum(model, T_map_sensor, params_.resolution_m);
+  const Frustum frustum = buildFrustum(how.model, how.T_map_sensor, params_.resolution_m);
   CullContext cull;
   if (integrator_->cullsOnItsOwn()) {
-    cull = culler_->beginScan(frustum, model, T_map_sensor);
+    cull = culler_->beginScan(frustum, how.model, how.T_map_sensor);
   } else {
-    stats.culling =
-        culler_->cull(frustum, model, T_map_sensor, params_.resolution_m, blocks_, nullptr);
-    cull = culler_->context(frustum, T_map_sensor);
+    stats.culling = culler_->cull(frustum, how.model, how.T_map_sensor, params_.resolution_m,
+                                  blocks_, nullptr);
+    cull = culler_->context(frustum, how.T_map_sensor);
   }
   stats.seconds_cull = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 
-  const ScanInput scan{cloud, T_map_sensor, model, frustum, explicit_model, cull};
+  ScanInput scan{cloud, how.T_map_sensor, how.model, frustum, how.explicit_model, cull};
+  scan.remove = remove;
   try {
-    integrator_->integrate(scan, params_, model_, revision_ + 1, blocks_, stats);
+    integrator_->integrate(scan, params, model_, revision_ + 1, blocks_, stats);
   } catch (const CudaOutOfMemory& e) {
     // The device backend applies a scan all at once or not at all: the map is intact.
     fallBackToCpu(e.what());
     InsertStats cpu_stats;
     cpu_stats.culling = stats.culling;
     cpu_stats.seconds_cull = stats.seconds_cull;
-    integrator_->integrate(scan, params_, model_, revision_ + 1, blocks_, cpu_stats);
+    integrator_->integrate(scan, params, model_, revision_ + 1, blocks_, cpu_stats);
     stats = cpu_stats;
   }
   ++revision_;
-  ++scans_;
+  return stats;
+}
+
+InsertStats Map::remove(ScanId id) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!params_.scans.keep && scan_store_->size() == 0)
+    throw InvalidArgument("this map keeps no scans (insert them with the scan store on: "
+                          "MapParams::scans.keep, `fragg_map build --keep-scans`)");
+  const ScanRecord how = scan_store_->record(id);  // throws for an unknown index
+  const PointCloud cloud = decodePoints(scan_store_->points(id));
+  InsertStats stats = integrateScan(cloud, how, /*remove=*/true);
+  scan_store_->erase(id);
+  if (scans_ > 0) --scans_;
+  stats.scan_id = id;
   stats.seconds_total =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;
+}
+
+CorrectionStats Map::correctPoses(const std::map<ScanId, Eigen::Isometry3d>& T_map_sensor_new) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!params_.scans.keep && scan_store_->size() == 0)
+    throw InvalidArgument("this map keeps no scans (insert them with the scan store on: "
+                          "MapParams::scans.keep, `fragg_map build --keep-scans`)");
+  // Everything is checked (and spilled points read) before the map changes.
+  std::vector<EncodedPoints> points;
+  points.reserve(T_map_sensor_new.size());
+  for (const auto& [id, T] : T_map_sensor_new) {
+    if (!scan_store_->contains(id))
+      throw InvalidArgument("no kept scan with index " + std::to_string(id));
+    try {
+      validatePose(T);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument("scan " + std::to_string(id) + ": " + e.what());
+    }
+    points.push_back(scan_store_->points(id));
+  }
+  CorrectionStats out;
+  out.scans = T_map_sensor_new.size();
+  size_t k = 0;
+  for (const auto& [id, T] : T_map_sensor_new)
+    out.removal.add(integrateScan(decodePoints(points[k++]), scan_store_->record(id), true));
+  k = 0;
+  for (const auto& [id, T] : T_map_sensor_new) {
+    scan_store_->setPose(id, T);
+    out.insertion.add(integrateScan(decodePoints(points[k++]), scan_store_->record(id), false));
+  }
+  out.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
 }
 
 VoxelKey Map::keyOf(const Eigen::Vector3d& p_map) const {
@@ -153,8 +232,10 @@ void Map::reset() {
   integrator_->dropDeviceCopies();
   blocks_.clear();
   culler_->reset();
+  scan_store_->clear();
   ++revision_;
   scans_ = 0;
+  next_scan_id_ = 0;
 }
 
 const BlockMap& Map::blocks() const {
@@ -187,6 +268,7 @@ MemoryStats Map::memory() const {
   m.device_bytes = integrator_->deviceBytes();
   m.device_estimate_bytes = integrator_->deviceEstimateBytes();
   m.known_voxels = knownVoxelCount();
+  m.scan_store_bytes = scan_store_->memoryBytes();
   return m;
 }
 

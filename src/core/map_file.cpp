@@ -4,16 +4,16 @@
 #include <zlib.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cstring>
-#include <fstream>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "fragg_map/atomic_file.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/byte_io.h"
 #include "fragg_map/internal/integrator.h"
+#include "fragg_map/internal/scan_codec.h"
 #include "fragg_map/map.h"
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the .fgm writer assumes little-endian");
@@ -23,60 +23,6 @@ namespace fragg {
 namespace {
 constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 * 6 + 4 + 4 + 8 + 8;
 constexpr size_t kBlockBytes = sizeof(Block);
-
-class Writer {
- public:
-  template <class T>
-  void put(const T& v) {
-    const auto* p = reinterpret_cast<const uint8_t*>(&v);
-    bytes.insert(bytes.end(), p, p + sizeof(T));
-  }
-  void put(const void* data, size_t n) {
-    const auto* p = static_cast<const uint8_t*>(data);
-    bytes.insert(bytes.end(), p, p + n);
-  }
-  std::vector<uint8_t> bytes;
-};
-
-class Reader {
- public:
-  Reader(const std::vector<uint8_t>& b, size_t end, const std::string& path)
-      : bytes_(b), end_(end), path_(path) {}
-  template <class T>
-  T get(const char* what) {
-    T v;
-    take(&v, sizeof(T), what);
-    return v;
-  }
-  void take(void* out, size_t n, const char* what) {
-    if (end_ - pos_ < n) fail(std::string("truncated while reading ") + what);
-    std::memcpy(out, bytes_.data() + pos_, n);
-    pos_ += n;
-  }
-  size_t remaining() const { return end_ - pos_; }
-  [[noreturn]] void fail(const std::string& why) const {
-    throw IoError(path_ + ": not a valid .fgm map: " + why);
-  }
-
- private:
-  const std::vector<uint8_t>& bytes_;
-  size_t end_;
-  size_t pos_ = 0;
-  std::string path_;
-};
-
-std::vector<uint8_t> readWholeFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot open " + path + ": " + std::strerror(errno));
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  if (size < 0) throw IoError("cannot read " + path);
-  std::vector<uint8_t> bytes(static_cast<size_t>(size));
-  in.seekg(0);
-  if (size > 0 && !in.read(reinterpret_cast<char*>(bytes.data()), size))
-    throw IoError("cannot read " + path + ": " + std::strerror(errno));
-  return bytes;
-}
 }  // namespace
 
 void Map::save(const std::string& path) const {
@@ -91,7 +37,7 @@ void Map::save(const std::string& path) const {
   };
   std::sort(order.begin(), order.end(), keyLess);
 
-  Writer w;
+  ByteWriter w;
   w.put(kMapFileMagic, sizeof(kMapFileMagic));
   w.put(kMapFileVersion);
   w.put(static_cast<uint32_t>(kHeaderBytes));
@@ -99,7 +45,8 @@ void Map::save(const std::string& path) const {
   for (double v : {occ.prob_hit, occ.prob_miss, occ.clamp_min, occ.clamp_max, occ.unknown_band})
     w.put(v);
   w.put(static_cast<uint32_t>(kBlockSize));
-  w.put(kMapFileCompressed);
+  const bool with_scans = params_.scans.keep || scan_store_->size() > 0;
+  w.put(kMapFileCompressed | (with_scans ? kMapFileScans : 0u));
   w.put(static_cast<uint64_t>(order.size()));
   w.put(static_cast<uint64_t>(scans_));
   std::vector<uint8_t> packed(compressBound(kBlockBytes));
@@ -115,6 +62,11 @@ void Map::save(const std::string& path) const {
     w.put(static_cast<uint32_t>(packed_size));
     w.put(packed.data(), packed_size);
   }
+  if (with_scans) {
+    w.put(static_cast<uint64_t>(next_scan_id_));
+    w.put(static_cast<uint64_t>(scan_store_->size()));
+    for (ScanId id : scan_store_->ids()) writeScan(w, scan_store_->record(id), scan_store_->points(id));
+  }
   const uint32_t crc = static_cast<uint32_t>(crc32(0L, w.bytes.data(), w.bytes.size()));
   w.put(crc);
   AtomicFile file(path);
@@ -127,12 +79,12 @@ Map Map::load(const std::string& path, Backend backend) {
   if (bytes.size() < kHeaderBytes + 4)
     throw IoError(path + ": not a valid .fgm map: file too short (" + std::to_string(bytes.size()) +
                   " bytes)");
-  Reader r(bytes, bytes.size() - 4, path);
+  ByteReader r(bytes, bytes.size() - 4, path, "not a valid .fgm map");
   char magic[8];
   r.take(magic, sizeof(magic), "magic");
   if (std::memcmp(magic, kMapFileMagic, sizeof(magic)) != 0) r.fail("wrong magic (not FRAGGMAP)");
   const auto version = r.get<uint32_t>("version");
-  if (version != kMapFileVersion)
+  if (version != 1 && version != kMapFileVersion)
     r.fail("unsupported version " + std::to_string(version) + " (this build reads version " +
            std::to_string(kMapFileVersion) + ")");
   uint32_t stored_crc;
@@ -157,13 +109,15 @@ Map Map::load(const std::string& path, Backend backend) {
   if (r.get<uint32_t>("block edge") != static_cast<uint32_t>(kBlockSize))
     r.fail("block edge is not " + std::to_string(kBlockSize));
   const auto flags = r.get<uint32_t>("flags");
-  if (flags & ~kMapFileCompressed) r.fail("unknown flags " + std::to_string(flags));
+  const uint32_t known_flags = kMapFileCompressed | (version >= 2 ? kMapFileScans : 0u);
+  if (flags & ~known_flags) r.fail("unknown flags " + std::to_string(flags));
   const auto count = r.get<uint64_t>("block count");
   const auto scans = r.get<uint64_t>("scan count");
   // Every block takes at least 16 bytes: reject absurd counts before allocating.
   if (count > r.remaining() / 16) r.fail("block count larger than the file");
 
   params.backend = backend;
+  params.scans.keep = (flags & kMapFileScans) != 0;
   Map map(params);
   const OccupancyModel& model = map.model();
   std::vector<uint8_t> packed;
@@ -194,6 +148,21 @@ Map Map::load(const std::string& path, Backend backend) {
       if (c.observed() && (c.log_odds_fx < model.min_fx || c.log_odds_fx > model.max_fx))
         r.fail("log-odds outside the clamping range");
     }
+  }
+  if (flags & kMapFileScans) {
+    map.next_scan_id_ = r.get<uint64_t>("next scan index");
+    const auto kept = r.get<uint64_t>("kept scan count");
+    if (kept > r.remaining() / 64) r.fail("kept scan count larger than the file");
+    for (uint64_t k = 0; k < kept; ++k) {
+      ScanRecord record;
+      EncodedPoints points;
+      readScan(r, record, points);
+      if (record.id >= map.next_scan_id_ || map.scan_store_->contains(record.id))
+        r.fail("scan index " + std::to_string(record.id) + " repeated or out of range");
+      map.scan_store_->add(record, std::move(points));
+    }
+  } else {
+    map.next_scan_id_ = scans;
   }
   if (r.remaining() != 0) r.fail("trailing bytes after the last block");
   map.scans_ = static_cast<size_t>(scans);

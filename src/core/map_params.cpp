@@ -47,6 +47,9 @@ void MapParams::validate() const {
     throw InvalidArgument("cuda pool margin must be in (0, 100], got " +
                           std::to_string(cuda.pool_margin));
   if (cuda.device < 0) throw InvalidArgument("cuda device must be >= 0");
+  if (!std::isfinite(scans.point_step_m) || scans.point_step_m < 0.0 || scans.point_step_m > 0.1)
+    throw InvalidArgument("scan store point step must be in [0, 0.1] m (0 = float32), got " +
+                          std::to_string(scans.point_step_m));
 }
 
 }  // namespace fragg

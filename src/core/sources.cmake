@@ -1,5 +1,8 @@
 set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/atomic_file.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/byte_io.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/scan_codec.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/scan_store.cpp
   ${CMAKE_CURRENT_LIST_DIR}/occupancy.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_params.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sensor_model.cpp

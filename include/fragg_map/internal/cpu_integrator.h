@@ -18,8 +18,10 @@ class CpuIntegrator : public Integrator {
   void integrate(const ScanInput& scan, const MapParams& params, const OccupancyModel& model,
                  uint64_t revision, BlockMap& blocks, InsertStats& stats) override;
   /// The ray cast and update of a prepared scan (also used by the CUDA backend's fallback).
+  /// `remove`: undo the scan's updates instead (no block is created).
   void integratePrepared(const PreparedScan& scan, const OccupancyModel& model, RayCast raycast,
-                         uint64_t revision, BlockMap& blocks, InsertStats& stats);
+                         uint64_t revision, BlockMap& blocks, InsertStats& stats,
+                         bool remove = false);
   const char* name() const override { return "cpu"; }
 
  private:

@@ -25,12 +25,16 @@ struct ScanInput {
   const Frustum& frustum;
   bool explicit_model;
   const CullContext& cull;  ///< coherence context of this scan
+  /// Loop closure: walk the same rays and undo the scan's updates (OccupancyModel::unapply)
+  /// instead of applying them; blocks that do not exist are not created.
+  bool remove = false;
 };
 
 class Integrator {
  public:
   virtual ~Integrator() = default;
-  /// Ray casts the scan (each cell updated at most once, hit wins) and applies the updates,
+  /// Ray casts the scan (each cell updated at most once, hit wins) and applies the updates
+  /// (or undoes them when `scan.remove`),
   /// stamping changed blocks with `revision`. Fills the point and traversal counters and the
   /// prepare / ray cast / apply times of `stats`.
   virtual void integrate(const ScanInput& scan, const MapParams& params,
