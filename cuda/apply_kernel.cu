@@ -11,8 +11,8 @@ constexpr int kThreads = 128;
 constexpr int kCellsPerThread = kCellsPerBlock / kThreads;
 
 __global__ void __launch_bounds__(kThreads)
-    applyKernel(SlotArrays s, OccupancyModel model, uint64_t revision, uint32_t scan,
-                bool remove, ScanCounters* c) {
+    applyKernel(SlotArrays s, OccupancyModel model, uint64_t revision, uint32_t scan, bool remove,
+                ScanCounters* c) {
   // The ray pass left work undone (a missed host block, a full pool): apply nothing, the host
   // completes the marks and launches this again.
   if (c->misses != 0 || c->overflow != 0 || c->outside_window != 0) return;

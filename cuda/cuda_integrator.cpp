@@ -465,8 +465,8 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
     launchRaycast(args, params.raycast, params.cuda.readonly_ray_loads, stream_.get());
     launchCompactTouched(pool_.arrays(), scan_, counters_dev_.get(), stream_.get());
     FRAGG_CUDA_CHECK(cudaEventRecord(apply_start_, stream_.get()));
-    launchApply(pool_.arrays(), model, revision, scan_, in.remove, counters_dev_.get(), 16 * sm_count_,
-                stream_.get());
+    launchApply(pool_.arrays(), model, revision, scan_, in.remove, counters_dev_.get(),
+                16 * sm_count_, stream_.get());
     FRAGG_CUDA_CHECK(cudaEventRecord(apply_end_, stream_.get()));
     copyToHost(counters_host_.get(), counters_dev_.get(), 1, stream_.get());
     stream_.sync();

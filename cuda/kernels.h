@@ -39,8 +39,7 @@ void launchCompactTouched(const SlotArrays& slots, uint32_t scan, ScanCounters* 
 /// Over the touched slots (only when the ray pass had no miss and no overflow): applies the
 /// marks (or undoes them: `remove`), clears the scratch, sets dirty / changed_at / last_used.
 void launchApply(const SlotArrays& slots, const OccupancyModel& model, uint64_t revision,
-                 uint32_t scan, bool remove, ScanCounters* counters, int grid,
-                 cudaStream_t stream);
+                 uint32_t scan, bool remove, ScanCounters* counters, int grid, cudaStream_t stream);
 
 /// Window entries: every one kWindowEmpty, then each resident slot whose block is inside.
 void launchWindowFill(const Window& w, const SlotArrays& slots, cudaStream_t stream);

@@ -41,7 +41,7 @@ struct MemoryStats {
   /// CUDA: the sensor's frustum volume (paper formula (1)) in blocks, as device bytes.
   size_t device_estimate_bytes = 0;
   size_t blocks = 0;
-  size_t known_voxels = 0;  ///< observed cells
+  size_t known_voxels = 0;      ///< observed cells
   size_t scan_store_bytes = 0;  ///< kept scans' points in memory
 };
 

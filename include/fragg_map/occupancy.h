@@ -52,22 +52,32 @@ struct OccupancyModel {
     c.log_odds_fx = updated(c.log_odds_fx, hit);
     if (hit && c.hits < INT16_MAX) ++c.hits;
   }
-  /// Undoes one update of a scan that is being removed (loop closure): subtracts the
-  /// increment, clamps, and takes the endpoint back from the hit count. A cell left with no hit
-  /// and a log-odds >= 0 holds no evidence any more (only misses can remain without hits, and
-  /// they sum below 0) and becomes unobserved: its state was unknown either way, and a later
-  /// update starts from 0 either way. Exact (the cell ends as if the scan had never been
-  /// inserted) as long as neither that cell's history nor the history without the scan met a
-  /// clamping bound, and its hit count never saturated. An unobserved cell stays so.
+  /// Undoes one update of a scan that is being removed (loop closure): takes the endpoint back
+  /// from the hit count and subtracts the increment, then applies what any history of
+  /// OctoMap's add-then-clamp updates guarantees:
+  ///  * a cell with h hits has log-odds <= h * hit (clamping from below only raises values
+  ///    that later hits build on from min <= 0);
+  ///  * a cell with no hit left holds misses only, so its log-odds is <= miss while it holds
+  ///    any: a larger value means no evidence is left and the cell becomes unobserved (it read
+  ///    unknown either way, and a later update starts from 0 either way);
+  ///  * a hit taken from a cell saturated at max leaves min(max, h * hit): the surplus that
+  ///    clamping cut off is assumed to have absorbed it (plain subtraction would turn a wall
+  ///    seen by many scans into free space after a few removals).
+  /// Exact (the cell ends as if the scan had never been inserted) when neither the cell's
+  /// history nor that history without the scan met a clamping bound and its hit count never
+  /// saturated; otherwise an estimate. An unobserved cell stays unobserved.
   FRAGG_HD void unapply(Cell& c, bool hit) const {
     if (!c.observed()) return;
     if (hit && c.hits > 0 && c.hits < INT16_MAX) --c.hits;
-    const int16_t v = clampFx(int{c.log_odds_fx} - (hit ? hit_fx : miss_fx));
-    if (c.hits == 0 && v >= 0) {
+    const int hit_bound = int{c.hits} * hit_fx;
+    int v = int{c.log_odds_fx} - (hit ? hit_fx : miss_fx);
+    if (hit && c.log_odds_fx == max_fx) v = max_fx;
+    if (v > hit_bound) v = hit_bound;
+    if (c.hits == 0 && v > miss_fx) {
       c = Cell();
       return;
     }
-    c.log_odds_fx = v;
+    c.log_odds_fx = clampFx(v);
   }
   /// apply() or unapply().
   FRAGG_HD void update(Cell& c, bool hit, bool remove) const {

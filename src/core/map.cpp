@@ -99,8 +99,8 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   if (integrator_->cullsOnItsOwn()) {
     cull = culler_->beginScan(frustum, how.model, how.T_map_sensor);
   } else {
-    stats.culling = culler_->cull(frustum, how.model, how.T_map_sensor, params_.resolution_m,
-                                  blocks_, nullptr);
+    stats.culling =
+        culler_->cull(frustum, how.model, how.T_map_sensor, params_.resolution_m, blocks_, nullptr);
     cull = culler_->context(frustum, how.T_map_sensor);
   }
   stats.seconds_cull = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
@@ -125,8 +125,9 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
 InsertStats Map::remove(ScanId id) {
   const auto t0 = std::chrono::steady_clock::now();
   if (!params_.scans.keep && scan_store_->size() == 0)
-    throw InvalidArgument("this map keeps no scans (insert them with the scan store on: "
-                          "MapParams::scans.keep, `fragg_map build --keep-scans`)");
+    throw InvalidArgument(
+        "this map keeps no scans (insert them with the scan store on: "
+        "MapParams::scans.keep, `fragg_map build --keep-scans`)");
   const ScanRecord how = scan_store_->record(id);  // throws for an unknown index
   const PointCloud cloud = decodePoints(scan_store_->points(id));
   InsertStats stats = integrateScan(cloud, how, /*remove=*/true);
@@ -141,8 +142,9 @@ InsertStats Map::remove(ScanId id) {
 CorrectionStats Map::correctPoses(const std::map<ScanId, Eigen::Isometry3d>& T_map_sensor_new) {
   const auto t0 = std::chrono::steady_clock::now();
   if (!params_.scans.keep && scan_store_->size() == 0)
-    throw InvalidArgument("this map keeps no scans (insert them with the scan store on: "
-                          "MapParams::scans.keep, `fragg_map build --keep-scans`)");
+    throw InvalidArgument(
+        "this map keeps no scans (insert them with the scan store on: "
+        "MapParams::scans.keep, `fragg_map build --keep-scans`)");
   // Everything is checked (and spilled points read) before the map changes.
   std::vector<EncodedPoints> points;
   points.reserve(T_map_sensor_new.size());

@@ -65,7 +65,8 @@ void Map::save(const std::string& path) const {
   if (with_scans) {
     w.put(static_cast<uint64_t>(next_scan_id_));
     w.put(static_cast<uint64_t>(scan_store_->size()));
-    for (ScanId id : scan_store_->ids()) writeScan(w, scan_store_->record(id), scan_store_->points(id));
+    for (ScanId id : scan_store_->ids())
+      writeScan(w, scan_store_->record(id), scan_store_->points(id));
   }
   const uint32_t crc = static_cast<uint32_t>(crc32(0L, w.bytes.data(), w.bytes.size()));
   w.put(crc);

@@ -65,7 +65,8 @@ PointCloud decodePoints(const EncodedPoints& points) {
   cloud.points_S.resize(points.count);
   if (points.step_m <= 0.0) {
     if (points.count)
-      std::memcpy(static_cast<void*>(cloud.points_S.data()), points.data.data(), points.dataBytes());
+      std::memcpy(static_cast<void*>(cloud.points_S.data()), points.data.data(),
+                  points.dataBytes());
     return cloud;
   }
   const auto* q = reinterpret_cast<const int16_t*>(points.data.data());
@@ -93,8 +94,8 @@ void writeScan(ByteWriter& w, const ScanRecord& r, const EncodedPoints& p) {
   w.put(static_cast<uint8_t>(r.explicit_model));
   w.put(static_cast<uint8_t>(r.raycast));
   w.put(static_cast<uint8_t>(r.clear_no_return_rays));
-  for (double v : {m.hfov_rad, m.vfov_rad, m.elevation_min_rad, m.elevation_max_rad,
-                   m.min_range_m, m.max_range_m})
+  for (double v : {m.hfov_rad, m.vfov_rad, m.elevation_min_rad, m.elevation_max_rad, m.min_range_m,
+                   m.max_range_m})
     w.put(v);
   for (int a = 0; a < 3; ++a) w.put(m.forward_S[a]);
   for (int a = 0; a < 3; ++a) w.put(m.right_S[a]);

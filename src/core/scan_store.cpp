@@ -10,7 +10,8 @@
 namespace fragg {
 
 void ScanStore::add(const ScanRecord& record, EncodedPoints points) {
-  if (scans_.count(record.id)) throw InvalidArgument("scan " + std::to_string(record.id) + " is already kept");
+  if (scans_.count(record.id))
+    throw InvalidArgument("scan " + std::to_string(record.id) + " is already kept");
   Entry& e = scans_[record.id];
   e.record = record;
   e.record.points = points.count;

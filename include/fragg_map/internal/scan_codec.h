@@ -14,8 +14,7 @@ void writeScan(ByteWriter& w, const ScanRecord& record, const EncodedPoints& poi
 void readScan(ByteReader& r, ScanRecord& record, EncodedPoints& points);
 
 /// A spill file: "FRAGGSCN" | scan | CRC-32. Written atomically.
-void writeSpillFile(const std::string& path, const ScanRecord& record,
-                    const EncodedPoints& points);
+void writeSpillFile(const std::string& path, const ScanRecord& record, const EncodedPoints& points);
 EncodedPoints readSpillFile(const std::string& path, ScanId expected_id);
 
 }  // namespace fragg

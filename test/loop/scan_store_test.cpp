@@ -1,0 +1,133 @@
+// The scan store: quantised points, memory budget, spill files, and the kept scans in .fgm.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/internal/scan_codec.h"
+#include "fragg_map/map.h"
+#include "loop_scenes.h"
+
+namespace fragg {
+namespace {
+
+TEST(ScanStoreTest, QuantisedPointsStayWithinHalfAStepAndKeepNoReturns) {
+  PointCloud c = test::roomScan(4.0, 1.0, 2.0, 8, 90);
+  c.points_S[5] = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  c.points_S[6] = Eigen::Vector3f(std::numeric_limits<float>::infinity(), 0.f, 0.f);
+  const EncodedPoints e = encodePoints(c, 0.001);
+  EXPECT_DOUBLE_EQ(e.step_m, 0.001);  // 4 m fit 16 bits at 1 mm
+  EXPECT_EQ(e.data.size(), c.size() * 6);
+  const PointCloud d = decodePoints(e);
+  ASSERT_EQ(d.size(), c.size());
+  EXPECT_EQ(d.width, c.width);
+  EXPECT_EQ(d.height, c.height);
+  for (size_t i = 0; i < c.size(); ++i) {
+    if (i == 5 || i == 6) {
+      EXPECT_FALSE(d.points_S[i].allFinite());
+      continue;
+    }
+    EXPECT_LE((d.points_S[i] - c.points_S[i]).cwiseAbs().maxCoeff(), 0.0005f + 1e-6f) << i;
+  }
+  // Encoding the decoded cloud again gives the same bytes: re-insertion repeats the rays.
+  EXPECT_EQ(encodePoints(d, 0.001).data, e.data);
+}
+
+TEST(ScanStoreTest, FarPointsWidenTheStepAndFloatModeIsExact) {
+  PointCloud c;
+  c.points_S = {{60.f, 0.f, 0.f}, {1.2345f, -2.f, 0.5f}};
+  const EncodedPoints e = encodePoints(c, 0.001);
+  EXPECT_GT(e.step_m, 0.001);  // 60 m do not fit 16 bits at 1 mm
+  EXPECT_LE(e.step_m, 60.0 / 32767.0 + 1e-12);
+  EXPECT_NEAR(decodePoints(e).points_S[0].x(), 60.f, e.step_m);
+  const EncodedPoints f = encodePoints(c, 0.0);
+  EXPECT_EQ(f.step_m, 0.0);
+  EXPECT_EQ(decodePoints(f).points_S[1], c.points_S[1]);
+}
+
+TEST(ScanStoreTest, BudgetSpillsOldestScansToDiskAndReadsThemBack) {
+  const std::string dir = std::string(FRAGG_TEST_TMP) + "/spill_test";
+  std::filesystem::remove_all(dir);
+  MapParams p;
+  p.backend = Backend::kCpu;
+  p.scans.keep = true;
+  p.scans.max_bytes = 40000;  // about one scan of 8 x 720 points
+  p.scans.spill_dir = dir;
+  Map map(p);
+  for (int i = 0; i < 4; ++i) map.insert(test::roomScan(4, 1, 2, 8, 720), test::poseAt(i), test::lidar());
+  EXPECT_EQ(map.scanStore().size(), 4u);
+  EXPECT_GE(map.scanStore().spilledCount(), 2u);
+  EXPECT_LE(map.scanStore().memoryBytes(), 2 * 8 * 720 * 6u);
+  const EncodedPoints back = map.scanStore().points(0);
+  EXPECT_EQ(back.data, encodePoints(test::roomScan(4, 1, 2, 8, 720), 0.001).data);
+  // A spill file that was damaged is reported, not silently used.
+  const std::string spilled = dir + "/scan_0.fgs";
+  ASSERT_TRUE(std::filesystem::exists(spilled));
+  std::filesystem::resize_file(spilled, std::filesystem::file_size(spilled) - 10);
+  EXPECT_THROW(map.scanStore().points(0), IoError);
+  const uint64_t revision = map.revision();
+  EXPECT_THROW(map.correctPoses({{0, test::poseAt(0)}}), IoError);
+  EXPECT_EQ(map.revision(), revision);  // nothing was integrated
+}
+
+TEST(ScanStoreTest, WithoutSpillFolderTheOldestPointsAreDroppedAndThatIsAnError) {
+  MapParams p;
+  p.backend = Backend::kCpu;
+  p.scans.keep = true;
+  p.scans.max_bytes = 40000;
+  Map map(p);
+  for (int i = 0; i < 3; ++i) map.insert(test::roomScan(4, 1, 2, 8, 720), test::poseAt(i), test::lidar());
+  EXPECT_GE(map.scanStore().droppedCount(), 1u);
+  EXPECT_FALSE(map.scanStore().hasPoints(0));
+  EXPECT_TRUE(map.scanStore().hasPoints(2));
+  EXPECT_THROW(map.remove(0), InvalidArgument);
+}
+
+TEST(ScanStoreTest, KeptScansRoundTripThroughTheMapFile) {
+  MapParams p;
+  p.backend = Backend::kCpu;
+  p.scans.keep = true;
+  Map map(p);
+  for (int i = 0; i < 3; ++i)
+    map.insert(test::roomScan(4, 1, 2, 8, 180), test::poseAt(i), test::lidar(), 1000 + i);
+  const std::string path = std::string(FRAGG_TEST_TMP) + "/kept_scans.fgm";
+  map.save(path);
+  Map loaded = Map::load(path, Backend::kCpu);
+  ASSERT_EQ(loaded.scanStore().size(), 3u);
+  for (ScanId id = 0; id < 3; ++id) {
+    const ScanRecord& a = map.scanStore().record(id);
+    const ScanRecord& b = loaded.scanStore().record(id);
+    EXPECT_EQ(a.stamp_ns, b.stamp_ns);
+    EXPECT_TRUE(a.T_map_sensor.matrix() == b.T_map_sensor.matrix());  // bit for bit
+    EXPECT_EQ(a.model.type, b.model.type);
+    EXPECT_EQ(a.model.max_range_m, b.model.max_range_m);
+    EXPECT_EQ(map.scanStore().points(id).data, loaded.scanStore().points(id).data);
+  }
+  // The loaded map keeps scans and numbers new ones after the old ones.
+  EXPECT_EQ(loaded.insert(test::roomScan(4, 1, 2, 8, 180), test::poseAt(3), test::lidar()).scan_id,
+            3u);
+  // A truncated file with scans is rejected with a clear error.
+  const auto size = std::filesystem::file_size(path);
+  std::filesystem::resize_file(path, size - 100);
+  EXPECT_THROW(Map::load(path, Backend::kCpu), IoError);
+}
+
+TEST(ScanStoreTest, MapsWithoutKeptScansStillWriteTheOldLayout) {
+  MapParams p;
+  p.backend = Backend::kCpu;
+  Map map(p);
+  map.insert(test::roomScan(4, 1, 2, 8, 180), test::poseAt(0), test::lidar());
+  const std::string path = std::string(FRAGG_TEST_TMP) + "/no_scans.fgm";
+  map.save(path);
+  Map loaded = Map::load(path, Backend::kCpu);
+  EXPECT_EQ(loaded.scanStore().size(), 0u);
+  EXPECT_EQ(loaded.scanCount(), 1u);
+  EXPECT_THROW(loaded.correctPoses({{0, test::poseAt(0)}}), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace fragg
