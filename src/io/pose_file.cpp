@@ -67,6 +67,31 @@ std::vector<StampedPose> readTumPoses(const std::string& path) {
   return poses;
 }
 
+std::map<uint64_t, Eigen::Isometry3d> readScanPoses(const std::string& path) {
+  std::map<uint64_t, Eigen::Isometry3d> poses;
+  for (const TextLine& line : internal::readDataLines(path)) {
+    const std::string where = "line " + std::to_string(line.number);
+    const std::vector<std::string> tokens = internal::splitTokens(line.text, true);
+    if (tokens.size() != 8)
+      throwIo(path, where + ": expected 'scan_index tx ty tz qx qy qz qw', got " +
+                        std::to_string(tokens.size()) + " values");
+    uint64_t index = 0;
+    if (!internal::parseUint64(tokens[0], &index))
+      throwIo(path, where + ": '" + tokens[0] + "' is not a scan index (0, 1, 2, ...)");
+    const std::vector<double> v =
+        parseNumbers(path, line, std::vector<std::string>(tokens.begin() + 1, tokens.end()));
+    const Eigen::Quaterniond q =
+        internal::checkedQuaternion(v[3], v[4], v[5], v[6], path + ": " + where);
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = q.toRotationMatrix();
+    T.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
+    if (!poses.emplace(index, T).second)
+      throwIo(path, where + ": scan " + std::to_string(index) + " is listed twice");
+  }
+  if (poses.empty()) throwIo(path, "no poses (expected 'scan_index tx ty tz qx qy qz qw' lines)");
+  return poses;
+}
+
 std::vector<Eigen::Isometry3d> readKittiPoses(const std::string& path) {
   std::vector<Eigen::Isometry3d> poses;
   for (const TextLine& line : internal::readDataLines(path)) {

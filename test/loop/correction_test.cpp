@@ -145,18 +145,19 @@ void expectCorrectionOnReal(const std::vector<Scan>& scans, const std::vector<in
   error.linear() = Eigen::AngleAxisd(0.03, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   for (size_t i = 0; i < scans.size(); ++i) {
     const bool bad = std::find(disturbed.begin(), disturbed.end(), int(i)) != disturbed.end();
-    const auto st = map.insert(scans[i].cloud, bad ? error * scans[i].T_map_sensor
-                                                   : scans[i].T_map_sensor, sensor);
+    const auto st = map.insert(scans[i].cloud,
+                               bad ? error * scans[i].T_map_sensor : scans[i].T_map_sensor, sensor);
     truth.insert(scans[i].cloud, scans[i].T_map_sensor, sensor);
     if (bad) fix[st.scan_id] = scans[i].T_map_sensor;
   }
   const double before = test::sameState(map, truth);
   map.correctPoses(fix);
   const MapComparison c = compareMaps(map, truth);
-  std::printf("[loop] %s: %zu scans, %zu corrected: same state before %.4f %%, after %.4f %% of "
-              "%llu cells known in either\n",
-              label, scans.size(), fix.size(), 100 * before, 100 * c.agreementInEither(),
-              static_cast<unsigned long long>(c.known_in_either));
+  std::printf(
+      "[loop] %s: %zu scans, %zu corrected: same state before %.4f %%, after %.4f %% of "
+      "%llu cells known in either\n",
+      label, scans.size(), fix.size(), 100 * before, 100 * c.agreementInEither(),
+      static_cast<unsigned long long>(c.known_in_either));
   EXPECT_GT(c.known_in_either, 10000u);
   EXPECT_GE(c.agreementInEither(), 0.995) << label;
 }

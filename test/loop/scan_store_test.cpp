@@ -58,7 +58,8 @@ TEST(ScanStoreTest, BudgetSpillsOldestScansToDiskAndReadsThemBack) {
   p.scans.max_bytes = 40000;  // about one scan of 8 x 720 points
   p.scans.spill_dir = dir;
   Map map(p);
-  for (int i = 0; i < 4; ++i) map.insert(test::roomScan(4, 1, 2, 8, 720), test::poseAt(i), test::lidar());
+  for (int i = 0; i < 4; ++i)
+    map.insert(test::roomScan(4, 1, 2, 8, 720), test::poseAt(i), test::lidar());
   EXPECT_EQ(map.scanStore().size(), 4u);
   EXPECT_GE(map.scanStore().spilledCount(), 2u);
   EXPECT_LE(map.scanStore().memoryBytes(), 2 * 8 * 720 * 6u);
@@ -80,7 +81,8 @@ TEST(ScanStoreTest, WithoutSpillFolderTheOldestPointsAreDroppedAndThatIsAnError)
   p.scans.keep = true;
   p.scans.max_bytes = 40000;
   Map map(p);
-  for (int i = 0; i < 3; ++i) map.insert(test::roomScan(4, 1, 2, 8, 720), test::poseAt(i), test::lidar());
+  for (int i = 0; i < 3; ++i)
+    map.insert(test::roomScan(4, 1, 2, 8, 720), test::poseAt(i), test::lidar());
   EXPECT_GE(map.scanStore().droppedCount(), 1u);
   EXPECT_FALSE(map.scanStore().hasPoints(0));
   EXPECT_TRUE(map.scanStore().hasPoints(2));

@@ -19,8 +19,11 @@ Cell replay(const OccupancyModel& m, const std::vector<bool>& updates) {
 
 TEST(UnapplyTest, UndoingEveryUpdateLeavesTheCellUnobserved) {
   const OccupancyModel m = defaultModel();
-  for (const std::vector<bool>& seq :
-       {std::vector<bool>{true}, {false}, {true, false}, {false, false, true}, {true, true, false}}) {
+  for (const std::vector<bool>& seq : {std::vector<bool>{true},
+                                       {false},
+                                       {true, false},
+                                       {false, false, true},
+                                       {true, true, false}}) {
     Cell c = replay(m, seq);
     ASSERT_TRUE(c.observed());
     for (bool hit : seq) m.unapply(c, hit);

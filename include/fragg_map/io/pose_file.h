@@ -3,6 +3,8 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -16,6 +18,10 @@ struct StampedPose {
 /// TUM trajectory: "timestamp tx ty tz qx qy qz qw" per line, or "tx ty tz qx qy qz qw"
 /// (slambook's pose.txt, stamps 0). Quaternions are normalised; non-unit ones are rejected.
 std::vector<StampedPose> readTumPoses(const std::string& path);
+
+/// Corrected scan poses for `fragg_map correct`: "scan_index tx ty tz qx qy qz qw" per line
+/// (T_map_sensor; the index is the scan's insertion order). Indices must not repeat.
+std::map<uint64_t, Eigen::Isometry3d> readScanPoses(const std::string& path);
 
 /// KITTI odometry poses: 12 numbers per line, the first three rows of T_cam0_camI, row-major.
 std::vector<Eigen::Isometry3d> readKittiPoses(const std::string& path);

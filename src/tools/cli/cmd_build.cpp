@@ -39,6 +39,8 @@ struct BuildOptions {
   int threads = 0;
   size_t max_scans = 0;
   bool json = false;
+  ScanStoreParams scans;
+  double scan_budget_mib = 0.0;
 };
 
 constexpr double kDeg = M_PI / 180.0;
@@ -70,6 +72,11 @@ void runBuild(const BuildOptions& o) {
   params.raycast = rayCastFromString(o.raycast);
   params.clear_no_return_rays = o.clear_no_return;
   params.threads = o.threads;
+  params.scans = o.scans;
+  if (!(o.scan_budget_mib >= 0.0)) throw InvalidArgument("--scan-budget must be >= 0 MiB");
+  params.scans.max_bytes = static_cast<size_t>(o.scan_budget_mib * 1048576.0);
+  if (!o.scans.keep && (o.scan_budget_mib > 0.0 || !o.scans.spill_dir.empty()))
+    throw InvalidArgument("--scan-budget and --spill-dir need --keep-scans");
   params.validate();
   const SensorModel sensor = sensorFrom(o);
   sensor.validate();
@@ -140,6 +147,8 @@ void runBuild(const BuildOptions& o) {
                           {"p99", p99},
                           {"mean", total.seconds_total * 1e3 / ms_per_scan.size()}}},
                         {"known_voxels", mem.known_voxels},
+                        {"kept_scans", map.scanStore().size()},
+                        {"scan_store_bytes", mem.scan_store_bytes},
                         {"blocks", mem.blocks},
                         {"host_bytes", mem.host_block_bytes},
                         {"culling",
@@ -160,6 +169,13 @@ void runBuild(const BuildOptions& o) {
                     total.seconds_total * 1e3 / ms_per_scan.size(), median, p99, mem.known_voxels,
                     mem.host_block_bytes / 1048576.0, map.backendName(), map.backendReason())
             .c_str());
+    if (map.scanStore().size() > 0)
+      std::printf("%s\n",
+                  fmt::format("kept {} scans for `fragg_map correct` ({:.1f} MiB of points "
+                              "in memory, {} spilled, {} dropped)",
+                              map.scanStore().size(), mem.scan_store_bytes / 1048576.0,
+                              map.scanStore().spilledCount(), map.scanStore().droppedCount())
+                      .c_str());
   }
 }
 }  // namespace
@@ -204,6 +220,16 @@ void addBuildCommand(CLI::App& app) {
   c->add_option("--threads", o->threads, "CPU threads (0 = every core)")->capture_default_str();
   c->add_option("--scans", o->max_scans, "Integrate only the first N scans (0 = all)")
       ->capture_default_str();
+  c->add_flag("--keep-scans", o->scans.keep,
+              "Keep every scan in the map file (quantised points, pose, sensor model) so that "
+              "`fragg_map correct` can move scans to corrected poses later");
+  c->add_option("--scan-step", o->scans.point_step_m,
+                "Quantisation step of kept points in metres (0 = float32 as given)")
+      ->capture_default_str();
+  c->add_option("--scan-budget", o->scan_budget_mib,
+                "Kept points held in memory at most, MiB (0 = no limit); older scans go to "
+                "--spill-dir or are dropped");
+  c->add_option("--spill-dir", o->scans.spill_dir, "Folder for kept points beyond --scan-budget");
   c->add_flag("--json", o->json, "Print one JSON object on stdout");
   c->callback([o] { runBuild(*o); });
 }

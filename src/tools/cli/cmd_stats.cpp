@@ -16,7 +16,24 @@ namespace {
 struct StatsOptions {
   std::string map;
   bool json = false;
+  bool list_scans = false;
 };
+
+/// The kept scans as `fragg_map correct` names them: index, stamp, T_map_sensor, points.
+nlohmann::json keptScans(const Map& map) {
+  nlohmann::json list = nlohmann::json::array();
+  for (ScanId id : map.scanStore().ids()) {
+    const ScanRecord& r = map.scanStore().record(id);
+    const Eigen::Quaterniond q(r.T_map_sensor.linear());
+    const Eigen::Vector3d t = r.T_map_sensor.translation();
+    list.push_back({{"index", id},
+                    {"stamp_ns", r.stamp_ns},
+                    {"pose", {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()}},
+                    {"points", r.points},
+                    {"sensor", toString(r.model.type)}});
+  }
+  return list;
+}
 
 void runStats(const StatsOptions& o) {
   const Map map = loadMapFile(o.map);
@@ -45,6 +62,7 @@ void runStats(const StatsOptions& o) {
                         {"file_bytes", file_bytes},
                         {"resolution_m", res},
                         {"scans", map.scanCount()},
+                        {"kept_scans", map.scanStore().size()},
                         {"blocks", mem.blocks},
                         {"known_voxels", observed},
                         {"occupied", counts[static_cast<int>(CellState::kOccupied)]},
@@ -58,6 +76,7 @@ void runStats(const StatsOptions& o) {
                           {"clamp_min", occ.clamp_min},
                           {"clamp_max", occ.clamp_max},
                           {"unknown_band", occ.unknown_band}}}};
+    if (o.list_scans) j["scan_list"] = keptScans(map);
     std::printf("%s\n", j.dump().c_str());
     return;
   }
@@ -81,6 +100,21 @@ void runStats(const StatsOptions& o) {
                                 mem.host_block_bytes / 1048576.0, occ.prob_hit, occ.prob_miss,
                                 occ.clamp_min, occ.clamp_max, occ.unknown_band)
                         .c_str());
+  std::printf("kept scans   %zu%s\n", map.scanStore().size(),
+              map.scanStore().size() ? " (fragg_map correct can move them; --scans lists them)"
+                                     : " (built without --keep-scans: poses cannot be corrected)");
+  if (!o.list_scans) return;
+  std::printf("# scan_index tx ty tz qx qy qz qw (T_map_sensor)  stamp_ns points sensor\n");
+  for (const auto& s : keptScans(map)) {
+    const auto& p = s["pose"];
+    std::printf("%s\n",
+                fmt::format("{} {:.6f} {:.6f} {:.6f} {:.9f} {:.9f} {:.9f} {:.9f}  {} {} {}",
+                            s["index"].get<uint64_t>(), p[0].get<double>(), p[1].get<double>(),
+                            p[2].get<double>(), p[3].get<double>(), p[4].get<double>(),
+                            p[5].get<double>(), p[6].get<double>(), s["stamp_ns"].get<int64_t>(),
+                            s["points"].get<uint64_t>(), s["sensor"].get<std::string>())
+                    .c_str());
+  }
 }
 }  // namespace
 
@@ -89,6 +123,9 @@ void addStatsCommand(CLI::App& app) {
   CLI::App* c = app.add_subcommand("stats", "Print what a map holds (.fgm or .bt)");
   c->add_option("map", o->map, "Map file")->required();
   c->add_flag("--json", o->json, "Print one JSON object on stdout");
+  c->add_flag("--scans", o->list_scans,
+              "List the kept scans: index and pose in the format `fragg_map correct --poses` "
+              "reads");
   c->callback([o] { runStats(*o); });
 }
 

@@ -8,6 +8,7 @@
 namespace fragg::cli {
 
 void addBuildCommand(CLI::App& app);
+void addCorrectCommand(CLI::App& app);
 void addStatsCommand(CLI::App& app);
 void addExportCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);

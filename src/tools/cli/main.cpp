@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "fragg_map: warning: %s\n", message.c_str());
   });
   fragg::cli::addBuildCommand(app);
+  fragg::cli::addCorrectCommand(app);
   fragg::cli::addStatsCommand(app);
   fragg::cli::addExportCommand(app);
   fragg::cli::addRenderCommand(app);
