@@ -124,6 +124,15 @@ nlohmann::json runBackend(const std::string& engine, const Options& o,
     for (size_t i = scans.size() - k; i < scans.size(); ++i) fix[ScanId(i)] = truth[i];
     const CorrectionStats st = map.correctPoses(fix);
     const double ms = st.seconds_total * 1e3;
+    auto stages = [](const InsertStats& t) {
+      return fmt::format(
+          "cull {:.1f} prepare {:.1f} residency {:.1f} raycast {:.1f} apply {:.1f} "
+          "total {:.1f}",
+          t.seconds_cull * 1e3, t.seconds_prepare * 1e3, t.seconds_residency * 1e3,
+          t.seconds_raycast * 1e3, t.seconds_apply * 1e3, t.seconds_total * 1e3);
+    };
+    std::fprintf(stderr, "[loop] %s k=%zu removal: %s | insertion: %s (ms)\n", engine.c_str(), k,
+                 stages(st.removal).c_str(), stages(st.insertion).c_str());
     rows.push_back({{"k", k},
                     {"ms_total", ms},
                     {"ms_per_scan", ms / k},
