@@ -183,6 +183,9 @@ ServerParams parseParameters(const XmlRpcValue& root) {
   readDouble(root, "tf_tolerance", &p.tf_tolerance_s);
   if (!(p.tf_tolerance_s >= 0.0) || !std::isfinite(p.tf_tolerance_s))
     badParam("tf_tolerance", "must be a finite number of seconds >= 0");
+  readDouble(root, "marker_rate", &p.marker_rate_hz);
+  if (!(p.marker_rate_hz >= 0.0) || !std::isfinite(p.marker_rate_hz))
+    badParam("marker_rate", "must be a finite rate in Hz >= 0 (0 = after every cloud)");
   readDouble(root, "markers/color_min_z", &p.color_min_z_m);
   readDouble(root, "markers/color_max_z", &p.color_max_z_m);
   if (!std::isfinite(p.color_min_z_m) || !std::isfinite(p.color_max_z_m) ||

@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
 #include <set>
+#include <tuple>
 
 #include "fragg_map/ros/height_color.h"
 #include "map_fixtures.h"
@@ -64,6 +66,77 @@ TEST(BlockMarkers, FirstUpdateShowsEveryOccupiedCellOncePerBlock) {
   EXPECT_EQ(points, occupied.size());
   EXPECT_EQ(ledger.shownBlocks(), a.markers.size());
   EXPECT_EQ(ledger.publishedRevision(), map.revision());
+}
+
+using KeySet = std::set<std::tuple<int32_t, int32_t, int32_t>>;
+
+// What a subscriber shows after applying marker arrays in order: the voxels of each marker id.
+using ShownVoxels = std::map<int32_t, KeySet>;
+
+void apply(const fragg::Map& map, const MarkerArray& a, ShownVoxels* shown) {
+  for (const Marker& m : a.markers) {
+    if (m.action == Marker::DELETEALL) {
+      shown->clear();
+    } else if (m.action == Marker::DELETE) {
+      EXPECT_EQ(shown->erase(m.id), 1u) << "DELETE of a marker that is not shown";
+    } else {
+      KeySet& voxels = (*shown)[m.id];
+      voxels.clear();
+      for (const auto& p : m.points) {
+        const fragg::VoxelKey v = map.keyOf(Eigen::Vector3d(p.x, p.y, p.z));
+        voxels.insert({v.x, v.y, v.z});
+      }
+    }
+  }
+}
+
+KeySet allShown(const ShownVoxels& shown) {
+  KeySet all;
+  for (const auto& entry : shown) all.insert(entry.second.begin(), entry.second.end());
+  return all;
+}
+
+KeySet occupiedVoxels(const fragg::Map& map) {
+  KeySet out;
+  for (const Eigen::Vector3d& c : fragg_ros_test::centresIn(map, fragg::CellState::kOccupied)) {
+    const fragg::VoxelKey v = map.keyOf(c);
+    out.insert({v.x, v.y, v.z});
+  }
+  return out;
+}
+
+// marker_rate: a throttled topic skips updates; the next one carries every block changed since
+// its last (by revision), so its subscriber ends up with the same voxels as one that got every
+// update, including cells that appeared and vanished in between.
+TEST(BlockMarkers, SkippedUpdatesAccumulateNothingIsLost) {
+  fragg::Map map(fragg_ros_test::cpuParams());
+  const fragg::VoxelKey lone{1, 2, 3};
+  fragg_ros_test::setCell(map, lone, fragg::CellState::kOccupied);
+  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  MarkerLedger every, throttled;
+  ShownVoxels every_view, throttled_view;
+  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &every), &every_view);
+  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &throttled),
+        &throttled_view);
+  ASSERT_EQ(allShown(throttled_view).count({lone.x, lone.y, lone.z}), 1u);
+  // Three changes the throttled topic does not publish: a new wall, the lone cell freed (its
+  // block emptied), a wall seen from farther away.
+  fragg_ros_test::insertWall(map, Eigen::Vector3d(0.0, 10.0, 0.0), 3.0);
+  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &every), &every_view);
+  fragg_ros_test::setCell(map, lone, fragg::CellState::kFree);
+  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &every), &every_view);
+  fragg_ros_test::insertWall(map, Eigen::Vector3d(-2.0, 0.0, 0.0), 5.5);
+  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &every), &every_view);
+  const MarkerArray catch_up =
+      fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &throttled);
+  EXPECT_EQ(countAction(catch_up, Marker::DELETE), 1u);  // the lone cell's block
+  apply(map, catch_up, &throttled_view);
+  const KeySet expected = occupiedVoxels(map);
+  EXPECT_EQ(expected.count({lone.x, lone.y, lone.z}), 0u);
+  EXPECT_EQ(allShown(every_view), expected);
+  EXPECT_EQ(allShown(throttled_view), expected);
+  EXPECT_EQ(throttled.shownBlocks(), every.shownBlocks());
+  EXPECT_EQ(throttled.publishedRevision(), map.revision());
 }
 
 TEST(BlockMarkers, NothingChangedMeansNothingSent) {

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -74,6 +75,7 @@ TEST(ServerParams, ReadsEveryName) {
   set(root, "sensor/vfov", 0.9);
   set(root, "queue_size", 3);
   set(root, "tf_tolerance", 0.25);
+  set(root, "marker_rate", 2);  // an int where a double is expected
   const fragg_ros::ServerParams p = fragg_ros::parseParameters(root);
   EXPECT_EQ(p.map.resolution_m, 0.1);
   EXPECT_EQ(p.frame_id, "odom");
@@ -96,6 +98,7 @@ TEST(ServerParams, ReadsEveryName) {
   EXPECT_EQ(p.sensor.vfov_rad, 0.9);
   EXPECT_EQ(p.queue_size, 3);
   EXPECT_EQ(p.tf_tolerance_s, 0.25);
+  EXPECT_EQ(p.marker_rate_hz, 2.0);
 }
 
 TEST(ServerParams, LidarSensor) {
@@ -127,6 +130,8 @@ TEST(ServerParams, InvalidValuesNameTheParameter) {
   expectRejected("queue_size", 0);
   expectRejected("queue_size", 2.5);
   expectRejected("tf_tolerance", -0.1);
+  expectRejected("marker_rate", -1.0);
+  expectRejected("marker_rate", std::numeric_limits<double>::infinity());
   expectRejected("latch", 1);
   expectRejected("threads", -1);
   expectRejected("culling/coherence_ttl_scans", 0);
@@ -196,6 +201,7 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.occupancy_max_z_m, d.occupancy_max_z_m);
   EXPECT_EQ(p.queue_size, d.queue_size);
   EXPECT_EQ(p.tf_tolerance_s, d.tf_tolerance_s);
+  EXPECT_EQ(p.marker_rate_hz, d.marker_rate_hz);
   EXPECT_EQ(p.latch, d.latch);
   EXPECT_EQ(p.color_max_z_m, d.color_max_z_m);
 }

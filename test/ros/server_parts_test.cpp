@@ -8,6 +8,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/drop_oldest_queue.h"
+#include "fragg_map/ros/marker_throttle.h"
 #include "fragg_map/ros/timing_stats.h"
 
 namespace {
@@ -92,6 +93,29 @@ TEST(TimingStats, PercentileFollowsTheWindowMeanFollowsEverything) {
   EXPECT_EQ(t.percentileMs(0.99), 1.0);
   EXPECT_DOUBLE_EQ(t.meanMs(), 500.5);
   EXPECT_THROW(fragg_ros::TimingStats(0), fragg::InvalidArgument);
+}
+
+TEST(MarkerThrottle, NoLimitIsAlwaysDue) {
+  fragg_ros::MarkerThrottle t(0.0);
+  EXPECT_FALSE(t.limited());
+  EXPECT_TRUE(t.due(5.0));
+  t.published(5.0);
+  EXPECT_TRUE(t.due(5.0));
+}
+
+TEST(MarkerThrottle, AtMostOneUpdatePerPeriod) {
+  fragg_ros::MarkerThrottle t(2.0);  // 2 Hz
+  EXPECT_TRUE(t.limited());
+  EXPECT_EQ(t.periodS(), 0.5);
+  EXPECT_TRUE(t.due(100.0));  // the first update goes out at once
+  t.published(100.0);
+  EXPECT_FALSE(t.due(100.0));
+  EXPECT_FALSE(t.due(100.49));
+  EXPECT_TRUE(t.due(100.5));
+  t.published(100.7);  // the period counts from the last update
+  EXPECT_FALSE(t.due(101.1));
+  EXPECT_TRUE(t.due(101.2));
+  EXPECT_THROW(fragg_ros::MarkerThrottle(-1.0), fragg::InvalidArgument);
 }
 
 }  // namespace

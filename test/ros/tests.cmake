@@ -24,8 +24,9 @@ if(FRAGG_HAVE_ROS)
 endif()
 
 # rostests of the map server (the nodelet) on recorded bags: the smoke bag (with the service,
-# malformed-cloud and missing-tf tests) and the real Velodyne pair (make_test_bag.py: float32
-# unorganised + float64 organised with NaN, a leading-slash frame, one cloud without tf).
+# malformed-cloud and missing-tf tests), the real Velodyne pair (make_test_bag.py: float32
+# unorganised + float64 organised with NaN, a leading-slash frame, one cloud without tf) and the
+# real RGB-D frames (make_rgbd_bag.py: organised xyz+rgb depth clouds in an optical frame).
 if(FRAGG_HAVE_ROS AND FRAGG_SMOKE_BAG)
   find_package(rostest REQUIRED)
   # (add_rostest puts the ARGS into target and file names: keep them short.)
@@ -43,5 +44,21 @@ if(FRAGG_HAVE_ROS AND FRAGG_SMOKE_BAG)
     add_custom_target(fragg_map_rostest_bags ALL DEPENDS ${_fragg_velodyne_bag})
     add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_bag.test
       ARGS bag:=${_fragg_velodyne_bag} topic:=/velodyne_points scans:=2 no_tf:=1)
+  endif()
+  # The real RGB-D frames as organised depth clouds (make_rgbd_bag.py: 49 MB, made at build
+  # time, never committed).
+  set(_fragg_rgbd_data ${FRAGG_REAL_DATA}/slambook2_ch5_rgbd)
+  if(EXISTS ${_fragg_rgbd_data}/pose.txt)
+    set(_fragg_rgbd_bag ${CMAKE_BINARY_DIR}/bags/rgbd.bag)
+    add_custom_command(OUTPUT ${_fragg_rgbd_bag}
+      COMMAND ${CMAKE_COMMAND} -E make_directory ${CMAKE_BINARY_DIR}/bags
+      COMMAND /usr/bin/python3 ${CMAKE_CURRENT_LIST_DIR}/../rostest/make_rgbd_bag.py
+              ${_fragg_rgbd_bag} ${_fragg_rgbd_data}
+      DEPENDS ${CMAKE_CURRENT_LIST_DIR}/../rostest/make_rgbd_bag.py
+      COMMENT "rostest bag: real RGB-D frames as organised depth clouds"
+      VERBATIM)
+    add_custom_target(fragg_map_rostest_rgbd_bag ALL DEPENDS ${_fragg_rgbd_bag})
+    add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_rgbd.test
+      ARGS bag:=${_fragg_rgbd_bag} data:=${_fragg_rgbd_data})
   endif()
 endif()

@@ -1,8 +1,9 @@
 """Checks every map-server rostest runs on its bag: every placeable scan inserted (none
 dropped from the queue, the expected number dropped for lack of tf), incremental markers, and
 the map saved through ~save_map equal, cell for cell, to `fragg_map build` on the same bag.
-Parameters (private): bag, topic, frame, scans, no_tf. The fragg_map executable is found in
-the workspace; files go to a temporary folder."""
+Parameters (private): bag, topic, frame, scans, no_tf, cli_args (options given to every
+`fragg_map build`, matching the node's parameters). The fragg_map executable is found
+in the workspace; files go to a temporary folder."""
 import json
 import os
 import shutil
@@ -95,18 +96,28 @@ class MapServerBagChecks(unittest.TestCase):
         self.assertLess(min(len(a.markers) for a in later), len(shown))
         self.assertGreater(sum(shown.values()), 0)
 
-    def test_3_saved_map_equals_cli_build(self):
-        node_map = os.path.join(self.tmp, "node.fgm")
-        res = self.save(node_map)
-        self.assertTrue(res.success, res.message)
-        ref = os.path.join(self.tmp, "cli.fgm")
-        cli = self.cli
-        subprocess.run([cli, "build", rospy.get_param("~bag"), "-o", ref,
-                        "--topic", rospy.get_param("~topic"), "--frame",
-                        rospy.get_param("~frame", "map"), "--backend", "cpu"],
+    def cli_build(self, source, out, *options):
+        """`fragg_map build source -o out` with the CPU backend and the test's cli_args."""
+        subprocess.run([self.cli, "build", source, "-o", out, "--backend", "cpu"] +
+                       rospy.get_param("~cli_args", "").split() + list(options),
                        check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        out = subprocess.run([cli, "compare", ref, node_map, "--json"], check=True,
+
+    def compare(self, a, b):
+        out = subprocess.run([self.cli, "compare", a, b, "--json"], check=True,
                              stdout=subprocess.PIPE).stdout
-        cmp = json.loads(out)
+        return json.loads(out)
+
+    def node_map(self):
+        path = os.path.join(self.tmp, "node.fgm")
+        if not os.path.exists(path):
+            res = self.save(path)
+            self.assertTrue(res.success, res.message)
+        return path
+
+    def test_3_saved_map_equals_cli_build(self):
+        ref = os.path.join(self.tmp, "cli.fgm")
+        self.cli_build(rospy.get_param("~bag"), ref, "--topic", rospy.get_param("~topic"),
+                       "--frame", rospy.get_param("~frame", "map"))
+        cmp = self.compare(ref, self.node_map())
         self.assertEqual(cmp["known_in_a"], cmp["known_in_b"])
         self.assertEqual(cmp["agreeing"], cmp["known_in_either"], cmp)

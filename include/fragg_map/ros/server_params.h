@@ -28,8 +28,11 @@ struct ServerParams {
   bool publish_free_space = false;  ///< free_cells_vis_array
   int queue_size = 5;               ///< clouds waiting for insertion; the oldest are dropped
   double tf_tolerance_s = 0.5;      ///< how long a cloud may wait for its transform
-  double color_min_z_m = -1.0;      ///< marker colour ramp (markers/color_min_z)
-  double color_max_z_m = 4.0;       ///< marker colour ramp (markers/color_max_z)
+  /// Most marker updates per second (steady clock); 0: one after every cloud. Changed blocks
+  /// accumulate between updates (BlockMeta::changed_at), so none is lost.
+  double marker_rate_hz = 0.0;
+  double color_min_z_m = -1.0;  ///< marker colour ramp (markers/color_min_z)
+  double color_max_z_m = 4.0;   ///< marker colour ramp (markers/color_max_z)
 };
 
 /// Fills ServerParams from a struct of parameters (the private namespace as one

@@ -17,7 +17,7 @@ namespace fragg_ros {
 MapPublishers::MapPublishers(ros::NodeHandle& nh, ros::NodeHandle& private_nh,
                              const ServerParams& params, SharedMap* shared,
                              const ServerStats* stats)
-    : params_(params), shared_(shared), stats_(stats) {
+    : params_(params), shared_(shared), stats_(stats), marker_throttle_(params.marker_rate_hz) {
   const bool latch = params_.latch;
   for (MarkerTopic* topic : {&occupied_markers_, &free_markers_}) {
     topic->style.frame_id = params_.frame_id;
@@ -44,6 +44,9 @@ MapPublishers::MapPublishers(ros::NodeHandle& nh, ros::NodeHandle& private_nh,
   projected_map_pub_ = nh.advertise<nav_msgs::OccupancyGrid>("projected_map", 1, latch);
   frustum_pub_ = nh.advertise<visualization_msgs::Marker>("frustum", 1, latch);
   stats_pub_ = private_nh.advertise<fragg_map::MapStats>("stats", 1, latch);
+  if (marker_throttle_.limited())
+    marker_flush_timer_ = nh.createSteadyTimer(ros::WallDuration(marker_throttle_.periodS()),
+                                               &MapPublishers::flushPendingMarkers, this);
 }
 
 bool MapPublishers::wanted(const ros::Publisher& pub) const {
@@ -65,14 +68,31 @@ void MapPublishers::publishFull(const ros::Time& stamp) {
 
 void MapPublishers::publishMaps(const ros::Time& stamp, bool full_markers) {
   const fragg::Map& map = shared_->map;
-  publishMarkers(occupied_markers_, stamp, full_markers);
-  if (params_.publish_free_space) publishMarkers(free_markers_, stamp, full_markers);
+  publishMarkerTopics(stamp, full_markers);
   if (wanted(occupied_cloud_pub_))
     occupied_cloud_pub_.publish(occupiedCloud(map, params_.frame_id, stamp));
   if (wanted(projected_map_pub_))
     projected_map_pub_.publish(projectedMap(map, params_.occupancy_min_z_m,
                                             params_.occupancy_max_z_m, params_.frame_id, stamp));
   if (wanted(stats_pub_)) stats_pub_.publish(stats_->toMsg(map, params_.frame_id, stamp));
+}
+
+void MapPublishers::publishMarkerTopics(const ros::Time& stamp, bool full) {
+  const double now_s = ros::SteadyTime::now().toSec();
+  if (!full && !marker_throttle_.due(now_s)) return;  // the changes stay pending
+  publishMarkers(occupied_markers_, stamp, full);
+  if (params_.publish_free_space) publishMarkers(free_markers_, stamp, full);
+  marker_throttle_.published(now_s);
+}
+
+void MapPublishers::flushPendingMarkers(const ros::SteadyTimerEvent&) {
+  std::unique_lock<std::mutex> lock(shared_->mutex, std::try_to_lock);
+  if (!lock.owns_lock()) return;
+  const uint64_t revision = shared_->map.revision();
+  const bool pending =
+      occupied_markers_.ledger.publishedRevision() != revision ||
+      (params_.publish_free_space && free_markers_.ledger.publishedRevision() != revision);
+  if (pending) publishMarkerTopics(ros::Time::now(), false);
 }
 
 void MapPublishers::publishMarkers(MarkerTopic& topic, const ros::Time& stamp, bool full) {

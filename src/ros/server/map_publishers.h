@@ -1,17 +1,21 @@
 // Every topic the map server publishes. Messages are built only for topics with subscribers
 // (or for every topic when latched). occupied_cells_vis_array and free_cells_vis_array are
 // incremental (one marker per changed block); they are republished in full after a reset or
-// load and, when latched, to each new subscriber.
+// load and, when latched, to each new subscriber. With `marker_rate` the marker updates are
+// throttled: the insertion thread publishes them when one is due, and a steady timer sends what
+// is still pending once the clouds stop.
 #pragma once
 
 #include <ros/node_handle.h>
 #include <ros/publisher.h>
+#include <ros/steady_timer.h>
 
 #include <Eigen/Geometry>
 #include <mutex>
 #include <string>
 
 #include "fragg_map/ros/block_markers.h"
+#include "fragg_map/ros/marker_throttle.h"
 #include "fragg_map/ros/server_params.h"
 #include "server_stats.h"
 #include "shared_map.h"
@@ -38,7 +42,12 @@ class MapPublishers {
   };
   // Callers hold shared_->mutex.
   void publishMaps(const ros::Time& stamp, bool full_markers);
+  /// Both marker topics: a full set, or the changes when the throttle lets an update out.
+  void publishMarkerTopics(const ros::Time& stamp, bool full);
   void publishMarkers(MarkerTopic& topic, const ros::Time& stamp, bool full);
+  /// Timer: the changes still pending (never waits for the map: an insertion holding it
+  /// publishes them itself when it ends).
+  void flushPendingMarkers(const ros::SteadyTimerEvent& event);
   void sendAllMarkersTo(MarkerTopic& topic, const ros::SingleSubscriberPublisher& sub);
   bool wanted(const ros::Publisher& pub) const;
 
@@ -47,6 +56,8 @@ class MapPublishers {
   const ServerStats* stats_;
   MarkerTopic occupied_markers_;
   MarkerTopic free_markers_;
+  MarkerThrottle marker_throttle_;
+  ros::SteadyTimer marker_flush_timer_;
   ros::Publisher occupied_cloud_pub_;
   ros::Publisher projected_map_pub_;
   ros::Publisher frustum_pub_;

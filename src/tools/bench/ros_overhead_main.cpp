@@ -1,8 +1,12 @@
 // fragg_map_ros_overhead: what the map server spends per cloud outside insertion, on the
 // synthetic 128 x 1406 LiDAR (179,968 points): PointCloud2 -> points (a Velodyne-like layout:
 // x y z intensity, point_step 16, organised) and the incremental marker update
-// (changedBlockMarkers) after each insertion; the insertion itself is timed for reference.
+// (changedBlockMarkers) after each insertion, or, with --marker-rate, when the server's
+// MarkerThrottle lets one out for clouds arriving at --cloud-rate (the skipped clouds' changes
+// go out with the next update, and a last update flushes what is pending at the end, as the
+// server's timer does); the insertion itself is timed for reference.
 //   fragg_map_ros_overhead [--scans N] [--resolution M] [--max-range M]
+//                          [--cloud-rate HZ] [--marker-rate HZ]
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/PointField.h>
 
@@ -16,6 +20,7 @@
 #include "fragg_map/map.h"
 #include "fragg_map/ros/block_markers.h"
 #include "fragg_map/ros/cloud_from_msg.h"
+#include "fragg_map/ros/marker_throttle.h"
 #include "percentile.h"
 
 namespace {
@@ -52,10 +57,15 @@ double msSince(std::chrono::steady_clock::time_point start) {
 int main(int argc, char** argv) {
   CLI::App app("per-cloud overhead of the map server outside insertion");
   int scans = 10;
-  double resolution_m = 0.05, max_range_m = 30.0;
+  double resolution_m = 0.05, max_range_m = 30.0, cloud_rate_hz = 10.0, marker_rate_hz = 0.0;
   app.add_option("--scans", scans, "scans along the synthetic path")->check(CLI::PositiveNumber);
   app.add_option("--resolution", resolution_m, "voxel edge [m]");
   app.add_option("--max-range", max_range_m, "sensor max range [m]");
+  app.add_option("--cloud-rate", cloud_rate_hz, "clouds per second (sensor time)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--marker-rate", marker_rate_hz,
+                 "most marker updates per second, as the server's marker_rate (0: every cloud)")
+      ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
 
   fragg::bench::SyntheticLidar lidar{fragg::bench::SyntheticLidarOptions()};
@@ -65,8 +75,22 @@ int main(int argc, char** argv) {
   fragg::Map map(params);
   fragg_ros::MarkerLedger ledger;
   const fragg_ros::MarkerStyle style;
-  std::vector<double> convert_ms, markers_ms, insert_ms, overhead_ms;
+  fragg_ros::MarkerThrottle throttle(marker_rate_hz);
+  std::vector<double> convert_ms, update_ms, insert_ms, overhead_ms;
+  double markers_total_ms = 0.0;
   size_t points = 0, markers_sent = 0, blocks_changed = 0;
+  // One marker update: the blocks changed since the last one, counted and converted.
+  auto markerUpdate = [&]() {
+    const uint64_t before = ledger.publishedRevision();
+    map.blocks().forEach(
+        [&](fragg::BlockIndex b) { blocks_changed += map.blocks().meta(b).changed_at > before; });
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto markers = fragg_ros::changedBlockMarkers(map, style, ros::Time(), &ledger);
+    update_ms.push_back(msSince(t0));
+    markers_total_ms += update_ms.back();
+    markers_sent += markers.markers.size();
+    return update_ms.back();
+  };
   for (int i = 0; i < scans; ++i) {
     const fragg::Scan scan = lidar.scan(i);
     const sensor_msgs::PointCloud2 msg = toMsg(scan.cloud);
@@ -77,28 +101,37 @@ int main(int argc, char** argv) {
     t0 = std::chrono::steady_clock::now();
     map.insert(cloud, scan.T_map_sensor, fragg::SensorModel::autoFromCloud(0.0, max_range_m));
     insert_ms.push_back(msSince(t0));
-    const uint64_t before = ledger.publishedRevision();
-    map.blocks().forEach(
-        [&](fragg::BlockIndex b) { blocks_changed += map.blocks().meta(b).changed_at > before; });
-    t0 = std::chrono::steady_clock::now();
-    const auto markers = fragg_ros::changedBlockMarkers(map, style, ros::Time(), &ledger);
-    markers_ms.push_back(msSince(t0));
-    markers_sent += markers.markers.size();
-    overhead_ms.push_back(convert_ms.back() + markers_ms.back());
+    const double now_s = i / cloud_rate_hz;  // the cloud's arrival, in sensor time
+    double markers_ms = 0.0;
+    if (throttle.due(now_s)) {
+      markers_ms = markerUpdate();
+      throttle.published(now_s);
+    }
+    overhead_ms.push_back(convert_ms.back() + markers_ms);
   }
+  // What the last clouds changed goes out once the clouds stop (the server's flush timer).
+  if (ledger.publishedRevision() != map.revision()) markerUpdate();
+  const size_t updates = update_ms.size();
   using fragg::tools::percentile;
   std::printf("%d scans of %zu points, %.3f m, max range %.0f m, CPU backend, %zu blocks\n", scans,
               points, resolution_m, max_range_m, map.blocks().size());
+  std::printf("clouds at %.1f Hz, marker_rate %.1f Hz: %zu marker updates\n", cloud_rate_hz,
+              marker_rate_hz, updates);
   std::printf("%-28s %10s %10s %10s\n", "ms per cloud", "median", "p99", "max");
   auto row = [&](const char* name, const std::vector<double>& v) {
     std::printf("%-28s %10.2f %10.2f %10.2f\n", name, percentile(v, 0.5), percentile(v, 0.99),
                 percentile(v, 1.0));
   };
   row("conversion (PointCloud2)", convert_ms);
-  row("incremental markers", markers_ms);
-  row("overhead (sum)", overhead_ms);
+  row("marker update (per update)", update_ms);
+  row("overhead (per cloud)", overhead_ms);
   row("insertion (reference)", insert_ms);
-  std::printf("blocks changed per cloud: %.0f, markers sent per cloud: %.0f (means)\n",
-              double(blocks_changed) / scans, double(markers_sent) / scans);
+  double convert_total_ms = 0.0;
+  for (double ms : convert_ms) convert_total_ms += ms;
+  std::printf("mean per cloud: conversion %.2f ms + markers %.2f ms = overhead %.2f ms\n",
+              convert_total_ms / scans, markers_total_ms / scans,
+              (convert_total_ms + markers_total_ms) / scans);
+  std::printf("per update: blocks changed %.0f, markers sent %.0f (means)\n",
+              double(blocks_changed) / updates, double(markers_sent) / updates);
   return 0;
 }
