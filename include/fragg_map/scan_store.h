@@ -39,8 +39,9 @@ struct EncodedPoints {
 
 /// Quantises a cloud at `step_m` (0: float32 copy). Non-finite points (no return) are kept as
 /// no-return markers; a point too far for 16 bits at the scan's step is moved along its ray to
-/// the farthest representable distance (it lies beyond any useful range).
-EncodedPoints encodePoints(const PointCloud& cloud, double step_m);
+/// the farthest representable distance (it lies beyond any useful range). `decoded`, when
+/// given, receives decodePoints() of the result from the same pass.
+EncodedPoints encodePoints(const PointCloud& cloud, double step_m, PointCloud* decoded = nullptr);
 PointCloud decodePoints(const EncodedPoints& points);
 
 /// How the scan was integrated: what a removal or a re-insertion must repeat exactly.

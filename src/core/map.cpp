@@ -60,8 +60,7 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   EncodedPoints kept;
   PointCloud quantised;
   if (keep) {
-    kept = encodePoints(cloud, params_.scans.point_step_m);
-    quantised = decodePoints(kept);
+    kept = encodePoints(cloud, params_.scans.point_step_m, &quantised);
   }
   const PointCloud& used = keep ? quantised : cloud;
 

@@ -24,28 +24,42 @@ double maxAbsCoordinate(const Eigen::Vector3f& p) {
 }
 }  // namespace
 
-EncodedPoints encodePoints(const PointCloud& cloud, double step_m) {
+EncodedPoints encodePoints(const PointCloud& cloud, double step_m, PointCloud* decoded) {
   EncodedPoints out;
   out.width = cloud.width;
   out.height = cloud.height;
   out.count = cloud.size();
+  if (decoded) {
+    decoded->width = cloud.width;
+    decoded->height = cloud.height;
+  }
+  const long n = static_cast<long>(cloud.size());
   if (step_m <= 0.0) {
     out.step_m = 0.0;
     out.data.resize(out.dataBytes());
     if (out.count) std::memcpy(out.data.data(), cloud.points_S.data(), out.data.size());
+    if (decoded) decoded->points_S = cloud.points_S;
     return out;
   }
   double far = 0.0;
-  for (const auto& p : cloud.points_S)
+#pragma omp parallel for schedule(static) reduction(max : far) if (n > 20000)
+  for (long i = 0; i < n; ++i) {
+    const Eigen::Vector3f& p = cloud.points_S[i];
     if (p.allFinite()) far = std::max(far, std::min(maxAbsCoordinate(p), kStepRangeCap_m));
+  }
   out.step_m = std::max(step_m, far / kMaxQuantised);
   out.data.resize(out.dataBytes());
-  auto* q = reinterpret_cast<int16_t*>(out.data.data());
+  if (decoded) decoded->points_S.resize(cloud.size());
+  auto* q_all = reinterpret_cast<int16_t*>(out.data.data());
   const double limit = kMaxQuantised * out.step_m;
-  for (size_t i = 0; i < cloud.size(); ++i, q += 3) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+#pragma omp parallel for schedule(static) if (n > 20000)
+  for (long i = 0; i < n; ++i) {
+    int16_t* q = q_all + 3 * i;
     const Eigen::Vector3f& p = cloud.points_S[i];
     if (!p.allFinite()) {
       q[0] = q[1] = q[2] = kNoReturn;
+      if (decoded) decoded->points_S[i] = Eigen::Vector3f::Constant(nan);
       continue;
     }
     const double m = maxAbsCoordinate(p);
@@ -53,6 +67,8 @@ EncodedPoints encodePoints(const PointCloud& cloud, double step_m) {
     for (int a = 0; a < 3; ++a) {
       const double v = std::round(static_cast<double>(p[a]) * scale / out.step_m);
       q[a] = static_cast<int16_t>(std::clamp(v, -kMaxQuantised, kMaxQuantised));
+      if (decoded)
+        decoded->points_S[i][a] = static_cast<float>(static_cast<double>(q[a]) * out.step_m);
     }
   }
   return out;
@@ -69,9 +85,12 @@ PointCloud decodePoints(const EncodedPoints& points) {
                   points.dataBytes());
     return cloud;
   }
-  const auto* q = reinterpret_cast<const int16_t*>(points.data.data());
+  const auto* q_all = reinterpret_cast<const int16_t*>(points.data.data());
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  for (size_t i = 0; i < points.count; ++i, q += 3) {
+  const long n = static_cast<long>(points.count);
+#pragma omp parallel for schedule(static) if (n > 20000)
+  for (long i = 0; i < n; ++i) {
+    const int16_t* q = q_all + 3 * i;
     if (q[0] == kNoReturn) {
       cloud.points_S[i] = Eigen::Vector3f::Constant(nan);
       continue;

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -35,6 +36,26 @@ TEST(ScanStoreTest, QuantisedPointsStayWithinHalfAStepAndKeepNoReturns) {
   }
   // Encoding the decoded cloud again gives the same bytes: re-insertion repeats the rays.
   EXPECT_EQ(encodePoints(d, 0.001).data, e.data);
+  // The decoded cloud from the encoding pass is the same as decoding afterwards.
+  PointCloud same_pass;
+  encodePoints(c, 0.001, &same_pass);
+  ASSERT_EQ(same_pass.size(), d.size());
+  for (size_t i = 0; i < d.size(); ++i)
+    if (d.points_S[i].allFinite())
+      EXPECT_EQ(same_pass.points_S[i], d.points_S[i]) << i;
+    else
+      EXPECT_FALSE(same_pass.points_S[i].allFinite()) << i;
+  // Large clouds take the parallel path: same bytes as a point-by-point encoding.
+  PointCloud big = test::roomScan(4.0, 1.0, 2.0, 64, 1024);
+  PointCloud big_decoded;
+  const EncodedPoints eb = encodePoints(big, 0.001, &big_decoded);
+  EXPECT_EQ(decodePoints(eb).points_S, big_decoded.points_S);
+  for (size_t i = 0; i < big.size(); i += 997) {
+    PointCloud one;
+    one.points_S = {big.points_S[i]};
+    const EncodedPoints e1 = encodePoints(one, eb.step_m);
+    EXPECT_EQ(0, std::memcmp(e1.data.data(), eb.data.data() + 6 * i, 6)) << i;
+  }
 }
 
 TEST(ScanStoreTest, FarPointsWidenTheStepAndFloatModeIsExact) {
