@@ -108,8 +108,10 @@ class Map {
  private:
   void fallBackToCpu(const std::string& why);
   /// Culling and integration of one prepared scan (insert or remove) with its own ray cast
-  /// mode and no-return setting.
-  InsertStats integrateScan(const PointCloud& cloud, const ScanRecord& how, bool remove);
+  /// mode and no-return setting. `host_cull`: run the host culler for a backend that does not
+  /// cull on its own (counters only; corrections skip it).
+  InsertStats integrateScan(const PointCloud& cloud, const ScanRecord& how, bool remove,
+                            bool host_cull);
 
   MapParams params_;
   OccupancyModel model_;

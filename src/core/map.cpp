@@ -76,7 +76,7 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   const double seconds_model =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  InsertStats stats = integrateScan(used, how, /*remove=*/false);
+  InsertStats stats = integrateScan(used, how, /*remove=*/false, /*host_cull=*/true);
   stats.seconds_cull += seconds_model;
   if (keep) scan_store_->add(how, std::move(kept));
   ++next_scan_id_;
@@ -87,7 +87,8 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   return stats;
 }
 
-InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, bool remove) {
+InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, bool remove,
+                               bool host_cull) {
   const auto t = std::chrono::steady_clock::now();  // frustum and culling
   MapParams params = params_;
   params.raycast = how.raycast;
@@ -97,6 +98,10 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   CullContext cull;
   if (integrator_->cullsOnItsOwn()) {
     cull = culler_->beginScan(frustum, how.model, how.T_map_sensor);
+  } else if (!host_cull) {
+    // The CPU backend's rays do not depend on culling: it only counts (InsertStats::culling).
+    // Corrections skip it; their scans are not part of the sensor's motion either.
+    cull = culler_->context(frustum, how.T_map_sensor);
   } else {
     stats.culling =
         culler_->cull(frustum, how.model, how.T_map_sensor, params_.resolution_m, blocks_, nullptr);
@@ -130,7 +135,7 @@ InsertStats Map::remove(ScanId id) {
         "MapParams::scans.keep, `fragg_map build --keep-scans`)");
   const ScanRecord how = scan_store_->record(id);  // throws for an unknown index
   const PointCloud cloud = decodePoints(scan_store_->points(id));
-  InsertStats stats = integrateScan(cloud, how, /*remove=*/true);
+  InsertStats stats = integrateScan(cloud, how, /*remove=*/true, /*host_cull=*/false);
   scan_store_->erase(id);
   if (scans_ > 0) --scans_;
   stats.scan_id = id;
@@ -162,11 +167,12 @@ CorrectionStats Map::correctPoses(const std::map<ScanId, Eigen::Isometry3d>& T_m
   out.scans = T_map_sensor_new.size();
   size_t k = 0;
   for (const auto& [id, T] : T_map_sensor_new)
-    out.removal.add(integrateScan(decodePoints(points[k++]), scan_store_->record(id), true));
+    out.removal.add(integrateScan(decodePoints(points[k++]), scan_store_->record(id), true, false));
   k = 0;
   for (const auto& [id, T] : T_map_sensor_new) {
     scan_store_->setPose(id, T);
-    out.insertion.add(integrateScan(decodePoints(points[k++]), scan_store_->record(id), false));
+    out.insertion.add(
+        integrateScan(decodePoints(points[k++]), scan_store_->record(id), false, false));
   }
   out.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
