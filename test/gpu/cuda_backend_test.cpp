@@ -103,6 +103,13 @@ std::vector<Input> syntheticLidar(int scans, double step_m) {
   return out;
 }
 
+/// The drive, then the same scans in reverse order (back to the start).
+std::vector<Input> outAndBack(std::vector<Input> scans) {
+  std::vector<Input> back(scans.rbegin(), scans.rend());
+  scans.insert(scans.end(), back.begin(), back.end());
+  return scans;
+}
+
 /// W1 itself (config/workloads/w1_lidar360.args): the campus street, 128 x 1406 LiDAR at
 /// 1.8 m, -25..15 deg, 2 cm noise, seed 101; every `step`-th of the first 100 frames.
 std::vector<Input> simulatedW1(int step) {
@@ -251,10 +258,7 @@ TEST(CudaBackendTest, TinyPoolEvictsWritesBackAndReuploads) {
   REQUIRE_DEVICE();
   // A pool of ~12,000 slots against a drive that touches far more: blocks go back and forth.
   // The path goes out and back, so evicted blocks are uploaded again.
-  auto scans = syntheticLidar(8, 4.0);
-  auto back = scans;
-  std::reverse(back.begin(), back.end());
-  scans.insert(scans.end(), back.begin(), back.end());
+  const auto scans = outAndBack(syntheticLidar(8, 4.0));
   MapParams p = paramsFor(Backend::kCuda, 0.1);
   p.cuda.pool_max_bytes = size_t(12000) * 2300;
   Map gpu(p);
@@ -375,10 +379,7 @@ TEST(CudaBackendTest, PoseCorrectionOfEvictedScansIsByteIdentical) {
   // A small pool and a drive out and back: the blocks around the far end have left the device
   // by the time the scans taken there are corrected, so removal uploads them (and evicts
   // others) first. 16,000 slots: fewer than the drive's ~20,000 blocks, more than one scan's.
-  auto scans = syntheticLidar(8, 4.0);
-  auto back = scans;
-  std::reverse(back.begin(), back.end());
-  scans.insert(scans.end(), back.begin(), back.end());
+  const auto scans = outAndBack(syntheticLidar(8, 4.0));
   MapParams p = paramsFor(Backend::kCuda, 0.1);
   p.cuda.pool_max_bytes = size_t(16000) * 2300;
   const CorrectionStats st = expectCorrectionAgrees(scans, p, SensorModel::autoFromCloud(0.0, 20.0),
