@@ -23,7 +23,7 @@ __global__ void __launch_bounds__(kThreads)
     const bool fresh = s.fresh[slot] != 0;
     SlotScratch& marks = s.scratch[slot];
     Block& block = s.cells[slot];
-    bool changed = false;
+    bool changed = false, occupancy_changed = false;
 #pragma unroll
     for (int k = 0; k < kCellsPerThread; ++k) {
       const int cell = threadIdx.x + k * kThreads;
@@ -36,11 +36,14 @@ __global__ void __launch_bounds__(kThreads)
         const Cell before = value;
         model.update(value, hit, remove);
         changed |= before.log_odds_fx != value.log_odds_fx || before.hits != value.hits;
+        occupancy_changed |= (model.state(before) == CellState::kOccupied) !=
+                             (model.state(value) == CellState::kOccupied);
         ++updated;
       }
       block.cells[cell] = value;
     }
     const bool any_changed = __syncthreads_or(changed);  // also: every read of marks is done
+    const bool occupancy_flipped = __syncthreads_or(occupancy_changed);
     if (threadIdx.x < 2 * kScratchWords) {
       uint32_t* words = threadIdx.x < kScratchWords ? marks.free : marks.hit;
       words[threadIdx.x % kScratchWords] = 0u;
@@ -48,9 +51,11 @@ __global__ void __launch_bounds__(kThreads)
     if (threadIdx.x == 0) {
       s.fresh[slot] = 0;
       s.last_used[slot] = scan;
+      if (fresh) s.occupied_at[slot] = 0;  // not the slot's previous block's
       if (any_changed) {
         s.dirty[slot] = 1;
         s.changed_at[slot] = revision;
+        if (occupancy_flipped) s.occupied_at[slot] = revision;
         atomicAdd(&c->changed, 1u);
       }
     }

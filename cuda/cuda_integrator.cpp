@@ -180,8 +180,8 @@ void CudaIntegrator::writeBack(const std::vector<int32_t>& slots, BlockMap& bloc
   for (size_t begin = 0; begin < slots.size(); begin += kTransferBatch) {
     const size_t n = std::min(kTransferBatch, slots.size() - begin);
     reserveTransfer(n, /*staging=*/true);
-    changed_host_.reserve(n);
-    changed_dev_.reserve(n);
+    changed_host_.reserve(2 * n);  // changed_at, then occupied_at
+    changed_dev_.reserve(2 * n);
     for (size_t j = 0; j < n; ++j) {
       slots_host_[j] = slots[begin + j];
       ptrs_host_[j] = staging_dev_.get() + j;
@@ -192,7 +192,7 @@ void CudaIntegrator::writeBack(const std::vector<int32_t>& slots, BlockMap& bloc
                    changed_dev_.get(), stream_.get());
     copyToHost(staging_host_.get(), staging_dev_.get(), n, stream_.get());
     copyToHost(keys_host_.get(), keys_dev_.get(), n, stream_.get());
-    copyToHost(changed_host_.get(), changed_dev_.get(), n, stream_.get());
+    copyToHost(changed_host_.get(), changed_dev_.get(), 2 * n, stream_.get());
     stream_.sync();
     // New host blocks first (the index is not thread-safe), then the copies in parallel.
     std::vector<BlockIndex> target(n);
@@ -210,6 +210,7 @@ void CudaIntegrator::writeBack(const std::vector<int32_t>& slots, BlockMap& bloc
       std::memcpy(&blocks.block(target[j]), &staging_host_[j], sizeof(Block));
       BlockMeta& m = blocks.meta(target[j]);
       m.changed_at = std::max(m.changed_at, changed_host_[j]);
+      m.occupied_at = std::max(m.occupied_at, changed_host_[n + j]);
     }
   }
 }

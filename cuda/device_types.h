@@ -55,6 +55,7 @@ struct SlotArrays {
   uint8_t* dirty = nullptr;         ///< changed since last written back to the host
   uint32_t* last_used = nullptr;    ///< scan index when last visible or touched (LRU)
   uint64_t* changed_at = nullptr;   ///< map revision of the last change
+  uint64_t* occupied_at = nullptr;  ///< revision of the last change of the occupied cells
   CullMemory* cull = nullptr;       ///< plane-rejection memory of the device frustum pass
   int32_t* free_stack = nullptr;    ///< free slots; the top is ScanCounters::free_top
   uint8_t* resident = nullptr;      ///< 1 while the slot holds a block

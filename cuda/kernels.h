@@ -51,7 +51,8 @@ void launchWindowSet(const Window& w, const int64_t* index, const int32_t* value
 /// into slot slots[j]; sets its key, clears dirty and fresh, stamps last_used.
 void launchUpload(const SlotArrays& s, const Block* const* src, const int32_t* slots,
                   const BlockKey* keys, uint32_t n, uint32_t scan, cudaStream_t stream);
-/// Copies slot slots[j] to dst[j] and its key / changed_at to keys[j] / changed_at[j];
+/// Copies slot slots[j] to dst[j] and its key / changed_at / occupied_at to keys[j] /
+/// changed_at[j] / changed_at[n + j] (changed_at holds 2n values);
 /// clears dirty.
 void launchDownload(const SlotArrays& s, Block* const* dst, const int32_t* slots, uint32_t n,
                     BlockKey* keys, uint64_t* changed_at, cudaStream_t stream);

@@ -36,6 +36,7 @@ __global__ void __launch_bounds__(kCopyThreads)
     s.fresh[slot] = 0;
     s.last_used[slot] = scan;
     s.changed_at[slot] = 0;
+    s.occupied_at[slot] = 0;
     s.cull[slot] = CullMemory();
   }
 }
@@ -51,6 +52,7 @@ __global__ void __launch_bounds__(kCopyThreads)
   if (threadIdx.x == 0) {
     keys[j] = s.keys[slot];
     changed_at[j] = s.changed_at[slot];
+    changed_at[gridDim.x + j] = s.occupied_at[slot];
     s.dirty[slot] = 0;
   }
 }

@@ -45,6 +45,7 @@ void SlotPool::grow(int32_t capacity) {
   regrow(dirty_, keep, n, stream_);
   regrow(last_used_, keep, n, stream_);
   regrow(changed_at_, keep, n, stream_);
+  regrow(occupied_at_, keep, n, stream_);
   regrow(cull_, keep, n, stream_);
   regrow(free_stack_, size_t(free_top_), n, stream_);
   regrow(resident_, keep, n, stream_);
@@ -83,6 +84,7 @@ SlotArrays SlotPool::arrays() const {
   a.dirty = dirty_.get();
   a.last_used = last_used_.get();
   a.changed_at = changed_at_.get();
+  a.occupied_at = occupied_at_.get();
   a.cull = cull_.get();
   a.free_stack = free_stack_.get();
   a.resident = resident_.get();

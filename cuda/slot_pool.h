@@ -51,6 +51,7 @@ class SlotPool {
   DeviceArray<uint8_t> dirty_;
   DeviceArray<uint32_t> last_used_;
   DeviceArray<uint64_t> changed_at_;
+  DeviceArray<uint64_t> occupied_at_;
   DeviceArray<CullMemory> cull_;
   DeviceArray<int32_t> free_stack_;
   DeviceArray<uint8_t> resident_;

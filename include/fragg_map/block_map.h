@@ -32,6 +32,10 @@ std::shared_ptr<ChunkAllocator> plainChunkAllocator();
 struct BlockMeta {
   BlockKey key;
   uint64_t changed_at = 0;  ///< map revision of the last change (for incremental publishing)
+  /// Map revision of the last change that may have changed which cells are occupied (a cell
+  /// crossed the occupied threshold either way); <= changed_at. Occupied-cell markers need
+  /// only the blocks with this newer than their last update.
+  uint64_t occupied_at = 0;
   CullMemory cull;
 };
 

@@ -149,7 +149,7 @@ void CpuIntegrator::integratePrepared(const PreparedScan& scan, const OccupancyM
     const ScratchBlock& marks = merged.touched(j);
     Block& block = blocks.block(target[j]);
     if (fresh[j]) std::fill(std::begin(block.cells), std::end(block.cells), Cell());
-    bool changed = false;
+    bool changed = false, occupancy_changed = false;
     for (int w = 0; w < kCellsPerBlock / 64; ++w) {
       for (uint64_t bits = marks.free[w] | marks.hit[w]; bits != 0; bits &= bits - 1) {
         const int bit = __builtin_ctzll(bits);
@@ -157,10 +157,13 @@ void CpuIntegrator::integratePrepared(const PreparedScan& scan, const OccupancyM
         const Cell before = cell;
         model.update(cell, (marks.hit[w] >> bit) & 1, remove);
         changed |= before.log_odds_fx != cell.log_odds_fx || before.hits != cell.hits;
+        occupancy_changed |= (model.state(before) == CellState::kOccupied) !=
+                             (model.state(cell) == CellState::kOccupied);
         ++updated;
       }
     }
     if (changed) blocks.meta(target[j]).changed_at = revision;
+    if (occupancy_changed) blocks.meta(target[j]).occupied_at = revision;
   }
   stats.cells_updated += updated;
   stats.blocks_touched += static_cast<uint64_t>(touched);

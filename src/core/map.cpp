@@ -230,7 +230,7 @@ void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_ma
         any_left |= b.cells[c].observed();
     }
     if (any_left)
-      blocks_.meta(i).changed_at = revision_;
+      blocks_.meta(i).changed_at = blocks_.meta(i).occupied_at = revision_;
     else
       blocks_.erase(key);
   }

@@ -1,4 +1,5 @@
-// One CUBE_LIST marker per block; incremental updates from BlockMeta::changed_at.
+// One CUBE_LIST marker per block; incremental updates from BlockMeta::occupied_at (occupied
+// markers) or BlockMeta::changed_at (others).
 #include "fragg_map/ros/block_markers.h"
 
 #include <vector>
@@ -100,9 +101,13 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
       ++it;
     }
   }
+  // Occupied markers: only blocks where a cell crossed the occupied threshold (the integrators
+  // stamp occupied_at); other states: every changed block.
+  const bool occupied = style.state == fragg::CellState::kOccupied;
   std::vector<fragg::BlockIndex> changed;
   blocks.forEach([&](fragg::BlockIndex i) {
-    if (blocks.meta(i).changed_at > since) changed.push_back(i);
+    const fragg::BlockMeta& m = blocks.meta(i);
+    if ((occupied ? m.occupied_at : m.changed_at) > since) changed.push_back(i);
   });
   // The masks in parallel (read-only), the ledger and the messages in order.
   std::vector<CellMask> masks(changed.size());

@@ -169,5 +169,31 @@ TEST(InsertTest, ClearBoxMakesCellsUnknown) {
   EXPECT_THROW(map.clearBox({1, 1, 1}, {0, 0, 0}), InvalidArgument);
 }
 
+TEST(InsertTest, OccupiedAtMovesOnlyWhenACellCrossesTheOccupiedThreshold) {
+  MapParams p;
+  p.backend = Backend::kCpu;
+  Map map(p);
+  const PointCloud wall = cloudOf({{1.0f, 0.f, 0.f}, {1.0f, 0.2f, 0.f}, {1.0f, -0.2f, 0.f}});
+  map.insert(wall, test::sensorAtVoxelCentre(), SensorModel::autoFromCloud());
+  const uint64_t first = map.revision();
+  size_t with_hits = 0;
+  map.blocks().forEach([&](BlockIndex i) {
+    bool occupied = false;
+    for (const Cell& c : map.blocks().block(i).cells)
+      occupied |= map.state(c) == CellState::kOccupied;
+    EXPECT_EQ(map.blocks().meta(i).occupied_at, occupied ? first : 0u);
+    with_hits += occupied;
+  });
+  EXPECT_GE(with_hits, 1u);
+  // The same scan again: log-odds move (changed_at), no cell crosses the threshold.
+  map.insert(wall, test::sensorAtVoxelCentre(), SensorModel::autoFromCloud());
+  size_t changed = 0;
+  map.blocks().forEach([&](BlockIndex i) {
+    changed += map.blocks().meta(i).changed_at > first;
+    EXPECT_LE(map.blocks().meta(i).occupied_at, first);
+  });
+  EXPECT_GT(changed, 0u);
+}
+
 }  // namespace
 }  // namespace fragg

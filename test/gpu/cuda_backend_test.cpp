@@ -50,7 +50,7 @@ MapParams paramsFor(Backend b, double res) {
 void expectSameBlocks(const Map& a, const Map& b, const char* what) {
   const BlockMap& ba = a.blocks();
   const BlockMap& bb = b.blocks();
-  size_t differing = 0, missing = 0, observed_cells = 0;
+  size_t differing = 0, missing = 0, observed_cells = 0, meta_differing = 0;
   ba.forEach([&](BlockIndex i) {
     const Block* other = bb.findBlock(ba.meta(i).key);
     if (!other) {
@@ -58,11 +58,16 @@ void expectSameBlocks(const Map& a, const Map& b, const char* what) {
       return;
     }
     if (std::memcmp(&ba.block(i), other, sizeof(Block)) != 0) ++differing;
+    // The revisions incremental publishing reads (markers) must agree as well.
+    const BlockMeta& mb = bb.meta(bb.find(ba.meta(i).key));
+    if (ba.meta(i).changed_at != mb.changed_at || ba.meta(i).occupied_at != mb.occupied_at)
+      ++meta_differing;
     for (const Cell& c : ba.block(i).cells) observed_cells += c.observed();
   });
   EXPECT_EQ(ba.size(), bb.size()) << what;
   EXPECT_EQ(missing, 0u) << what;
   EXPECT_EQ(differing, 0u) << what << ": blocks whose bytes differ";
+  EXPECT_EQ(meta_differing, 0u) << what << ": blocks whose changed_at / occupied_at differ";
   EXPECT_GT(observed_cells, 1000u) << what;
   std::printf("[gpu] %s: %zu blocks, %zu observed cells, %zu differing\n", what, ba.size(),
               observed_cells, differing);

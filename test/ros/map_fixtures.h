@@ -29,7 +29,7 @@ inline void setCell(fragg::Map& map, const fragg::VoxelKey& v, fragg::CellState 
     c.hits = state == fragg::CellState::kOccupied ? 1 : 0;
     c.log_odds_fx = state == fragg::CellState::kOccupied ? map.model().max_fx : map.model().min_fx;
   }
-  blocks.meta(i).changed_at = map.revision();
+  blocks.meta(i).changed_at = blocks.meta(i).occupied_at = map.revision();
 }
 
 /// A 2 m x 2 m wall of points `distance_m` ahead (+x) of the sensor at `sensor_xyz`.

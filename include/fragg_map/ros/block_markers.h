@@ -1,5 +1,6 @@
 // fragg::Map -> visualization_msgs/MarkerArray, one CUBE_LIST marker per 8x8x8 block, so that
-// a publisher can send only the blocks that changed (BlockMeta::changed_at) and DELETE the
+// a publisher can send only the blocks that changed (BlockMeta::occupied_at for occupied
+// cells, BlockMeta::changed_at otherwise) and DELETE the
 // blocks that no longer hold a cell of the drawn state.
 #pragma once
 

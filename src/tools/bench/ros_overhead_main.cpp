@@ -83,7 +83,7 @@ int main(int argc, char** argv) {
   auto markerUpdate = [&]() {
     const uint64_t before = ledger.publishedRevision();
     map.blocks().forEach(
-        [&](fragg::BlockIndex b) { blocks_changed += map.blocks().meta(b).changed_at > before; });
+        [&](fragg::BlockIndex b) { blocks_changed += map.blocks().meta(b).occupied_at > before; });
     const auto t0 = std::chrono::steady_clock::now();
     const auto markers = fragg_ros::changedBlockMarkers(map, style, ros::Time(), &ledger);
     update_ms.push_back(msSince(t0));
@@ -131,7 +131,7 @@ int main(int argc, char** argv) {
   std::printf("mean per cloud: conversion %.2f ms + markers %.2f ms = overhead %.2f ms\n",
               convert_total_ms / scans, markers_total_ms / scans,
               (convert_total_ms + markers_total_ms) / scans);
-  std::printf("per update: blocks changed %.0f, markers sent %.0f (means)\n",
+  std::printf("per update: blocks whose occupied cells changed %.0f, markers sent %.0f (means)\n",
               double(blocks_changed) / updates, double(markers_sent) / updates);
   return 0;
 }
