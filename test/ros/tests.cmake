@@ -17,6 +17,10 @@ if(FRAGG_HAVE_ROS)
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/server_parts_test.cpp
     LIBS fragg_map_ros
     LABELS ros)
+  fragg_add_test(ros_pose_correction_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/pose_correction_test.cpp
+    LIBS fragg_map_ros
+    LABELS ros)
   target_compile_definitions(ros_server_params_test PRIVATE
     FRAGG_PYTHON3="/usr/bin/python3"
     FRAGG_YAML_TO_XMLRPC="${CMAKE_CURRENT_LIST_DIR}/yaml_to_xmlrpc.py"
