@@ -123,6 +123,35 @@ void readSensor(const XmlRpcValue& root, ServerParams& p) {
   validateAs("sensor", [&] { p.sensor.validate(); });
 }
 
+void readScanStore(const XmlRpcValue& root, fragg::ScanStoreParams& s) {
+  readBool(root, "keep_scans", &s.keep);
+  double max_mb = static_cast<double>(s.max_bytes >> 20);
+  readDouble(root, "scan_store/max_mb", &max_mb);
+  if (!(max_mb >= 0.0) || !(max_mb <= 1e9))
+    badParam("scan_store/max_mb", "must be in [0, 1e9] MiB (0 = no limit)");
+  s.max_bytes = static_cast<size_t>(max_mb * 1024.0 * 1024.0);
+  readString(root, "scan_store/spill_dir", &s.spill_dir);
+  readDouble(root, "scan_store/point_step", &s.point_step_m);
+  if (!(s.point_step_m >= 0.0) || !(s.point_step_m <= 0.1))
+    badParam("scan_store/point_step", "must be in [0, 0.1] m (0 = float32 points)");
+}
+
+void readCorrection(const XmlRpcValue& root, CorrectionParams& c) {
+  readDouble(root, "correction/min_translation", &c.thresholds.min_translation_m);
+  if (!(c.thresholds.min_translation_m >= 0.0) || !std::isfinite(c.thresholds.min_translation_m))
+    badParam("correction/min_translation", "must be a finite number of metres >= 0");
+  readDouble(root, "correction/min_rotation", &c.thresholds.min_rotation_rad);
+  if (!(c.thresholds.min_rotation_rad >= 0.0) || !(c.thresholds.min_rotation_rad <= M_PI))
+    badParam("correction/min_rotation", "must be in [0, pi] rad");
+  readDouble(root, "correction/stamp_tolerance", &c.stamp_tolerance_s);
+  if (!(c.stamp_tolerance_s >= 0.0) || !(c.stamp_tolerance_s <= 3600.0))
+    badParam("correction/stamp_tolerance", "must be in [0, 3600] s");
+  readString(root, "correction/path_child_frame", &c.path_child_frame);
+  if (!c.path_child_frame.empty() && c.path_child_frame[0] == '/')
+    c.path_child_frame.erase(0, 1);  // tf2 frames have no leading slash
+  readBool(root, "correction/subscribe_path", &c.subscribe_path);
+}
+
 }  // namespace
 
 ServerParams parseParameters(const XmlRpcValue& root) {
@@ -165,6 +194,7 @@ ServerParams parseParameters(const XmlRpcValue& root) {
   readInt(root, "culling/coherence_ttl_scans", &m.culling.coherence_ttl_scans);
   if (m.culling.coherence_ttl_scans < 1 || m.culling.coherence_ttl_scans > 32)
     badParam("culling/coherence_ttl_scans", "must be in [1, 32]");
+  readScanStore(root, m.scans);
   validateAs("resolution", [&] { m.validate(); });
 
   readSensor(root, p);
@@ -191,6 +221,7 @@ ServerParams parseParameters(const XmlRpcValue& root) {
   if (!std::isfinite(p.color_min_z_m) || !std::isfinite(p.color_max_z_m) ||
       !(p.color_min_z_m < p.color_max_z_m))
     badParam("markers/color_min_z", "must be finite and below markers/color_max_z");
+  readCorrection(root, p.correction);
   return p;
 }
 

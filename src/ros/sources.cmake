@@ -9,4 +9,6 @@ set(FRAGG_ROS_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/frustum_marker.cpp
   ${CMAKE_CURRENT_LIST_DIR}/server_params.cpp
   ${CMAKE_CURRENT_LIST_DIR}/timing_stats.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/scan_stamp_index.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/pose_correction.cpp
 )

@@ -32,11 +32,10 @@ void writeText(const std::string& path, const std::string& text) { std::ofstream
 /// "index tx ty tz qx qy qz qw" of a kept scan, from `stats --json --scans`, moved by dx.
 std::string poseLine(const nlohmann::json& scan, double dx) {
   const auto& p = scan["pose"];
-  return std::to_string(scan["index"].get<int>()) + " " +
-         std::to_string(p[0].get<double>() + dx) + " " + std::to_string(p[1].get<double>()) +
-         " " + std::to_string(p[2].get<double>()) + " " + std::to_string(p[3].get<double>()) +
-         " " + std::to_string(p[4].get<double>()) + " " + std::to_string(p[5].get<double>()) +
-         " " + std::to_string(p[6].get<double>()) + "\n";
+  return std::to_string(scan["index"].get<int>()) + " " + std::to_string(p[0].get<double>() + dx) +
+         " " + std::to_string(p[1].get<double>()) + " " + std::to_string(p[2].get<double>()) + " " +
+         std::to_string(p[3].get<double>()) + " " + std::to_string(p[4].get<double>()) + " " +
+         std::to_string(p[5].get<double>()) + " " + std::to_string(p[6].get<double>()) + "\n";
 }
 
 double agreement(const std::string& dir, const std::string& a, const std::string& b) {
@@ -56,8 +55,8 @@ TEST(CliCorrect, MovesScansAndBack) {
   EXPECT_EQ(scans[3]["points"], 640 * 480);
 
   // Move scans 3 and 4 by 0.25 m: the map changes.
-  writeText(dir + "/moved.txt", "# two scans off\n" + poseLine(scans[3], 0.25) +
-                                    poseLine(scans[4], 0.25));
+  writeText(dir + "/moved.txt",
+            "# two scans off\n" + poseLine(scans[3], 0.25) + poseLine(scans[4], 0.25));
   r = runCli(dir, "correct '" + map + "' --poses '" + dir + "/moved.txt' -o '" + dir +
                       "/moved.fgm' --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -96,12 +95,14 @@ TEST(CliCorrect, BadInputFailsWithOneLineAndWritesNothing) {
   };
   for (const Case& k : cases) {
     writeText(dir + "/p.txt", k.poses_text);
-    const auto r = runCli(dir, "correct '" + k.map + "' --poses '" + dir + "/p.txt' -o '" + out + "'");
+    const auto r =
+        runCli(dir, "correct '" + k.map + "' --poses '" + dir + "/p.txt' -o '" + out + "'");
     EXPECT_EQ(r.exit_code, k.exit_code) << k.poses_text << r.err;
     EXPECT_NE(r.err.find(k.expect), std::string::npos) << k.poses_text << r.err;
     EXPECT_FALSE(fileExists(out)) << k.poses_text;
   }
-  const auto r = runCli(dir, "correct '" + map + "' --poses '" + dir + "/none.txt' -o '" + out + "'");
+  const auto r =
+      runCli(dir, "correct '" + map + "' --poses '" + dir + "/none.txt' -o '" + out + "'");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_FALSE(fileExists(out));
 }

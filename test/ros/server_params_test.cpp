@@ -52,6 +52,61 @@ TEST(ServerParams, EmptyNamespaceGivesTheCoreDefaults) {
   EXPECT_TRUE(std::isinf(p.pointcloud_min_z_m));
 }
 
+TEST(ServerParams, ScanStoreAndCorrectionDefaults) {
+  const fragg_ros::ServerParams p = fragg_ros::parseParameters(XmlRpcValue());
+  EXPECT_TRUE(p.map.scans.keep);  // the server keeps scans, the core does not by default
+  EXPECT_EQ(p.map.scans.max_bytes, size_t{2048} << 20);
+  EXPECT_EQ(p.map.scans.point_step_m, 0.001);
+  EXPECT_EQ(p.map.scans.spill_dir, "");
+  EXPECT_EQ(p.correction.thresholds.min_translation_m, 0.05);
+  EXPECT_EQ(p.correction.thresholds.min_rotation_rad, 0.01);
+  EXPECT_EQ(p.correction.stamp_tolerance_s, 0.001);
+  EXPECT_EQ(p.correction.path_child_frame, "");
+  EXPECT_TRUE(p.correction.subscribe_path);
+}
+
+TEST(ServerParams, ReadsScanStoreAndCorrection) {
+  XmlRpcValue root;
+  set(root, "keep_scans", false);
+  set(root, "scan_store/max_mb", 0);  // no limit
+  set(root, "scan_store/spill_dir", std::string("/tmp/spill"));
+  set(root, "scan_store/point_step", 0.002);
+  set(root, "correction/min_translation", 0.1);
+  set(root, "correction/min_rotation", 0.02);
+  set(root, "correction/stamp_tolerance", 0.01);
+  set(root, "correction/path_child_frame", std::string("/base_link"));
+  set(root, "correction/subscribe_path", false);
+  const fragg_ros::ServerParams p = fragg_ros::parseParameters(root);
+  EXPECT_FALSE(p.map.scans.keep);
+  EXPECT_EQ(p.map.scans.max_bytes, 0u);
+  EXPECT_EQ(p.map.scans.spill_dir, "/tmp/spill");
+  EXPECT_EQ(p.map.scans.point_step_m, 0.002);
+  EXPECT_EQ(p.correction.thresholds.min_translation_m, 0.1);
+  EXPECT_EQ(p.correction.thresholds.min_rotation_rad, 0.02);
+  EXPECT_EQ(p.correction.stamp_tolerance_s, 0.01);
+  EXPECT_EQ(p.correction.path_child_frame, "base_link");  // tf2 frames have no leading slash
+  EXPECT_FALSE(p.correction.subscribe_path);
+  XmlRpcValue mb;
+  set(mb, "scan_store/max_mb", 1.5);
+  EXPECT_EQ(fragg_ros::parseParameters(mb).map.scans.max_bytes, size_t{3} << 19);
+}
+
+TEST(ServerParams, InvalidScanStoreAndCorrectionValuesNameTheParameter) {
+  expectRejected("keep_scans", 1);
+  expectRejected("scan_store/max_mb", -1.0);
+  expectRejected("scan_store/max_mb", std::string("big"));
+  expectRejected("scan_store/spill_dir", 3);
+  expectRejected("scan_store/point_step", -0.001);
+  expectRejected("scan_store/point_step", 0.5);
+  expectRejected("correction/min_translation", -0.01);
+  expectRejected("correction/min_translation", std::numeric_limits<double>::infinity());
+  expectRejected("correction/min_rotation", -0.01);
+  expectRejected("correction/min_rotation", 4.0);
+  expectRejected("correction/stamp_tolerance", -1e-3);
+  expectRejected("correction/path_child_frame", 7);
+  expectRejected("correction/subscribe_path", std::string("yes"));
+}
+
 TEST(ServerParams, ReadsEveryName) {
   XmlRpcValue root;
   set(root, "resolution", 0.1);
@@ -204,6 +259,15 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.marker_rate_hz, d.marker_rate_hz);
   EXPECT_EQ(p.latch, d.latch);
   EXPECT_EQ(p.color_max_z_m, d.color_max_z_m);
+  EXPECT_EQ(p.map.scans.keep, d.map.scans.keep);
+  EXPECT_EQ(p.map.scans.max_bytes, d.map.scans.max_bytes);
+  EXPECT_EQ(p.map.scans.point_step_m, d.map.scans.point_step_m);
+  EXPECT_EQ(p.map.scans.spill_dir, d.map.scans.spill_dir);
+  EXPECT_EQ(p.correction.thresholds.min_translation_m, d.correction.thresholds.min_translation_m);
+  EXPECT_EQ(p.correction.thresholds.min_rotation_rad, d.correction.thresholds.min_rotation_rad);
+  EXPECT_EQ(p.correction.stamp_tolerance_s, d.correction.stamp_tolerance_s);
+  EXPECT_EQ(p.correction.path_child_frame, d.correction.path_child_frame);
+  EXPECT_EQ(p.correction.subscribe_path, d.correction.subscribe_path);
 }
 
 TEST(ServerParamsConfig, LidarYaml) {

@@ -97,8 +97,14 @@ class MapServerBagChecks(unittest.TestCase):
         self.assertGreater(sum(shown.values()), 0)
 
     def cli_build(self, source, out, *options):
-        """`fragg_map build source -o out` with the CPU backend and the test's cli_args."""
-        subprocess.run([self.cli, "build", source, "-o", out, "--backend", "cpu"] +
+        """`fragg_map build source -o out` with the CPU backend and the test's cli_args. When
+        the node keeps scans (keep_scans, default true) it integrates them quantised at
+        scan_store/point_step, so the build keeps them at the same step."""
+        keep = []
+        if rospy.get_param(NS + "keep_scans", True):
+            keep = ["--keep-scans", "--scan-step",
+                    repr(float(rospy.get_param(NS + "scan_store/point_step", 0.001)))]
+        subprocess.run([self.cli, "build", source, "-o", out, "--backend", "cpu"] + keep +
                        rospy.get_param("~cli_args", "").split() + list(options),
                        check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 

@@ -10,12 +10,26 @@
 #include <string>
 
 #include "fragg_map/map_params.h"
+#include "fragg_map/ros/pose_correction.h"
 #include "fragg_map/sensor_model.h"
 
 namespace fragg_ros {
 
+/// Loop-closure correction (~correct_poses, corrected_path): correction/*.
+struct CorrectionParams {
+  /// corrected_path moves a scan only when its pose changed beyond one of these.
+  PoseThresholds thresholds;  ///< correction/min_translation [m], correction/min_rotation [rad]
+  double stamp_tolerance_s = 0.001;  ///< a stamp names the kept scan nearest to it within this
+  /// Empty: corrected_path gives sensor poses. Else the frame whose pose it gives (base_link);
+  /// the sensor pose is that pose times tf child_frame -> cloud frame at the scan's stamp.
+  std::string path_child_frame;
+  bool subscribe_path = true;  ///< subscribe corrected_path
+};
+
 struct ServerParams {
-  fragg::MapParams map;       ///< resolution, sensor_model/hit|miss|min|max, backend, raycast
+  /// resolution, sensor_model/hit|miss|min|max, backend, raycast; keep_scans and scan_store/*
+  /// (map.scans: the server keeps scans by default, the core does not).
+  fragg::MapParams map = withKeptScans();
   fragg::SensorModel sensor;  ///< sensor/type|hfov|vfov, sensor_model/min_range|max_range
   std::string frame_id = "map";
   /// Points of a cloud outside [min, max] (map frame z) are not inserted.
@@ -33,6 +47,15 @@ struct ServerParams {
   double marker_rate_hz = 0.0;
   double color_min_z_m = -1.0;  ///< marker colour ramp (markers/color_min_z)
   double color_max_z_m = 4.0;   ///< marker colour ramp (markers/color_max_z)
+  CorrectionParams correction;
+
+  /// The core's defaults with keep_scans on and a 2 GiB budget (scan_store/max_mb 2048).
+  static fragg::MapParams withKeptScans() {
+    fragg::MapParams m;
+    m.scans.keep = true;
+    m.scans.max_bytes = size_t{2048} << 20;
+    return m;
+  }
 };
 
 /// Fills ServerParams from a struct of parameters (the private namespace as one

@@ -120,7 +120,9 @@ void CloudInput::process(const sensor_msgs::PointCloud2& msg) {
   const auto start = std::chrono::steady_clock::now();
   {
     std::lock_guard<std::mutex> lock(shared_->mutex);
-    shared_->map.insert(cloud, T_map_sensor, sensor, stamp_ns);
+    const fragg::InsertStats inserted = shared_->map.insert(cloud, T_map_sensor, sensor, stamp_ns);
+    if (shared_->map.scanStore().contains(inserted.scan_id))
+      shared_->stamps.add(stamp_ns, inserted.scan_id, withoutLeadingSlash(msg.header.frame_id));
   }
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -61,6 +61,11 @@ void MapPublishers::publishAfterInsert(const ros::Time& stamp, const fragg::Sens
     frustum_pub_.publish(frustumMarker(sensor, T_map_sensor, params_.frame_id, stamp));
 }
 
+void MapPublishers::publishAfterCorrection(const ros::Time& stamp) {
+  std::lock_guard<std::mutex> lock(shared_->mutex);
+  publishMaps(stamp, false);
+}
+
 void MapPublishers::publishFull(const ros::Time& stamp) {
   std::lock_guard<std::mutex> lock(shared_->mutex);
   publishMaps(stamp, true);

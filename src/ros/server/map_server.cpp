@@ -3,6 +3,8 @@
 
 #include <ros/console.h>
 
+#include <string>
+
 #include "fragg_map/log.h"
 
 namespace fragg_ros {
@@ -19,6 +21,18 @@ MapServer::MapServer(ros::NodeHandle& nh, ros::NodeHandle& private_nh)
   publishers_ = std::make_unique<MapPublishers>(nh, private_nh, params_, shared_.get(), &stats_);
   services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_,
                                             [this] { publishers_->publishFull(ros::Time::now()); });
+  auto publish_corrected = [this] {
+    try {
+      publishers_->publishAfterCorrection(ros::Time::now());
+    } catch (const std::exception& e) {
+      ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
+    }
+  };
+  correction_service_ = std::make_unique<CorrectionService>(private_nh, params_, shared_.get(),
+                                                            &stats_, publish_corrected);
+  if (params_.correction.subscribe_path)
+    path_corrector_ = std::make_unique<PathCorrector>(nh, params_, tf_buffer_, shared_.get(),
+                                                      &stats_, publish_corrected);
   input_ = std::make_unique<CloudInput>(
       nh, params_, tf_buffer_, shared_.get(), &stats_,
       [this](const ros::Time& stamp, const fragg::SensorModel& sensor,
@@ -35,6 +49,16 @@ MapServer::MapServer(ros::NodeHandle& nh, ros::NodeHandle& private_nh)
            params_.frame_id.c_str(), shared_->map.backendName(),
            shared_->map.backendReason().c_str(), params_.sensor.describe().c_str(),
            params_.queue_size);
+  const fragg::ScanStoreParams& scans = params_.map.scans;
+  if (scans.keep) {
+    const std::string budget =
+        scans.max_bytes ? std::to_string(scans.max_bytes >> 20) + " MiB" : std::string("none");
+    const std::string beyond =
+        scans.spill_dir.empty() ? "the oldest points dropped" : "spilled to " + scans.spill_dir;
+    ROS_INFO("fragg_map: keeping scans for ~correct_poses%s (budget %s; beyond it %s)",
+             params_.correction.subscribe_path ? " and corrected_path" : "", budget.c_str(),
+             beyond.c_str());
+  }
 }
 
 MapServer::~MapServer() {

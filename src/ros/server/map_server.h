@@ -1,5 +1,6 @@
-// The map server: parameters, the shared map, tf, and its three parts (input, publishers,
-// services). MapServerNodelet::onInit builds one; it holds no logic of its own.
+// The map server: parameters, the shared map, tf, and its parts (input, publishers, services,
+// loop-closure correction through ~correct_poses and corrected_path). MapServerNodelet::onInit
+// builds one; it holds no logic of its own.
 #pragma once
 
 #include <ros/node_handle.h>
@@ -9,9 +10,11 @@
 #include <memory>
 
 #include "cloud_input.h"
+#include "correction_service.h"
 #include "fragg_map/ros/server_params.h"
 #include "map_publishers.h"
 #include "map_services.h"
+#include "path_corrector.h"
 #include "server_stats.h"
 #include "shared_map.h"
 
@@ -32,7 +35,9 @@ class MapServer {
   tf2_ros::TransformListener tf_listener_;
   std::unique_ptr<MapPublishers> publishers_;
   std::unique_ptr<MapServices> services_;
-  std::unique_ptr<CloudInput> input_;  // last: its thread uses everything above
+  std::unique_ptr<CorrectionService> correction_service_;
+  std::unique_ptr<PathCorrector> path_corrector_;  // only with correction/subscribe_path
+  std::unique_ptr<CloudInput> input_;              // last: its thread uses everything above
 };
 
 }  // namespace fragg_ros

@@ -80,7 +80,9 @@ bool MapServices::loadMap(fragg_map::LoadMap::Request& req, fragg_map::LoadMap::
                                    std::to_string(params_.map.resolution_m) + " m");
     std::lock_guard<std::mutex> lock(shared_->mutex);
     shared_->map = std::move(loaded);
-    return "loaded " + std::to_string(shared_->map.blocks().size()) + " blocks from " + req.path;
+    shared_->stamps.rebuild(shared_->map.scanStore());
+    return "loaded " + std::to_string(shared_->map.blocks().size()) + " blocks and " +
+           std::to_string(shared_->map.scanStore().size()) + " kept scans from " + req.path;
   });
   if (res.success && on_map_replaced_) on_map_replaced_();
   return ok;
@@ -90,6 +92,7 @@ bool MapServices::reset(fragg_map::Reset::Request&, fragg_map::Reset::Response& 
   answer("reset", res, [&] {
     std::lock_guard<std::mutex> lock(shared_->mutex);
     shared_->map.reset();
+    shared_->stamps.clear();
     stats_->clearInsertions();
     return std::string("map reset");
   });

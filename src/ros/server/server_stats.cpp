@@ -25,11 +25,21 @@ void ServerStats::addRejected() {
   ++rejected_;
 }
 
+void ServerStats::addCorrection(uint64_t scans, double ms) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++corrections_;
+  corrected_scans_ += scans;
+  correction_ms_last_ = ms;
+}
+
 void ServerStats::clearInsertions() {
   std::lock_guard<std::mutex> lock(mutex_);
   scans_ = 0;
   points_ = 0;
   insertion_ms_.clear();
+  corrections_ = 0;
+  corrected_scans_ = 0;
+  correction_ms_last_ = 0.0;
 }
 
 uint64_t ServerStats::droppedNoTf() const {
@@ -49,6 +59,7 @@ fragg_map::MapStats ServerStats::toMsg(const fragg::Map& map, const std::string&
   msg.blocks = memory.blocks;
   msg.host_bytes = memory.host_block_bytes;
   msg.gpu_bytes = memory.device_bytes;
+  msg.scans_kept = map.scanStore().size();
   std::lock_guard<std::mutex> lock(mutex_);
   msg.scans = scans_;
   msg.points = points_;
@@ -59,6 +70,9 @@ fragg_map::MapStats ServerStats::toMsg(const fragg::Map& map, const std::string&
   msg.insertion_ms_last = static_cast<float>(insertion_ms_.lastMs());
   msg.insertion_ms_mean = static_cast<float>(insertion_ms_.meanMs());
   msg.insertion_ms_p99 = static_cast<float>(insertion_ms_.percentileMs(0.99));
+  msg.corrections = corrections_;
+  msg.corrected_scans = corrected_scans_;
+  msg.correction_ms_last = static_cast<float>(correction_ms_last_);
   return msg;
 }
 

@@ -18,7 +18,9 @@ class ServerStats {
   void addDroppedNoTf();
   void addDroppedQueueFull();
   void addRejected();
-  /// Forgets the insertions (after ~reset); the drop counters keep counting.
+  /// A pose correction that moved `scans` kept scans in `ms`.
+  void addCorrection(uint64_t scans, double ms);
+  /// Forgets the insertions and corrections (after ~reset); the drop counters keep counting.
   void clearInsertions();
 
   /// The statistics message; `map` must be locked by the caller.
@@ -34,6 +36,9 @@ class ServerStats {
   uint64_t dropped_queue_full_ = 0;
   uint64_t rejected_ = 0;
   TimingStats insertion_ms_;
+  uint64_t corrections_ = 0;
+  uint64_t corrected_scans_ = 0;
+  double correction_ms_last_ = 0.0;
 };
 
 }  // namespace fragg_ros

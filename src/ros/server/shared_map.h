@@ -1,10 +1,13 @@
-// The map and the lock every thread takes to use it (insertion worker, publishers, services).
+// The map, its stamp -> scan index and the lock every thread takes to use them (insertion
+// worker, publishers, services, corrected_path). The index changes only with the map, under
+// the same lock: insertion adds, ~load_map rebuilds, ~reset clears.
 #pragma once
 
 #include <mutex>
 #include <utility>
 
 #include "fragg_map/map.h"
+#include "fragg_map/ros/scan_stamp_index.h"
 
 namespace fragg_ros {
 
@@ -12,6 +15,7 @@ struct SharedMap {
   explicit SharedMap(fragg::Map m) : map(std::move(m)) {}
   std::mutex mutex;
   fragg::Map map;
+  ScanStampIndex stamps;  ///< kept scans by stamp (empty when the map keeps none)
 };
 
 }  // namespace fragg_ros

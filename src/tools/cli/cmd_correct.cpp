@@ -55,8 +55,8 @@ void runCorrect(const CorrectOptions& o) {
                                   "removal {:.1f} ms, re-insertion {:.1f} ms), backend {}; "
                                   "wrote {}",
                                   st.scans, map.scanStore().size(), ms, ms / st.scans,
-                                  st.removal.seconds_total * 1e3,
-                                  st.insertion.seconds_total * 1e3, map.backendName(), o.output)
+                                  st.removal.seconds_total * 1e3, st.insertion.seconds_total * 1e3,
+                                  map.backendName(), o.output)
                           .c_str());
 }
 }  // namespace

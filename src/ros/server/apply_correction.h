@@ -1,0 +1,34 @@
+// The step ~correct_poses and corrected_path share: a correction plan through
+// fragg::Map::correctPoses, timed and counted.
+#pragma once
+
+#include <chrono>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/ros/pose_correction.h"
+#include "server_stats.h"
+#include "shared_map.h"
+
+namespace fragg_ros {
+
+/// Wall time of the correction [ms]; nothing happens (0 ms) for an empty plan. The caller
+/// holds shared->mutex. Throws fragg::InvalidArgument when the map keeps no scans.
+inline double applyCorrection(const CorrectionPlan& plan, SharedMap* shared, ServerStats* stats) {
+  if (plan.T_map_sensor_new.empty()) return 0.0;
+  const auto start = std::chrono::steady_clock::now();
+  shared->map.correctPoses(plan.T_map_sensor_new);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  stats->addCorrection(plan.T_map_sensor_new.size(), ms);
+  return ms;
+}
+
+/// Refuses a correction on a server that keeps no scans.
+inline void requireKeptScans(const SharedMap& shared) {
+  if (!shared.map.params().scans.keep && shared.map.scanStore().size() == 0)
+    throw fragg::InvalidArgument(
+        "this map keeps no scans (parameter keep_scans is false, or the loaded map was saved "
+        "without them)");
+}
+
+}  // namespace fragg_ros
