@@ -79,6 +79,7 @@ class Map {
   Eigen::Vector3d centerOf(const VoxelKey& key) const;
 
   /// Makes every cell in the box unknown (block-granular memory release where possible).
+  /// Kept scans that could reach into the box can no longer be removed or corrected.
   void clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map);
   void reset();
 
@@ -89,7 +90,7 @@ class Map {
   /// first (a write-back cache), so every host reader goes through here.
   const BlockMap& blocks() const;
   /// Write access for loaders, importers and merging; bumps the map revision and drops the
-  /// device copies.
+  /// device copies. Kept scans can no longer be removed or corrected afterwards.
   BlockMap& mutableBlocks();
   uint64_t revision() const { return revision_; }
   size_t scanCount() const { return scans_; }
@@ -107,6 +108,9 @@ class Map {
 
  private:
   void fallBackToCpu(const std::string& why);
+  void requireRemovable(ScanId id) const;  ///< InvalidArgument when it is not
+  /// Marks the kept scans whose rays could reach into the box as no longer removable.
+  void markScansTouching(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map);
   /// Culling and integration of one prepared scan (insert or remove) with its own ray cast
   /// mode and no-return setting. `host_cull`: run the host culler for a backend that does not
   /// cull on its own (counters only; corrections skip it).

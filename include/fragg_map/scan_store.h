@@ -54,6 +54,9 @@ struct ScanRecord {
   RayCast raycast = RayCast::kDda;
   bool clear_no_return_rays = false;
   uint64_t points = 0;  ///< points of the cloud
+  /// False once cells the scan updated were changed by other means than scans (Map::clearBox,
+  /// Map::mutableBlocks): its removal would no longer undo its own updates.
+  bool removable = true;
 };
 
 class ScanStore {
@@ -71,6 +74,9 @@ class ScanStore {
   const ScanRecord& record(ScanId id) const;  ///< throws InvalidArgument for an unknown id
   /// Whether the scan's points are still available (in memory or spilled).
   bool hasPoints(ScanId id) const;
+  /// Whether the scan can be removed exactly: kept, points available, still removable.
+  bool canRemove(ScanId id) const;
+  void markUnremovable(ScanId id);
   /// The scan's points (read back from the spill folder if needed); throws InvalidArgument
   /// when they were dropped, IoError when a spill file is unreadable.
   EncodedPoints points(ScanId id) const;

@@ -127,6 +127,25 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   return stats;
 }
 
+void Map::requireRemovable(ScanId id) const {
+  if (!scan_store_->record(id).removable)
+    throw InvalidArgument("scan " + std::to_string(id) +
+                          " can no longer be removed exactly: a clear box (or a direct edit of "
+                          "the map) changed cells it had updated");
+}
+
+void Map::markScansTouching(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map) {
+  for (ScanId id : scan_store_->ids()) {
+    const ScanRecord& r = scan_store_->record(id);
+    // The scan's rays stay within max range of its sensor: a box around that sphere.
+    const Eigen::Vector3d o = r.T_map_sensor.translation();
+    const double reach = r.model.max_range_m + 2.0 * params_.resolution_m;
+    if ((o.array() + reach >= min_map.array()).all() &&
+        (o.array() - reach <= max_map.array()).all())
+      scan_store_->markUnremovable(id);
+  }
+}
+
 InsertStats Map::remove(ScanId id) {
   const auto t0 = std::chrono::steady_clock::now();
   if (!params_.scans.keep && scan_store_->size() == 0)
@@ -134,6 +153,7 @@ InsertStats Map::remove(ScanId id) {
         "this map keeps no scans (insert them with the scan store on: "
         "MapParams::scans.keep, `fragg_map build --keep-scans`)");
   const ScanRecord how = scan_store_->record(id);  // throws for an unknown index
+  requireRemovable(id);
   const PointCloud cloud = decodePoints(scan_store_->points(id));
   InsertStats stats = integrateScan(cloud, how, /*remove=*/true, /*host_cull=*/false);
   scan_store_->erase(id);
@@ -156,6 +176,7 @@ CorrectionStats Map::correctPoses(const std::map<ScanId, Eigen::Isometry3d>& T_m
   for (const auto& [id, T] : T_map_sensor_new) {
     if (!scan_store_->contains(id))
       throw InvalidArgument("no kept scan with index " + std::to_string(id));
+    requireRemovable(id);
     try {
       validatePose(T);
     } catch (const InvalidArgument& e) {
@@ -213,6 +234,7 @@ void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_ma
   const BlockKey blo = blockKeyOf(lo), bhi = blockKeyOf(hi);
   integrator_->syncToHost(blocks_);
   integrator_->dropDeviceCopies();
+  markScansTouching(min_map, max_map);
   std::vector<BlockIndex> hit;
   blocks_.forEachInBox(blo, bhi, [&](BlockIndex i) { hit.push_back(i); });
   ++revision_;
@@ -252,6 +274,7 @@ const BlockMap& Map::blocks() const {
 }
 
 BlockMap& Map::mutableBlocks() {
+  for (ScanId id : scan_store_->ids()) scan_store_->markUnremovable(id);
   integrator_->syncToHost(blocks_);
   integrator_->dropDeviceCopies();
   ++revision_;

@@ -113,6 +113,7 @@ void writeScan(ByteWriter& w, const ScanRecord& r, const EncodedPoints& p) {
   w.put(static_cast<uint8_t>(r.explicit_model));
   w.put(static_cast<uint8_t>(r.raycast));
   w.put(static_cast<uint8_t>(r.clear_no_return_rays));
+  w.put(static_cast<uint8_t>(r.removable));
   for (double v : {m.hfov_rad, m.vfov_rad, m.elevation_min_rad, m.elevation_max_rad, m.min_range_m,
                    m.max_range_m})
     w.put(v);
@@ -146,16 +147,18 @@ void readScan(ByteReader& rd, ScanRecord& r, EncodedPoints& p) {
   const auto explicit_model = rd.get<uint8_t>("explicit model flag");
   const auto raycast = rd.get<uint8_t>("ray cast mode");
   const auto no_return = rd.get<uint8_t>("no-return flag");
+  const auto removable = rd.get<uint8_t>("removable flag");
   if (type != uint8_t(SensorType::kSpinningLidar) && type != uint8_t(SensorType::kPinhole))
     rd.fail("scan " + std::to_string(r.id) + ": unknown sensor type " + std::to_string(type));
   if (axis > uint8_t(OpticalAxis::kXForward) || explicit_model > 1 ||
-      raycast > uint8_t(RayCast::kBresenham) || no_return > 1)
+      raycast > uint8_t(RayCast::kBresenham) || no_return > 1 || removable > 1)
     rd.fail("scan " + std::to_string(r.id) + ": bad sensor or insertion flags");
   m.type = static_cast<SensorType>(type);
   m.optical_axis = static_cast<OpticalAxis>(axis);
   r.explicit_model = explicit_model != 0;
   r.raycast = static_cast<RayCast>(raycast);
   r.clear_no_return_rays = no_return != 0;
+  r.removable = removable != 0;
   for (double* v : {&m.hfov_rad, &m.vfov_rad, &m.elevation_min_rad, &m.elevation_max_rad,
                     &m.min_range_m, &m.max_range_m})
     *v = rd.get<double>("sensor model");

@@ -31,6 +31,15 @@ bool ScanStore::hasPoints(ScanId id) const {
   return it != scans_.end() && it->second.where != Where::kDropped;
 }
 
+bool ScanStore::canRemove(ScanId id) const {
+  return hasPoints(id) && scans_.at(id).record.removable;
+}
+
+void ScanStore::markUnremovable(ScanId id) {
+  const auto it = scans_.find(id);
+  if (it != scans_.end()) it->second.record.removable = false;
+}
+
 EncodedPoints ScanStore::points(ScanId id) const {
   const auto it = scans_.find(id);
   if (it == scans_.end()) throw InvalidArgument("no kept scan with index " + std::to_string(id));

@@ -39,7 +39,7 @@ CorrectionPlan planCorrection(const std::vector<PoseRequest>& requests, const Sc
   for (size_t i = 0; i < requests.size(); ++i) {
     const PoseRequest& r = requests[i];
     const ScanStampIndex::Entry* entry = index.find(r.stamp_ns, tolerance_ns);
-    if (!entry || !store.contains(entry->id) || !store.hasPoints(entry->id)) {
+    if (!entry || !store.contains(entry->id) || !store.canRemove(entry->id)) {
       plan.unknown.push_back(i);
       continue;
     }

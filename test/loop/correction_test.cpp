@@ -120,6 +120,33 @@ TEST(CorrectTest, BadArgumentsLeaveTheMapUntouched) {
   EXPECT_THROW(no_scans.correctPoses({{0, test::poseAt(0)}}), InvalidArgument);
 }
 
+TEST(CorrectTest, ScansReachingIntoAClearedBoxCanNoLongerBeRemoved) {
+  // Far apart scans (10 m range): clearing a box around the first only touches the first.
+  Map map(keeping());
+  Eigen::Isometry3d far = test::poseAt(0);
+  far.translation().x() += 100.0;
+  map.insert(room(), test::poseAt(0), test::lidar());
+  map.insert(room(), far, test::lidar());
+  map.clearBox(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1));
+  EXPECT_FALSE(map.scanStore().canRemove(0));
+  EXPECT_TRUE(map.scanStore().canRemove(1));
+  const uint64_t revision = map.revision();
+  EXPECT_THROW(map.correctPoses({{0, test::poseAt(0, 0.1)}}), InvalidArgument);
+  EXPECT_THROW(map.remove(0), InvalidArgument);
+  EXPECT_EQ(map.revision(), revision);
+  // The flag is kept in the file; the other scan still moves.
+  const std::string path = std::string(FRAGG_TEST_TMP) + "/cleared.fgm";
+  map.save(path);
+  Map loaded = Map::load(path, Backend::kCpu);
+  EXPECT_FALSE(loaded.scanStore().canRemove(0));
+  Eigen::Isometry3d moved = far;
+  moved.translation().y() += 0.2;
+  EXPECT_EQ(loaded.correctPoses({{1, moved}}).scans, 1u);
+  // A direct edit of the map makes every kept scan unremovable.
+  loaded.mutableBlocks();
+  EXPECT_FALSE(loaded.scanStore().canRemove(1));
+}
+
 TEST(CorrectTest, CorrectionWorksAfterSavingAndLoading) {
   Map live(keeping());
   for (int i = 0; i < 5; ++i) live.insert(room(), test::poseAt(i, 0.02 * i), test::lidar());

@@ -46,8 +46,9 @@ struct PoseRequest {
 
 struct CorrectionPlan {
   std::map<fragg::ScanId, Eigen::Isometry3d> T_map_sensor_new;  ///< for Map::correctPoses
-  /// Requests (indices) that match no kept scan within the tolerance, or a scan whose points
-  /// were dropped by the store's budget.
+  /// Requests (indices) that match no kept scan within the tolerance, a scan whose points
+  /// were dropped by the store's budget, or one that can no longer be removed exactly
+  /// (ScanStore::canRemove: clear_bbox changed cells it had updated).
   std::vector<size_t> unknown;
   size_t unchanged = 0;  ///< matched, but within the thresholds (only with thresholds)
 };
