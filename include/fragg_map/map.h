@@ -103,10 +103,16 @@ class Map {
   KeyBounds bounds() const { return blocks().observedBounds(); }
 
   void save(const std::string& path) const;
-  /// Reads a .fgm file into a new map integrating with `backend`.
+  /// Reads a .fgm file into a new map integrating with `backend` (other settings default; the
+  /// map keeps scans if the file has them).
   static Map load(const std::string& path, Backend backend = Backend::kAuto);
+  /// The same, with every setting that is not in the file (backend, threads, ray cast, CUDA,
+  /// scan store...) from `runtime`; the file gives the resolution and the occupancy model. The
+  /// file's kept scans are loaded only when `runtime.scans.keep`.
+  static Map load(const std::string& path, const MapParams& runtime);
 
  private:
+  static Map loadFile(const std::string& path, const MapParams& runtime, bool keep_as_file);
   void fallBackToCpu(const std::string& why);
   void requireRemovable(ScanId id) const;  ///< InvalidArgument when it is not
   /// Marks the kept scans whose rays could reach into the box as no longer removable.

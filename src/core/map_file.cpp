@@ -76,6 +76,16 @@ void Map::save(const std::string& path) const {
 }
 
 Map Map::load(const std::string& path, Backend backend) {
+  MapParams runtime;
+  runtime.backend = backend;
+  return loadFile(path, runtime, /*keep_as_file=*/true);
+}
+
+Map Map::load(const std::string& path, const MapParams& runtime) {
+  return loadFile(path, runtime, /*keep_as_file=*/false);
+}
+
+Map Map::loadFile(const std::string& path, const MapParams& runtime, bool keep_as_file) {
   const std::vector<uint8_t> bytes = readWholeFile(path);
   if (bytes.size() < kHeaderBytes + 4)
     throw IoError(path + ": not a valid .fgm map: file too short (" + std::to_string(bytes.size()) +
@@ -94,7 +104,7 @@ Map Map::load(const std::string& path, Backend backend) {
     r.fail("checksum mismatch (file corrupted or truncated)");
   if (r.get<uint32_t>("header size") != kHeaderBytes) r.fail("unexpected header size");
 
-  MapParams params;
+  MapParams params = runtime;  // the file's fields below replace the runtime ones
   params.resolution_m = r.get<double>("resolution");
   OccupancyParams& occ = params.occupancy;
   occ.prob_hit = r.get<double>("prob_hit");
@@ -117,8 +127,8 @@ Map Map::load(const std::string& path, Backend backend) {
   // Every block takes at least 16 bytes: reject absurd counts before allocating.
   if (count > r.remaining() / 16) r.fail("block count larger than the file");
 
-  params.backend = backend;
-  params.scans.keep = (flags & kMapFileScans) != 0;
+  const bool file_has_scans = (flags & kMapFileScans) != 0;
+  if (keep_as_file) params.scans.keep = file_has_scans;
   Map map(params);
   const OccupancyModel& model = map.model();
   std::vector<uint8_t> packed;
@@ -160,7 +170,7 @@ Map Map::load(const std::string& path, Backend backend) {
       readScan(r, record, points);
       if (record.id >= map.next_scan_id_ || map.scan_store_->contains(record.id))
         r.fail("scan index " + std::to_string(record.id) + " repeated or out of range");
-      map.scan_store_->add(record, std::move(points));
+      if (params.scans.keep) map.scan_store_->add(record, std::move(points));
     }
   } else {
     map.next_scan_id_ = scans;

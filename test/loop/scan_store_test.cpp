@@ -133,6 +133,17 @@ TEST(ScanStoreTest, KeptScansRoundTripThroughTheMapFile) {
   // The loaded map keeps scans and numbers new ones after the old ones.
   EXPECT_EQ(loaded.insert(test::roomScan(4, 1, 2, 8, 180), test::poseAt(3), test::lidar()).scan_id,
             3u);
+  // With runtime settings: the budget applies, and a map that keeps no scans drops the file's.
+  MapParams budget = p;
+  budget.scans.max_bytes = 1;  // everything but the newest scan is dropped
+  budget.raycast = RayCast::kBresenham;
+  Map bounded = Map::load(path, budget);
+  EXPECT_EQ(bounded.params().raycast, RayCast::kBresenham);
+  EXPECT_EQ(bounded.scanStore().size(), 3u);
+  EXPECT_EQ(bounded.scanStore().droppedCount(), 2u);
+  MapParams none = p;
+  none.scans.keep = false;
+  EXPECT_EQ(Map::load(path, none).scanStore().size(), 0u);
   // A truncated file with scans is rejected with a clear error.
   const auto size = std::filesystem::file_size(path);
   std::filesystem::resize_file(path, size - 100);

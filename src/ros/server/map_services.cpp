@@ -73,7 +73,9 @@ bool MapServices::loadMap(fragg_map::LoadMap::Request& req, fragg_map::LoadMap::
   const bool ok = answer("load_map", res, [&] {
     if (!endsWith(req.path, ".fgm"))
       throw fragg::InvalidArgument("unknown extension of '" + req.path + "': load_map reads .fgm");
-    fragg::Map loaded = fragg::Map::load(req.path, params_.map.backend);  // validates first
+    // The file gives resolution, occupancy model and kept scans; the server's own settings
+    // (backend, threads, ray cast, scan store budget...) the rest. Validates first.
+    fragg::Map loaded = fragg::Map::load(req.path, params_.map);
     if (std::abs(loaded.resolution() - params_.map.resolution_m) > 1e-12)
       throw fragg::InvalidArgument("the file's resolution " + std::to_string(loaded.resolution()) +
                                    " m differs from the server's " +
