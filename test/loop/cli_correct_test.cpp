@@ -23,7 +23,9 @@ std::string buildKept(const std::string& dir, bool keep = true) {
   const auto r = runCli(dir, "build '" + kRgbd + "' -o '" + map + "' --resolution 0.05" +
                                  (keep ? " --keep-scans" : "") + " --json");
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  if (keep) EXPECT_EQ(nlohmann::json::parse(r.out)["kept_scans"], 5);
+  if (keep) {
+    EXPECT_EQ(nlohmann::json::parse(r.out)["kept_scans"], 5);
+  }
   return map;
 }
 

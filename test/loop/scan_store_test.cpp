@@ -41,10 +41,11 @@ TEST(ScanStoreTest, QuantisedPointsStayWithinHalfAStepAndKeepNoReturns) {
   encodePoints(c, 0.001, &same_pass);
   ASSERT_EQ(same_pass.size(), d.size());
   for (size_t i = 0; i < d.size(); ++i)
-    if (d.points_S[i].allFinite())
+    if (d.points_S[i].allFinite()) {
       EXPECT_EQ(same_pass.points_S[i], d.points_S[i]) << i;
-    else
+    } else {
       EXPECT_FALSE(same_pass.points_S[i].allFinite()) << i;
+    }
   // Large clouds take the parallel path: same bytes as a point-by-point encoding.
   PointCloud big = test::roomScan(4.0, 1.0, 2.0, 64, 1024);
   PointCloud big_decoded;

@@ -58,7 +58,9 @@ TEST(SimBag, CloudsAndTfReadBackThroughTheCoreBagReader) {
     // The bag's tf gives the drifting odometry's sensor pose, not the ground truth.
     const Eigen::Isometry3d expected = poses[i].T_odom_base * T_base_sensor;
     EXPECT_TRUE(s.T_map_sensor.isApprox(expected, 1e-6)) << "frame " << i;
-    if (i > 2) EXPECT_FALSE(s.T_map_sensor.isApprox(poses[i].T_map_base * T_base_sensor, 1e-4));
+    if (i > 2) {
+      EXPECT_FALSE(s.T_map_sensor.isApprox(poses[i].T_map_base * T_base_sensor, 1e-4));
+    }
     ++i;
   }
   EXPECT_EQ(i, poses.size());
