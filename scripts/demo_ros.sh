@@ -71,7 +71,9 @@ stop
 fragg_step "the node's map"
 "$fragg" stats "$out/node_smoke.fgm"
 "$fragg" render "$out/node_smoke.fgm" -o "$out/node_smoke_top.png" --view top
-"$fragg" build "$bag" -o "$out/cli_smoke.fgm" --topic /points --frame map >/dev/null
+# The node keeps its scans (keep_scans, default true), so it integrates them quantised to 1 mm:
+# the CLI does the same with --keep-scans, and the two maps are the same.
+"$fragg" build "$bag" -o "$out/cli_smoke.fgm" --topic /points --frame map --keep-scans >/dev/null
 "$fragg" compare "$out/cli_smoke.fgm" "$out/node_smoke.fgm"
 
 fragg_step "outputs"
