@@ -114,7 +114,8 @@ class Map {
  private:
   static Map loadFile(const std::string& path, const MapParams& runtime, bool keep_as_file);
   void fallBackToCpu(const std::string& why);
-  void requireRemovable(ScanId id) const;  ///< InvalidArgument when it is not
+  /// InvalidArgument unless the map keeps scans, `id` is one of them and it is removable.
+  void requireRemovable(ScanId id) const;
   /// Marks the kept scans whose rays could reach into the box as no longer removable.
   void markScansTouching(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map);
   /// Culling and integration of one prepared scan (insert or remove) with its own ray cast

@@ -128,7 +128,11 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
 }
 
 void Map::requireRemovable(ScanId id) const {
-  if (!scan_store_->record(id).removable)
+  if (!params_.scans.keep && scan_store_->size() == 0)
+    throw InvalidArgument(
+        "this map keeps no scans (insert them with the scan store on: "
+        "MapParams::scans.keep, `fragg_map build --keep-scans`)");
+  if (!scan_store_->record(id).removable)  // record() throws for an unknown index
     throw InvalidArgument("scan " + std::to_string(id) +
                           " can no longer be removed exactly: a clear box (or a direct edit of "
                           "the map) changed cells it had updated");
@@ -148,12 +152,8 @@ void Map::markScansTouching(const Eigen::Vector3d& min_map, const Eigen::Vector3
 
 InsertStats Map::remove(ScanId id) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (!params_.scans.keep && scan_store_->size() == 0)
-    throw InvalidArgument(
-        "this map keeps no scans (insert them with the scan store on: "
-        "MapParams::scans.keep, `fragg_map build --keep-scans`)");
-  const ScanRecord how = scan_store_->record(id);  // throws for an unknown index
   requireRemovable(id);
+  const ScanRecord how = scan_store_->record(id);
   const PointCloud cloud = decodePoints(scan_store_->points(id));
   InsertStats stats = integrateScan(cloud, how, /*remove=*/true, /*host_cull=*/false);
   scan_store_->erase(id);
@@ -166,16 +166,10 @@ InsertStats Map::remove(ScanId id) {
 
 CorrectionStats Map::correctPoses(const std::map<ScanId, Eigen::Isometry3d>& T_map_sensor_new) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (!params_.scans.keep && scan_store_->size() == 0)
-    throw InvalidArgument(
-        "this map keeps no scans (insert them with the scan store on: "
-        "MapParams::scans.keep, `fragg_map build --keep-scans`)");
   // Everything is checked (and spilled points read) before the map changes.
   std::vector<EncodedPoints> points;
   points.reserve(T_map_sensor_new.size());
   for (const auto& [id, T] : T_map_sensor_new) {
-    if (!scan_store_->contains(id))
-      throw InvalidArgument("no kept scan with index " + std::to_string(id));
     requireRemovable(id);
     try {
       validatePose(T);
