@@ -462,6 +462,7 @@ void CudaIntegrator::integrate(const ScanInput& in, const MapParams& params,
     args.miss_capacity = static_cast<uint32_t>(miss_dev_.size());
     args.counters = counters_dev_.get();
     args.scan = scan_;
+    args.remove = in.remove;
     FRAGG_CUDA_CHECK(cudaEventRecord(ray_start_, stream_.get()));
     launchRaycast(args, params.raycast, params.cuda.readonly_ray_loads, stream_.get());
     launchCompactTouched(pool_.arrays(), scan_, counters_dev_.get(), stream_.get());

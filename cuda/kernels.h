@@ -28,6 +28,9 @@ struct RaycastArgs {
   uint32_t miss_capacity;
   ScanCounters* counters;
   uint32_t scan;
+  /// A removal: a block without a slot or a host copy was never observed, so there is nothing
+  /// to undo in it; no slot is taken for it and its cells are not marked.
+  bool remove = false;
 };
 /// One thread a ray: marks FREE / HIT scratch bits, allocating slots for new blocks.
 void launchRaycast(const RaycastArgs& args, RayCast mode, bool readonly_loads, cudaStream_t stream);

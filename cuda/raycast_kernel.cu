@@ -40,6 +40,7 @@ __device__ int32_t resolveSlot(const RaycastArgs& a, const BlockKey& b) {
   for (;;) {
     if (v >= 0) break;
     if (v == kWindowEmpty) {
+      if (a.remove) return -1;
       const int32_t prev = atomicCAS(entry, kWindowEmpty, kWindowBusy);
       if (prev != kWindowEmpty) {
         v = prev;

@@ -22,7 +22,7 @@ void regrow(DeviceArray<T>& a, size_t keep, size_t n, cudaStream_t s) {
 
 size_t SlotPool::bytesPerSlot() {
   return sizeof(Block) + sizeof(BlockKey) + sizeof(SlotScratch) + sizeof(int32_t) +
-         2 * sizeof(uint8_t) + sizeof(uint32_t) + sizeof(uint64_t) + sizeof(CullMemory) +
+         2 * sizeof(uint8_t) + sizeof(uint32_t) + 2 * sizeof(uint64_t) + sizeof(CullMemory) +
          sizeof(int32_t) + sizeof(uint8_t);
 }
 

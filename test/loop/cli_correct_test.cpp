@@ -75,6 +75,15 @@ TEST(CliCorrect, MovesScansAndBack) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.out.rfind("corrected 2 of 5 kept scans", 0), 0u) << r.out;
   EXPECT_GE(agreement(dir, map, dir + "/back.fgm"), 0.995);
+
+  // `stats --scans` prints a file `correct --poses` reads as it is.
+  r = runCli(dir, "stats '" + map + "' --scans");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  writeText(dir + "/listed.txt", r.out);
+  r = runCli(dir,
+             "correct '" + map + "' --poses '" + dir + "/listed.txt' -o '" + dir + "/listed.fgm'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("corrected 5 of 5 kept scans", 0), 0u) << r.out;
 }
 
 TEST(CliCorrect, BadInputFailsWithOneLineAndWritesNothing) {

@@ -35,8 +35,29 @@ nlohmann::json keptScans(const Map& map) {
   return list;
 }
 
+/// The kept scans as a file `fragg_map correct --poses` reads: a pose line per scan, the rest
+/// in comments.
+void printScanPoses(const Map& map, const std::string& path) {
+  std::printf("# kept scans of %s: scan_index tx ty tz qx qy qz qw (T_map_sensor)\n", path.c_str());
+  for (const auto& s : keptScans(map)) {
+    const auto& p = s["pose"];
+    std::printf("%s\n", fmt::format("# stamp_ns {}, {} points, sensor {}\n{} {:.6f} {:.6f} {:.6f} "
+                                    "{:.9f} {:.9f} {:.9f} {:.9f}",
+                                    s["stamp_ns"].get<int64_t>(), s["points"].get<uint64_t>(),
+                                    s["sensor"].get<std::string>(), s["index"].get<uint64_t>(),
+                                    p[0].get<double>(), p[1].get<double>(), p[2].get<double>(),
+                                    p[3].get<double>(), p[4].get<double>(), p[5].get<double>(),
+                                    p[6].get<double>())
+                            .c_str());
+  }
+}
+
 void runStats(const StatsOptions& o) {
   const Map map = loadMapFile(o.map);
+  if (o.list_scans && !o.json) {
+    printScanPoses(map, o.map);
+    return;
+  }
   size_t counts[3] = {0, 0, 0};
   size_t observed = 0;
   map.blocks().forEach([&](BlockIndex i) {
@@ -103,18 +124,6 @@ void runStats(const StatsOptions& o) {
   std::printf("kept scans   %zu%s\n", map.scanStore().size(),
               map.scanStore().size() ? " (fragg_map correct can move them; --scans lists them)"
                                      : " (built without --keep-scans: poses cannot be corrected)");
-  if (!o.list_scans) return;
-  std::printf("# scan_index tx ty tz qx qy qz qw (T_map_sensor)  stamp_ns points sensor\n");
-  for (const auto& s : keptScans(map)) {
-    const auto& p = s["pose"];
-    std::printf("%s\n",
-                fmt::format("{} {:.6f} {:.6f} {:.6f} {:.9f} {:.9f} {:.9f} {:.9f}  {} {} {}",
-                            s["index"].get<uint64_t>(), p[0].get<double>(), p[1].get<double>(),
-                            p[2].get<double>(), p[3].get<double>(), p[4].get<double>(),
-                            p[5].get<double>(), p[6].get<double>(), s["stamp_ns"].get<int64_t>(),
-                            s["points"].get<uint64_t>(), s["sensor"].get<std::string>())
-                    .c_str());
-  }
 }
 }  // namespace
 
@@ -124,8 +133,9 @@ void addStatsCommand(CLI::App& app) {
   c->add_option("map", o->map, "Map file")->required();
   c->add_flag("--json", o->json, "Print one JSON object on stdout");
   c->add_flag("--scans", o->list_scans,
-              "List the kept scans: index and pose in the format `fragg_map correct --poses` "
-              "reads");
+              "Print only the kept scans, as the file `fragg_map correct --poses` reads (index "
+              "and pose per line; stamp, points and sensor in comments); with --json, add them "
+              "as scan_list");
   c->callback([o] { runStats(*o); });
 }
 
