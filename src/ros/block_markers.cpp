@@ -155,4 +155,20 @@ visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const Mar
   return out;
 }
 
+visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
+                                                  const ros::Time& stamp,
+                                                  const MarkerLedger& ledger) {
+  visualization_msgs::MarkerArray out;
+  out.markers.push_back(markerHeader(style, stamp, 0, visualization_msgs::Marker::DELETEALL));
+  const fragg::BlockMap& blocks = map.blocks();
+  for (const auto& [key, shown] : ledger.ids_) {
+    const fragg::BlockIndex i = blocks.find(key);
+    // An erased block is still shown until the next increment deletes it: its cells stand
+    // nowhere else, so it is left out (that DELETE then finds nothing, which is harmless).
+    if (i != fragg::kNoBlock)
+      out.markers.push_back(blockMarker(map, i, shown.cells, style, stamp, shown.id));
+  }
+  return out;
+}
+
 }  // namespace fragg_ros

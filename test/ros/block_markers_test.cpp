@@ -268,6 +268,38 @@ TEST(BlockMarkers, ClearedBoxDeletesTheErasedBlocks) {
   EXPECT_EQ(ledger.shownBlocks(), 0u);
 }
 
+// latch: a subscriber that connects late gets what the others see, under the same ids, so the
+// increments that follow apply to its view as to theirs.
+TEST(BlockMarkers, LateSubscriberFollowsTheIncrementsAfterItsSnapshot) {
+  fragg::Map map(fragg_ros_test::cpuParams());
+  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  MarkerLedger topic;
+  ShownVoxels early, late;
+  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &topic), &early);
+  fragg_ros_test::insertWall(map, Eigen::Vector3d(0.0, 10.0, 0.0), 3.0);
+  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &topic), &early);
+  const size_t shown_before = topic.shownBlocks();
+  const MarkerArray snapshot = fragg_ros::shownBlockMarkers(map, MarkerStyle(), kStamp, topic);
+  EXPECT_EQ(topic.shownBlocks(), shown_before);  // the topic's ledger is left alone
+  ASSERT_EQ(snapshot.markers.size(), shown_before + 1);
+  EXPECT_EQ(snapshot.markers[0].action, Marker::DELETEALL);
+  apply(map, snapshot, &late);
+  EXPECT_EQ(late, early);  // same ids, same cells
+  // Later changes, one of them deleting a block both views show.
+  const fragg::VoxelKey lone{40, 40, 40};
+  fragg_ros_test::setCell(map, lone, fragg::CellState::kOccupied);
+  const MarkerArray add = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &topic);
+  apply(map, add, &early);
+  apply(map, add, &late);
+  fragg_ros_test::setCell(map, lone, fragg::CellState::kFree);
+  const MarkerArray del = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &topic);
+  EXPECT_EQ(countAction(del, Marker::DELETE), 1u);
+  apply(map, del, &early);
+  apply(map, del, &late);
+  EXPECT_EQ(late, early);
+  EXPECT_EQ(allShown(late), occupiedVoxels(map));
+}
+
 TEST(BlockMarkers, FullRepublishStartsWithDeleteAll) {
   fragg::Map map(fragg_ros_test::cpuParams());
   fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);

@@ -47,6 +47,8 @@ class MarkerLedger {
                                                              const ros::Time&, MarkerLedger*);
   friend visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map&, const MarkerStyle&,
                                                          const ros::Time&, MarkerLedger*);
+  friend visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map&, const MarkerStyle&,
+                                                           const ros::Time&, const MarkerLedger&);
   struct Shown {
     int32_t id;
     CellMask cells;
@@ -73,5 +75,12 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
 /// `style.ns`, then one ADD per block with cells in `style.state`. Rebuilds the ledger.
 visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
                                                 const ros::Time& stamp, MarkerLedger* ledger);
+
+/// What a topic's subscribers see now, for a late subscriber of a latched topic: a DELETEALL,
+/// then every block the ledger shows, with the ledger's ids and cells, so that the topic's
+/// next increments apply to it as to everyone else. The ledger is not changed.
+visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
+                                                  const ros::Time& stamp,
+                                                  const MarkerLedger& ledger);
 
 }  // namespace fragg_ros

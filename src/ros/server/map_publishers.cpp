@@ -116,8 +116,8 @@ void MapPublishers::publishMarkers(MarkerTopic& topic, const ros::Time& stamp, b
 void MapPublishers::sendAllMarkersTo(MarkerTopic& topic,
                                      const ros::SingleSubscriberPublisher& sub) {
   std::lock_guard<std::mutex> lock(shared_->mutex);
-  MarkerLedger scratch;  // the topic's own ledger keeps following the incremental stream
-  sub.publish(allBlockMarkers(shared_->map, topic.style, ros::Time::now(), &scratch));
+  // The blocks the topic's subscribers see, under the ids its increments will use.
+  sub.publish(shownBlockMarkers(shared_->map, topic.style, ros::Time::now(), topic.ledger));
 }
 
 }  // namespace fragg_ros
