@@ -143,7 +143,8 @@ __global__ void __launch_bounds__(kThreads) raycastKernel(RaycastArgs a) {
     const RayVox ray{a.ref,
                      {a.start_v[0], a.start_v[1], a.start_v[2]},
                      {e.end_v[0], e.end_v[1], e.end_v[2]},
-                     e.hit != 0};
+                     e.hit != 0,
+                     marginOfHitCode(e.hit)};
     DeviceMarker mark{a, MarkFilter{filter}};
     visits = kBresenham ? traverseBresenham(ray, mark) : traverseDda(ray, mark);
   }

@@ -7,8 +7,8 @@
 //            sorted by key so the same map always gives the same bytes
 //   scans  : only with flag bit 1 (the map keeps its scans for loop closure; version 2):
 //            u64 next scan index | u64 scan count | scans in index order (scan_codec.h:
-//            index, stamp, pose as 12 f64, sensor model, insertion and removable flags,
-//            zlib'd points)
+//            index, stamp, pose as 12 f64, sensor model (version 3: with its range noise),
+//            insertion and removable flags, zlib'd points)
 //   footer : u32 CRC-32 (zlib) of everything before it
 // Saved to a temporary file and renamed. The loader checks every field and the checksum.
 #pragma once
@@ -18,7 +18,8 @@
 namespace fragg {
 
 constexpr char kMapFileMagic[8] = {'F', 'R', 'A', 'G', 'G', 'M', 'A', 'P'};
-constexpr uint32_t kMapFileVersion = 2;  ///< version 1 (no scan section) is read too
+/// Versions 1 (no scan section) and 2 (kept scans without range noise) are read too.
+constexpr uint32_t kMapFileVersion = 3;
 constexpr uint32_t kMapFileCompressed = 1u;
 constexpr uint32_t kMapFileScans = 2u;
 

@@ -2,8 +2,10 @@
 //
 // OctoMap semantics: the cells from the sensor's cell up to (not including) the endpoint cell
 // are free; the endpoint cell is a hit unless the ray was clipped at max range (then it is
-// neither). Coordinates come in voxel units (metres / resolution) relative to a reference
-// voxel near the sensor, so float traversal keeps full precision anywhere on an int32 map.
+// neither). A hit may carry a clearing margin (the sensor's range noise): free cells the ray
+// leaves less than that distance before its endpoint are not visited. Coordinates come in voxel
+// units (metres / resolution) relative to a reference voxel near the sensor, so float traversal
+// keeps full precision anywhere on an int32 map.
 #pragma once
 
 #include <cmath>
@@ -27,7 +29,23 @@ struct RayVox {
   float start_v[3];
   float end_v[3];
   bool end_is_hit;
+  /// Clearing margin of a hit, voxels: free cells whose exit point lies closer than this to
+  /// the endpoint (along the ray) are skipped, so that range noise does not clear the surface
+  /// that was hit. Ignored for free-only rays.
+  float keep_v = 0.f;
 };
+
+/// Ray parameter (0 at the start, 1 at the end) beyond which a free cell's exit puts it inside
+/// the clearing margin; above 1 when there is no margin.
+FRAGG_HD float keepAfterT(const RayVox& ray) {
+  if (!ray.end_is_hit || !(ray.keep_v > 0.f)) return 2.f;
+  const float dx = ray.end_v[0] - ray.start_v[0];
+  const float dy = ray.end_v[1] - ray.start_v[1];
+  const float dz = ray.end_v[2] - ray.start_v[2];
+  const float dxx = dx * dx, dyy = dy * dy, dzz = dz * dz;  // no contraction: same bits on GPU
+  const float len = sqrtf(dxx + dyy + dzz);
+  return len > 0.f ? 1.f - ray.keep_v / len : 2.f;
+}
 
 FRAGG_HD int floorToInt(float v) { return static_cast<int>(floorf(v)); }
 
@@ -72,7 +90,8 @@ struct DdaAxis {
 /// Exact 3D DDA (Amanatides & Woo). Visits every cell the segment passes through, in order,
 /// 6-connected; the per-axis step counts are fixed up front, so the walk always ends in the
 /// endpoint's cell. `visit(key, is_hit, entry)` is called once per cell (entry: kSameBlock,
-/// kUnknownBlock or the face crossed into a new block); returns how many cells it visited.
+/// kUnknownBlock or the face crossed into a new block) except the free cells inside a hit's
+/// clearing margin (then the hit comes with kUnknownBlock); returns how many cells it visited.
 template <class Visit>
 FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
   DdaAxis x, y, z;
@@ -80,10 +99,21 @@ FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
   y.init(ray.ref.y, ray.start_v[1], ray.end_v[1]);
   z.init(ray.ref.z, ray.start_v[2], ray.end_v[2]);
   int total = x.remaining + y.remaining + z.remaining;
-  const int visited = total + (ray.end_is_hit ? 1 : 0);
+  const float keep_after_t = keepAfterT(ray);
+  int visited = 0;
   int entry = kUnknownBlock;
+  bool skipped = false;
   while (total > 0) {
-    visit(VoxelKey{x.cur, y.cur, z.cur}, false, entry);
+    // The current cell's exit parameter is the smallest t_max (an axis with steps left has a
+    // finite one). Exits grow along the ray, so once inside the margin, every later free cell
+    // is too: the walk only follows the axes from there.
+    const float exit_t = fminf(x.t_max, fminf(y.t_max, z.t_max));
+    if (exit_t > keep_after_t) {
+      skipped = true;
+    } else {
+      visit(VoxelKey{x.cur, y.cur, z.cur}, false, entry);
+      ++visited;
+    }
     // Smallest t_max advances; ties go to the later axis, as in OctoMap's computeRayKeys. An
     // exhausted axis has an infinite t_max, and an axis with steps left a finite one, so an
     // exhausted axis is never chosen while steps remain.
@@ -100,7 +130,10 @@ FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
     }
     --total;
   }
-  if (ray.end_is_hit) visit(VoxelKey{x.cur, y.cur, z.cur}, true, entry);
+  if (ray.end_is_hit) {
+    visit(VoxelKey{x.cur, y.cur, z.cur}, true, skipped ? kUnknownBlock : entry);
+    ++visited;
+  }
   return visited;
 }
 
@@ -108,7 +141,9 @@ FRAGG_HD int absInt(int v) { return v < 0 ? -v : v; }
 
 /// 3D Bresenham line between the start and end cells (26-connected, integer only). Calls
 /// `visit(key, is_hit, entry)` like traverseDda (entry is kSameBlock or kUnknownBlock) and
-/// returns how many cells it visited.
+/// returns how many cells it visited. A clearing margin is measured at the major axis's cell
+/// boundaries: the free cell of step i is skipped when the ray crosses the major axis's next
+/// boundary inside the margin.
 template <class Visit>
 FRAGG_HD int traverseBresenham(const RayVox& ray, Visit& visit) {
   int cur[3], d[3], s[3];
@@ -123,16 +158,25 @@ FRAGG_HD int traverseBresenham(const RayVox& ray, Visit& visit) {
   int err1 = 2 * d[a1] - d[major];
   int err2 = 2 * d[a2] - d[major];
   const VoxelKey& r = ray.ref;
+  const float keep_after_t = keepAfterT(ray);
+  const int major0 = cur[major];
+  const float major_len = ray.end_v[major] - ray.start_v[major];
   VoxelKey previous{};
   int entry = kUnknownBlock;
+  int visited = 0;
   for (int i = 0; i < d[major]; ++i) {
     const VoxelKey key{r.x + cur[0], r.y + cur[1], r.z + cur[2]};
-    if (i > 0)
-      entry = ((key.x ^ previous.x) | (key.y ^ previous.y) | (key.z ^ previous.z)) & ~kBlockMask
-                  ? kUnknownBlock
-                  : kSameBlock;
-    visit(key, false, entry);
-    previous = key;
+    const float boundary = static_cast<float>(major0 + (s[major] > 0 ? i + 1 : -i));
+    const bool keep = (boundary - ray.start_v[major]) / major_len > keep_after_t;
+    if (!keep) {
+      if (visited > 0)
+        entry = ((key.x ^ previous.x) | (key.y ^ previous.y) | (key.z ^ previous.z)) & ~kBlockMask
+                    ? kUnknownBlock
+                    : kSameBlock;
+      visit(key, false, entry);
+      previous = key;
+      ++visited;
+    }
     if (err1 > 0) {
       cur[a1] += s[a1];
       err1 -= 2 * d[major];
@@ -147,13 +191,14 @@ FRAGG_HD int traverseBresenham(const RayVox& ray, Visit& visit) {
   }
   if (ray.end_is_hit) {
     const VoxelKey key{r.x + cur[0], r.y + cur[1], r.z + cur[2]};
-    if (d[major] > 0)
+    if (visited > 0)
       entry = ((key.x ^ previous.x) | (key.y ^ previous.y) | (key.z ^ previous.z)) & ~kBlockMask
                   ? kUnknownBlock
                   : kSameBlock;
     visit(key, true, entry);
+    ++visited;
   }
-  return d[major] + (ray.end_is_hit ? 1 : 0);
+  return visited;
 }
 
 }  // namespace fragg

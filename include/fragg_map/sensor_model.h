@@ -42,6 +42,18 @@ struct SensorModel {
   // Both: ranges in metres. max_range_m <= 0 means "no limit" (the farthest point).
   double min_range_m = 0.0;
   double max_range_m = -1.0;
+  // Range noise (one standard deviation) at range r: range_noise_m + range_noise_quadratic_per_m
+  // * r^2 (LiDAR: about constant; structured light / stereo depth: grows with r^2). A hit keeps
+  // free-space updates out of the last sigma(r) metres before it, so that the surface it
+  // measured is not cleared by its own noise or by neighbouring rays. 0 (default): OctoMap's
+  // behaviour, every cell up to the hit cell is free.
+  double range_noise_m = 0.0;
+  double range_noise_quadratic_per_m = 0.0;
+
+  /// sigma(r) above; 0 when the model has no noise.
+  double rangeNoiseAt(double range_m) const {
+    return range_noise_m + range_noise_quadratic_per_m * range_m * range_m;
+  }
 
   static SensorModel autoFromCloud(double min_range_m = 0.0, double max_range_m = -1.0);
   static SensorModel pinhole(double hfov_rad, double vfov_rad, double min_range_m,

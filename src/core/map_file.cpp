@@ -95,8 +95,8 @@ Map Map::loadFile(const std::string& path, const MapParams& runtime, bool keep_a
   r.take(magic, sizeof(magic), "magic");
   if (std::memcmp(magic, kMapFileMagic, sizeof(magic)) != 0) r.fail("wrong magic (not FRAGGMAP)");
   const auto version = r.get<uint32_t>("version");
-  if (version != 1 && version != kMapFileVersion)
-    r.fail("unsupported version " + std::to_string(version) + " (this build reads version " +
+  if (version < 1 || version > kMapFileVersion)
+    r.fail("unsupported version " + std::to_string(version) + " (this build reads versions 1 to " +
            std::to_string(kMapFileVersion) + ")");
   uint32_t stored_crc;
   std::memcpy(&stored_crc, bytes.data() + bytes.size() - 4, 4);
@@ -167,7 +167,7 @@ Map Map::loadFile(const std::string& path, const MapParams& runtime, bool keep_a
     for (uint64_t k = 0; k < kept; ++k) {
       ScanRecord record;
       EncodedPoints points;
-      readScan(r, record, points);
+      readScan(r, record, points, version);
       if (record.id >= map.next_scan_id_ || map.scan_store_->contains(record.id))
         r.fail("scan index " + std::to_string(record.id) + " repeated or out of range");
       if (params.scans.keep) map.scan_store_->add(record, std::move(points));

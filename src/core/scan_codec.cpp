@@ -9,6 +9,7 @@
 
 #include "fragg_map/atomic_file.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/map_file.h"
 
 namespace fragg {
 
@@ -119,6 +120,8 @@ void writeScan(ByteWriter& w, const ScanRecord& r, const EncodedPoints& p) {
     w.put(v);
   for (int a = 0; a < 3; ++a) w.put(m.forward_S[a]);
   for (int a = 0; a < 3; ++a) w.put(m.right_S[a]);
+  w.put(m.range_noise_m);
+  w.put(m.range_noise_quadratic_per_m);
   w.put(p.step_m);
   w.put(p.width);
   w.put(p.height);
@@ -132,7 +135,7 @@ void writeScan(ByteWriter& w, const ScanRecord& r, const EncodedPoints& p) {
   w.put(packed.data(), packed_size);
 }
 
-void readScan(ByteReader& rd, ScanRecord& r, EncodedPoints& p) {
+void readScan(ByteReader& rd, ScanRecord& r, EncodedPoints& p, uint32_t file_version) {
   r.id = rd.get<ScanId>("scan id");
   r.stamp_ns = rd.get<int64_t>("scan stamp");
   Eigen::Matrix<double, 3, 4> T;
@@ -164,6 +167,12 @@ void readScan(ByteReader& rd, ScanRecord& r, EncodedPoints& p) {
     *v = rd.get<double>("sensor model");
   for (int a = 0; a < 3; ++a) m.forward_S[a] = rd.get<double>("sensor axis");
   for (int a = 0; a < 3; ++a) m.right_S[a] = rd.get<double>("sensor axis");
+  m.range_noise_m = 0.0;
+  m.range_noise_quadratic_per_m = 0.0;
+  if (file_version >= 3) {
+    m.range_noise_m = rd.get<double>("range noise");
+    m.range_noise_quadratic_per_m = rd.get<double>("range noise");
+  }
   try {
     m.validate();
   } catch (const InvalidArgument& e) {
@@ -217,7 +226,7 @@ EncodedPoints readSpillFile(const std::string& path, ScanId expected_id) {
   if (std::memcmp(magic, kSpillMagic, sizeof(magic)) != 0) r.fail("wrong magic");
   ScanRecord record;
   EncodedPoints points;
-  readScan(r, record, points);
+  readScan(r, record, points, kMapFileVersion);  // spill files are this build's own
   if (record.id != expected_id)
     r.fail("holds scan " + std::to_string(record.id) + ", not " + std::to_string(expected_id));
   return points;

@@ -62,6 +62,8 @@ RayPrepParams rayPrepParams(const Eigen::Isometry3d& T_map_sensor, const SensorM
   }
   p.min_range_m = model.min_range_m;
   p.max_range_m = model.max_range_m;  // > 0: the model is resolved
+  p.noise_m = model.range_noise_m;
+  p.noise_quadratic_per_m = model.range_noise_quadratic_per_m;
   p.explicit_model = explicit_model;
   p.slack_m = static_cast<float>(1e-3 + params.resolution_m);
   return p;
@@ -94,7 +96,7 @@ void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                                  static_cast<uint32_t>(i % cloud.width), &dir_S)) {
           const double s[3] = {dir_S.x() * prep.max_range_m, dir_S.y() * prep.max_range_m,
                                dir_S.z() * prep.max_range_m};
-          if (rayEndFromSensor(prep, s, false, &ray)) {
+          if (rayEndFromSensor(prep, s, 0u, &ray)) {
             local.push_back(ray);
             ++no_return;
             continue;

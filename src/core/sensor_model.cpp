@@ -84,6 +84,12 @@ void SensorModel::validate() const {
     throw InvalidArgument("max range must be finite (or <= 0 for no limit)");
   if (max_range_m > 0.0 && max_range_m <= min_range_m)
     throw InvalidArgument("max range must exceed min range");
+  if (!std::isfinite(range_noise_m) || range_noise_m < 0.0 || range_noise_m > 10.0)
+    throw InvalidArgument("range noise must be in [0, 10] m, got " + std::to_string(range_noise_m));
+  if (!std::isfinite(range_noise_quadratic_per_m) || range_noise_quadratic_per_m < 0.0 ||
+      range_noise_quadratic_per_m > 1.0)
+    throw InvalidArgument("quadratic range noise must be in [0, 1] per m, got " +
+                          std::to_string(range_noise_quadratic_per_m));
   if (type == SensorType::kPinhole) {
     if (!(hfov_rad > 0.0 && hfov_rad < M_PI) || !(vfov_rad > 0.0 && vfov_rad < M_PI))
       throw InvalidArgument("pinhole hfov and vfov must be in (0, 180) degrees");
@@ -112,6 +118,8 @@ std::string SensorModel::describe() const {
     s << max_range_m << "]m";
   else
     s << "unlimited]";
+  if (range_noise_m > 0.0 || range_noise_quadratic_per_m > 0.0)
+    s << " noise=" << range_noise_m << "m+" << range_noise_quadratic_per_m << "/m*r^2";
   return s.str();
 }
 

@@ -89,6 +89,7 @@ void readSensor(const XmlRpcValue& root, ServerParams& p) {
   std::string type = "auto", axis = "z";
   double hfov = 0.0, vfov = 0.0, min_range = 0.0, max_range = -1.0;
   double elevation_min = -M_PI / 2, elevation_max = M_PI / 2;
+  double noise_m = 0.0, noise_quadratic = 0.0;
   readString(root, "sensor/type", &type);
   readDouble(root, "sensor/hfov", &hfov);
   readDouble(root, "sensor/vfov", &vfov);
@@ -97,6 +98,8 @@ void readSensor(const XmlRpcValue& root, ServerParams& p) {
   readDouble(root, "sensor/elevation_max", &elevation_max);
   readDouble(root, "sensor_model/min_range", &min_range);
   readDouble(root, "sensor_model/max_range", &max_range);
+  readDouble(root, "sensor/range_noise", &noise_m);
+  readDouble(root, "sensor/range_noise_quadratic", &noise_quadratic);
   fragg::SensorType sensor_type{};
   validateAs("sensor/type", [&] { sensor_type = fragg::sensorTypeFromString(type); });
   if (axis != "z" && axis != "x") badParam("sensor/optical_axis", "must be z or x");
@@ -120,6 +123,8 @@ void readSensor(const XmlRpcValue& root, ServerParams& p) {
     default:
       p.sensor = fragg::SensorModel::autoFromCloud(min_range, max_range);
   }
+  p.sensor.range_noise_m = noise_m;
+  p.sensor.range_noise_quadratic_per_m = noise_quadratic;
   validateAs("sensor", [&] { p.sensor.validate(); });
 }
 

@@ -195,5 +195,52 @@ TEST(InsertTest, OccupiedAtMovesOnlyWhenACellCrossesTheOccupiedThreshold) {
   EXPECT_GT(changed, 0u);
 }
 
+TEST(InsertTest, RangeNoiseKeepsAHitsOwnSurfaceFromBeingCleared) {
+  // Scan 1 hits cell 20 (x in [1.00, 1.05) m); scan 2 hits 1.5 cm behind it, in cell 21.
+  // OctoMap's rule clears cell 20 with scan 2's ray; with 2 cm of range noise the ray stops
+  // updating free space 2 cm before its hit, so cell 20 keeps scan 1's hit alone.
+  auto run = [](const SensorModel& model) {
+    Map map;
+    map.insert(cloudOf({{1.0f, 0.f, 0.f}}), sensorAtVoxelCentre(), model);
+    map.insert(cloudOf({{1.04f, 0.f, 0.f}}), sensorAtVoxelCentre(), model);
+    return map;
+  };
+  const SensorModel plain = SensorModel::autoFromCloud();
+  SensorModel noisy = plain;
+  noisy.range_noise_m = 0.02;
+  SensorModel quadratic = plain;  // sigma(1.04 m) = 0.02 * 1.04^2 = 2.2 cm
+  quadratic.range_noise_quadratic_per_m = 0.02;
+  const Map a = run(plain), b = run(noisy), c = run(quadratic);
+  const int16_t hit = a.model().hit_fx, miss = a.model().miss_fx;
+  EXPECT_EQ(cellAt(a, 20, 0, 0)->log_odds_fx, hit + miss);
+  EXPECT_EQ(cellAt(b, 20, 0, 0)->log_odds_fx, hit);
+  EXPECT_EQ(cellAt(c, 20, 0, 0)->log_odds_fx, hit);
+  for (const Map* m : {&a, &b, &c}) {
+    EXPECT_EQ(cellAt(*m, 21, 0, 0)->log_odds_fx, hit);
+    EXPECT_EQ(cellAt(*m, 19, 0, 0)->log_odds_fx, 2 * miss);  // left 6.5 cm before the hit
+    EXPECT_EQ(m->state(*cellAt(*m, 20, 0, 0)), CellState::kOccupied);
+  }
+  // Rays clipped at max range say nothing about a surface: they clear up to the max range.
+  Map clipped;
+  SensorModel noisy_clipped = noisy;
+  noisy_clipped.max_range_m = 1.0;
+  clipped.insert(cloudOf({{3.0f, 0.f, 0.f}}), sensorAtVoxelCentre(), noisy_clipped);
+  EXPECT_EQ(cellAt(clipped, 19, 0, 0)->log_odds_fx, miss);
+  // A bad noise figure is an error that leaves the map alone.
+  for (double bad : {-0.01, std::numeric_limits<double>::quiet_NaN(), 11.0}) {
+    SensorModel m = plain;
+    m.range_noise_m = bad;
+    Map map;
+    EXPECT_THROW(map.insert(cloudOf({{1.0f, 0.f, 0.f}}), sensorAtVoxelCentre(), m),
+                 InvalidArgument);
+    EXPECT_EQ(map.knownVoxelCount(), 0u);
+    m = plain;
+    m.range_noise_quadratic_per_m = bad;
+    EXPECT_THROW(map.insert(cloudOf({{1.0f, 0.f, 0.f}}), sensorAtVoxelCentre(), m),
+                 InvalidArgument);
+  }
+  EXPECT_NE(noisy.describe().find("noise=0.02"), std::string::npos) << noisy.describe();
+}
+
 }  // namespace
 }  // namespace fragg

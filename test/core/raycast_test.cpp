@@ -156,5 +156,116 @@ TEST(RaycastTest, BresenhamConnectsStartToEnd) {
   }
 }
 
+TEST(RaycastTest, ClearingMarginSkipsTheFreeCellsItsRayLeavesNearTheHit) {
+  // Along x from 0.5 to 10.3: free cells 0..9, hit in cell 10. Cell 9 is left at x = 10, 0.3
+  // voxels before the end; cell 8 at x = 9, 1.3 before.
+  RayVox ray{VoxelKey{0, 0, 0}, {0.5f, 0.5f, 0.5f}, {10.3f, 0.5f, 0.5f}, true};
+  for (float keep : {0.f, 0.2f, 0.5f, 1.5f, 50.f}) {
+    ray.keep_v = keep;
+    Collect got;
+    const int visited = traverseDda(ray, got);
+    const int free_expected = keep < 0.3f ? 10 : (keep < 1.3f ? 9 : (keep < 2.3f ? 8 : 0));
+    ASSERT_EQ(got.cells.size(), static_cast<size_t>(free_expected + 1)) << keep;
+    EXPECT_EQ(visited, free_expected + 1);
+    EXPECT_EQ(got.cells.back(), (VoxelKey{10, 0, 0}));
+    EXPECT_TRUE(got.hits.back());
+    for (int i = 0; i < free_expected; ++i) {
+      EXPECT_EQ(got.cells[i], (VoxelKey{i, 0, 0}));
+      EXPECT_FALSE(got.hits[i]);
+    }
+    // After skipped cells the hit cannot follow a block face from its predecessor.
+    if (free_expected < 10) EXPECT_EQ(got.entries.back(), kUnknownBlock) << keep;
+  }
+  // A free-only ray (clipped at max range) has no surface to protect: the margin is ignored.
+  ray.end_is_hit = false;
+  ray.keep_v = 5.f;
+  Collect free_only;
+  traverseDda(ray, free_only);
+  EXPECT_EQ(free_only.cells.size(), 10u);
+}
+
+/// Distance (voxels) from where the segment a->b leaves `cell` to b; -1 when it misses it.
+double exitToEnd(const float a[3], const float b[3], const VoxelKey& cell) {
+  double t0 = 0.0, t1 = 1.0;
+  const int c[3] = {cell.x, cell.y, cell.z};
+  double len2 = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    const double d = double(b[i]) - a[i];
+    len2 += d * d;
+    if (std::fabs(d) < 1e-12) continue;
+    double ta = (c[i] - a[i]) / d, tb = (c[i] + 1 - a[i]) / d;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  if (t0 > t1) return -1.0;
+  return (1.0 - t1) * std::sqrt(len2);
+}
+
+TEST(RaycastTest, ClearingMarginKeepsExactlyTheCellsLeftOutsideIt) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-20.f, 20.f), m(0.f, 3.f);
+  int skipped_total = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    RayVox ray{VoxelKey{5, -7, 9}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, true};
+    Collect plain;
+    traverseDda(ray, plain);
+    ray.keep_v = m(rng);
+    Collect kept;
+    const int visited = traverseDda(ray, kept);
+    EXPECT_EQ(visited, static_cast<int>(kept.cells.size()));
+    // The free cells are a prefix of the plain walk's, then the same hit.
+    ASSERT_GE(kept.cells.size(), 1u);
+    ASSERT_LE(kept.cells.size(), plain.cells.size());
+    const size_t free_kept = kept.cells.size() - 1;
+    for (size_t i = 0; i < free_kept; ++i) EXPECT_EQ(kept.cells[i], plain.cells[i]);
+    EXPECT_EQ(kept.cells.back(), plain.cells.back());
+    EXPECT_TRUE(kept.hits.back());
+    // Kept cells are left at least the margin before the end, skipped ones less (float
+    // traversal: a tolerance of 1e-3 voxels).
+    const float a[3] = {ray.start_v[0], ray.start_v[1], ray.start_v[2]};
+    const float b[3] = {ray.end_v[0], ray.end_v[1], ray.end_v[2]};
+    auto rel = [&](const VoxelKey& k) { return VoxelKey{k.x - 5, k.y + 7, k.z - 9}; };
+    for (size_t i = 0; i + 1 < plain.cells.size(); ++i) {
+      const double left = exitToEnd(a, b, rel(plain.cells[i]));
+      ASSERT_GE(left, 0.0);
+      if (i < free_kept) {
+        EXPECT_GE(left, ray.keep_v - 1e-3) << trial << " cell " << i;
+      } else {
+        EXPECT_LE(left, ray.keep_v + 1e-3) << trial << " cell " << i;
+        ++skipped_total;
+      }
+    }
+  }
+  EXPECT_GT(skipped_total, 2000);  // the margins did skip cells
+}
+
+TEST(RaycastTest, BresenhamClearingMarginDropsTheLastFreeCells) {
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<float> u(-20.f, 20.f), m(0.f, 3.f);
+  for (int trial = 0; trial < 500; ++trial) {
+    RayVox ray{VoxelKey{0, 0, 0}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, true};
+    Collect plain;
+    traverseBresenham(ray, plain);
+    ray.keep_v = m(rng);
+    Collect kept;
+    const int visited = traverseBresenham(ray, kept);
+    EXPECT_EQ(visited, static_cast<int>(kept.cells.size()));
+    ASSERT_LE(kept.cells.size(), plain.cells.size());
+    for (size_t i = 0; i + 1 < kept.cells.size(); ++i) EXPECT_EQ(kept.cells[i], plain.cells[i]);
+    EXPECT_EQ(kept.cells.back(), plain.cells.back());
+    expectEntriesMatchBlocks(kept, /*faces=*/false);
+    // The cells dropped lie within the margin of the end along the major axis (+1 cell).
+    const size_t dropped = plain.cells.size() - kept.cells.size();
+    float d_major = 0.f, len2 = 0.f;
+    for (int a = 0; a < 3; ++a) {
+      const float d = ray.end_v[a] - ray.start_v[a];
+      len2 += d * d;
+      d_major = std::max(d_major, std::fabs(d));
+    }
+    EXPECT_LE(static_cast<float>(dropped), ray.keep_v * d_major / std::sqrt(len2) + 1.001f);
+  }
+}
+
 }  // namespace
 }  // namespace fragg

@@ -53,6 +53,37 @@ TEST(RemoveTest, RemovingAScanEqualsNeverInsertingIt) {
   EXPECT_THROW(all.remove(1), InvalidArgument);  // already gone
 }
 
+SensorModel noisyLidar() {
+  SensorModel m = test::lidar();
+  m.range_noise_m = 0.03;
+  m.range_noise_quadratic_per_m = 0.002;
+  return m;
+}
+
+TEST(RemoveTest, WithRangeNoiseRemovalStillEqualsNeverInserting) {
+  // The clearing margin comes from each kept scan's own sensor model, also after a save and
+  // load, so removal walks exactly the cells the insertion updated.
+  Map all(keeping()), without(keeping()), plain(keeping());
+  for (int i = 0; i < 3; ++i) {
+    all.insert(room(), test::poseAt(i), noisyLidar());
+    plain.insert(room(), test::poseAt(i), test::lidar());
+  }
+  for (int i : {0, 2}) without.insert(room(), test::poseAt(i), noisyLidar());
+  EXPECT_FALSE(test::sameCells(all, plain));  // the margin changed the map
+  const std::string path = std::string(FRAGG_TEST_TMP) + "/noisy_kept.fgm";
+  all.save(path);
+  Map loaded = Map::load(path, Backend::kCpu);
+  EXPECT_EQ(loaded.scanStore().record(1).model.range_noise_m, 0.03);
+  EXPECT_EQ(loaded.scanStore().record(1).model.range_noise_quadratic_per_m, 0.002);
+  all.remove(1);
+  loaded.remove(1);
+  std::string why;
+  EXPECT_TRUE(test::sameCells(all, without, &why)) << why;
+  EXPECT_TRUE(test::sameCells(loaded, without, &why)) << why;
+  for (ScanId id : {0u, 2u}) all.remove(id);
+  EXPECT_EQ(all.knownVoxelCount(), 0u);
+}
+
 TEST(CorrectTest, CorrectingEveryScanEqualsARebuildWhenNothingClamps) {
   Map drifted(keeping()), rebuilt(keeping());
   std::map<ScanId, Eigen::Isometry3d> corrected;

@@ -1,6 +1,7 @@
 // The scan store: quantised points, memory budget, spill files, and the kept scans in .fgm.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/scan_codec.h"
 #include "fragg_map/map.h"
+#include "fragg_map/map_file.h"
 #include "loop_scenes.h"
 
 namespace fragg {
@@ -162,6 +164,51 @@ TEST(ScanStoreTest, MapsWithoutKeptScansStillWriteTheOldLayout) {
   EXPECT_EQ(loaded.scanStore().size(), 0u);
   EXPECT_EQ(loaded.scanCount(), 1u);
   EXPECT_THROW(loaded.correctPoses({{0, test::poseAt(0)}}), InvalidArgument);
+}
+
+TEST(ScanStoreTest, ScanRecordsOfVersion2FilesReadWithoutRangeNoise) {
+  ScanRecord r;
+  r.id = 7;
+  r.stamp_ns = 123;
+  r.model = test::lidar();
+  r.model.max_range_m = 10.0;
+  r.model.range_noise_m = 0.0123;
+  r.model.range_noise_quadratic_per_m = 0.000456;
+  r.points = 1;
+  const EncodedPoints pts = encodePoints(test::roomScan(4, 1, 2, 4, 8), 0.001);
+  r.points = pts.count;
+  ByteWriter w;
+  writeScan(w, r, pts);
+  // The current format reads back with its noise.
+  ScanRecord back;
+  EncodedPoints back_pts;
+  ByteReader current(w.bytes, w.bytes.size(), "mem", "scan");
+  readScan(current, back, back_pts, kMapFileVersion);
+  EXPECT_EQ(back.model.range_noise_m, 0.0123);
+  EXPECT_EQ(back.model.range_noise_quadratic_per_m, 0.000456);
+  EXPECT_EQ(current.remaining(), 0u);
+  // Version 2 wrote the same record without the two noise fields: read as no noise.
+  const double noise[2] = {0.0123, 0.000456};
+  auto at = std::search(w.bytes.begin(), w.bytes.end(), reinterpret_cast<const uint8_t*>(noise),
+                        reinterpret_cast<const uint8_t*>(noise) + sizeof(noise));
+  ASSERT_NE(at, w.bytes.end());
+  std::vector<uint8_t> v2(w.bytes.begin(), at);
+  v2.insert(v2.end(), at + sizeof(noise), w.bytes.end());
+  ScanRecord old;
+  EncodedPoints old_pts;
+  ByteReader reader(v2, v2.size(), "mem", "scan");
+  readScan(reader, old, old_pts, 2);
+  EXPECT_EQ(old.model.range_noise_m, 0.0);
+  EXPECT_EQ(old.model.range_noise_quadratic_per_m, 0.0);
+  EXPECT_EQ(old.model.max_range_m, 10.0);
+  EXPECT_EQ(old_pts.data, pts.data);
+  EXPECT_EQ(reader.remaining(), 0u);
+  // A bad noise figure in a file is rejected like any other bad field.
+  const double bad[2] = {-1.0, 0.0};
+  std::vector<uint8_t> corrupt = w.bytes;
+  std::memcpy(&corrupt[at - w.bytes.begin()], bad, sizeof(bad));
+  ByteReader bad_reader(corrupt, corrupt.size(), "mem", "scan");
+  EXPECT_THROW(readScan(bad_reader, old, old_pts, kMapFileVersion), IoError);
 }
 
 }  // namespace

@@ -13,9 +13,25 @@ namespace fragg {
 
 struct RayEnd {
   float end_v[3];  ///< relative to the scan's reference voxel, voxel units
-  uint32_t hit;    ///< 1: the end cell is a hit; 0: free-only ray (clipped or no return)
+  /// 0: free-only ray (clipped or no return); otherwise the end cell is a hit and
+  /// (hit - 1) / kMarginSteps is its clearing margin in voxels (see RayVox::keep_v).
+  uint32_t hit;
 };
 static_assert(sizeof(RayEnd) == 16, "RayEnd is 16 bytes");
+
+/// Clearing margins are kept in 1/256 voxel, up to kMaxMarginV voxels.
+constexpr float kMarginSteps = 256.f;
+constexpr double kMaxMarginV = 65536.0;
+
+/// RayEnd::hit of a hit whose clearing margin is `margin_v` voxels (>= 0).
+FRAGG_HD uint32_t hitCode(double margin_v) {
+  const double m = margin_v < kMaxMarginV ? margin_v : kMaxMarginV;
+  return 1u + static_cast<uint32_t>(floor(m * kMarginSteps + 0.5));
+}
+/// The clearing margin (voxels) of a RayEnd::hit value; 0 for a free-only ray.
+FRAGG_HD float marginOfHitCode(uint32_t hit) {
+  return hit ? static_cast<float>(hit - 1u) / kMarginSteps : 0.f;
+}
 
 /// Keys must stay inside int32 with room for a ray's traversal.
 constexpr double kMaxAbsVoxel = 2147483647.0 - 1048576.0;
@@ -27,7 +43,11 @@ struct RayPrepParams {
   double inv_res;      ///< 1 / resolution
   double ref_v[3];     ///< reference voxel (the sensor origin's), as doubles
   double min_range_m;
-  double max_range_m;   ///< > 0
+  double max_range_m;  ///< > 0
+  /// Range noise of the sensor: sigma(r) = noise_m + noise_quadratic_per_m * r^2; a hit's
+  /// clearing margin is sigma(r) at its measured range.
+  double noise_m;
+  double noise_quadratic_per_m;
   bool explicit_model;  ///< drop points outside `frustum`
   float slack_m;        ///< tolerance of that test
 };
@@ -37,20 +57,23 @@ enum class RayPrep : uint8_t { kHit, kFreeOnly, kInvalid, kTooClose, kOutside };
 FRAGG_HD bool finiteFloat(float v) { return v - v == 0.f; }  // false for NaN and +-Inf
 
 /// Builds the ray (map frame, relative to ref, voxel units) of the ray with sensor-frame
-/// direction and length `rel_S` already clipped; false when it leaves the key range.
-FRAGG_HD bool rayEndFromSensor(const RayPrepParams& p, const double s[3], bool hit, RayEnd* ray) {
+/// direction and length `s` already clipped, `hit` as in RayEnd::hit; false when it leaves
+/// the key range.
+FRAGG_HD bool rayEndFromSensor(const RayPrepParams& p, const double s[3], uint32_t hit,
+                               RayEnd* ray) {
   for (int a = 0; a < 3; ++a) {
     const double rel = p.R[3 * a] * s[0] + p.R[3 * a + 1] * s[1] + p.R[3 * a + 2] * s[2];
     const double end_v = (p.origin_m[a] + rel) * p.inv_res;
     if (fabs(end_v) > kMaxAbsVoxel) return false;
     ray->end_v[a] = static_cast<float>(end_v - p.ref_v[a]);
   }
-  ray->hit = hit ? 1u : 0u;
+  ray->hit = hit;
   return true;
 }
 
 /// OctoMap semantics: NaN/Inf and (0,0,0) points are invalid, points closer than min range
-/// dropped, points beyond max range become free-only rays ending at max range.
+/// dropped, points beyond max range become free-only rays ending at max range. A hit carries
+/// its clearing margin: the sensor's range noise at the measured range, in voxels.
 FRAGG_HD RayPrep prepareRay(const RayPrepParams& p, const Frustum& f, float x_S, float y_S,
                             float z_S, RayEnd* ray) {
   if (!finiteFloat(x_S) || !finiteFloat(y_S) || !finiteFloat(z_S)) return RayPrep::kInvalid;
@@ -70,7 +93,12 @@ FRAGG_HD RayPrep prepareRay(const RayPrepParams& p, const Frustum& f, float x_S,
           static_cast<float>(p.R[3 * a] * s[0] + p.R[3 * a + 1] * s[1] + p.R[3 * a + 2] * s[2]);
     if (!frustumContains(f, rel_f, p.slack_m)) return RayPrep::kOutside;
   }
-  if (!rayEndFromSensor(p, s, !clipped, ray)) return RayPrep::kInvalid;
+  uint32_t hit = 0u;
+  if (!clipped) {
+    const double noise_m = p.noise_m + p.noise_quadratic_per_m * range * range;
+    hit = hitCode(noise_m * p.inv_res);
+  }
+  if (!rayEndFromSensor(p, s, hit, ray)) return RayPrep::kInvalid;
   return clipped ? RayPrep::kFreeOnly : RayPrep::kHit;
 }
 

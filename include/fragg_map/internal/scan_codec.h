@@ -9,9 +9,11 @@
 
 namespace fragg {
 
+/// Writes the current format (the .fgm's kMapFileVersion).
 void writeScan(ByteWriter& w, const ScanRecord& record, const EncodedPoints& points);
-/// Throws IoError (through the reader) naming the bad field.
-void readScan(ByteReader& r, ScanRecord& record, EncodedPoints& points);
+/// Reads a scan written by .fgm version `file_version` (2: no range noise, read as 0). Throws
+/// IoError (through the reader) naming the bad field.
+void readScan(ByteReader& r, ScanRecord& record, EncodedPoints& points, uint32_t file_version);
 
 /// A spill file: "FRAGGSCN" | scan | CRC-32. Written atomically.
 void writeSpillFile(const std::string& path, const ScanRecord& record, const EncodedPoints& points);

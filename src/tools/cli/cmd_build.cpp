@@ -29,6 +29,7 @@ struct BuildOptions {
   std::string input, output;
   double resolution_m = MapParams().resolution_m;
   double max_range_m = -1.0, min_range_m = 0.0;
+  double range_noise_m = 0.0, range_noise_quadratic_per_m = 0.0;
   std::string sensor = "auto", backend = "auto", raycast = "dda";
   double hfov_deg = 0.0, vfov_deg = 0.0;
   double elevation_min_deg = -90.0, elevation_max_deg = 90.0;
@@ -45,7 +46,7 @@ struct BuildOptions {
 
 constexpr double kDeg = M_PI / 180.0;
 
-SensorModel sensorFrom(const BuildOptions& o) {
+SensorModel sensorShape(const BuildOptions& o) {
   switch (sensorTypeFromString(o.sensor)) {
     case SensorType::kPinhole:
       if (o.hfov_deg <= 0 || o.vfov_deg <= 0)
@@ -62,6 +63,14 @@ SensorModel sensorFrom(const BuildOptions& o) {
       break;
   }
   return SensorModel::autoFromCloud(o.min_range_m, o.max_range_m);
+}
+
+SensorModel sensorFrom(const BuildOptions& o) {
+  SensorModel m = sensorShape(o);
+  m.range_noise_m = o.range_noise_m;
+  m.range_noise_quadratic_per_m = o.range_noise_quadratic_per_m;
+  m.validate();
+  return m;
 }
 
 void runBuild(const BuildOptions& o) {
@@ -191,6 +200,14 @@ void addBuildCommand(CLI::App& app) {
   c->add_option("--max-range", o->max_range_m,
                 "Max range in metres; farther points clear free space up to it (<= 0: none)");
   c->add_option("--min-range", o->min_range_m, "Points closer than this are dropped (m)");
+  c->add_option("--range-noise", o->range_noise_m,
+                "Sensor range noise, one sigma (m): free space stops that far before each hit "
+                "(LiDAR ~0.02; 0 = OctoMap's behaviour)")
+      ->capture_default_str();
+  c->add_option("--range-noise-quadratic", o->range_noise_quadratic_per_m,
+                "Range noise growing with range^2 (1/m; depth cameras ~0.001-0.003): sigma(r) = "
+                "--range-noise + this * r^2")
+      ->capture_default_str();
   c->add_option("--sensor", o->sensor, "Sensor model: auto | lidar | pinhole")
       ->capture_default_str();
   c->add_option("--hfov", o->hfov_deg, "Pinhole horizontal field of view (degrees)");
