@@ -394,5 +394,25 @@ TEST(CudaBackendTest, PoseCorrectionOfEvictedScansIsByteIdentical) {
   EXPECT_GT(st.removal.blocks_uploaded + st.insertion.blocks_uploaded, 0u);
 }
 
+TEST(CudaBackendTest, RangeNoiseMarginsAreByteIdentical) {
+  REQUIRE_DEVICE();
+  // The clearing margin travels in each ray (prepare kernel) and is applied by the shared
+  // traversal: W1 with 2 cm LiDAR noise, Bresenham, RGB-D with quadratic depth noise, and a
+  // correction + removal with noise.
+  SensorModel lidar = SensorModel::autoFromCloud(0.0, 30.0);
+  lidar.range_noise_m = 0.02;
+  const auto w1 = simulatedW1(10);
+  expectBackendsAgree(w1, paramsFor(Backend::kCuda, 0.05), lidar, "W1 (10 scans) 2 cm noise");
+  MapParams p = paramsFor(Backend::kCuda, 0.05);
+  p.raycast = RayCast::kBresenham;
+  expectBackendsAgree(w1, p, lidar, "W1 (10 scans) 2 cm noise, bresenham");
+  SensorModel depth = SensorModel::autoFromCloud();
+  depth.range_noise_quadratic_per_m = 0.0015;
+  expectBackendsAgree(rgbdFrames(), paramsFor(Backend::kCuda, 0.03), depth,
+                      "rgbd 3 cm, 1.5 mm r^2 noise");
+  expectCorrectionAgrees(rgbdFrames(), paramsFor(Backend::kCuda, 0.03), depth, {2, 3, 4},
+                         "rgbd frames with noise");
+}
+
 }  // namespace
 }  // namespace fragg
