@@ -161,8 +161,12 @@ TEST(ServerParams, LidarSensor) {
   set(root, "sensor/type", std::string("lidar"));
   set(root, "sensor/elevation_min", -0.3);
   set(root, "sensor/elevation_max", 0.3);
+  set(root, "sensor/range_noise", 0.02);
+  set(root, "sensor/range_noise_quadratic", 0.001);
   const fragg_ros::ServerParams p = fragg_ros::parseParameters(root);
   EXPECT_EQ(p.sensor.type, fragg::SensorType::kSpinningLidar);
+  EXPECT_EQ(p.sensor.range_noise_m, 0.02);
+  EXPECT_EQ(p.sensor.range_noise_quadratic_per_m, 0.001);
   EXPECT_EQ(p.sensor.elevation_min_rad, -0.3);
   EXPECT_EQ(p.sensor.elevation_max_rad, 0.3);
 }
@@ -182,6 +186,9 @@ TEST(ServerParams, InvalidValuesNameTheParameter) {
   expectRejected("backend", std::string("tpu"));
   expectRejected("raycast", std::string("bvh"));
   expectRejected("sensor/type", std::string("sonar"));
+  expectRejected("sensor/range_noise", -0.01);
+  expectRejected("sensor/range_noise", std::nan(""));
+  expectRejected("sensor/range_noise_quadratic", 2.0);
   expectRejected("queue_size", 0);
   expectRejected("queue_size", 2.5);
   expectRejected("tf_tolerance", -0.1);
