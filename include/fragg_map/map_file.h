@@ -5,7 +5,7 @@
 //            u64 block count | u64 scans integrated
 //   blocks : i32 x, y, z | u32 payload bytes | payload (512 x {i16 hits, i16 log_odds_fx}),
 //            sorted by key so the same map always gives the same bytes
-//   scans  : only with flag bit 1 (the map keeps its scans for loop closure; version 2):
+//   scans  : only with flag bit 1 (the map keeps its scans for loop closure; version >= 2):
 //            u64 next scan index | u64 scan count | scans in index order (scan_codec.h:
 //            index, stamp, pose as 12 f64, sensor model (version 3: with its range noise),
 //            insertion and removable flags, zlib'd points)
