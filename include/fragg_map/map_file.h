@@ -7,8 +7,8 @@
 //            sorted by key so the same map always gives the same bytes
 //   scans  : only with flag bit 1 (the map keeps its scans for loop closure; version >= 2):
 //            u64 next scan index | u64 scan count | scans in index order (scan_codec.h:
-//            index, stamp, pose as 12 f64, sensor model (version 3: with its range noise),
-//            insertion and removable flags, zlib'd points)
+//            index, stamp, pose as 12 f64, sensor model (version 3: with its range noise and
+//            the cloud's frame id), insertion and removable flags, zlib'd points)
 //   footer : u32 CRC-32 (zlib) of everything before it
 // Saved to a temporary file and renamed. The loader checks every field and the checksum.
 #pragma once

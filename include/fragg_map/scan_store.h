@@ -23,6 +23,8 @@ namespace fragg {
 
 /// A scan's insertion index over the map's life (0, 1, 2, ...).
 using ScanId = uint64_t;
+/// Longest frame id a kept scan records.
+constexpr size_t kMaxSensorFrameChars = 1024;
 
 /// Sensor-frame points as the store keeps them.
 struct EncodedPoints {
@@ -48,6 +50,8 @@ PointCloud decodePoints(const EncodedPoints& points);
 struct ScanRecord {
   ScanId id = 0;
   int64_t stamp_ns = 0;
+  /// Frame id of the cloud (ROS: header.frame_id, no leading slash); empty when unknown.
+  std::string sensor_frame;
   Eigen::Isometry3d T_map_sensor = Eigen::Isometry3d::Identity();
   SensorModel model;  ///< resolved (never auto), as integrated
   bool explicit_model = false;

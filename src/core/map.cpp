@@ -50,10 +50,14 @@ Map::Map(Map&&) noexcept = default;
 Map& Map::operator=(Map&&) noexcept = default;
 
 InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
-                        const SensorModel& sensor, int64_t stamp_ns) {
+                        const SensorModel& sensor, int64_t stamp_ns,
+                        const std::string& sensor_frame) {
   const auto t0 = std::chrono::steady_clock::now();
   validatePose(T_map_sensor);
   sensor.validate();
+  if (sensor_frame.size() > kMaxSensorFrameChars)
+    throw InvalidArgument("sensor frame id longer than " + std::to_string(kMaxSensorFrameChars) +
+                          " characters");
   if (cloud.empty()) throw InvalidArgument("point cloud is empty");
   const bool keep = params_.scans.keep;
   // A kept scan is integrated as it is kept (quantised), so that its removal is exact.
@@ -67,6 +71,7 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   ScanRecord how;
   how.id = next_scan_id_;
   how.stamp_ns = stamp_ns;
+  how.sensor_frame = sensor_frame;
   how.T_map_sensor = T_map_sensor;
   how.explicit_model = sensor.type != SensorType::kAuto;
   how.model = how.explicit_model ? sensor : resolveAutoSensor(sensor, used);

@@ -122,6 +122,8 @@ void writeScan(ByteWriter& w, const ScanRecord& r, const EncodedPoints& p) {
   for (int a = 0; a < 3; ++a) w.put(m.right_S[a]);
   w.put(m.range_noise_m);
   w.put(m.range_noise_quadratic_per_m);
+  w.put(static_cast<uint16_t>(r.sensor_frame.size()));
+  w.put(r.sensor_frame.data(), r.sensor_frame.size());
   w.put(p.step_m);
   w.put(p.width);
   w.put(p.height);
@@ -169,9 +171,15 @@ void readScan(ByteReader& rd, ScanRecord& r, EncodedPoints& p, uint32_t file_ver
   for (int a = 0; a < 3; ++a) m.right_S[a] = rd.get<double>("sensor axis");
   m.range_noise_m = 0.0;
   m.range_noise_quadratic_per_m = 0.0;
+  r.sensor_frame.clear();
   if (file_version >= 3) {
     m.range_noise_m = rd.get<double>("range noise");
     m.range_noise_quadratic_per_m = rd.get<double>("range noise");
+    const auto frame_chars = rd.get<uint16_t>("sensor frame length");
+    if (frame_chars > kMaxSensorFrameChars)
+      rd.fail("scan " + std::to_string(r.id) + ": sensor frame id too long");
+    r.sensor_frame.resize(frame_chars);
+    rd.take(r.sensor_frame.data(), frame_chars, "sensor frame");
   }
   try {
     m.validate();

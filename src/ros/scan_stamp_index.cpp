@@ -11,7 +11,10 @@ void ScanStampIndex::add(int64_t stamp_ns, fragg::ScanId id, const std::string& 
 
 void ScanStampIndex::rebuild(const fragg::ScanStore& store) {
   by_stamp_.clear();
-  for (fragg::ScanId id : store.ids()) add(store.record(id).stamp_ns, id, std::string());
+  for (fragg::ScanId id : store.ids()) {
+    const fragg::ScanRecord& r = store.record(id);
+    add(r.stamp_ns, id, r.sensor_frame);
+  }
 }
 
 const ScanStampIndex::Entry* ScanStampIndex::find(int64_t stamp_ns, int64_t tolerance_ns) const {

@@ -119,7 +119,12 @@ TEST(ScanStoreTest, KeptScansRoundTripThroughTheMapFile) {
   p.scans.keep = true;
   Map map(p);
   for (int i = 0; i < 3; ++i)
-    map.insert(test::roomScan(4, 1, 2, 8, 180), test::poseAt(i), test::lidar(), 1000 + i);
+    map.insert(test::roomScan(4, 1, 2, 8, 180), test::poseAt(i), test::lidar(), 1000 + i,
+               i == 1 ? "" : "lidar_" + std::to_string(i));
+  EXPECT_THROW(map.insert(test::roomScan(4, 1, 2, 8, 180), test::poseAt(0), test::lidar(), 0,
+                          std::string(kMaxSensorFrameChars + 1, 'f')),
+               InvalidArgument);
+  EXPECT_EQ(map.scanStore().size(), 3u);
   const std::string path = std::string(FRAGG_TEST_TMP) + "/kept_scans.fgm";
   map.save(path);
   Map loaded = Map::load(path, Backend::kCpu);
@@ -128,6 +133,7 @@ TEST(ScanStoreTest, KeptScansRoundTripThroughTheMapFile) {
     const ScanRecord& a = map.scanStore().record(id);
     const ScanRecord& b = loaded.scanStore().record(id);
     EXPECT_EQ(a.stamp_ns, b.stamp_ns);
+    EXPECT_EQ(b.sensor_frame, id == 1 ? "" : "lidar_" + std::to_string(id));
     EXPECT_TRUE(a.T_map_sensor.matrix() == b.T_map_sensor.matrix());  // bit for bit
     EXPECT_EQ(a.model.type, b.model.type);
     EXPECT_EQ(a.model.max_range_m, b.model.max_range_m);
@@ -166,7 +172,7 @@ TEST(ScanStoreTest, MapsWithoutKeptScansStillWriteTheOldLayout) {
   EXPECT_THROW(loaded.correctPoses({{0, test::poseAt(0)}}), InvalidArgument);
 }
 
-TEST(ScanStoreTest, ScanRecordsOfVersion2FilesReadWithoutRangeNoise) {
+TEST(ScanStoreTest, ScanRecordsOfVersion2FilesReadWithoutRangeNoiseOrFrame) {
   ScanRecord r;
   r.id = 7;
   r.stamp_ns = 123;
@@ -174,6 +180,7 @@ TEST(ScanStoreTest, ScanRecordsOfVersion2FilesReadWithoutRangeNoise) {
   r.model.max_range_m = 10.0;
   r.model.range_noise_m = 0.0123;
   r.model.range_noise_quadratic_per_m = 0.000456;
+  r.sensor_frame = "velodyne";
   r.points = 1;
   const EncodedPoints pts = encodePoints(test::roomScan(4, 1, 2, 4, 8), 0.001);
   r.points = pts.count;
@@ -186,20 +193,24 @@ TEST(ScanStoreTest, ScanRecordsOfVersion2FilesReadWithoutRangeNoise) {
   readScan(current, back, back_pts, kMapFileVersion);
   EXPECT_EQ(back.model.range_noise_m, 0.0123);
   EXPECT_EQ(back.model.range_noise_quadratic_per_m, 0.000456);
+  EXPECT_EQ(back.sensor_frame, "velodyne");
   EXPECT_EQ(current.remaining(), 0u);
-  // Version 2 wrote the same record without the two noise fields: read as no noise.
+  // Version 2 wrote the same record without the noise and the frame (u16 length + chars):
+  // read as no noise and no frame.
   const double noise[2] = {0.0123, 0.000456};
   auto at = std::search(w.bytes.begin(), w.bytes.end(), reinterpret_cast<const uint8_t*>(noise),
                         reinterpret_cast<const uint8_t*>(noise) + sizeof(noise));
   ASSERT_NE(at, w.bytes.end());
+  const size_t v3_only = sizeof(noise) + sizeof(uint16_t) + r.sensor_frame.size();
   std::vector<uint8_t> v2(w.bytes.begin(), at);
-  v2.insert(v2.end(), at + sizeof(noise), w.bytes.end());
+  v2.insert(v2.end(), at + v3_only, w.bytes.end());
   ScanRecord old;
   EncodedPoints old_pts;
   ByteReader reader(v2, v2.size(), "mem", "scan");
   readScan(reader, old, old_pts, 2);
   EXPECT_EQ(old.model.range_noise_m, 0.0);
   EXPECT_EQ(old.model.range_noise_quadratic_per_m, 0.0);
+  EXPECT_TRUE(old.sensor_frame.empty());
   EXPECT_EQ(old.model.max_range_m, 10.0);
   EXPECT_EQ(old_pts.data, pts.data);
   EXPECT_EQ(reader.remaining(), 0u);

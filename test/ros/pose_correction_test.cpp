@@ -125,8 +125,8 @@ class CorrectionPlanTest : public ::testing::Test {
       fragg::PointCloud cloud;
       for (int k = 0; k < 100; ++k) cloud.points_S.emplace_back(3.f, -1.f + 0.02f * k, 0.f);
       const int64_t stamp_ns = (i + 1) * 1000 * kMs;
-      const fragg::InsertStats s =
-          map_->insert(cloud, pose(0, i, 0), fragg::SensorModel::autoFromCloud(0, -1), stamp_ns);
+      const fragg::InsertStats s = map_->insert(
+          cloud, pose(0, i, 0), fragg::SensorModel::autoFromCloud(0, -1), stamp_ns, "lidar");
       index_.add(stamp_ns, s.scan_id, "lidar");
     }
   }
@@ -203,7 +203,8 @@ TEST_F(CorrectionPlanTest, IndexRebuiltFromTheStoreMatchesByStamp) {
   EXPECT_EQ(rebuilt.size(), 3u);
   ASSERT_NE(rebuilt.find(2000 * kMs, 0), nullptr);
   EXPECT_EQ(rebuilt.find(2000 * kMs, 0)->id, 1u);
-  EXPECT_EQ(rebuilt.find(2000 * kMs, 0)->sensor_frame, "");  // the store keeps no frames
+  // The store keeps each scan's frame id, so a map loaded from a file finds its sensors again.
+  EXPECT_EQ(rebuilt.find(2000 * kMs, 0)->sensor_frame, "lidar");
 }
 
 }  // namespace

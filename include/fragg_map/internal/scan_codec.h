@@ -11,7 +11,8 @@ namespace fragg {
 
 /// Writes the current format (the .fgm's kMapFileVersion).
 void writeScan(ByteWriter& w, const ScanRecord& record, const EncodedPoints& points);
-/// Reads a scan written by .fgm version `file_version` (2: no range noise, read as 0). Throws
+/// Reads a scan written by .fgm version `file_version` (2: no range noise and no frame id,
+/// read as 0 and empty). Throws
 /// IoError (through the reader) naming the bad field.
 void readScan(ByteReader& r, ScanRecord& record, EncodedPoints& points, uint32_t file_version);
 

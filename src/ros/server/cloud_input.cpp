@@ -120,9 +120,11 @@ void CloudInput::process(const sensor_msgs::PointCloud2& msg) {
   const auto start = std::chrono::steady_clock::now();
   {
     std::lock_guard<std::mutex> lock(shared_->mutex);
-    const fragg::InsertStats inserted = shared_->map.insert(cloud, T_map_sensor, sensor, stamp_ns);
+    const std::string frame = withoutLeadingSlash(msg.header.frame_id);
+    const fragg::InsertStats inserted =
+        shared_->map.insert(cloud, T_map_sensor, sensor, stamp_ns, frame);
     if (shared_->map.scanStore().contains(inserted.scan_id))
-      shared_->stamps.add(stamp_ns, inserted.scan_id, withoutLeadingSlash(msg.header.frame_id));
+      shared_->stamps.add(stamp_ns, inserted.scan_id, frame);
   }
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

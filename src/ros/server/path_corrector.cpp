@@ -80,7 +80,7 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
           placed.push_back(r);  // unknown: planCorrection reports it
           continue;
         }
-        if (entry->sensor_frame.empty()) {  // loaded from a file: the frame is not kept
+        if (entry->sensor_frame.empty()) {  // kept by an older map file or a non-ROS build
           ++unplaced;
           continue;
         }
