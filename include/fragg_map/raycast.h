@@ -100,6 +100,7 @@ FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
   z.init(ray.ref.z, ray.start_v[2], ray.end_v[2]);
   int total = x.remaining + y.remaining + z.remaining;
   const float keep_after_t = keepAfterT(ray);
+  const bool has_margin = keep_after_t <= 1.f;  // else no cell is ever inside it
   int visited = 0;
   int entry = kUnknownBlock;
   bool skipped = false;
@@ -107,8 +108,7 @@ FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
     // The current cell's exit parameter is the smallest t_max (an axis with steps left has a
     // finite one). Exits grow along the ray, so once inside the margin, every later free cell
     // is too: the walk only follows the axes from there.
-    const float exit_t = fminf(x.t_max, fminf(y.t_max, z.t_max));
-    if (exit_t > keep_after_t) {
+    if (has_margin && fminf(x.t_max, fminf(y.t_max, z.t_max)) > keep_after_t) {
       skipped = true;
     } else {
       visit(VoxelKey{x.cur, y.cur, z.cur}, false, entry);
@@ -159,6 +159,7 @@ FRAGG_HD int traverseBresenham(const RayVox& ray, Visit& visit) {
   int err2 = 2 * d[a2] - d[major];
   const VoxelKey& r = ray.ref;
   const float keep_after_t = keepAfterT(ray);
+  const bool has_margin = keep_after_t <= 1.f;  // else no cell is ever inside it
   const int major0 = cur[major];
   const float major_len = ray.end_v[major] - ray.start_v[major];
   VoxelKey previous{};
@@ -166,9 +167,12 @@ FRAGG_HD int traverseBresenham(const RayVox& ray, Visit& visit) {
   int visited = 0;
   for (int i = 0; i < d[major]; ++i) {
     const VoxelKey key{r.x + cur[0], r.y + cur[1], r.z + cur[2]};
-    const float boundary = static_cast<float>(major0 + (s[major] > 0 ? i + 1 : -i));
-    const bool keep = (boundary - ray.start_v[major]) / major_len > keep_after_t;
-    if (!keep) {
+    bool in_margin = false;
+    if (has_margin) {  // the major axis's next boundary, as a ray parameter
+      const float boundary_v = static_cast<float>(major0 + (s[major] > 0 ? i + 1 : -i));
+      in_margin = (boundary_v - ray.start_v[major]) / major_len > keep_after_t;
+    }
+    if (!in_margin) {
       if (visited > 0)
         entry = ((key.x ^ previous.x) | (key.y ^ previous.y) | (key.z ^ previous.z)) & ~kBlockMask
                     ? kUnknownBlock

@@ -25,6 +25,10 @@ enum class OpticalAxis : uint8_t {
   kXForward = 1,  ///< body frame: x forward, y left, z up
 };
 
+/// Largest range noise figures a model accepts (SensorModel::validate).
+constexpr double kMaxRangeNoiseM = 10.0;
+constexpr double kMaxRangeNoiseQuadraticPerM = 1.0;
+
 struct SensorModel {
   SensorType type = SensorType::kAuto;
   // Pinhole: full fields of view and the axis convention.

@@ -84,11 +84,13 @@ void SensorModel::validate() const {
     throw InvalidArgument("max range must be finite (or <= 0 for no limit)");
   if (max_range_m > 0.0 && max_range_m <= min_range_m)
     throw InvalidArgument("max range must exceed min range");
-  if (!std::isfinite(range_noise_m) || range_noise_m < 0.0 || range_noise_m > 10.0)
-    throw InvalidArgument("range noise must be in [0, 10] m, got " + std::to_string(range_noise_m));
-  if (!std::isfinite(range_noise_quadratic_per_m) || range_noise_quadratic_per_m < 0.0 ||
-      range_noise_quadratic_per_m > 1.0)
-    throw InvalidArgument("quadratic range noise must be in [0, 1] per m, got " +
+  if (!(range_noise_m >= 0.0 && range_noise_m <= kMaxRangeNoiseM))  // NaN fails too
+    throw InvalidArgument("range noise must be in [0, " + std::to_string(kMaxRangeNoiseM) +
+                          "] m, got " + std::to_string(range_noise_m));
+  if (!(range_noise_quadratic_per_m >= 0.0 &&
+        range_noise_quadratic_per_m <= kMaxRangeNoiseQuadraticPerM))
+    throw InvalidArgument("quadratic range noise must be in [0, " +
+                          std::to_string(kMaxRangeNoiseQuadraticPerM) + "] per m, got " +
                           std::to_string(range_noise_quadratic_per_m));
   if (type == SensorType::kPinhole) {
     if (!(hfov_rad > 0.0 && hfov_rad < M_PI) || !(vfov_rad > 0.0 && vfov_rad < M_PI))

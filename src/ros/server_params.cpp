@@ -123,9 +123,12 @@ void readSensor(const XmlRpcValue& root, ServerParams& p) {
     default:
       p.sensor = fragg::SensorModel::autoFromCloud(min_range, max_range);
   }
-  if (!(noise_m >= 0.0 && noise_m <= 10.0)) badParam("sensor/range_noise", "must be in [0, 10] m");
-  if (!(noise_quadratic >= 0.0 && noise_quadratic <= 1.0))
-    badParam("sensor/range_noise_quadratic", "must be in [0, 1] per m");
+  if (!(noise_m >= 0.0 && noise_m <= fragg::kMaxRangeNoiseM))
+    badParam("sensor/range_noise",
+             "must be in [0, " + std::to_string(fragg::kMaxRangeNoiseM) + "] m");
+  if (!(noise_quadratic >= 0.0 && noise_quadratic <= fragg::kMaxRangeNoiseQuadraticPerM))
+    badParam("sensor/range_noise_quadratic",
+             "must be in [0, " + std::to_string(fragg::kMaxRangeNoiseQuadraticPerM) + "] per m");
   p.sensor.range_noise_m = noise_m;
   p.sensor.range_noise_quadratic_per_m = noise_quadratic;
   validateAs("sensor", [&] { p.sensor.validate(); });

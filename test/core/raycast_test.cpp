@@ -7,6 +7,7 @@
 #include <random>
 #include <set>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 namespace fragg {
@@ -47,8 +48,10 @@ void expectEntriesMatchBlocks(const Collect& got, bool faces) {
   }
 }
 
-/// Does the segment a->b intersect the unit cube at `cell` grown by `grow` on every side?
-bool segmentHitsCell(const float a[3], const float b[3], const VoxelKey& cell, double grow) {
+/// Does the segment a->b intersect the unit cube at `cell` grown by `grow` on every side? When
+/// it does and `t_exit` is given, it receives the segment parameter where it leaves the cube.
+bool segmentHitsCell(const float a[3], const float b[3], const VoxelKey& cell, double grow,
+                     double* t_exit = nullptr) {
   double t0 = 0.0, t1 = 1.0;
   const int c[3] = {cell.x, cell.y, cell.z};
   for (int i = 0; i < 3; ++i) {
@@ -63,6 +66,7 @@ bool segmentHitsCell(const float a[3], const float b[3], const VoxelKey& cell, d
     t1 = std::min(t1, tb);
     if (t0 > t1) return false;
   }
+  if (t_exit) *t_exit = t1;
   return true;
 }
 
@@ -186,21 +190,35 @@ TEST(RaycastTest, ClearingMarginSkipsTheFreeCellsItsRayLeavesNearTheHit) {
 
 /// Distance (voxels) from where the segment a->b leaves `cell` to b; -1 when it misses it.
 double exitToEnd(const float a[3], const float b[3], const VoxelKey& cell) {
-  double t0 = 0.0, t1 = 1.0;
-  const int c[3] = {cell.x, cell.y, cell.z};
+  double t_exit = 0.0;
+  if (!segmentHitsCell(a, b, cell, 0.0, &t_exit)) return -1.0;
   double len2 = 0.0;
-  for (int i = 0; i < 3; ++i) {
-    const double d = double(b[i]) - a[i];
-    len2 += d * d;
-    if (std::fabs(d) < 1e-12) continue;
-    double ta = (c[i] - a[i]) / d, tb = (c[i] + 1 - a[i]) / d;
-    if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
-  }
-  if (t0 > t1) return -1.0;
-  return (1.0 - t1) * std::sqrt(len2);
+  for (int i = 0; i < 3; ++i) len2 += (double(b[i]) - a[i]) * (double(b[i]) - a[i]);
+  return (1.0 - t_exit) * std::sqrt(len2);
 }
+
+/// Walks `ray` without and with the clearing margin `keep_v`; checks what holds for any
+/// traversal: the return value counts the visits, the margin only drops free cells from the
+/// end of the walk, and the hit stays.
+template <class Walk>
+std::pair<Collect, Collect> plainAndKept(RayVox ray, float keep_v, Walk walk) {
+  Collect plain, kept;
+  ray.keep_v = 0.f;
+  walk(ray, plain);
+  ray.keep_v = keep_v;
+  const int visited = walk(ray, kept);
+  EXPECT_EQ(visited, static_cast<int>(kept.cells.size()));
+  EXPECT_GE(kept.cells.size(), 1u);
+  EXPECT_LE(kept.cells.size(), plain.cells.size());
+  if (kept.cells.empty() || kept.cells.size() > plain.cells.size()) return {plain, kept};
+  for (size_t i = 0; i + 1 < kept.cells.size(); ++i) EXPECT_EQ(kept.cells[i], plain.cells[i]);
+  EXPECT_EQ(kept.cells.back(), plain.cells.back());
+  EXPECT_TRUE(kept.hits.back());
+  return {plain, kept};
+}
+
+const auto dda = [](const RayVox& r, Collect& c) { return traverseDda(r, c); };
+const auto bresenham = [](const RayVox& r, Collect& c) { return traverseBresenham(r, c); };
 
 TEST(RaycastTest, ClearingMarginKeepsExactlyTheCellsLeftOutsideIt) {
   std::mt19937 rng(11);
@@ -208,19 +226,10 @@ TEST(RaycastTest, ClearingMarginKeepsExactlyTheCellsLeftOutsideIt) {
   int skipped_total = 0;
   for (int trial = 0; trial < 2000; ++trial) {
     RayVox ray{VoxelKey{5, -7, 9}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, true};
-    Collect plain;
-    traverseDda(ray, plain);
-    ray.keep_v = m(rng);
-    Collect kept;
-    const int visited = traverseDda(ray, kept);
-    EXPECT_EQ(visited, static_cast<int>(kept.cells.size()));
-    // The free cells are a prefix of the plain walk's, then the same hit.
-    ASSERT_GE(kept.cells.size(), 1u);
-    ASSERT_LE(kept.cells.size(), plain.cells.size());
+    ray.keep_v = m(rng);  // used by the checks below
+    const auto [plain, kept] = plainAndKept(ray, ray.keep_v, dda);
+    ASSERT_FALSE(kept.cells.empty());
     const size_t free_kept = kept.cells.size() - 1;
-    for (size_t i = 0; i < free_kept; ++i) EXPECT_EQ(kept.cells[i], plain.cells[i]);
-    EXPECT_EQ(kept.cells.back(), plain.cells.back());
-    EXPECT_TRUE(kept.hits.back());
     // Kept cells are left at least the margin before the end, skipped ones less (float
     // traversal: a tolerance of 1e-3 voxels).
     const float a[3] = {ray.start_v[0], ray.start_v[1], ray.start_v[2]};
@@ -245,15 +254,9 @@ TEST(RaycastTest, BresenhamClearingMarginDropsTheLastFreeCells) {
   std::uniform_real_distribution<float> u(-20.f, 20.f), m(0.f, 3.f);
   for (int trial = 0; trial < 500; ++trial) {
     RayVox ray{VoxelKey{0, 0, 0}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, true};
-    Collect plain;
-    traverseBresenham(ray, plain);
-    ray.keep_v = m(rng);
-    Collect kept;
-    const int visited = traverseBresenham(ray, kept);
-    EXPECT_EQ(visited, static_cast<int>(kept.cells.size()));
+    ray.keep_v = m(rng);  // used by the checks below
+    const auto [plain, kept] = plainAndKept(ray, ray.keep_v, bresenham);
     ASSERT_LE(kept.cells.size(), plain.cells.size());
-    for (size_t i = 0; i + 1 < kept.cells.size(); ++i) EXPECT_EQ(kept.cells[i], plain.cells[i]);
-    EXPECT_EQ(kept.cells.back(), plain.cells.back());
     expectEntriesMatchBlocks(kept, /*faces=*/false);
     // The cells dropped lie within the margin of the end along the major axis (+1 cell).
     const size_t dropped = plain.cells.size() - kept.cells.size();
