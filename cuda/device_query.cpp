@@ -1,7 +1,7 @@
 #include <string>
 
 #include "cuda_check.h"
-#include "fragg_map/internal/cuda_backend.h"
+#include "fragg_map/internal/cuda_backend_factory.h"
 
 namespace fragg {
 

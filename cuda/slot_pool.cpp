@@ -1,6 +1,9 @@
 #include "slot_pool.h"
 
 #include <algorithm>
+#include <string>
+
+#include "cuda_stream.h"
 
 namespace fragg::cuda {
 
@@ -27,7 +30,8 @@ size_t SlotPool::bytesPerSlot() {
 }
 
 void SlotPool::grow(int32_t capacity) {
-  if (capacity <= capacity_) return;
+  const int32_t old = this->capacity();
+  if (capacity <= old) return;
   // Check the room first, so that a failure leaves every array as it was.
   size_t free_bytes = 0, total_bytes = 0;
   FRAGG_CUDA_CHECK(cudaMemGetInfo(&free_bytes, &total_bytes));
@@ -36,7 +40,7 @@ void SlotPool::grow(int32_t capacity) {
     throw CudaOutOfMemory("device block pool cannot grow to " + std::to_string(capacity) +
                           " slots (" + std::to_string(need >> 20) + " MiB needed, " +
                           std::to_string(free_bytes >> 20) + " MiB free)");
-  const size_t keep = size_t(capacity_), n = size_t(capacity);
+  const size_t keep = size_t(old), n = size_t(capacity);
   regrow(cells_, keep, n, stream_);
   regrow(keys_, keep, n, stream_);
   regrow(scratch_, keep, n, stream_);
@@ -47,31 +51,22 @@ void SlotPool::grow(int32_t capacity) {
   regrow(changed_at_, keep, n, stream_);
   regrow(occupied_at_, keep, n, stream_);
   regrow(cull_, keep, n, stream_);
-  regrow(free_stack_, size_t(free_top_), n, stream_);
+  regrow(free_stack_, size_t(table_.freeCount()), n, stream_);
   regrow(resident_, keep, n, stream_);
-  const int32_t old = capacity_;
-  capacity_ = capacity;
-  free_host_.resize(n);
-  resident_host_.resize(n, 0);
-  std::vector<int32_t> fresh_slots;
-  fresh_slots.reserve(n - keep);
-  for (int32_t s = capacity - 1; s >= old; --s) fresh_slots.push_back(s);
-  push(fresh_slots);
+  const int32_t top = table_.freeCount();
+  table_.grow(capacity);
+  uploadFreeStack(top);
 }
 
 void SlotPool::clear() {
-  if (capacity_ == 0) return;
-  const size_t n = size_t(capacity_);
+  if (capacity() == 0) return;
+  const size_t n = size_t(capacity());
   FRAGG_CUDA_CHECK(cudaMemsetAsync(scratch_.get(), 0, n * sizeof(SlotScratch), stream_));
   FRAGG_CUDA_CHECK(cudaMemsetAsync(fresh_.get(), 0, n, stream_));
   FRAGG_CUDA_CHECK(cudaMemsetAsync(dirty_.get(), 0, n, stream_));
   FRAGG_CUDA_CHECK(cudaMemsetAsync(resident_.get(), 0, n, stream_));
-  std::fill(resident_host_.begin(), resident_host_.end(), 0);
-  free_top_ = 0;
-  std::vector<int32_t> all;
-  all.reserve(n);
-  for (int32_t s = capacity_ - 1; s >= 0; --s) all.push_back(s);
-  push(all);
+  table_.clear();
+  uploadFreeStack(0);
 }
 
 SlotArrays SlotPool::arrays() const {
@@ -88,37 +83,33 @@ SlotArrays SlotPool::arrays() const {
   a.cull = cull_.get();
   a.free_stack = free_stack_.get();
   a.resident = resident_.get();
-  a.capacity = capacity_;
+  a.capacity = capacity();
   return a;
 }
 
-std::vector<int32_t> SlotPool::pop(int32_t n) {
-  n = std::min(n, free_top_);
-  std::vector<int32_t> out(free_host_.begin() + (free_top_ - n), free_host_.begin() + free_top_);
-  free_top_ -= n;
-  return out;
-}
-
-std::vector<int32_t> SlotPool::takenByDevice(int32_t new_top) {
-  new_top = std::max(new_top, 0);
-  std::vector<int32_t> out;
-  if (new_top >= free_top_) return out;
-  out.assign(free_host_.begin() + new_top, free_host_.begin() + free_top_);
-  free_top_ = new_top;
-  return out;
-}
-
-void SlotPool::push(const std::vector<int32_t>& slots) {
-  if (slots.empty()) return;
-  std::copy(slots.begin(), slots.end(), free_host_.begin() + free_top_);
-  copyToDevice(free_stack_.get() + free_top_, free_host_.data() + free_top_, slots.size(), stream_);
-  free_top_ += static_cast<int32_t>(slots.size());
-  // The host vector is read by the copy: wait before it can change again.
-  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+std::vector<BlockIndex> SlotPool::release(const std::vector<int32_t>& slots) {
+  std::vector<BlockIndex> blocks;
+  if (slots.empty()) return blocks;
+  blocks.reserve(slots.size());
+  for (int32_t s : slots) blocks.push_back(table_.unbind(s));
+  uploadResident();
+  const int32_t top = table_.freeCount();
+  table_.push(slots);
+  uploadFreeStack(top);
+  return blocks;
 }
 
 void SlotPool::uploadResident() {
-  copyToDevice(resident_.get(), resident_host_.data(), resident_host_.size(), stream_);
+  const std::vector<uint8_t>& flags = table_.residentFlags();
+  copyToDevice(resident_.get(), flags.data(), flags.size(), stream_);
+  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+}
+
+void SlotPool::uploadFreeStack(int32_t from) {
+  const int32_t top = table_.freeCount();
+  if (top <= from) return;
+  copyToDevice(free_stack_.get() + from, table_.freeStack() + from, size_t(top - from), stream_);
+  // The host vector is read by the copy: wait before it can change again.
   FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
 }
 

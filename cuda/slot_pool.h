@@ -1,12 +1,13 @@
-// The device pool of block slots (cells, keys, scan scratch, residency flags) and the host's
-// mirror of its free stack. Grows by reallocating and copying on the stream.
+// The device pool of block slots (cells, keys, scan scratch, residency flags) with the host's
+// book of it (SlotTable). Grows by reallocating and copying on the stream.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
-#include "device_memory.h"
+#include "cuda_array.h"
 #include "device_types.h"
+#include "slot_table.h"
 
 namespace fragg::cuda {
 
@@ -24,25 +25,27 @@ class SlotPool {
   void clear();
 
   SlotArrays arrays() const;
-  int32_t capacity() const { return capacity_; }
-  size_t deviceBytes() const { return size_t(capacity_) * bytesPerSlot(); }
+  int32_t capacity() const { return table_.capacity(); }
+  size_t deviceBytes() const { return size_t(capacity()) * bytesPerSlot(); }
+  const SlotTable& table() const { return table_; }
 
-  // Host mirror of the free stack: slots [0, free_top) are free.
-  int32_t freeTop() const { return free_top_; }
-  /// Takes `n` slots off the stack (host-side allocation, for uploads).
-  std::vector<int32_t> pop(int32_t n);
-  /// The device allocated the slots above `new_top`; returns them.
-  std::vector<int32_t> takenByDevice(int32_t new_top);
-  /// Puts slots back on the stack, on the host and the device.
-  void push(const std::vector<int32_t>& slots);
-
-  /// Host mirror of the resident flags; uploadResident() sends it.
-  std::vector<uint8_t>& residentHost() { return resident_host_; }
+  /// Takes `n` free slots for uploads (throws CudaError when fewer are free).
+  std::vector<int32_t> pop(int32_t n) { return table_.pop(n); }
+  /// The device allocated the slots above `new_top`: they become resident, device-only.
+  std::vector<int32_t> takenByDevice(int32_t new_top) { return table_.takenByDevice(new_top); }
+  void bind(int32_t slot, BlockIndex block) { table_.bind(slot, block); }
+  /// Frees slots (host book and device stack, resident flags sent); returns their host blocks
+  /// (kNoBlock for device-only ones).
+  std::vector<BlockIndex> release(const std::vector<int32_t>& slots);
+  /// Sends the host's resident flags to the device.
   void uploadResident();
 
  private:
+  /// Sends the free stack's entries [from, top) to the device.
+  void uploadFreeStack(int32_t from);
+
   cudaStream_t stream_;
-  int32_t capacity_ = 0;
+  SlotTable table_;
   DeviceArray<Block> cells_;
   DeviceArray<BlockKey> keys_;
   DeviceArray<SlotScratch> scratch_;
@@ -55,9 +58,6 @@ class SlotPool {
   DeviceArray<CullMemory> cull_;
   DeviceArray<int32_t> free_stack_;
   DeviceArray<uint8_t> resident_;
-  std::vector<int32_t> free_host_;
-  int32_t free_top_ = 0;
-  std::vector<uint8_t> resident_host_;
 };
 
 }  // namespace fragg::cuda

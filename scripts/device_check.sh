@@ -32,6 +32,11 @@ while [ $# -gt 0 ]; do
           --gtest_filter='*PrepareKernel*:*HostReaders*:*TinyPool*:*VelodynePair*:*PoseCorrectionIsByteIdenticalOnRealScans*:*RangeNoise*' \
           >"$out/sanitizer_$tool.log" 2>&1
         echo "compute-sanitizer $tool: exit $?"; tail -3 "$out/sanitizer_$tool.log"
+        # The device block cache's own tests, whole.
+        compute-sanitizer --tool "$tool" --error-exitcode 9 "$build/test/fragg_gpu_cache_test" \
+          >"$out/sanitizer_cache_$tool.log" 2>&1
+        echo "compute-sanitizer $tool (cache tests): exit $?"
+        tail -3 "$out/sanitizer_cache_$tool.log"
       done
       shift ;;
     workloads)

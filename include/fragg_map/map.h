@@ -5,6 +5,12 @@
 //   map.insert(cloud, T_map_sensor, fragg::SensorModel::autoFromCloud(0.0, 30.0));
 //   fragg::CellState s = map.query(p_map);
 //   map.save("x.fgm");   fragg::Map m = fragg::Map::load("x.fgm");
+//
+// Readers see the map through forEachBlock / findBlock / changedBlocksSince (never the block
+// storage); writers go through named edits (insert, remove, correctPoses, clearBox,
+// writeCells, reset, load). Const members may run concurrently with each other (a CUDA
+// write-back they need is serialised inside); a writer must exclude every other caller
+// (fragg::LockedMap / the server's map lock does).
 #pragma once
 
 #include <Eigen/Geometry>
@@ -12,9 +18,13 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <vector>
 
 #include "fragg_map/block_map.h"
+#include "fragg_map/block_view.h"
+#include "fragg_map/cell_writer.h"
 #include "fragg_map/insert_stats.h"
 #include "fragg_map/map_params.h"
 #include "fragg_map/occupancy.h"
@@ -24,8 +34,10 @@
 
 namespace fragg {
 
-class Integrator;
+class MapBackend;
 class Culler;
+struct ScanRecord;
+
 
 /// What a pose correction did (Map::correctPoses).
 struct CorrectionStats {
@@ -77,24 +89,43 @@ class Map {
 
   CellState query(const Eigen::Vector3d& p_map) const;
   CellState state(const Cell& c) const { return model_.state(c); }
-  const Cell* findCell(const VoxelKey& key) const { return blocks().findCell(key); }
+  const Cell* findCell(const VoxelKey& key) const;
   VoxelKey keyOf(const Eigen::Vector3d& p_map) const;  ///< throws if beyond the int32 range
   Eigen::Vector3d centerOf(const VoxelKey& key) const;
 
+  // Reading blocks. With the CUDA backend, device-side changes are written back first (a
+  // write-back cache), so these always see the whole map.
+  /// Read-only view of the blocks, valid until the map next changes; lock-free lookups.
+  BlockView blockView() const { return BlockView(hostBlocks()); }
+  /// Calls fn(key, block) for every block, in unspecified order.
+  void forEachBlock(const BlockVisitor& fn) const { blockView().forEach(fn); }
+  /// Calls fn(key, block) for every block whose key lies in [lo, hi] (inclusive).
+  void forEachBlockIn(const BlockKey& lo, const BlockKey& hi, const BlockVisitor& fn) const {
+    blockView().forEachIn(lo, hi, fn);
+  }
+  /// nullptr when the block does not exist (all its cells unknown).
+  const Block* findBlock(const BlockKey& key) const { return blockView().findBlock(key); }
+  size_t blockCount() const { return blockView().size(); }
+  /// Keys of the blocks whose cells changed (`what`) after map revision `revision` (what
+  /// markers, frontiers and incremental outputs use); revision() read with the blocks is where
+  /// the next call starts. Removed blocks are not listed.
+  std::vector<BlockKey> changedBlocksSince(uint64_t revision,
+                                           BlockChange what = BlockChange::kAny) const {
+    return blockView().changedSince(revision, what);
+  }
+
+  // Named edits besides insertion and correction.
   /// Makes every cell in the box unknown (block-granular memory release where possible).
   /// Kept scans that could reach into the box can no longer be removed or corrected.
   void clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map);
+  /// Writes cells directly (importers, test fixtures): `edit` gets a CellWriter. Bumps the
+  /// revision once; every kept scan can no longer be removed or corrected afterwards.
+  void writeCells(const std::function<void(CellWriter&)>& edit);
   void reset();
 
   const MapParams& params() const { return params_; }
   const OccupancyModel& model() const { return model_; }
   double resolution() const { return params_.resolution_m; }
-  /// The host map, complete: with the CUDA backend, device-side changes are written back
-  /// first (a write-back cache), so every host reader goes through here.
-  const BlockMap& blocks() const;
-  /// Write access for loaders, importers and merging; bumps the map revision and drops the
-  /// device copies. Kept scans can no longer be removed or corrected afterwards.
-  BlockMap& mutableBlocks();
   uint64_t revision() const { return revision_; }
   size_t scanCount() const { return scans_; }
   const char* backendName() const;
@@ -103,7 +134,7 @@ class Map {
 
   MemoryStats memory() const;
   size_t knownVoxelCount() const;
-  KeyBounds bounds() const { return blocks().observedBounds(); }
+  KeyBounds bounds() const { return hostBlocks().observedBounds(); }
 
   void save(const std::string& path) const;
   /// Reads a .fgm file into a new map integrating with `backend` (other settings default; the
@@ -117,6 +148,8 @@ class Map {
  private:
   static Map loadFile(const std::string& path, const MapParams& runtime, bool keep_as_file);
   void fallBackToCpu(const std::string& why);
+  /// The host map, complete (the backend's cache written back first; serialised).
+  const BlockMap& hostBlocks() const;
   /// InvalidArgument unless the map keeps scans, `id` is one of them and it is removable.
   void requireRemovable(ScanId id) const;
   /// Marks the kept scans whose rays could reach into the box as no longer removable.
@@ -129,10 +162,12 @@ class Map {
 
   MapParams params_;
   OccupancyModel model_;
-  std::unique_ptr<Integrator> integrator_;
+  std::unique_ptr<MapBackend> backend_;
   std::string backend_reason_;
-  // The host copy may lag the device cache; blocks() synchronises it, hence mutable.
+  // The host copy may lag the backend's cache; hostBlocks() synchronises it, hence mutable.
   mutable BlockMap blocks_;
+  /// Serialises that write-back between concurrent readers (a pointer: Map is movable).
+  std::unique_ptr<std::mutex> sync_mutex_;
   std::unique_ptr<Culler> culler_;
   uint64_t revision_ = 0;
   size_t scans_ = 0;

@@ -59,7 +59,7 @@ struct ScanRecord {
   bool clear_no_return_rays = false;
   uint64_t points = 0;  ///< points of the cloud
   /// False once cells the scan updated were changed by other means than scans (Map::clearBox,
-  /// Map::mutableBlocks): its removal would no longer undo its own updates.
+  /// Map::writeCells): its removal would no longer undo its own updates.
   bool removable = true;
 };
 

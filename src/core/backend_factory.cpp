@@ -3,10 +3,10 @@
 #include <atomic>
 
 #include "fragg_map/errors.h"
-#include "fragg_map/internal/cpu_integrator.h"
+#include "fragg_map/internal/cpu_backend.h"
 #include "fragg_map/log.h"
 #if FRAGG_HAVE_CUDA
-#include "fragg_map/internal/cuda_backend.h"
+#include "fragg_map/internal/cuda_backend_factory.h"
 #endif
 
 namespace fragg {
@@ -31,7 +31,7 @@ void logAutoChoiceOnce(LogLevel level, const std::string& line) {
 BackendChoice makeBackend(const MapParams& p) {
   BackendChoice c;
   if (p.backend == Backend::kCpu) {
-    c.integrator = std::make_unique<CpuIntegrator>(p.threads);
+    c.backend = std::make_unique<CpuBackend>(p.threads);
     c.reason = "cpu: requested";
     return c;
   }
@@ -40,23 +40,23 @@ BackendChoice makeBackend(const MapParams& p) {
   const std::string name = cudaDeviceName(p.cuda.device, &why_not);
   if (!name.empty()) {
     try {
-      c.integrator = makeCudaIntegrator(p);
+      c.backend = makeCudaBackend(p);
       c.reason = std::string(p.backend == Backend::kAuto ? "auto" : "requested") +
                  ": CUDA device " + std::to_string(p.cuda.device) + " (" + name + ")";
     } catch (const CudaError& e) {
       why_not = e.what();
     }
   }
-  if (!c.integrator && p.backend == Backend::kCuda)
+  if (!c.backend && p.backend == Backend::kCuda)
     throw InvalidArgument("backend cuda requested, but " + why_not);
-  if (!c.integrator) {
-    c.integrator = std::make_unique<CpuIntegrator>(p.threads);
+  if (!c.backend) {
+    c.backend = std::make_unique<CpuBackend>(p.threads);
     c.reason = "auto: CPU backend (" + why_not + ")";
   }
 #else
   if (p.backend == Backend::kCuda)
     throw InvalidArgument("backend cuda requested, but this build has no CUDA backend");
-  c.integrator = std::make_unique<CpuIntegrator>(p.threads);
+  c.backend = std::make_unique<CpuBackend>(p.threads);
   c.reason = "auto: CPU backend (built without CUDA)";
 #endif
   if (p.backend == Backend::kAuto) logAutoChoiceOnce(LogLevel::kInfo, "backend " + c.reason);

@@ -6,7 +6,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/backend_factory.h"
-#include "fragg_map/internal/cpu_integrator.h"
+#include "fragg_map/internal/cpu_backend.h"
 #include "fragg_map/internal/culler.h"
 #include "fragg_map/internal/frustum_builder.h"
 #include "fragg_map/log.h"
@@ -38,9 +38,10 @@ double farthestPoint(const PointCloud& cloud) {
 Map::Map(const MapParams& params)
     : params_(validated(params)), model_(OccupancyModel::fromParams(params.occupancy)) {
   BackendChoice choice = makeBackend(params_);
-  integrator_ = std::move(choice.integrator);
+  backend_ = std::move(choice.backend);
   backend_reason_ = std::move(choice.reason);
-  blocks_ = BlockMap(integrator_->hostAllocator());
+  blocks_ = BlockMap(backend_->hostAllocator());
+  sync_mutex_ = std::make_unique<std::mutex>();
   culler_ = std::make_unique<Culler>(params_.culling);
   scan_store_ = std::make_unique<ScanStore>(params_.scans);
 }
@@ -101,7 +102,7 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   InsertStats stats;
   const Frustum frustum = buildFrustum(how.model, how.T_map_sensor, params_.resolution_m);
   CullContext cull;
-  if (integrator_->cullsOnItsOwn()) {
+  if (backend_->cullsOnItsOwn()) {
     cull = culler_->beginScan(frustum, how.model, how.T_map_sensor);
   } else if (!host_cull) {
     // The CPU backend's rays do not depend on culling: it only counts (InsertStats::culling).
@@ -114,17 +115,26 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   }
   stats.seconds_cull = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 
-  ScanInput scan{cloud, how.T_map_sensor, how.model, frustum, how.explicit_model, cull};
-  scan.remove = remove;
+  const ScanInput scan{cloud, how.T_map_sensor, how.model, frustum, how.explicit_model, cull};
+  const UpdateSettings settings{params, model_, revision_ + 1};
+  const ScanUpdate what = remove ? ScanUpdate::kRemove : ScanUpdate::kIntegrate;
+  // Readers may be writing the cache back (they share the map): not while the scan runs.
+  std::lock_guard<std::mutex> lock(*sync_mutex_);
   try {
-    integrator_->integrate(scan, params, model_, revision_ + 1, blocks_, stats);
+    if (what == ScanUpdate::kRemove)
+      backend_->remove(scan, settings, blocks_, stats);
+    else
+      backend_->integrate(scan, settings, blocks_, stats);
   } catch (const CudaOutOfMemory& e) {
     // The device backend applies a scan all at once or not at all: the map is intact.
     fallBackToCpu(e.what());
     InsertStats cpu_stats;
     cpu_stats.culling = stats.culling;
     cpu_stats.seconds_cull = stats.seconds_cull;
-    integrator_->integrate(scan, params, model_, revision_ + 1, blocks_, cpu_stats);
+    if (what == ScanUpdate::kRemove)
+      backend_->remove(scan, settings, blocks_, cpu_stats);
+    else
+      backend_->integrate(scan, settings, blocks_, cpu_stats);
     stats = cpu_stats;
   }
   ++revision_;
@@ -212,17 +222,18 @@ Eigen::Vector3d Map::centerOf(const VoxelKey& key) const {
 }
 
 void Map::fallBackToCpu(const std::string& why) {
-  integrator_->syncToHost(blocks_);
-  integrator_->dropDeviceCopies();
-  integrator_ = std::make_unique<CpuIntegrator>(params_.threads);
+  backend_->cache().invalidateAll(blocks_);
+  backend_ = std::make_unique<CpuBackend>(params_.threads);
   backend_reason_ = "cpu: fell back from CUDA (" + why + ")";
   logMessage(LogLevel::kWarning, "GPU memory exhausted, continuing on the CPU backend: " + why);
 }
 
 CellState Map::query(const Eigen::Vector3d& p_map) const {
-  const Cell* c = blocks().findCell(keyOf(p_map));
+  const Cell* c = findCell(keyOf(p_map));
   return c ? model_.state(*c) : CellState::kUnknown;
 }
+
+const Cell* Map::findCell(const VoxelKey& key) const { return hostBlocks().findCell(key); }
 
 void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map) {
   if (!min_map.allFinite() || !max_map.allFinite())
@@ -231,8 +242,7 @@ void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_ma
     throw InvalidArgument("clear box min corner must not exceed the max corner");
   const VoxelKey lo = keyOf(min_map), hi = keyOf(max_map);
   const BlockKey blo = blockKeyOf(lo), bhi = blockKeyOf(hi);
-  integrator_->syncToHost(blocks_);
-  integrator_->dropDeviceCopies();
+  backend_->cache().invalidate(blo, bhi, blocks_);
   markScansTouching(min_map, max_map);
   std::vector<BlockIndex> hit;
   blocks_.forEachInBox(blo, bhi, [&](BlockIndex i) { hit.push_back(i); });
@@ -257,8 +267,16 @@ void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_ma
   }
 }
 
+void Map::writeCells(const std::function<void(CellWriter&)>& edit) {
+  for (ScanId id : scan_store_->ids()) scan_store_->markUnremovable(id);
+  backend_->cache().invalidateAll(blocks_);
+  ++revision_;
+  CellWriter writer(blocks_, model_, revision_);
+  edit(writer);
+}
+
 void Map::reset() {
-  integrator_->dropDeviceCopies();
+  backend_->cache().invalidateAll(blocks_);
   blocks_.clear();
   culler_->reset();
   scan_store_->clear();
@@ -267,24 +285,17 @@ void Map::reset() {
   next_scan_id_ = 0;
 }
 
-const BlockMap& Map::blocks() const {
-  integrator_->syncToHost(blocks_);
+const BlockMap& Map::hostBlocks() const {
+  std::lock_guard<std::mutex> lock(*sync_mutex_);
+  backend_->cache().sync(blocks_);
   return blocks_;
 }
 
-BlockMap& Map::mutableBlocks() {
-  for (ScanId id : scan_store_->ids()) scan_store_->markUnremovable(id);
-  integrator_->syncToHost(blocks_);
-  integrator_->dropDeviceCopies();
-  ++revision_;
-  return blocks_;
-}
-
-const char* Map::backendName() const { return integrator_->name(); }
+const char* Map::backendName() const { return backend_->name(); }
 
 size_t Map::knownVoxelCount() const {
   size_t n = 0;
-  const BlockMap& host = blocks();
+  const BlockMap& host = hostBlocks();
   host.forEach([&](BlockIndex i) {
     for (const Cell& c : host.block(i).cells) n += c.observed() ? 1 : 0;
   });
@@ -293,10 +304,10 @@ size_t Map::knownVoxelCount() const {
 
 MemoryStats Map::memory() const {
   MemoryStats m;
-  m.host_block_bytes = blocks().hostBytes();
+  m.host_block_bytes = hostBlocks().hostBytes();
   m.blocks = blocks_.size();
-  m.device_bytes = integrator_->deviceBytes();
-  m.device_estimate_bytes = integrator_->deviceEstimateBytes();
+  m.device_bytes = backend_->cache().deviceBytes();
+  m.device_estimate_bytes = backend_->deviceEstimateBytes();
   m.known_voxels = knownVoxelCount();
   m.scan_store_bytes = scan_store_->memoryBytes();
   return m;

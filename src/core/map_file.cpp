@@ -12,7 +12,7 @@
 #include "fragg_map/atomic_file.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/byte_io.h"
-#include "fragg_map/internal/integrator.h"
+#include "fragg_map/internal/backend.h"
 #include "fragg_map/internal/scan_codec.h"
 #include "fragg_map/map.h"
 
@@ -26,7 +26,7 @@ constexpr size_t kBlockBytes = sizeof(Block);
 }  // namespace
 
 void Map::save(const std::string& path) const {
-  integrator_->syncToHost(blocks_);
+  hostBlocks();  // the backend's cache written back
   const OccupancyParams& occ = params_.occupancy;
   std::vector<BlockIndex> order;
   order.reserve(blocks_.size());

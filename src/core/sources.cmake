@@ -7,14 +7,16 @@ set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/map_params.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sensor_model.cpp
   ${CMAKE_CURRENT_LIST_DIR}/block_map.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/block_view.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frustum_builder.cpp
   ${CMAKE_CURRENT_LIST_DIR}/culler.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scan_preparation.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scan_scratch.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/cpu_integrator.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/cpu_backend.cpp
   ${CMAKE_CURRENT_LIST_DIR}/insert_stats.cpp
   ${CMAKE_CURRENT_LIST_DIR}/log.cpp
   ${CMAKE_CURRENT_LIST_DIR}/backend_factory.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/cell_writer.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_file.cpp
 )

@@ -46,14 +46,12 @@ MapComparison compareMaps(const Map& a, const Map& b, const CompareOptions& opti
   MapComparison result;
   result.octomap_threshold = options.octomap_threshold;
   const bool octo = options.octomap_threshold;
-  const BlockMap& blocks_a = a.blocks();
-  const BlockMap& blocks_b = b.blocks();
+  const BlockView blocks_a = a.blockView();
+  const BlockView blocks_b = b.blockView();
   const Cell unobserved;
 
   // Blocks of a, against b's block at the same key (or unobserved space).
-  blocks_a.forEach([&](BlockIndex ia) {
-    const BlockKey& key = blocks_a.meta(ia).key;
-    const Block& block_a = blocks_a.block(ia);
+  blocks_a.forEach([&](const BlockKey& key, const Block& block_a) {
     const Block* block_b = blocks_b.findBlock(key);
     for (int i = 0; i < kCellsPerBlock; ++i) {
       const Cell& ca = block_a.cells[i];
@@ -63,9 +61,8 @@ MapComparison compareMaps(const Map& a, const Map& b, const CompareOptions& opti
     }
   });
   // Blocks only b has.
-  blocks_b.forEach([&](BlockIndex ib) {
-    if (blocks_a.findBlock(blocks_b.meta(ib).key)) return;
-    const Block& block_b = blocks_b.block(ib);
+  blocks_b.forEach([&](const BlockKey& key, const Block& block_b) {
+    if (blocks_a.findBlock(key)) return;
     for (int i = 0; i < kCellsPerBlock; ++i) {
       const Cell& cb = block_b.cells[i];
       if (!cb.observed()) continue;

@@ -8,12 +8,9 @@
 namespace fragg {
 
 std::vector<Eigen::Vector3f> occupiedCenters(const Map& map) {
-  const BlockMap& blocks = map.blocks();
   const OccupancyModel& model = map.model();
   std::vector<VoxelKey> keys;
-  blocks.forEach([&](BlockIndex bi) {
-    const Block& block = blocks.block(bi);
-    const BlockKey& block_key = blocks.meta(bi).key;
+  map.forEachBlock([&](const BlockKey& block_key, const Block& block) {
     for (int i = 0; i < kCellsPerBlock; ++i)
       if (model.state(block.cells[i]) == CellState::kOccupied)
         keys.push_back(voxelKeyOf(block_key, i));

@@ -26,10 +26,7 @@ std::unique_ptr<octomap::OcTree> toOcTree(const Map& map) {
   tree->setClampingThresMax(occupancy.clamp_max);
   tree->setOccupancyThres(0.5);
 
-  const BlockMap& blocks = map.blocks();
-  blocks.forEach([&](BlockIndex bi) {
-    const Block& block = blocks.block(bi);
-    const BlockKey& block_key = blocks.meta(bi).key;
+  map.forEachBlock([&](const BlockKey& block_key, const Block& block) {
     for (int i = 0; i < kCellsPerBlock; ++i) {
       const Cell& cell = block.cells[i];
       if (!cell.observed()) continue;

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <string>
 
-#include "fragg_map/block_map.h"
+#include "fragg_map/cell_writer.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/interop/octomap_io.h"
 #include "fragg_map/map.h"
@@ -25,8 +25,6 @@ MapParams mapParamsOfTree(double resolution_m, double prob_hit, double prob_miss
 /// excluded: it marks unobserved cells). Throws IoError for a non-finite value.
 int16_t logOddsFxOfNode(float log_odds, const std::string& source);
 
-/// Writes `fx` into every voxel of the cube [lo, lo + edge - 1] (edge in voxels).
-void fillCube(const VoxelKey& lo, int32_t edge, int16_t fx, BlockMap& blocks);
 
 template <class Tree>
 Map mapFromTree(const Tree& tree, const std::string& source, Backend backend) {
@@ -47,15 +45,16 @@ Map mapFromTree(const Tree& tree, const std::string& source, Backend backend) {
           "too much space to convert)",
           source, kMaxImportVoxels, tree.getResolution()));
   }
-  BlockMap& blocks = map.mutableBlocks();
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    const int16_t fx = logOddsFxOfNode(it->getLogOdds(), source);
-    const octomap::OcTreeKey k = it.getIndexKey();
-    const VoxelKey lo{static_cast<int32_t>(k[0]) - key_offset,
-                      static_cast<int32_t>(k[1]) - key_offset,
-                      static_cast<int32_t>(k[2]) - key_offset};
-    fillCube(lo, int32_t{1} << (depth - static_cast<int>(it.getDepth())), fx, blocks);
-  }
+  map.writeCells([&](CellWriter& cells) {
+    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+      const int16_t fx = logOddsFxOfNode(it->getLogOdds(), source);
+      const octomap::OcTreeKey k = it.getIndexKey();
+      const VoxelKey lo{static_cast<int32_t>(k[0]) - key_offset,
+                        static_cast<int32_t>(k[1]) - key_offset,
+                        static_cast<int32_t>(k[2]) - key_offset};
+      cells.fillCube(lo, int32_t{1} << (depth - static_cast<int>(it.getDepth())), fx);
+    }
+  });
   return map;
 }
 

@@ -18,10 +18,8 @@ using internal::RenderLayout;
 /// Calls fn(voxel_key, cell) for every cell of the map inside the layout's range.
 template <class Fn>
 void forEachCellIn(const Map& map, const RenderLayout& layout, Fn&& fn) {
-  const BlockMap& blocks = map.blocks();
-  blocks.forEachInBox(blockKeyOf(layout.lo), blockKeyOf(layout.hi), [&](BlockIndex bi) {
-    const Block& block = blocks.block(bi);
-    const BlockKey& block_key = blocks.meta(bi).key;
+  map.forEachBlockIn(blockKeyOf(layout.lo), blockKeyOf(layout.hi), [&](const BlockKey& block_key,
+                                                                        const Block& block) {
     for (int i = 0; i < kCellsPerBlock; ++i) {
       const VoxelKey v = voxelKeyOf(block_key, i);
       if (layout.contains(v)) fn(v, block.cells[i]);

@@ -1,5 +1,5 @@
-// One CUBE_LIST marker per block; incremental updates from BlockMeta::occupied_at (occupied
-// markers) or BlockMeta::changed_at (others).
+// One CUBE_LIST marker per block; incremental updates from Map::changedBlocksSince (which
+// cells are occupied, for occupied markers; any change for the others).
 #include "fragg_map/ros/block_markers.h"
 
 #include <vector>
@@ -29,11 +29,11 @@ int32_t MarkerLedger::idOf(const fragg::BlockKey& key) const {
   return it == ids_.end() ? -1 : it->second.id;
 }
 
-CellMask cellMask(const fragg::Map& map, fragg::BlockIndex block, fragg::CellState state) {
+CellMask cellMask(const fragg::Map& map, const fragg::Block& block, fragg::CellState state) {
   // Branch-free over 64-cell words (the hot loop of an incremental update: every changed
   // block is scanned). Unobserved cells hold INT16_MIN, below every threshold.
   const fragg::OccupancyModel& model = map.model();
-  const fragg::Cell* cells = map.blocks().block(block).cells;
+  const fragg::Cell* cells = block.cells;
   const int16_t above = model.occupied_above_fx, below = model.free_below_fx;
   CellMask mask;
   for (int w = 0; w < fragg::kCellsPerBlock / 64; ++w) {
@@ -58,14 +58,13 @@ CellMask cellMask(const fragg::Map& map, fragg::BlockIndex block, fragg::CellSta
   return mask;
 }
 
-visualization_msgs::Marker blockMarker(const fragg::Map& map, fragg::BlockIndex block,
+visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::BlockKey& key,
                                        const CellMask& cells, const MarkerStyle& style,
                                        const ros::Time& stamp, int32_t id) {
   visualization_msgs::Marker m = markerHeader(style, stamp, id, visualization_msgs::Marker::ADD);
   const double res_m = map.resolution();
   m.scale.x = m.scale.y = m.scale.z = res_m;
   m.color = heightColor(0.0, 0.0, 1.0, style.alpha);  // per-point colours below win
-  const fragg::BlockKey key = map.blocks().meta(block).key;
   m.points.reserve(cells.count());
   m.colors.reserve(cells.count());
   // Colours depend on the height only: one per z layer of the block.
@@ -89,11 +88,11 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, fragg::BlockIndex 
 visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
                                                     const ros::Time& stamp, MarkerLedger* ledger) {
   visualization_msgs::MarkerArray out;
-  const fragg::BlockMap& blocks = map.blocks();
+  const fragg::BlockView blocks = map.blockView();
   const uint64_t since = ledger->published_revision_;
-  // Shown blocks that were erased (clearBox, reset) have no metadata left: look them up.
+  // Shown blocks that were erased (clearBox, reset) are not listed as changed: look them up.
   for (auto it = ledger->ids_.begin(); it != ledger->ids_.end();) {
-    if (blocks.find(it->first) == fragg::kNoBlock) {
+    if (!blocks.findBlock(it->first)) {
       out.markers.push_back(
           markerHeader(style, stamp, it->second.id, visualization_msgs::Marker::DELETE));
       it = ledger->ids_.erase(it);
@@ -101,36 +100,33 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
       ++it;
     }
   }
-  // Occupied markers: only blocks where a cell crossed the occupied threshold (the integrators
-  // stamp occupied_at); other states: every changed block.
-  const bool occupied = style.state == fragg::CellState::kOccupied;
-  std::vector<fragg::BlockIndex> changed;
-  blocks.forEach([&](fragg::BlockIndex i) {
-    const fragg::BlockMeta& m = blocks.meta(i);
-    if ((occupied ? m.occupied_at : m.changed_at) > since) changed.push_back(i);
-  });
+  // Occupied markers: only blocks where a cell crossed the occupied threshold; other states:
+  // every changed block.
+  const std::vector<fragg::BlockKey> changed = blocks.changedSince(
+      since, style.state == fragg::CellState::kOccupied ? fragg::BlockChange::kOccupied
+                                                        : fragg::BlockChange::kAny);
   // The masks in parallel (read-only), the ledger and the messages in order.
   std::vector<CellMask> masks(changed.size());
   const int64_t n = static_cast<int64_t>(changed.size());
 #pragma omp parallel for schedule(static) if (n > 256)
-  for (int64_t j = 0; j < n; ++j) masks[j] = cellMask(map, changed[j], style.state);
+  for (int64_t j = 0; j < n; ++j)
+    masks[j] = cellMask(map, *blocks.findBlock(changed[j]), style.state);
   for (size_t j = 0; j < changed.size(); ++j) {
-    const fragg::BlockIndex i = changed[j];
-    const fragg::BlockKey key = blocks.meta(i).key;
+    const fragg::BlockKey& key = changed[j];
     const CellMask& cells = masks[j];
     const auto shown = ledger->ids_.find(key);
     if (shown == ledger->ids_.end()) {
       if (cells.none()) continue;
       const int32_t id = ledger->next_id_++;
       ledger->ids_.emplace(key, MarkerLedger::Shown{id, cells});
-      out.markers.push_back(blockMarker(map, i, cells, style, stamp, id));
+      out.markers.push_back(blockMarker(map, key, cells, style, stamp, id));
     } else if (cells.none()) {
       out.markers.push_back(
           markerHeader(style, stamp, shown->second.id, visualization_msgs::Marker::DELETE));
       ledger->ids_.erase(shown);
     } else if (cells != shown->second.cells) {
       shown->second.cells = cells;
-      out.markers.push_back(blockMarker(map, i, cells, style, stamp, shown->second.id));
+      out.markers.push_back(blockMarker(map, key, cells, style, stamp, shown->second.id));
     }
   }
   ledger->published_revision_ = map.revision();
@@ -143,13 +139,12 @@ visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const Mar
   out.markers.push_back(markerHeader(style, stamp, 0, visualization_msgs::Marker::DELETEALL));
   ledger->ids_.clear();
   ledger->next_id_ = 0;
-  const fragg::BlockMap& blocks = map.blocks();
-  blocks.forEach([&](fragg::BlockIndex i) {
-    const CellMask cells = cellMask(map, i, style.state);
+  map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& block) {
+    const CellMask cells = cellMask(map, block, style.state);
     if (cells.none()) return;
     const int32_t id = ledger->next_id_++;
-    ledger->ids_.emplace(blocks.meta(i).key, MarkerLedger::Shown{id, cells});
-    out.markers.push_back(blockMarker(map, i, cells, style, stamp, id));
+    ledger->ids_.emplace(key, MarkerLedger::Shown{id, cells});
+    out.markers.push_back(blockMarker(map, key, cells, style, stamp, id));
   });
   ledger->published_revision_ = map.revision();
   return out;
@@ -160,13 +155,12 @@ visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map& map, const M
                                                   const MarkerLedger& ledger) {
   visualization_msgs::MarkerArray out;
   out.markers.push_back(markerHeader(style, stamp, 0, visualization_msgs::Marker::DELETEALL));
-  const fragg::BlockMap& blocks = map.blocks();
+  const fragg::BlockView blocks = map.blockView();
   for (const auto& [key, shown] : ledger.ids_) {
-    const fragg::BlockIndex i = blocks.find(key);
     // An erased block is still shown until the next increment deletes it: its cells stand
     // nowhere else, so it is left out (that DELETE then finds nothing, which is harmless).
-    if (i != fragg::kNoBlock)
-      out.markers.push_back(blockMarker(map, i, shown.cells, style, stamp, shown.id));
+    if (blocks.findBlock(key))
+      out.markers.push_back(blockMarker(map, key, shown.cells, style, stamp, shown.id));
   }
   return out;
 }

@@ -11,10 +11,7 @@ namespace fragg_ros {
 sensor_msgs::PointCloud2 occupiedCloud(const fragg::Map& map, const std::string& frame_id,
                                        const ros::Time& stamp) {
   std::vector<float> xyz;
-  const fragg::BlockMap& blocks = map.blocks();
-  blocks.forEach([&](fragg::BlockIndex i) {
-    const fragg::BlockKey key = blocks.meta(i).key;
-    const fragg::Block& b = blocks.block(i);
+  map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& b) {
     for (int c = 0; c < fragg::kCellsPerBlock; ++c) {
       if (map.state(b.cells[c]) != fragg::CellState::kOccupied) continue;
       const Eigen::Vector3d p_map = map.centerOf(fragg::voxelKeyOf(key, c));

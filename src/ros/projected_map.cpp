@@ -38,10 +38,7 @@ nav_msgs::OccupancyGrid projectedMap(const fragg::Map& map, double min_z_m, doub
   grid.info.origin.position.y = bounds.min.y * res_m;
   grid.info.origin.position.z = 0.0;
   grid.data.assign(static_cast<size_t>(width * height), kUnknown);
-  const fragg::BlockMap& blocks = map.blocks();
-  blocks.forEach([&](fragg::BlockIndex i) {
-    const fragg::BlockKey key = blocks.meta(i).key;
-    const fragg::Block& b = blocks.block(i);
+  map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& b) {
     for (int c = 0; c < fragg::kCellsPerBlock; ++c) {
       const fragg::CellState s = map.state(b.cells[c]);
       if (s == fragg::CellState::kUnknown) continue;

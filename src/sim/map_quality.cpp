@@ -10,7 +10,7 @@ namespace {
 // Cell lookups with the last block remembered (voxels are visited in coherent order).
 class CellLookup {
  public:
-  explicit CellLookup(const BlockMap& blocks) : blocks_(blocks) {}
+  explicit CellLookup(const BlockView& blocks) : blocks_(blocks) {}
   const Cell* find(const VoxelKey& k) {
     const BlockKey b = blockKeyOf(k);
     if (!valid_ || b != last_key_) {
@@ -34,7 +34,7 @@ class CellLookup {
   }
 
  private:
-  const BlockMap& blocks_;
+  const BlockView& blocks_;
   BlockKey last_key_;
   const Block* last_ = nullptr;
   bool valid_ = false;
@@ -79,7 +79,7 @@ MapQuality evaluateMapQuality(const Map& map, const MeshBvh& scene,
   const double res = map.resolution();
   q.resolution_m = res;
   const float near_m = static_cast<float>(std::sqrt(3.0) / 2.0 * res);
-  const BlockMap& blocks = map.blocks();
+  const BlockView blocks = map.blockView();
   const Eigen::AlignedBox3f bounds = scene.bounds();
 
   auto occupied = [&](const Cell& c) {
@@ -90,13 +90,12 @@ MapQuality evaluateMapQuality(const Map& map, const MeshBvh& scene,
   };
 
   // 1. Every known cell: precision (occupied) and free-space errors (free).
-  std::vector<BlockIndex> indices;
-  blocks.forEach([&](BlockIndex i) { indices.push_back(i); });
+  const std::vector<BlockRef> all = blocks.all();
   uint64_t occ = 0, occ_near = 0, free = 0, inside = 0, deep = 0;
 #pragma omp parallel for schedule(dynamic, 16) reduction(+ : occ, occ_near, free, inside, deep)
-  for (size_t n = 0; n < indices.size(); ++n) {
-    const BlockKey bk = blocks.meta(indices[n]).key;
-    const Block& block = blocks.block(indices[n]);
+  for (size_t n = 0; n < all.size(); ++n) {
+    const BlockKey bk = all[n].key;
+    const Block& block = *all[n].block;
     for (int ci = 0; ci < kCellsPerBlock; ++ci) {
       const Cell& c = block.cells[ci];
       if (!c.observed()) continue;
@@ -137,12 +136,10 @@ MapQuality evaluateMapQuality(const Map& map, const MeshBvh& scene,
       const VoxelKey k0 = map.keyOf(lo), k1 = map.keyOf(hi);
       // Only voxels in an existing block or next to one can be in the observed region: visit
       // the blocks near the triangle, each grown by one voxel on every side.
-      std::vector<BlockIndex> near_blocks;
-      blocks.forEachInBox(blockKeyOf({k0.x - 1, k0.y - 1, k0.z - 1}),
-                          blockKeyOf({k1.x + 1, k1.y + 1, k1.z + 1}),
-                          [&](BlockIndex i) { near_blocks.push_back(i); });
-      for (BlockIndex bi : near_blocks) {
-        const BlockKey bk = blocks.meta(bi).key;
+      const std::vector<BlockRef> near_blocks = blocks.in(
+          blockKeyOf({k0.x - 1, k0.y - 1, k0.z - 1}), blockKeyOf({k1.x + 1, k1.y + 1, k1.z + 1}));
+      for (const BlockRef& near : near_blocks) {
+        const BlockKey bk = near.key;
         const VoxelKey b0{std::max(k0.x, bk.x * kBlockSize - 1),
                           std::max(k0.y, bk.y * kBlockSize - 1),
                           std::max(k0.z, bk.z * kBlockSize - 1)};

@@ -71,9 +71,7 @@ inline LeafStates leafStates(const octomap::OcTree& tree) {
 inline Agreement compareWithOctomap(const Map& map, const octomap::OcTree& tree) {
   LeafStates octo = leafStates(tree);
   Agreement a;
-  map.blocks().forEach([&](BlockIndex i) {
-    const BlockKey key = map.blocks().meta(i).key;
-    const Block& b = map.blocks().block(i);
+  map.forEachBlock([&](const BlockKey& key, const Block& b) {
     for (int c = 0; c < kCellsPerBlock; ++c) {
       if (!b.cells[c].observed()) continue;
       const bool occupied = b.cells[c].log_odds_fx > 0;

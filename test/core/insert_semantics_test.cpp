@@ -3,6 +3,7 @@
 
 #include <cstring>
 #include <limits>
+#include <unordered_set>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/map.h"
@@ -150,12 +151,11 @@ TEST(InsertTest, ThreadCountDoesNotChangeTheMap) {
     a.insert(scan, T, SensorModel::autoFromCloud());
     b.insert(scan, T, SensorModel::autoFromCloud());
   }
-  ASSERT_EQ(a.blocks().size(), b.blocks().size());
-  a.blocks().forEach([&](BlockIndex i) {
-    const BlockKey& k = a.blocks().meta(i).key;
-    const Block* other = b.blocks().findBlock(k);
+  ASSERT_EQ(a.blockCount(), b.blockCount());
+  a.forEachBlock([&](const BlockKey& k, const Block& block) {
+    const Block* other = b.findBlock(k);
     ASSERT_NE(other, nullptr);
-    EXPECT_EQ(std::memcmp(&a.blocks().block(i), other, sizeof(Block)), 0);
+    EXPECT_EQ(std::memcmp(&block, other, sizeof(Block)), 0);
   });
 }
 
@@ -177,22 +177,29 @@ TEST(InsertTest, OccupiedAtMovesOnlyWhenACellCrossesTheOccupiedThreshold) {
   map.insert(wall, test::sensorAtVoxelCentre(), SensorModel::autoFromCloud());
   const uint64_t first = map.revision();
   size_t with_hits = 0;
-  map.blocks().forEach([&](BlockIndex i) {
+  const std::vector<BlockKey> occupied_changed =
+      map.changedBlocksSince(0, BlockChange::kOccupied);
+  const std::unordered_set<BlockKey, BlockKeyHash> listed(occupied_changed.begin(),
+                                                          occupied_changed.end());
+  EXPECT_EQ(listed.size(), occupied_changed.size());
+  map.forEachBlock([&](const BlockKey& key, const Block& block) {
     bool occupied = false;
-    for (const Cell& c : map.blocks().block(i).cells)
-      occupied |= map.state(c) == CellState::kOccupied;
-    EXPECT_EQ(map.blocks().meta(i).occupied_at, occupied ? first : 0u);
+    for (const Cell& c : block.cells) occupied |= map.state(c) == CellState::kOccupied;
+    EXPECT_EQ(map.blockView().stamps(key).occupied_at, occupied ? first : 0u);
+    EXPECT_EQ(listed.count(key), occupied ? 1u : 0u);
     with_hits += occupied;
   });
   EXPECT_GE(with_hits, 1u);
   // The same scan again: log-odds move (changed_at), no cell crosses the threshold.
   map.insert(wall, test::sensorAtVoxelCentre(), SensorModel::autoFromCloud());
   size_t changed = 0;
-  map.blocks().forEach([&](BlockIndex i) {
-    changed += map.blocks().meta(i).changed_at > first;
-    EXPECT_LE(map.blocks().meta(i).occupied_at, first);
+  map.forEachBlock([&](const BlockKey& key, const Block&) {
+    changed += map.blockView().stamps(key).changed_at > first;
+    EXPECT_LE(map.blockView().stamps(key).occupied_at, first);
   });
   EXPECT_GT(changed, 0u);
+  EXPECT_EQ(map.changedBlocksSince(first, BlockChange::kAny).size(), changed);
+  EXPECT_TRUE(map.changedBlocksSince(first, BlockChange::kOccupied).empty());
 }
 
 TEST(InsertTest, RangeNoiseKeepsAHitsOwnSurfaceFromBeingCleared) {

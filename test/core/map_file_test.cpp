@@ -47,11 +47,11 @@ void expectSameMaps(const Map& a, const Map& b) {
   EXPECT_EQ(a.params().occupancy.prob_hit, b.params().occupancy.prob_hit);
   EXPECT_EQ(a.params().occupancy.unknown_band, b.params().occupancy.unknown_band);
   EXPECT_EQ(a.scanCount(), b.scanCount());
-  ASSERT_EQ(a.blocks().size(), b.blocks().size());
-  a.blocks().forEach([&](BlockIndex i) {
-    const Block* other = b.blocks().findBlock(a.blocks().meta(i).key);
+  ASSERT_EQ(a.blockCount(), b.blockCount());
+  a.forEachBlock([&](const BlockKey& key, const Block& block) {
+    const Block* other = b.findBlock(key);
     ASSERT_NE(other, nullptr);
-    EXPECT_EQ(std::memcmp(&a.blocks().block(i), other, sizeof(Block)), 0);
+    EXPECT_EQ(std::memcmp(&block, other, sizeof(Block)), 0);
   });
 }
 

@@ -49,22 +49,21 @@ MapParams paramsFor(Backend b, double res) {
 /// Every block of `a` is in `b` with the same 2 KiB, and the other way round; with
 /// `same_history` (two live maps given the same operations) also the same revisions.
 void expectSameBlocks(const Map& a, const Map& b, const char* what, bool same_history = true) {
-  const BlockMap& ba = a.blocks();
-  const BlockMap& bb = b.blocks();
+  const BlockView ba = a.blockView();
+  const BlockView bb = b.blockView();
   size_t differing = 0, missing = 0, observed_cells = 0, meta_differing = 0;
-  ba.forEach([&](BlockIndex i) {
-    const Block* other = bb.findBlock(ba.meta(i).key);
+  ba.forEach([&](const BlockKey& key, const Block& block) {
+    const Block* other = bb.findBlock(key);
     if (!other) {
       ++missing;
       return;
     }
-    if (std::memcmp(&ba.block(i), other, sizeof(Block)) != 0) ++differing;
+    if (std::memcmp(&block, other, sizeof(Block)) != 0) ++differing;
     // The revisions incremental publishing reads (markers) must agree as well.
-    const BlockMeta& mb = bb.meta(bb.find(ba.meta(i).key));
-    if (same_history &&
-        (ba.meta(i).changed_at != mb.changed_at || ba.meta(i).occupied_at != mb.occupied_at))
+    const BlockStamps sa = ba.stamps(key), sb = bb.stamps(key);
+    if (same_history && (sa.changed_at != sb.changed_at || sa.occupied_at != sb.occupied_at))
       ++meta_differing;
-    for (const Cell& c : ba.block(i).cells) observed_cells += c.observed();
+    for (const Cell& c : block.cells) observed_cells += c.observed();
   });
   EXPECT_EQ(ba.size(), bb.size()) << what;
   EXPECT_EQ(missing, 0u) << what;

@@ -7,3 +7,12 @@ fragg_add_test(fragg_gpu_test
   LABELS gpu)
 target_include_directories(fragg_gpu_test PRIVATE ${PROJECT_SOURCE_DIR}/src/tools)
 target_compile_definitions(fragg_gpu_test PRIVATE FRAGG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+
+# The device block cache on its own (needs the CUDA headers: CUDA builds only).
+if(FRAGG_HAVE_CUDA)
+  fragg_add_test(fragg_gpu_cache_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/device_block_cache_test.cpp
+    LIBS fragg_map_core CUDA::cudart_static
+    LABELS gpu)
+  target_include_directories(fragg_gpu_cache_test PRIVATE ${PROJECT_SOURCE_DIR}/cuda)
+endif()

@@ -25,8 +25,11 @@ inline MapParams paramsAt(double resolution_m) {
 
 /// Sets one cell's fixed-point log-odds, creating its block when needed.
 inline void setCell(Map& map, const VoxelKey& k, int16_t log_odds_fx) {
-  BlockMap& blocks = map.mutableBlocks();
-  blocks.block(blocks.findOrCreate(blockKeyOf(k))).cells[cellIndexOf(k)].log_odds_fx = log_odds_fx;
+  map.writeCells([&](CellWriter& cells) {
+    Cell c;
+    c.log_odds_fx = log_odds_fx;
+    cells.set(k, c);
+  });
 }
 
 /// log_odds_fx of a cell, or kUnobservedLogOdds when it has no block.

@@ -1,5 +1,5 @@
 # Test suites of src/interop and of the CLI subcommands built on it. The maps are made by
-# hand (cells set through Map::mutableBlocks), so nothing here depends on the ray caster.
+# hand (cells set through Map::writeCells), so nothing here depends on the ray caster.
 fragg_add_test(interop_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/export_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/render_test.cpp

@@ -174,7 +174,7 @@ TEST(CorrectTest, ScansReachingIntoAClearedBoxCanNoLongerBeRemoved) {
   moved.translation().y() += 0.2;
   EXPECT_EQ(loaded.correctPoses({{1, moved}}).scans, 1u);
   // A direct edit of the map makes every kept scan unremovable.
-  loaded.mutableBlocks();
+  loaded.writeCells([](CellWriter&) {});
   EXPECT_FALSE(loaded.scanStore().canRemove(1));
 }
 

@@ -30,13 +30,12 @@ inline double sameState(const Map& a, const Map& b) {
 inline bool sameCells(const Map& a, const Map& b, std::string* why = nullptr) {
   auto covered = [](const Map& x, const Map& y, std::string* msg) {
     bool ok = true;
-    const BlockMap& bx = x.blocks();
-    bx.forEach([&](BlockIndex i) {
+    const BlockView by = y.blockView();
+    x.forEachBlock([&](const BlockKey& k, const Block& block) {
       if (!ok) return;
-      const BlockKey k = bx.meta(i).key;
-      const Block* other = y.blocks().findBlock(k);
+      const Block* other = by.findBlock(k);
       for (int c = 0; c < kCellsPerBlock && ok; ++c) {
-        const Cell& cx = bx.block(i).cells[c];
+        const Cell& cx = block.cells[c];
         const Cell cy = other ? other->cells[c] : Cell();
         if (cx.log_odds_fx != cy.log_odds_fx || cx.hits != cy.hits) {
           ok = false;

@@ -1,4 +1,4 @@
-// Map -> per-block CUBE_LIST markers: content, incrementality (BlockMeta::changed_at), DELETE
+// Map -> per-block CUBE_LIST markers: content, incrementality (Map::changedBlocksSince), DELETE
 // for emptied and erased blocks, full republish, height colours.
 #include "fragg_map/ros/block_markers.h"
 
@@ -171,7 +171,7 @@ TEST(BlockMarkers, SecondScanSendsOnlyTheBlocksItChanged) {
     ASSERT_EQ(m.action, Marker::ADD);
     const fragg::BlockKey k = blockOfMarker(map, m);
     EXPECT_EQ(far_occupied_blocks.count({k.x, k.y, k.z}), 1u);
-    EXPECT_GT(map.blocks().meta(map.blocks().find(k)).changed_at, before);
+    EXPECT_GT(map.blockView().stamps(k).changed_at, before);
     EXPECT_EQ(first_ids.count(m.id), 0u) << "a new block reused a shown block's id";
   }
   EXPECT_EQ(ledger.shownBlocks(), first.markers.size() + second.markers.size());
@@ -189,7 +189,7 @@ TEST(BlockMarkers, BlockIsResentOnlyWhenItsDrawnCellsChange) {
   ASSERT_EQ(fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.size(), 1u);
   // Same block, a free cell changes: the block's changed_at moves, its occupied cells do not.
   fragg_ros_test::setCell(map, a_free, fragg::CellState::kFree);
-  ASSERT_GT(map.blocks().meta(map.blocks().find(fragg::blockKeyOf(a))).changed_at,
+  ASSERT_GT(map.blockView().stamps(fragg::blockKeyOf(a)).changed_at,
             ledger.publishedRevision());
   EXPECT_TRUE(fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.empty());
   // A second occupied cell: the block is sent again, whole, under the same id.
@@ -260,7 +260,7 @@ TEST(BlockMarkers, ClearedBoxDeletesTheErasedBlocks) {
   std::set<int32_t> shown;
   for (const Marker& m : first.markers) shown.insert(m.id);
   map.clearBox(Eigen::Vector3d(-100, -100, -100), Eigen::Vector3d(100, 100, 100));
-  ASSERT_TRUE(map.blocks().empty());
+  ASSERT_EQ(map.blockCount(), 0u);
   const MarkerArray second = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
   EXPECT_EQ(countAction(second, Marker::DELETE), shown.size());
   EXPECT_EQ(second.markers.size(), shown.size());

@@ -20,16 +20,12 @@ inline fragg::MapParams cpuParams(double resolution_m = 0.1) {
 /// Writes one cell (occupied: hit log-odds; free: miss log-odds) and marks its block changed
 /// at the map's new revision.
 inline void setCell(fragg::Map& map, const fragg::VoxelKey& v, fragg::CellState state) {
-  fragg::BlockMap& blocks = map.mutableBlocks();
-  const fragg::BlockIndex i = blocks.findOrCreate(fragg::blockKeyOf(v));
-  fragg::Cell& c = blocks.block(i).cells[fragg::cellIndexOf(v)];
-  if (state == fragg::CellState::kUnknown) {
-    c = fragg::Cell();
-  } else {
+  fragg::Cell c;
+  if (state != fragg::CellState::kUnknown) {
     c.hits = state == fragg::CellState::kOccupied ? 1 : 0;
     c.log_odds_fx = state == fragg::CellState::kOccupied ? map.model().max_fx : map.model().min_fx;
   }
-  blocks.meta(i).changed_at = blocks.meta(i).occupied_at = map.revision();
+  map.writeCells([&](fragg::CellWriter& cells) { cells.set(v, c); });
 }
 
 /// A 2 m x 2 m wall of points `distance_m` ahead (+x) of the sensor at `sensor_xyz`.
@@ -47,11 +43,10 @@ inline void insertWall(fragg::Map& map, const Eigen::Vector3d& sensor_xyz, doubl
 /// Every cell of the map in `state`, as voxel centres.
 inline std::vector<Eigen::Vector3d> centresIn(const fragg::Map& map, fragg::CellState state) {
   std::vector<Eigen::Vector3d> out;
-  const fragg::BlockMap& blocks = map.blocks();
-  blocks.forEach([&](fragg::BlockIndex i) {
+  map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& block) {
     for (int c = 0; c < fragg::kCellsPerBlock; ++c)
-      if (map.state(blocks.block(i).cells[c]) == state)
-        out.push_back(map.centerOf(fragg::voxelKeyOf(blocks.meta(i).key, c)));
+      if (map.state(block.cells[c]) == state)
+        out.push_back(map.centerOf(fragg::voxelKeyOf(key, c)));
   });
   return out;
 }

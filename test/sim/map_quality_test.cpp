@@ -9,8 +9,11 @@ namespace fragg::sim {
 namespace {
 
 void setCell(Map& map, const VoxelKey& k, int16_t log_odds_fx) {
-  BlockMap& blocks = map.mutableBlocks();
-  blocks.block(blocks.findOrCreate(blockKeyOf(k))).cells[cellIndexOf(k)].log_odds_fx = log_odds_fx;
+  map.writeCells([&](CellWriter& cells) {
+    Cell c;
+    c.log_odds_fx = log_odds_fx;
+    cells.set(k, c);
+  });
 }
 
 // 1 m voxels; the box spans [0.25, 4.75]^3, so voxel keys 0..4 on each axis hold its surface

@@ -5,13 +5,13 @@
 #include <memory>
 #include <string>
 
-#include "fragg_map/internal/integrator.h"
+#include "fragg_map/internal/backend.h"
 #include "fragg_map/map_params.h"
 
 namespace fragg {
 
 struct BackendChoice {
-  std::unique_ptr<Integrator> integrator;
+  std::unique_ptr<MapBackend> backend;
   std::string reason;  ///< e.g. "auto: CUDA device 0 (NVIDIA H100 80GB HBM3)"
 };
 

@@ -1,7 +1,7 @@
 // fragg::Map -> visualization_msgs/MarkerArray, one CUBE_LIST marker per 8x8x8 block, so that
-// a publisher can send only the blocks that changed (BlockMeta::occupied_at for occupied
-// cells, BlockMeta::changed_at otherwise) and DELETE the
-// blocks that no longer hold a cell of the drawn state.
+// a publisher can send only the blocks that changed (Map::changedBlocksSince: which cells are
+// occupied, for occupied cells; any change otherwise) and DELETE the blocks that no longer
+// hold a cell of the drawn state.
 #pragma once
 
 #include <ros/time.h>
@@ -29,8 +29,8 @@ struct MarkerStyle {
 /// Which cells of a block are drawn (bit i: cell index i).
 using CellMask = std::bitset<fragg::kCellsPerBlock>;
 
-/// The cells of block `block` in `state`.
-CellMask cellMask(const fragg::Map& map, fragg::BlockIndex block, fragg::CellState state);
+/// The cells of `block` in `state` (the map's occupancy model).
+CellMask cellMask(const fragg::Map& map, const fragg::Block& block, fragg::CellState state);
 
 /// Which blocks a marker topic shows, with the marker id each block got and the cells drawn,
 /// and the map revision published last. Owned by the publisher; the converters below read and
@@ -59,7 +59,7 @@ class MarkerLedger {
 };
 
 /// The CUBE_LIST marker of one block: centres of the cells in `cells`, coloured by height.
-visualization_msgs::Marker blockMarker(const fragg::Map& map, fragg::BlockIndex block,
+visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::BlockKey& key,
                                        const CellMask& cells, const MarkerStyle& style,
                                        const ros::Time& stamp, int32_t id);
 

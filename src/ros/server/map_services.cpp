@@ -83,7 +83,7 @@ bool MapServices::loadMap(fragg_map::LoadMap::Request& req, fragg_map::LoadMap::
     std::lock_guard<std::mutex> lock(shared_->mutex);
     shared_->map = std::move(loaded);
     shared_->stamps.rebuild(shared_->map.scanStore());
-    return "loaded " + std::to_string(shared_->map.blocks().size()) + " blocks and " +
+    return "loaded " + std::to_string(shared_->map.blockCount()) + " blocks and " +
            std::to_string(shared_->map.scanStore().size()) + " kept scans from " + req.path;
   });
   if (res.success && on_map_replaced_) on_map_replaced_();
@@ -105,10 +105,10 @@ bool MapServices::reset(fragg_map::Reset::Request&, fragg_map::Reset::Response& 
 bool MapServices::clearBox(fragg_map::ClearBox::Request& req, fragg_map::ClearBox::Response& res) {
   answer("clear_bbox", res, [&] {
     std::lock_guard<std::mutex> lock(shared_->mutex);
-    const size_t before = shared_->map.blocks().size();
+    const size_t before = shared_->map.blockCount();
     shared_->map.clearBox(toEigen(req.min), toEigen(req.max));  // validates the box first
     return "cleared; blocks " + std::to_string(before) + " -> " +
-           std::to_string(shared_->map.blocks().size());
+           std::to_string(shared_->map.blockCount());
   });
   if (res.success && on_map_replaced_) on_map_replaced_();
   return true;

@@ -82,8 +82,7 @@ int main(int argc, char** argv) {
   // One marker update: the blocks changed since the last one, counted and converted.
   auto markerUpdate = [&]() {
     const uint64_t before = ledger.publishedRevision();
-    map.blocks().forEach(
-        [&](fragg::BlockIndex b) { blocks_changed += map.blocks().meta(b).occupied_at > before; });
+    blocks_changed += map.changedBlocksSince(before, fragg::BlockChange::kOccupied).size();
     const auto t0 = std::chrono::steady_clock::now();
     const auto markers = fragg_ros::changedBlockMarkers(map, style, ros::Time(), &ledger);
     update_ms.push_back(msSince(t0));
@@ -114,7 +113,7 @@ int main(int argc, char** argv) {
   const size_t updates = update_ms.size();
   using fragg::tools::percentile;
   std::printf("%d scans of %zu points, %.3f m, max range %.0f m, CPU backend, %zu blocks\n", scans,
-              points, resolution_m, max_range_m, map.blocks().size());
+              points, resolution_m, max_range_m, map.blockCount());
   std::printf("clouds at %.1f Hz, marker_rate %.1f Hz: %zu marker updates\n", cloud_rate_hz,
               marker_rate_hz, updates);
   std::printf("%-28s %10s %10s %10s\n", "ms per cloud", "median", "p99", "max");

@@ -60,8 +60,8 @@ void runStats(const StatsOptions& o) {
   }
   size_t counts[3] = {0, 0, 0};
   size_t observed = 0;
-  map.blocks().forEach([&](BlockIndex i) {
-    for (const Cell& c : map.blocks().block(i).cells) {
+  map.forEachBlock([&](const BlockKey&, const Block& block) {
+    for (const Cell& c : block.cells) {
       if (!c.observed()) continue;
       ++observed;
       ++counts[static_cast<int>(map.state(c))];

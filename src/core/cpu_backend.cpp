@@ -1,4 +1,4 @@
-#include "fragg_map/internal/cpu_integrator.h"
+#include "fragg_map/internal/cpu_backend.h"
 
 #include <omp.h>
 
@@ -73,19 +73,19 @@ void scanBlockBounds(const PreparedScan& scan, BlockKey* lo, BlockKey* hi) {
 }
 }  // namespace
 
-void CpuIntegrator::integrate(const ScanInput& in, const MapParams& params,
-                              const OccupancyModel& model, uint64_t revision, BlockMap& blocks,
-                              InsertStats& stats) {
+void CpuBackend::update(const ScanInput& in, ScanUpdate what, const UpdateSettings& how,
+                        BlockMap& blocks, InsertStats& stats) {
   const auto t0 = std::chrono::steady_clock::now();
-  prepareScan(in.cloud, in.T_map_sensor, in.model, in.frustum, in.explicit_model, params, prepared_,
-              stats);
+  prepareScan(in.cloud, in.T_map_sensor, in.model, in.frustum, in.explicit_model, how.params,
+              prepared_, stats);
   stats.seconds_prepare += secondsSince(t0);
-  integratePrepared(prepared_, model, params.raycast, revision, blocks, stats, in.remove);
+  updatePrepared(prepared_, what, how.model, how.params.raycast, how.revision, blocks, stats);
 }
 
-void CpuIntegrator::integratePrepared(const PreparedScan& scan, const OccupancyModel& model,
-                                      RayCast raycast, uint64_t revision, BlockMap& blocks,
-                                      InsertStats& stats, bool remove) {
+void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
+                                const OccupancyModel& model, RayCast raycast, uint64_t revision,
+                                BlockMap& blocks, InsertStats& stats) {
+  const bool remove = what == ScanUpdate::kRemove;
   const int threads = threads_ > 0 ? threads_ : omp_get_max_threads();
   auto t0 = std::chrono::steady_clock::now();
   BlockKey lo, hi;

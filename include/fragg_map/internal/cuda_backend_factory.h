@@ -5,12 +5,12 @@
 #include <string>
 
 #include "fragg_map/internal/backend_factory.h"
-#include "fragg_map/internal/integrator.h"
+#include "fragg_map/internal/backend.h"
 #include "fragg_map/map_params.h"
 
 namespace fragg {
 
 /// Throws CudaError when the device cannot be set up.
-std::unique_ptr<Integrator> makeCudaIntegrator(const MapParams& params);
+std::unique_ptr<MapBackend> makeCudaBackend(const MapParams& params);
 
 }  // namespace fragg

@@ -1,0 +1,79 @@
+#include "block_transfer.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "kernels.h"
+
+namespace fragg::cuda {
+
+void BlockTransfer::reserve(size_t n, bool staging) {
+  block_ptrs_.reserve(n);
+  slots_.reserve(n);
+  keys_.reserve(n);
+  if (staging) staging_.reserve(n);
+}
+
+void BlockTransfer::upload(const SlotArrays& pool, const std::vector<BlockIndex>& host_blocks,
+                           const std::vector<int32_t>& slots, const BlockMap& blocks,
+                           uint32_t scan) {
+  for (size_t begin = 0; begin < host_blocks.size(); begin += kBatch) {
+    const size_t n = std::min(kBatch, host_blocks.size() - begin);
+    reserve(n, /*staging=*/!direct_);
+#pragma omp parallel for schedule(static)
+    for (long j = 0; j < static_cast<long>(n); ++j) {
+      const BlockIndex i = host_blocks[begin + j];
+      slots_[j] = slots[begin + j];
+      keys_[j] = blocks.meta(i).key;
+      if (direct_) {
+        block_ptrs_[j] = const_cast<Block*>(&blocks.block(i));
+      } else {
+        std::memcpy(&staging_[j], &blocks.block(i), sizeof(Block));
+        block_ptrs_[j] = staging_.device() + j;
+      }
+    }
+    if (!direct_) staging_.toDevice(n, stream_);
+    block_ptrs_.toDevice(n, stream_);
+    slots_.toDevice(n, stream_);
+    keys_.toDevice(n, stream_);
+    launchUpload(pool, block_ptrs_.device(), slots_.device(), keys_.device(), uint32_t(n), scan,
+                 stream_);
+    FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));  // the pinned lists are reused next batch
+  }
+}
+
+void BlockTransfer::writeBack(
+    const SlotArrays& pool, const std::vector<int32_t>& slots, BlockMap& blocks,
+    const std::function<BlockIndex(int32_t slot, const BlockKey& key)>& host_block_of) {
+  for (size_t begin = 0; begin < slots.size(); begin += kBatch) {
+    const size_t n = std::min(kBatch, slots.size() - begin);
+    reserve(n, /*staging=*/true);
+    stamps_.reserve(2 * n);
+    for (size_t j = 0; j < n; ++j) {
+      slots_[j] = slots[begin + j];
+      block_ptrs_[j] = staging_.device() + j;
+    }
+    slots_.toDevice(n, stream_);
+    block_ptrs_.toDevice(n, stream_);
+    launchDownload(pool, block_ptrs_.device(), slots_.device(), uint32_t(n), keys_.device(),
+                   stamps_.device(), stream_);
+    staging_.toHost(n, stream_);
+    keys_.toHost(n, stream_);
+    stamps_.toHost(2 * n, stream_);
+    FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+    // Targets first, in order (creating host blocks is not thread-safe), then the copies.
+    std::vector<BlockIndex> target(n);
+    for (size_t j = 0; j < n; ++j) target[j] = host_block_of(slots_[j], keys_[j]);
+#pragma omp parallel for schedule(static)
+    for (long j = 0; j < static_cast<long>(n); ++j) {
+      std::memcpy(&blocks.block(target[j]), &staging_[j], sizeof(Block));
+      BlockMeta& m = blocks.meta(target[j]);
+      m.changed_at = std::max(m.changed_at, stamps_[j]);
+      m.occupied_at = std::max(m.occupied_at, stamps_[n + j]);
+    }
+  }
+}
+
+}  // namespace fragg::cuda

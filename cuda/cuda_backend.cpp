@@ -1,0 +1,94 @@
+#include "cuda_backend.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "fragg_map/internal/cuda_backend_factory.h"
+#include "fragg_map/log.h"
+#include "pinned_allocator.h"
+
+namespace fragg {
+
+std::unique_ptr<MapBackend> makeCudaBackend(const MapParams& params) {
+  return std::make_unique<cuda::CudaBackend>(params);
+}
+
+namespace cuda {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+int selectDevice(int device) {
+  FRAGG_CUDA_CHECK(cudaSetDevice(device));
+  return device;
+}
+
+int deviceAttribute(cudaDeviceAttr what, int device) {
+  int value = 0;
+  FRAGG_CUDA_CHECK(cudaDeviceGetAttribute(&value, what, device));
+  return value;
+}
+
+/// Host blocks are read in place by the upload kernel when they are pinned and the device
+/// addresses host memory.
+bool directUploads(const MapParams& params) {
+  return params.cuda.pinned_host_blocks &&
+         deviceAttribute(cudaDevAttrUnifiedAddressing, params.cuda.device) != 0;
+}
+}  // namespace
+
+CudaBackend::CudaBackend(const MapParams& params)
+    : params_(params),
+      host_allocator_(params.cuda.pinned_host_blocks ? pinnedChunkAllocator()
+                                                     : plainChunkAllocator()),
+      device_(selectDevice(params.cuda.device)),
+      stream_(),
+      cache_(stream_.get(), params.cuda.pool_max_bytes, directUploads(params)),
+      integrator_(stream_.get(), cache_,
+                  deviceAttribute(cudaDevAttrMultiProcessorCount, params.cuda.device)),
+      cpu_(params.threads) {}
+
+size_t CudaBackend::deviceEstimateBytes() const {
+  return size_t(estimate_blocks_) * SlotPool::bytesPerSlot();
+}
+
+void CudaBackend::sizePool(const SensorModel& model, double resolution_m) {
+  if (estimate_blocks_ > 0) return;
+  // The paper's formula (1)-(4) for a pinhole; the spherical shell sector for a LiDAR.
+  const double block_m = resolution_m * kBlockSize;
+  double blocks = 0.0;
+  if (model.type == SensorType::kPinhole) {
+    blocks =
+        frustumVoxelEstimate(std::max(model.hfov_rad, model.vfov_rad),
+                             model.max_range_m - model.min_range_m, model.min_range_m, block_m);
+  } else {
+    const double r = model.max_range_m, r0 = model.min_range_m;
+    const double volume = 2.0 * kPi / 3.0 * (r * r * r - r0 * r0 * r0) *
+                          (std::sin(model.elevation_max_rad) - std::sin(model.elevation_min_rad));
+    blocks = volume / (block_m * block_m * block_m);
+  }
+  estimate_blocks_ = std::max<int64_t>(1, static_cast<int64_t>(std::ceil(blocks)));
+  cache_.reserve(static_cast<int64_t>(std::max(4096.0, blocks * params_.cuda.pool_margin)));
+}
+
+void CudaBackend::update(const ScanInput& scan, ScanUpdate what, const UpdateSettings& how,
+                         BlockMap& blocks, InsertStats& stats) {
+  sizePool(scan.model, how.params.resolution_m);
+  if (integrator_.update(scan, what, how, blocks, stats)) return;
+  static bool said = false;
+  if (!said) {
+    logMessage(LogLevel::kWarning,
+               "a scan ran on the CPU backend: its rays span more blocks than the device window "
+               "table holds");
+    said = true;
+  }
+  cache_.invalidateAll(blocks);
+  if (what == ScanUpdate::kRemove)
+    cpu_.remove(scan, how, blocks, stats);
+  else
+    cpu_.integrate(scan, how, blocks, stats);
+}
+
+}  // namespace cuda
+}  // namespace fragg

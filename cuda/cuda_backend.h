@@ -1,0 +1,44 @@
+// The CUDA backend (DESIGN §3, §11): the host map stays the map; a device block cache holds
+// the blocks scans need (write-back); the integrator runs each scan on the device. A scan
+// whose rays span more blocks than the window table holds runs on the CPU backend instead.
+#pragma once
+
+#include <memory>
+
+#include "cuda_integrator.h"
+#include "cuda_stream.h"
+#include "device_block_cache.h"
+#include "fragg_map/internal/backend.h"
+#include "fragg_map/internal/cpu_backend.h"
+
+namespace fragg::cuda {
+
+class CudaBackend : public MapBackend {
+ public:
+  explicit CudaBackend(const MapParams& params);
+
+  const char* name() const override { return "cuda"; }
+  BlockCache& cache() override { return cache_; }
+  bool cullsOnItsOwn() const override { return true; }
+  size_t deviceEstimateBytes() const override;
+  std::shared_ptr<ChunkAllocator> hostAllocator() const override { return host_allocator_; }
+
+ protected:
+  void update(const ScanInput& scan, ScanUpdate what, const UpdateSettings& how, BlockMap& blocks,
+              InsertStats& stats) override;
+
+ private:
+  /// Sizes the pool on the first scan from the sensor's visible volume.
+  void sizePool(const SensorModel& model, double resolution_m);
+
+  MapParams params_;
+  std::shared_ptr<ChunkAllocator> host_allocator_;
+  int device_;  ///< selected before the stream is made
+  CudaStream stream_;
+  DeviceBlockCache cache_;
+  CudaIntegrator integrator_;
+  CpuBackend cpu_;  ///< for scans whose window would not fit
+  int64_t estimate_blocks_ = 0;
+};
+
+}  // namespace fragg::cuda

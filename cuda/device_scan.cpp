@@ -1,0 +1,98 @@
+#include "device_scan.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+
+#include "kernels.h"
+
+namespace fragg::cuda {
+
+namespace {
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+void DeviceScan::prepare(const ScanInput& in, const MapParams& params, int32_t free_top,
+                         InsertStats& stats) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ScanCounters& c = counters();
+  c = ScanCounters{};
+  for (int a = 0; a < 3; ++a) {
+    c.lo_v[a] = 0;  // the start cell is part of the box
+    c.hi_v[a] = 0;
+  }
+  c.free_top = free_top;
+  if (params.clear_no_return_rays && in.cloud.organised()) {
+    prepareOnHost(in, params, stats);
+    stats.seconds_prepare += secondsSince(t0);
+    return;
+  }
+  const RayPrepParams prep =
+      rayPrepParams(in.T_map_sensor, in.model, in.explicit_model, params, prepared_);
+  const size_t n = in.cloud.size();
+  points_.reserve(3 * n);
+  rays_.reserve(n);
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "packed points");
+  const float* src = reinterpret_cast<const float*>(in.cloud.points_S.data());
+  float* dst = points_.host();
+#pragma omp parallel for schedule(static)
+  for (long chunk = 0; chunk < 64; ++chunk) {
+    const size_t b = 3 * n * size_t(chunk) / 64, e = 3 * n * size_t(chunk + 1) / 64;
+    std::memcpy(dst + b, src + b, (e - b) * sizeof(float));
+  }
+  points_.toDevice(3 * n, stream_);
+  countersToDevice();
+  launchPrepare(points_.device(), uint32_t(n), prep, in.frustum, rays_.get(), counters_.device(),
+                stream_);
+  countersToHost();
+  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  stats.points_in += n;
+  stats.rays_hit += c.hits;
+  stats.rays_free_only += c.free_only;
+  stats.dropped_invalid += c.invalid;
+  stats.dropped_min_range += c.too_close;
+  stats.dropped_outside_frustum += c.outside;
+  stats.seconds_prepare += secondsSince(t0);
+}
+
+void DeviceScan::prepareOnHost(const ScanInput& in, const MapParams& params, InsertStats& stats) {
+  // No-return rays need the row neighbours' directions.
+  prepareScan(in.cloud, in.T_map_sensor, in.model, in.frustum, in.explicit_model, params,
+              prepared_, stats);
+  ScanCounters& c = counters();
+  c.rays = static_cast<uint32_t>(prepared_.rays.size());
+  for (const RayEnd& r : prepared_.rays)
+    for (int a = 0; a < 3; ++a) {
+      c.lo_v[a] = std::min(c.lo_v[a], floorToInt(r.end_v[a]));
+      c.hi_v[a] = std::max(c.hi_v[a], floorToInt(r.end_v[a]));
+    }
+  rays_.reserve(c.rays);
+  copyToDevice(rays_.get(), prepared_.rays.data(), c.rays, stream_);
+  countersToDevice();
+  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+}
+
+void DeviceScan::rayBlockBox(BlockKey* lo, BlockKey* hi) const {
+  const ScanCounters& c = counters();
+  const int32_t ref[3] = {prepared_.ref.x, prepared_.ref.y, prepared_.ref.z};
+  int32_t l[3], h[3];
+  for (int a = 0; a < 3; ++a) {
+    l[a] = (ref[a] + c.lo_v[a] - 1) >> kBlockBits;
+    h[a] = (ref[a] + c.hi_v[a] + 1) >> kBlockBits;
+  }
+  *lo = {l[0], l[1], l[2]};
+  *hi = {h[0], h[1], h[2]};
+}
+
+std::vector<int32_t> DeviceScan::misses(uint32_t n) const {
+  n = std::min(n, missCapacity());
+  misses_.toHost(n, stream_);
+  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  return std::vector<int32_t>(misses_.host(), misses_.host() + n);
+}
+
+}  // namespace fragg::cuda

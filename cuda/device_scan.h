@@ -1,0 +1,59 @@
+// One scan on the device: the cloud uploaded and prepared into rays (on the device, or on the
+// host for organised clouds whose no-return rays need their neighbours), the scan's counters,
+// and the list of host-only blocks its rays asked for.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "cuda_array.h"
+#include "device_types.h"
+#include "fragg_map/internal/backend.h"
+#include "fragg_map/internal/prepared_scan.h"
+#include "mirrored_buffer.h"
+
+namespace fragg::cuda {
+
+class DeviceScan {
+ public:
+  explicit DeviceScan(cudaStream_t stream) : stream_(stream) { counters_.reserve(1); }
+
+  /// Prepares the scan's rays on the device and fills the point counters of `stats`; the
+  /// counters start with the pool's free-stack top `free_top`.
+  void prepare(const ScanInput& scan, const MapParams& params, int32_t free_top,
+               InsertStats& stats);
+
+  ScanCounters& counters() const { return counters_[0]; }
+  ScanCounters* countersOnDevice() const { return counters_.device(); }
+  void countersToDevice() const { counters_.toDevice(1, stream_); }
+  void countersToHost() const { counters_.toHost(1, stream_); }
+  /// Blocks [lo, hi] the rays can touch (the sensor's cell included, one cell of margin).
+  void rayBlockBox(BlockKey* lo, BlockKey* hi) const;
+
+  /// Room in the miss list for `n` host-only blocks.
+  void reserveMisses(size_t n) { misses_.reserve(std::max<size_t>(n, 1)); }
+  uint32_t missCapacity() const { return static_cast<uint32_t>(misses_.size()); }
+  int32_t* missList() const { return misses_.device(); }
+  /// The first `n` listed misses (window indices).
+  std::vector<int32_t> misses(uint32_t n) const;
+
+  VoxelKey ref() const { return prepared_.ref; }
+  const float* startV() const { return prepared_.start_v; }
+  const RayEnd* rays() const { return rays_.get(); }
+  size_t deviceBytes() const {
+    return rays_.bytes() + points_.deviceBytes() + misses_.deviceBytes();
+  }
+
+ private:
+  /// Organised clouds with no-return rays: prepared on the host, rays uploaded.
+  void prepareOnHost(const ScanInput& scan, const MapParams& params, InsertStats& stats);
+
+  cudaStream_t stream_;
+  PreparedScan prepared_;  ///< ref and start; the rays too when prepared on the host
+  MirroredBuffer<float> points_;
+  DeviceArray<RayEnd> rays_;
+  MirroredBuffer<ScanCounters> counters_;
+  MirroredBuffer<int32_t> misses_;
+};
+
+}  // namespace fragg::cuda

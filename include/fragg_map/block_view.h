@@ -1,0 +1,63 @@
+// Read-only access to a map's blocks (Map::blockView): keys and cells, never the storage's
+// bookkeeping. Taken once, it serves any number of lookups from any number of threads
+// without locking; it stays valid until the map is next changed (hold the map's read lock).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "fragg_map/block_map.h"
+
+namespace fragg {
+
+/// Which changes BlockView::changedSince() reports.
+enum class BlockChange {
+  kAny,       ///< any cell's value
+  kOccupied,  ///< which cells are occupied (a cell crossed the occupied threshold either way)
+};
+
+/// A block as readers see it: its key and cells.
+using BlockVisitor = std::function<void(const BlockKey& key, const Block& block)>;
+
+struct BlockRef {
+  BlockKey key;
+  const Block* block;
+};
+
+/// Map revisions of a block's last changes (0: never changed, or no such block).
+struct BlockStamps {
+  uint64_t changed_at = 0;   ///< any cell's value
+  uint64_t occupied_at = 0;  ///< which cells are occupied
+};
+
+class BlockView {
+ public:
+  explicit BlockView(const BlockMap& blocks) : blocks_(&blocks) {}
+
+  size_t size() const { return blocks_->size(); }
+  bool empty() const { return blocks_->empty(); }
+  /// nullptr when the block does not exist (all its cells unknown).
+  const Block* findBlock(const BlockKey& key) const { return blocks_->findBlock(key); }
+  const Cell* findCell(const VoxelKey& key) const { return blocks_->findCell(key); }
+  /// Calls fn(key, block) for every block, in unspecified order.
+  void forEach(const BlockVisitor& fn) const;
+  /// Calls fn(key, block) for every block whose key lies in [lo, hi] (inclusive); the cost
+  /// follows the blocks there, not the box volume.
+  void forEachIn(const BlockKey& lo, const BlockKey& hi, const BlockVisitor& fn) const;
+  /// Every block, in unspecified order (for parallel loops).
+  std::vector<BlockRef> all() const;
+  /// The blocks whose key lies in [lo, hi].
+  std::vector<BlockRef> in(const BlockKey& lo, const BlockKey& hi) const;
+  /// Keys of the blocks whose cells changed (`what`) after map revision `revision`, in
+  /// unspecified order. Removed blocks are not listed.
+  std::vector<BlockKey> changedSince(uint64_t revision, BlockChange what = BlockChange::kAny) const;
+  BlockStamps stamps(const BlockKey& key) const;
+  /// Exact bounds of observed cells.
+  KeyBounds observedBounds() const { return blocks_->observedBounds(); }
+
+ private:
+  const BlockMap* blocks_;
+};
+
+}  // namespace fragg

@@ -1,0 +1,118 @@
+// The backend interface (DESIGN §11): a backend integrates or removes a prepared scan, and
+// keeps a block cache, the memory it works in (the CPU backend works on the host map itself;
+// the CUDA backend keeps a device copy of the blocks it needs, written back on demand).
+// Out-of-core paging sits under the cache; planning kernels (frontiers, collision) call it.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "fragg_map/block_map.h"
+#include "fragg_map/culling.h"
+#include "fragg_map/frustum.h"
+#include "fragg_map/insert_stats.h"
+#include "fragg_map/map_params.h"
+#include "fragg_map/occupancy.h"
+#include "fragg_map/point_cloud.h"
+#include "fragg_map/sensor_model.h"
+
+namespace fragg {
+
+/// One scan as the map hands it to a backend (the sensor model is resolved, not auto).
+struct ScanInput {
+  const PointCloud& cloud;  ///< sensor frame
+  const Eigen::Isometry3d& T_map_sensor;
+  const SensorModel& model;
+  const Frustum& frustum;
+  bool explicit_model;
+  const CullContext& cull;  ///< coherence context of this scan
+};
+
+/// What a scan's updates do to the map.
+enum class ScanUpdate {
+  kIntegrate,  ///< apply the updates (each cell at most once, hit wins)
+  /// Loop closure: walk the same rays and undo the scan's updates (OccupancyModel::unapply);
+  /// blocks that do not exist are not created.
+  kRemove,
+};
+
+/// Where a backend's blocks live while it works on them. The host map (BlockMap) is the map;
+/// a cache may hold newer copies (write-back) until sync(). Every call takes the host map.
+class BlockCache {
+ public:
+  virtual ~BlockCache() = default;
+  /// Brings the host blocks with these keys into the backend's memory (keys without a host
+  /// block are skipped). Throws CudaOutOfMemory when they cannot all be held at once.
+  virtual void ensureResident(const std::vector<BlockKey>& keys, BlockMap& blocks) = 0;
+  /// The same for every host block whose key lies in [lo, hi] (inclusive).
+  virtual void ensureResident(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) = 0;
+  /// Writes the cache's changes back into `blocks`: after it the host map is complete. Cheap
+  /// when nothing changed since the last call.
+  virtual void sync(BlockMap& blocks) = 0;
+  /// Whether sync() has anything to write back.
+  virtual bool needsSync() const = 0;
+  /// Before the host blocks in [lo, hi] are changed directly (clear box, sub-map edits):
+  /// writes back, then forgets every cached copy of a block there.
+  virtual void invalidate(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) = 0;
+  /// invalidate() over the whole map (load, reset, import).
+  virtual void invalidateAll(BlockMap& blocks) = 0;
+  /// Memory the cache holds outside the host map.
+  virtual size_t deviceBytes() const = 0;
+};
+
+/// The CPU backend's cache: its working memory is the host map, so there is nothing to do.
+class HostBlockCache final : public BlockCache {
+ public:
+  void ensureResident(const std::vector<BlockKey>&, BlockMap&) override {}
+  void ensureResident(const BlockKey&, const BlockKey&, BlockMap&) override {}
+  void sync(BlockMap&) override {}
+  bool needsSync() const override { return false; }
+  void invalidate(const BlockKey&, const BlockKey&, BlockMap&) override {}
+  void invalidateAll(BlockMap&) override {}
+  size_t deviceBytes() const override { return 0; }
+};
+
+/// The map's settings a scan update needs.
+struct UpdateSettings {
+  const MapParams& params;  ///< ray cast mode and no-return setting are the scan's own
+  const OccupancyModel& model;
+  uint64_t revision;  ///< stamped on the blocks the scan changes
+};
+
+class MapBackend {
+ public:
+  virtual ~MapBackend() = default;
+  virtual const char* name() const = 0;
+
+  /// Ray casts the scan (each cell updated at most once, hit wins) and applies the updates,
+  /// stamping changed blocks with the revision. Fills the point and traversal counters and
+  /// the prepare / ray cast / apply times of `stats`.
+  void integrate(const ScanInput& scan, const UpdateSettings& how, BlockMap& blocks,
+                 InsertStats& stats) {
+    update(scan, ScanUpdate::kIntegrate, how, blocks, stats);
+  }
+  /// Walks the scan's rays again and undoes its updates (no block is created).
+  void remove(const ScanInput& scan, const UpdateSettings& how, BlockMap& blocks,
+              InsertStats& stats) {
+    update(scan, ScanUpdate::kRemove, how, blocks, stats);
+  }
+
+  virtual BlockCache& cache() = 0;
+  const BlockCache& cache() const { return const_cast<MapBackend*>(this)->cache(); }
+
+  /// Whether the backend culls the blocks it needs itself (else the map's host culler runs
+  /// over the host blocks in the frustum's box).
+  virtual bool cullsOnItsOwn() const { return false; }
+  /// The paper's formula (1): the sensor's visible volume in blocks, as device bytes.
+  virtual size_t deviceEstimateBytes() const { return 0; }
+  /// Where the host map's blocks are allocated (pinned memory for the CUDA backend).
+  virtual std::shared_ptr<ChunkAllocator> hostAllocator() const { return plainChunkAllocator(); }
+
+ protected:
+  virtual void update(const ScanInput& scan, ScanUpdate what, const UpdateSettings& how,
+                      BlockMap& blocks, InsertStats& stats) = 0;
+};
+
+}  // namespace fragg
