@@ -166,8 +166,7 @@ TEST(MapFileTest, KeptFloat32ScansRoundTripBitForBit) {
   EXPECT_EQ(differing, 0u);
   // A damaged float32 scan section is rejected like any other damage.
   std::vector<char> bytes = readAll(path);
-  writeAll(tmpPath("kept_float32_cut.fgm"),
-           std::vector<char>(bytes.begin(), bytes.end() - 200));
+  writeAll(tmpPath("kept_float32_cut.fgm"), std::vector<char>(bytes.begin(), bytes.end() - 200));
   EXPECT_THROW(Map::load(tmpPath("kept_float32_cut.fgm")), IoError);
 }
 

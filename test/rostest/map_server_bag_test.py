@@ -6,18 +6,6 @@ insertPointCloud, poses from the bag's tf, the node's resolution and max range):
 share of the cells either map knows must have the same state. States follow OctoMap's rule
 (every observed cell known, occupied iff p >= 0.5, `compare --octomap-threshold`), as
 octomap_server users see them: a .bt keeps only occupied or free per cell, not its
-probability, so each map's unknown band cannot be applied to it."""rostest of the map server on a recorded bag: the checks of map_server_checks.py, and, with
-the private parameter `octomap_agreement` (a fraction), the map saved through ~save_map
-against OctoMap's own map of the same bag (`fragg_map octomap-build`: liboctomap's
-insertPointCloud, poses from the bag's tf, the node's max range): at least that share of the
-cells either map knows must have the same state, under OctoMap's rule (every observed cell
-known, occupied iff p >= 0.5) and under each map's unknown band."""rostest of the map server on a recorded bag: the checks of map_server_checks.py, and, with
-the private parameter `octomap_agreement` (a fraction), the map saved through ~save_map
-against OctoMap's own map of the same bag (`fragg_map octomap-build`: liboctomap's
-insertPointCloud, poses from the bag's tf, the node's resolution and max range): at least that
-share of the cells either map knows must have the same state. States follow OctoMap's rule
-(every observed cell known, occupied iff p >= 0.5, `compare --octomap-threshold`), as
-octomap_server users see them: a .bt keeps only occupied or free per cell, not its
 probability, so each map's unknown band cannot be applied to it."""
 import json
 import os
@@ -42,9 +30,8 @@ class MapServerBagTest(MapServerBagChecks):
                         "--resolution", repr(float(rospy.get_param(NS + "resolution"))),
                         "--max-range", repr(max_range)],
                        check=True, stdout=subprocess.DEVNULL)
-        node = self.node_map()
-        out = subprocess.run([self.cli, "compare", bt, node, "--json", "--octomap-threshold"],
-                             check=True, stdout=subprocess.PIPE).stdout
+        out = subprocess.run([self.cli, "compare", bt, self.node_map(), "--json",
+                              "--octomap-threshold"], check=True, stdout=subprocess.PIPE).stdout
         cmp = json.loads(out)
         differ = cmp["known_in_either"] - cmp["agreeing"]
         rospy.loginfo("node map vs OctoMap: %d of %d cells either knows differ (%.4f %% agree)",
