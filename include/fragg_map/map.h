@@ -68,10 +68,11 @@ class Map {
 
   /// Integrates one scan. `cloud` is in the sensor frame; `T_map_sensor` places the sensor.
   /// Throws InvalidArgument for a non-finite pose or a bad sensor model (map untouched).
-  /// With `params.scans.keep` the scan is kept (quantised: the map integrates the kept
-  /// points) under its insertion index, `InsertStats::scan_id`, with `stamp_ns` and
-  /// `sensor_frame` (the cloud's frame id, at most kMaxSensorFrameChars characters; kept for
-  /// the caller, e.g. to find the scan's sensor again after loading the map).
+  /// With `params.scans.keep` the scan is kept (the map integrates the kept points: the
+  /// cloud itself by default, quantised ones with scans.point_step_m > 0) under its insertion
+  /// index, `InsertStats::scan_id`, with `stamp_ns` and `sensor_frame` (the cloud's frame id, at
+  /// most kMaxSensorFrameChars characters; kept for the caller, e.g. to find the scan's sensor
+  /// again after loading the map).
   InsertStats insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                      const SensorModel& sensor, int64_t stamp_ns = 0,
                      const std::string& sensor_frame = std::string());

@@ -40,10 +40,16 @@ struct CudaParams {
 
 /// The scan store for loop-closure correction (see scan_store.h).
 struct ScanStoreParams {
-  bool keep = false;            ///< keep every inserted scan (remove / correctPoses need it)
-  double point_step_m = 0.001;  ///< quantisation step of kept points; 0 = float32 as given
-  size_t max_bytes = 0;         ///< points kept in memory at most; 0 = no limit
-  std::string spill_dir;        ///< where points beyond max_bytes go; empty: they are dropped
+  bool keep = false;  ///< keep every inserted scan (remove / correctPoses need it)
+  /// 0 (default): kept points are float32, exactly as received, so the map integrates the
+  /// received cloud (the same map as without keeping, and as OctoMap's). > 0: a memory option:
+  /// points are quantised to int16 at this step (6 bytes a point instead of 12) and the map
+  /// integrates the quantised points, so endpoints near a cell face can change cell and long
+  /// rays their path (at 1 mm and 5 cm cells, 0.2-1.2 % of the cells differ from the map of
+  /// the received points on real RGB-D and Velodyne scans).
+  double point_step_m = 0.0;
+  size_t max_bytes = 0;   ///< points kept in memory at most; 0 = no limit
+  std::string spill_dir;  ///< where points beyond max_bytes go; empty: they are dropped
 };
 
 struct MapParams {

@@ -61,13 +61,13 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
                           " characters");
   if (cloud.empty()) throw InvalidArgument("point cloud is empty");
   const bool keep = params_.scans.keep;
-  // A kept scan is integrated as it is kept (quantised), so that its removal is exact.
+  // A kept scan is integrated as it is kept, so that its removal is exact: float32 points
+  // (point_step_m = 0) are the cloud itself; quantised ones are integrated quantised.
   EncodedPoints kept;
   PointCloud quantised;
-  if (keep) {
-    kept = encodePoints(cloud, params_.scans.point_step_m, &quantised);
-  }
-  const PointCloud& used = keep ? quantised : cloud;
+  const bool quantise = keep && params_.scans.point_step_m > 0.0;
+  if (keep) kept = encodePoints(cloud, params_.scans.point_step_m, quantise ? &quantised : nullptr);
+  const PointCloud& used = quantise ? quantised : cloud;
 
   ScanRecord how;
   how.id = next_scan_id_;

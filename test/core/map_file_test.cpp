@@ -8,10 +8,12 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/scan_codec.h"
 #include "fragg_map/map.h"
 #include "test_scenes.h"
 
@@ -108,6 +110,64 @@ TEST(MapFileTest, TruncatedCorruptedAndWrongVersionFilesAreRejected) {
   expectRejected(tmpPath("next_version.fgm"), "version " + std::to_string(version));
 
   expectRejected(tmpPath("does_not_exist.fgm"), "does_not_exist");
+}
+
+TEST(MapFileTest, KeptFloat32ScansRoundTripBitForBit) {
+  // Kept scans are float32 as received by default: the file gives every point back bit for bit
+  // (no returns and a point far beyond what int16 holds at any useful step too), and a map
+  // loaded from it integrates (removes, corrects) exactly those points.
+  MapParams p;
+  p.resolution_m = 0.1;
+  p.backend = Backend::kCpu;
+  p.scans.keep = true;
+  ASSERT_EQ(p.scans.point_step_m, 0.0);
+  Map map(p);
+  PointCloud c = test::roomScan(4.0, 1.0, 2.0, 16, 360);
+  c.points_S[7] = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  c.points_S[8] = Eigen::Vector3f(1234.5678f, -0.0001234f, 3.3333333f);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(-3.3, 2.1, 0.7);
+  map.insert(c, T, SensorModel::autoFromCloud(0.0, 8.0), 42, "lidar");
+  T.translation().x() += 0.35;
+  map.insert(c, T, SensorModel::autoFromCloud(0.0, 8.0), 43, "lidar");
+  const std::string path = tmpPath("kept_float32.fgm");
+  map.save(path);
+  Map loaded = Map::load(path, Backend::kCpu);
+  expectSameMaps(map, loaded);
+  ASSERT_EQ(loaded.scanStore().size(), 2u);
+  for (ScanId id : {ScanId{0}, ScanId{1}}) {
+    const EncodedPoints e = loaded.scanStore().points(id);
+    EXPECT_EQ(e.step_m, 0.0);
+    EXPECT_EQ(e.width, c.width);
+    EXPECT_EQ(e.height, c.height);
+    ASSERT_EQ(e.data.size(), c.size() * 12);
+    EXPECT_EQ(0, std::memcmp(e.data.data(), c.points_S.data(), e.data.size())) << id;
+  }
+  // Same map, same bytes.
+  loaded.save(tmpPath("kept_float32_again.fgm"));
+  EXPECT_EQ(readAll(path), readAll(tmpPath("kept_float32_again.fgm")));
+  // The loaded scans are the received ones: removing scan 1 leaves the map of scan 0 alone.
+  MapParams plain = p;
+  plain.scans.keep = false;
+  Map first(plain);
+  T.translation().x() -= 0.35;
+  first.insert(c, T, SensorModel::autoFromCloud(0.0, 8.0));
+  loaded.remove(1);
+  EXPECT_EQ(loaded.knownVoxelCount(), first.knownVoxelCount());
+  size_t differing = 0;
+  loaded.blocks().forEach([&](BlockIndex i) {
+    const Block* other = first.blocks().findBlock(loaded.blocks().meta(i).key);
+    for (int k = 0; k < kCellsPerBlock; ++k) {
+      const Cell& a = loaded.blocks().block(i).cells[k];
+      const Cell b = other ? other->cells[k] : Cell();
+      differing += a.log_odds_fx != b.log_odds_fx || a.hits != b.hits;
+    }
+  });
+  EXPECT_EQ(differing, 0u);
+  // A damaged float32 scan section is rejected like any other damage.
+  std::vector<char> bytes = readAll(path);
+  writeAll(tmpPath("kept_float32_cut.fgm"), std::vector<char>(bytes.begin(), bytes.end() - 200));
+  EXPECT_THROW(Map::load(tmpPath("kept_float32_cut.fgm")), IoError);
 }
 
 TEST(MapFileTest, FailedSaveLeavesNoFile) {

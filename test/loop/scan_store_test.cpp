@@ -1,4 +1,5 @@
-// The scan store: quantised points, memory budget, spill files, and the kept scans in .fgm.
+// The scan store: float32 (default) and quantised points, memory budget, spill files, and the
+// kept scans in .fgm.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -73,22 +74,90 @@ TEST(ScanStoreTest, FarPointsWidenTheStepAndFloatModeIsExact) {
   EXPECT_EQ(decodePoints(f).points_S[1], c.points_S[1]);
 }
 
-TEST(ScanStoreTest, BudgetSpillsOldestScansToDiskAndReadsThemBack) {
+TEST(ScanStoreTest, KeptPointsAreFloat32ByDefaultAndTheMapIsTheMapOfTheReceivedCloud) {
+  EXPECT_EQ(ScanStoreParams().point_step_m, 0.0);
+  PointCloud c = test::roomScan(4.0, 1.0, 2.0, 16, 360);
+  c.points_S[3] = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  MapParams plain;
+  plain.backend = Backend::kCpu;
+  MapParams kept = plain;
+  kept.scans.keep = true;
+  MapParams quantised = kept;
+  quantised.scans.point_step_m = 0.001;
+  Map without(plain), with(kept), coarse(quantised);
+  for (int i = 0; i < 2; ++i) {
+    without.insert(c, test::poseAt(i), test::lidar());
+    with.insert(c, test::poseAt(i), test::lidar());
+    coarse.insert(c, test::poseAt(i), test::lidar());
+  }
+  // Keeping scans does not change the map: it integrates the cloud as received.
+  std::string why;
+  EXPECT_TRUE(test::sameCells(with, without, &why)) << why;
+  const EncodedPoints e = with.scanStore().points(1);
+  EXPECT_EQ(e.step_m, 0.0);
+  EXPECT_EQ(e.data.size(), c.size() * 12);
+  EXPECT_EQ(with.scanStore().memoryBytes(), 2 * c.size() * 12);
+  const PointCloud back = decodePoints(e);
+  ASSERT_EQ(back.size(), c.size());
+  EXPECT_EQ(0, std::memcmp(back.points_S.data(), c.points_S.data(), c.size() * 12));  // NaN too
+  // The memory option: half the bytes, but the map is built from the quantised points and some
+  // endpoints near a cell face land in the neighbouring cell.
+  EXPECT_EQ(coarse.scanStore().memoryBytes(), 2 * c.size() * 6);
+  EXPECT_FALSE(test::sameCells(coarse, without));
+  const double same = test::sameState(coarse, without);
+  EXPECT_LT(same, 1.0);
+  EXPECT_GT(same, 0.99);
+  // A removal from either store is exact (no clamping in two scans): the map of scan 0 alone.
+  Map first(plain);
+  first.insert(c, test::poseAt(0), test::lidar());
+  with.remove(1);
+  EXPECT_TRUE(test::sameCells(with, first, &why)) << why;
+}
+
+/// Four scans under a budget of a bit more than one scan's points at `step_m` (0: float32,
+/// 12 bytes a point; else int16, 6): the three oldest go to the spill folder, come back
+/// intact, and a correction from spilled points works; a damaged spill file is reported.
+void expectBudgetSpills(double step_m) {
+  SCOPED_TRACE("point step " + std::to_string(step_m));
   const std::string dir = std::string(FRAGG_TEST_TMP) + "/spill_test";
   std::filesystem::remove_all(dir);
+  const PointCloud scan = test::roomScan(4, 1, 2, 8, 720);
+  const size_t scan_bytes = scan.size() * (step_m > 0.0 ? 6 : 12);
   MapParams p;
   p.backend = Backend::kCpu;
   p.scans.keep = true;
-  p.scans.max_bytes = 40000;  // about one scan of 8 x 720 points
+  p.scans.point_step_m = step_m;
+  p.scans.max_bytes = scan_bytes + scan_bytes / 6;
   p.scans.spill_dir = dir;
   Map map(p);
-  for (int i = 0; i < 4; ++i)
-    map.insert(test::roomScan(4, 1, 2, 8, 720), test::poseAt(i), test::lidar());
+  MapParams plain_params = p;
+  plain_params.scans = ScanStoreParams();
+  Map plain(plain_params);
+  for (int i = 0; i < 4; ++i) {
+    map.insert(scan, test::poseAt(i), test::lidar());
+    plain.insert(scan, test::poseAt(i), test::lidar());
+  }
   EXPECT_EQ(map.scanStore().size(), 4u);
-  EXPECT_GE(map.scanStore().spilledCount(), 2u);
-  EXPECT_LE(map.scanStore().memoryBytes(), 2 * 8 * 720 * 6u);
+  EXPECT_EQ(map.scanStore().spilledCount(), 3u);
+  EXPECT_EQ(map.scanStore().memoryBytes(), scan_bytes);  // the newest scan only
   const EncodedPoints back = map.scanStore().points(0);
-  EXPECT_EQ(back.data, encodePoints(test::roomScan(4, 1, 2, 8, 720), 0.001).data);
+  EXPECT_EQ(back.step_m, step_m);
+  EXPECT_EQ(back.data, encodePoints(scan, step_m).data);
+  if (step_m == 0.0) {
+    EXPECT_EQ(decodePoints(back).points_S, scan.points_S);
+    std::string why;
+    EXPECT_TRUE(test::sameCells(map, plain, &why)) << why;
+  }
+  // A spilled scan is corrected from its spill file: moved away and back (no clamping in four
+  // scans), the map is the one before.
+  map.correctPoses({{1, test::poseAt(1, 0.4)}});
+  EXPECT_FALSE(test::sameCells(map, plain));
+  map.correctPoses({{1, test::poseAt(1)}});
+  if (step_m == 0.0) {
+    std::string why;
+    EXPECT_TRUE(test::sameCells(map, plain, &why)) << why;
+  }
+  EXPECT_GT(test::sameState(map, plain), 0.99);
   // A spill file that was damaged is reported, not silently used.
   const std::string spilled = dir + "/scan_0.fgs";
   ASSERT_TRUE(std::filesystem::exists(spilled));
@@ -97,6 +166,11 @@ TEST(ScanStoreTest, BudgetSpillsOldestScansToDiskAndReadsThemBack) {
   const uint64_t revision = map.revision();
   EXPECT_THROW(map.correctPoses({{0, test::poseAt(0)}}), IoError);
   EXPECT_EQ(map.revision(), revision);  // nothing was integrated
+}
+
+TEST(ScanStoreTest, BudgetSpillsOldestScansToDiskAndReadsThemBack) {
+  expectBudgetSpills(0.0);    // float32, the default
+  expectBudgetSpills(0.001);  // quantised, the memory option
 }
 
 TEST(ScanStoreTest, WithoutSpillFolderTheOldestPointsAreDroppedAndThatIsAnError) {
@@ -138,6 +212,10 @@ TEST(ScanStoreTest, KeptScansRoundTripThroughTheMapFile) {
     EXPECT_EQ(a.model.type, b.model.type);
     EXPECT_EQ(a.model.max_range_m, b.model.max_range_m);
     EXPECT_EQ(map.scanStore().points(id).data, loaded.scanStore().points(id).data);
+    // Float32 by default: the file gives back the points as they were received.
+    EXPECT_EQ(loaded.scanStore().points(id).step_m, 0.0);
+    EXPECT_EQ(decodePoints(loaded.scanStore().points(id)).points_S,
+              test::roomScan(4, 1, 2, 8, 180).points_S);
   }
   // The loaded map keeps scans and numbers new ones after the old ones.
   EXPECT_EQ(loaded.insert(test::roomScan(4, 1, 2, 8, 180), test::poseAt(3), test::lidar()).scan_id,

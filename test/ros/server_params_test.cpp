@@ -56,7 +56,8 @@ TEST(ServerParams, ScanStoreAndCorrectionDefaults) {
   const fragg_ros::ServerParams p = fragg_ros::parseParameters(XmlRpcValue());
   EXPECT_TRUE(p.map.scans.keep);  // the server keeps scans, the core does not by default
   EXPECT_EQ(p.map.scans.max_bytes, size_t{2048} << 20);
-  EXPECT_EQ(p.map.scans.point_step_m, 0.001);
+  // Float32 kept points: the kept scans do not change the map (octomap_server's map).
+  EXPECT_EQ(p.map.scans.point_step_m, 0.0);
   EXPECT_EQ(p.map.scans.spill_dir, "");
   EXPECT_EQ(p.correction.thresholds.min_translation_m, 0.05);
   EXPECT_EQ(p.correction.thresholds.min_rotation_rad, 0.01);

@@ -67,5 +67,14 @@ if(FRAGG_HAVE_ROS AND FRAGG_SMOKE_BAG)
     add_custom_target(fragg_map_rostest_rgbd_bag ALL DEPENDS ${_fragg_rgbd_bag})
     add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_rgbd.test
       ARGS bag:=${_fragg_rgbd_bag} data:=${_fragg_rgbd_data})
+    # The same bag into the node with config/default.yaml (kept scans included), as a user
+    # switching from octomap_server runs it: its map against OctoMap's map of the bag,
+    # >= 99.99 % of the cells either knows (measured: 2 of 436,222 differ). (On the Velodyne
+    # pair the agreement is 99.96 %: ray traversal rounding on rays up to 78 m, README.)
+    if(octomap_FOUND)
+      add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_bag.test
+        ARGS bag:=${_fragg_rgbd_bag} topic:=/camera/depth_registered/points scans:=5
+             rate:=0.5 octomap:=0.9999)
+    endif()
   endif()
 endif()

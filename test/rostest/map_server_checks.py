@@ -97,13 +97,16 @@ class MapServerBagChecks(unittest.TestCase):
         self.assertGreater(sum(shown.values()), 0)
 
     def cli_build(self, source, out, *options):
-        """`fragg_map build source -o out` with the CPU backend and the test's cli_args. When
-        the node keeps scans (keep_scans, default true) it integrates them quantised at
-        scan_store/point_step, so the build keeps them at the same step."""
+        """`fragg_map build source -o out` with the CPU backend and the test's cli_args. The
+        node keeps its scans (keep_scans, default true) as float32 points as received
+        (scan_store/point_step 0, the default), which leaves its map the map of the received
+        clouds: the build is then a plain one with the CLI's defaults. Only a node that
+        quantises kept points (point_step > 0) integrates the quantised points; the build then
+        keeps its scans at the same step."""
         keep = []
-        if rospy.get_param(NS + "keep_scans", True):
-            keep = ["--keep-scans", "--scan-step",
-                    repr(float(rospy.get_param(NS + "scan_store/point_step", 0.001)))]
+        step = float(rospy.get_param(NS + "scan_store/point_step", 0.0))
+        if rospy.get_param(NS + "keep_scans", True) and step > 0.0:
+            keep = ["--keep-scans", "--scan-step", repr(step)]
         subprocess.run([self.cli, "build", source, "-o", out, "--backend", "cpu"] + keep +
                        rospy.get_param("~cli_args", "").split() + list(options),
                        check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)

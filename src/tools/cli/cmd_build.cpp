@@ -238,10 +238,13 @@ void addBuildCommand(CLI::App& app) {
   c->add_option("--scans", o->max_scans, "Integrate only the first N scans (0 = all)")
       ->capture_default_str();
   c->add_flag("--keep-scans", o->scans.keep,
-              "Keep every scan in the map file (quantised points, pose, sensor model) so that "
+              "Keep every scan in the map file (points, pose, sensor model) so that "
               "`fragg_map correct` can move scans to corrected poses later");
   c->add_option("--scan-step", o->scans.point_step_m,
-                "Quantisation step of kept points in metres (0 = float32 as given)")
+                "Kept points: 0 = float32 as received (12 bytes a point; the map is the same "
+                "as without --keep-scans); > 0 = quantised to int16 at this step in metres "
+                "(half the memory, but the map integrates the quantised points: at 0.001 and "
+                "5 cm, 0.2-1.2 % of the cells differ on real scans)")
       ->capture_default_str();
   c->add_option("--scan-budget", o->scan_budget_mib,
                 "Kept points held in memory at most, MiB (0 = no limit); older scans go to "
