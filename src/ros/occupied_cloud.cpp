@@ -6,10 +6,10 @@
 #include <cstring>
 #include <vector>
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 sensor_msgs::PointCloud2 occupiedCloud(const fragg::Map& map, const std::string& frame_id,
-                                       const ros::Time& stamp) {
+                                       const ::ros::Time& stamp) {
   std::vector<float> xyz;
   const fragg::BlockMap& blocks = map.blocks();
   blocks.forEach([&](fragg::BlockIndex i) {
@@ -45,4 +45,4 @@ sensor_msgs::PointCloud2 occupiedCloud(const fragg::Map& map, const std::string&
   return msg;
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

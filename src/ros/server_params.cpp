@@ -8,7 +8,7 @@
 
 #include "fragg_map/errors.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
 using XmlRpc::XmlRpcValue;
@@ -236,10 +236,10 @@ ServerParams parseParameters(const XmlRpcValue& root) {
   return p;
 }
 
-ServerParams readParameters(const ros::NodeHandle& private_nh) {
+ServerParams readParameters(const ::ros::NodeHandle& private_nh) {
   XmlRpcValue root;  // stays invalid (every default) when the namespace holds nothing
   private_nh.getParam(private_nh.getNamespace(), root);
   return parseParameters(root);
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -29,7 +29,7 @@ void expectRejected(const std::string& name, const XmlRpcValue& value) {
   XmlRpcValue root;
   set(root, name, value);
   try {
-    fragg_ros::parseParameters(root);
+    fragg::ros::parseParameters(root);
     FAIL() << name << " = " << const_cast<XmlRpcValue&>(value).toXml() << " was accepted";
   } catch (const fragg::InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("'" + name + "'"), std::string::npos)
@@ -38,7 +38,7 @@ void expectRejected(const std::string& name, const XmlRpcValue& value) {
 }
 
 TEST(ServerParams, EmptyNamespaceGivesTheCoreDefaults) {
-  const fragg_ros::ServerParams p = fragg_ros::parseParameters(XmlRpcValue());
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(XmlRpcValue());
   const fragg::MapParams core;
   EXPECT_EQ(p.map.resolution_m, core.resolution_m);
   EXPECT_EQ(p.map.occupancy.prob_hit, core.occupancy.prob_hit);
@@ -53,7 +53,7 @@ TEST(ServerParams, EmptyNamespaceGivesTheCoreDefaults) {
 }
 
 TEST(ServerParams, ScanStoreAndCorrectionDefaults) {
-  const fragg_ros::ServerParams p = fragg_ros::parseParameters(XmlRpcValue());
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(XmlRpcValue());
   EXPECT_TRUE(p.map.scans.keep);  // the server keeps scans, the core does not by default
   EXPECT_EQ(p.map.scans.max_bytes, size_t{2048} << 20);
   EXPECT_EQ(p.map.scans.point_step_m, 0.001);
@@ -76,7 +76,7 @@ TEST(ServerParams, ReadsScanStoreAndCorrection) {
   set(root, "correction/stamp_tolerance", 0.01);
   set(root, "correction/path_child_frame", std::string("/base_link"));
   set(root, "correction/subscribe_path", false);
-  const fragg_ros::ServerParams p = fragg_ros::parseParameters(root);
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(root);
   EXPECT_FALSE(p.map.scans.keep);
   EXPECT_EQ(p.map.scans.max_bytes, 0u);
   EXPECT_EQ(p.map.scans.spill_dir, "/tmp/spill");
@@ -88,7 +88,7 @@ TEST(ServerParams, ReadsScanStoreAndCorrection) {
   EXPECT_FALSE(p.correction.subscribe_path);
   XmlRpcValue mb;
   set(mb, "scan_store/max_mb", 1.5);
-  EXPECT_EQ(fragg_ros::parseParameters(mb).map.scans.max_bytes, size_t{3} << 19);
+  EXPECT_EQ(fragg::ros::parseParameters(mb).map.scans.max_bytes, size_t{3} << 19);
 }
 
 TEST(ServerParams, InvalidScanStoreAndCorrectionValuesNameTheParameter) {
@@ -131,7 +131,7 @@ TEST(ServerParams, ReadsEveryName) {
   set(root, "queue_size", 3);
   set(root, "tf_tolerance", 0.25);
   set(root, "marker_rate", 2);  // an int where a double is expected
-  const fragg_ros::ServerParams p = fragg_ros::parseParameters(root);
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(root);
   EXPECT_EQ(p.map.resolution_m, 0.1);
   EXPECT_EQ(p.frame_id, "odom");
   EXPECT_EQ(p.map.occupancy.prob_hit, 0.8);
@@ -163,7 +163,7 @@ TEST(ServerParams, LidarSensor) {
   set(root, "sensor/elevation_max", 0.3);
   set(root, "sensor/range_noise", 0.02);
   set(root, "sensor/range_noise_quadratic", 0.001);
-  const fragg_ros::ServerParams p = fragg_ros::parseParameters(root);
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(root);
   EXPECT_EQ(p.sensor.type, fragg::SensorType::kSpinningLidar);
   EXPECT_EQ(p.sensor.range_noise_m, 0.02);
   EXPECT_EQ(p.sensor.range_noise_quadratic_per_m, 0.001);
@@ -206,7 +206,7 @@ TEST(ServerParams, InconsistentPairsNameTheParameter) {
   EXPECT_THROW(
       {
         try {
-          fragg_ros::parseParameters(root);
+          fragg::ros::parseParameters(root);
         } catch (const fragg::InvalidArgument& e) {
           EXPECT_NE(std::string(e.what()).find("'pointcloud_min_z'"), std::string::npos);
           throw;
@@ -215,17 +215,17 @@ TEST(ServerParams, InconsistentPairsNameTheParameter) {
       fragg::InvalidArgument);
   XmlRpcValue pinhole;
   set(pinhole, "sensor/type", std::string("pinhole"));  // no hfov/vfov
-  EXPECT_THROW(fragg_ros::parseParameters(pinhole), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::parseParameters(pinhole), fragg::InvalidArgument);
   XmlRpcValue ranges;
   set(ranges, "sensor_model/min_range", 5.0);
   set(ranges, "sensor_model/max_range", 2.0);
-  EXPECT_THROW(fragg_ros::parseParameters(ranges), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::parseParameters(ranges), fragg::InvalidArgument);
   XmlRpcValue occupancy;
   set(occupancy, "occupancy_min_z", 3.0);
   set(occupancy, "occupancy_max_z", 0.0);
-  EXPECT_THROW(fragg_ros::parseParameters(occupancy), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::parseParameters(occupancy), fragg::InvalidArgument);
   XmlRpcValue not_a_struct(3);
-  EXPECT_THROW(fragg_ros::parseParameters(not_a_struct), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::parseParameters(not_a_struct), fragg::InvalidArgument);
 }
 
 }  // namespace
@@ -249,8 +249,8 @@ XmlRpcValue loadYaml(const std::vector<std::string>& files) {
 }
 
 TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
-  const fragg_ros::ServerParams p = fragg_ros::parseParameters(loadYaml({"default.yaml"}));
-  const fragg_ros::ServerParams d = fragg_ros::parseParameters(XmlRpcValue());
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(loadYaml({"default.yaml"}));
+  const fragg::ros::ServerParams d = fragg::ros::parseParameters(XmlRpcValue());
   EXPECT_EQ(p.map.resolution_m, d.map.resolution_m);
   EXPECT_EQ(p.map.occupancy.prob_hit, d.map.occupancy.prob_hit);
   EXPECT_EQ(p.map.occupancy.prob_miss, d.map.occupancy.prob_miss);
@@ -278,8 +278,8 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
 }
 
 TEST(ServerParamsConfig, LidarYaml) {
-  const fragg_ros::ServerParams p =
-      fragg_ros::parseParameters(loadYaml({"default.yaml", "lidar.yaml"}));
+  const fragg::ros::ServerParams p =
+      fragg::ros::parseParameters(loadYaml({"default.yaml", "lidar.yaml"}));
   EXPECT_EQ(p.sensor.type, fragg::SensorType::kSpinningLidar);
   EXPECT_EQ(p.sensor.max_range_m, 30.0);
   EXPECT_EQ(p.occupancy_max_z_m, 2.0);
@@ -287,8 +287,8 @@ TEST(ServerParamsConfig, LidarYaml) {
 }
 
 TEST(ServerParamsConfig, DepthCameraYaml) {
-  const fragg_ros::ServerParams p =
-      fragg_ros::parseParameters(loadYaml({"default.yaml", "depth_camera.yaml"}));
+  const fragg::ros::ServerParams p =
+      fragg::ros::parseParameters(loadYaml({"default.yaml", "depth_camera.yaml"}));
   EXPECT_EQ(p.sensor.type, fragg::SensorType::kPinhole);
   EXPECT_EQ(p.map.resolution_m, 0.02);
   EXPECT_NEAR(p.sensor.hfov_rad, 58.0 * M_PI / 180.0, 1e-4);

@@ -13,7 +13,7 @@
 #include "fragg_map/ros/pose_correction.h"
 #include "fragg_map/sensor_model.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 /// Loop-closure correction (~correct_poses, corrected_path): correction/*.
 struct CorrectionParams {
@@ -64,6 +64,6 @@ struct ServerParams {
 ServerParams parseParameters(const XmlRpc::XmlRpcValue& params);
 
 /// Reads the node's private namespace and parses it as above.
-ServerParams readParameters(const ros::NodeHandle& private_nh);
+ServerParams readParameters(const ::ros::NodeHandle& private_nh);
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

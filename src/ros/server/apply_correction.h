@@ -9,7 +9,7 @@
 #include "server_stats.h"
 #include "shared_map.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 /// Wall time of the correction [ms]; nothing happens (0 ms) for an empty plan. The caller
 /// holds shared->mutex. Throws fragg::InvalidArgument when the map keeps no scans.
@@ -31,4 +31,4 @@ inline void requireKeptScans(const SharedMap& shared) {
         "without them)");
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -12,7 +12,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/cloud_from_msg.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
 std::string withoutLeadingSlash(const std::string& frame) {
@@ -35,7 +35,7 @@ void filterHeight(const Eigen::Isometry3d& T_map_sensor, double min_z_m, double 
 
 }  // namespace
 
-CloudInput::CloudInput(ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
+CloudInput::CloudInput(::ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
                        SharedMap* shared, ServerStats* stats, InsertedFn on_inserted)
     : params_(params),
       tf_(tf),
@@ -132,4 +132,4 @@ void CloudInput::process(const sensor_msgs::PointCloud2& msg) {
   if (on_inserted_) on_inserted_(msg.header.stamp, sensor, T_map_sensor);
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

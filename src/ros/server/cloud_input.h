@@ -23,15 +23,15 @@
 #include "server_stats.h"
 #include "shared_map.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 class CloudInput {
  public:
   /// Called on the insertion thread after each insertion (the map is not locked).
-  using InsertedFn = std::function<void(const ros::Time& stamp, const fragg::SensorModel&,
+  using InsertedFn = std::function<void(const ::ros::Time& stamp, const fragg::SensorModel&,
                                         const Eigen::Isometry3d& T_map_sensor)>;
 
-  CloudInput(ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
+  CloudInput(::ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
              SharedMap* shared, ServerStats* stats, InsertedFn on_inserted);
   ~CloudInput();  ///< stops the insertion thread
   CloudInput(const CloudInput&) = delete;
@@ -50,8 +50,8 @@ class CloudInput {
   InsertedFn on_inserted_;
   DropOldestQueue<sensor_msgs::PointCloud2::ConstPtr> queue_;
   std::atomic<bool> stopping_{false};
-  ros::Subscriber sub_;
+  ::ros::Subscriber sub_;
   std::thread worker_;
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -11,7 +11,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/pose_correction.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
 // The requests, every pose checked; throws fragg::InvalidArgument naming the bad one.
@@ -34,7 +34,7 @@ std::vector<PoseRequest> requestsFrom(const fragg_map::CorrectPoses::Request& re
 
 }  // namespace
 
-CorrectionService::CorrectionService(ros::NodeHandle& private_nh, const ServerParams& params,
+CorrectionService::CorrectionService(::ros::NodeHandle& private_nh, const ServerParams& params,
                                      SharedMap* shared, ServerStats* stats,
                                      std::function<void()> on_corrected)
     : params_(params), shared_(shared), stats_(stats), on_corrected_(std::move(on_corrected)) {
@@ -78,4 +78,4 @@ bool CorrectionService::correct(fragg_map::CorrectPoses::Request& req,
   return true;
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -10,7 +10,7 @@
 #include "fragg_map/interop/octomap_io.h"
 #endif
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
 bool endsWith(const std::string& s, const std::string& suffix) {
@@ -36,7 +36,7 @@ Eigen::Vector3d toEigen(const geometry_msgs::Point& p) { return {p.x, p.y, p.z};
 
 }  // namespace
 
-MapServices::MapServices(ros::NodeHandle& private_nh, const ServerParams& params, SharedMap* shared,
+MapServices::MapServices(::ros::NodeHandle& private_nh, const ServerParams& params, SharedMap* shared,
                          ServerStats* stats, std::function<void()> on_map_replaced)
     : params_(params),
       shared_(shared),
@@ -117,9 +117,9 @@ bool MapServices::clearBox(fragg_map::ClearBox::Request& req, fragg_map::ClearBo
 bool MapServices::getStats(fragg_map::GetStats::Request&, fragg_map::GetStats::Response& res) {
   return answer("get_stats", res, [&] {
     std::lock_guard<std::mutex> lock(shared_->mutex);
-    res.stats = stats_->toMsg(shared_->map, params_.frame_id, ros::Time::now());
+    res.stats = stats_->toMsg(shared_->map, params_.frame_id, ::ros::Time::now());
     return std::string("ok");
   });
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -13,7 +13,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/pose_correction.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
 std::string withoutLeadingSlash(const std::string& frame) {
@@ -22,7 +22,7 @@ std::string withoutLeadingSlash(const std::string& frame) {
 
 }  // namespace
 
-PathCorrector::PathCorrector(ros::NodeHandle& nh, const ServerParams& params,
+PathCorrector::PathCorrector(::ros::NodeHandle& nh, const ServerParams& params,
                              const tf2_ros::Buffer& tf, SharedMap* shared, ServerStats* stats,
                              std::function<void()> on_corrected)
     : params_(params),
@@ -85,7 +85,7 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
           continue;
         }
         try {
-          ros::Time stamp;
+          ::ros::Time stamp;
           stamp.fromNSec(
               static_cast<uint64_t>(shared_->map.scanStore().record(entry->id).stamp_ns));
           const Eigen::Isometry3d T_child_sensor =
@@ -117,4 +117,4 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
   if (on_corrected_) on_corrected_();
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

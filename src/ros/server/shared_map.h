@@ -9,7 +9,7 @@
 #include "fragg_map/map.h"
 #include "fragg_map/ros/scan_stamp_index.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 struct SharedMap {
   explicit SharedMap(fragg::Map m) : map(std::move(m)) {}
@@ -18,4 +18,4 @@ struct SharedMap {
   ScanStampIndex stamps;  ///< kept scans by stamp (empty when the map keeps none)
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros
