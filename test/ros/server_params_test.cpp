@@ -32,9 +32,23 @@ void expectRejected(const std::string& name, const XmlRpcValue& value) {
     fragg::ros::parseParameters(root);
     FAIL() << name << " = " << const_cast<XmlRpcValue&>(value).toXml() << " was accepted";
   } catch (const fragg::InvalidArgument& e) {
-    EXPECT_NE(std::string(e.what()).find("'" + name + "'"), std::string::npos)
-        << "the error does not name " << name << ": " << e.what();
+    const std::string what = e.what();
+    EXPECT_NE(what.find("'" + name + "'"), std::string::npos)
+        << "the error does not name " << name << ": " << what;
+    // The core's field names are renamed to parameters, never shown as they are.
+    for (const char* core : {"occupancy.", "sensor.", "height_filter.", "resolution_m", "scans.",
+                             "culling."})
+      EXPECT_EQ(what.find(core), std::string::npos) << "core name " << core << " in: " << what;
   }
+}
+
+std::string rejection(const XmlRpcValue& root) {
+  try {
+    fragg::ros::parseParameters(root);
+  } catch (const fragg::InvalidArgument& e) {
+    return e.what();
+  }
+  return "(accepted)";
 }
 
 TEST(ServerParams, EmptyNamespaceGivesTheCoreDefaults) {
@@ -49,7 +63,7 @@ TEST(ServerParams, EmptyNamespaceGivesTheCoreDefaults) {
   EXPECT_LT(p.sensor.max_range_m, 0.0);
   EXPECT_EQ(p.queue_size, 5);
   EXPECT_FALSE(p.latch);
-  EXPECT_TRUE(std::isinf(p.pointcloud_min_z_m));
+  EXPECT_TRUE(std::isinf(p.map.height_filter.min_z_m));
 }
 
 TEST(ServerParams, ScanStoreAndCorrectionDefaults) {
@@ -140,8 +154,8 @@ TEST(ServerParams, ReadsEveryName) {
   EXPECT_EQ(p.map.occupancy.clamp_max, 0.95);
   EXPECT_EQ(p.sensor.max_range_m, 30.0);
   EXPECT_EQ(p.sensor.min_range_m, 0.5);
-  EXPECT_EQ(p.pointcloud_min_z_m, -2.0);
-  EXPECT_EQ(p.pointcloud_max_z_m, 5.0);
+  EXPECT_EQ(p.map.height_filter.min_z_m, -2.0);
+  EXPECT_EQ(p.map.height_filter.max_z_m, 5.0);
   EXPECT_EQ(p.occupancy_min_z_m, 0.1);
   EXPECT_EQ(p.occupancy_max_z_m, 1.8);
   EXPECT_TRUE(p.latch);
@@ -197,6 +211,27 @@ TEST(ServerParams, InvalidValuesNameTheParameter) {
   expectRejected("latch", 1);
   expectRejected("threads", -1);
   expectRejected("culling/coherence_ttl_scans", 0);
+  expectRejected("unknown_band", -0.1);
+  expectRejected("sensor_model/max_range", std::numeric_limits<double>::infinity());
+  expectRejected("pointcloud_min_z", std::nan(""));
+}
+
+TEST(ServerParams, CoreMessagesReadInParameterNames) {
+  XmlRpcValue hit;
+  set(hit, "sensor_model/hit", 0.4);
+  EXPECT_EQ(rejection(hit), "parameter 'sensor_model/hit' must be > 0.5, got 0.400000");
+  XmlRpcValue clamp;
+  set(clamp, "sensor_model/min", 0.99);
+  EXPECT_EQ(rejection(clamp), "parameter 'sensor_model/min' must be below 'sensor_model/max'");
+  XmlRpcValue ranges;
+  set(ranges, "sensor_model/min_range", 5.0);
+  set(ranges, "sensor_model/max_range", 2.0);
+  EXPECT_EQ(rejection(ranges),
+            "parameter 'sensor_model/max_range' must exceed 'sensor_model/min_range' (or be <= 0)");
+  XmlRpcValue band;
+  set(band, "unknown_band", 0.5);
+  EXPECT_EQ(rejection(band).rfind("parameter 'unknown_band' must be in [0, 0.5)", 0), 0u)
+      << rejection(band);
 }
 
 TEST(ServerParams, InconsistentPairsNameTheParameter) {
@@ -259,7 +294,7 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.map.occupancy.unknown_band, d.map.occupancy.unknown_band);
   EXPECT_EQ(p.sensor.type, d.sensor.type);
   EXPECT_EQ(p.sensor.max_range_m, d.sensor.max_range_m);
-  EXPECT_EQ(p.pointcloud_min_z_m, d.pointcloud_min_z_m);
+  EXPECT_EQ(p.map.height_filter.min_z_m, d.map.height_filter.min_z_m);
   EXPECT_EQ(p.occupancy_max_z_m, d.occupancy_max_z_m);
   EXPECT_EQ(p.queue_size, d.queue_size);
   EXPECT_EQ(p.tf_tolerance_s, d.tf_tolerance_s);

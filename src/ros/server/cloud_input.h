@@ -1,8 +1,8 @@
 // Input of the map server: cloud_in -> bounded drop-oldest queue -> insertion thread. The
 // thread waits for each cloud's transform to frame_id at the cloud's stamp (up to
-// tf_tolerance of wall time; then the cloud is dropped and counted), converts the cloud,
-// filters it by height in the map frame and inserts it, so the subscriber thread never does
-// more than enqueue.
+// tf_tolerance of wall time; then the cloud is dropped and counted), converts the cloud and
+// inserts it (the map filters it by height in the map frame), taking the map's write lock for
+// that one scan, so the subscriber thread never does more than enqueue.
 //
 // Why not tf2_ros::MessageFilter: Debian's MessageFilter has no per-message timeout (a cloud
 // whose tf never comes waits until its queue overflows), and it would run the callback on the
@@ -27,7 +27,8 @@ namespace fragg::ros {
 
 class CloudInput {
  public:
-  /// Called on the insertion thread after each insertion (the map is not locked).
+  /// Called on the insertion thread after each insertion (the map is not locked), with the
+  /// sensor model the map used (an `auto` model resolved for the cloud).
   using InsertedFn = std::function<void(const ::ros::Time& stamp, const fragg::SensorModel&,
                                         const Eigen::Isometry3d& T_map_sensor)>;
 

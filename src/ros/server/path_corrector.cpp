@@ -66,8 +66,8 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
   size_t unplaced = 0;
   double ms = 0.0;
   {
-    std::lock_guard<std::mutex> lock(shared_->mutex);
-    requireKeptScans(*shared_);
+    const SharedMap::WriteGuard state = shared_->write();
+    requireKeptScans(state->map);
     if (!child_frame.empty()) {
       // Path poses of child_frame -> sensor poses (tf child_frame -> the scan's cloud frame at
       // the scan's stamp; a static transform is found at any time). Poses that cannot be
@@ -75,7 +75,7 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
       std::vector<PoseRequest> placed;
       placed.reserve(requests.size());
       for (const PoseRequest& r : requests) {
-        const ScanStampIndex::Entry* entry = shared_->stamps.find(r.stamp_ns, tolerance_ns);
+        const ScanStampIndex::Entry* entry = state->stamps.find(r.stamp_ns, tolerance_ns);
         if (!entry) {
           placed.push_back(r);  // unknown: planCorrection reports it
           continue;
@@ -87,7 +87,7 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
         try {
           ::ros::Time stamp;
           stamp.fromNSec(
-              static_cast<uint64_t>(shared_->map.scanStore().record(entry->id).stamp_ns));
+              static_cast<uint64_t>(state->map.scanStore().record(entry->id).stamp_ns));
           const Eigen::Isometry3d T_child_sensor =
               tf2::transformToEigen(tf_.lookupTransform(child_frame, entry->sensor_frame, stamp));
           placed.push_back({r.stamp_ns, sensorPoseFromChild(r.T_map_sensor, T_child_sensor)});
@@ -100,9 +100,9 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
       requests.swap(placed);
     }
     const PoseThresholds& thresholds = params_.correction.thresholds;
-    plan = planCorrection(requests, shared_->stamps, shared_->map.scanStore(), tolerance_ns,
+    plan = planCorrection(requests, state->stamps, state->map.scanStore(), tolerance_ns,
                           &thresholds);
-    ms = applyCorrection(plan, shared_, stats_);
+    ms = applyCorrection(plan, &state->map, stats_);
   }
   if (plan.T_map_sensor_new.empty()) {
     ROS_DEBUG("fragg_map: corrected_path: no kept scan moved (%zu poses, %zu within thresholds)",
