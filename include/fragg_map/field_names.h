@@ -24,8 +24,7 @@ std::string renameFields(const std::string& message, const std::vector<FieldName
 
 /// Runs `fn`; an InvalidArgument it throws is thrown again with its fields renamed.
 template <typename Fn>
-void withFieldNames(const std::vector<FieldName>& names, Fn&& fn,
-                    const std::string& quote = "'") {
+void withFieldNames(const std::vector<FieldName>& names, Fn&& fn, const std::string& quote = "'") {
   try {
     fn();
   } catch (const InvalidArgument& e) {

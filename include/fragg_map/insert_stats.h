@@ -9,7 +9,7 @@
 namespace fragg {
 
 struct InsertStats {
-  uint64_t scan_id = 0;                  ///< the scan's insertion index (not summed by add())
+  uint64_t scan_id = 0;  ///< the scan's insertion index (not summed by add())
   /// The sensor model the scan was integrated with: an `auto` model resolved for the cloud,
   /// max range set (not summed by add()).
   SensorModel sensor;

@@ -23,9 +23,9 @@ std::string renameFields(const std::string& message, const std::vector<FieldName
         if (n.field.empty() || message.compare(i, n.field.size(), n.field) != 0) continue;
         const size_t end = i + n.field.size();
         // A sentence may end right after a field: "x must exceed y." keeps its full stop.
-        const bool whole = end == message.size() || !partOfName(message[end]) ||
-                           (message[end] == '.' &&
-                            (end + 1 == message.size() || !partOfName(message[end + 1])));
+        const bool whole =
+            end == message.size() || !partOfName(message[end]) ||
+            (message[end] == '.' && (end + 1 == message.size() || !partOfName(message[end + 1])));
         if (whole && (!match || n.field.size() > match->field.size())) match = &n;
       }
     }

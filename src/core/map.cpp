@@ -150,8 +150,7 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
 
 void Map::requireRemovable(ScanId id) const {
   if (!params_.scans.keep && scan_store_->size() == 0)
-    throw InvalidArgument(
-        "this map keeps no scans (scans.keep was off when they were inserted)");
+    throw InvalidArgument("this map keeps no scans (scans.keep was off when they were inserted)");
   if (!scan_store_->record(id).removable)  // record() throws for an unknown index
     throw InvalidArgument("scan " + std::to_string(id) +
                           " can no longer be removed exactly: a clear box (or a direct edit of "

@@ -54,7 +54,7 @@ void MapParams::validate() const {
                           std::to_string(scans.point_step_m));
   if (std::isnan(height_filter.min_z_m) || std::isnan(height_filter.max_z_m))
     throw InvalidArgument(std::string(std::isnan(height_filter.min_z_m) ? "height_filter.min_z_m"
-                                                                       : "height_filter.max_z_m") +
+                                                                        : "height_filter.max_z_m") +
                           " must be a height in m (or +-infinity), got NaN");
   if (height_filter.min_z_m > height_filter.max_z_m)
     throw InvalidArgument("height_filter.min_z_m (" + std::to_string(height_filter.min_z_m) +

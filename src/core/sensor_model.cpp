@@ -86,9 +86,8 @@ void SensorModel::validate() const {
   if (max_range_m > 0.0 && max_range_m <= min_range_m)
     throw InvalidArgument("sensor.max_range_m must exceed sensor.min_range_m (or be <= 0)");
   if (!(range_noise_m >= 0.0 && range_noise_m <= kMaxRangeNoiseM))  // NaN fails too
-    throw InvalidArgument("sensor.range_noise_m must be in [0, " +
-                          std::to_string(kMaxRangeNoiseM) + "] m, got " +
-                          std::to_string(range_noise_m));
+    throw InvalidArgument("sensor.range_noise_m must be in [0, " + std::to_string(kMaxRangeNoiseM) +
+                          "] m, got " + std::to_string(range_noise_m));
   if (!(range_noise_quadratic_per_m >= 0.0 &&
         range_noise_quadratic_per_m <= kMaxRangeNoiseQuadraticPerM))
     throw InvalidArgument("sensor.range_noise_quadratic_per_m must be in [0, " +
@@ -96,22 +95,26 @@ void SensorModel::validate() const {
                           std::to_string(range_noise_quadratic_per_m));
   if (type == SensorType::kPinhole) {
     if (!(hfov_rad > 0.0 && hfov_rad < M_PI))
-      throw InvalidArgument("sensor.hfov_rad must be in (0, pi) rad (0-180 degrees) for a pinhole, got " +
-                            std::to_string(hfov_rad) + " rad");
+      throw InvalidArgument(
+          "sensor.hfov_rad must be in (0, pi) rad (0-180 degrees) for a pinhole, got " +
+          std::to_string(hfov_rad) + " rad");
     if (!(vfov_rad > 0.0 && vfov_rad < M_PI))
-      throw InvalidArgument("sensor.vfov_rad must be in (0, pi) rad (0-180 degrees) for a pinhole, got " +
-                            std::to_string(vfov_rad) + " rad");
+      throw InvalidArgument(
+          "sensor.vfov_rad must be in (0, pi) rad (0-180 degrees) for a pinhole, got " +
+          std::to_string(vfov_rad) + " rad");
     if (std::fabs(forward_S.norm() - 1.0) > 1e-6 || std::fabs(right_S.norm() - 1.0) > 1e-6 ||
         std::fabs(forward_S.dot(right_S)) > 1e-6)
       throw InvalidArgument("sensor.forward_S and sensor.right_S must be orthonormal");
   }
   if (type == SensorType::kSpinningLidar) {
     if (!(elevation_min_rad >= -M_PI / 2 - 1e-9 && elevation_min_rad <= M_PI / 2 + 1e-9))
-      throw InvalidArgument("sensor.elevation_min_rad must be in [-pi/2, pi/2] rad (+-90 degrees), got " +
-                            std::to_string(elevation_min_rad) + " rad");
+      throw InvalidArgument(
+          "sensor.elevation_min_rad must be in [-pi/2, pi/2] rad (+-90 degrees), got " +
+          std::to_string(elevation_min_rad) + " rad");
     if (!(elevation_max_rad >= -M_PI / 2 - 1e-9 && elevation_max_rad <= M_PI / 2 + 1e-9))
-      throw InvalidArgument("sensor.elevation_max_rad must be in [-pi/2, pi/2] rad (+-90 degrees), got " +
-                            std::to_string(elevation_max_rad) + " rad");
+      throw InvalidArgument(
+          "sensor.elevation_max_rad must be in [-pi/2, pi/2] rad (+-90 degrees), got " +
+          std::to_string(elevation_max_rad) + " rad");
     if (elevation_min_rad >= elevation_max_rad)
       throw InvalidArgument("sensor.elevation_min_rad must be below sensor.elevation_max_rad");
   }

@@ -87,7 +87,8 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, fragg::BlockIndex 
 }
 
 visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
-                                                    const ::ros::Time& stamp, MarkerLedger* ledger) {
+                                                    const ::ros::Time& stamp,
+                                                    MarkerLedger* ledger) {
   visualization_msgs::MarkerArray out;
   const fragg::BlockMap& blocks = map.blocks();
   const uint64_t since = ledger->published_revision_;

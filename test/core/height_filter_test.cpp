@@ -34,8 +34,8 @@ Eigen::Isometry3d lookingDown() {
 TEST(HeightFilter, DropsPointsOutsideTheBandInTheMapFrame) {
   Map map(cpuParams(-0.5, 0.7));
   // Map heights 0.55 (kept), -1.05 (below), 0.25 (kept), 1.45 (above; behind the sensor).
-  const PointCloud cloud = test::cloudOf({{0.45f, 0.f, 0.f}, {2.05f, -0.3f, 0.f},
-                                          {0.75f, 0.3f, 0.f}, {-0.45f, 0.6f, 0.f}});
+  const PointCloud cloud = test::cloudOf(
+      {{0.45f, 0.f, 0.f}, {2.05f, -0.3f, 0.f}, {0.75f, 0.3f, 0.f}, {-0.45f, 0.6f, 0.f}});
   const InsertStats s = map.insert(cloud, lookingDown(), SensorModel::autoFromCloud());
   EXPECT_EQ(s.dropped_height, 2u);
   EXPECT_EQ(s.rays_hit, 2u);
@@ -48,8 +48,8 @@ TEST(HeightFilter, DropsPointsOutsideTheBandInTheMapFrame) {
 }
 
 TEST(HeightFilter, OffByDefaultAndCountsNothing) {
-  Map map(cpuParams(-std::numeric_limits<double>::infinity(),
-                    std::numeric_limits<double>::infinity()));
+  Map map(
+      cpuParams(-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()));
   const PointCloud cloud = test::cloudOf({{0.45f, 0.f, 0.f}, {2.05f, -0.3f, 0.f}});
   const InsertStats s = map.insert(cloud, lookingDown(), SensorModel::autoFromCloud());
   EXPECT_EQ(s.dropped_height, 0u);
@@ -115,8 +115,8 @@ TEST(HeightFilter, ValidateNamesTheField) {
 }
 
 TEST(InsertStatsSensor, AnAutoModelComesBackResolved) {
-  Map map(cpuParams(-std::numeric_limits<double>::infinity(),
-                    std::numeric_limits<double>::infinity()));
+  Map map(
+      cpuParams(-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()));
   // Every point in front of the sensor along +z: a pinhole about the z axis.
   const PointCloud cloud = test::cloudOf({{0.2f, 0.1f, 3.f}, {-0.2f, -0.1f, 3.f}, {0.f, 0.f, 2.f}});
   const InsertStats s =
@@ -129,8 +129,8 @@ TEST(InsertStatsSensor, AnAutoModelComesBackResolved) {
 }
 
 TEST(InsertStatsSensor, AnExplicitModelComesBackAsGiven) {
-  Map map(cpuParams(-std::numeric_limits<double>::infinity(),
-                    std::numeric_limits<double>::infinity()));
+  Map map(
+      cpuParams(-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()));
   const SensorModel lidar = SensorModel::spinningLidar(-0.3, 0.3, 0.0, 20.0);
   const InsertStats s =
       map.insert(test::cloudOf({{2.f, 0.f, 0.f}}), Eigen::Isometry3d::Identity(), lidar);

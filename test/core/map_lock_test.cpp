@@ -32,9 +32,7 @@ Eigen::Vector3d hitOfScan(int i) {
   return {2.0 * std::cos(azimuth_rad), 2.0 * std::sin(azimuth_rad), 0.05};
 }
 
-PointCloud scanCloud(int i) {
-  return test::cloudOf({hitOfScan(i).cast<float>()});
-}
+PointCloud scanCloud(int i) { return test::cloudOf({hitOfScan(i).cast<float>()}); }
 
 // Occupied voxels among the hits of scans 0..n-1.
 int occupiedHits(const Map& map, int n) {
@@ -108,7 +106,7 @@ TEST(MapLock, AQueryIsAnsweredWhileALongInsertionRuns) {
   constexpr int kScans = 40;
   constexpr int kAskAfter = 10;  // the reader asks once this many scans are in
   LockedMap locked{Map(cpuParams())};
-  std::atomic<int> inserted{0};   // scans integrated, counted under the write lock
+  std::atomic<int> inserted{0};  // scans integrated, counted under the write lock
   std::atomic<int> answered_at{-1};
   int occupied_seen = -1;
   size_t scans_seen = 0;

@@ -186,7 +186,8 @@ TEST(BlockMarkers, BlockIsResentOnlyWhenItsDrawnCellsChange) {
   const fragg::VoxelKey a{1, 2, 3}, a_free{2, 2, 3}, a_more{3, 2, 3};
   fragg::ros::test::setCell(map, a, fragg::CellState::kOccupied);
   MarkerLedger ledger;
-  ASSERT_EQ(fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.size(), 1u);
+  ASSERT_EQ(fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.size(),
+            1u);
   // Same block, a free cell changes: the block's changed_at moves, its occupied cells do not.
   fragg::ros::test::setCell(map, a_free, fragg::CellState::kFree);
   ASSERT_GT(map.blocks().meta(map.blocks().find(fragg::blockKeyOf(a))).changed_at,

@@ -126,10 +126,10 @@ TEST(FrustumMarker, LidarRimsAtMaxRangeAndBadModels) {
     EXPECT_TRUE(r < 1e-12 || std::abs(r - 10.0) < 1e-9) << r;
   }
   EXPECT_THROW(fragg::ros::frustumMarker(fragg::SensorModel::autoFromCloud(0.0, 5.0),
-                                        Eigen::Isometry3d::Identity(), "map", kStamp),
+                                         Eigen::Isometry3d::Identity(), "map", kStamp),
                fragg::InvalidArgument);
   EXPECT_THROW(fragg::ros::frustumMarker(fragg::SensorModel::spinningLidar(-0.3, 0.2, 0.0, -1.0),
-                                        Eigen::Isometry3d::Identity(), "map", kStamp),
+                                         Eigen::Isometry3d::Identity(), "map", kStamp),
                fragg::InvalidArgument);
 }
 

@@ -36,8 +36,8 @@ void expectRejected(const std::string& name, const XmlRpcValue& value) {
     EXPECT_NE(what.find("'" + name + "'"), std::string::npos)
         << "the error does not name " << name << ": " << what;
     // The core's field names are renamed to parameters, never shown as they are.
-    for (const char* core : {"occupancy.", "sensor.", "height_filter.", "resolution_m", "scans.",
-                             "culling."})
+    for (const char* core :
+         {"occupancy.", "sensor.", "height_filter.", "resolution_m", "scans.", "culling."})
       EXPECT_EQ(what.find(core), std::string::npos) << "core name " << core << " in: " << what;
   }
 }

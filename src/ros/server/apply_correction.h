@@ -5,9 +5,9 @@
 #include <chrono>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/map.h"
 #include "fragg_map/ros/pose_correction.h"
 #include "server_stats.h"
-#include "fragg_map/map.h"
 
 namespace fragg::ros {
 

@@ -32,8 +32,9 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
   // A latched topic's late subscriber would only see the last increment: it gets every block.
   auto connect = [this, latch](MarkerTopic* topic) -> ::ros::SubscriberStatusCallback {
     if (!latch) return ::ros::SubscriberStatusCallback();
-    return
-        [this, topic](const ::ros::SingleSubscriberPublisher& sub) { sendAllMarkersTo(*topic, sub); };
+    return [this, topic](const ::ros::SingleSubscriberPublisher& sub) {
+      sendAllMarkersTo(*topic, sub);
+    };
   };
   occupied_markers_.pub = nh.advertise<visualization_msgs::MarkerArray>(
       "occupied_cells_vis_array", 1, connect(&occupied_markers_), ::ros::SubscriberStatusCallback(),

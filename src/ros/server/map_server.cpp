@@ -19,8 +19,9 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh)
   });
   shared_ = std::make_unique<SharedMap>(MapState(fragg::Map(params_.map)));
   publishers_ = std::make_unique<MapPublishers>(nh, private_nh, params_, shared_.get(), &stats_);
-  services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_,
-                                            [this] { publishers_->publishFull(::ros::Time::now()); });
+  services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_, [this] {
+    publishers_->publishFull(::ros::Time::now());
+  });
   auto publish_corrected = [this] {
     try {
       publishers_->publishAfterCorrection(::ros::Time::now());
@@ -48,9 +49,8 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh)
     const SharedMap::ReadGuard state = shared_->read();
     ROS_INFO("fragg_map: %s map at %.3f m in '%s', backend %s (%s), sensor %s, queue %d",
              params_.latch ? "latched" : "unlatched", params_.map.resolution_m,
-             params_.frame_id.c_str(), state->map.backendName(),
-             state->map.backendReason().c_str(), params_.sensor.describe().c_str(),
-             params_.queue_size);
+             params_.frame_id.c_str(), state->map.backendName(), state->map.backendReason().c_str(),
+             params_.sensor.describe().c_str(), params_.queue_size);
   }
   const fragg::ScanStoreParams& scans = params_.map.scans;
   if (scans.keep) {

@@ -36,8 +36,9 @@ Eigen::Vector3d toEigen(const geometry_msgs::Point& p) { return {p.x, p.y, p.z};
 
 }  // namespace
 
-MapServices::MapServices(::ros::NodeHandle& private_nh, const ServerParams& params, SharedMap* shared,
-                         ServerStats* stats, std::function<void()> on_map_replaced)
+MapServices::MapServices(::ros::NodeHandle& private_nh, const ServerParams& params,
+                         SharedMap* shared, ServerStats* stats,
+                         std::function<void()> on_map_replaced)
     : params_(params),
       shared_(shared),
       stats_(stats),

@@ -86,8 +86,7 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
         }
         try {
           ::ros::Time stamp;
-          stamp.fromNSec(
-              static_cast<uint64_t>(state->map.scanStore().record(entry->id).stamp_ns));
+          stamp.fromNSec(static_cast<uint64_t>(state->map.scanStore().record(entry->id).stamp_ns));
           const Eigen::Isometry3d T_child_sensor =
               tf2::transformToEigen(tf_.lookupTransform(child_frame, entry->sensor_frame, stamp));
           placed.push_back({r.stamp_ns, sensorPoseFromChild(r.T_map_sensor, T_child_sensor)});
@@ -100,8 +99,8 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
       requests.swap(placed);
     }
     const PoseThresholds& thresholds = params_.correction.thresholds;
-    plan = planCorrection(requests, state->stamps, state->map.scanStore(), tolerance_ns,
-                          &thresholds);
+    plan =
+        planCorrection(requests, state->stamps, state->map.scanStore(), tolerance_ns, &thresholds);
     ms = applyCorrection(plan, &state->map, stats_);
   }
   if (plan.T_map_sensor_new.empty()) {
