@@ -25,11 +25,13 @@ MapParams cpuParams() {
   return p;
 }
 
-// Scan i: one hit 2 m from the origin at azimuth 7 i degrees: every scan occupies its own voxel
-// and no ray (radial) crosses another scan's hit.
+// Scan i: one hit 2.03 m from the origin at azimuth 7 i degrees: every scan occupies its own
+// voxel and no ray (radial) crosses another scan's hit. Float, as the cloud holds it, so that
+// the query looks in the voxel the map integrated.
 Eigen::Vector3d hitOfScan(int i) {
   const double azimuth_rad = 7.0 * i * M_PI / 180.0;
-  return {2.0 * std::cos(azimuth_rad), 2.0 * std::sin(azimuth_rad), 0.05};
+  const Eigen::Vector3f p(2.03 * std::cos(azimuth_rad), 2.03 * std::sin(azimuth_rad), 0.05);
+  return p.cast<double>();
 }
 
 PointCloud scanCloud(int i) { return test::cloudOf({hitOfScan(i).cast<float>()}); }
