@@ -87,7 +87,7 @@ TEST(CliBuild, BadArgumentsAndInputsFailCleanly) {
        "--range-noise-quadratic must"},
       {"build '" + kPly + "' -o '" + out + "/m.fgm' --min-z 2 --max-z 1", 2,
        "--min-z (2.000000 m) must not exceed --max-z"},
-      {"build '" + kPly + "' -o '" + out + "/m.fgm' --clamp-min 0.9", 2,
+      {"build '" + kPly + "' -o '" + out + "/m.fgm' --clamp-min 0.98", 2,
        "--clamp-min must be below --clamp-max"},
       {"build '" + kPly + "'", 2, "output"},
       {"stats '" + dir + "/missing.fgm'", 1, "missing.fgm"},
