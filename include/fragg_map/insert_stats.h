@@ -4,11 +4,15 @@
 #include <cstdint>
 
 #include "fragg_map/culling.h"
+#include "fragg_map/sensor_model.h"
 
 namespace fragg {
 
 struct InsertStats {
-  uint64_t scan_id = 0;                  ///< the scan's insertion index (not summed by add())
+  uint64_t scan_id = 0;  ///< the scan's insertion index (not summed by add())
+  /// The sensor model the scan was integrated with: an `auto` model resolved for the cloud,
+  /// max range set (not summed by add()).
+  SensorModel sensor;
   uint64_t points_in = 0;                ///< points given
   uint64_t rays_hit = 0;                 ///< rays ending in a hit
   uint64_t rays_free_only = 0;           ///< beyond max range: clear up to max range, no hit
@@ -16,6 +20,7 @@ struct InsertStats {
   uint64_t dropped_invalid = 0;          ///< NaN / Inf / beyond the int32 key range
   uint64_t dropped_min_range = 0;        ///< closer than min range
   uint64_t dropped_outside_frustum = 0;  ///< outside an explicit sensor model's frustum
+  uint64_t dropped_height = 0;           ///< map-frame z outside MapParams::height_filter
   uint64_t voxel_visits = 0;             ///< cells visited by the traversal (with repeats)
   uint64_t cells_updated = 0;            ///< cells whose log-odds were updated (once per scan)
   uint64_t blocks_touched = 0;

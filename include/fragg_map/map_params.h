@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <string>
 
 #include "fragg_map/occupancy.h"
@@ -52,6 +53,20 @@ struct ScanStoreParams {
   std::string spill_dir;  ///< where points beyond max_bytes go; empty: they are dropped
 };
 
+/// Points dropped before integration by their height in the map frame (octomap_server's
+/// pointcloud_min_z / pointcloud_max_z): a point whose map-frame z lies outside
+/// [min_z_m, max_z_m] is not inserted (InsertStats::dropped_height). Default: every height.
+struct HeightFilterParams {
+  double min_z_m = -std::numeric_limits<double>::infinity();
+  double max_z_m = std::numeric_limits<double>::infinity();
+
+  /// False when the band keeps every height.
+  bool active() const {
+    return min_z_m > -std::numeric_limits<double>::infinity() ||
+           max_z_m < std::numeric_limits<double>::infinity();
+  }
+};
+
 struct MapParams {
   double resolution_m = 0.05;
   OccupancyParams occupancy;
@@ -64,6 +79,7 @@ struct MapParams {
   int threads = 0;
   CudaParams cuda;
   ScanStoreParams scans;
+  HeightFilterParams height_filter;
 
   /// Throws InvalidArgument naming the bad field.
   void validate() const;

@@ -10,6 +10,7 @@ void InsertStats::add(const InsertStats& o) {
   dropped_invalid += o.dropped_invalid;
   dropped_min_range += o.dropped_min_range;
   dropped_outside_frustum += o.dropped_outside_frustum;
+  dropped_height += o.dropped_height;
   voxel_visits += o.voxel_visits;
   cells_updated += o.cells_updated;
   blocks_touched += o.blocks_touched;

@@ -1,5 +1,6 @@
 #include "fragg_map/map.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -9,6 +10,7 @@
 #include "fragg_map/internal/cpu_backend.h"
 #include "fragg_map/internal/culler.h"
 #include "fragg_map/internal/frustum_builder.h"
+#include "fragg_map/internal/height_filter.h"
 #include "fragg_map/log.h"
 
 namespace fragg {
@@ -60,14 +62,21 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
     throw InvalidArgument("sensor frame id longer than " + std::to_string(kMaxSensorFrameChars) +
                           " characters");
   if (cloud.empty()) throw InvalidArgument("point cloud is empty");
+  // The height band first: a kept scan holds the points that were integrated.
+  const bool by_height = params_.height_filter.active();
+  PointCloud in_band;
+  const uint64_t dropped_height =
+      by_height ? filterHeight(cloud, T_map_sensor, params_.height_filter, &in_band) : 0;
+  const PointCloud& filtered = by_height ? in_band : cloud;
   const bool keep = params_.scans.keep;
   // A kept scan is integrated as it is kept, so that its removal is exact: float32 points
   // (point_step_m = 0) are the cloud itself; quantised ones are integrated quantised.
   EncodedPoints kept;
   PointCloud quantised;
   const bool quantise = keep && params_.scans.point_step_m > 0.0;
-  if (keep) kept = encodePoints(cloud, params_.scans.point_step_m, quantise ? &quantised : nullptr);
-  const PointCloud& used = quantise ? quantised : cloud;
+  if (keep)
+    kept = encodePoints(filtered, params_.scans.point_step_m, quantise ? &quantised : nullptr);
+  const PointCloud& used = quantise ? quantised : filtered;
 
   ScanRecord how;
   how.id = next_scan_id_;
@@ -88,6 +97,14 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   ++next_scan_id_;
   ++scans_;
   stats.scan_id = how.id;
+  stats.sensor = how.model;
+  // Dropped by height: left out of an unorganised cloud, (0,0,0) pixels (counted invalid by
+  // the integrator) in an organised one.
+  stats.dropped_height = dropped_height;
+  if (filtered.organised())
+    stats.dropped_invalid -= std::min<uint64_t>(stats.dropped_invalid, dropped_height);
+  else
+    stats.points_in += dropped_height;
   stats.seconds_total =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;
@@ -144,9 +161,7 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
 
 void Map::requireRemovable(ScanId id) const {
   if (!params_.scans.keep && scan_store_->size() == 0)
-    throw InvalidArgument(
-        "this map keeps no scans (insert them with the scan store on: "
-        "MapParams::scans.keep, `fragg_map build --keep-scans`)");
+    throw InvalidArgument("this map keeps no scans (scans.keep was off when they were inserted)");
   if (!scan_store_->record(id).removable)  // record() throws for an unknown index
     throw InvalidArgument("scan " + std::to_string(id) +
                           " can no longer be removed exactly: a clear box (or a direct edit of "
@@ -174,6 +189,7 @@ InsertStats Map::remove(ScanId id) {
   scan_store_->erase(id);
   if (scans_ > 0) --scans_;
   stats.scan_id = id;
+  stats.sensor = how.model;
   stats.seconds_total =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;

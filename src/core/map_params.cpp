@@ -35,21 +35,31 @@ RayCast rayCastFromString(const std::string& s) {
 }
 
 void MapParams::validate() const {
+  // Messages name the field by its path in MapParams (front ends rename it: field_names.h).
   if (!std::isfinite(resolution_m) || resolution_m < 1e-3 || resolution_m > 100.0)
-    throw InvalidArgument("resolution must be in [0.001, 100] m, got " +
+    throw InvalidArgument("resolution_m must be in [0.001, 100] m, got " +
                           std::to_string(resolution_m));
   occupancy.validate();
   if (culling.coherence_ttl_scans < 1 || culling.coherence_ttl_scans > 32)
-    throw InvalidArgument("culling coherence TTL must be in [1, 32] scans, got " +
+    throw InvalidArgument("culling.coherence_ttl_scans must be in [1, 32] scans, got " +
                           std::to_string(culling.coherence_ttl_scans));
-  if (threads < 0) throw InvalidArgument("threads must be >= 0 (0 = every core)");
+  if (threads < 0)
+    throw InvalidArgument("threads must be >= 0 (0 = every core), got " + std::to_string(threads));
   if (!std::isfinite(cuda.pool_margin) || cuda.pool_margin <= 0.0 || cuda.pool_margin > 100.0)
-    throw InvalidArgument("cuda pool margin must be in (0, 100], got " +
+    throw InvalidArgument("cuda.pool_margin must be in (0, 100], got " +
                           std::to_string(cuda.pool_margin));
-  if (cuda.device < 0) throw InvalidArgument("cuda device must be >= 0");
+  if (cuda.device < 0) throw InvalidArgument("cuda.device must be >= 0");
   if (!std::isfinite(scans.point_step_m) || scans.point_step_m < 0.0 || scans.point_step_m > 0.1)
-    throw InvalidArgument("scan store point step must be in [0, 0.1] m (0 = float32), got " +
+    throw InvalidArgument("scans.point_step_m must be in [0, 0.1] m (0 = float32), got " +
                           std::to_string(scans.point_step_m));
+  if (std::isnan(height_filter.min_z_m) || std::isnan(height_filter.max_z_m))
+    throw InvalidArgument(std::string(std::isnan(height_filter.min_z_m) ? "height_filter.min_z_m"
+                                                                        : "height_filter.max_z_m") +
+                          " must be a height in m (or +-infinity), got NaN");
+  if (height_filter.min_z_m > height_filter.max_z_m)
+    throw InvalidArgument("height_filter.min_z_m (" + std::to_string(height_filter.min_z_m) +
+                          " m) must not exceed height_filter.max_z_m (" +
+                          std::to_string(height_filter.max_z_m) + " m)");
 }
 
 }  // namespace fragg

@@ -40,21 +40,26 @@ void requireProbability(double p, const char* name) {
 }
 }  // namespace
 
+// Messages name the fields as MapParams holds them (occupancy.*); front ends rename them.
 void OccupancyParams::validate() const {
-  requireProbability(prob_hit, "sensor_model/hit");
-  requireProbability(prob_miss, "sensor_model/miss");
-  requireProbability(clamp_min, "sensor_model/min");
-  requireProbability(clamp_max, "sensor_model/max");
-  if (prob_hit <= 0.5) throw InvalidArgument("sensor_model/hit must be > 0.5");
-  if (prob_miss >= 0.5) throw InvalidArgument("sensor_model/miss must be < 0.5");
+  requireProbability(prob_hit, "occupancy.prob_hit");
+  requireProbability(prob_miss, "occupancy.prob_miss");
+  requireProbability(clamp_min, "occupancy.clamp_min");
+  requireProbability(clamp_max, "occupancy.clamp_max");
+  if (prob_hit <= 0.5)
+    throw InvalidArgument("occupancy.prob_hit must be > 0.5, got " + std::to_string(prob_hit));
+  if (prob_miss >= 0.5)
+    throw InvalidArgument("occupancy.prob_miss must be < 0.5, got " + std::to_string(prob_miss));
   if (clamp_min >= clamp_max)
-    throw InvalidArgument("sensor_model/min must be below sensor_model/max");
+    throw InvalidArgument("occupancy.clamp_min must be below occupancy.clamp_max");
   if (!std::isfinite(unknown_band) || unknown_band < 0.0 || unknown_band >= 0.5)
-    throw InvalidArgument("unknown_band must be in [0, 0.5), got " + std::to_string(unknown_band));
+    throw InvalidArgument("occupancy.unknown_band must be in [0, 0.5), got " +
+                          std::to_string(unknown_band));
   // Fixed point: log-odds of the clamping range must fit int16 at 1/1024 steps (|l| < 32).
-  if (std::fabs(logOdds(clamp_min)) * kLogOddsScale >= 32000 ||
-      std::fabs(logOdds(clamp_max)) * kLogOddsScale >= 32000)
-    throw InvalidArgument("sensor_model/min and /max must lie within (1e-13, 1 - 1e-13)");
+  if (std::fabs(logOdds(clamp_min)) * kLogOddsScale >= 32000)
+    throw InvalidArgument("occupancy.clamp_min must lie within (1e-13, 1 - 1e-13)");
+  if (std::fabs(logOdds(clamp_max)) * kLogOddsScale >= 32000)
+    throw InvalidArgument("occupancy.clamp_max must lie within (1e-13, 1 - 1e-13)");
 }
 
 OccupancyModel OccupancyModel::fromParams(const OccupancyParams& p) {

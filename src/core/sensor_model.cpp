@@ -39,7 +39,7 @@ SensorType sensorTypeFromString(const std::string& s) {
   if (s == "auto") return SensorType::kAuto;
   if (s == "lidar" || s == "spinning_lidar") return SensorType::kSpinningLidar;
   if (s == "pinhole" || s == "depth") return SensorType::kPinhole;
-  throw InvalidArgument("sensor must be auto, lidar or pinhole, got '" + s + "'");
+  throw InvalidArgument("sensor.type must be auto, lidar or pinhole, got '" + s + "'");
 }
 
 SensorModel SensorModel::autoFromCloud(double min_range_m, double max_range_m) {
@@ -77,33 +77,46 @@ SensorModel SensorModel::spinningLidar(double elevation_min_rad, double elevatio
   return m;
 }
 
+// Messages name the field as `sensor.<member>` (front ends rename it: field_names.h).
 void SensorModel::validate() const {
   if (!std::isfinite(min_range_m) || min_range_m < 0.0)
-    throw InvalidArgument("min range must be >= 0 m, got " + std::to_string(min_range_m));
+    throw InvalidArgument("sensor.min_range_m must be >= 0 m, got " + std::to_string(min_range_m));
   if (!std::isfinite(max_range_m))
-    throw InvalidArgument("max range must be finite (or <= 0 for no limit)");
+    throw InvalidArgument("sensor.max_range_m must be finite (or <= 0 for no limit)");
   if (max_range_m > 0.0 && max_range_m <= min_range_m)
-    throw InvalidArgument("max range must exceed min range");
+    throw InvalidArgument("sensor.max_range_m must exceed sensor.min_range_m (or be <= 0)");
   if (!(range_noise_m >= 0.0 && range_noise_m <= kMaxRangeNoiseM))  // NaN fails too
-    throw InvalidArgument("range noise must be in [0, " + std::to_string(kMaxRangeNoiseM) +
+    throw InvalidArgument("sensor.range_noise_m must be in [0, " + std::to_string(kMaxRangeNoiseM) +
                           "] m, got " + std::to_string(range_noise_m));
   if (!(range_noise_quadratic_per_m >= 0.0 &&
         range_noise_quadratic_per_m <= kMaxRangeNoiseQuadraticPerM))
-    throw InvalidArgument("quadratic range noise must be in [0, " +
+    throw InvalidArgument("sensor.range_noise_quadratic_per_m must be in [0, " +
                           std::to_string(kMaxRangeNoiseQuadraticPerM) + "] per m, got " +
                           std::to_string(range_noise_quadratic_per_m));
   if (type == SensorType::kPinhole) {
-    if (!(hfov_rad > 0.0 && hfov_rad < M_PI) || !(vfov_rad > 0.0 && vfov_rad < M_PI))
-      throw InvalidArgument("pinhole hfov and vfov must be in (0, 180) degrees");
+    if (!(hfov_rad > 0.0 && hfov_rad < M_PI))
+      throw InvalidArgument(
+          "sensor.hfov_rad must be in (0, pi) rad (0-180 degrees) for a pinhole, got " +
+          std::to_string(hfov_rad) + " rad");
+    if (!(vfov_rad > 0.0 && vfov_rad < M_PI))
+      throw InvalidArgument(
+          "sensor.vfov_rad must be in (0, pi) rad (0-180 degrees) for a pinhole, got " +
+          std::to_string(vfov_rad) + " rad");
     if (std::fabs(forward_S.norm() - 1.0) > 1e-6 || std::fabs(right_S.norm() - 1.0) > 1e-6 ||
         std::fabs(forward_S.dot(right_S)) > 1e-6)
-      throw InvalidArgument("pinhole axes must be orthonormal");
+      throw InvalidArgument("sensor.forward_S and sensor.right_S must be orthonormal");
   }
   if (type == SensorType::kSpinningLidar) {
-    if (!std::isfinite(elevation_min_rad) || !std::isfinite(elevation_max_rad) ||
-        elevation_min_rad >= elevation_max_rad || elevation_min_rad < -M_PI / 2 - 1e-9 ||
-        elevation_max_rad > M_PI / 2 + 1e-9)
-      throw InvalidArgument("lidar elevation limits must satisfy -90 <= min < max <= 90 deg");
+    if (!(elevation_min_rad >= -M_PI / 2 - 1e-9 && elevation_min_rad <= M_PI / 2 + 1e-9))
+      throw InvalidArgument(
+          "sensor.elevation_min_rad must be in [-pi/2, pi/2] rad (+-90 degrees), got " +
+          std::to_string(elevation_min_rad) + " rad");
+    if (!(elevation_max_rad >= -M_PI / 2 - 1e-9 && elevation_max_rad <= M_PI / 2 + 1e-9))
+      throw InvalidArgument(
+          "sensor.elevation_max_rad must be in [-pi/2, pi/2] rad (+-90 degrees), got " +
+          std::to_string(elevation_max_rad) + " rad");
+    if (elevation_min_rad >= elevation_max_rad)
+      throw InvalidArgument("sensor.elevation_min_rad must be below sensor.elevation_max_rad");
   }
 }
 

@@ -4,12 +4,14 @@ set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/scan_codec.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scan_store.cpp
   ${CMAKE_CURRENT_LIST_DIR}/occupancy.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/field_names.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_params.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sensor_model.cpp
   ${CMAKE_CURRENT_LIST_DIR}/block_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/block_view.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frustum_builder.cpp
   ${CMAKE_CURRENT_LIST_DIR}/culler.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/height_filter.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scan_preparation.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scan_scratch.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cpu_backend.cpp

@@ -6,10 +6,10 @@
 
 #include "fragg_map/ros/height_color.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
-visualization_msgs::Marker markerHeader(const MarkerStyle& style, const ros::Time& stamp,
+visualization_msgs::Marker markerHeader(const MarkerStyle& style, const ::ros::Time& stamp,
                                         int32_t id, int32_t action) {
   visualization_msgs::Marker m;
   m.header.frame_id = style.frame_id;
@@ -60,7 +60,7 @@ CellMask cellMask(const fragg::Map& map, const fragg::Block& block, fragg::CellS
 
 visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::BlockKey& key,
                                        const CellMask& cells, const MarkerStyle& style,
-                                       const ros::Time& stamp, int32_t id) {
+                                       const ::ros::Time& stamp, int32_t id) {
   visualization_msgs::Marker m = markerHeader(style, stamp, id, visualization_msgs::Marker::ADD);
   const double res_m = map.resolution();
   m.scale.x = m.scale.y = m.scale.z = res_m;
@@ -86,7 +86,8 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
 }
 
 visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
-                                                    const ros::Time& stamp, MarkerLedger* ledger) {
+                                                    const ::ros::Time& stamp,
+                                                    MarkerLedger* ledger) {
   visualization_msgs::MarkerArray out;
   const fragg::BlockView blocks = map.blockView();
   const uint64_t since = ledger->published_revision_;
@@ -134,7 +135,7 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
 }
 
 visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
-                                                const ros::Time& stamp, MarkerLedger* ledger) {
+                                                const ::ros::Time& stamp, MarkerLedger* ledger) {
   visualization_msgs::MarkerArray out;
   out.markers.push_back(markerHeader(style, stamp, 0, visualization_msgs::Marker::DELETEALL));
   ledger->ids_.clear();
@@ -151,7 +152,7 @@ visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const Mar
 }
 
 visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
-                                                  const ros::Time& stamp,
+                                                  const ::ros::Time& stamp,
                                                   const MarkerLedger& ledger) {
   visualization_msgs::MarkerArray out;
   out.markers.push_back(markerHeader(style, stamp, 0, visualization_msgs::Marker::DELETEALL));
@@ -165,4 +166,4 @@ visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map& map, const M
   return out;
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -11,7 +11,7 @@
 
 #include "fragg_map/errors.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
 using sensor_msgs::PointField;
@@ -143,4 +143,4 @@ size_t finitePointCount(const fragg::PointCloud& cloud) {
                                            [](const Eigen::Vector3f& p) { return p.allFinite(); }));
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -6,7 +6,7 @@
 
 #include "fragg_map/errors.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
 geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
@@ -33,7 +33,7 @@ std::vector<Eigen::Vector3d> pinholeCorners_S(const fragg::SensorModel& s) {
 
 visualization_msgs::Marker frustumMarker(const fragg::SensorModel& sensor,
                                          const Eigen::Isometry3d& T_map_sensor,
-                                         const std::string& frame_id, const ros::Time& stamp,
+                                         const std::string& frame_id, const ::ros::Time& stamp,
                                          int segments) {
   if (sensor.type == fragg::SensorType::kAuto)
     throw fragg::InvalidArgument("frustum marker needs an explicit sensor model");
@@ -83,4 +83,4 @@ visualization_msgs::Marker frustumMarker(const fragg::SensorModel& sensor,
   return m;
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 std_msgs::ColorRGBA heightColor(double z_m, double min_z_m, double max_z_m, float alpha) {
   const double span = max_z_m - min_z_m;
@@ -40,4 +40,4 @@ std_msgs::ColorRGBA heightColor(double z_m, double min_z_m, double max_z_m, floa
   return c;
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

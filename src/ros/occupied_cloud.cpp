@@ -6,10 +6,10 @@
 #include <cstring>
 #include <vector>
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 sensor_msgs::PointCloud2 occupiedCloud(const fragg::Map& map, const std::string& frame_id,
-                                       const ros::Time& stamp) {
+                                       const ::ros::Time& stamp) {
   std::vector<float> xyz;
   map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& b) {
     for (int c = 0; c < fragg::kCellsPerBlock; ++c) {
@@ -42,4 +42,4 @@ sensor_msgs::PointCloud2 occupiedCloud(const fragg::Map& map, const std::string&
   return msg;
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

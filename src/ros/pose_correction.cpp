@@ -6,7 +6,7 @@
 
 #include "fragg_map/errors.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 Eigen::Isometry3d isometryFromPose(const geometry_msgs::Pose& pose) {
   const Eigen::Vector3d t(pose.position.x, pose.position.y, pose.position.z);
@@ -58,4 +58,4 @@ CorrectionPlan planCorrection(const std::vector<PoseRequest>& requests, const Sc
   return plan;
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

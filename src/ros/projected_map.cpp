@@ -6,7 +6,7 @@
 
 #include "fragg_map/errors.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
 constexpr int8_t kUnknown = -1;
@@ -16,7 +16,7 @@ constexpr int8_t kOccupied = 100;
 }  // namespace
 
 nav_msgs::OccupancyGrid projectedMap(const fragg::Map& map, double min_z_m, double max_z_m,
-                                     const std::string& frame_id, const ros::Time& stamp) {
+                                     const std::string& frame_id, const ::ros::Time& stamp) {
   if (std::isnan(min_z_m) || std::isnan(max_z_m))
     throw fragg::InvalidArgument("projected map heights must not be NaN");
   if (min_z_m > max_z_m)
@@ -56,4 +56,4 @@ nav_msgs::OccupancyGrid projectedMap(const fragg::Map& map, double min_z_m, doub
   return grid;
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -3,7 +3,7 @@
 
 #include <iterator>
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 void ScanStampIndex::add(int64_t stamp_ns, fragg::ScanId id, const std::string& sensor_frame) {
   by_stamp_[stamp_ns] = Entry{id, sensor_frame};
@@ -38,4 +38,4 @@ const ScanStampIndex::Entry* ScanStampIndex::find(int64_t stamp_ns, int64_t tole
   return best;
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

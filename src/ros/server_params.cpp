@@ -1,5 +1,7 @@
 // Parameters of the map server: one read of the private namespace, typed lookups by path
-// ("sensor_model/hit"), validation naming the parameter.
+// ("sensor_model/hit"). The values of the core's fields are checked by the core's validate()
+// only; its messages name the core's fields, renamed here to the parameters (kParameterNames).
+// What is checked here belongs to the server alone (frame_id, queue, tf, markers, correction).
 #include "fragg_map/ros/server_params.h"
 
 #include <cmath>
@@ -7,8 +9,9 @@
 #include <vector>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/field_names.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
 using XmlRpc::XmlRpcValue;
@@ -66,22 +69,48 @@ void readString(const XmlRpcValue& root, const std::string& name, std::string* o
   *out = static_cast<std::string>(copy);
 }
 
-void requireProbability(const std::string& name, double p) {
-  if (!(p > 0.0 && p < 1.0)) badParam(name, "must be in (0, 1), got " + std::to_string(p));
-}
-
 void requireOrdered(const std::string& lo_name, double lo, const std::string& hi_name, double hi) {
   if (lo > hi)
     badParam(lo_name, std::to_string(lo) + " exceeds " + hi_name + " " + std::to_string(hi));
 }
 
-// Runs a core validate() and names the parameters it covers when it throws.
+// The core's fields (as its validate() messages name them) -> the server's parameters.
+const std::vector<fragg::FieldName>& parameterNames() {
+  static const std::vector<fragg::FieldName> names = {
+      {"resolution_m", "resolution"},
+      {"occupancy.prob_hit", "sensor_model/hit"},
+      {"occupancy.prob_miss", "sensor_model/miss"},
+      {"occupancy.clamp_min", "sensor_model/min"},
+      {"occupancy.clamp_max", "sensor_model/max"},
+      {"occupancy.unknown_band", "unknown_band"},
+      {"backend", "backend"},
+      {"raycast", "raycast"},
+      {"threads", "threads"},
+      {"culling.coherence_ttl_scans", "culling/coherence_ttl_scans"},
+      {"scans.point_step_m", "scan_store/point_step"},
+      {"height_filter.min_z_m", "pointcloud_min_z"},
+      {"height_filter.max_z_m", "pointcloud_max_z"},
+      {"sensor.type", "sensor/type"},
+      {"sensor.hfov_rad", "sensor/hfov"},
+      {"sensor.vfov_rad", "sensor/vfov"},
+      {"sensor.elevation_min_rad", "sensor/elevation_min"},
+      {"sensor.elevation_max_rad", "sensor/elevation_max"},
+      {"sensor.min_range_m", "sensor_model/min_range"},
+      {"sensor.max_range_m", "sensor_model/max_range"},
+      {"sensor.range_noise_m", "sensor/range_noise"},
+      {"sensor.range_noise_quadratic_per_m", "sensor/range_noise_quadratic"},
+  };
+  return names;
+}
+
+// Runs core parsing or validation; its InvalidArgument comes back naming the parameters
+// ("parameter 'sensor_model/hit' must be > 0.5, got 0.4").
 template <typename Fn>
-void validateAs(const std::string& names, Fn&& validate) {
+void asParameters(Fn&& fn) {
   try {
-    validate();
+    fn();
   } catch (const fragg::InvalidArgument& e) {
-    badParam(names, e.what());
+    throw fragg::InvalidArgument("parameter " + fragg::renameFields(e.what(), parameterNames()));
   }
 }
 
@@ -101,17 +130,10 @@ void readSensor(const XmlRpcValue& root, ServerParams& p) {
   readDouble(root, "sensor/range_noise", &noise_m);
   readDouble(root, "sensor/range_noise_quadratic", &noise_quadratic);
   fragg::SensorType sensor_type{};
-  validateAs("sensor/type", [&] { sensor_type = fragg::sensorTypeFromString(type); });
+  asParameters([&] { sensor_type = fragg::sensorTypeFromString(type); });
   if (axis != "z" && axis != "x") badParam("sensor/optical_axis", "must be z or x");
-  if (!std::isfinite(min_range) || min_range < 0.0)
-    badParam("sensor_model/min_range", "must be >= 0 m");
-  if (!std::isfinite(max_range)) badParam("sensor_model/max_range", "must be finite");
-  if (max_range > 0.0 && max_range <= min_range)
-    badParam("sensor_model/max_range", "must exceed sensor_model/min_range (or be <= 0)");
   switch (sensor_type) {
     case fragg::SensorType::kPinhole:
-      if (!(hfov > 0.0 && hfov < M_PI)) badParam("sensor/hfov", "must be in (0, pi) rad");
-      if (!(vfov > 0.0 && vfov < M_PI)) badParam("sensor/vfov", "must be in (0, pi) rad");
       p.sensor = fragg::SensorModel::pinhole(
           hfov, vfov, min_range, max_range,
           axis == "x" ? fragg::OpticalAxis::kXForward : fragg::OpticalAxis::kZForward);
@@ -123,28 +145,21 @@ void readSensor(const XmlRpcValue& root, ServerParams& p) {
     default:
       p.sensor = fragg::SensorModel::autoFromCloud(min_range, max_range);
   }
-  if (!(noise_m >= 0.0 && noise_m <= fragg::kMaxRangeNoiseM))
-    badParam("sensor/range_noise",
-             "must be in [0, " + std::to_string(fragg::kMaxRangeNoiseM) + "] m");
-  if (!(noise_quadratic >= 0.0 && noise_quadratic <= fragg::kMaxRangeNoiseQuadraticPerM))
-    badParam("sensor/range_noise_quadratic",
-             "must be in [0, " + std::to_string(fragg::kMaxRangeNoiseQuadraticPerM) + "] per m");
   p.sensor.range_noise_m = noise_m;
   p.sensor.range_noise_quadratic_per_m = noise_quadratic;
-  validateAs("sensor", [&] { p.sensor.validate(); });
+  asParameters([&] { p.sensor.validate(); });
 }
 
 void readScanStore(const XmlRpcValue& root, fragg::ScanStoreParams& s) {
   readBool(root, "keep_scans", &s.keep);
   double max_mb = static_cast<double>(s.max_bytes >> 20);
   readDouble(root, "scan_store/max_mb", &max_mb);
+  // A conversion, not a check of the core's field (max_bytes): MiB -> bytes must fit.
   if (!(max_mb >= 0.0) || !(max_mb <= 1e9))
     badParam("scan_store/max_mb", "must be in [0, 1e9] MiB (0 = no limit)");
   s.max_bytes = static_cast<size_t>(max_mb * 1024.0 * 1024.0);
   readString(root, "scan_store/spill_dir", &s.spill_dir);
   readDouble(root, "scan_store/point_step", &s.point_step_m);
-  if (!(s.point_step_m >= 0.0) || !(s.point_step_m <= 0.1))
-    badParam("scan_store/point_step", "must be in [0, 0.1] m (0 = float32 points)");
 }
 
 void readCorrection(const XmlRpcValue& root, CorrectionParams& c) {
@@ -171,8 +186,6 @@ ServerParams parseParameters(const XmlRpcValue& root) {
   ServerParams p;
   fragg::MapParams& m = p.map;
   readDouble(root, "resolution", &m.resolution_m);
-  if (!(m.resolution_m > 0.0) || !std::isfinite(m.resolution_m))
-    badParam("resolution", "must be a positive number of metres");
   readString(root, "frame_id", &p.frame_id);
   if (p.frame_id.empty()) badParam("frame_id", "must not be empty");
 
@@ -181,39 +194,27 @@ ServerParams parseParameters(const XmlRpcValue& root) {
   readDouble(root, "sensor_model/min", &m.occupancy.clamp_min);
   readDouble(root, "sensor_model/max", &m.occupancy.clamp_max);
   readDouble(root, "unknown_band", &m.occupancy.unknown_band);
-  requireProbability("sensor_model/hit", m.occupancy.prob_hit);
-  requireProbability("sensor_model/miss", m.occupancy.prob_miss);
-  requireProbability("sensor_model/min", m.occupancy.clamp_min);
-  requireProbability("sensor_model/max", m.occupancy.clamp_max);
-  if (m.occupancy.prob_hit <= 0.5) badParam("sensor_model/hit", "must exceed 0.5");
-  if (m.occupancy.prob_miss >= 0.5) badParam("sensor_model/miss", "must be below 0.5");
-  requireOrdered("sensor_model/min", m.occupancy.clamp_min, "sensor_model/max",
-                 m.occupancy.clamp_max);
-  validateAs("sensor_model/* or unknown_band", [&] { m.occupancy.validate(); });
 
   std::string backend = "auto", raycast = "dda";
   readString(root, "backend", &backend);
   readString(root, "raycast", &raycast);
-  validateAs("backend", [&] { m.backend = fragg::backendFromString(backend); });
-  validateAs("raycast", [&] { m.raycast = fragg::rayCastFromString(raycast); });
+  asParameters([&] {
+    m.backend = fragg::backendFromString(backend);
+    m.raycast = fragg::rayCastFromString(raycast);
+  });
   readBool(root, "clear_no_return_rays", &m.clear_no_return_rays);
   readInt(root, "threads", &m.threads);
-  if (m.threads < 0) badParam("threads", "must be >= 0 (0 = every core)");
   readBool(root, "culling/plane_memory", &m.culling.plane_memory);
   readBool(root, "culling/rotation_coherence", &m.culling.rotation_coherence);
   readBool(root, "culling/translation_coherence", &m.culling.translation_coherence);
   readInt(root, "culling/coherence_ttl_scans", &m.culling.coherence_ttl_scans);
-  if (m.culling.coherence_ttl_scans < 1 || m.culling.coherence_ttl_scans > 32)
-    badParam("culling/coherence_ttl_scans", "must be in [1, 32]");
   readScanStore(root, m.scans);
-  validateAs("resolution", [&] { m.validate(); });
+  readDouble(root, "pointcloud_min_z", &m.height_filter.min_z_m);
+  readDouble(root, "pointcloud_max_z", &m.height_filter.max_z_m);
+  asParameters([&] { m.validate(); });
 
   readSensor(root, p);
 
-  readDouble(root, "pointcloud_min_z", &p.pointcloud_min_z_m);
-  readDouble(root, "pointcloud_max_z", &p.pointcloud_max_z_m);
-  requireOrdered("pointcloud_min_z", p.pointcloud_min_z_m, "pointcloud_max_z",
-                 p.pointcloud_max_z_m);
   readDouble(root, "occupancy_min_z", &p.occupancy_min_z_m);
   readDouble(root, "occupancy_max_z", &p.occupancy_max_z_m);
   requireOrdered("occupancy_min_z", p.occupancy_min_z_m, "occupancy_max_z", p.occupancy_max_z_m);
@@ -236,10 +237,10 @@ ServerParams parseParameters(const XmlRpcValue& root) {
   return p;
 }
 
-ServerParams readParameters(const ros::NodeHandle& private_nh) {
+ServerParams readParameters(const ::ros::NodeHandle& private_nh) {
   XmlRpcValue root;  // stays invalid (every default) when the namespace holds nothing
   private_nh.getParam(private_nh.getNamespace(), root);
   return parseParameters(root);
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -6,7 +6,7 @@
 
 #include "fragg_map/errors.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 TimingStats::TimingStats(size_t window) : window_(window) {
   if (window_ == 0) throw fragg::InvalidArgument("timing window must be >= 1 sample");
@@ -40,4 +40,4 @@ double TimingStats::percentileMs(double q) const {
   return sorted[std::min(sorted.size() - 1, rank == 0 ? 0 : rank - 1)];
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

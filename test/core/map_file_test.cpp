@@ -155,10 +155,10 @@ TEST(MapFileTest, KeptFloat32ScansRoundTripBitForBit) {
   loaded.remove(1);
   EXPECT_EQ(loaded.knownVoxelCount(), first.knownVoxelCount());
   size_t differing = 0;
-  loaded.blocks().forEach([&](BlockIndex i) {
-    const Block* other = first.blocks().findBlock(loaded.blocks().meta(i).key);
+  loaded.forEachBlock([&](const BlockKey& key, const Block& block) {
+    const Block* other = first.findBlock(key);
     for (int k = 0; k < kCellsPerBlock; ++k) {
-      const Cell& a = loaded.blocks().block(i).cells[k];
+      const Cell& a = block.cells[k];
       const Cell b = other ? other->cells[k] : Cell();
       differing += a.log_odds_fx != b.log_odds_fx || a.hits != b.hits;
     }

@@ -6,5 +6,8 @@ fragg_add_test(fragg_core_test
           ${CMAKE_CURRENT_LIST_DIR}/insert_semantics_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/frustum_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/map_file_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/map_lock_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/height_filter_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/field_names_test.cpp
   LIBS fragg_map_core ZLIB::ZLIB
   LABELS core)

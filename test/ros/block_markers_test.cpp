@@ -13,8 +13,8 @@
 
 namespace {
 
-using fragg_ros::MarkerLedger;
-using fragg_ros::MarkerStyle;
+using fragg::ros::MarkerLedger;
+using fragg::ros::MarkerStyle;
 using visualization_msgs::Marker;
 using visualization_msgs::MarkerArray;
 
@@ -36,12 +36,12 @@ fragg::BlockKey blockOfMarker(const fragg::Map& map, const Marker& m) {
 }
 
 TEST(BlockMarkers, FirstUpdateShowsEveryOccupiedCellOncePerBlock) {
-  fragg::Map map(fragg_ros_test::cpuParams());
-  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  fragg::Map map(fragg::ros::test::cpuParams());
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
   MarkerLedger ledger;
   MarkerStyle style;
-  const MarkerArray a = fragg_ros::changedBlockMarkers(map, style, kStamp, &ledger);
-  const auto occupied = fragg_ros_test::centresIn(map, fragg::CellState::kOccupied);
+  const MarkerArray a = fragg::ros::changedBlockMarkers(map, style, kStamp, &ledger);
+  const auto occupied = fragg::ros::test::centresIn(map, fragg::CellState::kOccupied);
   ASSERT_FALSE(occupied.empty());
   size_t points = 0;
   std::set<int32_t> ids;
@@ -98,7 +98,7 @@ KeySet allShown(const ShownVoxels& shown) {
 
 KeySet occupiedVoxels(const fragg::Map& map) {
   KeySet out;
-  for (const Eigen::Vector3d& c : fragg_ros_test::centresIn(map, fragg::CellState::kOccupied)) {
+  for (const Eigen::Vector3d& c : fragg::ros::test::centresIn(map, fragg::CellState::kOccupied)) {
     const fragg::VoxelKey v = map.keyOf(c);
     out.insert({v.x, v.y, v.z});
   }
@@ -109,26 +109,26 @@ KeySet occupiedVoxels(const fragg::Map& map) {
 // its last (by revision), so its subscriber ends up with the same voxels as one that got every
 // update, including cells that appeared and vanished in between.
 TEST(BlockMarkers, SkippedUpdatesAccumulateNothingIsLost) {
-  fragg::Map map(fragg_ros_test::cpuParams());
+  fragg::Map map(fragg::ros::test::cpuParams());
   const fragg::VoxelKey lone{1, 2, 3};
-  fragg_ros_test::setCell(map, lone, fragg::CellState::kOccupied);
-  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  fragg::ros::test::setCell(map, lone, fragg::CellState::kOccupied);
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
   MarkerLedger every, throttled;
   ShownVoxels every_view, throttled_view;
-  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &every), &every_view);
-  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &throttled),
+  apply(map, fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &every), &every_view);
+  apply(map, fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &throttled),
         &throttled_view);
   ASSERT_EQ(allShown(throttled_view).count({lone.x, lone.y, lone.z}), 1u);
   // Three changes the throttled topic does not publish: a new wall, the lone cell freed (its
   // block emptied), a wall seen from farther away.
-  fragg_ros_test::insertWall(map, Eigen::Vector3d(0.0, 10.0, 0.0), 3.0);
-  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &every), &every_view);
-  fragg_ros_test::setCell(map, lone, fragg::CellState::kFree);
-  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &every), &every_view);
-  fragg_ros_test::insertWall(map, Eigen::Vector3d(-2.0, 0.0, 0.0), 5.5);
-  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &every), &every_view);
+  fragg::ros::test::insertWall(map, Eigen::Vector3d(0.0, 10.0, 0.0), 3.0);
+  apply(map, fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &every), &every_view);
+  fragg::ros::test::setCell(map, lone, fragg::CellState::kFree);
+  apply(map, fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &every), &every_view);
+  fragg::ros::test::insertWall(map, Eigen::Vector3d(-2.0, 0.0, 0.0), 5.5);
+  apply(map, fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &every), &every_view);
   const MarkerArray catch_up =
-      fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &throttled);
+      fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &throttled);
   EXPECT_EQ(countAction(catch_up, Marker::DELETE), 1u);  // the lone cell's block
   apply(map, catch_up, &throttled_view);
   const KeySet expected = occupiedVoxels(map);
@@ -140,26 +140,26 @@ TEST(BlockMarkers, SkippedUpdatesAccumulateNothingIsLost) {
 }
 
 TEST(BlockMarkers, NothingChangedMeansNothingSent) {
-  fragg::Map map(fragg_ros_test::cpuParams());
-  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  fragg::Map map(fragg::ros::test::cpuParams());
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
   MarkerLedger ledger;
-  fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
-  EXPECT_TRUE(fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.empty());
+  fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  EXPECT_TRUE(fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.empty());
 }
 
 TEST(BlockMarkers, SecondScanSendsOnlyTheBlocksItChanged) {
-  fragg::Map map(fragg_ros_test::cpuParams());
-  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  fragg::Map map(fragg::ros::test::cpuParams());
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
   MarkerLedger ledger;
-  const MarkerArray first = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  const MarkerArray first = fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
   ASSERT_FALSE(first.markers.empty());
   const uint64_t before = map.revision();
   // A second wall 10 m to the side (y in [9, 11] m): its rays never reach the first wall's
   // blocks (y in [-1, 1] m), so only its own blocks change.
-  fragg_ros_test::insertWall(map, Eigen::Vector3d(0.0, 10.0, 0.0), 3.0);
-  const MarkerArray second = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  fragg::ros::test::insertWall(map, Eigen::Vector3d(0.0, 10.0, 0.0), 3.0);
+  const MarkerArray second = fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
   std::set<std::tuple<int, int, int>> far_occupied_blocks;
-  for (const Eigen::Vector3d& c : fragg_ros_test::centresIn(map, fragg::CellState::kOccupied)) {
+  for (const Eigen::Vector3d& c : fragg::ros::test::centresIn(map, fragg::CellState::kOccupied)) {
     const fragg::BlockKey k = fragg::blockKeyOf(map.keyOf(c));
     if (c.y() > 8.0) far_occupied_blocks.insert({k.x, k.y, k.z});
   }
@@ -176,26 +176,27 @@ TEST(BlockMarkers, SecondScanSendsOnlyTheBlocksItChanged) {
   }
   EXPECT_EQ(ledger.shownBlocks(), first.markers.size() + second.markers.size());
   // Re-observing the first wall: whatever it resends keeps the old ids.
-  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
-  const MarkerArray third = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  const MarkerArray third = fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
   for (const Marker& m : third.markers) EXPECT_EQ(first_ids.count(m.id), 1u);
 }
 
 TEST(BlockMarkers, BlockIsResentOnlyWhenItsDrawnCellsChange) {
-  fragg::Map map(fragg_ros_test::cpuParams());
+  fragg::Map map(fragg::ros::test::cpuParams());
   const fragg::VoxelKey a{1, 2, 3}, a_free{2, 2, 3}, a_more{3, 2, 3};
-  fragg_ros_test::setCell(map, a, fragg::CellState::kOccupied);
+  fragg::ros::test::setCell(map, a, fragg::CellState::kOccupied);
   MarkerLedger ledger;
-  ASSERT_EQ(fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.size(), 1u);
+  ASSERT_EQ(fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.size(),
+            1u);
   // Same block, a free cell changes: the block's changed_at moves, its occupied cells do not.
-  fragg_ros_test::setCell(map, a_free, fragg::CellState::kFree);
+  fragg::ros::test::setCell(map, a_free, fragg::CellState::kFree);
   ASSERT_GT(map.blockView().stamps(fragg::blockKeyOf(a)).changed_at,
             ledger.publishedRevision());
-  EXPECT_TRUE(fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.empty());
+  EXPECT_TRUE(fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.empty());
   // A second occupied cell: the block is sent again, whole, under the same id.
   const int32_t id = ledger.idOf(fragg::blockKeyOf(a));
-  fragg_ros_test::setCell(map, a_more, fragg::CellState::kOccupied);
-  const MarkerArray again = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  fragg::ros::test::setCell(map, a_more, fragg::CellState::kOccupied);
+  const MarkerArray again = fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
   ASSERT_EQ(again.markers.size(), 1u);
   EXPECT_EQ(again.markers[0].id, id);
   EXPECT_EQ(again.markers[0].action, Marker::ADD);
@@ -203,19 +204,19 @@ TEST(BlockMarkers, BlockIsResentOnlyWhenItsDrawnCellsChange) {
 }
 
 TEST(BlockMarkers, ColoursFollowHeight) {
-  fragg::Map map(fragg_ros_test::cpuParams(0.5));
-  fragg_ros_test::setCell(map, {0, 0, 0}, fragg::CellState::kOccupied);  // z 0.25 m
-  fragg_ros_test::setCell(map, {0, 0, 7}, fragg::CellState::kOccupied);  // z 3.75 m
+  fragg::Map map(fragg::ros::test::cpuParams(0.5));
+  fragg::ros::test::setCell(map, {0, 0, 0}, fragg::CellState::kOccupied);  // z 0.25 m
+  fragg::ros::test::setCell(map, {0, 0, 7}, fragg::CellState::kOccupied);  // z 3.75 m
   MarkerLedger ledger;
   MarkerStyle style;
   style.color_min_z_m = 0.0;
   style.color_max_z_m = 4.0;
-  const MarkerArray a = fragg_ros::changedBlockMarkers(map, style, kStamp, &ledger);
+  const MarkerArray a = fragg::ros::changedBlockMarkers(map, style, kStamp, &ledger);
   ASSERT_EQ(a.markers.size(), 1u);
   const Marker& m = a.markers[0];
   ASSERT_EQ(m.points.size(), 2u);
   for (size_t i = 0; i < 2; ++i) {
-    const auto want = fragg_ros::heightColor(m.points[i].z, 0.0, 4.0, 1.f);
+    const auto want = fragg::ros::heightColor(m.points[i].z, 0.0, 4.0, 1.f);
     EXPECT_FLOAT_EQ(m.colors[i].r, want.r);
     EXPECT_FLOAT_EQ(m.colors[i].g, want.g);
     EXPECT_FLOAT_EQ(m.colors[i].b, want.b);
@@ -224,17 +225,17 @@ TEST(BlockMarkers, ColoursFollowHeight) {
 }
 
 TEST(BlockMarkers, BlockThatLosesItsOccupiedCellsIsDeleted) {
-  fragg::Map map(fragg_ros_test::cpuParams());
+  fragg::Map map(fragg::ros::test::cpuParams());
   const fragg::VoxelKey a{1, 2, 3}, b{40, 2, 3};
-  fragg_ros_test::setCell(map, a, fragg::CellState::kOccupied);
-  fragg_ros_test::setCell(map, b, fragg::CellState::kOccupied);
+  fragg::ros::test::setCell(map, a, fragg::CellState::kOccupied);
+  fragg::ros::test::setCell(map, b, fragg::CellState::kOccupied);
   MarkerLedger ledger;
-  const MarkerArray first = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  const MarkerArray first = fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
   ASSERT_EQ(first.markers.size(), 2u);
   const int32_t id_a = ledger.idOf(fragg::blockKeyOf(a));
   ASSERT_GE(id_a, 0);
-  fragg_ros_test::setCell(map, a, fragg::CellState::kFree);  // the block still exists
-  const MarkerArray second = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  fragg::ros::test::setCell(map, a, fragg::CellState::kFree);  // the block still exists
+  const MarkerArray second = fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
   ASSERT_EQ(second.markers.size(), 1u);
   EXPECT_EQ(second.markers[0].action, Marker::DELETE);
   EXPECT_EQ(second.markers[0].id, id_a);
@@ -246,22 +247,22 @@ TEST(BlockMarkers, BlockThatLosesItsOccupiedCellsIsDeleted) {
   MarkerStyle free_style;
   free_style.ns = "free";
   free_style.state = fragg::CellState::kFree;
-  const MarkerArray free = fragg_ros::changedBlockMarkers(map, free_style, kStamp, &free_ledger);
+  const MarkerArray free = fragg::ros::changedBlockMarkers(map, free_style, kStamp, &free_ledger);
   ASSERT_EQ(free.markers.size(), 1u);
   EXPECT_EQ(free.markers[0].points.size(), 1u);
   EXPECT_EQ(free.markers[0].ns, "free");
 }
 
 TEST(BlockMarkers, ClearedBoxDeletesTheErasedBlocks) {
-  fragg::Map map(fragg_ros_test::cpuParams());
-  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  fragg::Map map(fragg::ros::test::cpuParams());
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
   MarkerLedger ledger;
-  const MarkerArray first = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  const MarkerArray first = fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
   std::set<int32_t> shown;
   for (const Marker& m : first.markers) shown.insert(m.id);
   map.clearBox(Eigen::Vector3d(-100, -100, -100), Eigen::Vector3d(100, 100, 100));
   ASSERT_EQ(map.blockCount(), 0u);
-  const MarkerArray second = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
+  const MarkerArray second = fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger);
   EXPECT_EQ(countAction(second, Marker::DELETE), shown.size());
   EXPECT_EQ(second.markers.size(), shown.size());
   for (const Marker& m : second.markers) EXPECT_EQ(shown.count(m.id), 1u);
@@ -271,15 +272,15 @@ TEST(BlockMarkers, ClearedBoxDeletesTheErasedBlocks) {
 // latch: a subscriber that connects late gets what the others see, under the same ids, so the
 // increments that follow apply to its view as to theirs.
 TEST(BlockMarkers, LateSubscriberFollowsTheIncrementsAfterItsSnapshot) {
-  fragg::Map map(fragg_ros_test::cpuParams());
-  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  fragg::Map map(fragg::ros::test::cpuParams());
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
   MarkerLedger topic;
   ShownVoxels early, late;
-  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &topic), &early);
-  fragg_ros_test::insertWall(map, Eigen::Vector3d(0.0, 10.0, 0.0), 3.0);
-  apply(map, fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &topic), &early);
+  apply(map, fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &topic), &early);
+  fragg::ros::test::insertWall(map, Eigen::Vector3d(0.0, 10.0, 0.0), 3.0);
+  apply(map, fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &topic), &early);
   const size_t shown_before = topic.shownBlocks();
-  const MarkerArray snapshot = fragg_ros::shownBlockMarkers(map, MarkerStyle(), kStamp, topic);
+  const MarkerArray snapshot = fragg::ros::shownBlockMarkers(map, MarkerStyle(), kStamp, topic);
   EXPECT_EQ(topic.shownBlocks(), shown_before);  // the topic's ledger is left alone
   ASSERT_EQ(snapshot.markers.size(), shown_before + 1);
   EXPECT_EQ(snapshot.markers[0].action, Marker::DELETEALL);
@@ -287,12 +288,12 @@ TEST(BlockMarkers, LateSubscriberFollowsTheIncrementsAfterItsSnapshot) {
   EXPECT_EQ(late, early);  // same ids, same cells
   // Later changes, one of them deleting a block both views show.
   const fragg::VoxelKey lone{40, 40, 40};
-  fragg_ros_test::setCell(map, lone, fragg::CellState::kOccupied);
-  const MarkerArray add = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &topic);
+  fragg::ros::test::setCell(map, lone, fragg::CellState::kOccupied);
+  const MarkerArray add = fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &topic);
   apply(map, add, &early);
   apply(map, add, &late);
-  fragg_ros_test::setCell(map, lone, fragg::CellState::kFree);
-  const MarkerArray del = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &topic);
+  fragg::ros::test::setCell(map, lone, fragg::CellState::kFree);
+  const MarkerArray del = fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &topic);
   EXPECT_EQ(countAction(del, Marker::DELETE), 1u);
   apply(map, del, &early);
   apply(map, del, &late);
@@ -301,34 +302,34 @@ TEST(BlockMarkers, LateSubscriberFollowsTheIncrementsAfterItsSnapshot) {
 }
 
 TEST(BlockMarkers, FullRepublishStartsWithDeleteAll) {
-  fragg::Map map(fragg_ros_test::cpuParams());
-  fragg_ros_test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  fragg::Map map(fragg::ros::test::cpuParams());
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
   MarkerLedger incremental, full;
-  const MarkerArray inc = fragg_ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &incremental);
-  const MarkerArray all = fragg_ros::allBlockMarkers(map, MarkerStyle(), kStamp, &full);
+  const MarkerArray inc = fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &incremental);
+  const MarkerArray all = fragg::ros::allBlockMarkers(map, MarkerStyle(), kStamp, &full);
   ASSERT_EQ(all.markers.size(), inc.markers.size() + 1);
   EXPECT_EQ(all.markers[0].action, Marker::DELETEALL);
   EXPECT_EQ(countAction(all, Marker::ADD), inc.markers.size());
   EXPECT_EQ(full.shownBlocks(), incremental.shownBlocks());
   // After a reset the full republish is the DELETEALL alone.
   map.reset();
-  const MarkerArray after_reset = fragg_ros::allBlockMarkers(map, MarkerStyle(), kStamp, &full);
+  const MarkerArray after_reset = fragg::ros::allBlockMarkers(map, MarkerStyle(), kStamp, &full);
   ASSERT_EQ(after_reset.markers.size(), 1u);
   EXPECT_EQ(after_reset.markers[0].action, Marker::DELETEALL);
   EXPECT_EQ(full.shownBlocks(), 0u);
 }
 
 TEST(HeightColor, RampEndsAndClamping) {
-  const auto low = fragg_ros::heightColor(-5.0, 0.0, 2.0, 0.5f);
+  const auto low = fragg::ros::heightColor(-5.0, 0.0, 2.0, 0.5f);
   EXPECT_FLOAT_EQ(low.r, 1.f);
   EXPECT_FLOAT_EQ(low.g, 0.f);
   EXPECT_FLOAT_EQ(low.b, 0.f);
   EXPECT_FLOAT_EQ(low.a, 0.5f);
-  const auto high = fragg_ros::heightColor(9.0, 0.0, 2.0, 1.f);
+  const auto high = fragg::ros::heightColor(9.0, 0.0, 2.0, 1.f);
   EXPECT_FLOAT_EQ(high.r, 1.f);
   EXPECT_FLOAT_EQ(high.g, 0.f);
   EXPECT_FLOAT_EQ(high.b, 1.f);
-  const auto mid = fragg_ros::heightColor(1.0, 0.0, 2.0, 1.f);  // hue 2.5 sectors: cyan-green
+  const auto mid = fragg::ros::heightColor(1.0, 0.0, 2.0, 1.f);  // hue 2.5 sectors: cyan-green
   EXPECT_FLOAT_EQ(mid.r, 0.f);
   EXPECT_FLOAT_EQ(mid.g, 1.f);
   EXPECT_FLOAT_EQ(mid.b, 0.5f);

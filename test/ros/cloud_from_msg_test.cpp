@@ -13,11 +13,11 @@
 
 namespace {
 
-using fragg_ros::cloudFromMsg;
-using fragg_ros::CloudLayout;
-using fragg_ros_test::FieldSpec;
-using fragg_ros_test::makeCloud;
-using fragg_ros_test::packedXyz;
+using fragg::ros::cloudFromMsg;
+using fragg::ros::CloudLayout;
+using fragg::ros::test::FieldSpec;
+using fragg::ros::test::makeCloud;
+using fragg::ros::test::packedXyz;
 using F = sensor_msgs::PointField;
 
 std::vector<Eigen::Vector3f> randomPoints(size_t n, unsigned seed = 7) {
@@ -117,7 +117,7 @@ TEST(CloudFromMsg, OrganisedDepthCloudKeepsItsNaNsInPlace) {
   EXPECT_EQ(cloud.width, 8u);
   EXPECT_EQ(cloud.height, 6u);
   expectSamePoints(pts, cloud);
-  EXPECT_EQ(fragg_ros::finitePointCount(cloud), 45u);
+  EXPECT_EQ(fragg::ros::finitePointCount(cloud), 45u);
 }
 
 TEST(CloudFromMsg, RejectsMissingField) {

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace fragg_ros_test {
+namespace fragg::ros::test {
 
 struct FieldSpec {
   std::string name;
@@ -82,4 +82,4 @@ inline std::vector<FieldSpec> packedXyz() {
   return {{"x", 0, F::FLOAT32}, {"y", 4, F::FLOAT32}, {"z", 8, F::FLOAT32}};
 }
 
-}  // namespace fragg_ros_test
+}  // namespace fragg::ros::test

@@ -7,7 +7,7 @@
 
 #include "fragg_map/map.h"
 
-namespace fragg_ros_test {
+namespace fragg::ros::test {
 
 inline fragg::MapParams cpuParams(double resolution_m = 0.1) {
   fragg::MapParams p;
@@ -51,4 +51,4 @@ inline std::vector<Eigen::Vector3d> centresIn(const fragg::Map& map, fragg::Cell
   return out;
 }
 
-}  // namespace fragg_ros_test
+}  // namespace fragg::ros::test

@@ -20,17 +20,17 @@ bool lexLess(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 }
 
 TEST(OccupiedCloud, RoundTripGivesTheOccupiedCentres) {
-  fragg::Map map(fragg_ros_test::cpuParams(0.05));
-  fragg_ros_test::insertWall(map, Eigen::Vector3d(0.5, -0.2, 0.3), 2.0);
-  const sensor_msgs::PointCloud2 msg = fragg_ros::occupiedCloud(map, "map", kStamp);
+  fragg::Map map(fragg::ros::test::cpuParams(0.05));
+  fragg::ros::test::insertWall(map, Eigen::Vector3d(0.5, -0.2, 0.3), 2.0);
+  const sensor_msgs::PointCloud2 msg = fragg::ros::occupiedCloud(map, "map", kStamp);
   EXPECT_EQ(msg.header.frame_id, "map");
   EXPECT_EQ(msg.header.stamp, kStamp);
   EXPECT_EQ(msg.height, 1u);
   EXPECT_EQ(msg.point_step, 12u);
-  fragg_ros::CloudLayout layout{};
-  const fragg::PointCloud back = fragg_ros::cloudFromMsg(msg, &layout);
-  EXPECT_EQ(layout, fragg_ros::CloudLayout::kPackedFloat32);
-  auto want = fragg_ros_test::centresIn(map, fragg::CellState::kOccupied);
+  fragg::ros::CloudLayout layout{};
+  const fragg::PointCloud back = fragg::ros::cloudFromMsg(msg, &layout);
+  EXPECT_EQ(layout, fragg::ros::CloudLayout::kPackedFloat32);
+  auto want = fragg::ros::test::centresIn(map, fragg::CellState::kOccupied);
   std::vector<Eigen::Vector3d> got;
   for (const auto& p : back.points_S) got.push_back(p.cast<double>());
   ASSERT_EQ(got.size(), want.size());
@@ -43,8 +43,8 @@ TEST(OccupiedCloud, RoundTripGivesTheOccupiedCentres) {
 }
 
 TEST(OccupiedCloud, EmptyMapGivesAnEmptyCloud) {
-  fragg::Map map(fragg_ros_test::cpuParams());
-  const sensor_msgs::PointCloud2 msg = fragg_ros::occupiedCloud(map, "odom", kStamp);
+  fragg::Map map(fragg::ros::test::cpuParams());
+  const sensor_msgs::PointCloud2 msg = fragg::ros::occupiedCloud(map, "odom", kStamp);
   EXPECT_EQ(msg.width, 0u);
   EXPECT_TRUE(msg.data.empty());
   EXPECT_EQ(msg.fields.size(), 3u);
@@ -52,15 +52,15 @@ TEST(OccupiedCloud, EmptyMapGivesAnEmptyCloud) {
 
 TEST(ProjectedMap, ColumnsBetweenMinAndMaxZ) {
   // Resolution 0.1 m: voxel z key k has its centre at (k + 0.5) * 0.1 m.
-  fragg::Map map(fragg_ros_test::cpuParams(0.1));
+  fragg::Map map(fragg::ros::test::cpuParams(0.1));
   using S = fragg::CellState;
-  fragg_ros_test::setCell(map, {0, 0, 5}, S::kOccupied);   // z 0.55: inside [0, 1]
-  fragg_ros_test::setCell(map, {1, 0, 5}, S::kFree);       // free column
-  fragg_ros_test::setCell(map, {2, 0, 20}, S::kOccupied);  // z 2.05: above -> unknown
-  fragg_ros_test::setCell(map, {3, 0, 2}, S::kFree);       // free below occupied: occupied
-  fragg_ros_test::setCell(map, {3, 0, 3}, S::kOccupied);
-  fragg_ros_test::setCell(map, {-2, 4, 1}, S::kFree);  // extends the bounds to x -2, y 4
-  const nav_msgs::OccupancyGrid grid = fragg_ros::projectedMap(map, 0.0, 1.0, "map", kStamp);
+  fragg::ros::test::setCell(map, {0, 0, 5}, S::kOccupied);   // z 0.55: inside [0, 1]
+  fragg::ros::test::setCell(map, {1, 0, 5}, S::kFree);       // free column
+  fragg::ros::test::setCell(map, {2, 0, 20}, S::kOccupied);  // z 2.05: above -> unknown
+  fragg::ros::test::setCell(map, {3, 0, 2}, S::kFree);       // free below occupied: occupied
+  fragg::ros::test::setCell(map, {3, 0, 3}, S::kOccupied);
+  fragg::ros::test::setCell(map, {-2, 4, 1}, S::kFree);  // extends the bounds to x -2, y 4
+  const nav_msgs::OccupancyGrid grid = fragg::ros::projectedMap(map, 0.0, 1.0, "map", kStamp);
   EXPECT_EQ(grid.header.frame_id, "map");
   EXPECT_FLOAT_EQ(grid.info.resolution, 0.1f);
   ASSERT_EQ(grid.info.width, 6u);   // x keys -2 .. 3
@@ -79,17 +79,17 @@ TEST(ProjectedMap, ColumnsBetweenMinAndMaxZ) {
   for (int8_t v : grid.data) known += v != -1;
   EXPECT_EQ(known, 4u);
   // Raising the ceiling brings the high cell in.
-  const nav_msgs::OccupancyGrid tall = fragg_ros::projectedMap(map, 0.0, 3.0, "map", kStamp);
+  const nav_msgs::OccupancyGrid tall = fragg::ros::projectedMap(map, 0.0, 3.0, "map", kStamp);
   EXPECT_EQ(tall.data[0 * 6 + 4], 100);
 }
 
 TEST(ProjectedMap, EmptyMapAndBadHeights) {
-  fragg::Map map(fragg_ros_test::cpuParams());
-  const nav_msgs::OccupancyGrid grid = fragg_ros::projectedMap(map, 0.0, 1.0, "map", kStamp);
+  fragg::Map map(fragg::ros::test::cpuParams());
+  const nav_msgs::OccupancyGrid grid = fragg::ros::projectedMap(map, 0.0, 1.0, "map", kStamp);
   EXPECT_EQ(grid.info.width, 0u);
   EXPECT_TRUE(grid.data.empty());
-  EXPECT_THROW(fragg_ros::projectedMap(map, 1.0, 0.0, "map", kStamp), fragg::InvalidArgument);
-  EXPECT_THROW(fragg_ros::projectedMap(map, NAN, 0.0, "map", kStamp), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::projectedMap(map, 1.0, 0.0, "map", kStamp), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::projectedMap(map, NAN, 0.0, "map", kStamp), fragg::InvalidArgument);
 }
 
 }  // namespace
@@ -102,7 +102,7 @@ TEST(FrustumMarker, PinholePyramidInTheMapFrame) {
   const fragg::SensorModel cam = fragg::SensorModel::pinhole(M_PI / 2, M_PI / 2, 0.0, 2.0);
   Eigen::Isometry3d T_map_sensor = Eigen::Isometry3d::Identity();
   T_map_sensor.translation() = Eigen::Vector3d(1.0, 2.0, 3.0);
-  const visualization_msgs::Marker m = fragg_ros::frustumMarker(cam, T_map_sensor, "map", kStamp);
+  const visualization_msgs::Marker m = fragg::ros::frustumMarker(cam, T_map_sensor, "map", kStamp);
   EXPECT_EQ(m.type, visualization_msgs::Marker::LINE_LIST);
   ASSERT_EQ(m.points.size(), 16u);  // 4 edges from the apex + 4 far-plane edges
   for (size_t i = 0; i < m.points.size(); i += 2) {
@@ -119,17 +119,17 @@ TEST(FrustumMarker, PinholePyramidInTheMapFrame) {
 TEST(FrustumMarker, LidarRimsAtMaxRangeAndBadModels) {
   const fragg::SensorModel lidar = fragg::SensorModel::spinningLidar(-0.3, 0.2, 0.0, 10.0);
   const visualization_msgs::Marker m =
-      fragg_ros::frustumMarker(lidar, Eigen::Isometry3d::Identity(), "map", kStamp, 8);
+      fragg::ros::frustumMarker(lidar, Eigen::Isometry3d::Identity(), "map", kStamp, 8);
   ASSERT_FALSE(m.points.empty());
   for (const auto& p : m.points) {
     const double r = Eigen::Vector3d(p.x, p.y, p.z).norm();
     EXPECT_TRUE(r < 1e-12 || std::abs(r - 10.0) < 1e-9) << r;
   }
-  EXPECT_THROW(fragg_ros::frustumMarker(fragg::SensorModel::autoFromCloud(0.0, 5.0),
-                                        Eigen::Isometry3d::Identity(), "map", kStamp),
+  EXPECT_THROW(fragg::ros::frustumMarker(fragg::SensorModel::autoFromCloud(0.0, 5.0),
+                                         Eigen::Isometry3d::Identity(), "map", kStamp),
                fragg::InvalidArgument);
-  EXPECT_THROW(fragg_ros::frustumMarker(fragg::SensorModel::spinningLidar(-0.3, 0.2, 0.0, -1.0),
-                                        Eigen::Isometry3d::Identity(), "map", kStamp),
+  EXPECT_THROW(fragg::ros::frustumMarker(fragg::SensorModel::spinningLidar(-0.3, 0.2, 0.0, -1.0),
+                                         Eigen::Isometry3d::Identity(), "map", kStamp),
                fragg::InvalidArgument);
 }
 

@@ -15,9 +15,9 @@
 
 namespace {
 
-using fragg_ros::PoseRequest;
-using fragg_ros::PoseThresholds;
-using fragg_ros::ScanStampIndex;
+using fragg::ros::PoseRequest;
+using fragg::ros::PoseThresholds;
+using fragg::ros::ScanStampIndex;
 
 constexpr int64_t kMs = 1000000;  // ns
 
@@ -65,49 +65,49 @@ TEST(ScanStampIndex, FindsTheNearestStampWithinTheTolerance) {
 
 TEST(PoseCorrection, IsometryFromPoseChecksAndNormalises) {
   const double h = std::sqrt(0.5);
-  const Eigen::Isometry3d T = fragg_ros::isometryFromPose(poseMsg(2.0, 0, 0, h, h));
+  const Eigen::Isometry3d T = fragg::ros::isometryFromPose(poseMsg(2.0, 0, 0, h, h));
   EXPECT_TRUE(T.translation().isApprox(Eigen::Vector3d(2, 0, 0)));
   EXPECT_TRUE((T.linear() * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), 1e-12));
   // Within 1e-3 of unit norm: accepted and normalised.
-  const Eigen::Isometry3d N = fragg_ros::isometryFromPose(poseMsg(0, 0, 0, 0, 1.0005));
+  const Eigen::Isometry3d N = fragg::ros::isometryFromPose(poseMsg(0, 0, 0, 0, 1.0005));
   EXPECT_NEAR(N.linear().determinant(), 1.0, 1e-12);
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_THROW(fragg_ros::isometryFromPose(poseMsg(nan, 0, 0, 0, 1)), fragg::InvalidArgument);
-  EXPECT_THROW(fragg_ros::isometryFromPose(poseMsg(0, 0, 0, nan, 1)), fragg::InvalidArgument);
-  EXPECT_THROW(fragg_ros::isometryFromPose(poseMsg(0, 0, 0, 0, 0)), fragg::InvalidArgument);
-  EXPECT_THROW(fragg_ros::isometryFromPose(poseMsg(0, 0, 0, 0, 2)), fragg::InvalidArgument);
-  EXPECT_THROW(fragg_ros::isometryFromPose(poseMsg(0, 0, 0, 0, 1.01)), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::isometryFromPose(poseMsg(nan, 0, 0, 0, 1)), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::isometryFromPose(poseMsg(0, 0, 0, nan, 1)), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::isometryFromPose(poseMsg(0, 0, 0, 0, 0)), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::isometryFromPose(poseMsg(0, 0, 0, 0, 2)), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::isometryFromPose(poseMsg(0, 0, 0, 0, 1.01)), fragg::InvalidArgument);
 }
 
 TEST(PoseCorrection, PoseMovedUsesBothThresholds) {
   const PoseThresholds t{0.05, 0.01};
   const Eigen::Isometry3d A = pose(1, 2, 3, 0.5);
-  EXPECT_FALSE(fragg_ros::poseMoved(A, A, t));
-  EXPECT_FALSE(fragg_ros::poseMoved(A, pose(1.04, 2, 3, 0.5), t));
-  EXPECT_TRUE(fragg_ros::poseMoved(A, pose(1.06, 2, 3, 0.5), t));
-  EXPECT_TRUE(fragg_ros::poseMoved(A, pose(1, 2, 2.94, 0.5), t));
-  EXPECT_FALSE(fragg_ros::poseMoved(A, pose(1, 2, 3, 0.509), t));
-  EXPECT_TRUE(fragg_ros::poseMoved(A, pose(1, 2, 3, 0.511), t));
-  EXPECT_TRUE(fragg_ros::poseMoved(A, pose(1, 2, 3, 0.5 - 0.011), t));  // either direction
+  EXPECT_FALSE(fragg::ros::poseMoved(A, A, t));
+  EXPECT_FALSE(fragg::ros::poseMoved(A, pose(1.04, 2, 3, 0.5), t));
+  EXPECT_TRUE(fragg::ros::poseMoved(A, pose(1.06, 2, 3, 0.5), t));
+  EXPECT_TRUE(fragg::ros::poseMoved(A, pose(1, 2, 2.94, 0.5), t));
+  EXPECT_FALSE(fragg::ros::poseMoved(A, pose(1, 2, 3, 0.509), t));
+  EXPECT_TRUE(fragg::ros::poseMoved(A, pose(1, 2, 3, 0.511), t));
+  EXPECT_TRUE(fragg::ros::poseMoved(A, pose(1, 2, 3, 0.5 - 0.011), t));  // either direction
   // A rotation about another axis counts by its angle too.
   Eigen::Isometry3d R = A;
   R.linear() = A.linear() * Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitX()).toRotationMatrix();
-  EXPECT_TRUE(fragg_ros::poseMoved(A, R, t));
-  EXPECT_FALSE(fragg_ros::poseMoved(A, R, PoseThresholds{0.05, 0.03}));
+  EXPECT_TRUE(fragg::ros::poseMoved(A, R, t));
+  EXPECT_FALSE(fragg::ros::poseMoved(A, R, PoseThresholds{0.05, 0.03}));
   // Zero thresholds: any change moves, no change does not.
-  EXPECT_TRUE(fragg_ros::poseMoved(A, pose(1, 2, 3.001, 0.5), PoseThresholds{0.0, 0.0}));
-  EXPECT_FALSE(fragg_ros::poseMoved(A, A, PoseThresholds{0.0, 0.0}));
+  EXPECT_TRUE(fragg::ros::poseMoved(A, pose(1, 2, 3.001, 0.5), PoseThresholds{0.0, 0.0}));
+  EXPECT_FALSE(fragg::ros::poseMoved(A, A, PoseThresholds{0.0, 0.0}));
 }
 
 TEST(PoseCorrection, SensorPoseFromPathPoseOfAnotherFrame) {
   // base_link at (1, 0, 0) turned 90 degrees left; the sensor 0.5 m ahead and 1 m up on it.
   const Eigen::Isometry3d T_map_base = pose(1, 0, 0, M_PI / 2);
   const Eigen::Isometry3d T_base_sensor = pose(0.5, 0, 1, 0.0);
-  const Eigen::Isometry3d T = fragg_ros::sensorPoseFromChild(T_map_base, T_base_sensor);
+  const Eigen::Isometry3d T = fragg::ros::sensorPoseFromChild(T_map_base, T_base_sensor);
   EXPECT_TRUE(T.translation().isApprox(Eigen::Vector3d(1, 0.5, 1), 1e-12));
   EXPECT_TRUE(T.linear().isApprox(T_map_base.linear(), 1e-12));
   // Identity child -> sensor: the path pose is the sensor pose.
-  EXPECT_TRUE(fragg_ros::sensorPoseFromChild(T_map_base, Eigen::Isometry3d::Identity())
+  EXPECT_TRUE(fragg::ros::sensorPoseFromChild(T_map_base, Eigen::Isometry3d::Identity())
                   .isApprox(T_map_base));
 }
 
@@ -117,7 +117,7 @@ class CorrectionPlanTest : public ::testing::Test {
   void SetUp() override { build(fragg::ScanStoreParams{true, 0.001, 0, ""}); }
 
   void build(const fragg::ScanStoreParams& scans) {
-    fragg::MapParams p = fragg_ros_test::cpuParams();
+    fragg::MapParams p = fragg::ros::test::cpuParams();
     p.scans = scans;
     map_ = std::make_unique<fragg::Map>(p);
     index_.clear();
@@ -141,8 +141,8 @@ TEST_F(CorrectionPlanTest, MatchesStampsAndReportsTheUnknown) {
       {5000 * kMs, pose(0, 0, 0)},             // no scan
       {3000 * kMs, pose(0.5, 2, 0)},           // scan 2
   };
-  const fragg_ros::CorrectionPlan plan =
-      fragg_ros::planCorrection(requests, index_, map_->scanStore(), 1 * kMs, nullptr);
+  const fragg::ros::CorrectionPlan plan =
+      fragg::ros::planCorrection(requests, index_, map_->scanStore(), 1 * kMs, nullptr);
   ASSERT_EQ(plan.T_map_sensor_new.size(), 2u);
   EXPECT_TRUE(plan.T_map_sensor_new.at(0).isApprox(pose(0.5, 0, 0)));
   EXPECT_TRUE(plan.T_map_sensor_new.at(2).isApprox(pose(0.5, 2, 0)));
@@ -152,8 +152,8 @@ TEST_F(CorrectionPlanTest, MatchesStampsAndReportsTheUnknown) {
   EXPECT_EQ(map_->correctPoses(plan.T_map_sensor_new).scans, 2u);
   EXPECT_TRUE(map_->scanStore().record(2).T_map_sensor.isApprox(pose(0.5, 2, 0)));
   // A tighter tolerance: the 0.2 ms offset no longer matches.
-  const fragg_ros::CorrectionPlan strict =
-      fragg_ros::planCorrection(requests, index_, map_->scanStore(), 100000, nullptr);
+  const fragg::ros::CorrectionPlan strict =
+      fragg::ros::planCorrection(requests, index_, map_->scanStore(), 100000, nullptr);
   EXPECT_EQ(strict.T_map_sensor_new.size(), 1u);
   EXPECT_EQ(strict.unknown.size(), 2u);
 }
@@ -165,14 +165,14 @@ TEST_F(CorrectionPlanTest, ThresholdsLeaveSmallChangesAlone) {
       {2000 * kMs, pose(0, 1.2, 0)},     // 20 cm: moved
       {3000 * kMs, pose(0, 2, 0, 0.1)},  // turned: moved
   };
-  const fragg_ros::CorrectionPlan plan =
-      fragg_ros::planCorrection(requests, index_, map_->scanStore(), 0, &t);
+  const fragg::ros::CorrectionPlan plan =
+      fragg::ros::planCorrection(requests, index_, map_->scanStore(), 0, &t);
   EXPECT_EQ(plan.unchanged, 1u);
   EXPECT_EQ(plan.T_map_sensor_new.size(), 2u);
   EXPECT_EQ(plan.T_map_sensor_new.count(0), 0u);
   EXPECT_TRUE(plan.unknown.empty());
   // Without thresholds every matched scan is planned.
-  EXPECT_EQ(fragg_ros::planCorrection(requests, index_, map_->scanStore(), 0, nullptr)
+  EXPECT_EQ(fragg::ros::planCorrection(requests, index_, map_->scanStore(), 0, nullptr)
                 .T_map_sensor_new.size(),
             3u);
 }
@@ -180,7 +180,7 @@ TEST_F(CorrectionPlanTest, ThresholdsLeaveSmallChangesAlone) {
 TEST_F(CorrectionPlanTest, TwoRequestsForOneScanAreRefused) {
   const std::vector<PoseRequest> requests = {{2000 * kMs, pose(0, 1, 0)},
                                              {2000 * kMs + 10, pose(0, 1.5, 0)}};
-  EXPECT_THROW(fragg_ros::planCorrection(requests, index_, map_->scanStore(), 1 * kMs, nullptr),
+  EXPECT_THROW(fragg::ros::planCorrection(requests, index_, map_->scanStore(), 1 * kMs, nullptr),
                fragg::InvalidArgument);
 }
 
@@ -190,8 +190,8 @@ TEST_F(CorrectionPlanTest, ScansWhosePointsWereDroppedAreUnknown) {
   EXPECT_EQ(map_->scanStore().droppedCount(), 2u);
   const std::vector<PoseRequest> requests = {
       {1000 * kMs, pose(0.5, 0, 0)}, {2000 * kMs, pose(0.5, 1, 0)}, {3000 * kMs, pose(0.5, 2, 0)}};
-  const fragg_ros::CorrectionPlan plan =
-      fragg_ros::planCorrection(requests, index_, map_->scanStore(), 0, nullptr);
+  const fragg::ros::CorrectionPlan plan =
+      fragg::ros::planCorrection(requests, index_, map_->scanStore(), 0, nullptr);
   EXPECT_EQ(plan.T_map_sensor_new.size(), 1u);
   EXPECT_EQ(plan.T_map_sensor_new.count(2), 1u);
   EXPECT_EQ(plan.unknown, (std::vector<size_t>{0, 1}));

@@ -29,16 +29,30 @@ void expectRejected(const std::string& name, const XmlRpcValue& value) {
   XmlRpcValue root;
   set(root, name, value);
   try {
-    fragg_ros::parseParameters(root);
+    fragg::ros::parseParameters(root);
     FAIL() << name << " = " << const_cast<XmlRpcValue&>(value).toXml() << " was accepted";
   } catch (const fragg::InvalidArgument& e) {
-    EXPECT_NE(std::string(e.what()).find("'" + name + "'"), std::string::npos)
-        << "the error does not name " << name << ": " << e.what();
+    const std::string what = e.what();
+    EXPECT_NE(what.find("'" + name + "'"), std::string::npos)
+        << "the error does not name " << name << ": " << what;
+    // The core's field names are renamed to parameters, never shown as they are.
+    for (const char* core :
+         {"occupancy.", "sensor.", "height_filter.", "resolution_m", "scans.", "culling."})
+      EXPECT_EQ(what.find(core), std::string::npos) << "core name " << core << " in: " << what;
   }
 }
 
+std::string rejection(const XmlRpcValue& root) {
+  try {
+    fragg::ros::parseParameters(root);
+  } catch (const fragg::InvalidArgument& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
 TEST(ServerParams, EmptyNamespaceGivesTheCoreDefaults) {
-  const fragg_ros::ServerParams p = fragg_ros::parseParameters(XmlRpcValue());
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(XmlRpcValue());
   const fragg::MapParams core;
   EXPECT_EQ(p.map.resolution_m, core.resolution_m);
   EXPECT_EQ(p.map.occupancy.prob_hit, core.occupancy.prob_hit);
@@ -49,11 +63,11 @@ TEST(ServerParams, EmptyNamespaceGivesTheCoreDefaults) {
   EXPECT_LT(p.sensor.max_range_m, 0.0);
   EXPECT_EQ(p.queue_size, 5);
   EXPECT_FALSE(p.latch);
-  EXPECT_TRUE(std::isinf(p.pointcloud_min_z_m));
+  EXPECT_TRUE(std::isinf(p.map.height_filter.min_z_m));
 }
 
 TEST(ServerParams, ScanStoreAndCorrectionDefaults) {
-  const fragg_ros::ServerParams p = fragg_ros::parseParameters(XmlRpcValue());
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(XmlRpcValue());
   EXPECT_TRUE(p.map.scans.keep);  // the server keeps scans, the core does not by default
   EXPECT_EQ(p.map.scans.max_bytes, size_t{2048} << 20);
   // Float32 kept points: the kept scans do not change the map (octomap_server's map).
@@ -77,7 +91,7 @@ TEST(ServerParams, ReadsScanStoreAndCorrection) {
   set(root, "correction/stamp_tolerance", 0.01);
   set(root, "correction/path_child_frame", std::string("/base_link"));
   set(root, "correction/subscribe_path", false);
-  const fragg_ros::ServerParams p = fragg_ros::parseParameters(root);
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(root);
   EXPECT_FALSE(p.map.scans.keep);
   EXPECT_EQ(p.map.scans.max_bytes, 0u);
   EXPECT_EQ(p.map.scans.spill_dir, "/tmp/spill");
@@ -89,7 +103,7 @@ TEST(ServerParams, ReadsScanStoreAndCorrection) {
   EXPECT_FALSE(p.correction.subscribe_path);
   XmlRpcValue mb;
   set(mb, "scan_store/max_mb", 1.5);
-  EXPECT_EQ(fragg_ros::parseParameters(mb).map.scans.max_bytes, size_t{3} << 19);
+  EXPECT_EQ(fragg::ros::parseParameters(mb).map.scans.max_bytes, size_t{3} << 19);
 }
 
 TEST(ServerParams, InvalidScanStoreAndCorrectionValuesNameTheParameter) {
@@ -132,7 +146,7 @@ TEST(ServerParams, ReadsEveryName) {
   set(root, "queue_size", 3);
   set(root, "tf_tolerance", 0.25);
   set(root, "marker_rate", 2);  // an int where a double is expected
-  const fragg_ros::ServerParams p = fragg_ros::parseParameters(root);
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(root);
   EXPECT_EQ(p.map.resolution_m, 0.1);
   EXPECT_EQ(p.frame_id, "odom");
   EXPECT_EQ(p.map.occupancy.prob_hit, 0.8);
@@ -141,8 +155,8 @@ TEST(ServerParams, ReadsEveryName) {
   EXPECT_EQ(p.map.occupancy.clamp_max, 0.95);
   EXPECT_EQ(p.sensor.max_range_m, 30.0);
   EXPECT_EQ(p.sensor.min_range_m, 0.5);
-  EXPECT_EQ(p.pointcloud_min_z_m, -2.0);
-  EXPECT_EQ(p.pointcloud_max_z_m, 5.0);
+  EXPECT_EQ(p.map.height_filter.min_z_m, -2.0);
+  EXPECT_EQ(p.map.height_filter.max_z_m, 5.0);
   EXPECT_EQ(p.occupancy_min_z_m, 0.1);
   EXPECT_EQ(p.occupancy_max_z_m, 1.8);
   EXPECT_TRUE(p.latch);
@@ -164,7 +178,7 @@ TEST(ServerParams, LidarSensor) {
   set(root, "sensor/elevation_max", 0.3);
   set(root, "sensor/range_noise", 0.02);
   set(root, "sensor/range_noise_quadratic", 0.001);
-  const fragg_ros::ServerParams p = fragg_ros::parseParameters(root);
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(root);
   EXPECT_EQ(p.sensor.type, fragg::SensorType::kSpinningLidar);
   EXPECT_EQ(p.sensor.range_noise_m, 0.02);
   EXPECT_EQ(p.sensor.range_noise_quadratic_per_m, 0.001);
@@ -198,6 +212,27 @@ TEST(ServerParams, InvalidValuesNameTheParameter) {
   expectRejected("latch", 1);
   expectRejected("threads", -1);
   expectRejected("culling/coherence_ttl_scans", 0);
+  expectRejected("unknown_band", -0.1);
+  expectRejected("sensor_model/max_range", std::numeric_limits<double>::infinity());
+  expectRejected("pointcloud_min_z", std::nan(""));
+}
+
+TEST(ServerParams, CoreMessagesReadInParameterNames) {
+  XmlRpcValue hit;
+  set(hit, "sensor_model/hit", 0.4);
+  EXPECT_EQ(rejection(hit), "parameter 'sensor_model/hit' must be > 0.5, got 0.400000");
+  XmlRpcValue clamp;
+  set(clamp, "sensor_model/min", 0.99);
+  EXPECT_EQ(rejection(clamp), "parameter 'sensor_model/min' must be below 'sensor_model/max'");
+  XmlRpcValue ranges;
+  set(ranges, "sensor_model/min_range", 5.0);
+  set(ranges, "sensor_model/max_range", 2.0);
+  EXPECT_EQ(rejection(ranges),
+            "parameter 'sensor_model/max_range' must exceed 'sensor_model/min_range' (or be <= 0)");
+  XmlRpcValue band;
+  set(band, "unknown_band", 0.5);
+  EXPECT_EQ(rejection(band).rfind("parameter 'unknown_band' must be in [0, 0.5)", 0), 0u)
+      << rejection(band);
 }
 
 TEST(ServerParams, InconsistentPairsNameTheParameter) {
@@ -207,7 +242,7 @@ TEST(ServerParams, InconsistentPairsNameTheParameter) {
   EXPECT_THROW(
       {
         try {
-          fragg_ros::parseParameters(root);
+          fragg::ros::parseParameters(root);
         } catch (const fragg::InvalidArgument& e) {
           EXPECT_NE(std::string(e.what()).find("'pointcloud_min_z'"), std::string::npos);
           throw;
@@ -216,17 +251,17 @@ TEST(ServerParams, InconsistentPairsNameTheParameter) {
       fragg::InvalidArgument);
   XmlRpcValue pinhole;
   set(pinhole, "sensor/type", std::string("pinhole"));  // no hfov/vfov
-  EXPECT_THROW(fragg_ros::parseParameters(pinhole), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::parseParameters(pinhole), fragg::InvalidArgument);
   XmlRpcValue ranges;
   set(ranges, "sensor_model/min_range", 5.0);
   set(ranges, "sensor_model/max_range", 2.0);
-  EXPECT_THROW(fragg_ros::parseParameters(ranges), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::parseParameters(ranges), fragg::InvalidArgument);
   XmlRpcValue occupancy;
   set(occupancy, "occupancy_min_z", 3.0);
   set(occupancy, "occupancy_max_z", 0.0);
-  EXPECT_THROW(fragg_ros::parseParameters(occupancy), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::parseParameters(occupancy), fragg::InvalidArgument);
   XmlRpcValue not_a_struct(3);
-  EXPECT_THROW(fragg_ros::parseParameters(not_a_struct), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::parseParameters(not_a_struct), fragg::InvalidArgument);
 }
 
 }  // namespace
@@ -250,8 +285,8 @@ XmlRpcValue loadYaml(const std::vector<std::string>& files) {
 }
 
 TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
-  const fragg_ros::ServerParams p = fragg_ros::parseParameters(loadYaml({"default.yaml"}));
-  const fragg_ros::ServerParams d = fragg_ros::parseParameters(XmlRpcValue());
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(loadYaml({"default.yaml"}));
+  const fragg::ros::ServerParams d = fragg::ros::parseParameters(XmlRpcValue());
   EXPECT_EQ(p.map.resolution_m, d.map.resolution_m);
   EXPECT_EQ(p.map.occupancy.prob_hit, d.map.occupancy.prob_hit);
   EXPECT_EQ(p.map.occupancy.prob_miss, d.map.occupancy.prob_miss);
@@ -260,7 +295,7 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.map.occupancy.unknown_band, d.map.occupancy.unknown_band);
   EXPECT_EQ(p.sensor.type, d.sensor.type);
   EXPECT_EQ(p.sensor.max_range_m, d.sensor.max_range_m);
-  EXPECT_EQ(p.pointcloud_min_z_m, d.pointcloud_min_z_m);
+  EXPECT_EQ(p.map.height_filter.min_z_m, d.map.height_filter.min_z_m);
   EXPECT_EQ(p.occupancy_max_z_m, d.occupancy_max_z_m);
   EXPECT_EQ(p.queue_size, d.queue_size);
   EXPECT_EQ(p.tf_tolerance_s, d.tf_tolerance_s);
@@ -279,8 +314,8 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
 }
 
 TEST(ServerParamsConfig, LidarYaml) {
-  const fragg_ros::ServerParams p =
-      fragg_ros::parseParameters(loadYaml({"default.yaml", "lidar.yaml"}));
+  const fragg::ros::ServerParams p =
+      fragg::ros::parseParameters(loadYaml({"default.yaml", "lidar.yaml"}));
   EXPECT_EQ(p.sensor.type, fragg::SensorType::kSpinningLidar);
   EXPECT_EQ(p.sensor.max_range_m, 30.0);
   EXPECT_EQ(p.occupancy_max_z_m, 2.0);
@@ -288,8 +323,8 @@ TEST(ServerParamsConfig, LidarYaml) {
 }
 
 TEST(ServerParamsConfig, DepthCameraYaml) {
-  const fragg_ros::ServerParams p =
-      fragg_ros::parseParameters(loadYaml({"default.yaml", "depth_camera.yaml"}));
+  const fragg::ros::ServerParams p =
+      fragg::ros::parseParameters(loadYaml({"default.yaml", "depth_camera.yaml"}));
   EXPECT_EQ(p.sensor.type, fragg::SensorType::kPinhole);
   EXPECT_EQ(p.map.resolution_m, 0.02);
   EXPECT_NEAR(p.sensor.hfov_rad, 58.0 * M_PI / 180.0, 1e-4);

@@ -13,7 +13,7 @@
 
 namespace {
 
-using fragg_ros::DropOldestQueue;
+using fragg::ros::DropOldestQueue;
 
 TEST(DropOldestQueue, KeepsTheNewestAndCountsTheDropped) {
   DropOldestQueue<int> q(3);
@@ -73,7 +73,7 @@ TEST(DropOldestQueue, ZeroCapacityIsRejected) {
 }
 
 TEST(TimingStats, LastMeanAndP99) {
-  fragg_ros::TimingStats t(1000);
+  fragg::ros::TimingStats t(1000);
   EXPECT_EQ(t.percentileMs(0.99), 0.0);
   for (int i = 1; i <= 100; ++i) t.add(i);
   EXPECT_EQ(t.count(), 100u);
@@ -87,16 +87,16 @@ TEST(TimingStats, LastMeanAndP99) {
 }
 
 TEST(TimingStats, PercentileFollowsTheWindowMeanFollowsEverything) {
-  fragg_ros::TimingStats t(10);
+  fragg::ros::TimingStats t(10);
   for (int i = 0; i < 10; ++i) t.add(1000.0);
   for (int i = 0; i < 10; ++i) t.add(1.0);  // pushes every 1000 out of the window
   EXPECT_EQ(t.percentileMs(0.99), 1.0);
   EXPECT_DOUBLE_EQ(t.meanMs(), 500.5);
-  EXPECT_THROW(fragg_ros::TimingStats(0), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::TimingStats(0), fragg::InvalidArgument);
 }
 
 TEST(MarkerThrottle, NoLimitIsAlwaysDue) {
-  fragg_ros::MarkerThrottle t(0.0);
+  fragg::ros::MarkerThrottle t(0.0);
   EXPECT_FALSE(t.limited());
   EXPECT_TRUE(t.due(5.0));
   t.published(5.0);
@@ -104,7 +104,7 @@ TEST(MarkerThrottle, NoLimitIsAlwaysDue) {
 }
 
 TEST(MarkerThrottle, AtMostOneUpdatePerPeriod) {
-  fragg_ros::MarkerThrottle t(2.0);  // 2 Hz
+  fragg::ros::MarkerThrottle t(2.0);  // 2 Hz
   EXPECT_TRUE(t.limited());
   EXPECT_EQ(t.periodS(), 0.5);
   EXPECT_TRUE(t.due(100.0));  // the first update goes out at once
@@ -115,7 +115,7 @@ TEST(MarkerThrottle, AtMostOneUpdatePerPeriod) {
   t.published(100.7);  // the period counts from the last update
   EXPECT_FALSE(t.due(101.1));
   EXPECT_TRUE(t.due(101.2));
-  EXPECT_THROW(fragg_ros::MarkerThrottle(-1.0), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::MarkerThrottle(-1.0), fragg::InvalidArgument);
 }
 
 }  // namespace

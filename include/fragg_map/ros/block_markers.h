@@ -15,7 +15,7 @@
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 struct MarkerStyle {
   std::string frame_id = "map";
@@ -44,11 +44,11 @@ class MarkerLedger {
 
  private:
   friend visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map&, const MarkerStyle&,
-                                                             const ros::Time&, MarkerLedger*);
+                                                             const ::ros::Time&, MarkerLedger*);
   friend visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map&, const MarkerStyle&,
-                                                         const ros::Time&, MarkerLedger*);
+                                                         const ::ros::Time&, MarkerLedger*);
   friend visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map&, const MarkerStyle&,
-                                                           const ros::Time&, const MarkerLedger&);
+                                                           const ::ros::Time&, const MarkerLedger&);
   struct Shown {
     int32_t id;
     CellMask cells;
@@ -61,7 +61,7 @@ class MarkerLedger {
 /// The CUBE_LIST marker of one block: centres of the cells in `cells`, coloured by height.
 visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::BlockKey& key,
                                        const CellMask& cells, const MarkerStyle& style,
-                                       const ros::Time& stamp, int32_t id);
+                                       const ::ros::Time& stamp, int32_t id);
 
 /// Markers for the blocks changed since `ledger->publishedRevision()`: ADD (or modify) for a
 /// changed block whose set of cells in `style.state` changed and is not empty, DELETE for a
@@ -69,18 +69,18 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
 /// same (e.g. only its free cells changed) is not sent. Updates the ledger to the map's
 /// revision.
 visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
-                                                    const ros::Time& stamp, MarkerLedger* ledger);
+                                                    const ::ros::Time& stamp, MarkerLedger* ledger);
 
 /// A full republish (after reset or load, or for a late subscriber): a DELETEALL marker in
 /// `style.ns`, then one ADD per block with cells in `style.state`. Rebuilds the ledger.
 visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
-                                                const ros::Time& stamp, MarkerLedger* ledger);
+                                                const ::ros::Time& stamp, MarkerLedger* ledger);
 
 /// What a topic's subscribers see now, for a late subscriber of a latched topic: a DELETEALL,
 /// then every block the ledger shows, with the ledger's ids and cells, so that the topic's
 /// next increments apply to it as to everyone else. The ledger is not changed.
 visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
-                                                  const ros::Time& stamp,
+                                                  const ::ros::Time& stamp,
                                                   const MarkerLedger& ledger);
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -13,7 +13,7 @@
 
 #include "fragg_map/point_cloud.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 /// How a message was converted (for statistics and tests).
 enum class CloudLayout { kPackedFloat32, kStrided };
@@ -28,4 +28,4 @@ fragg::PointCloud cloudFromMsg(const sensor_msgs::PointCloud2& msg, CloudLayout*
 /// Points of `cloud` with finite coordinates.
 size_t finitePointCount(const fragg::PointCloud& cloud);
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

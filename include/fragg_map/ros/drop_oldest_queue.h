@@ -12,7 +12,7 @@
 
 #include "fragg_map/errors.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 template <typename T>
 class DropOldestQueue {
@@ -79,4 +79,4 @@ class DropOldestQueue {
   bool closed_ = false;
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

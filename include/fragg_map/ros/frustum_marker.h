@@ -11,13 +11,13 @@
 
 #include "fragg_map/sensor_model.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 /// `sensor` must be explicit (pinhole or spinning LiDAR, as resolveAutoSensor gives) with a
 /// positive max range. Throws fragg::InvalidArgument otherwise.
 visualization_msgs::Marker frustumMarker(const fragg::SensorModel& sensor,
                                          const Eigen::Isometry3d& T_map_sensor,
-                                         const std::string& frame_id, const ros::Time& stamp,
+                                         const std::string& frame_id, const ::ros::Time& stamp,
                                          int segments = 24);
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -6,7 +6,7 @@
 
 #include "fragg_map/errors.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 class MarkerThrottle {
  public:
@@ -34,4 +34,4 @@ class MarkerThrottle {
   bool published_ = false;
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

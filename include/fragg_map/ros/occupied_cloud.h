@@ -8,11 +8,11 @@
 
 #include "fragg_map/map.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 /// An unorganised cloud (height 1) with packed float32 fields x, y, z (point_step 12) holding
 /// the centre of every occupied voxel, in `frame_id`.
 sensor_msgs::PointCloud2 occupiedCloud(const fragg::Map& map, const std::string& frame_id,
-                                       const ros::Time& stamp);
+                                       const ::ros::Time& stamp);
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

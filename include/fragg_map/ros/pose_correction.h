@@ -14,7 +14,7 @@
 #include "fragg_map/ros/scan_stamp_index.h"
 #include "fragg_map/scan_store.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 /// Poses closer than both thresholds to the kept pose are left alone (corrected_path).
 struct PoseThresholds {
@@ -60,4 +60,4 @@ CorrectionPlan planCorrection(const std::vector<PoseRequest>& requests, const Sc
                               const fragg::ScanStore& store, int64_t tolerance_ns,
                               const PoseThresholds* thresholds);
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -9,7 +9,7 @@
 
 #include "fragg_map/map.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 /// One grid cell per voxel column (the map's resolution), covering the xy bounds of the
 /// observed map. A column is 100 (occupied) when a voxel with its centre in
@@ -17,6 +17,6 @@ namespace fragg_ros {
 /// -1 (unknown) otherwise; infinite limits leave that side open. An empty map gives a 0 x 0
 /// grid. Throws fragg::InvalidArgument for NaN heights or min_z_m > max_z_m.
 nav_msgs::OccupancyGrid projectedMap(const fragg::Map& map, double min_z_m, double max_z_m,
-                                     const std::string& frame_id, const ros::Time& stamp);
+                                     const std::string& frame_id, const ::ros::Time& stamp);
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

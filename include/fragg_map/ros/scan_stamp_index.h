@@ -9,7 +9,7 @@
 
 #include "fragg_map/scan_store.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 class ScanStampIndex {
  public:
@@ -33,4 +33,4 @@ class ScanStampIndex {
   std::map<int64_t, Entry> by_stamp_;
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -13,7 +13,7 @@
 #include "fragg_map/ros/pose_correction.h"
 #include "fragg_map/sensor_model.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 /// Loop-closure correction (~correct_poses, corrected_path): correction/*.
 struct CorrectionParams {
@@ -28,13 +28,11 @@ struct CorrectionParams {
 
 struct ServerParams {
   /// resolution, sensor_model/hit|miss|min|max, backend, raycast; keep_scans and scan_store/*
-  /// (map.scans: the server keeps scans by default, the core does not).
+  /// (map.scans: the server keeps scans by default, the core does not); pointcloud_min_z|max_z
+  /// (map.height_filter: points outside [min, max] map-frame z are not inserted).
   fragg::MapParams map = withKeptScans();
   fragg::SensorModel sensor;  ///< sensor/type|hfov|vfov, sensor_model/min_range|max_range
   std::string frame_id = "map";
-  /// Points of a cloud outside [min, max] (map frame z) are not inserted.
-  double pointcloud_min_z_m = -std::numeric_limits<double>::infinity();
-  double pointcloud_max_z_m = std::numeric_limits<double>::infinity();
   /// Heights projected into projected_map.
   double occupancy_min_z_m = -std::numeric_limits<double>::infinity();
   double occupancy_max_z_m = std::numeric_limits<double>::infinity();
@@ -59,11 +57,12 @@ struct ServerParams {
 };
 
 /// Fills ServerParams from a struct of parameters (the private namespace as one
-/// XmlRpcValue; absent names keep their defaults) and validates every value. Throws
-/// fragg::InvalidArgument naming the parameter for a wrong type or an invalid value.
+/// XmlRpcValue; absent names keep their defaults) and validates every value (the core's
+/// fields through the core's validate()). Throws fragg::InvalidArgument naming the parameter
+/// ('sensor_model/hit') for a wrong type or an invalid value.
 ServerParams parseParameters(const XmlRpc::XmlRpcValue& params);
 
 /// Reads the node's private namespace and parses it as above.
-ServerParams readParameters(const ros::NodeHandle& private_nh);
+ServerParams readParameters(const ::ros::NodeHandle& private_nh);
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

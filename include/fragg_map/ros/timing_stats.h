@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 class TimingStats {
  public:
@@ -32,4 +32,4 @@ class TimingStats {
   double last_ms_ = 0.0;
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -5,18 +5,18 @@
 #include <chrono>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/map.h"
 #include "fragg_map/ros/pose_correction.h"
 #include "server_stats.h"
-#include "shared_map.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 /// Wall time of the correction [ms]; nothing happens (0 ms) for an empty plan. The caller
-/// holds shared->mutex. Throws fragg::InvalidArgument when the map keeps no scans.
-inline double applyCorrection(const CorrectionPlan& plan, SharedMap* shared, ServerStats* stats) {
+/// holds the map's write lock. Throws fragg::InvalidArgument when the map keeps no scans.
+inline double applyCorrection(const CorrectionPlan& plan, fragg::Map* map, ServerStats* stats) {
   if (plan.T_map_sensor_new.empty()) return 0.0;
   const auto start = std::chrono::steady_clock::now();
-  shared->map.correctPoses(plan.T_map_sensor_new);
+  map->correctPoses(plan.T_map_sensor_new);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   stats->addCorrection(plan.T_map_sensor_new.size(), ms);
@@ -24,11 +24,11 @@ inline double applyCorrection(const CorrectionPlan& plan, SharedMap* shared, Ser
 }
 
 /// Refuses a correction on a server that keeps no scans.
-inline void requireKeptScans(const SharedMap& shared) {
-  if (!shared.map.params().scans.keep && shared.map.scanStore().size() == 0)
+inline void requireKeptScans(const fragg::Map& map) {
+  if (!map.params().scans.keep && map.scanStore().size() == 0)
     throw fragg::InvalidArgument(
         "this map keeps no scans (parameter keep_scans is false, or the loaded map was saved "
         "without them)");
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

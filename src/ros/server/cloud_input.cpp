@@ -6,36 +6,21 @@
 #include <tf2_eigen/tf2_eigen.h>
 
 #include <chrono>
-#include <cmath>
-#include <limits>
+#include <string>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/cloud_from_msg.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
 std::string withoutLeadingSlash(const std::string& frame) {
   return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
 }
 
-// Points whose map-frame height is outside [min_z, max_z] become NaN (organised clouds keep
-// their layout; NaN points are skipped by the map).
-void filterHeight(const Eigen::Isometry3d& T_map_sensor, double min_z_m, double max_z_m,
-                  fragg::PointCloud* cloud) {
-  if (std::isinf(min_z_m) && std::isinf(max_z_m)) return;
-  const Eigen::Vector3d row_z = T_map_sensor.linear().row(2).transpose();
-  const double tz = T_map_sensor.translation().z();
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  for (Eigen::Vector3f& p : cloud->points_S) {
-    const double z_m = row_z.dot(p.cast<double>()) + tz;
-    if (z_m < min_z_m || z_m > max_z_m) p.setConstant(nan);
-  }
-}
-
 }  // namespace
 
-CloudInput::CloudInput(ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
+CloudInput::CloudInput(::ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
                        SharedMap* shared, ServerStats* stats, InsertedFn on_inserted)
     : params_(params),
       tf_(tf),
@@ -111,25 +96,25 @@ bool CloudInput::waitForTransform(const sensor_msgs::PointCloud2& msg,
 
 void CloudInput::process(const sensor_msgs::PointCloud2& msg) {
   if (msg.header.frame_id.empty()) throw fragg::InvalidArgument("cloud has no frame_id");
-  fragg::PointCloud cloud = cloudFromMsg(msg);  // validate before waiting for tf
+  const fragg::PointCloud cloud = cloudFromMsg(msg);  // validate before waiting for tf
   Eigen::Isometry3d T_map_sensor;
   if (!waitForTransform(msg, &T_map_sensor)) return;
-  filterHeight(T_map_sensor, params_.pointcloud_min_z_m, params_.pointcloud_max_z_m, &cloud);
-  const fragg::SensorModel sensor = fragg::resolveAutoSensor(params_.sensor, cloud);
   const int64_t stamp_ns = static_cast<int64_t>(msg.header.stamp.toNSec());
+  const std::string frame = withoutLeadingSlash(msg.header.frame_id);
   const auto start = std::chrono::steady_clock::now();
+  fragg::InsertStats inserted;
   {
-    std::lock_guard<std::mutex> lock(shared_->mutex);
-    const std::string frame = withoutLeadingSlash(msg.header.frame_id);
-    const fragg::InsertStats inserted =
-        shared_->map.insert(cloud, T_map_sensor, sensor, stamp_ns, frame);
-    if (shared_->map.scanStore().contains(inserted.scan_id))
-      shared_->stamps.add(stamp_ns, inserted.scan_id, frame);
+    // One scan per lock: a query waits for this scan at most. The map drops points outside
+    // the height band (pointcloud_min_z/max_z) and resolves an `auto` sensor, as for the CLI.
+    const SharedMap::WriteGuard state = shared_->write();
+    inserted = state->map.insert(cloud, T_map_sensor, params_.sensor, stamp_ns, frame);
+    if (state->map.scanStore().contains(inserted.scan_id))
+      state->stamps.add(stamp_ns, inserted.scan_id, frame);
   }
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   stats_->addInsertion(cloud.size(), ms);
-  if (on_inserted_) on_inserted_(msg.header.stamp, sensor, T_map_sensor);
+  if (on_inserted_) on_inserted_(msg.header.stamp, inserted.sensor, T_map_sensor);
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

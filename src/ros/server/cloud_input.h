@@ -1,8 +1,8 @@
 // Input of the map server: cloud_in -> bounded drop-oldest queue -> insertion thread. The
 // thread waits for each cloud's transform to frame_id at the cloud's stamp (up to
-// tf_tolerance of wall time; then the cloud is dropped and counted), converts the cloud,
-// filters it by height in the map frame and inserts it, so the subscriber thread never does
-// more than enqueue.
+// tf_tolerance of wall time; then the cloud is dropped and counted), converts the cloud and
+// inserts it (the map filters it by height in the map frame), taking the map's write lock for
+// that one scan, so the subscriber thread never does more than enqueue.
 //
 // Why not tf2_ros::MessageFilter: Debian's MessageFilter has no per-message timeout (a cloud
 // whose tf never comes waits until its queue overflows), and it would run the callback on the
@@ -23,15 +23,16 @@
 #include "server_stats.h"
 #include "shared_map.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 class CloudInput {
  public:
-  /// Called on the insertion thread after each insertion (the map is not locked).
-  using InsertedFn = std::function<void(const ros::Time& stamp, const fragg::SensorModel&,
+  /// Called on the insertion thread after each insertion (the map is not locked), with the
+  /// sensor model the map used (an `auto` model resolved for the cloud).
+  using InsertedFn = std::function<void(const ::ros::Time& stamp, const fragg::SensorModel&,
                                         const Eigen::Isometry3d& T_map_sensor)>;
 
-  CloudInput(ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
+  CloudInput(::ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
              SharedMap* shared, ServerStats* stats, InsertedFn on_inserted);
   ~CloudInput();  ///< stops the insertion thread
   CloudInput(const CloudInput&) = delete;
@@ -50,8 +51,8 @@ class CloudInput {
   InsertedFn on_inserted_;
   DropOldestQueue<sensor_msgs::PointCloud2::ConstPtr> queue_;
   std::atomic<bool> stopping_{false};
-  ros::Subscriber sub_;
+  ::ros::Subscriber sub_;
   std::thread worker_;
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -11,7 +11,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/pose_correction.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
 // The requests, every pose checked; throws fragg::InvalidArgument naming the bad one.
@@ -34,7 +34,7 @@ std::vector<PoseRequest> requestsFrom(const fragg_map::CorrectPoses::Request& re
 
 }  // namespace
 
-CorrectionService::CorrectionService(ros::NodeHandle& private_nh, const ServerParams& params,
+CorrectionService::CorrectionService(::ros::NodeHandle& private_nh, const ServerParams& params,
                                      SharedMap* shared, ServerStats* stats,
                                      std::function<void()> on_corrected)
     : params_(params), shared_(shared), stats_(stats), on_corrected_(std::move(on_corrected)) {
@@ -50,12 +50,12 @@ bool CorrectionService::correct(fragg_map::CorrectPoses::Request& req,
     const std::vector<PoseRequest> requests = requestsFrom(req);
     const int64_t tolerance_ns = std::llround(params_.correction.stamp_tolerance_s * 1e9);
     {
-      std::lock_guard<std::mutex> lock(shared_->mutex);
-      requireKeptScans(*shared_);
+      const SharedMap::WriteGuard state = shared_->write();
+      requireKeptScans(state->map);
       const CorrectionPlan plan =
-          planCorrection(requests, shared_->stamps, shared_->map.scanStore(), tolerance_ns,
+          planCorrection(requests, state->stamps, state->map.scanStore(), tolerance_ns,
                          nullptr);  // asked for explicitly: every matched scan moves
-      res.ms = applyCorrection(plan, shared_, stats_);
+      res.ms = applyCorrection(plan, &state->map, stats_);
       res.corrected = static_cast<uint32_t>(plan.T_map_sensor_new.size());
       for (size_t i : plan.unknown) res.unknown_stamps.push_back(req.stamps[i]);
     }
@@ -78,4 +78,4 @@ bool CorrectionService::correct(fragg_map::CorrectPoses::Request& req,
   return true;
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

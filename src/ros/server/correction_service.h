@@ -14,12 +14,12 @@
 #include "server_stats.h"
 #include "shared_map.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 class CorrectionService {
  public:
   /// `on_corrected` runs (map unlocked) after a correction that moved at least one scan.
-  CorrectionService(ros::NodeHandle& private_nh, const ServerParams& params, SharedMap* shared,
+  CorrectionService(::ros::NodeHandle& private_nh, const ServerParams& params, SharedMap* shared,
                     ServerStats* stats, std::function<void()> on_corrected);
 
  private:
@@ -29,7 +29,7 @@ class CorrectionService {
   SharedMap* shared_;
   ServerStats* stats_;
   std::function<void()> on_corrected_;
-  ros::ServiceServer service_;
+  ::ros::ServiceServer service_;
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

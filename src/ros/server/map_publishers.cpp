@@ -8,13 +8,15 @@
 #include <visualization_msgs/Marker.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <optional>
+
 #include "fragg_map/ros/frustum_marker.h"
 #include "fragg_map/ros/occupied_cloud.h"
 #include "fragg_map/ros/projected_map.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
-MapPublishers::MapPublishers(ros::NodeHandle& nh, ros::NodeHandle& private_nh,
+MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
                              const ServerParams& params, SharedMap* shared,
                              const ServerStats* stats)
     : params_(params), shared_(shared), stats_(stats), marker_throttle_(params.marker_rate_hz) {
@@ -28,52 +30,53 @@ MapPublishers::MapPublishers(ros::NodeHandle& nh, ros::NodeHandle& private_nh,
   free_markers_.style.state = fragg::CellState::kFree;
   free_markers_.style.alpha = 0.3f;
   // A latched topic's late subscriber would only see the last increment: it gets every block.
-  auto connect = [this, latch](MarkerTopic* topic) -> ros::SubscriberStatusCallback {
-    if (!latch) return ros::SubscriberStatusCallback();
-    return
-        [this, topic](const ros::SingleSubscriberPublisher& sub) { sendAllMarkersTo(*topic, sub); };
+  auto connect = [this, latch](MarkerTopic* topic) -> ::ros::SubscriberStatusCallback {
+    if (!latch) return ::ros::SubscriberStatusCallback();
+    return [this, topic](const ::ros::SingleSubscriberPublisher& sub) {
+      sendAllMarkersTo(*topic, sub);
+    };
   };
   occupied_markers_.pub = nh.advertise<visualization_msgs::MarkerArray>(
-      "occupied_cells_vis_array", 1, connect(&occupied_markers_), ros::SubscriberStatusCallback(),
-      ros::VoidConstPtr(), latch);
+      "occupied_cells_vis_array", 1, connect(&occupied_markers_), ::ros::SubscriberStatusCallback(),
+      ::ros::VoidConstPtr(), latch);
   if (params_.publish_free_space)
     free_markers_.pub = nh.advertise<visualization_msgs::MarkerArray>(
-        "free_cells_vis_array", 1, connect(&free_markers_), ros::SubscriberStatusCallback(),
-        ros::VoidConstPtr(), latch);
+        "free_cells_vis_array", 1, connect(&free_markers_), ::ros::SubscriberStatusCallback(),
+        ::ros::VoidConstPtr(), latch);
   occupied_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("occupied_cells", 1, latch);
   projected_map_pub_ = nh.advertise<nav_msgs::OccupancyGrid>("projected_map", 1, latch);
   frustum_pub_ = nh.advertise<visualization_msgs::Marker>("frustum", 1, latch);
   stats_pub_ = private_nh.advertise<fragg_map::MapStats>("stats", 1, latch);
   if (marker_throttle_.limited())
-    marker_flush_timer_ = nh.createSteadyTimer(ros::WallDuration(marker_throttle_.periodS()),
+    marker_flush_timer_ = nh.createSteadyTimer(::ros::WallDuration(marker_throttle_.periodS()),
                                                &MapPublishers::flushPendingMarkers, this);
 }
 
-bool MapPublishers::wanted(const ros::Publisher& pub) const {
+bool MapPublishers::wanted(const ::ros::Publisher& pub) const {
   return pub && (params_.latch || pub.getNumSubscribers() > 0);
 }
 
-void MapPublishers::publishAfterInsert(const ros::Time& stamp, const fragg::SensorModel& sensor,
+void MapPublishers::publishAfterInsert(const ::ros::Time& stamp, const fragg::SensorModel& sensor,
                                        const Eigen::Isometry3d& T_map_sensor) {
-  std::lock_guard<std::mutex> lock(shared_->mutex);
-  publishMaps(stamp, false);
+  std::lock_guard<std::mutex> publishing(publish_mutex_);
+  publishMaps(shared_->read()->map, stamp, false);
   if (wanted(frustum_pub_) && sensor.type != fragg::SensorType::kAuto && sensor.max_range_m > 0.0)
     frustum_pub_.publish(frustumMarker(sensor, T_map_sensor, params_.frame_id, stamp));
 }
 
-void MapPublishers::publishAfterCorrection(const ros::Time& stamp) {
-  std::lock_guard<std::mutex> lock(shared_->mutex);
-  publishMaps(stamp, false);
+void MapPublishers::publishAfterCorrection(const ::ros::Time& stamp) {
+  std::lock_guard<std::mutex> publishing(publish_mutex_);
+  publishMaps(shared_->read()->map, stamp, false);
 }
 
-void MapPublishers::publishFull(const ros::Time& stamp) {
-  std::lock_guard<std::mutex> lock(shared_->mutex);
-  publishMaps(stamp, true);
+void MapPublishers::publishFull(const ::ros::Time& stamp) {
+  std::lock_guard<std::mutex> publishing(publish_mutex_);
+  publishMaps(shared_->read()->map, stamp, true);
 }
 
-void MapPublishers::publishMaps(const ros::Time& stamp, bool full_markers) {
-  const fragg::Map& map = shared_->map;
-  publishMarkerTopics(stamp, full_markers);
+void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
+                                bool full_markers) {
+  publishMarkerTopics(map, stamp, full_markers);
   if (wanted(occupied_cloud_pub_))
     occupied_cloud_pub_.publish(occupiedCloud(map, params_.frame_id, stamp));
   if (wanted(projected_map_pub_))
@@ -82,25 +85,32 @@ void MapPublishers::publishMaps(const ros::Time& stamp, bool full_markers) {
   if (wanted(stats_pub_)) stats_pub_.publish(stats_->toMsg(map, params_.frame_id, stamp));
 }
 
-void MapPublishers::publishMarkerTopics(const ros::Time& stamp, bool full) {
-  const double now_s = ros::SteadyTime::now().toSec();
+void MapPublishers::publishMarkerTopics(const fragg::Map& map, const ::ros::Time& stamp,
+                                        bool full) {
+  const double now_s = ::ros::SteadyTime::now().toSec();
   if (!full && !marker_throttle_.due(now_s)) return;  // the changes stay pending
-  publishMarkers(occupied_markers_, stamp, full);
-  if (params_.publish_free_space) publishMarkers(free_markers_, stamp, full);
+  publishMarkers(map, occupied_markers_, stamp, full);
+  if (params_.publish_free_space) publishMarkers(map, free_markers_, stamp, full);
   marker_throttle_.published(now_s);
 }
 
-void MapPublishers::flushPendingMarkers(const ros::SteadyTimerEvent&) {
-  std::unique_lock<std::mutex> lock(shared_->mutex, std::try_to_lock);
-  if (!lock.owns_lock()) return;
-  const uint64_t revision = shared_->map.revision();
+void MapPublishers::flushPendingMarkers(const ::ros::SteadyTimerEvent&) {
+  // Never waits: a publisher already at work, or a writer holding the map, publishes the
+  // pending changes itself when it is done.
+  std::unique_lock<std::mutex> publishing(publish_mutex_, std::try_to_lock);
+  if (!publishing.owns_lock()) return;
+  const std::optional<SharedMap::ReadGuard> state = shared_->tryRead();
+  if (!state) return;
+  const fragg::Map& map = (*state)->map;
+  const uint64_t revision = map.revision();
   const bool pending =
       occupied_markers_.ledger.publishedRevision() != revision ||
       (params_.publish_free_space && free_markers_.ledger.publishedRevision() != revision);
-  if (pending) publishMarkerTopics(ros::Time::now(), false);
+  if (pending) publishMarkerTopics(map, ::ros::Time::now(), false);
 }
 
-void MapPublishers::publishMarkers(MarkerTopic& topic, const ros::Time& stamp, bool full) {
+void MapPublishers::publishMarkers(const fragg::Map& map, MarkerTopic& topic,
+                                   const ::ros::Time& stamp, bool full) {
   if (!wanted(topic.pub)) {
     // Nobody sees the markers: the next subscriber starts from a full set.
     topic.ledger = MarkerLedger();
@@ -108,16 +118,17 @@ void MapPublishers::publishMarkers(MarkerTopic& topic, const ros::Time& stamp, b
   }
   const bool first = topic.ledger.publishedRevision() == 0;
   visualization_msgs::MarkerArray markers =
-      full || first ? allBlockMarkers(shared_->map, topic.style, stamp, &topic.ledger)
-                    : changedBlockMarkers(shared_->map, topic.style, stamp, &topic.ledger);
+      full || first ? allBlockMarkers(map, topic.style, stamp, &topic.ledger)
+                    : changedBlockMarkers(map, topic.style, stamp, &topic.ledger);
   if (!markers.markers.empty()) topic.pub.publish(markers);
 }
 
 void MapPublishers::sendAllMarkersTo(MarkerTopic& topic,
-                                     const ros::SingleSubscriberPublisher& sub) {
-  std::lock_guard<std::mutex> lock(shared_->mutex);
+                                     const ::ros::SingleSubscriberPublisher& sub) {
+  std::lock_guard<std::mutex> publishing(publish_mutex_);
+  const SharedMap::ReadGuard state = shared_->read();
   // The blocks the topic's subscribers see, under the ids its increments will use.
-  sub.publish(shownBlockMarkers(shared_->map, topic.style, ros::Time::now(), topic.ledger));
+  sub.publish(shownBlockMarkers(state->map, topic.style, ::ros::Time::now(), topic.ledger));
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -20,51 +20,56 @@
 #include "server_stats.h"
 #include "shared_map.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 class MapPublishers {
  public:
-  MapPublishers(ros::NodeHandle& nh, ros::NodeHandle& private_nh, const ServerParams& params,
+  MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh, const ServerParams& params,
                 SharedMap* shared, const ServerStats* stats);
 
   /// After an insertion: incremental markers, occupied cloud, projected map, frustum, stats.
-  /// Locks the map itself.
-  void publishAfterInsert(const ros::Time& stamp, const fragg::SensorModel& sensor,
+  /// Takes the map's read lock itself.
+  void publishAfterInsert(const ::ros::Time& stamp, const fragg::SensorModel& sensor,
                           const Eigen::Isometry3d& T_map_sensor);
   /// After a pose correction: the markers of the blocks it changed (incremental, as after an
-  /// insertion; throttled by marker_rate), occupied cloud, projected map, stats. Locks the map.
-  void publishAfterCorrection(const ros::Time& stamp);
+  /// insertion; throttled by marker_rate), occupied cloud, projected map, stats. Takes the read
+  /// lock.
+  void publishAfterCorrection(const ::ros::Time& stamp);
   /// After reset, load or clear: a full marker republish and the other map topics.
-  void publishFull(const ros::Time& stamp);
+  void publishFull(const ::ros::Time& stamp);
 
  private:
   struct MarkerTopic {
-    ros::Publisher pub;
+    ::ros::Publisher pub;
     MarkerStyle style;
     MarkerLedger ledger;
   };
-  // Callers hold shared_->mutex.
-  void publishMaps(const ros::Time& stamp, bool full_markers);
+  // Callers hold publish_mutex_ and the map's read lock.
+  void publishMaps(const fragg::Map& map, const ::ros::Time& stamp, bool full_markers);
   /// Both marker topics: a full set, or the changes when the throttle lets an update out.
-  void publishMarkerTopics(const ros::Time& stamp, bool full);
-  void publishMarkers(MarkerTopic& topic, const ros::Time& stamp, bool full);
+  void publishMarkerTopics(const fragg::Map& map, const ::ros::Time& stamp, bool full);
+  void publishMarkers(const fragg::Map& map, MarkerTopic& topic, const ::ros::Time& stamp,
+                      bool full);
   /// Timer: the changes still pending (never waits for the map: an insertion holding it
   /// publishes them itself when it ends).
-  void flushPendingMarkers(const ros::SteadyTimerEvent& event);
-  void sendAllMarkersTo(MarkerTopic& topic, const ros::SingleSubscriberPublisher& sub);
-  bool wanted(const ros::Publisher& pub) const;
+  void flushPendingMarkers(const ::ros::SteadyTimerEvent& event);
+  void sendAllMarkersTo(MarkerTopic& topic, const ::ros::SingleSubscriberPublisher& sub);
+  bool wanted(const ::ros::Publisher& pub) const;
 
   const ServerParams params_;
   SharedMap* shared_;
   const ServerStats* stats_;
+  /// The publishers' own state (marker ledgers, throttle): readers of the map run at once
+  /// (insertion thread, services, timer), so they take this first, then the map's read lock.
+  std::mutex publish_mutex_;
   MarkerTopic occupied_markers_;
   MarkerTopic free_markers_;
   MarkerThrottle marker_throttle_;
-  ros::SteadyTimer marker_flush_timer_;
-  ros::Publisher occupied_cloud_pub_;
-  ros::Publisher projected_map_pub_;
-  ros::Publisher frustum_pub_;
-  ros::Publisher stats_pub_;
+  ::ros::SteadyTimer marker_flush_timer_;
+  ::ros::Publisher occupied_cloud_pub_;
+  ::ros::Publisher projected_map_pub_;
+  ::ros::Publisher frustum_pub_;
+  ::ros::Publisher stats_pub_;
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

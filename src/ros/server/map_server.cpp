@@ -7,9 +7,9 @@
 
 #include "fragg_map/log.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
-MapServer::MapServer(ros::NodeHandle& nh, ros::NodeHandle& private_nh)
+MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh)
     : params_(readParameters(private_nh)), tf_listener_(tf_buffer_, nh) {
   fragg::setLogSink([](fragg::LogLevel level, const std::string& line) {
     if (level == fragg::LogLevel::kWarning)
@@ -17,13 +17,14 @@ MapServer::MapServer(ros::NodeHandle& nh, ros::NodeHandle& private_nh)
     else
       ROS_INFO("fragg_map: %s", line.c_str());
   });
-  shared_ = std::make_unique<SharedMap>(fragg::Map(params_.map));
+  shared_ = std::make_unique<SharedMap>(MapState(fragg::Map(params_.map)));
   publishers_ = std::make_unique<MapPublishers>(nh, private_nh, params_, shared_.get(), &stats_);
-  services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_,
-                                            [this] { publishers_->publishFull(ros::Time::now()); });
+  services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_, [this] {
+    publishers_->publishFull(::ros::Time::now());
+  });
   auto publish_corrected = [this] {
     try {
-      publishers_->publishAfterCorrection(ros::Time::now());
+      publishers_->publishAfterCorrection(::ros::Time::now());
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
     }
@@ -35,7 +36,7 @@ MapServer::MapServer(ros::NodeHandle& nh, ros::NodeHandle& private_nh)
                                                       &stats_, publish_corrected);
   input_ = std::make_unique<CloudInput>(
       nh, params_, tf_buffer_, shared_.get(), &stats_,
-      [this](const ros::Time& stamp, const fragg::SensorModel& sensor,
+      [this](const ::ros::Time& stamp, const fragg::SensorModel& sensor,
              const Eigen::Isometry3d& T_map_sensor) {
         try {
           publishers_->publishAfterInsert(stamp, sensor, T_map_sensor);
@@ -43,12 +44,14 @@ MapServer::MapServer(ros::NodeHandle& nh, ros::NodeHandle& private_nh)
           ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
         }
       });
-  publishers_->publishFull(ros::Time::now());
-  ROS_INFO("fragg_map: %s map at %.3f m in '%s', backend %s (%s), sensor %s, queue %d",
-           params_.latch ? "latched" : "unlatched", params_.map.resolution_m,
-           params_.frame_id.c_str(), shared_->map.backendName(),
-           shared_->map.backendReason().c_str(), params_.sensor.describe().c_str(),
-           params_.queue_size);
+  publishers_->publishFull(::ros::Time::now());
+  {
+    const SharedMap::ReadGuard state = shared_->read();
+    ROS_INFO("fragg_map: %s map at %.3f m in '%s', backend %s (%s), sensor %s, queue %d",
+             params_.latch ? "latched" : "unlatched", params_.map.resolution_m,
+             params_.frame_id.c_str(), state->map.backendName(), state->map.backendReason().c_str(),
+             params_.sensor.describe().c_str(), params_.queue_size);
+  }
   const fragg::ScanStoreParams& scans = params_.map.scans;
   if (scans.keep) {
     const std::string budget =
@@ -66,4 +69,4 @@ MapServer::~MapServer() {
   fragg::setLogSink(fragg::LogSink());
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

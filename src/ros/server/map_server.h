@@ -18,13 +18,13 @@
 #include "server_stats.h"
 #include "shared_map.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 class MapServer {
  public:
   /// Reads and validates the parameters (throws fragg::InvalidArgument naming the bad one),
   /// builds the map and starts the parts.
-  MapServer(ros::NodeHandle& nh, ros::NodeHandle& private_nh);
+  MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh);
   ~MapServer();
 
  private:
@@ -40,4 +40,4 @@ class MapServer {
   std::unique_ptr<CloudInput> input_;              // last: its thread uses everything above
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

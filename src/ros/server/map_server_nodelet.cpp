@@ -7,7 +7,7 @@
 
 #include "map_server.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 class MapServerNodelet : public nodelet::Nodelet {
  private:
@@ -23,6 +23,6 @@ class MapServerNodelet : public nodelet::Nodelet {
   std::unique_ptr<MapServer> server_;
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros
 
-PLUGINLIB_EXPORT_CLASS(fragg_ros::MapServerNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(fragg::ros::MapServerNodelet, nodelet::Nodelet)

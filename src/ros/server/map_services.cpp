@@ -10,7 +10,7 @@
 #include "fragg_map/interop/octomap_io.h"
 #endif
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
 bool endsWith(const std::string& s, const std::string& suffix) {
@@ -36,8 +36,9 @@ Eigen::Vector3d toEigen(const geometry_msgs::Point& p) { return {p.x, p.y, p.z};
 
 }  // namespace
 
-MapServices::MapServices(ros::NodeHandle& private_nh, const ServerParams& params, SharedMap* shared,
-                         ServerStats* stats, std::function<void()> on_map_replaced)
+MapServices::MapServices(::ros::NodeHandle& private_nh, const ServerParams& params,
+                         SharedMap* shared, ServerStats* stats,
+                         std::function<void()> on_map_replaced)
     : params_(params),
       shared_(shared),
       stats_(stats),
@@ -53,19 +54,19 @@ bool MapServices::saveMap(fragg_map::SaveMap::Request& req, fragg_map::SaveMap::
   return answer("save_map", res, [&] {
     const std::string& path = req.path;
     if (path.empty()) throw fragg::InvalidArgument("empty path");
-    std::lock_guard<std::mutex> lock(shared_->mutex);
+    const SharedMap::ReadGuard state = shared_->read();  // saving only reads the map
     if (endsWith(path, ".fgm")) {
-      shared_->map.save(path);
+      state->map.save(path);
     } else if (endsWith(path, ".bt")) {
 #if FRAGG_HAVE_OCTOMAP
-      fragg::exportOctomap(shared_->map, path);
+      fragg::exportOctomap(state->map, path);
 #else
       throw fragg::InvalidArgument("this build has no liboctomap: .bt is not available");
 #endif
     } else {
       throw fragg::InvalidArgument("unknown extension of '" + path + "': use .fgm or .bt");
     }
-    return "saved " + std::to_string(shared_->map.knownVoxelCount()) + " known voxels to " + path;
+    return "saved " + std::to_string(state->map.knownVoxelCount()) + " known voxels to " + path;
   });
 }
 
@@ -80,11 +81,11 @@ bool MapServices::loadMap(fragg_map::LoadMap::Request& req, fragg_map::LoadMap::
       throw fragg::InvalidArgument("the file's resolution " + std::to_string(loaded.resolution()) +
                                    " m differs from the server's " +
                                    std::to_string(params_.map.resolution_m) + " m");
-    std::lock_guard<std::mutex> lock(shared_->mutex);
-    shared_->map = std::move(loaded);
-    shared_->stamps.rebuild(shared_->map.scanStore());
-    return "loaded " + std::to_string(shared_->map.blockCount()) + " blocks and " +
-           std::to_string(shared_->map.scanStore().size()) + " kept scans from " + req.path;
+    const SharedMap::WriteGuard state = shared_->write();
+    state->map = std::move(loaded);
+    state->stamps.rebuild(state->map.scanStore());
+    return "loaded " + std::to_string(state->map.blockCount()) + " blocks and " +
+           std::to_string(state->map.scanStore().size()) + " kept scans from " + req.path;
   });
   if (res.success && on_map_replaced_) on_map_replaced_();
   return ok;
@@ -92,9 +93,9 @@ bool MapServices::loadMap(fragg_map::LoadMap::Request& req, fragg_map::LoadMap::
 
 bool MapServices::reset(fragg_map::Reset::Request&, fragg_map::Reset::Response& res) {
   answer("reset", res, [&] {
-    std::lock_guard<std::mutex> lock(shared_->mutex);
-    shared_->map.reset();
-    shared_->stamps.clear();
+    const SharedMap::WriteGuard state = shared_->write();
+    state->map.reset();
+    state->stamps.clear();
     stats_->clearInsertions();
     return std::string("map reset");
   });
@@ -104,11 +105,11 @@ bool MapServices::reset(fragg_map::Reset::Request&, fragg_map::Reset::Response& 
 
 bool MapServices::clearBox(fragg_map::ClearBox::Request& req, fragg_map::ClearBox::Response& res) {
   answer("clear_bbox", res, [&] {
-    std::lock_guard<std::mutex> lock(shared_->mutex);
-    const size_t before = shared_->map.blockCount();
-    shared_->map.clearBox(toEigen(req.min), toEigen(req.max));  // validates the box first
+    const SharedMap::WriteGuard state = shared_->write();
+    const size_t before = state->map.blockCount();
+    state->map.clearBox(toEigen(req.min), toEigen(req.max));  // validates the box first
     return "cleared; blocks " + std::to_string(before) + " -> " +
-           std::to_string(shared_->map.blockCount());
+           std::to_string(state->map.blockCount());
   });
   if (res.success && on_map_replaced_) on_map_replaced_();
   return true;
@@ -116,10 +117,10 @@ bool MapServices::clearBox(fragg_map::ClearBox::Request& req, fragg_map::ClearBo
 
 bool MapServices::getStats(fragg_map::GetStats::Request&, fragg_map::GetStats::Response& res) {
   return answer("get_stats", res, [&] {
-    std::lock_guard<std::mutex> lock(shared_->mutex);
-    res.stats = stats_->toMsg(shared_->map, params_.frame_id, ros::Time::now());
+    const SharedMap::ReadGuard state = shared_->read();
+    res.stats = stats_->toMsg(state->map, params_.frame_id, ::ros::Time::now());
     return std::string("ok");
   });
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -19,12 +19,12 @@
 #include "server_stats.h"
 #include "shared_map.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 class MapServices {
  public:
   /// `on_map_replaced` runs (map unlocked) after reset, load and clear_bbox.
-  MapServices(ros::NodeHandle& private_nh, const ServerParams& params, SharedMap* shared,
+  MapServices(::ros::NodeHandle& private_nh, const ServerParams& params, SharedMap* shared,
               ServerStats* stats, std::function<void()> on_map_replaced);
 
  private:
@@ -38,7 +38,7 @@ class MapServices {
   SharedMap* shared_;
   ServerStats* stats_;
   std::function<void()> on_map_replaced_;
-  ros::ServiceServer save_, load_, reset_, clear_, stats_srv_;
+  ::ros::ServiceServer save_, load_, reset_, clear_, stats_srv_;
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -13,7 +13,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/pose_correction.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 namespace {
 
 std::string withoutLeadingSlash(const std::string& frame) {
@@ -22,7 +22,7 @@ std::string withoutLeadingSlash(const std::string& frame) {
 
 }  // namespace
 
-PathCorrector::PathCorrector(ros::NodeHandle& nh, const ServerParams& params,
+PathCorrector::PathCorrector(::ros::NodeHandle& nh, const ServerParams& params,
                              const tf2_ros::Buffer& tf, SharedMap* shared, ServerStats* stats,
                              std::function<void()> on_corrected)
     : params_(params),
@@ -66,8 +66,8 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
   size_t unplaced = 0;
   double ms = 0.0;
   {
-    std::lock_guard<std::mutex> lock(shared_->mutex);
-    requireKeptScans(*shared_);
+    const SharedMap::WriteGuard state = shared_->write();
+    requireKeptScans(state->map);
     if (!child_frame.empty()) {
       // Path poses of child_frame -> sensor poses (tf child_frame -> the scan's cloud frame at
       // the scan's stamp; a static transform is found at any time). Poses that cannot be
@@ -75,7 +75,7 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
       std::vector<PoseRequest> placed;
       placed.reserve(requests.size());
       for (const PoseRequest& r : requests) {
-        const ScanStampIndex::Entry* entry = shared_->stamps.find(r.stamp_ns, tolerance_ns);
+        const ScanStampIndex::Entry* entry = state->stamps.find(r.stamp_ns, tolerance_ns);
         if (!entry) {
           placed.push_back(r);  // unknown: planCorrection reports it
           continue;
@@ -85,9 +85,8 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
           continue;
         }
         try {
-          ros::Time stamp;
-          stamp.fromNSec(
-              static_cast<uint64_t>(shared_->map.scanStore().record(entry->id).stamp_ns));
+          ::ros::Time stamp;
+          stamp.fromNSec(static_cast<uint64_t>(state->map.scanStore().record(entry->id).stamp_ns));
           const Eigen::Isometry3d T_child_sensor =
               tf2::transformToEigen(tf_.lookupTransform(child_frame, entry->sensor_frame, stamp));
           placed.push_back({r.stamp_ns, sensorPoseFromChild(r.T_map_sensor, T_child_sensor)});
@@ -100,9 +99,9 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
       requests.swap(placed);
     }
     const PoseThresholds& thresholds = params_.correction.thresholds;
-    plan = planCorrection(requests, shared_->stamps, shared_->map.scanStore(), tolerance_ns,
-                          &thresholds);
-    ms = applyCorrection(plan, shared_, stats_);
+    plan =
+        planCorrection(requests, state->stamps, state->map.scanStore(), tolerance_ns, &thresholds);
+    ms = applyCorrection(plan, &state->map, stats_);
   }
   if (plan.T_map_sensor_new.empty()) {
     ROS_DEBUG("fragg_map: corrected_path: no kept scan moved (%zu poses, %zu within thresholds)",
@@ -117,4 +116,4 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
   if (on_corrected_) on_corrected_();
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

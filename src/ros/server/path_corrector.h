@@ -16,12 +16,12 @@
 #include "server_stats.h"
 #include "shared_map.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 class PathCorrector {
  public:
   /// `on_corrected` runs (map unlocked) after a correction that moved at least one scan.
-  PathCorrector(ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
+  PathCorrector(::ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
                 SharedMap* shared, ServerStats* stats, std::function<void()> on_corrected);
 
  private:
@@ -34,7 +34,7 @@ class PathCorrector {
   SharedMap* shared_;
   ServerStats* stats_;
   std::function<void()> on_corrected_;
-  ros::Subscriber sub_;
+  ::ros::Subscriber sub_;
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

@@ -1,7 +1,7 @@
 // Map server counters -> fragg_map/MapStats.
 #include "server_stats.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 void ServerStats::addInsertion(uint64_t points, double ms) {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -48,7 +48,7 @@ uint64_t ServerStats::droppedNoTf() const {
 }
 
 fragg_map::MapStats ServerStats::toMsg(const fragg::Map& map, const std::string& frame_id,
-                                       const ros::Time& stamp) const {
+                                       const ::ros::Time& stamp) const {
   fragg_map::MapStats msg;
   msg.header.frame_id = frame_id;
   msg.header.stamp = stamp;
@@ -76,4 +76,4 @@ fragg_map::MapStats ServerStats::toMsg(const fragg::Map& map, const std::string&
   return msg;
 }
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

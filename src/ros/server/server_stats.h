@@ -10,7 +10,7 @@
 #include "fragg_map/map.h"
 #include "fragg_map/ros/timing_stats.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
 class ServerStats {
  public:
@@ -25,7 +25,7 @@ class ServerStats {
 
   /// The statistics message; `map` must be locked by the caller.
   fragg_map::MapStats toMsg(const fragg::Map& map, const std::string& frame_id,
-                            const ros::Time& stamp) const;
+                            const ::ros::Time& stamp) const;
   uint64_t droppedNoTf() const;
 
  private:
@@ -41,4 +41,4 @@ class ServerStats {
   double correction_ms_last_ = 0.0;
 };
 
-}  // namespace fragg_ros
+}  // namespace fragg::ros

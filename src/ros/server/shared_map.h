@@ -1,21 +1,25 @@
-// The map, its stamp -> scan index and the lock every thread takes to use them (insertion
-// worker, publishers, services, corrected_path). The index changes only with the map, under
-// the same lock: insertion adds, ~load_map rebuilds, ~reset clears.
+// The map and its stamp -> scan index behind one reader/writer lock (fragg::Locked), shared by
+// the insertion thread, publishers, services and corrected_path. The index changes only with
+// the map, under the write lock: insertion adds, ~load_map rebuilds, ~reset clears.
+//
+// Who takes which side: publishers, ~save_map and ~get_stats read; insertion (one scan per
+// lock), ~clear_bbox, ~reset, ~load_map and the pose corrections write.
 #pragma once
 
-#include <mutex>
 #include <utility>
 
 #include "fragg_map/map.h"
+#include "fragg_map/map_lock.h"
 #include "fragg_map/ros/scan_stamp_index.h"
 
-namespace fragg_ros {
+namespace fragg::ros {
 
-struct SharedMap {
-  explicit SharedMap(fragg::Map m) : map(std::move(m)) {}
-  std::mutex mutex;
+struct MapState {
+  explicit MapState(fragg::Map m) : map(std::move(m)) {}
   fragg::Map map;
   ScanStampIndex stamps;  ///< kept scans by stamp (empty when the map keeps none)
 };
 
-}  // namespace fragg_ros
+using SharedMap = fragg::Locked<MapState>;
+
+}  // namespace fragg::ros

@@ -73,9 +73,9 @@ int main(int argc, char** argv) {
   params.resolution_m = resolution_m;
   params.backend = fragg::Backend::kCpu;
   fragg::Map map(params);
-  fragg_ros::MarkerLedger ledger;
-  const fragg_ros::MarkerStyle style;
-  fragg_ros::MarkerThrottle throttle(marker_rate_hz);
+  fragg::ros::MarkerLedger ledger;
+  const fragg::ros::MarkerStyle style;
+  fragg::ros::MarkerThrottle throttle(marker_rate_hz);
   std::vector<double> convert_ms, update_ms, insert_ms, overhead_ms;
   double markers_total_ms = 0.0;
   size_t points = 0, markers_sent = 0, blocks_changed = 0;
@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
     const uint64_t before = ledger.publishedRevision();
     blocks_changed += map.changedBlocksSince(before, fragg::BlockChange::kOccupied).size();
     const auto t0 = std::chrono::steady_clock::now();
-    const auto markers = fragg_ros::changedBlockMarkers(map, style, ros::Time(), &ledger);
+    const auto markers = fragg::ros::changedBlockMarkers(map, style, ros::Time(), &ledger);
     update_ms.push_back(msSince(t0));
     markers_total_ms += update_ms.back();
     markers_sent += markers.markers.size();
@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
     const fragg::Scan scan = lidar.scan(i);
     const sensor_msgs::PointCloud2 msg = toMsg(scan.cloud);
     auto t0 = std::chrono::steady_clock::now();
-    const fragg::PointCloud cloud = fragg_ros::cloudFromMsg(msg);
+    const fragg::PointCloud cloud = fragg::ros::cloudFromMsg(msg);
     convert_ms.push_back(msSince(t0));
     points = cloud.size();
     t0 = std::chrono::steady_clock::now();

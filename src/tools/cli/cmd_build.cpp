@@ -13,6 +13,7 @@
 #include "cli/progress.h"
 #include "fragg_map/atomic_file.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/field_names.h"
 #include "fragg_map/io/dataset.h"
 #include "fragg_map/map.h"
 #include "percentile.h"
@@ -42,7 +43,36 @@ struct BuildOptions {
   bool json = false;
   ScanStoreParams scans;
   double scan_budget_mib = 0.0;
+  HeightFilterParams height_filter;
 };
+
+// The core's fields (as its validate() messages name them) -> the flags that set them.
+const std::vector<FieldName>& flagNames() {
+  static const std::vector<FieldName> names = {
+      {"resolution_m", "--resolution"},
+      {"occupancy.prob_hit", "--hit"},
+      {"occupancy.prob_miss", "--miss"},
+      {"occupancy.clamp_min", "--clamp-min"},
+      {"occupancy.clamp_max", "--clamp-max"},
+      {"occupancy.unknown_band", "--unknown-band"},
+      {"backend", "--backend"},
+      {"raycast", "--raycast"},
+      {"threads", "--threads"},
+      {"scans.point_step_m", "--scan-step"},
+      {"height_filter.min_z_m", "--min-z"},
+      {"height_filter.max_z_m", "--max-z"},
+      {"sensor.type", "--sensor"},
+      {"sensor.hfov_rad", "--hfov"},
+      {"sensor.vfov_rad", "--vfov"},
+      {"sensor.elevation_min_rad", "--elevation-min"},
+      {"sensor.elevation_max_rad", "--elevation-max"},
+      {"sensor.min_range_m", "--min-range"},
+      {"sensor.max_range_m", "--max-range"},
+      {"sensor.range_noise_m", "--range-noise"},
+      {"sensor.range_noise_quadratic_per_m", "--range-noise-quadratic"},
+  };
+  return names;
+}
 
 constexpr double kDeg = M_PI / 180.0;
 
@@ -75,20 +105,27 @@ SensorModel sensorFrom(const BuildOptions& o) {
 
 void runBuild(const BuildOptions& o) {
   MapParams params;
-  params.resolution_m = o.resolution_m;
-  params.occupancy = o.occupancy;
-  params.backend = backendFromString(o.backend);
-  params.raycast = rayCastFromString(o.raycast);
-  params.clear_no_return_rays = o.clear_no_return;
-  params.threads = o.threads;
-  params.scans = o.scans;
+  SensorModel sensor;
+  // The core checks the values; its messages come back naming the flags.
+  withFieldNames(
+      flagNames(),
+      [&] {
+        params.resolution_m = o.resolution_m;
+        params.occupancy = o.occupancy;
+        params.backend = backendFromString(o.backend);
+        params.raycast = rayCastFromString(o.raycast);
+        params.clear_no_return_rays = o.clear_no_return;
+        params.threads = o.threads;
+        params.scans = o.scans;
+        params.height_filter = o.height_filter;
+        params.validate();
+        sensor = sensorFrom(o);
+      },
+      "");
   if (!(o.scan_budget_mib >= 0.0)) throw InvalidArgument("--scan-budget must be >= 0 MiB");
   params.scans.max_bytes = static_cast<size_t>(o.scan_budget_mib * 1048576.0);
   if (!o.scans.keep && (o.scan_budget_mib > 0.0 || !o.scans.spill_dir.empty()))
     throw InvalidArgument("--scan-budget and --spill-dir need --keep-scans");
-  params.validate();
-  const SensorModel sensor = sensorFrom(o);
-  sensor.validate();
   if (o.output.size() < 5 || o.output.substr(o.output.size() - 4) != ".fgm")
     throw InvalidArgument("output must be a .fgm file, got '" + o.output + "'");
   { AtomicFile probe(o.output); }  // fail now, not after the build, if it cannot be written
@@ -147,6 +184,7 @@ void runBuild(const BuildOptions& o) {
                         {"dropped_invalid", total.dropped_invalid},
                         {"dropped_min_range", total.dropped_min_range},
                         {"dropped_outside_frustum", total.dropped_outside_frustum},
+                        {"dropped_height", total.dropped_height},
                         {"scans_skipped", source->skipped()},
                         {"voxel_visits", total.voxel_visits},
                         {"seconds", seconds},
@@ -232,6 +270,11 @@ void addBuildCommand(CLI::App& app) {
   c->add_option("--unknown-band", o->occupancy.unknown_band,
                 "Cells with |p - 0.5| <= band are unknown")
       ->capture_default_str();
+  c->add_option("--min-z", o->height_filter.min_z_m,
+                "Points below this map-frame height are not inserted (m; octomap_server's "
+                "pointcloud_min_z)");
+  c->add_option("--max-z", o->height_filter.max_z_m,
+                "Points above this map-frame height are not inserted (m; pointcloud_max_z)");
   c->add_flag("--clear-no-return", o->clear_no_return,
               "Organised clouds: clear free space along rays without a return");
   c->add_option("--threads", o->threads, "CPU threads (0 = every core)")->capture_default_str();
