@@ -1,5 +1,5 @@
-// Map::save and Map::load: the .fgm format described in map_file.h.
-#include "fragg_map/map_file.h"
+// Map::save and Map::load: the .fgm format described in map_file_format.h.
+#include "fragg_map/map_file_format.h"
 
 #include <zlib.h>
 

@@ -1,4 +1,4 @@
-#include "fragg_map/map_file.h"
+#include "fragg_map/map_file_format.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
