@@ -129,7 +129,8 @@ MapQuality evaluateMapQuality(const Map& map, const geometry::MeshBvh& scene,
         if (b0.x > b1.x || b0.y > b1.y || b0.z > b1.z) continue;
         const Eigen::Vector3d box_lo = Eigen::Vector3d(b0.x, b0.y, b0.z) * res;
         const Eigen::Vector3d box_hi = Eigen::Vector3d(b1.x + 1, b1.y + 1, b1.z + 1) * res;
-        if (!geometry::triangleBoxOverlap(0.5 * (box_lo + box_hi), 0.5 * (box_hi - box_lo), a, b, c))
+        if (!geometry::triangleBoxOverlap(0.5 * (box_lo + box_hi), 0.5 * (box_hi - box_lo), a, b,
+                                          c))
           continue;
         for (int32_t z = b0.z; z <= b1.z; ++z)
           for (int32_t y = b0.y; y <= b1.y; ++y)

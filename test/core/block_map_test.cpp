@@ -171,7 +171,7 @@ TEST(BlockMapTest, ErasedIndicesAreReusedBeforeTheArenaGrows) {
   }
   m.erase(keys[1]);
   m.erase(keys[3]);
-  m.erase(keys[3]);          // twice: no effect
+  m.erase(keys[3]);        // twice: no effect
   m.erase({12345, 0, 0});  // never there: no effect
   EXPECT_EQ(m.size(), 3u);
   EXPECT_EQ(m.find(keys[1]), kNoBlock);
@@ -233,9 +233,9 @@ TEST(BlockMapTest, ForEachInBoxMatchesBruteForce) {
     const BlockKey k{near(rng), near(rng), near(rng)};
     live[k] = m.findOrCreate(k);
   }
-  for (const BlockKey& k : {BlockKey{kMaxBlock, kMaxBlock, kMaxBlock},
-                            BlockKey{kMinBlock, kMinBlock, kMinBlock},
-                            BlockKey{kMinBlock, 0, kMaxBlock}, BlockKey{1000000, -1000000, 7}})
+  for (const BlockKey& k :
+       {BlockKey{kMaxBlock, kMaxBlock, kMaxBlock}, BlockKey{kMinBlock, kMinBlock, kMinBlock},
+        BlockKey{kMinBlock, 0, kMaxBlock}, BlockKey{1000000, -1000000, 7}})
     live[k] = m.findOrCreate(k);
   // Erase a third: the index must forget them.
   for (auto it = live.begin(); it != live.end();) {
@@ -258,8 +258,8 @@ TEST(BlockMapTest, ForEachInBoxMatchesBruteForce) {
   };
   auto check = [&](const BlockKey& lo, const BlockKey& hi) {
     const std::vector<BlockIndex> got = collectInBox(m, lo, hi);  // sorted, duplicates kept
-    EXPECT_EQ(got, brute(lo, hi)) << "box " << lo.x << " " << lo.y << " " << lo.z << " .. "
-                                  << hi.x << " " << hi.y << " " << hi.z;
+    EXPECT_EQ(got, brute(lo, hi)) << "box " << lo.x << " " << lo.y << " " << lo.z << " .. " << hi.x
+                                  << " " << hi.y << " " << hi.z;
   };
   // Random boxes from one block to the whole cloud: small ones walk the box's super-cells,
   // large ones the occupied super-cells.

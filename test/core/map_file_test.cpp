@@ -1,5 +1,3 @@
-#include "fragg_map/map_file_format.h"
-
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -13,6 +11,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/map.h"
+#include "fragg_map/map_file_format.h"
 #include "test_scenes.h"
 
 namespace fragg {

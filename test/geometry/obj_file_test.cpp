@@ -57,7 +57,7 @@ TEST(GeometryObjFile, ReaderAcceptsFaceFormsAndStartsASolidPerObjectOrGroup) {
   const std::string dir = test::testDir();
   writeText(dir + "/quad.obj",
             "# comment\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\n"
-            "f 1 2 3\n"                // before any o/g: a solid of its own
+            "f 1 2 3\n"                   // before any o/g: a solid of its own
             "g a\nf 1/1 2/2/2 3//3 -1\n"  // a quad, fanned; the last index is relative
             "o b\nf -4 -3 -2\n");
   const TriangleMesh q = readObj(dir + "/quad.obj");
@@ -94,8 +94,7 @@ TEST(GeometryObjFile, ReaderErrorsNameTheFileAndTheLine) {
   writeText(dir + "/no_faces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
   EXPECT_THROW(readObj(dir + "/no_faces.obj"), IoError);
   EXPECT_THROW(readObj(dir + "/missing.obj"), IoError);
-  EXPECT_THROW(writeObj(test::boxSolid({0, 0, 0}, {1, 1, 1}), dir + "/no/such/dir/m.obj"),
-               IoError);
+  EXPECT_THROW(writeObj(test::boxSolid({0, 0, 0}, {1, 1, 1}), dir + "/no/such/dir/m.obj"), IoError);
 }
 
 }  // namespace

@@ -23,8 +23,7 @@ TEST(GeometryTriangle, RayTriangleHitsAtTheAnalyticDistance) {
   const Eigen::Vector3f o(0.5f, 0.5f, 1.f);
   EXPECT_LT(rayTriangle(o, Eigen::Vector3f(1, 1, -1).normalized(), kV0, kE1, kE2), 0.f);
   const Eigen::Vector3f d = Eigen::Vector3f(0.25f, 0.25f, -1).normalized();
-  EXPECT_NEAR(rayTriangle(o, d, kV0, kE1, kE2), Eigen::Vector3f(0.25f, 0.25f, -1).norm(),
-              1e-6f);
+  EXPECT_NEAR(rayTriangle(o, d, kV0, kE1, kE2), Eigen::Vector3f(0.25f, 0.25f, -1).norm(), 1e-6f);
   // Either face: the triangle is hit from below too.
   EXPECT_FLOAT_EQ(rayTriangle({0.5f, 0.5f, -2.f}, {0, 0, 1}, kV0, kE1, kE2), 2.f);
   // The line's hit behind the origin comes back as a negative t.
@@ -52,15 +51,15 @@ TEST(GeometryTriangle, PointDistanceInEveryVoronoiRegion) {
   auto d = [&](float x, float y, float z) {
     return std::sqrt(pointTriangleDistanceSq({x, y, z}, a, b, c));
   };
-  EXPECT_FLOAT_EQ(d(0.5f, 0.5f, 1.5f), 1.5f);           // face
-  EXPECT_FLOAT_EQ(d(0.5f, 0.5f, -0.25f), 0.25f);        // face, other side
-  EXPECT_FLOAT_EQ(d(-1, -1, 0), std::sqrt(2.f));        // vertex a
-  EXPECT_FLOAT_EQ(d(3, -1, 1), std::sqrt(3.f));         // vertex b
-  EXPECT_FLOAT_EQ(d(-1, 4, 0), std::sqrt(5.f));         // vertex c
-  EXPECT_FLOAT_EQ(d(1, -2, 0), 2.f);                    // edge ab
-  EXPECT_FLOAT_EQ(d(-3, 1, 4), 5.f);                    // edge ca
-  EXPECT_FLOAT_EQ(d(2, 2, 0), std::sqrt(2.f));          // edge bc (x + y = 2)
-  EXPECT_FLOAT_EQ(d(1, 1, 0), 0.f);                     // on the edge bc
+  EXPECT_FLOAT_EQ(d(0.5f, 0.5f, 1.5f), 1.5f);     // face
+  EXPECT_FLOAT_EQ(d(0.5f, 0.5f, -0.25f), 0.25f);  // face, other side
+  EXPECT_FLOAT_EQ(d(-1, -1, 0), std::sqrt(2.f));  // vertex a
+  EXPECT_FLOAT_EQ(d(3, -1, 1), std::sqrt(3.f));   // vertex b
+  EXPECT_FLOAT_EQ(d(-1, 4, 0), std::sqrt(5.f));   // vertex c
+  EXPECT_FLOAT_EQ(d(1, -2, 0), 2.f);              // edge ab
+  EXPECT_FLOAT_EQ(d(-3, 1, 4), 5.f);              // edge ca
+  EXPECT_FLOAT_EQ(d(2, 2, 0), std::sqrt(2.f));    // edge bc (x + y = 2)
+  EXPECT_FLOAT_EQ(d(1, 1, 0), 0.f);               // on the edge bc
   EXPECT_FLOAT_EQ(pointTriangleDistanceSq(b, a, b, c), 0.f);
 }
 

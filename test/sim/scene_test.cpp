@@ -1,5 +1,7 @@
 // Scenes: the simulator's primitives under the BVH (analytic hits on terrain, cylinder caps,
 // tessellated spheres), OBJ meshes placed by a scene file, scene files and their errors.
+#include "fragg_map/sim/scene.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,7 +10,6 @@
 #include "fragg_map/geometry/mesh_bvh.h"
 #include "fragg_map/geometry/obj_file.h"
 #include "fragg_map/sim/primitives.h"
-#include "fragg_map/sim/scene.h"
 #include "sim_test_util.h"
 
 namespace fragg::sim {

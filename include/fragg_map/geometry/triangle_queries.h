@@ -12,7 +12,7 @@ namespace fragg::geometry {
 
 /// Squared distance from p to the triangle (a, b, c).
 inline float pointTriangleDistanceSq(const Eigen::Vector3f& p, const Eigen::Vector3f& a,
-                              const Eigen::Vector3f& b, const Eigen::Vector3f& c) {
+                                     const Eigen::Vector3f& b, const Eigen::Vector3f& c) {
   // Closest point by Voronoi region (Ericson, Real-Time Collision Detection, 5.1.5).
   const Eigen::Vector3f ab = b - a, ac = c - a, ap = p - a;
   const float d1 = ab.dot(ap), d2 = ac.dot(ap);
@@ -40,8 +40,8 @@ inline float pointTriangleDistanceSq(const Eigen::Vector3f& p, const Eigen::Vect
 /// Möller-Trumbore: distance t along dir to the triangle (v0, v0 + e1, v0 + e2), or a negative
 /// value when the line misses it. Barycentric limits are widened by edge_eps.
 inline float rayTriangle(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
-                  const Eigen::Vector3f& v0, const Eigen::Vector3f& e1, const Eigen::Vector3f& e2,
-                  float edge_eps = 0.f) {
+                         const Eigen::Vector3f& v0, const Eigen::Vector3f& e1,
+                         const Eigen::Vector3f& e2, float edge_eps = 0.f) {
   const Eigen::Vector3f pv = dir.cross(e2);
   const float det = e1.dot(pv);
   if (std::abs(det) < 1e-12f) return -1.f;
@@ -58,8 +58,8 @@ inline float rayTriangle(const Eigen::Vector3f& origin, const Eigen::Vector3f& d
 /// Whether the triangle (a, b, c) meets the axis-aligned box centre +- half (separating axis
 /// test of Akenine-Moller); touching counts.
 inline bool triangleBoxOverlap(const Eigen::Vector3d& centre, const Eigen::Vector3d& half,
-                        const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                        const Eigen::Vector3d& c) {
+                               const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                               const Eigen::Vector3d& c) {
   const Eigen::Vector3d v[3] = {a - centre, b - centre, c - centre};
   // Box face normals.
   for (int i = 0; i < 3; ++i) {

@@ -6,9 +6,9 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
+#include "fragg_map/geometry/mesh_bvh.h"
 #include "fragg_map/io/depth_image.h"
 #include "fragg_map/point_cloud.h"
-#include "fragg_map/geometry/mesh_bvh.h"
 
 namespace fragg::sim {
 

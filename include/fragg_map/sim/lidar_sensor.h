@@ -6,8 +6,8 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
-#include "fragg_map/point_cloud.h"
 #include "fragg_map/geometry/mesh_bvh.h"
+#include "fragg_map/point_cloud.h"
 
 namespace fragg::sim {
 

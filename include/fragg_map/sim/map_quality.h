@@ -12,8 +12,8 @@
 
 #include <cstdint>
 
-#include "fragg_map/map.h"
 #include "fragg_map/geometry/mesh_bvh.h"
+#include "fragg_map/map.h"
 
 namespace fragg::sim {
 
