@@ -362,7 +362,9 @@ TEST(BlockMapTest, HostBytesGrowWithBlocks) {
     const size_t now = m.hostBytes();
     EXPECT_GT(now, last) << "block " << i;
     last = now;
-    if (i == 0) EXPECT_GE(now, kChunkBytes);
+    if (i == 0) {
+      EXPECT_GE(now, kChunkBytes);
+    }
   }
   EXPECT_GE(last, 2 * kChunkBytes + 1100 * sizeof(BlockMeta));
 }

