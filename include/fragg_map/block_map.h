@@ -89,7 +89,7 @@ class BlockMap {
   /// Every live block, in unspecified order.
   void forEach(const std::function<void(BlockIndex)>& fn) const;
 
-  /// Exact bounds of observed cells (scans the boundary blocks).
+  /// Exact bounds of observed cells (reads every cell of every block).
   KeyBounds observedBounds() const;
 
   size_t hostBytes() const;

@@ -1,6 +1,4 @@
-// Map::save and Map::load: the .fgm format described in map_file.h.
-#include "fragg_map/map_file.h"
-
+// Map::save and Map::load: the .fgm format described in map_file_format.h.
 #include <zlib.h>
 
 #include <algorithm>
@@ -15,6 +13,7 @@
 #include "fragg_map/internal/backend.h"
 #include "fragg_map/internal/scan_codec.h"
 #include "fragg_map/map.h"
+#include "fragg_map/map_file_format.h"
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the .fgm writer assumes little-endian");
 

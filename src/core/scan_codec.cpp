@@ -9,7 +9,7 @@
 
 #include "fragg_map/atomic_file.h"
 #include "fragg_map/errors.h"
-#include "fragg_map/map_file.h"
+#include "fragg_map/map_file_format.h"
 
 namespace fragg {
 

@@ -31,7 +31,7 @@ DepthIntrinsics DepthCameraSpec::intrinsics() const {
   return k;
 }
 
-PointCloud simulateDepthCamera(const MeshBvh& scene, const DepthCameraSpec& spec,
+PointCloud simulateDepthCamera(const geometry::MeshBvh& scene, const DepthCameraSpec& spec,
                                const Eigen::Isometry3d& T_map_camera, uint64_t seed,
                                uint64_t frame) {
   spec.validate();
@@ -49,7 +49,7 @@ PointCloud simulateDepthCamera(const MeshBvh& scene, const DepthCameraSpec& spec
     const int u = static_cast<int>(i % spec.width), v = static_cast<int>(i / spec.width);
     const Eigen::Vector3f ray_C((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0f);  // z = 1
     const float len = ray_C.norm();
-    RayHit hit;
+    geometry::RayHit hit;
     const float t_max = static_cast<float>(spec.max_range_m) * len;
     if (!scene.intersect(origin, R * (ray_C / len), t_max, &hit)) continue;
     double depth = hit.t_m / len;

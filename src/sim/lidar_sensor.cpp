@@ -32,7 +32,7 @@ Eigen::Vector3f LidarSpec::direction(int beam, int column) const {
       .cast<float>();
 }
 
-PointCloud simulateLidar(const MeshBvh& scene, const LidarSpec& spec,
+PointCloud simulateLidar(const geometry::MeshBvh& scene, const LidarSpec& spec,
                          const Eigen::Isometry3d& T_map_sensor, uint64_t seed, uint64_t frame) {
   spec.validate();
   PointCloud cloud;
@@ -48,7 +48,7 @@ PointCloud simulateLidar(const MeshBvh& scene, const LidarSpec& spec,
     const int beam = static_cast<int>(i / spec.azimuth_steps);
     const int column = static_cast<int>(i % spec.azimuth_steps);
     const Eigen::Vector3f d_S = spec.direction(beam, column);
-    RayHit hit;
+    geometry::RayHit hit;
     if (!scene.intersect(origin, R * d_S, static_cast<float>(spec.max_range_m), &hit)) continue;
     if (hit.t_m < spec.min_range_m) continue;
     const uint64_t key = mix64(frame_key ^ static_cast<uint64_t>(i));

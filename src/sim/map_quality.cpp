@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include "fragg_map/geometry/triangle_queries.h"
+
 namespace fragg::sim {
 namespace {
 
@@ -48,32 +50,7 @@ bool lessKey(const VoxelKey& a, const VoxelKey& b) {
 
 }  // namespace
 
-bool triangleBoxOverlap(const Eigen::Vector3d& centre, const Eigen::Vector3d& half,
-                        const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                        const Eigen::Vector3d& c) {
-  const Eigen::Vector3d v[3] = {a - centre, b - centre, c - centre};
-  // Box face normals.
-  for (int i = 0; i < 3; ++i) {
-    const double lo = std::min({v[0][i], v[1][i], v[2][i]});
-    const double hi = std::max({v[0][i], v[1][i], v[2][i]});
-    if (lo > half[i] || hi < -half[i]) return false;
-  }
-  const Eigen::Vector3d e[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
-  // Triangle plane.
-  const Eigen::Vector3d n = e[0].cross(e[1]);
-  if (std::abs(n.dot(v[0])) > half.dot(n.cwiseAbs())) return false;
-  // Cross products of the box axes with the triangle edges.
-  for (int j = 0; j < 3; ++j)
-    for (int i = 0; i < 3; ++i) {
-      const Eigen::Vector3d axis = Eigen::Vector3d::Unit(i).cross(e[j]);
-      const double p0 = axis.dot(v[0]), p1 = axis.dot(v[1]), p2 = axis.dot(v[2]);
-      const double r = half.dot(axis.cwiseAbs());
-      if (std::min({p0, p1, p2}) > r || std::max({p0, p1, p2}) < -r) return false;
-    }
-  return true;
-}
-
-MapQuality evaluateMapQuality(const Map& map, const MeshBvh& scene,
+MapQuality evaluateMapQuality(const Map& map, const geometry::MeshBvh& scene,
                               const MapQualityOptions& options) {
   MapQuality q;
   const double res = map.resolution();
@@ -119,7 +96,7 @@ MapQuality evaluateMapQuality(const Map& map, const MeshBvh& scene,
   q.free_inside_deep = deep;
 
   // 2. Surface voxels in the observed region, per triangle, then merged without duplicates.
-  const TriangleMesh& mesh = scene.mesh();
+  const geometry::TriangleMesh& mesh = scene.mesh();
   std::vector<VoxelKey> surface;
   const Eigen::Vector3d half = Eigen::Vector3d::Constant(0.5 * res);
 #pragma omp parallel
@@ -149,13 +126,14 @@ MapQuality evaluateMapQuality(const Map& map, const MeshBvh& scene,
         if (b0.x > b1.x || b0.y > b1.y || b0.z > b1.z) continue;
         const Eigen::Vector3d box_lo = Eigen::Vector3d(b0.x, b0.y, b0.z) * res;
         const Eigen::Vector3d box_hi = Eigen::Vector3d(b1.x + 1, b1.y + 1, b1.z + 1) * res;
-        if (!triangleBoxOverlap(0.5 * (box_lo + box_hi), 0.5 * (box_hi - box_lo), a, b, c))
+        if (!geometry::triangleBoxOverlap(0.5 * (box_lo + box_hi), 0.5 * (box_hi - box_lo), a, b,
+                                          c))
           continue;
         for (int32_t z = b0.z; z <= b1.z; ++z)
           for (int32_t y = b0.y; y <= b1.y; ++y)
             for (int32_t x = b0.x; x <= b1.x; ++x) {
               const VoxelKey k{x, y, z};
-              if (!triangleBoxOverlap(map.centerOf(k), half, a, b, c)) continue;
+              if (!geometry::triangleBoxOverlap(map.centerOf(k), half, a, b, c)) continue;
               if (lookup.observedAround(k)) local.push_back(k);
             }
       }

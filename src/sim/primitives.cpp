@@ -8,6 +8,9 @@
 #include "fragg_map/errors.h"
 
 namespace fragg::sim {
+
+using geometry::TriangleMesh;
+
 namespace {
 
 int32_t addVertex(TriangleMesh& m, const Eigen::Vector3d& p) {

@@ -7,12 +7,13 @@
 #include <sstream>
 
 #include "fragg_map/errors.h"
-#include "fragg_map/sim/obj_file.h"
+#include "fragg_map/geometry/obj_file.h"
 #include "fragg_map/sim/primitives.h"
 
 namespace fragg::sim {
 namespace {
 
+using geometry::TriangleMesh;
 using nlohmann::json;
 
 // Solids standing on the ground reach this far below it, so that no gap opens on a slope.
@@ -124,7 +125,7 @@ TriangleMesh readObject(const json& o, const Terrain& terrain, const std::string
       throw InvalidArgument("mesh: 'obj' must name an OBJ file");
     std::string path = o.at("obj").get<std::string>();
     if (!path.empty() && path[0] != '/') path = base_dir + "/" + path;
-    TriangleMesh m = readObj(path);
+    TriangleMesh m = geometry::readObj(path);
     if (o.contains("offset")) {
       const Eigen::Vector3f off = vec(o, "offset", 3, 3).cast<float>();
       for (Eigen::Vector3f& v : m.vertices_m) v += off;

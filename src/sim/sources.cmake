@@ -1,11 +1,9 @@
-# Simulator and ground-truth geometry (fragg_map_sim_lib, ROS-free): scene meshes, BVH, OBJ
-# files, sensors, trajectories, dataset writers and map quality against the scene.
+# Simulator (fragg_map_sim_lib, ROS-free): scene primitives and scene files, sensors,
+# trajectories, dataset writers and map quality against the scene. Meshes, the BVH and OBJ
+# files come from fragg_map_geometry (src/geometry).
 # FRAGG_SIM_ROS_SOURCES (the bag writer) go into fragg_map_sim_bag, built only with ROS.
 set(FRAGG_SIM_SOURCES
-  ${CMAKE_CURRENT_LIST_DIR}/triangle_mesh.cpp
   ${CMAKE_CURRENT_LIST_DIR}/primitives.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/mesh_bvh.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/obj_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene.cpp
   ${CMAKE_CURRENT_LIST_DIR}/trajectory.cpp
   ${CMAKE_CURRENT_LIST_DIR}/lidar_sensor.cpp

@@ -1,5 +1,3 @@
-#include "fragg_map/map_file.h"
-
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -15,6 +13,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/scan_codec.h"
 #include "fragg_map/map.h"
+#include "fragg_map/map_file_format.h"
 #include "test_scenes.h"
 
 namespace fragg {

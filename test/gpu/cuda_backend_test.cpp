@@ -13,13 +13,13 @@
 
 #include "bench/synthetic_lidar.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/geometry/mesh_bvh.h"
 #include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/io/dataset.h"
 #include "fragg_map/io/point_file.h"
 #include "fragg_map/io/pose_file.h"
 #include "fragg_map/map.h"
 #include "fragg_map/sim/lidar_sensor.h"
-#include "fragg_map/sim/mesh_bvh.h"
 #include "fragg_map/sim/scene.h"
 #include "fragg_map/sim/trajectory.h"
 
@@ -125,7 +125,7 @@ std::vector<Input> simulatedW1(int step) {
       scene.trajectories.at("street"),
       [&terrain](double x, double y) { return terrain.heightAt(x, y); }, sim::DriftSpec(), 101,
       100);
-  const sim::MeshBvh bvh(std::move(scene.mesh));
+  const geometry::MeshBvh bvh(std::move(scene.mesh));
   sim::LidarSpec spec;
   spec.beams = 128;
   spec.azimuth_steps = 1406;

@@ -13,7 +13,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/scan_codec.h"
 #include "fragg_map/map.h"
-#include "fragg_map/map_file.h"
+#include "fragg_map/map_file_format.h"
 #include "loop_scenes.h"
 
 namespace fragg {

@@ -12,6 +12,8 @@
 namespace fragg::sim {
 namespace {
 
+using geometry::MeshBvh;
+
 TEST(SimBag, CloudsAndTfReadBackThroughTheCoreBagReader) {
   const std::string path = test::testDir() + "/sim.bag";
   const MeshBvh ground(test::flatGround(50));

@@ -8,6 +8,9 @@
 namespace fragg::sim {
 namespace {
 
+using geometry::MeshBvh;
+using geometry::TriangleMesh;
+
 void setCell(Map& map, const VoxelKey& k, int16_t log_odds_fx) {
   map.writeCells([&](CellWriter& cells) {
     Cell c;

@@ -19,6 +19,9 @@
 namespace fragg::sim {
 namespace {
 
+using geometry::MeshBvh;
+using geometry::TriangleMesh;
+
 constexpr double kSensorHeightM = 2.0;
 
 Eigen::Isometry3d at(double x, double y, double z, double yaw = 0.0) {

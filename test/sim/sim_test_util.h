@@ -9,14 +9,14 @@
 #include <iterator>
 #include <string>
 
+#include "fragg_map/geometry/triangle_mesh.h"
 #include "fragg_map/sim/primitives.h"
-#include "fragg_map/sim/triangle_mesh.h"
 
 namespace fragg::sim::test {
 
 /// A flat ground slab, top at z = 0, over [-half, half]^2.
-inline TriangleMesh flatGround(double half_m) {
-  TriangleMesh m;
+inline geometry::TriangleMesh flatGround(double half_m) {
+  geometry::TriangleMesh m;
   m.append(makeTerrainSlab(-half_m, -half_m, half_m, half_m, half_m / 4, 1.0,
                            [](double, double) { return 0.0; }));
   return m;

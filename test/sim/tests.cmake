@@ -1,8 +1,9 @@
-# Simulator and map-quality suites: analytic ray hits, sensors (NaN for no return, noise and
-# dropout statistics), determinism, OBJ round trip, evaluation metrics on a hand-made map, and
-# (ROS builds) the bag read back by the core's bag reader.
-fragg_add_test(sim_geometry_test
-  SOURCES ${CMAKE_CURRENT_LIST_DIR}/geometry_test.cpp
+# Simulator and map-quality suites: scenes and primitives (analytic ray hits, OBJ meshes in a
+# scene, scene files), sensors (NaN for no return, noise and dropout statistics), determinism,
+# evaluation metrics on a hand-made map, and (ROS builds) the bag read back by the core's bag
+# reader. The mesh, BVH and OBJ code itself is tested in test/geometry.
+fragg_add_test(sim_scene_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/scene_test.cpp
   LIBS fragg_map_sim_lib
   LABELS sim)
 

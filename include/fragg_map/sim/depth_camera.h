@@ -6,9 +6,9 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
+#include "fragg_map/geometry/mesh_bvh.h"
 #include "fragg_map/io/depth_image.h"
 #include "fragg_map/point_cloud.h"
-#include "fragg_map/sim/mesh_bvh.h"
 
 namespace fragg::sim {
 
@@ -27,7 +27,7 @@ struct DepthCameraSpec {
 };
 
 /// One frame from pose T_map_camera (optical frame). Deterministic in (seed, frame, pixel).
-PointCloud simulateDepthCamera(const MeshBvh& scene, const DepthCameraSpec& spec,
+PointCloud simulateDepthCamera(const geometry::MeshBvh& scene, const DepthCameraSpec& spec,
                                const Eigen::Isometry3d& T_map_camera, uint64_t seed,
                                uint64_t frame);
 

@@ -6,8 +6,8 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
+#include "fragg_map/geometry/mesh_bvh.h"
 #include "fragg_map/point_cloud.h"
-#include "fragg_map/sim/mesh_bvh.h"
 
 namespace fragg::sim {
 
@@ -29,7 +29,7 @@ struct LidarSpec {
 
 /// One scan from pose T_map_sensor. Noise and dropout are drawn from (seed, frame, ray), so the
 /// same arguments give the same cloud whatever the thread count. Multithreaded (OpenMP).
-PointCloud simulateLidar(const MeshBvh& scene, const LidarSpec& spec,
+PointCloud simulateLidar(const geometry::MeshBvh& scene, const LidarSpec& spec,
                          const Eigen::Isometry3d& T_map_sensor, uint64_t seed, uint64_t frame);
 
 }  // namespace fragg::sim

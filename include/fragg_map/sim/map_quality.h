@@ -12,8 +12,8 @@
 
 #include <cstdint>
 
+#include "fragg_map/geometry/mesh_bvh.h"
 #include "fragg_map/map.h"
-#include "fragg_map/sim/mesh_bvh.h"
 
 namespace fragg::sim {
 
@@ -44,13 +44,7 @@ struct MapQuality {
 };
 
 /// Evaluates `map` against the scene (map frame = scene frame). Multithreaded (OpenMP).
-MapQuality evaluateMapQuality(const Map& map, const MeshBvh& scene,
+MapQuality evaluateMapQuality(const Map& map, const geometry::MeshBvh& scene,
                               const MapQualityOptions& options = {});
-
-/// Whether the triangle (a, b, c) meets the axis-aligned box centre +- half (separating axis
-/// test of Akenine-Moller); touching counts.
-bool triangleBoxOverlap(const Eigen::Vector3d& centre, const Eigen::Vector3d& half,
-                        const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                        const Eigen::Vector3d& c);
 
 }  // namespace fragg::sim

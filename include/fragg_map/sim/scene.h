@@ -6,8 +6,8 @@
 #include <map>
 #include <string>
 
+#include "fragg_map/geometry/triangle_mesh.h"
 #include "fragg_map/sim/trajectory.h"
-#include "fragg_map/sim/triangle_mesh.h"
 
 namespace fragg::sim {
 
@@ -29,7 +29,7 @@ struct Terrain {
 struct Scene {
   std::string name;
   Terrain terrain;
-  TriangleMesh mesh;  ///< every object, closed solids
+  geometry::TriangleMesh mesh;  ///< every object, closed solids
   std::map<std::string, TrajectorySpec> trajectories;
 };
 

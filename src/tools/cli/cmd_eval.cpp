@@ -12,8 +12,9 @@
 #include "cli/commands.h"
 #include "cli/map_input.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/geometry/mesh_bvh.h"
+#include "fragg_map/geometry/obj_file.h"
 #include "fragg_map/sim/map_quality.h"
-#include "fragg_map/sim/obj_file.h"
 #include "fragg_map/sim/scene.h"
 
 namespace fragg::cli {
@@ -62,8 +63,9 @@ void runEval(const EvalOptions& o) {
   const std::string ext = extensionOf(o.scene);
   if (ext != "obj" && ext != "json")
     throw InvalidArgument("--scene must be an OBJ file or a fragg_map_sim scene (.json)");
-  sim::TriangleMesh mesh = ext == "obj" ? sim::readObj(o.scene) : sim::loadScene(o.scene).mesh;
-  const sim::MeshBvh scene(std::move(mesh));
+  geometry::TriangleMesh mesh =
+      ext == "obj" ? geometry::readObj(o.scene) : sim::loadScene(o.scene).mesh;
+  const geometry::MeshBvh scene(std::move(mesh));
   sim::MapQualityOptions options;
   options.octomap_threshold = o.octomap_threshold;
 

@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/geometry/mesh_bvh.h"
+#include "fragg_map/geometry/obj_file.h"
 #include "fragg_map/sim/dataset_writers.h"
 #include "fragg_map/sim/depth_camera.h"
 #include "fragg_map/sim/lidar_sensor.h"
-#include "fragg_map/sim/mesh_bvh.h"
-#include "fragg_map/sim/obj_file.h"
 #include "fragg_map/sim/scene.h"
 #include "sim/commands.h"
 #ifdef FRAGG_HAVE_SIM_BAG
@@ -91,8 +91,8 @@ void runRecord(const RecordOptions& o) {
   const std::vector<PoseSample> poses = sampleTrajectory(
       spec, [&terrain](double x, double y) { return terrain.heightAt(x, y); }, o.drift, o.seed,
       o.frames);
-  if (!o.obj.empty()) writeObj(scene.mesh, o.obj);
-  const MeshBvh bvh(std::move(scene.mesh));
+  if (!o.obj.empty()) geometry::writeObj(scene.mesh, o.obj);
+  const geometry::MeshBvh bvh(std::move(scene.mesh));
   const Eigen::Isometry3d T_base_sensor = mountOf(o, lidar);
 
   std::optional<KittiFolderWriter> kitti;

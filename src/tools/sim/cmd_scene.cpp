@@ -3,7 +3,7 @@
 #include <memory>
 #include <string>
 
-#include "fragg_map/sim/obj_file.h"
+#include "fragg_map/geometry/obj_file.h"
 #include "fragg_map/sim/scene.h"
 #include "sim/commands.h"
 
@@ -20,7 +20,7 @@ void addSceneCommand(CLI::App& app) {
   c->add_option("-o,--output", o->obj, "OBJ file to write")->required();
   c->callback([o] {
     const Scene scene = loadScene(o->scene);
-    writeObj(scene.mesh, o->obj);
+    geometry::writeObj(scene.mesh, o->obj);
     std::printf("%s: %zu triangles, %d solids -> %s\n", scene.name.c_str(), scene.mesh.size(),
                 scene.mesh.solid_count, o->obj.c_str());
   });

@@ -1,4 +1,4 @@
-#include "fragg_map/sim/mesh_bvh.h"
+#include "fragg_map/geometry/mesh_bvh.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include "fragg_map/errors.h"
 
-namespace fragg::sim {
+namespace fragg::geometry {
 namespace {
 
 constexpr uint32_t kLeafSize = 4;
@@ -40,48 +40,6 @@ inline float boxDistanceSq(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
 }
 
 }  // namespace
-
-float rayTriangle(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
-                  const Eigen::Vector3f& v0, const Eigen::Vector3f& e1, const Eigen::Vector3f& e2,
-                  float edge_eps) {
-  const Eigen::Vector3f pv = dir.cross(e2);
-  const float det = e1.dot(pv);
-  if (std::abs(det) < 1e-12f) return -1.f;
-  const float inv = 1.f / det;
-  const Eigen::Vector3f tv = origin - v0;
-  const float u = tv.dot(pv) * inv;
-  if (u < -edge_eps || u > 1.f + edge_eps) return -1.f;
-  const Eigen::Vector3f qv = tv.cross(e1);
-  const float v = dir.dot(qv) * inv;
-  if (v < -edge_eps || u + v > 1.f + edge_eps) return -1.f;
-  return e2.dot(qv) * inv;
-}
-
-float pointTriangleDistanceSq(const Eigen::Vector3f& p, const Eigen::Vector3f& a,
-                              const Eigen::Vector3f& b, const Eigen::Vector3f& c) {
-  // Closest point by Voronoi region (Ericson, Real-Time Collision Detection, 5.1.5).
-  const Eigen::Vector3f ab = b - a, ac = c - a, ap = p - a;
-  const float d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0.f && d2 <= 0.f) return ap.squaredNorm();
-  const Eigen::Vector3f bp = p - b;
-  const float d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0.f && d4 <= d3) return bp.squaredNorm();
-  const float vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.f && d1 >= 0.f && d3 <= 0.f) return (ap - ab * (d1 / (d1 - d3))).squaredNorm();
-  const Eigen::Vector3f cp = p - c;
-  const float d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0.f && d5 <= d6) return cp.squaredNorm();
-  const float vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.f && d2 >= 0.f && d6 <= 0.f) return (ap - ac * (d2 / (d2 - d6))).squaredNorm();
-  const float va = d3 * d6 - d5 * d4;
-  if (va <= 0.f && (d4 - d3) >= 0.f && (d5 - d6) >= 0.f) {
-    const float w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return (bp - (c - b) * w).squaredNorm();
-  }
-  const float denom = 1.f / (va + vb + vc);
-  const float v = vb * denom, w = vc * denom;
-  return (ap - ab * v - ac * w).squaredNorm();
-}
 
 MeshBvh::MeshBvh(TriangleMesh mesh) : mesh_(std::move(mesh)) {
   if (mesh_.solid_of_triangle.size() != mesh_.triangles.size())
@@ -256,7 +214,7 @@ bool MeshBvh::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& di
 
 bool MeshBvh::inside(const Eigen::Vector3f& p) const {
   // An irrational-looking direction, steep upwards: few solids lie above a point, and no
-  // axis-aligned face or edge of the scene is parallel to it.
+  // axis-aligned face or edge (buildings, boxes, slabs) is parallel to it.
   static const Eigen::Vector3f kDir = Eigen::Vector3f(0.0917f, 0.0531f, 1.0f).normalized();
   int32_t solids[32];
   int parity[32];
@@ -336,4 +294,4 @@ float MeshBvh::distance(const Eigen::Vector3f& p, float max_m) const {
   return std::sqrt(best2);
 }
 
-}  // namespace fragg::sim
+}  // namespace fragg::geometry

@@ -1,4 +1,4 @@
-#include "fragg_map/sim/obj_file.h"
+#include "fragg_map/geometry/obj_file.h"
 
 #include <fmt/format.h>
 
@@ -10,11 +10,11 @@
 #include "fragg_map/atomic_file.h"
 #include "fragg_map/errors.h"
 
-namespace fragg::sim {
+namespace fragg::geometry {
 
 void writeObj(const TriangleMesh& mesh, const std::string& path) {
   AtomicFile out(path);
-  out.write(fmt::format("# fragg_map_sim scene: {} vertices, {} triangles, {} closed solids\n",
+  out.write(fmt::format("# fragg_map mesh: {} vertices, {} triangles, {} closed solids\n",
                         mesh.vertices_m.size(), mesh.triangles.size(), mesh.solid_count));
   std::string buf;
   for (const Eigen::Vector3f& v : mesh.vertices_m)
@@ -87,4 +87,4 @@ TriangleMesh readObj(const std::string& path) {
   return mesh;
 }
 
-}  // namespace fragg::sim
+}  // namespace fragg::geometry

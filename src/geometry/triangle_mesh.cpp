@@ -1,6 +1,6 @@
-#include "fragg_map/sim/triangle_mesh.h"
+#include "fragg_map/geometry/triangle_mesh.h"
 
-namespace fragg::sim {
+namespace fragg::geometry {
 
 void TriangleMesh::append(const TriangleMesh& other) {
   const int32_t offset = static_cast<int32_t>(vertices_m.size());
@@ -32,4 +32,4 @@ void TriangleMesh::addTriangle(const Eigen::Vector3f& a, const Eigen::Vector3f& 
   if (solid >= solid_count) solid_count = solid + 1;
 }
 
-}  // namespace fragg::sim
+}  // namespace fragg::geometry

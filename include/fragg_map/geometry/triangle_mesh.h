@@ -1,13 +1,14 @@
 // A triangle mesh made of closed solids: every triangle belongs to one solid (a box, a tree
-// trunk, the ground slab...), so that "inside" can be decided per solid by ray parity even
-// where solids overlap. Coordinates in metres, in the scene (map) frame.
+// trunk, a ground slab...), so that "inside" can be decided per solid by ray parity even
+// where solids overlap. Coordinates in metres, in the frame of whoever built the mesh (the
+// map frame for the simulator's scenes).
 #pragma once
 
 #include <Eigen/Core>
 #include <cstdint>
 #include <vector>
 
-namespace fragg::sim {
+namespace fragg::geometry {
 
 struct TriangleMesh {
   std::vector<Eigen::Vector3f> vertices_m;
@@ -27,4 +28,4 @@ struct TriangleMesh {
                    int32_t solid);
 };
 
-}  // namespace fragg::sim
+}  // namespace fragg::geometry

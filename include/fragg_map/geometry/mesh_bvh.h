@@ -1,5 +1,6 @@
-// A bounding volume hierarchy over a triangle mesh: nearest ray hit (the simulator's sensors),
-// "is a point within r of the surface" and "is a point inside a solid" (map evaluation).
+// A bounding volume hierarchy over a triangle mesh: nearest ray hit, "is a point within r of
+// the surface", distance to the surface and "is a point inside a solid". Generic queries: the
+// simulator's sensors cast rays with them, map evaluation and collision checks ask the others.
 // Immutable after construction; every query is thread-safe.
 #pragma once
 
@@ -8,9 +9,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "fragg_map/sim/triangle_mesh.h"
+#include "fragg_map/geometry/triangle_mesh.h"
+#include "fragg_map/geometry/triangle_queries.h"
 
-namespace fragg::sim {
+namespace fragg::geometry {
 
 struct RayHit {
   float t_m = 0.f;        ///< distance along the (unit) ray direction
@@ -36,7 +38,8 @@ class MeshBvh {
   float distance(const Eigen::Vector3f& p, float max_m) const;
 
   /// Whether p is inside one of the mesh's closed solids: ray parity per solid, along a fixed
-  /// direction that no scene edge or face is aligned with.
+  /// direction that no axis-aligned edge or face is parallel to (at most 32 solids may lie
+  /// above p: more throws InvalidArgument).
   bool inside(const Eigen::Vector3f& p) const;
 
  private:
@@ -60,14 +63,4 @@ class MeshBvh {
   std::vector<Tri> tris_;        ///< in leaf order
 };
 
-/// Squared distance from p to the triangle (a, b, c).
-float pointTriangleDistanceSq(const Eigen::Vector3f& p, const Eigen::Vector3f& a,
-                              const Eigen::Vector3f& b, const Eigen::Vector3f& c);
-
-/// Möller-Trumbore: distance t along dir to the triangle (v0, v0 + e1, v0 + e2), or a negative
-/// value when the line misses it. Barycentric limits are widened by edge_eps.
-float rayTriangle(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
-                  const Eigen::Vector3f& v0, const Eigen::Vector3f& e1, const Eigen::Vector3f& e2,
-                  float edge_eps = 0.f);
-
-}  // namespace fragg::sim
+}  // namespace fragg::geometry
