@@ -34,8 +34,7 @@ bool CudaIntegrator::update(const ScanInput& in, ScanUpdate what, const UpdateSe
   if (!window_.shape(lo, hi)) return false;
   stats.add(prep_stats);
 
-  std::vector<BlockKey> host_only =
-      makeWindowResident(in, how.params.resolution_m, blocks, stats);
+  std::vector<BlockKey> host_only = makeWindowResident(in, how.params.resolution_m, blocks, stats);
   const uint32_t created = rayAndApply(what, how, blocks, std::move(host_only));
 
   const ScanCounters& c = scan_.counters();
@@ -55,9 +54,8 @@ bool CudaIntegrator::update(const ScanInput& in, ScanUpdate what, const UpdateSe
   return true;
 }
 
-std::vector<BlockKey> CudaIntegrator::makeWindowResident(const ScanInput& in,
-                                                         double resolution_m, BlockMap& blocks,
-                                                         InsertStats& stats) {
+std::vector<BlockKey> CudaIntegrator::makeWindowResident(const ScanInput& in, double resolution_m,
+                                                         BlockMap& blocks, InsertStats& stats) {
   // Host blocks of the window without a slot: those in the frustum (the same cullBlock()
   // test as the CPU's) are uploaded; the others are host-only.
   const double block_m = resolution_m * kBlockSize;

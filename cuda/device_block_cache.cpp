@@ -14,8 +14,7 @@ bool inBox(const BlockKey& k, const BlockKey& lo, const BlockKey& hi) {
 }
 }  // namespace
 
-DeviceBlockCache::DeviceBlockCache(cudaStream_t stream, size_t pool_max_bytes,
-                                   bool direct_uploads)
+DeviceBlockCache::DeviceBlockCache(cudaStream_t stream, size_t pool_max_bytes, bool direct_uploads)
     : stream_(stream),
       pool_max_bytes_(pool_max_bytes),
       pool_(stream),
@@ -42,7 +41,8 @@ std::vector<BlockIndex> DeviceBlockCache::makeRoom(int32_t need, int32_t want, B
   if (freeSlots() >= want) return evicted;
   const int32_t cap = pool_.capacity();
   const int32_t limit = slotLimit();
-  const int64_t grown = std::max<int64_t>(int64_t(cap) + cap / 2, int64_t(cap) + want - freeSlots());
+  const int64_t grown =
+      std::max<int64_t>(int64_t(cap) + cap / 2, int64_t(cap) + want - freeSlots());
   if (cap < limit) {
     try {
       pool_.grow(static_cast<int32_t>(std::min<int64_t>(grown, limit)));

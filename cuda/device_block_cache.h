@@ -70,7 +70,7 @@ class DeviceBlockCache : public BlockCache {
   size_t pool_max_bytes_;
   SlotPool pool_;
   BlockTransfer transfer_;
-  HostOnlyIndex host_only_;       ///< host blocks without a slot
+  HostOnlyIndex host_only_;      ///< host blocks without a slot
   bool host_only_stale_ = true;  ///< rebuild before it is next read
   bool any_dirty_ = false;
   uint32_t scan_ = 0;

@@ -61,8 +61,8 @@ void DeviceScan::prepare(const ScanInput& in, const MapParams& params, int32_t f
 
 void DeviceScan::prepareOnHost(const ScanInput& in, const MapParams& params, InsertStats& stats) {
   // No-return rays need the row neighbours' directions.
-  prepareScan(in.cloud, in.T_map_sensor, in.model, in.frustum, in.explicit_model, params,
-              prepared_, stats);
+  prepareScan(in.cloud, in.T_map_sensor, in.model, in.frustum, in.explicit_model, params, prepared_,
+              stats);
   ScanCounters& c = counters();
   c.rays = static_cast<uint32_t>(prepared_.rays.size());
   for (const RayEnd& r : prepared_.rays)

@@ -38,7 +38,6 @@ class MapBackend;
 class Culler;
 struct ScanRecord;
 
-
 /// What a pose correction did (Map::correctPoses).
 struct CorrectionStats {
   size_t scans = 0;

@@ -7,21 +7,23 @@ void BlockView::forEach(const BlockVisitor& fn) const {
 }
 
 void BlockView::forEachIn(const BlockKey& lo, const BlockKey& hi, const BlockVisitor& fn) const {
-  blocks_->forEachInBox(lo, hi,
-                        [&](BlockIndex i) { fn(blocks_->meta(i).key, blocks_->block(i)); });
+  blocks_->forEachInBox(lo, hi, [&](BlockIndex i) { fn(blocks_->meta(i).key, blocks_->block(i)); });
 }
 
 std::vector<BlockRef> BlockView::all() const {
   std::vector<BlockRef> out;
   out.reserve(blocks_->size());
-  blocks_->forEach([&](BlockIndex i) { out.push_back({blocks_->meta(i).key, &blocks_->block(i)}); });
+  blocks_->forEach([&](BlockIndex i) {
+    out.push_back({blocks_->meta(i).key, &blocks_->block(i)});
+  });
   return out;
 }
 
 std::vector<BlockRef> BlockView::in(const BlockKey& lo, const BlockKey& hi) const {
   std::vector<BlockRef> out;
-  blocks_->forEachInBox(
-      lo, hi, [&](BlockIndex i) { out.push_back({blocks_->meta(i).key, &blocks_->block(i)}); });
+  blocks_->forEachInBox(lo, hi, [&](BlockIndex i) {
+    out.push_back({blocks_->meta(i).key, &blocks_->block(i)});
+  });
   return out;
 }
 

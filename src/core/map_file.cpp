@@ -9,8 +9,8 @@
 
 #include "fragg_map/atomic_file.h"
 #include "fragg_map/errors.h"
-#include "fragg_map/internal/byte_io.h"
 #include "fragg_map/internal/backend.h"
+#include "fragg_map/internal/byte_io.h"
 #include "fragg_map/internal/scan_codec.h"
 #include "fragg_map/map.h"
 #include "fragg_map/map_file_format.h"

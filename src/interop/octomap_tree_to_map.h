@@ -25,7 +25,6 @@ MapParams mapParamsOfTree(double resolution_m, double prob_hit, double prob_miss
 /// excluded: it marks unobserved cells). Throws IoError for a non-finite value.
 int16_t logOddsFxOfNode(float log_odds, const std::string& source);
 
-
 template <class Tree>
 Map mapFromTree(const Tree& tree, const std::string& source, Backend backend) {
   MapParams params =

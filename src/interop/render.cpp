@@ -18,13 +18,13 @@ using internal::RenderLayout;
 /// Calls fn(voxel_key, cell) for every cell of the map inside the layout's range.
 template <class Fn>
 void forEachCellIn(const Map& map, const RenderLayout& layout, Fn&& fn) {
-  map.forEachBlockIn(blockKeyOf(layout.lo), blockKeyOf(layout.hi), [&](const BlockKey& block_key,
-                                                                        const Block& block) {
-    for (int i = 0; i < kCellsPerBlock; ++i) {
-      const VoxelKey v = voxelKeyOf(block_key, i);
-      if (layout.contains(v)) fn(v, block.cells[i]);
-    }
-  });
+  map.forEachBlockIn(blockKeyOf(layout.lo), blockKeyOf(layout.hi),
+                     [&](const BlockKey& block_key, const Block& block) {
+                       for (int i = 0; i < kCellsPerBlock; ++i) {
+                         const VoxelKey v = voxelKeyOf(block_key, i);
+                         if (layout.contains(v)) fn(v, block.cells[i]);
+                       }
+                     });
 }
 
 RenderInfo infoOf(const RenderLayout& layout) {

@@ -24,7 +24,7 @@ TEST(SlotTable, GrowPutsNewSlotsOnTheFreeStackLowestOnTop) {
   EXPECT_EQ(t.freeCount(), 5);
   const std::vector<int32_t> next = t.pop(2);
   EXPECT_EQ(next, (std::vector<int32_t>{5, 4}));  // the new slots sit above the old ones
-  t.grow(3);                                       // never shrinks
+  t.grow(3);                                      // never shrinks
   EXPECT_EQ(t.capacity(), 6);
 }
 
@@ -74,8 +74,8 @@ TEST(SlotTable, DeviceAllocationsAreResidentAndDeviceOnly) {
   }
   // The same slots are what pop(3) would have handed out.
   EXPECT_EQ(std::set<int32_t>(taken.begin(), taken.end()), (std::set<int32_t>{0, 1, 2}));
-  EXPECT_TRUE(t.takenByDevice(7).empty());   // no change
-  EXPECT_TRUE(t.takenByDevice(9).empty());   // above the top: nothing taken
+  EXPECT_TRUE(t.takenByDevice(7).empty());    // no change
+  EXPECT_TRUE(t.takenByDevice(9).empty());    // above the top: nothing taken
   EXPECT_EQ(t.takenByDevice(-4).size(), 7u);  // an overflowed pass drives the top negative
   EXPECT_EQ(t.freeCount(), 0);
 }

@@ -177,8 +177,7 @@ TEST(InsertTest, OccupiedAtMovesOnlyWhenACellCrossesTheOccupiedThreshold) {
   map.insert(wall, test::sensorAtVoxelCentre(), SensorModel::autoFromCloud());
   const uint64_t first = map.revision();
   size_t with_hits = 0;
-  const std::vector<BlockKey> occupied_changed =
-      map.changedBlocksSince(0, BlockChange::kOccupied);
+  const std::vector<BlockKey> occupied_changed = map.changedBlocksSince(0, BlockChange::kOccupied);
   const std::unordered_set<BlockKey, BlockKeyHash> listed(occupied_changed.begin(),
                                                           occupied_changed.end());
   EXPECT_EQ(listed.size(), occupied_changed.size());

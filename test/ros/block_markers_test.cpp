@@ -190,8 +190,7 @@ TEST(BlockMarkers, BlockIsResentOnlyWhenItsDrawnCellsChange) {
             1u);
   // Same block, a free cell changes: the block's changed_at moves, its occupied cells do not.
   fragg::ros::test::setCell(map, a_free, fragg::CellState::kFree);
-  ASSERT_GT(map.blockView().stamps(fragg::blockKeyOf(a)).changed_at,
-            ledger.publishedRevision());
+  ASSERT_GT(map.blockView().stamps(fragg::blockKeyOf(a)).changed_at, ledger.publishedRevision());
   EXPECT_TRUE(fragg::ros::changedBlockMarkers(map, MarkerStyle(), kStamp, &ledger).markers.empty());
   // A second occupied cell: the block is sent again, whole, under the same id.
   const int32_t id = ledger.idOf(fragg::blockKeyOf(a));

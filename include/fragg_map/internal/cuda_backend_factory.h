@@ -4,8 +4,8 @@
 #include <memory>
 #include <string>
 
-#include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/internal/backend.h"
+#include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/map_params.h"
 
 namespace fragg {
