@@ -10,6 +10,7 @@
 #include <string>
 
 #include "fragg_map/geometry/triangle_mesh.h"
+#include "test_dir.h"
 
 namespace fragg::geometry::test {
 
@@ -46,14 +47,6 @@ inline TriangleMesh randomSoup(int count, float half_m, float size_m, uint32_t s
   return m;
 }
 
-/// A per-test directory under FRAGG_TEST_TMP, emptied first.
-inline std::string testDir() {
-  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::string dir =
-      std::string(FRAGG_TEST_TMP) + "/" + info->test_suite_name() + "." + info->name();
-  const std::string cmd = "rm -rf '" + dir + "' && mkdir -p '" + dir + "'";
-  EXPECT_EQ(std::system(cmd.c_str()), 0);
-  return dir;
-}
+using fragg::test::testDir;
 
 }  // namespace fragg::geometry::test

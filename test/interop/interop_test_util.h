@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "fragg_map/map.h"
+#include "test_dir.h"
 
 namespace fragg::test {
 
@@ -41,16 +42,6 @@ inline int16_t cellFx(const Map& map, const VoxelKey& k) {
 inline CellState stateAt(const Map& map, const VoxelKey& k) {
   const Cell* c = map.findCell(k);
   return c ? map.state(*c) : CellState::kUnknown;
-}
-
-/// A per-test directory under FRAGG_TEST_TMP (tests may run in parallel), emptied first.
-inline std::string testDir() {
-  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::string dir =
-      std::string(FRAGG_TEST_TMP) + "/" + info->test_suite_name() + "." + info->name();
-  const std::string cmd = "rm -rf '" + dir + "' && mkdir -p '" + dir + "'";
-  EXPECT_EQ(std::system(cmd.c_str()), 0);
-  return dir;
 }
 
 inline bool fileExists(const std::string& path) { return std::ifstream(path).good(); }

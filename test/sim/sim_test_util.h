@@ -11,6 +11,7 @@
 
 #include "fragg_map/geometry/triangle_mesh.h"
 #include "fragg_map/sim/primitives.h"
+#include "test_dir.h"
 
 namespace fragg::sim::test {
 
@@ -22,15 +23,7 @@ inline geometry::TriangleMesh flatGround(double half_m) {
   return m;
 }
 
-/// A per-test directory under FRAGG_TEST_TMP, emptied first.
-inline std::string testDir() {
-  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::string dir =
-      std::string(FRAGG_TEST_TMP) + "/" + info->test_suite_name() + "." + info->name();
-  const std::string cmd = "rm -rf '" + dir + "' && mkdir -p '" + dir + "'";
-  EXPECT_EQ(std::system(cmd.c_str()), 0);
-  return dir;
-}
+using fragg::test::testDir;
 
 inline std::string readBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
