@@ -8,7 +8,7 @@
 // Readers (queries, markers, statistics, saving) share the lock; writers (insertion, clear box,
 // reset, load, pose correction) hold it alone. A writer should hold it for one short edit (one
 // scan, not a batch of them), so that a reader never waits for more than that edit. Map's const
-// readers may run concurrently (the CUDA write-back inside Map::blocks() has its own guard).
+// readers may run concurrently (the CUDA write-back behind Map::blockView() has its own guard).
 #pragma once
 
 #include <mutex>
