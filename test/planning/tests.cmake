@@ -5,3 +5,14 @@ fragg_add_test(fragg_planning_test
           ${CMAKE_CURRENT_LIST_DIR}/collision_semantics_test.cpp
   LIBS fragg_map_planning
   LABELS planning)
+
+# Runs the built `fragg_map collide` on a hand-written map saved as .fgm.
+fragg_add_test(cli_collide_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/cli_collide_test.cpp
+  LIBS fragg_map_core fragg_map_geometry nlohmann_json::nlohmann_json
+  LABELS cli planning)
+if(TARGET cli_collide_test)
+  add_dependencies(cli_collide_test fragg_map_cli)
+  target_compile_definitions(cli_collide_test PRIVATE FRAGG_CLI_PATH="$<TARGET_FILE:fragg_map_cli>")
+  target_include_directories(cli_collide_test PRIVATE ${CMAKE_CURRENT_LIST_DIR}/../interop)
+endif()
