@@ -41,8 +41,7 @@ CollisionResult checkMeshPose(const Map& map, const BlockView& view, const Colli
   const double half_m = 0.5 * map.resolution() + grow_m - kTouchEpsilon_m;
   std::vector<uint8_t> cut(cells.size(), 0);
   for (const Eigen::Vector3i& t : mesh.triangles) {
-    const Eigen::Vector3d &a = vertices_map[t[0]], &b = vertices_map[t[1]],
-                          &c = vertices_map[t[2]];
+    const Eigen::Vector3d &a = vertices_map[t[0]], &b = vertices_map[t[1]], &c = vertices_map[t[2]];
     const Eigen::Vector3d tri_lo = a.cwiseMin(b).cwiseMin(c) - Eigen::Vector3d::Constant(grow_m);
     const Eigen::Vector3d tri_hi = a.cwiseMax(b).cwiseMax(c) + Eigen::Vector3d::Constant(grow_m);
     const VoxelKey kl = map.keyOf(tri_lo), kh = map.keyOf(tri_hi);
@@ -50,13 +49,12 @@ CollisionResult checkMeshPose(const Map& map, const BlockView& view, const Colli
       if (!cut[i] && geometry::triangleCubeOverlap(a, b, c, map.centerOf(cells[i]), half_m))
         cut[i] = 1;
     };
-    const double range_cells = double(kh.x - kl.x + 1) * double(kh.y - kl.y + 1) *
-                               double(kh.z - kl.z + 1);
+    const double range_cells =
+        double(kh.x - kl.x + 1) * double(kh.y - kl.y + 1) * double(kh.z - kl.z + 1);
     if (range_cells > double(cells.size())) {  // large triangle: walk the obstacle list
       for (uint32_t i = 0; i < cells.size(); ++i) {
         const VoxelKey& k = cells[i];
-        if (k.x >= kl.x && k.x <= kh.x && k.y >= kl.y && k.y <= kh.y && k.z >= kl.z &&
-            k.z <= kh.z)
+        if (k.x >= kl.x && k.x <= kh.x && k.y >= kl.y && k.y <= kh.y && k.z >= kl.z && k.z <= kh.z)
           test(i);
       }
       continue;

@@ -33,7 +33,8 @@ void forEachObstacleCell(const Map& map, const BlockView& view, const VoxelKey& 
           bool obstacle = unknown_is_occupied;
           if (block) {
             const CellState s = map.state(block->cells[cellIndexOf(k)]);
-            obstacle = s == CellState::kOccupied || (unknown_is_occupied && s == CellState::kUnknown);
+            obstacle =
+                s == CellState::kOccupied || (unknown_is_occupied && s == CellState::kUnknown);
           }
           if (obstacle && visit(k)) return true;
         }

@@ -33,8 +33,8 @@ void appendSegment(const std::vector<Eigen::Isometry3d>& w, int64_t i, double st
       Eigen::Quaterniond(a.linear()).angularDistance(Eigen::Quaterniond(b.linear()));
   const double n = std::max({1.0, std::ceil(dist_m / step_m), std::ceil(angle_rad / step_rad)});
   if (n > 1e8)
-    throw InvalidArgument(fmt::format("path segment {} needs {} poses (too long for the step)",
-                                      i, n));
+    throw InvalidArgument(
+        fmt::format("path segment {} needs {} poses (too long for the step)", i, n));
   const int64_t steps = static_cast<int64_t>(n);
   for (int64_t k = 1; k <= steps; ++k) {
     const double s = double(k) / double(steps);

@@ -28,13 +28,13 @@ Eigen::Isometry3d parseWaypoint(const std::string& line) {
   }
   std::string extra;
   if (in >> extra)
-    throw InvalidArgument(fmt::format("expected 7 numbers (x y z qx qy qz qw), found more: '{}'",
-                                      extra));
+    throw InvalidArgument(
+        fmt::format("expected 7 numbers (x y z qx qy qz qw), found more: '{}'", extra));
   const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
   const double norm = q.norm();
   if (std::abs(norm - 1.0) > kQuaternionNormTolerance)
-    throw InvalidArgument(
-        fmt::format("quaternion norm is {:.9f}, not 1 (within {})", norm, kQuaternionNormTolerance));
+    throw InvalidArgument(fmt::format("quaternion norm is {:.9f}, not 1 (within {})", norm,
+                                      kQuaternionNormTolerance));
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = q.normalized().toRotationMatrix();
   T.translation() = Eigen::Vector3d(v[0], v[1], v[2]);

@@ -36,8 +36,9 @@ std::string wallMap(const std::string& dir) {
 TEST(CliCollide, WaypointsAndPathAsJson) {
   const std::string dir = testDir();
   const std::string map = wallMap(dir), wp = dir + "/wp.txt";
-  writeText(wp, "# x y z qx qy qz qw\n0.5 0.05 0.05 0 0 0 1\n1.6 0.05 0.05 0 0 0 1\n"
-                "1.05 0.05 0.05 0 0 0 1\n");
+  writeText(wp,
+            "# x y z qx qy qz qw\n0.5 0.05 0.05 0 0 0 1\n1.6 0.05 0.05 0 0 0 1\n"
+            "1.05 0.05 0.05 0 0 0 1\n");
   auto r = runCli(dir, "collide '" + map + "' --waypoints '" + wp + "' --sphere 0.04 --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);
@@ -47,7 +48,8 @@ TEST(CliCollide, WaypointsAndPathAsJson) {
   EXPECT_EQ(j["first_collision"], 2);
   EXPECT_GE(j["ms"].get<double>(), 0.0);
 
-  r = runCli(dir, "collide '" + map + "' --waypoints '" + wp + "' --box 0.08 0.08 0.08 --path --json");
+  r = runCli(dir,
+             "collide '" + map + "' --waypoints '" + wp + "' --box 0.08 0.08 0.08 --path --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   j = nlohmann::json::parse(r.out);
   EXPECT_TRUE(j["path_collides"].get<bool>());
@@ -71,8 +73,8 @@ TEST(CliCollide, WaypointsAndPathAsJson) {
   writeText(wp, "-3 -3 -3 0 0 0 1\n");
   r = runCli(dir, "collide '" + map + "' --waypoints '" + wp + "' --sphere 0.2 --json");
   EXPECT_EQ(nlohmann::json::parse(r.out)["colliding"], 0);
-  r = runCli(dir,
-             "collide '" + map + "' --waypoints '" + wp + "' --sphere 0.2 --unknown-occupied --json");
+  r = runCli(
+      dir, "collide '" + map + "' --waypoints '" + wp + "' --sphere 0.2 --unknown-occupied --json");
   EXPECT_EQ(nlohmann::json::parse(r.out)["colliding"], 1);
 }
 

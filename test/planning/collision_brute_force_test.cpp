@@ -58,9 +58,8 @@ TEST(CollisionBruteForce, OrientedBox) {
       [&](const Map& map, const Eigen::Isometry3d& T, bool unknown) {
         return bruteForce(map, T.translation(), half.norm() + 0.3, unknown,
                           [&](const Vec3& c, double h) {
-                            return obbObbOverlap(c, Eigen::Matrix3d::Identity(),
-                                                 Vec3::Constant(h), T.translation(),
-                                                 T.linear(), half);
+                            return obbObbOverlap(c, Eigen::Matrix3d::Identity(), Vec3::Constant(h),
+                                                 T.translation(), T.linear(), half);
                           });
       },
       11);
@@ -73,8 +72,8 @@ TEST(CollisionBruteForce, Sphere) {
       shape,
       [&](const Map& map, const Eigen::Isometry3d& T, bool unknown) {
         return bruteForce(map, T.translation(), r + 0.3, unknown, [&](const Vec3& c, double h) {
-          return pointBoxDistance(T.translation(), c - Vec3::Constant(h),
-                                  c + Vec3::Constant(h)) <= r;
+          return pointBoxDistance(T.translation(), c - Vec3::Constant(h), c + Vec3::Constant(h)) <=
+                 r;
         });
       },
       12);
@@ -87,11 +86,10 @@ TEST(CollisionBruteForce, Capsule) {
       shape,
       [&](const Map& map, const Eigen::Isometry3d& T, bool unknown) {
         const Vec3 a = T * Vec3(0, 0, -0.5 * length), b = T * Vec3(0, 0, 0.5 * length);
-        return bruteForce(map, T.translation(), r + length + 0.3, unknown,
-                          [&](const Vec3& c, double h) {
-                            return segmentBoxDistance(a, b, c - Vec3::Constant(h),
-                                                      c + Vec3::Constant(h)) <= r;
-                          });
+        return bruteForce(
+            map, T.translation(), r + length + 0.3, unknown, [&](const Vec3& c, double h) {
+              return segmentBoxDistance(a, b, c - Vec3::Constant(h), c + Vec3::Constant(h)) <= r;
+            });
       },
       13);
 }
@@ -102,8 +100,8 @@ TEST(CollisionBruteForce, MarginGrowsSphereAndBox) {
       CollisionShape::sphere(r),
       [&](const Map& map, const Eigen::Isometry3d& T, bool unknown) {
         return bruteForce(map, T.translation(), r + 0.4, unknown, [&](const Vec3& c, double h) {
-          return pointBoxDistance(T.translation(), c - Vec3::Constant(h),
-                                  c + Vec3::Constant(h)) <= r + margin;
+          return pointBoxDistance(T.translation(), c - Vec3::Constant(h), c + Vec3::Constant(h)) <=
+                 r + margin;
         });
       },
       14, margin);
@@ -111,12 +109,11 @@ TEST(CollisionBruteForce, MarginGrowsSphereAndBox) {
   compareRandomPoses(
       CollisionShape::box(half),
       [&](const Map& map, const Eigen::Isometry3d& T, bool unknown) {
-        return bruteForce(map, T.translation(), half.norm() + 0.4, unknown,
-                          [&](const Vec3& c, double h) {
-                            return obbObbOverlap(c, Eigen::Matrix3d::Identity(),
-                                                 Vec3::Constant(h), T.translation(),
-                                                 T.linear(), half + Vec3::Constant(margin));
-                          });
+        return bruteForce(
+            map, T.translation(), half.norm() + 0.4, unknown, [&](const Vec3& c, double h) {
+              return obbObbOverlap(c, Eigen::Matrix3d::Identity(), Vec3::Constant(h),
+                                   T.translation(), T.linear(), half + Vec3::Constant(margin));
+            });
       },
       15, margin);
 }
@@ -131,16 +128,15 @@ std::vector<VoxelKey> meshReference(const geometry::TriangleMesh& mesh, const Ma
     radius = std::max(radius, double(v.norm()));
     v = (T * v.cast<double>()).cast<float>();
   }
-  return bruteForce(map, T.translation(), radius + margin_m + 0.3, unknown,
-                    [&](const Vec3& c, double h) {
-                      for (const Eigen::Vector3i& t : moved.triangles)
-                        if (geometry::triangleBoxOverlap(c, Vec3::Constant(h + margin_m),
-                                                         moved.vertices_m[t[0]].cast<double>(),
-                                                         moved.vertices_m[t[1]].cast<double>(),
-                                                         moved.vertices_m[t[2]].cast<double>()))
-                          return true;
-                      return insideConvex(moved, c);
-                    });
+  return bruteForce(
+      map, T.translation(), radius + margin_m + 0.3, unknown, [&](const Vec3& c, double h) {
+        for (const Eigen::Vector3i& t : moved.triangles)
+          if (geometry::triangleBoxOverlap(
+                  c, Vec3::Constant(h + margin_m), moved.vertices_m[t[0]].cast<double>(),
+                  moved.vertices_m[t[1]].cast<double>(), moved.vertices_m[t[2]].cast<double>()))
+            return true;
+        return insideConvex(moved, c);
+      });
 }
 
 geometry::TriangleMesh tetrahedron() {
@@ -188,7 +184,8 @@ TEST(CollisionBruteForce, SpheresAgreeWithACoarseTessellation) {
   const Map map = randomMap(0.1, 16, 18);
   std::mt19937 rng(19);
   const auto sphere = CollisionShape::sphere(0.2);
-  const auto cube = CollisionShape::mesh(geometry::test::boxSolid({-.2f, -.2f, -.2f}, {.2f, .2f, .2f}));
+  const auto cube =
+      CollisionShape::mesh(geometry::test::boxSolid({-.2f, -.2f, -.2f}, {.2f, .2f, .2f}));
   CollisionOptions options;
   options.count_cells = true;
   for (int i = 0; i < 100; ++i) {

@@ -24,14 +24,14 @@ using Vec3 = Eigen::Vector3d;
 inline std::array<Vec3, 8> boxCorners(const Vec3& c, const Eigen::Matrix3d& R, const Vec3& h) {
   std::array<Vec3, 8> v;
   for (int i = 0; i < 8; ++i)
-    v[i] = c + R * Vec3((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(),
-                        (i & 4) ? h.z() : -h.z());
+    v[i] =
+        c + R * Vec3((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(), (i & 4) ? h.z() : -h.z());
   return v;
 }
 
 /// Two oriented boxes overlap (touching counts): 15 axes, every corner projected.
-inline bool obbObbOverlap(const Vec3& ca, const Eigen::Matrix3d& Ra, const Vec3& ha,
-                          const Vec3& cb, const Eigen::Matrix3d& Rb, const Vec3& hb) {
+inline bool obbObbOverlap(const Vec3& ca, const Eigen::Matrix3d& Ra, const Vec3& ha, const Vec3& cb,
+                          const Eigen::Matrix3d& Rb, const Vec3& hb) {
   const auto A = boxCorners(ca, Ra, ha), B = boxCorners(cb, Rb, hb);
   std::vector<Vec3> axes;
   for (int i = 0; i < 3; ++i) axes.push_back(Ra.col(i)), axes.push_back(Rb.col(i));
@@ -71,8 +71,10 @@ inline double segmentSegmentDistance(const Vec3& p1, const Vec3& q1, const Vec3&
       const double b = d1.dot(d2), denom = a * e - b * b;
       s = denom > 1e-18 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
       t = (b * s + f) / e;
-      if (t < 0) t = 0, s = std::clamp(-c / a, 0.0, 1.0);
-      else if (t > 1) t = 1, s = std::clamp((b - c) / a, 0.0, 1.0);
+      if (t < 0)
+        t = 0, s = std::clamp(-c / a, 0.0, 1.0);
+      else if (t > 1)
+        t = 1, s = std::clamp((b - c) / a, 0.0, 1.0);
     }
   }
   return ((p1 + d1 * s) - (p2 + d2 * t)).norm();
@@ -174,9 +176,12 @@ inline Map randomMap(double resolution_m, int extent_vox, uint32_t seed) {
         for (int x = -extent_vox; x < extent_vox; ++x) {
           if (x >= extent_vox / 2 && y >= extent_vox / 2) continue;  // a corner of no blocks
           const int p = pick(rng);
-          if (p < 4) w.set({x, y, z}, Cell{1, 3000});        // occupied
-          else if (p < 60) w.set({x, y, z}, Cell{0, -2000});  // free
-          else if (p < 70) w.set({x, y, z}, Cell{0, 0});      // unknown band (p = 0.5)
+          if (p < 4)
+            w.set({x, y, z}, Cell{1, 3000});  // occupied
+          else if (p < 60)
+            w.set({x, y, z}, Cell{0, -2000});  // free
+          else if (p < 70)
+            w.set({x, y, z}, Cell{0, 0});  // unknown band (p = 0.5)
         }
   });
   return map;

@@ -44,11 +44,11 @@ bool collides(const Map& map, const CollisionShape& s, const Eigen::Isometry3d& 
 TEST(CollisionSemantics, TouchingFacesEdgesAndCornersDoesNotCollide) {
   const Map map = mapWith({{0, 0, 0}});
   const auto box = CollisionShape::box({0.05, 0.05, 0.05});
-  EXPECT_FALSE(collides(map, box, at(-0.05, 0.05, 0.05)));  // face x = 0
-  EXPECT_FALSE(collides(map, box, at(0.15, 0.05, 0.05)));   // face x = 0.1
-  EXPECT_FALSE(collides(map, box, at(0.05, 0.05, 0.15)));   // face z = 0.1
-  EXPECT_FALSE(collides(map, box, at(-0.05, -0.05, 0.05)));  // edge
-  EXPECT_FALSE(collides(map, box, at(-0.05, -0.05, -0.05)));  // corner
+  EXPECT_FALSE(collides(map, box, at(-0.05, 0.05, 0.05)));        // face x = 0
+  EXPECT_FALSE(collides(map, box, at(0.15, 0.05, 0.05)));         // face x = 0.1
+  EXPECT_FALSE(collides(map, box, at(0.05, 0.05, 0.15)));         // face z = 0.1
+  EXPECT_FALSE(collides(map, box, at(-0.05, -0.05, 0.05)));       // edge
+  EXPECT_FALSE(collides(map, box, at(-0.05, -0.05, -0.05)));      // corner
   EXPECT_TRUE(collides(map, box, at(-0.05 + 1e-5, 0.05, 0.05)));  // 10 um in
   EXPECT_TRUE(collides(map, box, at(0.05, 0.05, 0.05)));
 
@@ -69,8 +69,8 @@ TEST(CollisionSemantics, TouchingFacesEdgesAndCornersDoesNotCollide) {
   EXPECT_FALSE(collides(map, capsule, at(0.05, 0.05, -0.2)));
   EXPECT_TRUE(collides(map, capsule, at(0.05, 0.05, -0.2 + 1e-5)));
 
-  const auto mesh =
-      CollisionShape::mesh(geometry::test::boxSolid({-0.05f, -0.05f, -0.05f}, {0.05f, 0.05f, 0.05f}));
+  const auto mesh = CollisionShape::mesh(
+      geometry::test::boxSolid({-0.05f, -0.05f, -0.05f}, {0.05f, 0.05f, 0.05f}));
   EXPECT_FALSE(collides(map, mesh, at(-0.05, 0.05, 0.05)));
   EXPECT_TRUE(collides(map, mesh, at(-0.04, 0.05, 0.05)));
 }
@@ -112,8 +112,8 @@ TEST(CollisionSemantics, MarginGrowsTheShape) {
   EXPECT_TRUE(collides(map, CollisionShape::sphere(0.05), at(-0.1, 0.05, 0.05), margin));
   EXPECT_TRUE(collides(map, CollisionShape::box({0.05, 0.05, 0.05}), at(-0.1, 0.05, 0.05), margin));
   EXPECT_TRUE(collides(map, CollisionShape::capsule(0.05, 0.2), at(-0.1, 0.05, 0.05), margin));
-  const auto mesh =
-      CollisionShape::mesh(geometry::test::boxSolid({-0.05f, -0.05f, -0.05f}, {0.05f, 0.05f, 0.05f}));
+  const auto mesh = CollisionShape::mesh(
+      geometry::test::boxSolid({-0.05f, -0.05f, -0.05f}, {0.05f, 0.05f, 0.05f}));
   EXPECT_FALSE(collides(map, mesh, at(-0.1, 0.05, 0.05)));
   EXPECT_TRUE(collides(map, mesh, at(-0.1, 0.05, 0.05), margin));
   // Exactly at the margin: touching again.
@@ -174,8 +174,7 @@ TEST(CollisionPath, RotationInPlaceSweepsThroughACell) {
   // A 1 m long stick turning 90 degrees about z at the origin passes the cell at 45 degrees.
   const Map map = mapWith({{3, 3, 0}});  // [0.3, 0.4]^2
   const auto stick = CollisionShape::box({0.5, 0.01, 0.01});
-  const std::vector<Eigen::Isometry3d> waypoints = {at(0, 0, 0.05, 0.0),
-                                                    at(0, 0, 0.05, M_PI / 2)};
+  const std::vector<Eigen::Isometry3d> waypoints = {at(0, 0, 0.05, 0.0), at(0, 0, 0.05, M_PI / 2)};
   EXPECT_FALSE(collides(map, stick, waypoints[0]));
   EXPECT_FALSE(collides(map, stick, waypoints[1]));
   const PathResult p = checkPath(map, stick, waypoints, CollisionOptions());
@@ -228,11 +227,12 @@ TEST(CollisionInputs, WaypointLines) {
   EXPECT_THROW(parseWaypoint("1 2 3e 0 0 0 1"), InvalidArgument);
   EXPECT_THROW(parseWaypoint("1 2 nan 0 0 0 1"), InvalidArgument);
   EXPECT_THROW(parseWaypoint("1 2 3 0 0 0 1.00001"), InvalidArgument);  // |q| off by 1e-5
-  EXPECT_NO_THROW(parseWaypoint("1 2 3 0 0 0 1.0000001"));             // within 1e-6
+  EXPECT_NO_THROW(parseWaypoint("1 2 3 0 0 0 1.0000001"));              // within 1e-6
 
   const std::string dir = fragg::test::testDir();
   const std::string good = dir + "/good.txt", bad = dir + "/bad.txt";
-  std::ofstream(good) << "# x y z qx qy qz qw\n\n0 0 0 0 0 0 1\n  # indented comment\n1 0 0 0 0 0 1\n";
+  std::ofstream(good)
+      << "# x y z qx qy qz qw\n\n0 0 0 0 0 0 1\n  # indented comment\n1 0 0 0 0 0 1\n";
   std::ofstream(bad) << "0 0 0 0 0 0 1\n0 0 0 0 0 0 2\n";
   EXPECT_EQ(readWaypoints(good).size(), 2u);
   try {

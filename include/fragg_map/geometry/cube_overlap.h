@@ -27,12 +27,12 @@ FRAGG_HD double pointCubeDistanceSq(const Eigen::Vector3d& p, const Eigen::Vecto
 /// box_half) meets the cube centre +- half: separating axis test over the cube's 3 axes, the
 /// box's 3 and their 9 cross products.
 FRAGG_HD bool orientedBoxCubeOverlap(const Eigen::Vector3d& box_centre, const Eigen::Matrix3d& R,
-                                     const Eigen::Vector3d& box_half,
-                                     const Eigen::Vector3d& centre, double half) {
+                                     const Eigen::Vector3d& box_half, const Eigen::Vector3d& centre,
+                                     double half) {
   const Eigen::Vector3d t = box_centre - centre;
   for (int i = 0; i < 3; ++i) {  // cube axes
-    const double rb = box_half[0] * fabs(R(i, 0)) + box_half[1] * fabs(R(i, 1)) +
-                      box_half[2] * fabs(R(i, 2));
+    const double rb =
+        box_half[0] * fabs(R(i, 0)) + box_half[1] * fabs(R(i, 1)) + box_half[2] * fabs(R(i, 2));
     if (fabs(t[i]) > half + rb) return false;
   }
   for (int j = 0; j < 3; ++j) {  // box axes

@@ -31,9 +31,9 @@ constexpr double kTouchEpsilon_m = 1e-6;
 
 struct CollisionOptions {
   bool unknown_is_occupied = false;
-  double margin_m = 0.0;      ///< >= 0; see the header comment for meshes
-  bool count_cells = false;   ///< count every colliding cell (otherwise stop at the first)
-  int threads = 0;            ///< batches: OpenMP threads (0 = every core)
+  double margin_m = 0.0;     ///< >= 0; see the header comment for meshes
+  bool count_cells = false;  ///< count every colliding cell (otherwise stop at the first)
+  int threads = 0;           ///< batches: OpenMP threads (0 = every core)
 };
 
 struct CollisionResult {

@@ -31,8 +31,8 @@ class CollisionShape {
 
   ShapeKind kind() const { return kind_; }
   const Eigen::Vector3d& halfExtents() const { return half_extents_m_; }  ///< box
-  double radius() const { return radius_m_; }                              ///< sphere, capsule
-  double length() const { return length_m_; }                              ///< capsule
+  double radius() const { return radius_m_; }                             ///< sphere, capsule
+  double length() const { return length_m_; }                             ///< capsule
   /// Mesh in the shape frame (scaled), its BVH; nullptr for the other shapes.
   const geometry::MeshBvh* meshBvh() const { return bvh_.get(); }
   bool meshClosed() const { return mesh_closed_; }

@@ -23,10 +23,10 @@ struct PathResult {
   /// collision at waypoint 0 itself is segment 0, fraction 0; with one waypoint, the only
   /// pose is segment 0.
   int64_t first_segment = -1;
-  double fraction = 0.0;             ///< along that segment, in [0, 1]
+  double fraction = 0.0;  ///< along that segment, in [0, 1]
   Eigen::Isometry3d T_map_shape_hit = Eigen::Isometry3d::Identity();  ///< the colliding pose
-  CollisionResult hit;               ///< that pose's result
-  uint64_t poses_checked = 0;        ///< interpolated poses checked (the waypoints included)
+  CollisionResult hit;                                                ///< that pose's result
+  uint64_t poses_checked = 0;  ///< interpolated poses checked (the waypoints included)
 };
 
 /// Throws InvalidArgument for an empty path, a bad pose, bad options or step limits.

@@ -34,8 +34,7 @@ planning::CollisionShape shapeFrom(const CollideOptions& o, const CLI::App& c) {
   if (given != 1)
     throw InvalidArgument("give exactly one shape: --box, --sphere, --capsule or --mesh");
   if (!o.box.empty())
-    return planning::CollisionShape::box(
-        0.5 * Eigen::Vector3d(o.box[0], o.box[1], o.box[2]));
+    return planning::CollisionShape::box(0.5 * Eigen::Vector3d(o.box[0], o.box[1], o.box[2]));
   if (c.count("--sphere")) return planning::CollisionShape::sphere(o.sphere);
   if (!o.capsule.empty()) return planning::CollisionShape::capsule(o.capsule[0], o.capsule[1]);
   if (!(o.mesh_scale > 0.0) || !std::isfinite(o.mesh_scale))
@@ -82,9 +81,12 @@ void runCollide(const CollideOptions& o, const CLI::App& c) {
     if (first < 0) first = static_cast<int64_t>(i);
   }
   if (o.json) {
-    nlohmann::json j = {{"waypoints", poses.size()}, {"collides", collides},
-                        {"colliding", colliding},     {"first_collision", first},
-                        {"ms", ms},                   {"shape", shape.describe()},
+    nlohmann::json j = {{"waypoints", poses.size()},
+                        {"collides", collides},
+                        {"colliding", colliding},
+                        {"first_collision", first},
+                        {"ms", ms},
+                        {"shape", shape.describe()},
                         {"backend", "cpu"}};
     if (first >= 0) {
       const VoxelKey& k = results[first].first_cell;
@@ -104,9 +106,10 @@ void runCollide(const CollideOptions& o, const CLI::App& c) {
     std::printf("%s\n", j.dump().c_str());
     return;
   }
-  std::printf("%s\n", fmt::format("{} of {} waypoints collide (first: {}), {}, {:.2f} ms on the CPU",
-                                  colliding, poses.size(), first, shape.describe(), ms)
-                          .c_str());
+  std::printf("%s\n",
+              fmt::format("{} of {} waypoints collide (first: {}), {}, {:.2f} ms on the CPU",
+                          colliding, poses.size(), first, shape.describe(), ms)
+                  .c_str());
   if (path) {
     if (path->collides)
       std::printf("%s\n", fmt::format("path collides on segment {} at fraction {:.4f} ({} poses "
