@@ -16,3 +16,14 @@ if(TARGET cli_collide_test)
   target_compile_definitions(cli_collide_test PRIVATE FRAGG_CLI_PATH="$<TARGET_FILE:fragg_map_cli>")
   target_include_directories(cli_collide_test PRIVATE ${CMAKE_CURRENT_LIST_DIR}/../interop)
 endif()
+
+# FCL as an oracle on a real scan, only when FCL (libfcl-dev, scripts/install_deps.sh) is found.
+find_package(fcl QUIET)
+if(fcl_FOUND)
+  fragg_add_test(fcl_oracle_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/fcl_oracle_test.cpp
+    LIBS fragg_map_planning fcl
+    LABELS planning)
+else()
+  message(STATUS "fragg_map: FCL not found: no FCL oracle test for collision checking")
+endif()
