@@ -197,5 +197,29 @@ TEST(CollisionBruteForce, SpheresAgreeWithACoarseTessellation) {
   }
 }
 
+TEST(CollisionBruteForce, BoxMeshFindsTheBoxesCells) {
+  // A closed box mesh and the box primitive are the same solid: the same cells, by two
+  // different routes (triangles + ray parity, and separating axes).
+  const Map map = randomMap(0.1, 16, 20);
+  std::mt19937 rng(21);
+  const auto box = CollisionShape::box({0.3, 0.2, 0.15});
+  const auto mesh =
+      CollisionShape::mesh(geometry::test::boxSolid({-0.3f, -0.2f, -0.15f}, {0.3f, 0.2f, 0.15f}));
+  for (const bool unknown : {false, true}) {
+    CollisionOptions options;
+    options.count_cells = true;
+    options.unknown_is_occupied = unknown;
+    int colliding = 0;
+    for (int i = 0; i < 200; ++i) {
+      const Eigen::Isometry3d T = randomPose(rng, 1.8);
+      const auto rb = checkPose(map, box, T, options), rm = checkPose(map, mesh, T, options);
+      EXPECT_EQ(rb.colliding_cells, rm.colliding_cells) << "pose " << i;
+      EXPECT_EQ(rb.first_cell, rm.first_cell) << "pose " << i;
+      colliding += rb.collides;
+    }
+    EXPECT_GT(colliding, 10);
+  }
+}
+
 }  // namespace
 }  // namespace fragg::planning::test
