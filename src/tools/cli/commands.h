@@ -15,5 +15,6 @@ void addRenderCommand(CLI::App& app);
 void addCompareCommand(CLI::App& app);
 void addEvalCommand(CLI::App& app);
 void addOctomapBuildCommand(CLI::App& app);
+void addCollideCommand(CLI::App& app);
 
 }  // namespace fragg::cli

@@ -10,7 +10,7 @@
 int main(int argc, char** argv) {
   CLI::App app{
       "fragg_map: GPU-accelerated 3D occupancy maps (build, stats, export, render, "
-      "compare, eval, octomap-build)"};
+      "compare, eval, octomap-build, collide)"};
   app.require_subcommand(1);
   // The backend choice is part of each command's summary line; warnings go to stderr.
   fragg::setLogSink([](fragg::LogLevel level, const std::string& message) {
@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   fragg::cli::addCompareCommand(app);
   fragg::cli::addEvalCommand(app);
   fragg::cli::addOctomapBuildCommand(app);
+  fragg::cli::addCollideCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

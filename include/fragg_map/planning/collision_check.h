@@ -1,0 +1,62 @@
+// Collision checks of a shape against a map on the CPU: one pose, a batch of poses (OpenMP
+// threads) and a path (planning/path_check.h).
+//
+// Semantics. A pose collides when some occupied cell's cube overlaps the shape with positive
+// volume: the shape must reach more than kTouchEpsilon_m into the cube (the cube shrunk by
+// that much on every side must meet the closed shape), so a shape touching a cell's face, edge
+// or corner does not collide. For a closed mesh, cells entirely inside the mesh count too; an
+// open mesh is a surface (only cells its triangles cut). A cell's state is the map's
+// (Map::state, the unknown band included). With unknown_is_occupied, unknown cells count as
+// occupied, cells without a block included: the shape's whole cell range is examined.
+//
+// Margin. margin_m >= 0 grows the shape: box half extents, sphere and capsule radii grow by
+// margin_m; a mesh is not offset: instead each cell's cube is grown by margin_m on every side
+// (axis-aligned in the map frame) before the triangle test, so a cell collides when it is within
+// margin_m of the surface along each map axis (a superset of the true offset surface, by at most
+// a factor sqrt(3) along diagonals), or inside a closed mesh.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+#include "fragg_map/key.h"
+#include "fragg_map/map.h"
+#include "fragg_map/planning/collision_shape.h"
+
+namespace fragg::planning {
+
+/// How far (metres) a shape must reach into a cell's cube to collide with it.
+constexpr double kTouchEpsilon_m = 1e-6;
+
+struct CollisionOptions {
+  bool unknown_is_occupied = false;
+  double margin_m = 0.0;     ///< >= 0; see the header comment for meshes
+  bool count_cells = false;  ///< count every colliding cell (otherwise stop at the first)
+  int threads = 0;           ///< batches: OpenMP threads (0 = every core)
+};
+
+struct CollisionResult {
+  bool collides = false;
+  /// Colliding cells (with count_cells; otherwise 1 when the pose collides, else 0).
+  uint64_t colliding_cells = 0;
+  /// The first colliding cell in scan order (blocks by z, y, x key; cells x fastest within a
+  /// block); meaningless when !collides.
+  VoxelKey first_cell;
+};
+
+/// Throws InvalidArgument for a negative or non-finite margin, a non-finite pose or a rotation
+/// that is not orthonormal.
+void validate(const CollisionOptions& options);
+void validatePose(const Eigen::Isometry3d& T_map_shape);
+
+/// One pose (checks its arguments first).
+CollisionResult checkPose(const Map& map, const CollisionShape& shape,
+                          const Eigen::Isometry3d& T_map_shape, const CollisionOptions& options);
+
+/// Every pose, in parallel; result i belongs to pose i. Hold the map's read lock.
+std::vector<CollisionResult> checkPoses(const Map& map, const CollisionShape& shape,
+                                        const std::vector<Eigen::Isometry3d>& T_map_shape,
+                                        const CollisionOptions& options);
+
+}  // namespace fragg::planning

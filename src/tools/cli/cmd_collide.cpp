@@ -1,0 +1,158 @@
+// fragg_map collide MAP --waypoints FILE (--box | --sphere | --capsule | --mesh): collision
+// checks of a shape at poses (or along a path) against a map, on the CPU.
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cli/commands.h"
+#include "cli/map_input.h"
+#include "fragg_map/errors.h"
+#include "fragg_map/geometry/obj_file.h"
+#include "fragg_map/planning/collision_check.h"
+#include "fragg_map/planning/path_check.h"
+#include "fragg_map/planning/waypoint_file.h"
+
+namespace fragg::cli {
+
+namespace {
+struct CollideOptions {
+  std::string map, waypoints, mesh, backend = "auto";
+  std::vector<double> box, capsule;
+  double sphere = 0.0, mesh_scale = 1.0, margin_m = 0.0;
+  bool path = false, unknown_occupied = false, count_cells = false, json = false;
+  int threads = 0;
+};
+
+planning::CollisionShape shapeFrom(const CollideOptions& o, const CLI::App& c) {
+  const int given = int(!o.box.empty()) + int(c.count("--sphere") > 0) + int(!o.capsule.empty()) +
+                    int(!o.mesh.empty());
+  if (given != 1)
+    throw InvalidArgument("give exactly one shape: --box, --sphere, --capsule or --mesh");
+  if (!o.box.empty())
+    return planning::CollisionShape::box(0.5 * Eigen::Vector3d(o.box[0], o.box[1], o.box[2]));
+  if (c.count("--sphere")) return planning::CollisionShape::sphere(o.sphere);
+  if (!o.capsule.empty()) return planning::CollisionShape::capsule(o.capsule[0], o.capsule[1]);
+  if (!(o.mesh_scale > 0.0) || !std::isfinite(o.mesh_scale))
+    throw InvalidArgument(fmt::format("--mesh-scale must be finite and > 0, got {}", o.mesh_scale));
+  const geometry::TriangleMesh mesh = geometry::readObj(o.mesh);  // IoError: exit 1
+  try {
+    return planning::CollisionShape::mesh(mesh, o.mesh_scale);
+  } catch (const InvalidArgument& e) {
+    throw IoError(fmt::format("{}: {}", o.mesh, e.what()));  // a bad file, not a bad flag
+  }
+}
+
+void runCollide(const CollideOptions& o, const CLI::App& c) {
+  const Backend backend = backendFromString(o.backend);
+  if (backend == Backend::kCuda)
+    throw InvalidArgument("collide has no CUDA backend yet: use --backend cpu or auto");
+  planning::CollisionOptions options;
+  options.unknown_is_occupied = o.unknown_occupied;
+  options.margin_m = o.margin_m;
+  options.count_cells = o.count_cells;
+  options.threads = o.threads;
+  planning::validate(options);
+  const planning::CollisionShape shape = shapeFrom(o, c);
+  const std::vector<Eigen::Isometry3d> poses = planning::readWaypoints(o.waypoints);
+  if (poses.empty()) throw IoError(o.waypoints + " holds no waypoints");
+  const Map map = loadMapFile(o.map);
+
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<planning::CollisionResult> results =
+      planning::checkPoses(map, shape, poses, options);
+  std::optional<planning::PathResult> path;
+  if (o.path) path = planning::checkPath(map, shape, poses, options);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+
+  int64_t first = -1, colliding = 0;
+  std::vector<bool> collides(results.size());
+  std::vector<uint64_t> cells(results.size());
+  for (size_t i = 0; i < results.size(); ++i) {
+    collides[i] = results[i].collides;
+    cells[i] = results[i].colliding_cells;
+    if (!collides[i]) continue;
+    ++colliding;
+    if (first < 0) first = static_cast<int64_t>(i);
+  }
+  if (o.json) {
+    nlohmann::json j = {{"waypoints", poses.size()},
+                        {"collides", collides},
+                        {"colliding", colliding},
+                        {"first_collision", first},
+                        {"ms", ms},
+                        {"shape", shape.describe()},
+                        {"backend", "cpu"}};
+    if (first >= 0) {
+      const VoxelKey& k = results[first].first_cell;
+      j["first_cell"] = {k.x, k.y, k.z};
+    }
+    if (o.count_cells) j["colliding_cells"] = cells;
+    if (path) {
+      j["path_collides"] = path->collides;
+      j["path_first_segment"] = path->first_segment;
+      j["path_fraction"] = path->fraction;
+      j["path_poses_checked"] = path->poses_checked;
+      if (path->collides) {
+        const VoxelKey& k = path->hit.first_cell;
+        j["path_cell"] = {k.x, k.y, k.z};
+      }
+    }
+    std::printf("%s\n", j.dump().c_str());
+    return;
+  }
+  std::printf("%s\n",
+              fmt::format("{} of {} waypoints collide (first: {}), {}, {:.2f} ms on the CPU",
+                          colliding, poses.size(), first, shape.describe(), ms)
+                  .c_str());
+  if (path) {
+    if (path->collides)
+      std::printf("%s\n", fmt::format("path collides on segment {} at fraction {:.4f} ({} poses "
+                                      "checked)",
+                                      path->first_segment, path->fraction, path->poses_checked)
+                              .c_str());
+    else
+      std::printf("%s\n",
+                  fmt::format("path is clear ({} poses checked)", path->poses_checked).c_str());
+  }
+}
+}  // namespace
+
+void addCollideCommand(CLI::App& app) {
+  auto o = std::make_shared<CollideOptions>();
+  CLI::App* c = app.add_subcommand(
+      "collide",
+      "Check a shape at poses (or along the path through them) against a map: occupied cells "
+      "it overlaps with positive volume collide (touching does not)");
+  c->add_option("map", o->map, "Map (.fgm, or .bt / .ot)")->required();
+  c->add_option("--waypoints", o->waypoints,
+                "Poses, one a line: x y z qx qy qz qw (T_map_shape: the shape's centre or "
+                "mesh origin), '#' comments")
+      ->required();
+  c->add_option("--box", o->box, "Box full lengths LX LY LZ (metres)")->expected(3);
+  c->add_option("--sphere", o->sphere, "Sphere radius (metres)");
+  c->add_option("--capsule", o->capsule,
+                "Capsule radius R and length L of its axis (shape z, centred), metres")
+      ->expected(2);
+  c->add_option("--mesh", o->mesh, "Triangle mesh (.obj); closed meshes count the cells inside");
+  c->add_option("--mesh-scale", o->mesh_scale, "Scale applied to the mesh's coordinates")
+      ->capture_default_str();
+  c->add_flag("--path", o->path,
+              "Also check the path through the waypoints (steps of half a voxel, 0.05 rad)");
+  c->add_flag("--unknown-occupied", o->unknown_occupied, "Unknown cells count as occupied");
+  c->add_option("--margin", o->margin_m,
+                "Grow the shape by M metres (a mesh: each cell grown by M instead)")
+      ->capture_default_str();
+  c->add_flag("--count-cells", o->count_cells, "Count every colliding cell of each pose");
+  c->add_option("--threads", o->threads, "CPU threads (0 = every core)")->capture_default_str();
+  c->add_option("--backend", o->backend, "auto | cpu (cuda: not yet)")->capture_default_str();
+  c->add_flag("--json", o->json, "Print one JSON object on stdout");
+  c->callback([o, c] { runCollide(*o, *c); });
+}
+
+}  // namespace fragg::cli

@@ -1,0 +1,29 @@
+# fragg_map_planning: collision checks against brute force and independent overlap tests on
+# hand-written maps, touching cases, unknown cells, margins, mesh insides, paths, bad inputs.
+fragg_add_test(fragg_planning_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/collision_brute_force_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/collision_semantics_test.cpp
+  LIBS fragg_map_planning
+  LABELS planning)
+
+# Runs the built `fragg_map collide` on a hand-written map saved as .fgm.
+fragg_add_test(cli_collide_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/cli_collide_test.cpp
+  LIBS fragg_map_core fragg_map_geometry nlohmann_json::nlohmann_json
+  LABELS cli planning)
+if(TARGET cli_collide_test)
+  add_dependencies(cli_collide_test fragg_map_cli)
+  target_compile_definitions(cli_collide_test PRIVATE FRAGG_CLI_PATH="$<TARGET_FILE:fragg_map_cli>")
+  target_include_directories(cli_collide_test PRIVATE ${CMAKE_CURRENT_LIST_DIR}/../interop)
+endif()
+
+# FCL as an oracle on a real scan, only when FCL (libfcl-dev, scripts/install_deps.sh) is found.
+find_package(fcl QUIET)
+if(fcl_FOUND)
+  fragg_add_test(fcl_oracle_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/fcl_oracle_test.cpp
+    LIBS fragg_map_planning fcl
+    LABELS planning)
+else()
+  message(STATUS "fragg_map: FCL not found: no FCL oracle test for collision checking")
+endif()
