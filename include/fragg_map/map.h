@@ -8,9 +8,9 @@
 //
 // Readers see the map through forEachBlock / findBlock / changedBlocksSince (never the block
 // storage); writers go through named edits (insert, remove, correctPoses, clearBox,
-// writeCells, truncate, truncateOutside, merge, reset, load). Const members may run concurrently with each other (a CUDA
-// write-back they need is serialised inside); a writer must exclude every other caller
-// (fragg::LockedMap / the server's map lock does).
+// writeCells, truncate, truncateOutside, merge, reset, load). Const members may run concurrently
+// with each other (a CUDA write-back they need is serialised inside); a writer must exclude every
+// other caller (fragg::LockedMap / the server's map lock does).
 #pragma once
 
 #include <Eigen/Geometry>

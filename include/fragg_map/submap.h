@@ -16,8 +16,8 @@ namespace fragg {
 struct SubmapRegion {
   enum class Kind : uint32_t { kNone = 0, kBox = 1, kOutsideSphere = 2 };
   Kind kind = Kind::kNone;
-  Eigen::Vector3d min_map = Eigen::Vector3d::Zero();  ///< kBox
-  Eigen::Vector3d max_map = Eigen::Vector3d::Zero();  ///< kBox
+  Eigen::Vector3d min_map = Eigen::Vector3d::Zero();     ///< kBox
+  Eigen::Vector3d max_map = Eigen::Vector3d::Zero();     ///< kBox
   Eigen::Vector3d center_map = Eigen::Vector3d::Zero();  ///< kOutsideSphere
   double radius_m = 0.0;                                 ///< kOutsideSphere
   std::string frame_id = "map";

@@ -198,8 +198,8 @@ SubmapStats Map::merge(const Map& sub, MergeMode mode,
     }
   } else {
     const Eigen::Vector3d lo_sub = Eigen::Vector3d(sb.min.x, sb.min.y, sb.min.z) * res;
-    const Eigen::Vector3d hi_sub = (Eigen::Vector3d(sb.max.x, sb.max.y, sb.max.z).array() + 1.0)
-                                       .matrix() * res;
+    const Eigen::Vector3d hi_sub =
+        (Eigen::Vector3d(sb.max.x, sb.max.y, sb.max.z).array() + 1.0).matrix() * res;
     Eigen::Vector3d lo_map = Eigen::Vector3d::Constant(INFINITY);
     Eigen::Vector3d hi_map = -lo_map;
     for (int corner = 0; corner < 8; ++corner) {
@@ -246,7 +246,8 @@ SubmapStats Map::merge(const Map& sub, MergeMode mode,
   };
 
   if (exact_shift) {
-    const int32_t dx = static_cast<int32_t>(shift_vox.x()), dy = static_cast<int32_t>(shift_vox.y()),
+    const int32_t dx = static_cast<int32_t>(shift_vox.x()),
+                  dy = static_cast<int32_t>(shift_vox.y()),
                   dz = static_cast<int32_t>(shift_vox.z());
     sub_view.forEach([&](const BlockKey& key, const Block& block) {
       for (int c = 0; c < kCellsPerBlock; ++c) {

@@ -73,11 +73,12 @@ TEST(CliSubmap, TruncateRadiusAndMergeWithAddAndTransform) {
   r = runCli(dir, "merge " + q(dir + "/near.fgm") + " " + q(dir + "/far.fgm") + " -o " +
                       q(dir + "/back.fgm") + " --mode add");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(test::sameCells(Map::load(dir + "/back.fgm", Backend::kCpu),
-                              Map::load(map, Backend::kCpu)));
+  EXPECT_TRUE(
+      test::sameCells(Map::load(dir + "/back.fgm", Backend::kCpu), Map::load(map, Backend::kCpu)));
   // A whole-voxel translation moves every cell by 3 voxels in x.
   r = runCli(dir, "merge " + q(dir + "/near.fgm") + " " + q(dir + "/far.fgm") + " -o " +
-                      q(dir + "/moved.fgm") + " --mode overwrite --json --transform 0.15 0 0 0 0 0 1");
+                      q(dir + "/moved.fgm") +
+                      " --mode overwrite --json --transform 0.15 0 0 0 0 0 1");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Map moved = Map::load(dir + "/moved.fgm", Backend::kCpu);
   test::forEachObserved(far, [&](const VoxelKey& k, const Cell& c) {
@@ -91,13 +92,12 @@ TEST(CliSubmap, BadArgumentsAreRefused) {
   const std::string out = " -o " + q(dir + "/out.fgm");
   expectOneLineError(runCli(dir, "truncate " + q(map) + out), 2, "--box");
   expectOneLineError(
-      runCli(dir, "truncate " + q(map) + " --box 0 0 0 1 1 1 --center 0 0 0 --radius 1" + out),
-      2, "either");
+      runCli(dir, "truncate " + q(map) + " --box 0 0 0 1 1 1 --center 0 0 0 --radius 1" + out), 2,
+      "either");
   expectOneLineError(runCli(dir, "truncate " + q(map) + " --center 0 0 0" + out), 2, "--radius");
   expectOneLineError(runCli(dir, "truncate " + q(map) + " --box 1 0 0 0 1 1" + out), 2,
                      "min corner");
-  expectOneLineError(runCli(dir, "truncate " + q(map) + " --box nan 0 0 1 1 1" + out), 2,
-                     "finite");
+  expectOneLineError(runCli(dir, "truncate " + q(map) + " --box nan 0 0 1 1 1" + out), 2, "finite");
   expectOneLineError(runCli(dir, "truncate " + q(map) + " --center 0 0 0 --radius -1" + out), 2,
                      "radius");
   expectOneLineError(runCli(dir, "truncate " + q(map) + " --box 0 0 0 1 1 1 -o x.ply"), 2, ".fgm");
@@ -124,8 +124,8 @@ TEST(CliSubmap, UnreadableSubMapsAreRejected) {
   bytes[bytes.size() / 2] ^= 0x21;
   test::writeBytes(dir + "/corrupt.fgm", bytes);
   expectOneLineError(
-      runCli(dir, "merge " + q(map) + " " + q(dir + "/corrupt.fgm") + out + " --mode overwrite"),
-      1, "checksum");
+      runCli(dir, "merge " + q(map) + " " + q(dir + "/corrupt.fgm") + out + " --mode overwrite"), 1,
+      "checksum");
   test::writeBytes(dir + "/short.fgm", bytes.substr(0, 40));
   expectOneLineError(
       runCli(dir, "merge " + q(map) + " " + q(dir + "/short.fgm") + out + " --mode overwrite"), 1,

@@ -15,9 +15,9 @@ using test::forEachObserved;
 using test::sameCell;
 
 struct AddComparison {
-  size_t cells = 0;           ///< observed in the full map or the sum
-  size_t equal = 0;           ///< same log-odds and hits
-  size_t unclamped = 0;       ///< neither half nor the full map at a clamping bound
+  size_t cells = 0;      ///< observed in the full map or the sum
+  size_t equal = 0;      ///< same log-odds and hits
+  size_t unclamped = 0;  ///< neither half nor the full map at a clamping bound
   size_t unclamped_equal = 0;
 };
 
@@ -146,7 +146,8 @@ TEST(MergeTransformTest, RotationIsResampledFromTheNearestCell) {
   const Eigen::Isometry3d T_sub_map = T_map_sub.inverse();
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = -lo;
   for (int corner = 0; corner < 8; ++corner) {
-    const Eigen::Vector3d p((corner & 1) ? b.max.x + 1 : b.min.x, (corner & 2) ? b.max.y + 1 : b.min.y,
+    const Eigen::Vector3d p((corner & 1) ? b.max.x + 1 : b.min.x,
+                            (corner & 2) ? b.max.y + 1 : b.min.y,
                             (corner & 4) ? b.max.z + 1 : b.min.z);
     const Eigen::Vector3d q = T_map_sub * (p * sub.resolution());
     lo = lo.cwiseMin(q);

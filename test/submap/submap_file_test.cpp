@@ -29,8 +29,8 @@ void patchHeader(const std::string& path, uint32_t version, uint32_t flags) {
   std::memcpy(bytes.data() + 8 + 4 + 4 + 8 * 6 + 4, &flags, 4);
   const uint32_t crc = static_cast<uint32_t>(crc32(0L, bytes.data(), bytes.size() - 4));
   std::memcpy(bytes.data() + bytes.size() - 4, &crc, 4);
-  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
-                                              bytes.size());
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), bytes.size());
 }
 
 uint32_t versionOf(const std::string& path) {
@@ -41,8 +41,8 @@ uint32_t versionOf(const std::string& path) {
 
 TEST(SubmapFileTest, BoxRegionRoundTrips) {
   Map map = test::roomMap();
-  SubmapRegion box = SubmapRegion::box(Eigen::Vector3d(-1.03, -2.0, -0.5),
-                                       Eigen::Vector3d(2.5, 1.01, 1.5));
+  SubmapRegion box =
+      SubmapRegion::box(Eigen::Vector3d(-1.03, -2.0, -0.5), Eigen::Vector3d(2.5, 1.01, 1.5));
   Map sub = map.truncate(box.min_map, box.max_map);
   box.frame_id = "robot_2/map";
   sub.setRegion(box);
@@ -97,8 +97,8 @@ TEST(SubmapFileTest, CorruptRegionIsRejected) {
   std::vector<uint8_t> bytes = readBytes(path);
   // Flip one byte of the file: the checksum catches it.
   bytes[bytes.size() / 2] ^= 0x5a;
-  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
-                                              bytes.size());
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   EXPECT_THROW(Map::load(path, Backend::kCpu), IoError);
   // setRegion validates as the loader does.
   SubmapRegion inverted;

@@ -44,8 +44,7 @@ inline Map rgbdMap(const std::vector<int>& frames, const MapParams& params = cpu
 /// The simulated room seen from four poses (no clamping bound can be met).
 inline Map roomMap(const MapParams& params = cpuParams()) {
   Map map(params);
-  for (int i = 0; i < 4; ++i)
-    map.insert(roomScan(4.0, 1.0, 2.0, 16, 360), poseAt(i), lidar());
+  for (int i = 0; i < 4; ++i) map.insert(roomScan(4.0, 1.0, 2.0, 16, 360), poseAt(i), lidar());
   return map;
 }
 

@@ -17,3 +17,9 @@ if(TARGET cli_submap_test)
   target_compile_definitions(cli_submap_test PRIVATE FRAGG_CLI_PATH="$<TARGET_FILE:fragg_map_cli>")
   target_include_directories(cli_submap_test PRIVATE ${CMAKE_CURRENT_LIST_DIR}/../interop)
 endif()
+
+# The same edits on the CUDA backend (label gpu; skipped without a device).
+fragg_add_test(fragg_gpu_submap_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/submap_gpu_test.cpp
+  LIBS fragg_map_interop
+  LABELS gpu submap)

@@ -153,5 +153,19 @@ TEST(TruncateTest, KeptScansReachingTheRegionBecomeUnremovable) {
   EXPECT_FALSE(map.scanStore().record(1).removable);
 }
 
+TEST(TruncateTest, MergingMarksKeptScansReachingTheMergedRegion) {
+  MapParams p = test::cpuParams();
+  p.scans.keep = true;
+  Map map(p);
+  map.insert(test::roomScan(4.0, 1.0, 2.0, 16, 360), test::poseAt(0), test::lidar());
+  Map sub(test::cpuParams());
+  sub.writeCells([](CellWriter& w) { w.set(VoxelKey{2000, 0, 0}, Cell{1, 500}); });  // 100 m off
+  map.merge(sub, MergeMode::kAdd);
+  EXPECT_TRUE(map.scanStore().record(0).removable);
+  sub.writeCells([](CellWriter& w) { w.set(VoxelKey{10, 0, 0}, Cell{1, 500}); });  // 0.5 m
+  map.merge(sub, MergeMode::kAdd);
+  EXPECT_FALSE(map.scanStore().record(0).removable);
+}
+
 }  // namespace
 }  // namespace fragg

@@ -67,9 +67,12 @@ void runMerge(const MergeOptions& o) {
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   map.save(o.output);
   if (o.json) {
-    nlohmann::json j = {{"output", o.output},        {"mode", toString(mode)},
-                        {"sub_maps", subs.size()},   {"cells_merged", total.cells},
-                        {"blocks_merged", total.blocks}, {"known_voxels", map.knownVoxelCount()},
+    nlohmann::json j = {{"output", o.output},
+                        {"mode", toString(mode)},
+                        {"sub_maps", subs.size()},
+                        {"cells_merged", total.cells},
+                        {"blocks_merged", total.blocks},
+                        {"known_voxels", map.knownVoxelCount()},
                         {"ms", ms}};
     std::printf("%s\n", j.dump().c_str());
     return;

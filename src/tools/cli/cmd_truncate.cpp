@@ -50,9 +50,9 @@ void runTruncate(const TruncateOptions& o) {
   Map map = loadMapFile(o.map);
   const auto t0 = std::chrono::steady_clock::now();
   SubmapStats st;
-  const Map sub = by_box ? map.truncate(region.min_map, region.max_map, Backend::kCpu, &st)
-                         : map.truncateOutside(region.center_map, region.radius_m, Backend::kCpu,
-                                               &st);
+  const Map sub = by_box
+                      ? map.truncate(region.min_map, region.max_map, Backend::kCpu, &st)
+                      : map.truncateOutside(region.center_map, region.radius_m, Backend::kCpu, &st);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   sub.save(o.output);
@@ -69,12 +69,12 @@ void runTruncate(const TruncateOptions& o) {
     std::printf("%s\n", j.dump().c_str());
     return;
   }
-  std::printf("%s\n",
-              fmt::format("moved {} cells in {} blocks ({}) to {} in {:.1f} ms; {} cells left{}",
-                          st.cells, st.blocks,
-                          by_box ? "inside the box" : "farther than the radius", o.output, ms,
-                          map.knownVoxelCount(), o.rest.empty() ? "" : " (written to " + o.rest + ")")
-                  .c_str());
+  std::printf(
+      "%s\n",
+      fmt::format("moved {} cells in {} blocks ({}) to {} in {:.1f} ms; {} cells left{}", st.cells,
+                  st.blocks, by_box ? "inside the box" : "farther than the radius", o.output, ms,
+                  map.knownVoxelCount(), o.rest.empty() ? "" : " (written to " + o.rest + ")")
+          .c_str());
 }
 }  // namespace
 
