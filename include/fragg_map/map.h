@@ -193,9 +193,9 @@ class Map {
   /// how far the scan's rays go from its sensor.
   void markScansWhere(
       const std::function<bool(const Eigen::Vector3d& origin_map, double reach_m)>& reaches);
-  /// Makes the cells of `blocks` for which `inside` holds unknown, stamps the blocks with
-  /// revision_ (bumped by the caller, after the cache was invalidated over them) and erases the
-  /// blocks left empty. Returns the observed cells cleared.
+  /// Makes the cells of `blocks` for which `inside` holds unknown, stamps the blocks that lost
+  /// an observed cell with revision_ (bumped by the caller, after the cache was invalidated
+  /// over them) and erases the blocks left empty. Returns the observed cells cleared.
   uint64_t clearCellsWhere(const std::vector<BlockIndex>& blocks,
                            const std::function<bool(const VoxelKey&)>& inside,
                            uint64_t* blocks_erased = nullptr);

@@ -281,9 +281,10 @@ uint64_t Map::clearCellsWhere(const std::vector<BlockIndex>& blocks,
   for (BlockIndex i : blocks) {
     const BlockKey key = blocks_.meta(i).key;
     Block& b = blocks_.block(i);
-    bool any_left = false;
+    bool any_left = false, any_cleared = false;
     for (int c = 0; c < kCellsPerBlock; ++c) {
       if (inside(voxelKeyOf(key, c))) {
+        any_cleared |= b.cells[c].observed();
         cleared += b.cells[c].observed() ? 1 : 0;
         b.cells[c] = Cell();
       } else {
@@ -291,7 +292,8 @@ uint64_t Map::clearCellsWhere(const std::vector<BlockIndex>& blocks,
       }
     }
     if (any_left) {
-      blocks_.meta(i).changed_at = blocks_.meta(i).occupied_at = revision_;
+      // Only blocks that lost a cell are listed by changedBlocksSince.
+      if (any_cleared) blocks_.meta(i).changed_at = blocks_.meta(i).occupied_at = revision_;
     } else {
       blocks_.erase(key);
       if (blocks_erased) ++*blocks_erased;
