@@ -8,9 +8,9 @@
 //
 // Readers see the map through forEachBlock / findBlock / changedBlocksSince (never the block
 // storage); writers go through named edits (insert, remove, correctPoses, clearBox,
-// writeCells, reset, load). Const members may run concurrently with each other (a CUDA
-// write-back they need is serialised inside); a writer must exclude every other caller
-// (fragg::LockedMap / the server's map lock does).
+// writeCells, truncate, truncateOutside, merge, reset, load). Const members may run concurrently
+// with each other (a CUDA write-back they need is serialised inside); a writer must exclude every
+// other caller (fragg::LockedMap / the server's map lock does).
 #pragma once
 
 #include <Eigen/Geometry>
@@ -19,6 +19,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,7 @@
 #include "fragg_map/point_cloud.h"
 #include "fragg_map/scan_store.h"
 #include "fragg_map/sensor_model.h"
+#include "fragg_map/submap.h"
 
 namespace fragg {
 
@@ -123,6 +125,39 @@ class Map {
   void writeCells(const std::function<void(CellWriter&)>& edit);
   void reset();
 
+  // Sub-maps (fragg_map/submap.h; src/core/submap.cpp). A cell belongs to a region by its
+  // centre. The sub-map has this map's resolution and occupancy model, `backend`, no kept
+  // scans, and region() = where it was cut from (saved in its .fgm). All arguments are checked
+  // before anything changes (InvalidArgument: non-finite or inverted box, negative or NaN
+  // radius, a box beyond the key range).
+  /// Copies of the cells whose centres lie in [min_map, max_map]; this map is unchanged.
+  Map extract(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map,
+              Backend backend = Backend::kCpu, SubmapStats* stats = nullptr) const;
+  /// Moves those cells out: they become unknown here and blocks left empty are erased. Kept
+  /// scans whose rays could reach into the box can no longer be removed or corrected (as
+  /// clearBox).
+  Map truncate(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map,
+               Backend backend = Backend::kCpu, SubmapStats* stats = nullptr);
+  /// Moves out every cell whose centre is farther than radius_m from center_map (the map keeps
+  /// the ball). Kept scans whose rays could reach beyond the sphere become unremovable.
+  Map truncateOutside(const Eigen::Vector3d& center_map, double radius_m,
+                      Backend backend = Backend::kCpu, SubmapStats* stats = nullptr);
+  /// Merges `sub` into this map (MergeMode says how two cells combine). Without T_map_sub
+  /// (or with a pose that is a whole-cell translation: rotation identity within 1e-9, each
+  /// translation component an integer number of voxels within 1e-6 voxel) cells are shifted
+  /// key for key, exactly. Any other pose resamples: every map cell whose centre, mapped back
+  /// by T_map_sub^-1 into the sub-map, falls in an observed sub-map cell (the nearest cell:
+  /// the one containing that point) takes that cell's value. Throws InvalidArgument (map
+  /// untouched) for a different resolution or occupancy model (prob_hit, prob_miss, clamps),
+  /// or a pose that is not a finite rigid transform. Kept scans whose rays could reach the
+  /// merged region can no longer be removed or corrected.
+  SubmapStats merge(const Map& sub, MergeMode mode,
+                    const std::optional<Eigen::Isometry3d>& T_map_sub = std::nullopt);
+  /// Where this map was cut from (kNone for a whole map).
+  const SubmapRegion& region() const { return region_; }
+  /// Validates and sets the region (saved with the map).
+  void setRegion(const SubmapRegion& region);
+
   const MapParams& params() const { return params_; }
   const OccupancyModel& model() const { return model_; }
   double resolution() const { return params_.resolution_m; }
@@ -154,6 +189,21 @@ class Map {
   void requireRemovable(ScanId id) const;
   /// Marks the kept scans whose rays could reach into the box as no longer removable.
   void markScansTouching(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map);
+  /// Marks the kept scans for which `reaches(sensor origin, reach_m)` holds, reach_m bounding
+  /// how far the scan's rays go from its sensor.
+  void markScansWhere(
+      const std::function<bool(const Eigen::Vector3d& origin_map, double reach_m)>& reaches);
+  /// Makes the cells of `blocks` for which `inside` holds unknown, stamps the blocks that lost
+  /// an observed cell with revision_ (bumped by the caller, after the cache was invalidated
+  /// over them) and erases the blocks left empty. Returns the observed cells cleared.
+  uint64_t clearCellsWhere(const std::vector<BlockIndex>& blocks,
+                           const std::function<bool(const VoxelKey&)>& inside,
+                           uint64_t* blocks_erased = nullptr);
+  /// extract: copies of the cells of `region` in a new map holding `region`.
+  Map copyRegion(const SubmapRegion& region, Backend backend, SubmapStats* stats) const;
+  /// truncate / truncateOutside: copyRegion, then those cells cleared here (cache
+  /// invalidated over the region first, kept scans reaching it marked).
+  Map moveOut(const SubmapRegion& region, Backend backend, SubmapStats* stats);
   /// Culling and integration of one prepared scan (insert or remove) with its own ray cast
   /// mode and no-return setting. `host_cull`: run the host culler for a backend that does not
   /// cull on its own (counters only; corrections skip it).
@@ -173,6 +223,7 @@ class Map {
   size_t scans_ = 0;
   ScanId next_scan_id_ = 0;
   std::unique_ptr<ScanStore> scan_store_;
+  SubmapRegion region_;
 };
 
 }  // namespace fragg

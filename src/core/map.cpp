@@ -168,16 +168,22 @@ void Map::requireRemovable(ScanId id) const {
                           "the map) changed cells it had updated");
 }
 
-void Map::markScansTouching(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map) {
+void Map::markScansWhere(
+    const std::function<bool(const Eigen::Vector3d& origin_map, double reach_m)>& reaches) {
   for (ScanId id : scan_store_->ids()) {
     const ScanRecord& r = scan_store_->record(id);
-    // The scan's rays stay within max range of its sensor: a box around that sphere.
-    const Eigen::Vector3d o = r.T_map_sensor.translation();
+    // The scan's rays stay within max range of its sensor (plus a cell's diagonal margin).
     const double reach = r.model.max_range_m + 2.0 * params_.resolution_m;
-    if ((o.array() + reach >= min_map.array()).all() &&
-        (o.array() - reach <= max_map.array()).all())
-      scan_store_->markUnremovable(id);
+    if (reaches(r.T_map_sensor.translation(), reach)) scan_store_->markUnremovable(id);
   }
+}
+
+void Map::markScansTouching(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map) {
+  // A box around the sphere the rays stay in, against the box.
+  markScansWhere([&](const Eigen::Vector3d& o, double reach) {
+    return (o.array() + reach >= min_map.array()).all() &&
+           (o.array() - reach <= max_map.array()).all();
+  });
 }
 
 InsertStats Map::remove(ScanId id) {
@@ -263,24 +269,37 @@ void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_ma
   std::vector<BlockIndex> hit;
   blocks_.forEachInBox(blo, bhi, [&](BlockIndex i) { hit.push_back(i); });
   ++revision_;
-  for (BlockIndex i : hit) {
+  clearCellsWhere(hit, [&](const VoxelKey& v) {
+    return v.x >= lo.x && v.x <= hi.x && v.y >= lo.y && v.y <= hi.y && v.z >= lo.z && v.z <= hi.z;
+  });
+}
+
+uint64_t Map::clearCellsWhere(const std::vector<BlockIndex>& blocks,
+                              const std::function<bool(const VoxelKey&)>& inside,
+                              uint64_t* blocks_erased) {
+  uint64_t cleared = 0;
+  for (BlockIndex i : blocks) {
     const BlockKey key = blocks_.meta(i).key;
     Block& b = blocks_.block(i);
-    bool any_left = false;
+    bool any_left = false, any_cleared = false;
     for (int c = 0; c < kCellsPerBlock; ++c) {
-      const VoxelKey v = voxelKeyOf(key, c);
-      const bool inside =
-          v.x >= lo.x && v.x <= hi.x && v.y >= lo.y && v.y <= hi.y && v.z >= lo.z && v.z <= hi.z;
-      if (inside)
+      if (inside(voxelKeyOf(key, c))) {
+        any_cleared |= b.cells[c].observed();
+        cleared += b.cells[c].observed() ? 1 : 0;
         b.cells[c] = Cell();
-      else
+      } else {
         any_left |= b.cells[c].observed();
+      }
     }
-    if (any_left)
-      blocks_.meta(i).changed_at = blocks_.meta(i).occupied_at = revision_;
-    else
+    if (any_left) {
+      // Only blocks that lost a cell are listed by changedBlocksSince.
+      if (any_cleared) blocks_.meta(i).changed_at = blocks_.meta(i).occupied_at = revision_;
+    } else {
       blocks_.erase(key);
+      if (blocks_erased) ++*blocks_erased;
+    }
   }
+  return cleared;
 }
 
 void Map::writeCells(const std::function<void(CellWriter&)>& edit) {

@@ -22,6 +22,45 @@ namespace fragg {
 namespace {
 constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 * 6 + 4 + 4 + 8 + 8;
 constexpr size_t kBlockBytes = sizeof(Block);
+
+void writeRegion(ByteWriter& w, const SubmapRegion& region) {
+  w.put(static_cast<uint32_t>(region.kind));
+  if (region.kind == SubmapRegion::Kind::kBox) {
+    for (int a = 0; a < 3; ++a) w.put(region.min_map[a]);
+    for (int a = 0; a < 3; ++a) w.put(region.max_map[a]);
+  } else {
+    for (int a = 0; a < 3; ++a) w.put(region.center_map[a]);
+    w.put(region.radius_m);
+  }
+  w.put(static_cast<uint32_t>(region.frame_id.size()));
+  w.put(region.frame_id.data(), region.frame_id.size());
+}
+
+SubmapRegion readRegion(ByteReader& r) {
+  SubmapRegion region;
+  const auto kind = r.get<uint32_t>("region kind");
+  if (kind == static_cast<uint32_t>(SubmapRegion::Kind::kBox)) {
+    region.kind = SubmapRegion::Kind::kBox;
+    for (int a = 0; a < 3; ++a) region.min_map[a] = r.get<double>("region box");
+    for (int a = 0; a < 3; ++a) region.max_map[a] = r.get<double>("region box");
+  } else if (kind == static_cast<uint32_t>(SubmapRegion::Kind::kOutsideSphere)) {
+    region.kind = SubmapRegion::Kind::kOutsideSphere;
+    for (int a = 0; a < 3; ++a) region.center_map[a] = r.get<double>("region centre");
+    region.radius_m = r.get<double>("region radius");
+  } else {
+    r.fail("unknown region kind " + std::to_string(kind));
+  }
+  const auto frame_chars = r.get<uint32_t>("region frame id length");
+  if (frame_chars > kMaxRegionFrameChars) r.fail("region frame id too long");
+  region.frame_id.resize(frame_chars);
+  r.take(region.frame_id.data(), frame_chars, "region frame id");
+  try {
+    region.validate();
+  } catch (const InvalidArgument& e) {
+    r.fail(std::string("bad region: ") + e.what());
+  }
+  return region;
+}
 }  // namespace
 
 void Map::save(const std::string& path) const {
@@ -45,7 +84,9 @@ void Map::save(const std::string& path) const {
     w.put(v);
   w.put(static_cast<uint32_t>(kBlockSize));
   const bool with_scans = params_.scans.keep || scan_store_->size() > 0;
-  w.put(kMapFileCompressed | (with_scans ? kMapFileScans : 0u));
+  const bool with_region = !region_.empty();
+  w.put(kMapFileCompressed | (with_scans ? kMapFileScans : 0u) |
+        (with_region ? kMapFileRegion : 0u));
   w.put(static_cast<uint64_t>(order.size()));
   w.put(static_cast<uint64_t>(scans_));
   std::vector<uint8_t> packed(compressBound(kBlockBytes));
@@ -61,6 +102,7 @@ void Map::save(const std::string& path) const {
     w.put(static_cast<uint32_t>(packed_size));
     w.put(packed.data(), packed_size);
   }
+  if (with_region) writeRegion(w, region_);
   if (with_scans) {
     w.put(static_cast<uint64_t>(next_scan_id_));
     w.put(static_cast<uint64_t>(scan_store_->size()));
@@ -119,7 +161,8 @@ Map Map::loadFile(const std::string& path, const MapParams& runtime, bool keep_a
   if (r.get<uint32_t>("block edge") != static_cast<uint32_t>(kBlockSize))
     r.fail("block edge is not " + std::to_string(kBlockSize));
   const auto flags = r.get<uint32_t>("flags");
-  const uint32_t known_flags = kMapFileCompressed | (version >= 2 ? kMapFileScans : 0u);
+  const uint32_t known_flags = kMapFileCompressed | (version >= 2 ? kMapFileScans : 0u) |
+                               (version >= 4 ? kMapFileRegion : 0u);
   if (flags & ~known_flags) r.fail("unknown flags " + std::to_string(flags));
   const auto count = r.get<uint64_t>("block count");
   const auto scans = r.get<uint64_t>("scan count");
@@ -159,6 +202,7 @@ Map Map::loadFile(const std::string& path, const MapParams& runtime, bool keep_a
         r.fail("log-odds outside the clamping range");
     }
   }
+  if (flags & kMapFileRegion) map.region_ = readRegion(r);
   if (flags & kMapFileScans) {
     map.next_scan_id_ = r.get<uint64_t>("next scan index");
     const auto kept = r.get<uint64_t>("kept scan count");

@@ -21,4 +21,6 @@ set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/cell_writer.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_file.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/submap_region.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/submap.cpp
 )

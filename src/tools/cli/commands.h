@@ -9,6 +9,8 @@ namespace fragg::cli {
 
 void addBuildCommand(CLI::App& app);
 void addCorrectCommand(CLI::App& app);
+void addTruncateCommand(CLI::App& app);
+void addMergeCommand(CLI::App& app);
 void addStatsCommand(CLI::App& app);
 void addExportCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);

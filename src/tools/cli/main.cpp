@@ -10,7 +10,7 @@
 int main(int argc, char** argv) {
   CLI::App app{
       "fragg_map: GPU-accelerated 3D occupancy maps (build, stats, export, render, "
-      "compare, eval, octomap-build, collide)"};
+      "compare, eval, octomap-build, truncate, merge, collide)"};
   app.require_subcommand(1);
   // The backend choice is part of each command's summary line; warnings go to stderr.
   fragg::setLogSink([](fragg::LogLevel level, const std::string& message) {
@@ -19,6 +19,8 @@ int main(int argc, char** argv) {
   });
   fragg::cli::addBuildCommand(app);
   fragg::cli::addCorrectCommand(app);
+  fragg::cli::addTruncateCommand(app);
+  fragg::cli::addMergeCommand(app);
   fragg::cli::addStatsCommand(app);
   fragg::cli::addExportCommand(app);
   fragg::cli::addRenderCommand(app);
