@@ -72,13 +72,10 @@ std::vector<BlockIndex> DeviceBlockCache::evict(int32_t n, BlockMap& blocks) {
 std::vector<BlockIndex> DeviceBlockCache::dropSlots(const std::vector<int32_t>& slots,
                                                     BlockMap& blocks) {
   if (slots.empty()) return {};
-  const int32_t cap = pool_.capacity();
-  dirty_host_.reserve(size_t(cap));
-  copyToHost(dirty_host_.get(), pool_.arrays().dirty, size_t(cap), stream_);
-  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  const uint8_t* dirty_flags = downloadDirtyFlags();
   std::vector<int32_t> dirty;
   for (int32_t s : slots)
-    if (dirty_host_[s]) dirty.push_back(s);
+    if (dirty_flags[s]) dirty.push_back(s);
   writeBack(dirty, blocks);
   std::vector<BlockIndex> released = pool_.release(slots);
   // A device-only slot that was never applied has no host block: nothing to keep.
@@ -149,20 +146,21 @@ void DeviceBlockCache::ensureResident(const BlockKey& lo, const BlockKey& hi, Bl
   upload(wanted, blocks);
 }
 
-std::vector<int32_t> DeviceBlockCache::dirtySlots(cudaStream_t stream) {
-  const int32_t cap = pool_.capacity();
-  dirty_host_.reserve(size_t(cap));
-  copyToHost(dirty_host_.get(), pool_.arrays().dirty, size_t(cap), stream);
-  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream));
-  std::vector<int32_t> dirty;
-  for (int32_t s = 0; s < cap; ++s)
-    if (dirty_host_[s]) dirty.push_back(s);
-  return dirty;
+const uint8_t* DeviceBlockCache::downloadDirtyFlags() {
+  const size_t cap = size_t(pool_.capacity());
+  dirty_host_.reserve(cap);
+  copyToHost(dirty_host_.get(), pool_.arrays().dirty, cap, stream_);
+  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  return dirty_host_.get();
 }
 
 void DeviceBlockCache::sync(BlockMap& blocks) {
   if (!any_dirty_) return;
-  writeBack(dirtySlots(stream_), blocks);
+  const uint8_t* dirty_flags = downloadDirtyFlags();
+  std::vector<int32_t> dirty;
+  for (int32_t s = 0; s < pool_.capacity(); ++s)
+    if (dirty_flags[s]) dirty.push_back(s);
+  writeBack(dirty, blocks);
   any_dirty_ = false;
 }
 

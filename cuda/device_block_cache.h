@@ -64,7 +64,8 @@ class DeviceBlockCache : public BlockCache {
   /// Frees the slots (written back first when dirty); their host blocks become host-only.
   std::vector<BlockIndex> dropSlots(const std::vector<int32_t>& slots, BlockMap& blocks);
   void writeBack(const std::vector<int32_t>& slots, BlockMap& blocks);
-  std::vector<int32_t> dirtySlots(cudaStream_t stream);
+  /// The pool's dirty flags, read back from the device (valid until the next call).
+  const uint8_t* downloadDirtyFlags();
 
   cudaStream_t stream_;
   size_t pool_max_bytes_;

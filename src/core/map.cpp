@@ -11,6 +11,7 @@
 #include "fragg_map/internal/culler.h"
 #include "fragg_map/internal/frustum_builder.h"
 #include "fragg_map/internal/height_filter.h"
+#include "fragg_map/internal/rigid_pose.h"
 #include "fragg_map/log.h"
 
 namespace fragg {
@@ -21,13 +22,7 @@ const MapParams& validated(const MapParams& p) {
   return p;
 }
 
-void validatePose(const Eigen::Isometry3d& T) {
-  if (!T.matrix().allFinite()) throw InvalidArgument("sensor pose is not finite (NaN or Inf)");
-  const Eigen::Matrix3d R = T.linear();
-  if ((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-4 ||
-      R.determinant() < 0)
-    throw InvalidArgument("sensor pose rotation is not a rotation matrix");
-}
+void validatePose(const Eigen::Isometry3d& T) { requireRigidPose(T, "sensor pose", 1e-4); }
 
 double farthestPoint(const PointCloud& cloud) {
   double r2 = 0.0;
@@ -137,21 +132,21 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   const ScanUpdate what = remove ? ScanUpdate::kRemove : ScanUpdate::kIntegrate;
   // Readers may be writing the cache back (they share the map): not while the scan runs.
   std::lock_guard<std::mutex> lock(*sync_mutex_);
-  try {
+  auto run = [&](InsertStats& into) {
     if (what == ScanUpdate::kRemove)
-      backend_->remove(scan, settings, blocks_, stats);
+      backend_->remove(scan, settings, blocks_, into);
     else
-      backend_->integrate(scan, settings, blocks_, stats);
+      backend_->integrate(scan, settings, blocks_, into);
+  };
+  try {
+    run(stats);
   } catch (const CudaOutOfMemory& e) {
     // The device backend applies a scan all at once or not at all: the map is intact.
     fallBackToCpu(e.what());
     InsertStats cpu_stats;
     cpu_stats.culling = stats.culling;
     cpu_stats.seconds_cull = stats.seconds_cull;
-    if (what == ScanUpdate::kRemove)
-      backend_->remove(scan, settings, blocks_, cpu_stats);
-    else
-      backend_->integrate(scan, settings, blocks_, cpu_stats);
+    run(cpu_stats);
     stats = cpu_stats;
   }
   ++revision_;

@@ -10,6 +10,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/backend.h"
+#include "fragg_map/internal/rigid_pose.h"
 #include "fragg_map/map.h"
 
 namespace fragg {
@@ -54,16 +55,6 @@ void requireSameModel(const MapParams& map, const MapParams& sub) {
     throw InvalidArgument(
         "sub-map occupancy model (prob_hit, prob_miss, clamp_min, clamp_max) differs from the "
         "map's");
-}
-
-void requireRigid(const Eigen::Isometry3d& T_map_sub) {
-  if (!T_map_sub.matrix().allFinite())
-    throw InvalidArgument("sub-map pose T_map_sub is not finite (NaN or Inf)");
-  const Eigen::Matrix3d R = T_map_sub.linear();
-  if ((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 ||
-      R.determinant() < 0 ||
-      (T_map_sub.matrix().row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 0)
-    throw InvalidArgument("sub-map pose T_map_sub is not a rigid transform");
 }
 
 /// A sub-map cell combined into a map cell.
@@ -170,7 +161,7 @@ SubmapStats Map::merge(const Map& sub, MergeMode mode,
     throw InvalidArgument("unknown merge mode");
   requireSameModel(params_, sub.params_);
   const Eigen::Isometry3d T = T_map_sub.value_or(Eigen::Isometry3d::Identity());
-  requireRigid(T);
+  requireRigidPose(T, "sub-map pose T_map_sub", 1e-6);
   const double res = params_.resolution_m;
   const Eigen::Vector3d t_vox = T.translation() / res;
   const Eigen::Vector3d shift_vox = t_vox.array().round();
