@@ -20,6 +20,7 @@ class CudaBackend : public MapBackend {
   const char* name() const override { return "cuda"; }
   BlockCache& cache() override { return cache_; }
   bool cullsOnItsOwn() const override { return true; }
+  size_t deviceBytes() const override { return cache_.deviceBytes() + integrator_.deviceBytes(); }
   size_t deviceEstimateBytes() const override;
   std::shared_ptr<ChunkAllocator> hostAllocator() const override { return host_allocator_; }
 

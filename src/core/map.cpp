@@ -336,7 +336,7 @@ MemoryStats Map::memory() const {
   MemoryStats m;
   m.host_block_bytes = hostBlocks().hostBytes();
   m.blocks = blocks_.size();
-  m.device_bytes = backend_->cache().deviceBytes();
+  m.device_bytes = backend_->deviceBytes();
   m.device_estimate_bytes = backend_->deviceEstimateBytes();
   m.known_voxels = knownVoxelCount();
   m.scan_store_bytes = scan_store_->memoryBytes();

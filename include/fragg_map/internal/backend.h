@@ -105,6 +105,8 @@ class MapBackend {
   /// Whether the backend culls the blocks it needs itself (else the map's host culler runs
   /// over the host blocks in the frustum's box).
   virtual bool cullsOnItsOwn() const { return false; }
+  /// Device memory the backend holds: its cache and its per-scan buffers.
+  virtual size_t deviceBytes() const { return cache().deviceBytes(); }
   /// The paper's formula (1): the sensor's visible volume in blocks, as device bytes.
   virtual size_t deviceEstimateBytes() const { return 0; }
   /// Where the host map's blocks are allocated (pinned memory for the CUDA backend).
