@@ -7,6 +7,9 @@
 #   w3_loopclosure/  KITTI folder + poses_odom.txt, and w3_loopclosure.bag (drifting tf,
 #                    ground-truth pose and path) when fragg_map_sim has bag output (ROS build)
 #   smoke/           KITTI folder and smoke.bag (< 2 MB; bag with ROS only)
+#   w4_long_drive/   only when asked for (--only w4; scripts/w4.sh): KITTI folder, 579 scans
+#                    of a 1,156 m loop through the campus laid out four times (~1.5 GB), and
+#                    scenes/campus_long.obj
 #   MANIFEST.sha256  checksums of every file: a rerun must give the same file
 # Uses the catkin build's fragg_map_sim (ws/, with bag output) when there is one, else builds
 # the plain CMake one (build-core/, no ROS: no bags) first.
@@ -15,9 +18,10 @@ repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
 
 usage() {
   cat <<USAGE
-usage: bash scripts/make_workloads.sh [--out DIR] [--only w1,w2,w3,smoke] [--sim PATH] [--jobs N]
+usage: bash scripts/make_workloads.sh [--out DIR] [--only w1,w2,w3,smoke,w4] [--sim PATH] [--jobs N]
   --out DIR    cache folder (default: \$FRAGG_WORKLOADS or ~/.cache/fragg_map/workloads)
-  --only LIST  comma-separated subset of w1,w2,w3,smoke (default: all)
+  --only LIST  comma-separated subset of w1,w2,w3,smoke,w4 (default: w1,w2,w3,smoke; W4, the
+               1.5 GB long drive, only when named)
   --sim PATH   fragg_map_sim to use (default: ws/devel/lib/fragg_map/fragg_map_sim, else
                build-core/bin/fragg_map_sim, built with plain CMake when missing)
   --jobs N     compile jobs when building (default 2)
@@ -39,7 +43,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 for w in ${only//,/ }; do
-  case "$w" in w1|w2|w3|smoke) ;; *) echo "make_workloads: unknown workload '$w'" >&2; exit 2 ;; esac
+  case "$w" in w1|w2|w3|smoke|w4) ;; *) echo "make_workloads: unknown workload '$w'" >&2; exit 2 ;; esac
 done
 
 if [ -z "$sim" ]; then
@@ -64,6 +68,9 @@ out="$(cd "$out" && pwd -P)"
 cd "$repo"  # scene paths in the .args files are relative to the repository
 "$sim" scene config/scenes/campus.json -o "$out/scenes/campus.obj"
 "$sim" scene config/scenes/pipes.json -o "$out/scenes/pipes.obj"
+case ",$only," in *,w4,*)
+  "$sim" scene config/scenes/campus_long.json -o "$out/scenes/campus_long.obj" ;;
+esac
 
 # The record arguments of a workload, without comments.
 args_of() { grep -v '^[[:space:]]*#' "$repo/config/workloads/$1.args"; }
@@ -90,6 +97,7 @@ for w in ${only//,/ }; do
     w3) run w3_loopclosure --kitti "$out/w3_loopclosure" $(bag_flag w3_loopclosure) ;;
     # shellcheck disable=SC2046
     smoke) run smoke --kitti "$out/smoke" --organised $(bag_flag smoke) ;;
+    w4) run w4_long_drive --kitti "$out/w4_long_drive" ;;
   esac
 done
 

@@ -9,6 +9,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/geometry/obj_file.h"
 #include "fragg_map/sim/primitives.h"
+#include "scene_tiles.h"
 
 namespace fragg::sim {
 namespace {
@@ -169,6 +170,7 @@ Scene sceneFromJson(const std::string& json_text, const std::string& base_dir) {
   } catch (const json::exception& e) {
     throw IoError(std::string("scene: not valid JSON: ") + e.what());
   }
+  j = expandSceneTiles(j, base_dir);
   Scene scene;
   scene.name = j.value("name", "scene");
   if (j.contains("ground")) {

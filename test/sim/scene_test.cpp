@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/geometry/mesh_bvh.h"
@@ -89,6 +91,88 @@ TEST(SimScene, SceneFileObjectsAndErrors) {
   EXPECT_THROW(sceneFromJson(R"({"objects": [{"type": "mesh", "obj": "missing.obj"}]})"), IoError);
   EXPECT_THROW(sceneFromJson(R"({"objects": [{"type": "box", "min": [0, 0]}]})"), InvalidArgument);
   EXPECT_THROW(sceneFromJson("{not json"), IoError);
+}
+
+// A tile scene file (ground, a building, a box mesh from an OBJ file, a trajectory) for the
+// "tile" section.
+std::string writeTileScene(const std::string& dir) {
+  TriangleMesh crate;
+  crate.appendSolid(makeBox({0, 0, 0}, {1, 1, 1}));
+  geometry::writeObj(crate, dir + "/crate.obj");
+  const std::string path = dir + "/tile.json";
+  std::ofstream(path) << R"({"name": "tile",
+    "ground": {"extent": [-10, -10, 10, 10], "slope": [0.1, 0.05], "cell": 2, "thickness": 1},
+    "objects": [{"type": "building", "footprint": [0, 0, 2, 2], "height": 3},
+                {"type": "mesh", "obj": "crate.obj", "offset": [-5, -5, 20]}],
+    "trajectories": {"t": {"waypoints": [[0, 0], [5, 0]]}}})";
+  return path;
+}
+
+TEST(SimScene, TileRepeatsAnotherScenesObjectsOnAGrownGround) {
+  const std::string dir = test::testDir();
+  writeTileScene(dir);
+  const std::string sub = dir + "/sub";
+  ASSERT_EQ(std::system(("mkdir -p '" + sub + "'").c_str()), 0);
+  // The tiling scene lives in another folder: the tile's OBJ path stays relative to the tile.
+  const Scene s = sceneFromJson(R"({"name": "big",
+    "tile": {"scene": "../tile.json", "count": [3, 2], "step": [20, 30]},
+    "objects": [{"type": "box", "min": [100, 100, 0], "max": [101, 101, 1]}],
+    "trajectories": {"own": {"waypoints": [[0, 0], [1, 0]]}}})",
+                                sub);
+  EXPECT_EQ(s.name, "big");
+  EXPECT_EQ(s.mesh.solid_count, 1 + 3 * 2 * 2 + 1);  // ground, 6 x (building, crate), own box
+  EXPECT_EQ(s.terrain.x0_m, -10);
+  EXPECT_EQ(s.terrain.y0_m, -10);
+  EXPECT_EQ(s.terrain.x1_m, 10 + 2 * 20);
+  EXPECT_EQ(s.terrain.y1_m, 10 + 1 * 30);
+  EXPECT_NEAR(s.terrain.heightAt(40, 30), 0.1 * 40 + 0.05 * 30, 1e-12);
+  ASSERT_EQ(s.trajectories.size(), 1u);  // the tile's own trajectories are not taken
+  EXPECT_EQ(s.trajectories.count("own"), 1u);
+  const MeshBvh bvh(s.mesh);
+  for (int ix = 0; ix < 3; ++ix)
+    for (int iy = 0; iy < 2; ++iy) {
+      SCOPED_TRACE(testing::Message() << "tile " << ix << " " << iy);
+      const float x = 1.0f + 20 * ix, y = 1.0f + 30 * iy;
+      // Each building stands on the ground where its tile puts it: roof = ground there + 3.
+      EXPECT_NEAR(hitDistance(bvh, {x, y, 50.f}, {0, 0, -1}), 50.f - (s.terrain.heightAt(x, y) + 3),
+                  1e-4f);
+      EXPECT_TRUE(bvh.inside({-4.5f + 20 * ix, -4.5f + 30 * iy, 20.5f}));  // the crate
+    }
+  EXPECT_FALSE(bvh.inside({-4.5f + 60, -4.5f, 20.5f}));  // no fourth tile along x
+  EXPECT_FALSE(bvh.inside({-4.5f, -4.5f + 60, 20.5f}));  // no third along y
+  EXPECT_TRUE(bvh.inside({100.5f, 100.5f, 0.5f}));       // the scene's own objects come too
+
+  // The scene's own ground replaces the tile's.
+  const Scene own = sceneFromJson(R"({"tile": {"scene": "tile.json", "count": [2, 1],
+    "step": [20, 0]}, "ground": {"extent": [-1, -1, 1, 1]}})",
+                                  dir);
+  EXPECT_EQ(own.terrain.x1_m, 1);
+  EXPECT_EQ(own.terrain.slope_x, 0);
+}
+
+TEST(SimScene, TileErrors) {
+  const std::string dir = test::testDir();
+  writeTileScene(dir);
+  auto tiled = [&](const std::string& tile) {
+    return sceneFromJson(R"({"tile": )" + tile + "}", dir);
+  };
+  EXPECT_NO_THROW(tiled(R"({"scene": "tile.json", "count": [1, 1], "step": [0, 0]})"));
+  for (const char* bad : {R"({"scene": "tile.json", "count": [0, 1], "step": [1, 1]})",
+                          R"({"scene": "tile.json", "count": [1.5, 1], "step": [1, 1]})",
+                          R"({"scene": "tile.json", "count": [1000, 1000], "step": [1, 1]})",
+                          R"({"scene": "tile.json", "count": [1, 1]})",
+                          R"({"scene": "tile.json", "count": [1], "step": [1, 1]})",
+                          R"({"count": [1, 1], "step": [1, 1]})", R"("tile.json")"}) {
+    SCOPED_TRACE(bad);
+    EXPECT_THROW(tiled(bad), InvalidArgument);
+  }
+  EXPECT_THROW(tiled(R"({"scene": "missing.json", "count": [1, 1], "step": [1, 1]})"), IoError);
+  std::ofstream(dir + "/nested.json") << R"({"tile": {"scene": "tile.json", "count": [1, 1],
+    "step": [1, 1]}})";
+  EXPECT_THROW(tiled(R"({"scene": "nested.json", "count": [1, 1], "step": [1, 1]})"),
+               InvalidArgument);
+  std::ofstream(dir + "/broken.json") << "{not json";
+  EXPECT_THROW(tiled(R"({"scene": "broken.json", "count": [1, 1], "step": [1, 1]})"), IoError);
 }
 
 }  // namespace

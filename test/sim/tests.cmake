@@ -40,3 +40,14 @@ if(TARGET sim_cli_test)
     FRAGG_SCENES_DIR="${PROJECT_SOURCE_DIR}/config/scenes"
     $<$<TARGET_EXISTS:fragg_map_octomap>:FRAGG_CLI_HAS_OCTOMAP=1>)
 endif()
+
+# W4's scene and loop (not the 1.5 GB recording): scene file, trajectory length, one coarse scan.
+fragg_add_test(sim_long_drive_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/long_drive_test.cpp
+  LIBS fragg_map_sim_lib
+  LABELS sim)
+if(TARGET sim_long_drive_test)
+  target_compile_definitions(sim_long_drive_test PRIVATE
+    FRAGG_SCENES_DIR="${PROJECT_SOURCE_DIR}/config/scenes"
+    FRAGG_WORKLOADS_CONFIG_DIR="${PROJECT_SOURCE_DIR}/config/workloads")
+endif()
