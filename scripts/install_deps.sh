@@ -4,7 +4,10 @@
 # test and format tools. Installs nothing (and runs no apt-get update) when all are present.
 # Runs as root (CI) or through sudo. Extra packages on the command line are handled the same
 # way (e.g. `rviz xvfb` to look at the map in rviz without a screen).
+# When another apt or dpkg holds its lock (common on a fresh machine: unattended upgrades), it
+# waits for it, at most FRAGG_APT_LOCK_WAIT_S seconds (default 600), saying so once.
 # Usage: bash scripts/install_deps.sh [--dry-run] [EXTRA_PACKAGE...]
+# (Sourced, it only defines its functions: test/scripts/ tests the lock wait that way.)
 set -euo pipefail
 
 packages=(
@@ -25,42 +28,87 @@ packages=(
   gnuplot-nox
 )
 
-dry_run=0
-for arg in "$@"; do
-  case "$arg" in
-    --dry-run) dry_run=1 ;;
-    -*) echo "install_deps: unknown option $arg (usage: [--dry-run] [EXTRA_PACKAGE...])" >&2; exit 2 ;;
-    *) packages+=("$arg") ;;
-  esac
-done
+# apt's and dpkg's lock files (apt and dpkg hold them with fcntl locks while they run).
+FRAGG_APT_LOCK_FILES="${FRAGG_APT_LOCK_FILES:-/var/lib/dpkg/lock-frontend /var/lib/dpkg/lock \
+/var/lib/apt/lists/lock /var/cache/apt/archives/lock}"
 
-missing=()
-for p in "${packages[@]}"; do
-  status="$(dpkg-query -W -f='${db:Status-Status}' "$p" 2>/dev/null || true)"
-  [ "$status" = "installed" ] || missing+=("$p")
-done
+# Whether a process holds a lock on one of FRAGG_APT_LOCK_FILES: looks the files up in
+# /proc/locks (POSIX and flock locks, any user's, no root needed, nothing taken). Files are
+# matched by inode and device; by inode alone where the file's device has major 0 (overlay or
+# tmpfs), whose device /proc/locks may name differently.
+apt_lock_held() {
+  local f dev ino major minor
+  for f in $FRAGG_APT_LOCK_FILES; do
+    [ -e "$f" ] || continue
+    read -r major minor ino < <(stat -L -c '%Hd %Ld %i' "$f") || continue
+    if [ "$major" = 0 ]; then dev='[0-9a-f]+:[0-9a-f]+'
+    else dev="$(printf '%02x:%02x' "$major" "$minor")"; fi
+    grep -Eq "[[:space:]]${dev}:${ino}[[:space:]]" /proc/locks && return 0
+  done
+  return 1
+}
 
-if [ "${#missing[@]}" -eq 0 ]; then
-  echo "install_deps: all ${#packages[@]} packages are installed"
-  exit 0
-fi
+# Waits while apt_lock_held, at most FRAGG_APT_LOCK_WAIT_S seconds (polling every
+# FRAGG_APT_LOCK_POLL_S, default 2), printing one line when it starts waiting. Returns 1 if the
+# lock is still held at the end.
+wait_for_apt_lock() {
+  local limit="${FRAGG_APT_LOCK_WAIT_S:-600}" poll="${FRAGG_APT_LOCK_POLL_S:-2}" start=$SECONDS
+  apt_lock_held || return 0
+  echo "install_deps: another apt or dpkg holds its lock; waiting for it (at most ${limit} s)"
+  while apt_lock_held; do
+    if [ $((SECONDS - start)) -ge "$limit" ]; then
+      echo "install_deps: the apt/dpkg lock is still held after ${limit} s; try again later" >&2
+      return 1
+    fi
+    sleep "$poll"
+  done
+  echo "install_deps: the lock is free after $((SECONDS - start)) s"
+}
 
-echo "install_deps: missing ${#missing[@]} package(s): ${missing[*]}"
-if [ "$dry_run" -eq 1 ]; then
-  exit 0
-fi
+main() {
+  dry_run=0
+  for arg in "$@"; do
+    case "$arg" in
+      --dry-run) dry_run=1 ;;
+      -*) echo "install_deps: unknown option $arg (usage: [--dry-run] [EXTRA_PACKAGE...])" >&2; exit 2 ;;
+      *) packages+=("$arg") ;;
+    esac
+  done
 
-if [ "$(id -u)" -eq 0 ]; then
-  as_root=()
-elif command -v sudo >/dev/null 2>&1; then
-  as_root=(sudo)
-else
-  echo "install_deps: not root and no sudo: install these as root: ${missing[*]}" >&2
-  exit 1
-fi
+  missing=()
+  for p in "${packages[@]}"; do
+    status="$(dpkg-query -W -f='${db:Status-Status}' "$p" 2>/dev/null || true)"
+    [ "$status" = "installed" ] || missing+=("$p")
+  done
 
-export DEBIAN_FRONTEND=noninteractive
-"${as_root[@]}" apt-get update
-"${as_root[@]}" env DEBIAN_FRONTEND=noninteractive \
-  apt-get install -y --no-install-recommends "${missing[@]}"
-echo "install_deps: installed ${missing[*]}"
+  if [ "${#missing[@]}" -eq 0 ]; then
+    echo "install_deps: all ${#packages[@]} packages are installed"
+    exit 0
+  fi
+
+  echo "install_deps: missing ${#missing[@]} package(s): ${missing[*]}"
+  if [ "$dry_run" -eq 1 ]; then
+    exit 0
+  fi
+
+  if [ "$(id -u)" -eq 0 ]; then
+    as_root=()
+  elif command -v sudo >/dev/null 2>&1; then
+    as_root=(sudo)
+  else
+    echo "install_deps: not root and no sudo: install these as root: ${missing[*]}" >&2
+    exit 1
+  fi
+
+  export DEBIAN_FRONTEND=noninteractive
+  wait_for_apt_lock
+  # apt's own wait covers a lock taken again between the check and the call.
+  lock_timeout=(-o "DPkg::Lock::Timeout=${FRAGG_APT_LOCK_WAIT_S:-600}")
+  "${as_root[@]}" apt-get "${lock_timeout[@]}" update
+  echo "install_deps: installing (no recommends): ${missing[*]}"
+  "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive \
+    apt-get "${lock_timeout[@]}" install -y --no-install-recommends "${missing[@]}"
+  echo "install_deps: installed ${missing[*]}"
+}
+
+if [ "${BASH_SOURCE[0]}" = "$0" ]; then main "$@"; fi
