@@ -177,5 +177,26 @@ TEST_F(Cli, BadArgumentsAndInputsFailCleanly) {
   EXPECT_EQ(inputs.size(), 7u) << "a file appeared beside the inputs";
 }
 
+TEST_F(Cli, UnknownOrMissingCommandIsNamedAndTheCommandsListed) {
+  const char* kCommands =
+      "build, correct, truncate, merge, stats, export, render, compare, eval, octomap-build, "
+      "collide";
+  RunResult r = run("frobnicate " + in("map.fgm"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, std::string("fragg_map: error: unknown command 'frobnicate'; the commands "
+                               "are: ") +
+                       kCommands + " (see --help)\n");
+  r = run("");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err,
+            std::string("fragg_map: error: give a command: ") + kCommands + " (see --help)\n");
+  // Known commands and options before a command still reach CLI11.
+  r = run("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("truncate"), std::string::npos);
+  r = run("stats " + in("map.fgm"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
 }  // namespace
 }  // namespace fragg
