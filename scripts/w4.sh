@@ -1,0 +1,99 @@
+#!/usr/bin/env bash
+# W4 long drive (issue 13): generates the workload when missing (scripts/make_workloads.sh
+# --only w4: 579 scans of W1's LiDAR along a closed 1,156 m loop through the campus laid out
+# four times, ~1.5 GB) and builds its map at 5 cm with a 30 m max range
+#   - in memory:  fragg_map build W4 -o mem.fgm --resolution 0.05 --max-range 30
+#   - paged:      the same with --page-store FILE --page-budget-mb N, when the CLI has paging
+# each under /usr/bin/time -v, then prints a table: wall time, scans/s (scans over the build
+# loop's seconds, reading and insertion; the map file's write excluded), peak RSS, the map's
+# host memory (Map::memory()) and, for the paged build, what its --json says about pages.
+# Usage: bash scripts/w4.sh [--workloads DIR] [--out DIR] [--bin DIR] [--budget-mb N]
+#                           [--backend cpu|cuda|auto] [--scans N] [--no-paged] [--keep-maps]
+#   --workloads DIR  workload cache (default: $FRAGG_WORKLOADS or ~/.cache/fragg_map/workloads)
+#   --out DIR        maps, logs and JSON (default: WORKLOADS/w4_runs)
+#   --bin DIR        folder with fragg_map and fragg_map_sim (default: ws/devel/lib/fragg_map,
+#                    else build-core/bin)
+#   --budget-mb N    paged build's --page-budget-mb (default 512)
+#   --scans N        only the first N scans (default: all)
+#   --keep-maps      keep the map file and the page store (several GB each) after the run
+set -euo pipefail
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
+workloads="${FRAGG_WORKLOADS:-$HOME/.cache/fragg_map/workloads}"
+out="" bin="" budget_mb=512 backend=auto scans=0 paged=1 keep=0
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --workloads) workloads="${2:?}"; shift 2 ;;
+    --out) out="${2:?}"; shift 2 ;;
+    --bin) bin="${2:?}"; shift 2 ;;
+    --budget-mb) budget_mb="${2:?}"; shift 2 ;;
+    --backend) backend="${2:?}"; shift 2 ;;
+    --scans) scans="${2:?}"; shift 2 ;;
+    --no-paged) paged=0; shift ;;
+    --keep-maps) keep=1; shift ;;
+    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
+    *) echo "w4: unknown argument '$1'" >&2; exit 2 ;;
+  esac
+done
+if [ -z "$bin" ]; then
+  if [ -x "$repo/ws/devel/lib/fragg_map/fragg_map" ]; then bin="$repo/ws/devel/lib/fragg_map"
+  else bin="$repo/build-core/bin"; fi
+fi
+fm="$bin/fragg_map"
+[ -x "$fm" ] || { echo "w4: no fragg_map in $bin (build first)" >&2; exit 1; }
+[ -x /usr/bin/time ] || { echo "w4: needs /usr/bin/time (Debian package 'time')" >&2; exit 1; }
+mkdir -p "$workloads"
+workloads="$(cd "$workloads" && pwd -P)"
+out="${out:-$workloads/w4_runs}"
+mkdir -p "$out"
+w4="$workloads/w4_long_drive"
+
+if [ ! -f "$w4/poses.txt" ] || [ "$(find "$w4/velodyne" -name '*.bin' | wc -l)" -lt 579 ]; then
+  echo "w4: generating W4 into $w4"
+  sim_args=()
+  [ -x "$bin/fragg_map_sim" ] && sim_args=(--sim "$bin/fragg_map_sim")
+  bash "$repo/scripts/make_workloads.sh" --out "$workloads" --only w4 "${sim_args[@]}"
+fi
+
+# name, build arguments...: runs the build under /usr/bin/time -v, keeps its JSON and time log.
+build() {
+  local name="$1"; shift
+  echo "w4: $name build ($*)" >&2
+  /usr/bin/time -v -o "$out/$name.time" "$fm" build "$w4" --resolution 0.05 --max-range 30 \
+    --backend "$backend" --scans "$scans" --json "$@" > "$out/$name.json"
+}
+
+rm -f "$out/in_memory.fgm"
+build in_memory -o "$out/in_memory.fgm"
+[ "$keep" = 1 ] || rm -f "$out/in_memory.fgm"
+runs=(in_memory)
+if [ "$paged" = 1 ]; then
+  if "$fm" build --help | grep -q -- '--page-store'; then
+    # The store is the map: no .fgm is written (that would page every block back in).
+    rm -f "$out/w4_pages.db"*
+    build paged --page-store "$out/w4_pages.db" --page-budget-mb "$budget_mb"
+    [ "$keep" = 1 ] || rm -f "$out/w4_pages.db"*
+    runs+=(paged)
+  else
+    echo "w4: this fragg_map has no --page-store: in-memory build only" >&2
+  fi
+fi
+
+echo
+echo "W4 long drive, 5 cm, 30 m, backend $backend, $(nproc) cores, $fm"
+python3 - "$out" "${runs[@]}" <<'PY'
+import json, re, sys
+out, runs = sys.argv[1], sys.argv[2:]
+print("| build | scans | wall s | loop s | scans/s | peak RSS MiB | map host MiB | blocks | paging |")
+print("|---|---|---|---|---|---|---|---|---|")
+for name in runs:
+    j = json.load(open(f"{out}/{name}.json"))
+    t = open(f"{out}/{name}.time").read()
+    rss_mib = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", t).group(1)) / 1024
+    wall = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): ([\d:.]+)", t).group(1)
+    wall_s = sum(float(x) * 60 ** i for i, x in enumerate(reversed(wall.split(":"))))
+    paging = ", ".join(f"{k} {v}" for k, v in sorted(j.items())
+                       if re.search(r"page|resident|budget", k) and not isinstance(v, dict))
+    print(f"| {name} | {j['scans']} | {wall_s:.1f} | {j['seconds']:.1f} | "
+          f"{j['scans'] / j['seconds']:.2f} | {rss_mib:,.0f} | {j['host_bytes'] / 2**20:,.0f} | "
+          f"{j['blocks']:,} | {paging or '-'} |")
+PY
