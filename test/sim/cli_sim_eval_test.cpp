@@ -97,6 +97,11 @@ TEST(CliSim, RecordsAndRefusesUnknownTrajectoriesAndSensors) {
   r = test::run(FRAGG_SIM_PATH, dir,
                 "record '" + dir + "/missing.json' --trajectory street --kitti '" + dir + "/k'");
   EXPECT_EQ(r.exit_code, 1);
+  r = test::run(FRAGG_SIM_PATH, dir, "recrod x.json");  // a typo: named, the commands listed
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err,
+            "fragg_map_sim: error: unknown command 'recrod'; the commands are: scene, record, "
+            "info (see --help)\n");
 }
 
 }  // namespace

@@ -5,31 +5,9 @@
 #include <string>
 
 #include "cli/commands.h"
+#include "command_error.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/log.h"
-
-namespace {
-
-// The commands, comma-separated, in the order they were added.
-std::string commandNames(const CLI::App& app) {
-  std::string names;
-  for (const CLI::App* c : app.get_subcommands([](const CLI::App*) { return true; }))
-    names += (names.empty() ? "" : ", ") + c->get_name();
-  return names;
-}
-
-// CLI11 answers a missing or unknown command with "A subcommand is required": name the word
-// and list the commands instead. Empty when the first argument is an option or a command.
-std::string commandError(const CLI::App& app, int argc, char** argv) {
-  if (argc < 2) return "give a command: " + commandNames(app) + " (see --help)";
-  const std::string word = argv[1];
-  if (word.empty() || word[0] == '-') return "";
-  for (const CLI::App* c : app.get_subcommands([](const CLI::App*) { return true; }))
-    if (c->check_name(word)) return "";
-  return "unknown command '" + word + "'; the commands are: " + commandNames(app) + " (see --help)";
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -52,7 +30,7 @@ int main(int argc, char** argv) {
   fragg::cli::addEvalCommand(app);
   fragg::cli::addOctomapBuildCommand(app);
   fragg::cli::addCollideCommand(app);
-  const std::string command_error = commandError(app, argc, argv);
+  const std::string command_error = fragg::tools::commandError(app, argc, argv);
   if (!command_error.empty()) {
     std::fprintf(stderr, "fragg_map: error: %s\n", command_error.c_str());
     return 2;

@@ -3,7 +3,9 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
+#include <string>
 
+#include "command_error.h"
 #include "fragg_map/errors.h"
 #include "sim/commands.h"
 
@@ -20,6 +22,11 @@ int main(int argc, char** argv) {
         std::printf("bag_output no\n");
 #endif
       });
+  const std::string command_error = fragg::tools::commandError(app, argc, argv);
+  if (!command_error.empty()) {
+    std::fprintf(stderr, "fragg_map_sim: error: %s\n", command_error.c_str());
+    return 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
