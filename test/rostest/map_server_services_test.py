@@ -188,6 +188,8 @@ class MapServerServicesTest(MapServerBagChecks):
         res = self.call([pose_msg(T) for T in spread], "box", robot, count_cells=True)
         cli = self.cli_collide(map_path, spread, robot_args, "--count-cells")
         self.assert_same_answers(res, cli, "random boxes")
+        rospy.loginfo("random boxes: %d of %d collide, %d cells, %.2f ms (CLI %.2f ms)",
+                      res.colliding, len(spread), sum(res.colliding_cells), res.ms, cli["ms"])
         self.assertGreater(res.colliding, 0)
         self.assertLess(res.colliding, len(spread))
         res = self.call([pose_msg(T) for T in spread], "box", robot, override_options=True,
@@ -195,6 +197,7 @@ class MapServerServicesTest(MapServerBagChecks):
         cli_unknown = self.cli_collide(map_path, spread, robot_args, "--unknown-occupied",
                                        "--margin", "0.1")
         self.assert_same_answers(res, cli_unknown, "random boxes, unknown occupied, margin")
+        rospy.loginfo("random boxes, unknown occupied, margin 0.1: %d collide", res.colliding)
         self.assertGreater(res.colliding, cli["colliding"])
 
         # Poses given in base_link at the scans' stamps: tf puts them where the CLI puts the
@@ -263,6 +266,9 @@ class MapServerServicesTest(MapServerBagChecks):
             self.assertGreater(res.path_fraction, 0.0)
             self.assertLessEqual(res.path_fraction * total, math.dist(start, wall) + 0.2)
             self.assertGreater(res.path_poses_checked, 2)
+            rospy.loginfo("path through the wall at %s: segment %d, fraction %.4f of %.2f m, %d "
+                          "poses checked", wall, res.path_first_segment, res.path_fraction, total,
+                          res.path_poses_checked)
             # The same path as a nav_msgs/Path.
             path = Path()
             path.header.frame_id = "map"
@@ -397,6 +403,8 @@ class MapServerServicesTest(MapServerBagChecks):
         self.assertEqual(res.blocks, len(far))
         self.assertEqual(res.known_voxels, known - far_cells)
         self.assertEqual(self.stats().known_voxels, known - far_cells)
+        rospy.loginfo("truncate: %d of %d cells in %d blocks moved out in %.1f ms", res.cells,
+                      known, res.blocks, res.ms)
         self.assertTrue(read_blocks(sub_path)[0] == far, "the file holds the far half")
         self.assertTrue(read_blocks(self.saved("without_far_half.fgm"))[0] == near,
                         "the map holds the near half")
@@ -427,6 +435,7 @@ class MapServerServicesTest(MapServerBagChecks):
         self.assertTrue(res.success, res.message)
         self.assertEqual(res.cells, far_cells)
         self.assertEqual(res.known_voxels, known)
+        rospy.loginfo("merge: %d cells back in %.1f ms", res.cells, res.ms)
         after_path = self.saved("after_merge.fgm")
         after = read_blocks(after_path)[0]
         self.assertEqual(set(after), set(before))
