@@ -246,7 +246,9 @@ class MapServerServicesTest(MapServerBagChecks):
 
     def check_path_through_a_wall(self, map_path, centres, rng):
         start = self.sensor[0][0]
-        candidates = [c for c in centres if 4.0 < math.dist(c, start) < 15.0]
+        # Occupied cells at the sensor's height (walls, trunks; not the ground), 4-12 m away.
+        candidates = [c for c in centres
+                      if 4.0 < math.dist(c, start) < 12.0 and abs(c[2] - start[2]) < 0.3]
         rng.shuffle(candidates)
         self.assertTrue(candidates)
         ball = ["--sphere", "0.1"]
