@@ -449,6 +449,14 @@ class MapServerServicesTest(MapServerBagChecks):
         wait_for(lambda: len(self.arrays) > arrays_before and
                  max(p[0] for p in self.shown_marker_points()) >= mid, 20,
                  "markers of the merged half")
+        # Overwriting again through an identity T_map_sub (an exact key shift) changes nothing.
+        identity = Pose()
+        identity.orientation.w = 1.0
+        res = self.merge(path=sub_path, mode="overwrite", use_transform=True, T_map_sub=identity)
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(res.cells, far_cells)
+        self.assertEqual(res.known_voxels, known)
+        self.assertTrue(read_blocks(self.saved("after_second_merge.fgm"))[0] == before)
 
 
 if __name__ == "__main__":
