@@ -19,6 +19,8 @@ packages=(
   python3-roslaunch python3-rosservice python3-rosnode python3-rostopic ros-message-generation
   python3-geometry-msgs python3-sensor-msgs python3-visualization-msgs python3-tf2-msgs
   python3-std-srvs python3-nav-msgs liboctomap-dev libgtest-dev
+  # ~check_collision takes a shape_msgs/Mesh
+  libshape-msgs-dev python3-shape-msgs
   # core, CLI, benchmark, tests, format check
   libcli11-dev nlohmann-json3-dev libpng-dev libfmt-dev libbenchmark-dev zlib1g-dev
   clang-format octomap-tools libgmock-dev bzip2

@@ -133,6 +133,10 @@ class Map {
   /// Copies of the cells whose centres lie in [min_map, max_map]; this map is unchanged.
   Map extract(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map,
               Backend backend = Backend::kCpu, SubmapStats* stats = nullptr) const;
+  /// Copies of the cells whose centres are farther than radius_m from center_map (what
+  /// truncateOutside moves); this map is unchanged.
+  Map extractOutside(const Eigen::Vector3d& center_map, double radius_m,
+                     Backend backend = Backend::kCpu, SubmapStats* stats = nullptr) const;
   /// Moves those cells out: they become unknown here and blocks left empty are erased. Kept
   /// scans whose rays could reach into the box can no longer be removed or corrected (as
   /// clearBox).

@@ -1,5 +1,5 @@
-// Sub-maps: Map::extract, truncate, truncateOutside and merge (fragg_map/submap.h). Every
-// edit of this map's host blocks invalidates the backend's cache over them first, bumps the
+// Sub-maps: Map::extract, extractOutside, truncate, truncateOutside and merge (fragg_map/submap.h).
+// Every edit of this map's host blocks invalidates the backend's cache over them first, bumps the
 // revision and stamps the blocks it changes.
 #include <algorithm>
 #include <chrono>
@@ -136,6 +136,11 @@ Map Map::moveOut(const SubmapRegion& region, Backend backend, SubmapStats* stats
 Map Map::extract(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map, Backend backend,
                  SubmapStats* stats) const {
   return copyRegion(SubmapRegion::box(min_map, max_map), backend, stats);
+}
+
+Map Map::extractOutside(const Eigen::Vector3d& center_map, double radius_m, Backend backend,
+                        SubmapStats* stats) const {
+  return copyRegion(SubmapRegion::outsideSphere(center_map, radius_m), backend, stats);
 }
 
 Map Map::truncate(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map, Backend backend,

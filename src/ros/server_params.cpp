@@ -1,7 +1,8 @@
 // Parameters of the map server: one read of the private namespace, typed lookups by path
 // ("sensor_model/hit"). The values of the core's fields are checked by the core's validate()
 // only; its messages name the core's fields, renamed here to the parameters (kParameterNames).
-// What is checked here belongs to the server alone (frame_id, queue, tf, markers, correction).
+// What is checked here belongs to the server alone (frame_id, queue, tf, markers, correction,
+// collision).
 #include "fragg_map/ros/server_params.h"
 
 #include <cmath>
@@ -178,6 +179,21 @@ void readCorrection(const XmlRpcValue& root, CorrectionParams& c) {
   readBool(root, "correction/subscribe_path", &c.subscribe_path);
 }
 
+void readCollision(const XmlRpcValue& root, CollisionParams& c) {
+  readBool(root, "collision/unknown_is_occupied", &c.unknown_is_occupied);
+  readDouble(root, "collision/margin", &c.margin_m);
+  if (!(c.margin_m >= 0.0) || !std::isfinite(c.margin_m))
+    badParam("collision/margin", "must be a finite number of metres >= 0");
+  readString(root, "collision/mesh", &c.mesh);
+  if (!c.mesh.empty() && c.mesh[0] != '/')
+    badParam("collision/mesh", "must be an absolute path (got '" + c.mesh + "')");
+  readDouble(root, "collision/mesh_scale", &c.mesh_scale);
+  if (!(c.mesh_scale > 0.0) || !std::isfinite(c.mesh_scale))
+    badParam("collision/mesh_scale", "must be finite and > 0");
+  readInt(root, "collision/max_markers", &c.max_markers);
+  if (c.max_markers < 0) badParam("collision/max_markers", "must be >= 0");
+}
+
 }  // namespace
 
 ServerParams parseParameters(const XmlRpcValue& root) {
@@ -234,6 +250,7 @@ ServerParams parseParameters(const XmlRpcValue& root) {
       !(p.color_min_z_m < p.color_max_z_m))
     badParam("markers/color_min_z", "must be finite and below markers/color_max_z");
   readCorrection(root, p.correction);
+  readCollision(root, p.collision);
   return p;
 }
 

@@ -1,5 +1,5 @@
 # fragg_map_ros (ROS builds only): stateless converters between ROS messages and the map, and
-# the server's parameters.
+# the server's parameters, collision shapes from requests and their markers.
 set(FRAGG_ROS_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/cloud_from_msg.cpp
   ${CMAKE_CURRENT_LIST_DIR}/height_color.cpp
@@ -11,4 +11,6 @@ set(FRAGG_ROS_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/timing_stats.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scan_stamp_index.cpp
   ${CMAKE_CURRENT_LIST_DIR}/pose_correction.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/collision_shape_msg.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/collision_markers.cpp
 )

@@ -122,6 +122,34 @@ TEST(ServerParams, InvalidScanStoreAndCorrectionValuesNameTheParameter) {
   expectRejected("correction/subscribe_path", std::string("yes"));
 }
 
+TEST(ServerParams, CollisionDefaultsValuesAndRefusals) {
+  const fragg::ros::ServerParams d = fragg::ros::parseParameters(XmlRpcValue());
+  EXPECT_FALSE(d.collision.unknown_is_occupied);
+  EXPECT_EQ(d.collision.margin_m, 0.0);
+  EXPECT_EQ(d.collision.mesh, "");
+  EXPECT_EQ(d.collision.mesh_scale, 1.0);
+  EXPECT_EQ(d.collision.max_markers, 500);
+  XmlRpcValue root;
+  set(root, "collision/unknown_is_occupied", true);
+  set(root, "collision/margin", 0.1);
+  set(root, "collision/mesh", std::string("/robots/base.obj"));
+  set(root, "collision/mesh_scale", 0.001);
+  set(root, "collision/max_markers", 20);
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(root);
+  EXPECT_TRUE(p.collision.unknown_is_occupied);
+  EXPECT_EQ(p.collision.margin_m, 0.1);
+  EXPECT_EQ(p.collision.mesh, "/robots/base.obj");
+  EXPECT_EQ(p.collision.mesh_scale, 0.001);
+  EXPECT_EQ(p.collision.max_markers, 20);
+  expectRejected("collision/unknown_is_occupied", 1);
+  expectRejected("collision/margin", -0.01);
+  expectRejected("collision/margin", std::numeric_limits<double>::infinity());
+  expectRejected("collision/mesh", std::string("robot.obj"));  // relative
+  expectRejected("collision/mesh_scale", 0.0);
+  expectRejected("collision/mesh_scale", -2.0);
+  expectRejected("collision/max_markers", -1);
+}
+
 TEST(ServerParams, ReadsEveryName) {
   XmlRpcValue root;
   set(root, "resolution", 0.1);
@@ -311,6 +339,11 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.correction.stamp_tolerance_s, d.correction.stamp_tolerance_s);
   EXPECT_EQ(p.correction.path_child_frame, d.correction.path_child_frame);
   EXPECT_EQ(p.correction.subscribe_path, d.correction.subscribe_path);
+  EXPECT_EQ(p.collision.unknown_is_occupied, d.collision.unknown_is_occupied);
+  EXPECT_EQ(p.collision.margin_m, d.collision.margin_m);
+  EXPECT_EQ(p.collision.mesh, d.collision.mesh);
+  EXPECT_EQ(p.collision.mesh_scale, d.collision.mesh_scale);
+  EXPECT_EQ(p.collision.max_markers, d.collision.max_markers);
 }
 
 TEST(ServerParamsConfig, LidarYaml) {

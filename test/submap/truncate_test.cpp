@@ -104,6 +104,25 @@ TEST(TruncateTest, ExtractCopiesWithoutChangingTheMap) {
   EXPECT_TRUE(test::sameCells(sub, truncated, &why)) << why;
 }
 
+TEST(TruncateTest, ExtractOutsideCopiesWhatTruncateOutsideMoves) {
+  Map map = test::roomMap();
+  const Map copy = test::roomMap();
+  const KeyBounds b = map.bounds();
+  const Eigen::Vector3d centre = 0.5 * (map.centerOf(b.min) + map.centerOf(b.max));
+  const double radius_m = 0.3 * (map.centerOf(b.max) - map.centerOf(b.min)).norm();
+  const uint64_t rev = map.revision();
+  const Map sub = map.extractOutside(centre, radius_m);
+  EXPECT_EQ(map.revision(), rev);
+  EXPECT_TRUE(test::sameCells(map, copy));
+  EXPECT_EQ(sub.region().kind, SubmapRegion::Kind::kOutsideSphere);
+  EXPECT_GT(sub.knownVoxelCount(), 1000u);
+  Map cut = test::roomMap();
+  const Map moved = cut.truncateOutside(centre, radius_m);
+  std::string why;
+  EXPECT_TRUE(test::sameCells(sub, moved, &why)) << why;
+  EXPECT_THROW(map.extractOutside(centre, -1.0), InvalidArgument);
+}
+
 TEST(TruncateTest, OutsideRadiusSplitsRealMapAndMergeRestoresIt) {
   const Map original = test::rgbdMap({0, 1, 2, 3, 4});
   Map map = test::rgbdMap({0, 1, 2, 3, 4});

@@ -26,6 +26,17 @@ struct CorrectionParams {
   bool subscribe_path = true;  ///< subscribe corrected_path
 };
 
+/// ~check_collision: collision/*. The request may override the two options.
+struct CollisionParams {
+  bool unknown_is_occupied = false;  ///< collision/unknown_is_occupied
+  double margin_m = 0.0;             ///< collision/margin [m], >= 0
+  /// collision/mesh: absolute path of an OBJ (the robot; origin = the pose a request gives),
+  /// read at start-up; "": requests of shape "mesh" must carry their own triangles.
+  std::string mesh;
+  double mesh_scale = 1.0;  ///< collision/mesh_scale: OBJ units -> metres (> 0)
+  int max_markers = 500;    ///< collision/max_markers: poses drawn on `collisions` (>= 0)
+};
+
 struct ServerParams {
   /// resolution, sensor_model/hit|miss|min|max, backend, raycast; keep_scans and scan_store/*
   /// (map.scans: the server keeps scans by default, the core does not); pointcloud_min_z|max_z
@@ -46,6 +57,7 @@ struct ServerParams {
   double color_min_z_m = -1.0;  ///< marker colour ramp (markers/color_min_z)
   double color_max_z_m = 4.0;   ///< marker colour ramp (markers/color_max_z)
   CorrectionParams correction;
+  CollisionParams collision;
 
   /// The core's defaults with keep_scans on and a 2 GiB budget (scan_store/max_mb 2048).
   static fragg::MapParams withKeptScans() {

@@ -31,9 +31,9 @@ class MapPublishers {
   /// Takes the map's read lock itself.
   void publishAfterInsert(const ::ros::Time& stamp, const fragg::SensorModel& sensor,
                           const Eigen::Isometry3d& T_map_sensor);
-  /// After a pose correction: the markers of the blocks it changed (incremental, as after an
-  /// insertion; throttled by marker_rate), occupied cloud, projected map, stats. Takes the read
-  /// lock.
+  /// After a pose correction, a truncation or a merge: the markers of the blocks it changed
+  /// (incremental, as after an insertion; throttled by marker_rate), occupied cloud, projected
+  /// map, stats. Takes the read lock.
   void publishAfterCorrection(const ::ros::Time& stamp);
   /// After reset, load or clear: a full marker republish and the other map topics.
   void publishFull(const ::ros::Time& stamp);

@@ -22,7 +22,7 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh)
   services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_, [this] {
     publishers_->publishFull(::ros::Time::now());
   });
-  auto publish_corrected = [this] {
+  auto publish_changed = [this] {
     try {
       publishers_->publishAfterCorrection(::ros::Time::now());
     } catch (const std::exception& e) {
@@ -30,10 +30,14 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh)
     }
   };
   correction_service_ = std::make_unique<CorrectionService>(private_nh, params_, shared_.get(),
-                                                            &stats_, publish_corrected);
+                                                            &stats_, publish_changed);
+  submap_services_ =
+      std::make_unique<SubmapServices>(private_nh, params_, shared_.get(), publish_changed);
+  collision_service_ = std::make_unique<CollisionService>(nh, private_nh, params_, tf_buffer_,
+                                                          shared_.get(), &stats_);
   if (params_.correction.subscribe_path)
     path_corrector_ = std::make_unique<PathCorrector>(nh, params_, tf_buffer_, shared_.get(),
-                                                      &stats_, publish_corrected);
+                                                      &stats_, publish_changed);
   input_ = std::make_unique<CloudInput>(
       nh, params_, tf_buffer_, shared_.get(), &stats_,
       [this](const ::ros::Time& stamp, const fragg::SensorModel& sensor,

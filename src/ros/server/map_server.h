@@ -1,5 +1,6 @@
 // The map server: parameters, the shared map, tf, and its parts (input, publishers, services,
-// loop-closure correction through ~correct_poses and corrected_path). MapServerNodelet::onInit
+// loop-closure correction through ~correct_poses and corrected_path, sub-maps through ~truncate
+// and ~merge, collision checks through ~check_collision). MapServerNodelet::onInit
 // builds one; it holds no logic of its own.
 #pragma once
 
@@ -10,6 +11,7 @@
 #include <memory>
 
 #include "cloud_input.h"
+#include "collision_service.h"
 #include "correction_service.h"
 #include "fragg_map/ros/server_params.h"
 #include "map_publishers.h"
@@ -17,6 +19,7 @@
 #include "path_corrector.h"
 #include "server_stats.h"
 #include "shared_map.h"
+#include "submap_services.h"
 
 namespace fragg::ros {
 
@@ -36,6 +39,8 @@ class MapServer {
   std::unique_ptr<MapPublishers> publishers_;
   std::unique_ptr<MapServices> services_;
   std::unique_ptr<CorrectionService> correction_service_;
+  std::unique_ptr<SubmapServices> submap_services_;
+  std::unique_ptr<CollisionService> collision_service_;
   std::unique_ptr<PathCorrector> path_corrector_;  // only with correction/subscribe_path
   std::unique_ptr<CloudInput> input_;              // last: its thread uses everything above
 };

@@ -32,6 +32,12 @@ void ServerStats::addCorrection(uint64_t scans, double ms) {
   correction_ms_last_ = ms;
 }
 
+void ServerStats::addCollisionCheck(uint64_t poses, double ms) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  collision_ms_.add(ms);
+  collision_poses_ += poses;
+}
+
 void ServerStats::clearInsertions() {
   std::lock_guard<std::mutex> lock(mutex_);
   scans_ = 0;
@@ -40,6 +46,8 @@ void ServerStats::clearInsertions() {
   corrections_ = 0;
   corrected_scans_ = 0;
   correction_ms_last_ = 0.0;
+  collision_ms_.clear();
+  collision_poses_ = 0;
 }
 
 uint64_t ServerStats::droppedNoTf() const {
@@ -73,6 +81,10 @@ fragg_map::MapStats ServerStats::toMsg(const fragg::Map& map, const std::string&
   msg.corrections = corrections_;
   msg.corrected_scans = corrected_scans_;
   msg.correction_ms_last = static_cast<float>(correction_ms_last_);
+  msg.collision_checks = collision_ms_.count();
+  msg.collision_poses = collision_poses_;
+  msg.collision_ms_last = static_cast<float>(collision_ms_.lastMs());
+  msg.collision_ms_mean = static_cast<float>(collision_ms_.meanMs());
   return msg;
 }
 

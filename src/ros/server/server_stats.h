@@ -1,5 +1,6 @@
-// Counters of the map server (clouds inserted, dropped and why, insertion times), safe to
-// update from the insertion thread and read from service and publisher threads.
+// Counters of the map server (clouds inserted, dropped and why, insertion, correction and
+// collision-check times), safe to update from the insertion thread and read from service and
+// publisher threads.
 #pragma once
 
 #include <cstdint>
@@ -20,7 +21,10 @@ class ServerStats {
   void addRejected();
   /// A pose correction that moved `scans` kept scans in `ms`.
   void addCorrection(uint64_t scans, double ms);
-  /// Forgets the insertions and corrections (after ~reset); the drop counters keep counting.
+  /// A ~check_collision call that checked `poses` poses in `ms`.
+  void addCollisionCheck(uint64_t poses, double ms);
+  /// Forgets the insertions, corrections and collision checks (after ~reset); the drop
+  /// counters keep counting.
   void clearInsertions();
 
   /// The statistics message; `map` must be locked by the caller.
@@ -39,6 +43,8 @@ class ServerStats {
   uint64_t corrections_ = 0;
   uint64_t corrected_scans_ = 0;
   double correction_ms_last_ = 0.0;
+  TimingStats collision_ms_{1};  // last and mean only (no percentile is published)
+  uint64_t collision_poses_ = 0;
 };
 
 }  // namespace fragg::ros
