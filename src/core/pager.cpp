@@ -18,6 +18,11 @@ constexpr uint32_t kStoreMetaVersion = 1;
 /// counts them), and its share of the store's key set.
 constexpr size_t kResidentBlockBytes = sizeof(Block) + sizeof(BlockMeta) + 64;
 
+/// Regions in [slo, shi] (as a double: a box over the whole key range overflows 64 bits).
+double regionCount(const BlockKey& slo, const BlockKey& shi) {
+  return (double{1} + shi.x - slo.x) * (double{1} + shi.y - slo.y) * (double{1} + shi.z - slo.z);
+}
+
 double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -90,11 +95,11 @@ void Pager::removePagedOut(const BlockKey& key) {
 bool Pager::anyPagedOut(const BlockKey& lo, const BlockKey& hi) const {
   if (paged_out_.empty()) return false;
   const BlockKey slo = superOf(lo), shi = superOf(hi);
-  const int64_t volume = int64_t{shi.x - slo.x + 1} * (shi.y - slo.y + 1) * (shi.z - slo.z + 1);
+  const double volume = regionCount(slo, shi);
   auto inBox = [&](const BlockKey& k) {
     return k.x >= lo.x && k.x <= hi.x && k.y >= lo.y && k.y <= hi.y && k.z >= lo.z && k.z <= hi.z;
   };
-  if (volume > static_cast<int64_t>(paged_super_.size())) {
+  if (volume > static_cast<double>(paged_super_.size())) {
     for (const auto& [s, keys] : paged_super_)
       for (const BlockKey& k : keys)
         if (inBox(k)) return true;
@@ -129,13 +134,13 @@ size_t Pager::pageIn(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) {
   const auto t0 = Clock::now();
   std::vector<BlockKey> wanted;
   const BlockKey slo = superOf(lo), shi = superOf(hi);
-  const int64_t volume = int64_t{shi.x - slo.x + 1} * (shi.y - slo.y + 1) * (shi.z - slo.z + 1);
+  const double volume = regionCount(slo, shi);
   auto collect = [&](const std::vector<BlockKey>& keys) {
     for (const BlockKey& k : keys)
       if (k.x >= lo.x && k.x <= hi.x && k.y >= lo.y && k.y <= hi.y && k.z >= lo.z && k.z <= hi.z)
         wanted.push_back(k);
   };
-  if (volume > static_cast<int64_t>(paged_super_.size())) {
+  if (volume > static_cast<double>(paged_super_.size())) {
     for (const auto& [s, keys] : paged_super_) collect(keys);
   } else {
     for (int32_t z = slo.z; z <= shi.z; ++z)
@@ -168,8 +173,8 @@ size_t Pager::pageInAll(BlockMap& blocks) {
 
 void Pager::touch(const BlockKey& lo, const BlockKey& hi, uint64_t stamp) {
   const BlockKey slo = superOf(lo), shi = superOf(hi);
-  const int64_t volume = int64_t{shi.x - slo.x + 1} * (shi.y - slo.y + 1) * (shi.z - slo.z + 1);
-  if (volume > int64_t{1} << 22) return;  // a box this large is not a sensor's or a query's
+  const double volume = regionCount(slo, shi);
+  if (volume > 4194304.0) return;  // a box this large is not a sensor's or a query's
   for (int32_t z = slo.z; z <= shi.z; ++z)
     for (int32_t y = slo.y; y <= shi.y; ++y)
       for (int32_t x = slo.x; x <= shi.x; ++x) last_used_[{x, y, z}] = stamp;

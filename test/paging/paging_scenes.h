@@ -20,7 +20,7 @@ namespace fragg::test {
 /// Ground z = 0, ceiling z = 3, walls at |y| = 4 (x in even metres) or 3.5 (odd metres).
 inline double corridorHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
   double best = INFINITY;
-  auto plane = [&](int axis, double at) {
+  auto plane = [&](int axis, double at) -> double {
     if (std::fabs(d[axis]) < 1e-12) return INFINITY;
     const double t = (at - o[axis]) / d[axis];
     return t > 1e-9 ? t : INFINITY;

@@ -45,6 +45,19 @@ void insertScans(Map& map, int from, int to) {
   }
 }
 
+/// The centre of an occupied cell of `map` with x in [x0, x1) (a wall or the ground).
+Eigen::Vector3d occupiedCellIn(const Map& map, double x0, double x1) {
+  Eigen::Vector3d found = Eigen::Vector3d::Constant(NAN);
+  map.forEachBlock([&](const BlockKey& k, const Block& b) {
+    for (int c = 0; c < kCellsPerBlock && !found.allFinite(); ++c) {
+      const Eigen::Vector3d p = map.centerOf(voxelKeyOf(k, c));
+      if (p.x() >= x0 && p.x() < x1 && map.state(b.cells[c]) == CellState::kOccupied) found = p;
+    }
+  });
+  EXPECT_TRUE(found.allFinite()) << "no occupied cell with x in [" << x0 << ", " << x1 << ")";
+  return found;
+}
+
 class Paging : public ::testing::TestWithParam<PageStoreKind> {
  protected:
   std::string storePath(const std::string& dir) const {
@@ -97,7 +110,7 @@ TEST_P(Paging, QueriesAndEditsPageInWhatTheyReach) {
   const Map reference = inMemory(kScans / 2);
 
   // A wall cell near the start: a const reader sees only resident blocks, the map pages it in.
-  const Eigen::Vector3d wall(0.45, 3.95, 1.05);
+  const Eigen::Vector3d wall = occupiedCellIn(reference, 0.0, 2.0);
   ASSERT_EQ(reference.query(wall), CellState::kOccupied);
   const Map& as_const = paged;
   EXPECT_EQ(as_const.query(wall), CellState::kUnknown);
@@ -109,7 +122,7 @@ TEST_P(Paging, QueriesAndEditsPageInWhatTheyReach) {
   EXPECT_TRUE(sameBlocks(paged.extract(lo, hi), reference.extract(lo, hi), &why)) << why;
 
   // ensureResident brings a box back for const readers.
-  const Eigen::Vector3d far_wall(12.5, -3.95, 0.55);
+  const Eigen::Vector3d far_wall = occupiedCellIn(reference, 12.0, 13.0);
   paged.ensureResident(far_wall, far_wall);
   EXPECT_EQ(as_const.query(far_wall), reference.query(far_wall));
   EXPECT_THROW(paged.ensureResident(hi, lo), InvalidArgument);
