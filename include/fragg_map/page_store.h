@@ -68,10 +68,10 @@ struct PagingStats {
   std::string store;             ///< "sqlite:/path/map.db"
   uint64_t resident_blocks = 0;  ///< in RAM now
   uint64_t peak_resident_blocks = 0;
-  uint64_t paged_blocks = 0;     ///< in the store only
-  uint64_t pages_written = 0;    ///< block records written (commits of dirty blocks)
-  uint64_t pages_read = 0;       ///< block records read back into RAM
-  uint64_t pages_evicted = 0;    ///< blocks dropped from RAM
+  uint64_t paged_blocks = 0;   ///< in the store only
+  uint64_t pages_written = 0;  ///< block records written (commits of dirty blocks)
+  uint64_t pages_read = 0;     ///< block records read back into RAM
+  uint64_t pages_evicted = 0;  ///< blocks dropped from RAM
   uint64_t commits = 0;
   uint64_t committed_scans = 0;  ///< scans the store holds (its last commit)
   double seconds_commit = 0;     ///< time in commits

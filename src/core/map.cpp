@@ -47,8 +47,8 @@ void rayBlockBounds(const PointCloud& cloud, const ScanRecord& how, double resol
     mx = (mx.array() + 2 * resolution_m).min((o + reach).array()).matrix();
   }
   auto blockOf = [&](const Eigen::Vector3d& p) {
-    const Eigen::Vector3d v = (p / resolution_m).array().floor().cwiseMax(-2147483648.0).cwiseMin(
-        2147483647.0);
+    const Eigen::Vector3d v =
+        (p / resolution_m).array().floor().cwiseMax(-2147483648.0).cwiseMin(2147483647.0);
     return blockKeyOf(VoxelKey{static_cast<int32_t>(v.x()), static_cast<int32_t>(v.y()),
                                static_cast<int32_t>(v.z())});
   };

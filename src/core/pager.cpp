@@ -33,7 +33,8 @@ void PagingPolicy::validate() const {
     throw InvalidArgument("paging budget must be a finite number of MB >= 0");
   if (!std::isfinite(radius_m) || radius_m < 0)
     throw InvalidArgument("paging radius must be a finite distance >= 0");
-  if (!(low_water > 0 && low_water <= 1)) throw InvalidArgument("paging low_water must be in (0, 1]");
+  if (!(low_water > 0 && low_water <= 1))
+    throw InvalidArgument("paging low_water must be in (0, 1]");
   if (!std::isfinite(commit_every_s) || commit_every_s < 0)
     throw InvalidArgument("paging commit interval must be a finite number of seconds >= 0");
 }
@@ -207,7 +208,8 @@ void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta
   std::vector<std::pair<BlockKey, const Block*>> puts;
   blocks.forEach([&](BlockIndex i) {
     const BlockMeta& m = blocks.meta(i);
-    if (all_dirty_ || m.changed_at > committed_revision_) puts.emplace_back(m.key, &blocks.block(i));
+    if (all_dirty_ || m.changed_at > committed_revision_)
+      puts.emplace_back(m.key, &blocks.block(i));
   });
   std::sort(puts.begin(), puts.end(), [](const auto& a, const auto& b) {
     return std::tie(a.first.z, a.first.y, a.first.x) < std::tie(b.first.z, b.first.y, b.first.x);
@@ -229,7 +231,8 @@ void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta
 }
 
 void Pager::evict(BlockMap& blocks, const Eigen::Vector3d& sensor_m) {
-  const size_t target = static_cast<size_t>(static_cast<double>(budgetBlocks()) * policy_.low_water);
+  const size_t target =
+      static_cast<size_t>(static_cast<double>(budgetBlocks()) * policy_.low_water);
   if (blocks.size() <= target) return;
   struct Candidate {
     uint64_t used;
@@ -247,7 +250,8 @@ void Pager::evict(BlockMap& blocks, const Eigen::Vector3d& sensor_m) {
   const size_t n = std::min(candidates.size(), blocks.size() - target);
   // Oldest first; ties by key so that the same run pages out the same blocks.
   auto older = [](const Candidate& a, const Candidate& b) {
-    return std::tie(a.used, a.key.z, a.key.y, a.key.x) < std::tie(b.used, b.key.z, b.key.y, b.key.x);
+    return std::tie(a.used, a.key.z, a.key.y, a.key.x) <
+           std::tie(b.used, b.key.z, b.key.y, b.key.x);
   };
   std::nth_element(candidates.begin(), candidates.begin() + static_cast<long>(n), candidates.end(),
                    older);

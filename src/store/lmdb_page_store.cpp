@@ -31,8 +31,7 @@ class LmdbPageStore final : public PageStore {
     try {
       check(mdb_env_set_mapsize(env_, kMapSizeBytes), "set map size");
       check(mdb_env_set_maxdbs(env_, 2), "set databases");
-      const unsigned flags =
-          MDB_NOSUBDIR | MDB_NOTLS | (read_only ? MDB_RDONLY : MDB_NOMETASYNC);
+      const unsigned flags = MDB_NOSUBDIR | MDB_NOTLS | (read_only ? MDB_RDONLY : MDB_NOMETASYNC);
       check(mdb_env_open(env_, path.c_str(), flags, 0644), "open");
       MDB_txn* txn = nullptr;
       check(mdb_txn_begin(env_, nullptr, read_only ? MDB_RDONLY : 0, &txn), "begin");

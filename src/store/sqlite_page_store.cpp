@@ -67,8 +67,9 @@ class SqlitePageStore final : public PageStore {
         exec("PRAGMA synchronous=NORMAL");
         if (app == 0) {
           exec("BEGIN IMMEDIATE");
-          exec("CREATE TABLE IF NOT EXISTS blocks(k BLOB PRIMARY KEY, v BLOB NOT NULL) "
-               "WITHOUT ROWID");
+          exec(
+              "CREATE TABLE IF NOT EXISTS blocks(k BLOB PRIMARY KEY, v BLOB NOT NULL) "
+              "WITHOUT ROWID");
           exec("CREATE TABLE IF NOT EXISTS meta(name TEXT PRIMARY KEY, v BLOB NOT NULL)");
           exec(("PRAGMA application_id=" + std::to_string(kApplicationId)).c_str());
           exec("COMMIT");
@@ -131,8 +132,8 @@ class SqlitePageStore final : public PageStore {
       while (all.step() == SQLITE_ROW) {
         const BlockKey key = blockKeyOfStoreKey(sqlite3_column_blob(all.get(), 0),
                                                 sqlite3_column_bytes(all.get(), 0), path_);
-        codec_.decode(sqlite3_column_blob(all.get(), 1), sqlite3_column_bytes(all.get(), 1),
-                      &block, path_);
+        codec_.decode(sqlite3_column_blob(all.get(), 1), sqlite3_column_bytes(all.get(), 1), &block,
+                      path_);
         fn(key, block);
       }
       std::vector<uint8_t> meta = readMetaLocked();

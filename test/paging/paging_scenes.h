@@ -44,7 +44,8 @@ inline Eigen::Isometry3d corridorPose(int i, int n) {
   const double x = i < half ? 40.0 * i / (half - 1) : 40.0 * (n - 1 - i) / (n - half - 1) + 0.37;
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(x, 0.3 * std::sin(0.4 * i), 1.2);
-  T.linear() = Eigen::AngleAxisd(0.1 * std::sin(0.3 * i), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.linear() =
+      Eigen::AngleAxisd(0.1 * std::sin(0.3 * i), Eigen::Vector3d::UnitZ()).toRotationMatrix();
   return T;
 }
 
@@ -57,8 +58,7 @@ inline PointCloud corridorScan(const Eigen::Isometry3d& T_map_sensor) {
       const double az = a * M_PI / 180.0;
       const Eigen::Vector3d d_S(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
                                 std::sin(el));
-      const double t =
-          corridorHit(T_map_sensor.translation(), T_map_sensor.linear() * d_S);
+      const double t = corridorHit(T_map_sensor.translation(), T_map_sensor.linear() * d_S);
       if (t <= 15.0) cloud.points_S.push_back((d_S * t).cast<float>());
     }
   }
@@ -80,8 +80,8 @@ inline MapParams corridorParams(Backend backend = Backend::kCpu) {
 /// ensureAllResident on a paged map first); `why` names the first difference.
 inline bool sameBlocks(const Map& a, const Map& b, std::string* why) {
   if (a.blockCount() != b.blockCount()) {
-    *why = "block counts " + std::to_string(a.blockCount()) + " vs " +
-           std::to_string(b.blockCount());
+    *why =
+        "block counts " + std::to_string(a.blockCount()) + " vs " + std::to_string(b.blockCount());
     return false;
   }
   const BlockView vb = b.blockView();

@@ -83,11 +83,25 @@ size_t checkStore(const std::string& path, Reference& ref) {
 }
 
 pid_t launchBuild(const std::string& dataset, const std::string& store, const std::string& log) {
-  std::vector<std::string> args = {FRAGG_CLI_PATH, "build",     dataset,   "--page-store",
-                                   store,          "--page-budget-mb", "2", "--page-radius",
-                                   "4",            "--commit-every", "1",  "--resolution",
-                                   "0.1",          "--max-range", "15",   "--backend",
-                                   "cpu",          "--threads",  "1"};
+  std::vector<std::string> args = {FRAGG_CLI_PATH,
+                                   "build",
+                                   dataset,
+                                   "--page-store",
+                                   store,
+                                   "--page-budget-mb",
+                                   "2",
+                                   "--page-radius",
+                                   "4",
+                                   "--commit-every",
+                                   "1",
+                                   "--resolution",
+                                   "0.1",
+                                   "--max-range",
+                                   "15",
+                                   "--backend",
+                                   "cpu",
+                                   "--threads",
+                                   "1"};
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -111,8 +125,7 @@ class StoreCrash : public ::testing::TestWithParam<PageStoreKind> {
 TEST_P(StoreCrash, KilledBuildsReopenAtTheirLastCommitAndContinue) {
   const std::string dir = testDir();
   writeKittiSequence(dir);
-  const std::string store =
-      dir + (GetParam() == PageStoreKind::kLmdb ? "/map.lmdb" : "/map.db");
+  const std::string store = dir + (GetParam() == PageStoreKind::kLmdb ? "/map.lmdb" : "/map.db");
   Reference ref(dir);
   ASSERT_EQ(ref.size(), static_cast<size_t>(kScans));
 

@@ -182,7 +182,7 @@ void runBuild(const BuildOptions& o) {
   while ((o.max_scans == 0 || skipped_resumed + ms_per_scan.size() < o.max_scans) &&
          source->next(scan)) {
     if (scan.cloud.empty()) continue;  // an empty message carries nothing to integrate
-    if (skipped_resumed < resumed) {  // in the store already
+    if (skipped_resumed < resumed) {   // in the store already
       ++skipped_resumed;
       continue;
     }
@@ -215,43 +215,42 @@ void runBuild(const BuildOptions& o) {
                  "and were dropped (widen --hfov/--vfov or use --sensor auto)\n",
                  static_cast<unsigned long long>(total.dropped_outside_frustum), o.sensor.c_str());
   if (o.json) {
-    nlohmann::json j = {{"output", where},
-                        {"input", source->describe()},
-                        {"backend", map.backendName()},
-                        {"backend_reason", map.backendReason()},
-                        {"device_bytes", mem.device_bytes},
-                        {"blocks_uploaded", total.blocks_uploaded},
-                        {"blocks_evicted", total.blocks_evicted},
-                        {"resolution_m", params.resolution_m},
-                        {"scans", ms_per_scan.size()},
-                        {"points", total.points_in},
-                        {"rays_hit", total.rays_hit},
-                        {"rays_free_only", total.rays_free_only},
-                        {"rays_no_return", total.rays_no_return},
-                        {"dropped_invalid", total.dropped_invalid},
-                        {"dropped_min_range", total.dropped_min_range},
-                        {"dropped_outside_frustum", total.dropped_outside_frustum},
-                        {"dropped_height", total.dropped_height},
-                        {"scans_skipped", source->skipped()},
-                        {"voxel_visits", total.voxel_visits},
-                        {"seconds", seconds},
-                        {"insert_seconds", total.seconds_total},
-                        {"ms_per_scan",
-                         {{"median", median},
-                          {"p99", p99},
-                          {"mean", total.seconds_total * 1e3 / inserted}}},
-                        {"known_voxels", mem.known_voxels},
-                        {"kept_scans", map.scanStore().size()},
-                        {"scan_store_bytes", mem.scan_store_bytes},
-                        {"blocks", mem.blocks},
-                        {"host_bytes", mem.host_block_bytes},
-                        {"culling",
-                         {{"blocks_tested", total.culling.blocks_tested},
-                          {"blocks_visible", total.culling.blocks_visible},
-                          {"tests_run", total.culling.tests_run},
-                          {"saved_by_plane_memory", total.culling.saved_by_plane_memory},
-                          {"saved_by_rotation", total.culling.saved_by_rotation},
-                          {"saved_by_translation", total.culling.saved_by_translation}}}};
+    nlohmann::json j = {
+        {"output", where},
+        {"input", source->describe()},
+        {"backend", map.backendName()},
+        {"backend_reason", map.backendReason()},
+        {"device_bytes", mem.device_bytes},
+        {"blocks_uploaded", total.blocks_uploaded},
+        {"blocks_evicted", total.blocks_evicted},
+        {"resolution_m", params.resolution_m},
+        {"scans", ms_per_scan.size()},
+        {"points", total.points_in},
+        {"rays_hit", total.rays_hit},
+        {"rays_free_only", total.rays_free_only},
+        {"rays_no_return", total.rays_no_return},
+        {"dropped_invalid", total.dropped_invalid},
+        {"dropped_min_range", total.dropped_min_range},
+        {"dropped_outside_frustum", total.dropped_outside_frustum},
+        {"dropped_height", total.dropped_height},
+        {"scans_skipped", source->skipped()},
+        {"voxel_visits", total.voxel_visits},
+        {"seconds", seconds},
+        {"insert_seconds", total.seconds_total},
+        {"ms_per_scan",
+         {{"median", median}, {"p99", p99}, {"mean", total.seconds_total * 1e3 / inserted}}},
+        {"known_voxels", mem.known_voxels},
+        {"kept_scans", map.scanStore().size()},
+        {"scan_store_bytes", mem.scan_store_bytes},
+        {"blocks", mem.blocks},
+        {"host_bytes", mem.host_block_bytes},
+        {"culling",
+         {{"blocks_tested", total.culling.blocks_tested},
+          {"blocks_visible", total.culling.blocks_visible},
+          {"tests_run", total.culling.tests_run},
+          {"saved_by_plane_memory", total.culling.saved_by_plane_memory},
+          {"saved_by_rotation", total.culling.saved_by_rotation},
+          {"saved_by_translation", total.culling.saved_by_translation}}}};
     if (paging.enabled)
       j["paging"] = {{"store", paging.store},
                      {"budget_mb", o.paging.budget_mb},
@@ -287,8 +286,7 @@ void runBuild(const BuildOptions& o) {
                               paging.store, paging.committed_scans, resumed,
                               paging.peak_resident_blocks, paging.resident_blocks,
                               paging.paged_blocks, paging.pages_written, paging.pages_read,
-                              paging.commits, paging.seconds_commit,
-                              paging.store_bytes / 1048576.0)
+                              paging.commits, paging.seconds_commit, paging.store_bytes / 1048576.0)
                       .c_str());
     if (map.scanStore().size() > 0)
       std::printf("%s\n",
