@@ -367,7 +367,8 @@ void addBuildCommand(CLI::App& app) {
                 "--spill-dir or are dropped");
   c->add_option("--spill-dir", o->scans.spill_dir, "Folder for kept points beyond --scan-budget");
   c->add_option("--page-store", o->page_store,
-                "Out-of-core paging: the store that holds the map (.db SQLite, .lmdb LMDB); an "
+                "Out-of-core paging: the store that holds the map (.lmdb LMDB, .db SQLite; other "
+                "names: LMDB where built, else SQLite); an "
                 "existing store is continued (its scans are the input's first scans)");
   c->add_option("--page-budget-mb", o->paging.budget_mb,
                 "Resident blocks' memory above which blocks are paged out (MB; 0 = never)")

@@ -28,11 +28,11 @@ fragg::Map loadMapFile(const std::string& path) {
   // Reading commands never insert: the CPU backend, no device set up.
   const Backend backend = Backend::kCpu;
   const std::string ext = extensionOf(path);
-  const bool store = ext == "db" || ext == "sqlite" || ext == "lmdb";
+  const bool store = ext == "db" || ext == "sqlite" || ext == "lmdb" || ext == "mdb";
   if (ext != "fgm" && ext != "bt" && ext != "ot" && !store)
     throw InvalidArgument(
         fmt::format("{}: unknown map format '{}' (expected .fgm, a page store .db / .sqlite / "
-                    ".lmdb, or .bt / .ot from OctoMap)",
+                    ".lmdb / .mdb, or .bt / .ot from OctoMap)",
                     path, ext));
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
