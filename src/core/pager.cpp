@@ -121,7 +121,14 @@ void Pager::readInto(const BlockKey& key, BlockMap& blocks) {
   bool created = false;
   const BlockIndex i = blocks.findOrCreate(key, &created, /*initialise=*/false);
   if (!created) throw IoError("paging: block paged out and resident at once (internal error)");
-  if (!store_->read(key, &blocks.block(i))) {
+  bool found = false;
+  try {
+    found = store_->read(key, &blocks.block(i));
+  } catch (...) {
+    blocks.erase(key);  // the block stays paged out; the map is as before
+    throw;
+  }
+  if (!found) {
     blocks.erase(key);
     throw IoError(store_->path() + ": block record missing from the page store");
   }

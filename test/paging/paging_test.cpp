@@ -2,6 +2,7 @@
 // to the store and back in, and ends byte-identical to the map built in memory; queries and
 // edits page in what they reach; a store is a map on its own and a build continues it.
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <memory>
 #include <string>
@@ -190,6 +191,41 @@ TEST_P(Paging, RefusesWhatItCannotPage) {
   EXPECT_THROW(openPageStore(dir + "/missing.db", true), IoError);
   writeBytes(dir + "/garbage.db", std::string(4096, 'x'));
   EXPECT_THROW(openPageStore(dir + "/garbage.db", true), IoError);
+}
+
+TEST(SqlitePageStore, ACorruptRecordIsRefusedWhenRead) {
+  const std::string dir = testDir();
+  const std::string path = dir + "/map.db";
+  {
+    Map map(corridorParams());
+    map.attachPageStore(openPageStore(path, false), smallBudget());
+    insertScans(map, 0, 2);
+  }
+  ASSERT_GT(Map::loadPageStore(*openPageStore(path, true)).blockCount(), 0u);
+  // One record's value overwritten behind the store's back (as a disk error would).
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db,
+                         "UPDATE blocks SET v = substr(v, 1, length(v) - 3) || x'000000' WHERE k "
+                         "= (SELECT k FROM blocks LIMIT 1)",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  try {
+    Map::loadPageStore(*openPageStore(path, true));
+    FAIL() << "a corrupt record was read";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("block record"), std::string::npos) << e.what();
+  }
+  // Continuing the map reads that block when a scan reaches it: refused the same way.
+  Map again = Map::openPageStore(openPageStore(path, false), corridorParams(), smallBudget());
+  const Eigen::Isometry3d T = corridorPose(0, kScans);
+  const size_t resident = again.pagingStats().resident_blocks;
+  EXPECT_THROW(again.insert(corridorScan(T), T, corridorSensor()), IoError);
+  EXPECT_EQ(again.scanCount(), 2u);
+  // The blocks read before the bad one are clean copies; the bad one stays paged out.
+  EXPECT_GE(again.pagingStats().paged_blocks, 1u);
+  EXPECT_GE(again.pagingStats().resident_blocks, resident);
 }
 
 INSTANTIATE_TEST_SUITE_P(Stores, Paging,

@@ -183,6 +183,49 @@ TEST_P(StoreCrash, KilledBuildsReopenAtTheirLastCommitAndContinue) {
   EXPECT_EQ(checkStore(store, ref), static_cast<size_t>(kScans));
 }
 
+/// Runs the CLI; returns its exit status, stdout and stderr in `out`.
+int runCli(const std::string& dir, const std::string& args, std::string* out) {
+  const std::string log = dir + "/cli.log";
+  const int rc = std::system(
+      (std::string("'") + FRAGG_CLI_PATH + "' " + args + " > '" + log + "' 2>&1").c_str());
+  *out = readBytes(log);
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+TEST(CliPaging, StoresAreReadWhereMapsAreAndBadFlagsAreRefused) {
+  const std::string dir = testDir();
+  writeKittiSequence(dir);
+  const std::string common =
+      "'" + dir + "' --resolution 0.1 --max-range 15 --backend cpu --scans 12";
+  std::string out;
+  ASSERT_EQ(runCli(dir, "build " + common + " -o '" + dir + "/mem.fgm'", &out), 0) << out;
+  ASSERT_EQ(runCli(dir,
+                   "build " + common + " --page-store '" + dir +
+                       "/s.lmdb' --page-budget-mb 1 --page-radius 3 --json",
+                   &out),
+            0)
+      << out;
+  for (const char* field : {"\"peak_resident_blocks\"", "\"pages_written\"", "\"pages_read\""})
+    EXPECT_NE(out.find(field), std::string::npos) << field << " missing in " << out;
+  // compare accepts the store as a map: every cell agrees with the in-memory build's.
+  ASSERT_EQ(runCli(dir, "compare '" + dir + "/s.lmdb' '" + dir + "/mem.fgm' --json", &out), 0)
+      << out;
+  EXPECT_NE(out.find("\"agreement_in_either\":1.0"), std::string::npos) << out;
+  ASSERT_EQ(runCli(dir, "stats '" + dir + "/s.lmdb'", &out), 0) << out;
+  EXPECT_NE(out.find("scans        12"), std::string::npos) << out;
+
+  EXPECT_EQ(runCli(dir, "build " + common + " --page-budget-mb 5 -o '" + dir + "/x.fgm'", &out), 2);
+  EXPECT_NE(out.find("--page-store"), std::string::npos) << out;
+  EXPECT_EQ(runCli(dir, "build " + common, &out), 2);
+  EXPECT_NE(out.find("-o"), std::string::npos) << out;
+  EXPECT_EQ(
+      runCli(dir, "build " + common + " --page-store '" + dir + "/t.db' --page-radius -1", &out),
+      2);
+  EXPECT_NE(out.find("radius"), std::string::npos) << out;
+  EXPECT_EQ(runCli(dir, "stats '" + dir + "/missing.db'", &out), 1);
+  EXPECT_NE(out.find("no such file"), std::string::npos) << out;
+}
+
 INSTANTIATE_TEST_SUITE_P(Stores, StoreCrash,
                          ::testing::Values(PageStoreKind::kSqlite, PageStoreKind::kLmdb),
                          [](const auto& info) {
