@@ -256,6 +256,8 @@ class Map {
   InsertStats integrateScan(const PointCloud& cloud, const ScanRecord& how, bool remove,
                             bool host_cull);
 
+  // Every member is moved by operator=(Map&&) in map.cpp (it commits the paging first): a new
+  // member goes there too.
   MapParams params_;
   OccupancyModel model_;
   std::unique_ptr<MapBackend> backend_;
