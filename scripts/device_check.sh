@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # On the GPU machine (plain CMake, no ROS): build, run the `gpu` tests, optionally under
 # compute-sanitizer, and the benchmark. Data and liboctomap come staged under .device/
-# (real/ copied from ../shared/data/real, octomap/ from ../shared/tools/stage-octomap.sh).
+# (real/ copied from ../shared/data/real, octomap/ from ../shared/tools/stage-octomap.sh, store/
+# from scripts/stage_store.sh).
 # Usage: bash scripts/device_check.sh [tests] [sanitize] [workloads LIST] [bench ARGS...]
 # (workloads go to .device/workloads; bench ARGS are fragg_map_bench's).
 # Logs go to $OUT when set (the device tool brings them back).
@@ -10,9 +11,16 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 out="${OUT:-$root/out/device}"
 mkdir -p "$out"
 build="$root/build-device"
+# The page stores (SQLite, zstd, LMDB) come staged under .device/store (scripts/stage_store.sh).
+store_args=()
+if [ -d "$root/.device/store" ]; then
+  store_args=(-DSTORE_ROOT="$root/.device/store")
+  export LD_LIBRARY_PATH="$root/.device/store/lib:${LD_LIBRARY_PATH:-}"
+fi
 cmake -S "$root" -B "$build" -DFRAGG_WITH_ROS=OFF -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_CUDA_ARCHITECTURES=90 -DFRAGG_REAL_DATA="$root/.device/real" \
-  -DOCTOMAP_ROOT="$root/.device/octomap" >"$out/cmake.log" 2>&1 || { tail -30 "$out/cmake.log"; exit 1; }
+  -DOCTOMAP_ROOT="$root/.device/octomap" "${store_args[@]}" >"$out/cmake.log" 2>&1 || { tail -30 "$out/cmake.log"; exit 1; }
+grep -E "page store|SQLite3 or zstd" "$out/cmake.log"
 cmake --build "$build" -j "$(nproc)" >"$out/build.log" 2>&1 || { grep -E "error" "$out/build.log" | head -30; exit 1; }
 echo "build ok"
 export LD_LIBRARY_PATH="$root/.device/octomap/lib:${LD_LIBRARY_PATH:-}"

@@ -29,6 +29,7 @@
 #include "fragg_map/insert_stats.h"
 #include "fragg_map/map_params.h"
 #include "fragg_map/occupancy.h"
+#include "fragg_map/page_store.h"
 #include "fragg_map/point_cloud.h"
 #include "fragg_map/scan_store.h"
 #include "fragg_map/sensor_model.h"
@@ -38,6 +39,7 @@ namespace fragg {
 
 class MapBackend;
 class Culler;
+class Pager;
 struct ScanRecord;
 
 /// What a pose correction did (Map::correctPoses).
@@ -89,9 +91,13 @@ class Map {
   CorrectionStats correctPoses(const std::map<ScanId, Eigen::Isometry3d>& T_map_sensor_new);
   const ScanStore& scanStore() const { return *scan_store_; }
 
+  /// With paging, const readers see the resident blocks only (call ensureResident first);
+  /// on a non-const map query() and findCell() page the cell's block in.
   CellState query(const Eigen::Vector3d& p_map) const;
+  CellState query(const Eigen::Vector3d& p_map);
   CellState state(const Cell& c) const { return model_.state(c); }
   const Cell* findCell(const VoxelKey& key) const;
+  const Cell* findCell(const VoxelKey& key);
   VoxelKey keyOf(const Eigen::Vector3d& p_map) const;  ///< throws if beyond the int32 range
   Eigen::Vector3d centerOf(const VoxelKey& key) const;
 
@@ -133,6 +139,9 @@ class Map {
   /// Copies of the cells whose centres lie in [min_map, max_map]; this map is unchanged.
   Map extract(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map,
               Backend backend = Backend::kCpu, SubmapStats* stats = nullptr) const;
+  /// The same, paging the box's blocks in first (a const map extracts its resident blocks).
+  Map extract(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map,
+              Backend backend = Backend::kCpu, SubmapStats* stats = nullptr);
   /// Copies of the cells whose centres are farther than radius_m from center_map (what
   /// truncateOutside moves); this map is unchanged.
   Map extractOutside(const Eigen::Vector3d& center_map, double radius_m,
@@ -175,6 +184,7 @@ class Map {
   size_t knownVoxelCount() const;
   KeyBounds bounds() const { return hostBlocks().observedBounds(); }
 
+  /// Writes the whole map, paged-out blocks included (read from the store).
   void save(const std::string& path) const;
   /// Reads a .fgm file into a new map integrating with `backend` (other settings default; the
   /// map keeps scans if the file has them).
@@ -184,8 +194,44 @@ class Map {
   /// file's kept scans are loaded only when `runtime.scans.keep`.
   static Map load(const std::string& path, const MapParams& runtime);
 
+  // Out-of-core paging (fragg_map/page_store.h; src/core/pager.cpp, map_paging.cpp). The store
+  // is the map: every block is committed to it (dirty blocks every policy.commit_every_scans
+  // scans or commit_every_s seconds, before blocks are paged out, and at close) together with
+  // the number of scans they hold; blocks beyond the budget leave RAM, least recently used
+  // first, never within policy.radius_m of the last sensor position. Insertion, removal,
+  // correction, clearBox, truncate, merge and writeCells page in what they reach first; const
+  // readers see the resident blocks (ensureResident brings a box back). Kept scans are not
+  // stored: a map that keeps scans cannot page (InvalidArgument).
+  /// Attaches a store to this map. A new (empty) store receives the whole map at once. A store
+  /// that already holds a map is continued: this map must be empty and have the same resolution
+  /// and occupancy model (InvalidArgument), and takes the store's blocks (paged out) and scan
+  /// count. IoError when the store cannot be read or written.
+  void attachPageStore(std::shared_ptr<PageStore> store, const PagingPolicy& policy);
+  /// A map continuing the one a store holds: resolution and occupancy model from the store,
+  /// everything else from `runtime`. IoError for a store that holds no map.
+  static Map openPageStore(std::shared_ptr<PageStore> store, const MapParams& runtime,
+                           const PagingPolicy& policy);
+  /// The map a store holds, read whole into RAM from one snapshot (no paging; the store is
+  /// only read, so another process may be writing it). Every record is checked (IoError).
+  static Map loadPageStore(PageStore& store, const MapParams& runtime = MapParams());
+  /// Brings every paged-out block whose cells may lie in the box back into RAM.
+  void ensureResident(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map);
+  void ensureAllResident();
+  /// Commits the dirty blocks and the scan count now.
+  void commitPages();
+  bool paging() const { return pager_ != nullptr; }
+  PagingStats pagingStats() const;
+
  private:
   static Map loadFile(const std::string& path, const MapParams& runtime, bool keep_as_file);
+  /// Paging: brings the paged-out blocks of [lo, hi] back (the backend's cache over them
+  /// invalidated first) and marks the box as used now.
+  void pageInBlocks(const BlockKey& lo, const BlockKey& hi);
+  void pageInAllBlocks();
+  /// Paging after a scan (or removal): commits when due or over budget, then pages out.
+  void pageAfterScan(const Eigen::Vector3d& sensor_map);
+  /// Commits (at close and before a move-assignment); errors are logged, not thrown.
+  void closePaging() noexcept;
   void fallBackToCpu(const std::string& why);
   /// The host map, complete (the backend's cache written back first; serialised).
   const BlockMap& hostBlocks() const;
@@ -214,6 +260,8 @@ class Map {
   InsertStats integrateScan(const PointCloud& cloud, const ScanRecord& how, bool remove,
                             bool host_cull);
 
+  // Every member is moved by operator=(Map&&) in map.cpp (it commits the paging first): a new
+  // member goes there too.
   MapParams params_;
   OccupancyModel model_;
   std::unique_ptr<MapBackend> backend_;
@@ -228,6 +276,7 @@ class Map {
   ScanId next_scan_id_ = 0;
   std::unique_ptr<ScanStore> scan_store_;
   SubmapRegion region_;
+  std::unique_ptr<Pager> pager_;
 };
 
 }  // namespace fragg

@@ -11,6 +11,7 @@
 #include "fragg_map/internal/culler.h"
 #include "fragg_map/internal/frustum_builder.h"
 #include "fragg_map/internal/height_filter.h"
+#include "fragg_map/internal/pager.h"
 #include "fragg_map/internal/rigid_pose.h"
 #include "fragg_map/log.h"
 
@@ -23,6 +24,37 @@ const MapParams& validated(const MapParams& p) {
 }
 
 void validatePose(const Eigen::Isometry3d& T) { requireRigidPose(T, "sensor pose", 1e-4); }
+
+/// Blocks the scan's rays can reach: its points and sensor, within its max range of the sensor
+/// (the whole range ball with no-return rays), widened by two cells.
+void rayBlockBounds(const PointCloud& cloud, const ScanRecord& how, double resolution_m,
+                    BlockKey* lo, BlockKey* hi) {
+  const Eigen::Vector3d o = how.T_map_sensor.translation();
+  const Eigen::Vector3d reach = Eigen::Vector3d::Constant(how.model.max_range_m + 2 * resolution_m);
+  Eigen::Vector3d mn = o, mx = o;
+  if (how.clear_no_return_rays && cloud.organised()) {
+    mn = o - reach;
+    mx = o + reach;
+  } else {
+    const Eigen::Matrix3d R = how.T_map_sensor.linear();
+    for (const Eigen::Vector3f& p : cloud.points_S) {
+      if (!p.allFinite()) continue;
+      const Eigen::Vector3d q = R * p.cast<double>() + o;
+      mn = mn.cwiseMin(q);
+      mx = mx.cwiseMax(q);
+    }
+    mn = (mn.array() - 2 * resolution_m).max((o - reach).array()).matrix();
+    mx = (mx.array() + 2 * resolution_m).min((o + reach).array()).matrix();
+  }
+  auto blockOf = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d v =
+        (p / resolution_m).array().floor().cwiseMax(-2147483648.0).cwiseMin(2147483647.0);
+    return blockKeyOf(VoxelKey{static_cast<int32_t>(v.x()), static_cast<int32_t>(v.y()),
+                               static_cast<int32_t>(v.z())});
+  };
+  *lo = blockOf(mn);
+  *hi = blockOf(mx);
+}
 
 double farthestPoint(const PointCloud& cloud) {
   double r2 = 0.0;
@@ -43,9 +75,25 @@ Map::Map(const MapParams& params)
   scan_store_ = std::make_unique<ScanStore>(params_.scans);
 }
 
-Map::~Map() = default;
+Map::~Map() { closePaging(); }
 Map::Map(Map&&) noexcept = default;
-Map& Map::operator=(Map&&) noexcept = default;
+Map& Map::operator=(Map&& other) noexcept {
+  if (this != &other) closePaging();  // this map's store gets its last commit
+  params_ = std::move(other.params_);
+  model_ = std::move(other.model_);
+  backend_ = std::move(other.backend_);
+  backend_reason_ = std::move(other.backend_reason_);
+  blocks_ = std::move(other.blocks_);
+  sync_mutex_ = std::move(other.sync_mutex_);
+  culler_ = std::move(other.culler_);
+  revision_ = other.revision_;
+  scans_ = other.scans_;
+  next_scan_id_ = other.next_scan_id_;
+  scan_store_ = std::move(other.scan_store_);
+  region_ = std::move(other.region_);
+  pager_ = std::move(other.pager_);
+  return *this;
+}
 
 InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                         const SensorModel& sensor, int64_t stamp_ns,
@@ -100,6 +148,7 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
     stats.dropped_invalid -= std::min<uint64_t>(stats.dropped_invalid, dropped_height);
   else
     stats.points_in += dropped_height;
+  if (pager_) pageAfterScan(T_map_sensor.translation());
   stats.seconds_total =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;
@@ -112,6 +161,12 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   params.raycast = how.raycast;
   params.clear_no_return_rays = how.clear_no_return_rays;
   InsertStats stats;
+  if (pager_) {
+    // Every block the rays can reach is resident before the backend runs.
+    BlockKey lo, hi;
+    rayBlockBounds(cloud, how, params_.resolution_m, &lo, &hi);
+    pageInBlocks(lo, hi);
+  }
   const Frustum frustum = buildFrustum(how.model, how.T_map_sensor, params_.resolution_m);
   CullContext cull;
   if (backend_->cullsOnItsOwn()) {
@@ -189,6 +244,7 @@ InsertStats Map::remove(ScanId id) {
   InsertStats stats = integrateScan(cloud, how, /*remove=*/true, /*host_cull=*/false);
   scan_store_->erase(id);
   if (scans_ > 0) --scans_;
+  if (pager_) pageAfterScan(how.T_map_sensor.translation());
   stats.scan_id = id;
   stats.sensor = how.model;
   stats.seconds_total =
@@ -252,6 +308,16 @@ CellState Map::query(const Eigen::Vector3d& p_map) const {
 
 const Cell* Map::findCell(const VoxelKey& key) const { return hostBlocks().findCell(key); }
 
+CellState Map::query(const Eigen::Vector3d& p_map) {
+  const Cell* c = findCell(keyOf(p_map));
+  return c ? model_.state(*c) : CellState::kUnknown;
+}
+
+const Cell* Map::findCell(const VoxelKey& key) {
+  if (pager_) pageInBlocks(blockKeyOf(key), blockKeyOf(key));
+  return hostBlocks().findCell(key);
+}
+
 void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map) {
   if (!min_map.allFinite() || !max_map.allFinite())
     throw InvalidArgument("clear box corners must be finite");
@@ -259,6 +325,7 @@ void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_ma
     throw InvalidArgument("clear box min corner must not exceed the max corner");
   const VoxelKey lo = keyOf(min_map), hi = keyOf(max_map);
   const BlockKey blo = blockKeyOf(lo), bhi = blockKeyOf(hi);
+  pageInBlocks(blo, bhi);
   backend_->cache().invalidate(blo, bhi, blocks_);
   markScansTouching(min_map, max_map);
   std::vector<BlockIndex> hit;
@@ -291,6 +358,7 @@ uint64_t Map::clearCellsWhere(const std::vector<BlockIndex>& blocks,
       if (any_cleared) blocks_.meta(i).changed_at = blocks_.meta(i).occupied_at = revision_;
     } else {
       blocks_.erase(key);
+      if (pager_) pager_->noteErased(key);
       if (blocks_erased) ++*blocks_erased;
     }
   }
@@ -299,6 +367,7 @@ uint64_t Map::clearCellsWhere(const std::vector<BlockIndex>& blocks,
 
 void Map::writeCells(const std::function<void(CellWriter&)>& edit) {
   for (ScanId id : scan_store_->ids()) scan_store_->markUnremovable(id);
+  pageInAllBlocks();  // the edit may write anywhere
   backend_->cache().invalidateAll(blocks_);
   ++revision_;
   CellWriter writer(blocks_, model_, revision_);
@@ -307,6 +376,7 @@ void Map::writeCells(const std::function<void(CellWriter&)>& edit) {
 
 void Map::reset() {
   backend_->cache().invalidateAll(blocks_);
+  if (pager_) pager_->forgetAll(blocks_);
   blocks_.clear();
   culler_->reset();
   scan_store_->clear();

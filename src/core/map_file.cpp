@@ -11,6 +11,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/backend.h"
 #include "fragg_map/internal/byte_io.h"
+#include "fragg_map/internal/pager.h"
 #include "fragg_map/internal/scan_codec.h"
 #include "fragg_map/map.h"
 #include "fragg_map/map_file_format.h"
@@ -66,14 +67,19 @@ SubmapRegion readRegion(ByteReader& r) {
 void Map::save(const std::string& path) const {
   hostBlocks();  // the backend's cache written back
   const OccupancyParams& occ = params_.occupancy;
-  std::vector<BlockIndex> order;
-  order.reserve(blocks_.size());
-  blocks_.forEach([&](BlockIndex i) { order.push_back(i); });
-  auto keyLess = [this](BlockIndex a, BlockIndex b) {
-    const BlockKey &ka = blocks_.meta(a).key, &kb = blocks_.meta(b).key;
-    return std::tie(ka.z, ka.y, ka.x) < std::tie(kb.z, kb.y, kb.x);
+  // Resident blocks, and with paging the blocks that are in the store only (kNoBlock).
+  struct Entry {
+    BlockKey key;
+    BlockIndex index;
   };
-  std::sort(order.begin(), order.end(), keyLess);
+  std::vector<Entry> order;
+  order.reserve(blocks_.size());
+  blocks_.forEach([&](BlockIndex i) { order.push_back({blocks_.meta(i).key, i}); });
+  if (pager_)
+    for (const BlockKey& k : pager_->pagedOutKeys()) order.push_back({k, kNoBlock});
+  std::sort(order.begin(), order.end(), [](const Entry& a, const Entry& b) {
+    return std::tie(a.key.z, a.key.y, a.key.x) < std::tie(b.key.z, b.key.y, b.key.x);
+  });
 
   ByteWriter w;
   w.put(kMapFileMagic, sizeof(kMapFileMagic));
@@ -90,14 +96,21 @@ void Map::save(const std::string& path) const {
   w.put(static_cast<uint64_t>(order.size()));
   w.put(static_cast<uint64_t>(scans_));
   std::vector<uint8_t> packed(compressBound(kBlockBytes));
-  for (BlockIndex i : order) {
-    const BlockKey& k = blocks_.meta(i).key;
+  Block paged;
+  for (const Entry& e : order) {
+    const BlockKey& k = e.key;
+    const Block* block = &paged;
+    if (e.index != kNoBlock)
+      block = &blocks_.block(e.index);
+    else if (!pager_->store().read(k, &paged))
+      throw IoError("cannot write " + path + ": a paged-out block is missing from " +
+                    pager_->store().path());
     w.put(k.x);
     w.put(k.y);
     w.put(k.z);
     uLongf packed_size = packed.size();
-    if (compress2(packed.data(), &packed_size, reinterpret_cast<const Bytef*>(&blocks_.block(i)),
-                  kBlockBytes, 1) != Z_OK)
+    if (compress2(packed.data(), &packed_size, reinterpret_cast<const Bytef*>(block), kBlockBytes,
+                  1) != Z_OK)
       throw IoError("cannot write " + path + ": compression failed");
     w.put(static_cast<uint32_t>(packed_size));
     w.put(packed.data(), packed_size);

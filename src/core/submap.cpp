@@ -109,6 +109,12 @@ Map Map::copyRegion(const SubmapRegion& region, Backend backend, SubmapStats* st
 Map Map::moveOut(const SubmapRegion& region, Backend backend, SubmapStats* stats) {
   const auto t0 = Clock::now();
   region.validate();
+  // Paged-out blocks of the region come back first.
+  if (region.kind == SubmapRegion::Kind::kBox)
+    pageInBlocks(blockKeyOf(clampedKeyOf(region.min_map, params_.resolution_m)),
+                 blockKeyOf(clampedKeyOf(region.max_map, params_.resolution_m)));
+  else
+    pageInAllBlocks();
   // The device copies of the region go back to the host (and are dropped) before reading.
   if (region.kind == SubmapRegion::Kind::kBox)
     backend_->cache().invalidate(blockKeyOf(clampedKeyOf(region.min_map, params_.resolution_m)),
@@ -221,6 +227,7 @@ SubmapStats Map::merge(const Map& sub, MergeMode mode,
                     static_cast<int32_t>(box.lo[2])};
   const VoxelKey hi{static_cast<int32_t>(box.hi[0]), static_cast<int32_t>(box.hi[1]),
                     static_cast<int32_t>(box.hi[2])};
+  pageInBlocks(blockKeyOf(lo), blockKeyOf(hi));
   backend_->cache().invalidate(blockKeyOf(lo), blockKeyOf(hi), blocks_);
   markScansTouching(Eigen::Vector3d(lo.x, lo.y, lo.z) * res,
                     (Eigen::Vector3d(hi.x, hi.y, hi.z).array() + 1.0).matrix() * res);

@@ -16,3 +16,12 @@ if(FRAGG_HAVE_CUDA)
     LABELS gpu)
   target_include_directories(fragg_gpu_cache_test PRIVATE ${PROJECT_SOURCE_DIR}/cuda)
 endif()
+
+# Out-of-core paging on the CUDA backend (needs the page stores: SQLite + zstd, staged on the
+# GPU machine under .device/store by ../shared/tools/stage-store.sh).
+if(TARGET fragg_map_store)
+  fragg_add_test(fragg_gpu_paging_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/paging_gpu_test.cpp
+    LIBS fragg_map_store
+    LABELS gpu paging)
+endif()

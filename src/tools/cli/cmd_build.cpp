@@ -20,6 +20,9 @@
 #ifdef FRAGG_HAVE_ROSBAG
 #include "fragg_map/io/rosbag_source.h"
 #endif
+#ifdef FRAGG_HAVE_PAGE_STORE
+#include "fragg_map/store/page_stores.h"
+#endif
 
 namespace fragg::cli {
 
@@ -44,6 +47,8 @@ struct BuildOptions {
   ScanStoreParams scans;
   double scan_budget_mib = 0.0;
   HeightFilterParams height_filter;
+  std::string page_store;  ///< out-of-core paging: the store is the map
+  PagingPolicy paging;
 };
 
 // The core's fields (as its validate() messages name them) -> the flags that set them.
@@ -126,9 +131,16 @@ void runBuild(const BuildOptions& o) {
   params.scans.max_bytes = static_cast<size_t>(o.scan_budget_mib * 1048576.0);
   if (!o.scans.keep && (o.scan_budget_mib > 0.0 || !o.scans.spill_dir.empty()))
     throw InvalidArgument("--scan-budget and --spill-dir need --keep-scans");
-  if (o.output.size() < 5 || o.output.substr(o.output.size() - 4) != ".fgm")
-    throw InvalidArgument("output must be a .fgm file, got '" + o.output + "'");
-  { AtomicFile probe(o.output); }  // fail now, not after the build, if it cannot be written
+  if (o.output.empty() && o.page_store.empty())
+    throw InvalidArgument("give an output map (-o MAP.fgm), a page store (--page-store), or both");
+  if (!o.output.empty()) {
+    if (o.output.size() < 5 || o.output.substr(o.output.size() - 4) != ".fgm")
+      throw InvalidArgument("output must be a .fgm file, got '" + o.output + "'");
+    AtomicFile probe(o.output);  // fail now, not after the build, if it cannot be written
+  }
+  if (o.page_store.empty() && (o.paging.budget_mb > 0 || o.paging.radius_m > 0))
+    throw InvalidArgument("--page-budget-mb and --page-radius need --page-store");
+  o.paging.validate();
 
 #ifdef FRAGG_HAVE_ROSBAG
   registerRosbagReader();
@@ -137,15 +149,43 @@ void runBuild(const BuildOptions& o) {
   dataset_options.topic = o.topic;
   dataset_options.frame = o.frame;
   auto source = openDataset(o.input, dataset_options);
-  Map map(params);
+  // With a page store that holds a map already, the build continues it: the store's scans are
+  // the input's first scans, the rest are integrated.
+  size_t resumed = 0;
+  Map map = [&] {
+    if (o.page_store.empty()) return Map(params);
+#ifdef FRAGG_HAVE_PAGE_STORE
+    if (params.scans.keep) throw InvalidArgument("--page-store cannot be used with --keep-scans");
+    auto store = openPageStore(o.page_store, /*read_only=*/false);
+    if (!store->readMeta().empty()) {
+      Map m = Map::openPageStore(store, params, o.paging);
+      if (m.resolution() != params.resolution_m)
+        std::fprintf(stderr, "fragg_map: note: continuing %s at its resolution %g m\n",
+                     o.page_store.c_str(), m.resolution());
+      resumed = m.scanCount();
+      return m;
+    }
+    Map m(params);
+    m.attachPageStore(store, o.paging);
+    return m;
+#else
+    throw InvalidArgument("--page-store: this fragg_map was built without SQLite (no page store)");
+#endif
+  }();
 
   Progress progress(source->size());
   InsertStats total;
   std::vector<double> ms_per_scan;
   Scan scan;
+  size_t skipped_resumed = 0;
   const auto t0 = std::chrono::steady_clock::now();
-  while ((o.max_scans == 0 || ms_per_scan.size() < o.max_scans) && source->next(scan)) {
+  while ((o.max_scans == 0 || skipped_resumed + ms_per_scan.size() < o.max_scans) &&
+         source->next(scan)) {
     if (scan.cloud.empty()) continue;  // an empty message carries nothing to integrate
+    if (skipped_resumed < resumed) {   // in the store already
+      ++skipped_resumed;
+      continue;
+    }
     const InsertStats s = map.insert(scan.cloud, scan.T_map_sensor, sensor, scan.stamp_ns);
     total.add(s);
     ms_per_scan.push_back(s.seconds_total * 1e3);
@@ -154,8 +194,15 @@ void runBuild(const BuildOptions& o) {
   progress.finish();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (ms_per_scan.empty()) throw IoError(o.input + ": no scans with points found");
-  map.save(o.output);
+  if (ms_per_scan.empty() && resumed == 0) throw IoError(o.input + ": no scans with points found");
+  if (resumed > skipped_resumed)
+    throw IoError(fmt::format("{} holds {} scans but {} has only {}", o.page_store, resumed,
+                              o.input, skipped_resumed));
+  map.commitPages();
+  if (!o.output.empty()) map.save(o.output);
+  const PagingStats paging = map.pagingStats();
+  const std::string where = o.output.empty() ? o.page_store : o.output;
+  const size_t inserted = std::max<size_t>(1, ms_per_scan.size());
 
   const MemoryStats mem = map.memory();
   const double median = percentile(ms_per_scan, 0.5), p99 = percentile(ms_per_scan, 0.99);
@@ -168,43 +215,58 @@ void runBuild(const BuildOptions& o) {
                  "and were dropped (widen --hfov/--vfov or use --sensor auto)\n",
                  static_cast<unsigned long long>(total.dropped_outside_frustum), o.sensor.c_str());
   if (o.json) {
-    nlohmann::json j = {{"output", o.output},
-                        {"input", source->describe()},
-                        {"backend", map.backendName()},
-                        {"backend_reason", map.backendReason()},
-                        {"device_bytes", mem.device_bytes},
-                        {"blocks_uploaded", total.blocks_uploaded},
-                        {"blocks_evicted", total.blocks_evicted},
-                        {"resolution_m", params.resolution_m},
-                        {"scans", ms_per_scan.size()},
-                        {"points", total.points_in},
-                        {"rays_hit", total.rays_hit},
-                        {"rays_free_only", total.rays_free_only},
-                        {"rays_no_return", total.rays_no_return},
-                        {"dropped_invalid", total.dropped_invalid},
-                        {"dropped_min_range", total.dropped_min_range},
-                        {"dropped_outside_frustum", total.dropped_outside_frustum},
-                        {"dropped_height", total.dropped_height},
-                        {"scans_skipped", source->skipped()},
-                        {"voxel_visits", total.voxel_visits},
-                        {"seconds", seconds},
-                        {"insert_seconds", total.seconds_total},
-                        {"ms_per_scan",
-                         {{"median", median},
-                          {"p99", p99},
-                          {"mean", total.seconds_total * 1e3 / ms_per_scan.size()}}},
-                        {"known_voxels", mem.known_voxels},
-                        {"kept_scans", map.scanStore().size()},
-                        {"scan_store_bytes", mem.scan_store_bytes},
-                        {"blocks", mem.blocks},
-                        {"host_bytes", mem.host_block_bytes},
-                        {"culling",
-                         {{"blocks_tested", total.culling.blocks_tested},
-                          {"blocks_visible", total.culling.blocks_visible},
-                          {"tests_run", total.culling.tests_run},
-                          {"saved_by_plane_memory", total.culling.saved_by_plane_memory},
-                          {"saved_by_rotation", total.culling.saved_by_rotation},
-                          {"saved_by_translation", total.culling.saved_by_translation}}}};
+    nlohmann::json j = {
+        {"output", where},
+        {"input", source->describe()},
+        {"backend", map.backendName()},
+        {"backend_reason", map.backendReason()},
+        {"device_bytes", mem.device_bytes},
+        {"blocks_uploaded", total.blocks_uploaded},
+        {"blocks_evicted", total.blocks_evicted},
+        {"resolution_m", params.resolution_m},
+        {"scans", ms_per_scan.size()},
+        {"points", total.points_in},
+        {"rays_hit", total.rays_hit},
+        {"rays_free_only", total.rays_free_only},
+        {"rays_no_return", total.rays_no_return},
+        {"dropped_invalid", total.dropped_invalid},
+        {"dropped_min_range", total.dropped_min_range},
+        {"dropped_outside_frustum", total.dropped_outside_frustum},
+        {"dropped_height", total.dropped_height},
+        {"scans_skipped", source->skipped()},
+        {"voxel_visits", total.voxel_visits},
+        {"seconds", seconds},
+        {"insert_seconds", total.seconds_total},
+        {"ms_per_scan",
+         {{"median", median}, {"p99", p99}, {"mean", total.seconds_total * 1e3 / inserted}}},
+        {"known_voxels", mem.known_voxels},
+        {"kept_scans", map.scanStore().size()},
+        {"scan_store_bytes", mem.scan_store_bytes},
+        {"blocks", mem.blocks},
+        {"host_bytes", mem.host_block_bytes},
+        {"culling",
+         {{"blocks_tested", total.culling.blocks_tested},
+          {"blocks_visible", total.culling.blocks_visible},
+          {"tests_run", total.culling.tests_run},
+          {"saved_by_plane_memory", total.culling.saved_by_plane_memory},
+          {"saved_by_rotation", total.culling.saved_by_rotation},
+          {"saved_by_translation", total.culling.saved_by_translation}}}};
+    if (paging.enabled)
+      j["paging"] = {{"store", paging.store},
+                     {"budget_mb", o.paging.budget_mb},
+                     {"radius_m", o.paging.radius_m},
+                     {"resumed_scans", resumed},
+                     {"committed_scans", paging.committed_scans},
+                     {"peak_resident_blocks", paging.peak_resident_blocks},
+                     {"resident_blocks", paging.resident_blocks},
+                     {"paged_blocks", paging.paged_blocks},
+                     {"pages_written", paging.pages_written},
+                     {"pages_read", paging.pages_read},
+                     {"pages_evicted", paging.pages_evicted},
+                     {"commits", paging.commits},
+                     {"seconds_commit", paging.seconds_commit},
+                     {"seconds_page_in", paging.seconds_page_in},
+                     {"store_bytes", paging.store_bytes}};
     std::printf("%s\n", j.dump().c_str());
   } else {
     std::printf(
@@ -212,10 +274,20 @@ void runBuild(const BuildOptions& o) {
         fmt::format("built {}: {} scans, {} points, {:.2f} s, {:.1f} ms/scan (median "
                     "{:.1f}, p99 {:.1f}), {} known voxels, {:.1f} MiB host memory, "
                     "backend {} ({})",
-                    o.output, ms_per_scan.size(), total.points_in, seconds,
-                    total.seconds_total * 1e3 / ms_per_scan.size(), median, p99, mem.known_voxels,
+                    where, ms_per_scan.size(), total.points_in, seconds,
+                    total.seconds_total * 1e3 / inserted, median, p99, mem.known_voxels,
                     mem.host_block_bytes / 1048576.0, map.backendName(), map.backendReason())
             .c_str());
+    if (paging.enabled)
+      std::printf("%s\n",
+                  fmt::format("paging to {}: {} scans held ({} resumed), peak {} resident "
+                              "blocks, {} now resident, {} paged out, {} pages written, {} read, "
+                              "{} commits ({:.2f} s), store {:.1f} MiB",
+                              paging.store, paging.committed_scans, resumed,
+                              paging.peak_resident_blocks, paging.resident_blocks,
+                              paging.paged_blocks, paging.pages_written, paging.pages_read,
+                              paging.commits, paging.seconds_commit, paging.store_bytes / 1048576.0)
+                      .c_str());
     if (map.scanStore().size() > 0)
       std::printf("%s\n",
                   fmt::format("kept {} scans for `fragg_map correct` ({:.1f} MiB of points "
@@ -233,7 +305,8 @@ void addBuildCommand(CLI::App& app) {
                                    "Build a map from a dataset (bag, KITTI, graph, PCD "
                                    "folder + TUM poses, depth images, point file)");
   c->add_option("input", o->input, "Dataset to read")->required();
-  c->add_option("-o,--output", o->output, "Map file to write (.fgm)")->required();
+  c->add_option("-o,--output", o->output,
+                "Map file to write (.fgm; optional with --page-store, which is the map)");
   c->add_option("--resolution", o->resolution_m, "Voxel edge in metres")->capture_default_str();
   c->add_option("--max-range", o->max_range_m,
                 "Max range in metres; farther points clear free space up to it (<= 0: none)");
@@ -293,6 +366,22 @@ void addBuildCommand(CLI::App& app) {
                 "Kept points held in memory at most, MiB (0 = no limit); older scans go to "
                 "--spill-dir or are dropped");
   c->add_option("--spill-dir", o->scans.spill_dir, "Folder for kept points beyond --scan-budget");
+  c->add_option("--page-store", o->page_store,
+                "Out-of-core paging: the store that holds the map (.lmdb LMDB, .db SQLite; other "
+                "names: LMDB where built, else SQLite); an "
+                "existing store is continued (its scans are the input's first scans)");
+  c->add_option("--page-budget-mb", o->paging.budget_mb,
+                "Resident blocks' memory above which blocks are paged out (MB; 0 = never)")
+      ->capture_default_str();
+  c->add_option("--page-radius", o->paging.radius_m,
+                "Blocks within this distance of the sensor stay in memory (m)")
+      ->capture_default_str();
+  c->add_option("--commit-every", o->paging.commit_every_scans,
+                "Page store: commit the changed blocks every N scans (0 = by time only)")
+      ->capture_default_str();
+  c->add_option("--commit-seconds", o->paging.commit_every_s,
+                "Page store: commit at least this often (s; 0 = by scans only)")
+      ->capture_default_str();
   c->add_flag("--json", o->json, "Print one JSON object on stdout");
   c->callback([o] { runBuild(*o); });
 }

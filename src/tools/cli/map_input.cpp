@@ -10,6 +10,9 @@
 #ifdef FRAGG_HAVE_OCTOMAP
 #include "fragg_map/interop/octomap_io.h"
 #endif
+#ifdef FRAGG_HAVE_PAGE_STORE
+#include "fragg_map/store/page_stores.h"
+#endif
 
 namespace fragg::cli {
 
@@ -25,15 +28,29 @@ fragg::Map loadMapFile(const std::string& path) {
   // Reading commands never insert: the CPU backend, no device set up.
   const Backend backend = Backend::kCpu;
   const std::string ext = extensionOf(path);
-  if (ext != "fgm" && ext != "bt" && ext != "ot")
-    throw InvalidArgument(fmt::format(
-        "{}: unknown map format '{}' (expected .fgm, or .bt / .ot from OctoMap)", path, ext));
+  const bool store = ext == "db" || ext == "sqlite" || ext == "lmdb" || ext == "mdb";
+  if (ext != "fgm" && ext != "bt" && ext != "ot" && !store)
+    throw InvalidArgument(
+        fmt::format("{}: unknown map format '{}' (expected .fgm, a page store .db / .sqlite / "
+                    ".lmdb / .mdb, or .bt / .ot from OctoMap)",
+                    path, ext));
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
     throw IoError(fmt::format("cannot read {}: no such file", path));
   if (std::filesystem::is_directory(path, ec))
     throw IoError(fmt::format("cannot read {}: is a directory", path));
   if (ext == "fgm") return fragg::Map::load(path, backend);
+  if (store) {
+#ifdef FRAGG_HAVE_PAGE_STORE
+    // Read-only, one snapshot: a build may be writing the store meanwhile.
+    MapParams runtime;
+    runtime.backend = backend;
+    return fragg::Map::loadPageStore(*openPageStore(path, /*read_only=*/true), runtime);
+#else
+    throw IoError(fmt::format(
+        "cannot read {}: this fragg_map was built without SQLite (no page store)", path));
+#endif
+  }
 #ifdef FRAGG_HAVE_OCTOMAP
   return fragg::importOctomap(path, backend);
 #else

@@ -1,0 +1,102 @@
+// The map's side of out-of-core paging (Map::attachPageStore): which blocks are in the store
+// only, which resident blocks were used least recently, and the commits that keep the store
+// equal to the map. The Map calls it around every edit; no block is created over a key that
+// is paged out (the Map pages it in first).
+#pragma once
+
+#include <Eigen/Core>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "fragg_map/block_map.h"
+#include "fragg_map/map_params.h"
+#include "fragg_map/page_store.h"
+
+namespace fragg {
+
+/// The metadata record of a store: what makes it a map on its own.
+struct StoreMapMeta {
+  double resolution_m = 0;
+  OccupancyParams occupancy;
+  uint64_t scans = 0;  ///< scans integrated into the committed blocks
+};
+std::vector<uint8_t> encodeStoreMeta(const StoreMapMeta& meta);
+/// IoError naming `where` when the record is not a fragg_map store's metadata.
+StoreMapMeta decodeStoreMeta(const std::vector<uint8_t>& bytes, const std::string& where);
+
+class Pager {
+ public:
+  /// Every committed block of `store` starts paged out.
+  Pager(std::shared_ptr<PageStore> store, const PagingPolicy& policy, double resolution_m);
+
+  PageStore& store() { return *store_; }
+  const PagingPolicy& policy() const { return policy_; }
+
+  /// Whether a block of [lo, hi] is paged out (no store access).
+  bool anyPagedOut(const BlockKey& lo, const BlockKey& hi) const;
+  bool isPagedOut(const BlockKey& key) const { return paged_out_.count(key) != 0; }
+  size_t pagedOutCount() const { return paged_out_.size(); }
+  std::vector<BlockKey> pagedOutKeys() const { return {paged_out_.begin(), paged_out_.end()}; }
+  /// Reads the paged-out blocks of [lo, hi] back into `blocks` (clean: stamped 0). Returns
+  /// their keys' bounding box through lo_read/hi_read; returns the count.
+  size_t pageIn(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks);
+  /// Every paged-out block.
+  size_t pageInAll(BlockMap& blocks);
+  /// Blocks of [lo, hi] were used at `stamp` (a scan number): they are paged out last.
+  void touch(const BlockKey& lo, const BlockKey& hi, uint64_t stamp);
+  /// A resident block was erased (all its cells unknown): its record goes at the next commit.
+  void noteErased(const BlockKey& key) { erased_.push_back(key); }
+  /// The map was reset: every record goes at the next commit, nothing is paged out.
+  void forgetAll(const BlockMap& blocks);
+  /// Commit every dirty block (changed after the last commit's revision), not just those.
+  void markAllDirty() { all_dirty_ = true; }
+  /// The store's last commit holds `scans` scans and equals the map at `revision`.
+  void setCommitted(uint64_t scans, uint64_t revision) {
+    committed_scans_ = counters_.committed_scans = scans;
+    committed_revision_ = revision;
+  }
+
+  bool commitDue(uint64_t scans) const;
+  bool overBudget(const BlockMap& blocks) const;
+  /// Writes the dirty resident blocks, the erasures and `meta` in one transaction; `revision`
+  /// is the map's revision now (blocks changed after it are dirty next time).
+  void commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta& meta);
+  /// After a commit (every resident block clean): drops least recently used blocks farther than
+  /// the radius from `sensor_m` until the resident blocks fit the low-water mark.
+  void evict(BlockMap& blocks, const Eigen::Vector3d& sensor_m);
+
+  PagingStats stats(const BlockMap& blocks) const;
+  /// Resident block count after an edit (for the peak).
+  void noteResident(size_t resident);
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  static BlockKey superOf(const BlockKey& b) {
+    return {b.x >> kBlockBits, b.y >> kBlockBits, b.z >> kBlockBits};
+  }
+  void addPagedOut(const BlockKey& key);
+  void removePagedOut(const BlockKey& key);
+  void readInto(const BlockKey& key, BlockMap& blocks);
+  size_t budgetBlocks() const;
+
+  std::shared_ptr<PageStore> store_;
+  PagingPolicy policy_;
+  double block_m_;
+  std::unordered_set<BlockKey, BlockKeyHash> paged_out_;
+  /// paged_out_ by 8x8x8-block region, so that a box costs its regions, not its blocks.
+  std::unordered_map<BlockKey, std::vector<BlockKey>, BlockKeyHash> paged_super_;
+  /// Last use (scan number) by 8x8x8-block region.
+  std::unordered_map<BlockKey, uint64_t, BlockKeyHash> last_used_;
+  std::vector<BlockKey> erased_;
+  bool all_dirty_ = false;
+  uint64_t committed_revision_ = 0;
+  uint64_t committed_scans_ = 0;
+  Clock::time_point last_commit_ = Clock::now();
+  PagingStats counters_;
+};
+
+}  // namespace fragg

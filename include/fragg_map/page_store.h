@@ -1,0 +1,82 @@
+// Out-of-core paging (DESIGN §11): the interface of a page store, the embedded database that
+// holds a map's blocks while they are out of RAM, and the policy that decides which blocks
+// leave. Implementations (SQLite, LMDB) live in fragg_map_store (fragg_map/store/).
+//
+// A store is a map on its own: one record per block (key -> compressed cells) and one metadata
+// record (the map's resolution, occupancy model and the number of scans it holds), written
+// together in one transaction by commit(). Readers see the last committed state.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "fragg_map/cell.h"
+#include "fragg_map/key.h"
+
+namespace fragg {
+
+class PageStore {
+ public:
+  virtual ~PageStore() = default;
+  /// "sqlite" or "lmdb".
+  virtual const char* kind() const = 0;
+  /// Where the store is (its file).
+  virtual const std::string& path() const = 0;
+  /// Keys of every committed block record.
+  virtual std::vector<BlockKey> keys() = 0;
+  /// Reads one committed block; false when there is no record for `key`. IoError when the
+  /// record does not decode to a block.
+  virtual bool read(const BlockKey& key, Block* out) = 0;
+  /// The committed metadata record (empty: a new store that holds no map yet).
+  virtual std::vector<uint8_t> readMeta() = 0;
+  /// Every block and the metadata from one snapshot (one read transaction): fn(key, block)
+  /// for each block, then the metadata is returned. IoError when a record does not decode.
+  virtual std::vector<uint8_t> readAll(
+      const std::function<void(const BlockKey&, const Block&)>& fn) = 0;
+  /// Writes the blocks, erases the keys and replaces the metadata in one transaction: after
+  /// a crash the store holds either all of it or none of it. Throws IoError (nothing written).
+  virtual void commit(const std::vector<std::pair<BlockKey, const Block*>>& puts,
+                      const std::vector<BlockKey>& erases, const std::vector<uint8_t>& meta) = 0;
+  /// The store's size on disk (its files).
+  virtual uint64_t diskBytes() const = 0;
+};
+
+/// When blocks leave RAM (Map::attachPageStore).
+struct PagingPolicy {
+  /// Resident blocks' memory (cells, metadata, index) above which blocks are paged out;
+  /// 0: never page out (the store still receives every commit).
+  double budget_mb = 0.0;
+  /// Blocks whose centre lies within this distance of the last sensor position stay in RAM.
+  double radius_m = 0.0;
+  /// Paging out brings the resident blocks down to this fraction of the budget (hysteresis:
+  /// fewer, larger rounds).
+  double low_water = 0.75;
+  /// Dirty resident blocks are committed every this many scans (0: only by seconds, paging
+  /// rounds and close) ...
+  uint64_t commit_every_scans = 50;
+  /// ... or when this many seconds passed since the last commit (0: never by time).
+  double commit_every_s = 10.0;
+
+  void validate() const;
+};
+
+struct PagingStats {
+  bool enabled = false;
+  std::string store;             ///< "sqlite:/path/map.db"
+  uint64_t resident_blocks = 0;  ///< in RAM now
+  uint64_t peak_resident_blocks = 0;
+  uint64_t paged_blocks = 0;   ///< in the store only
+  uint64_t pages_written = 0;  ///< block records written (commits of dirty blocks)
+  uint64_t pages_read = 0;     ///< block records read back into RAM
+  uint64_t pages_evicted = 0;  ///< blocks dropped from RAM
+  uint64_t commits = 0;
+  uint64_t committed_scans = 0;  ///< scans the store holds (its last commit)
+  double seconds_commit = 0;     ///< time in commits
+  double seconds_page_in = 0;    ///< time reading blocks back
+  uint64_t store_bytes = 0;      ///< on disk
+};
+
+}  // namespace fragg

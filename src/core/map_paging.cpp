@@ -1,0 +1,198 @@
+// Map's side of out-of-core paging: attaching a store, paging blocks in and out, commits.
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/internal/backend.h"
+#include "fragg_map/internal/pager.h"
+#include "fragg_map/log.h"
+#include "fragg_map/map.h"
+
+namespace fragg {
+
+namespace {
+bool sameModel(const MapParams& p, const StoreMapMeta& m) {
+  const OccupancyParams &a = p.occupancy, &b = m.occupancy;
+  return p.resolution_m == m.resolution_m && a.prob_hit == b.prob_hit &&
+         a.prob_miss == b.prob_miss && a.clamp_min == b.clamp_min && a.clamp_max == b.clamp_max &&
+         a.unknown_band == b.unknown_band;
+}
+
+StoreMapMeta metaOf(const MapParams& p, uint64_t scans) {
+  StoreMapMeta m;
+  m.resolution_m = p.resolution_m;
+  m.occupancy = p.occupancy;
+  m.scans = scans;
+  return m;
+}
+
+BlockKey clampedBlockOf(const Eigen::Vector3d& p_map, double resolution_m) {
+  const Eigen::Vector3d v =
+      (p_map / resolution_m).array().floor().cwiseMax(-2147483648.0).cwiseMin(2147483647.0);
+  return blockKeyOf(VoxelKey{static_cast<int32_t>(v.x()), static_cast<int32_t>(v.y()),
+                             static_cast<int32_t>(v.z())});
+}
+}  // namespace
+
+void Map::attachPageStore(std::shared_ptr<PageStore> store, const PagingPolicy& policy) {
+  if (!store) throw InvalidArgument("no page store given");
+  if (pager_) throw InvalidArgument("this map already pages to " + pager_->store().path());
+  policy.validate();
+  if (params_.scans.keep || scan_store_->size() > 0)
+    throw InvalidArgument("a map that keeps its scans cannot page (the store holds no scans)");
+  const std::vector<uint8_t> meta_bytes = store->readMeta();
+  if (!meta_bytes.empty()) {
+    const StoreMapMeta meta = decodeStoreMeta(meta_bytes, store->path());
+    if (!sameModel(params_, meta))
+      throw InvalidArgument(store->path() +
+                            ": the store's map has another resolution or occupancy model");
+    if (!blocks_.empty() || scans_ > 0)
+      throw InvalidArgument(store->path() +
+                            ": the store already holds a map: continue it from an empty map "
+                            "(Map::openPageStore)");
+    backend_->cache().invalidateAll(blocks_);
+    pager_ = std::make_unique<Pager>(std::move(store), policy, params_.resolution_m);
+    pager_->setCommitted(meta.scans, revision_);
+    scans_ = meta.scans;
+    next_scan_id_ = meta.scans;
+    ++revision_;
+    return;
+  }
+  if (!store->keys().empty())
+    throw IoError(store->path() + ": the store holds blocks but no map metadata");
+  {
+    std::lock_guard<std::mutex> lock(*sync_mutex_);
+    backend_->cache().sync(blocks_);
+  }
+  auto pager = std::make_unique<Pager>(std::move(store), policy, params_.resolution_m);
+  pager->markAllDirty();
+  pager->commit(blocks_, revision_, metaOf(params_, scans_));
+  pager_ = std::move(pager);
+}
+
+Map Map::openPageStore(std::shared_ptr<PageStore> store, const MapParams& runtime,
+                       const PagingPolicy& policy) {
+  if (!store) throw InvalidArgument("no page store given");
+  const std::vector<uint8_t> meta_bytes = store->readMeta();
+  if (meta_bytes.empty()) throw IoError(store->path() + ": the page store holds no map");
+  const StoreMapMeta meta = decodeStoreMeta(meta_bytes, store->path());
+  MapParams params = runtime;
+  params.resolution_m = meta.resolution_m;
+  params.occupancy = meta.occupancy;
+  Map map(params);
+  map.attachPageStore(std::move(store), policy);
+  return map;
+}
+
+Map Map::loadPageStore(PageStore& store, const MapParams& runtime) {
+  const std::vector<uint8_t> first = store.readMeta();
+  if (first.empty()) throw IoError(store.path() + ": the page store holds no map");
+  const StoreMapMeta meta = decodeStoreMeta(first, store.path());
+  MapParams params = runtime;
+  params.resolution_m = meta.resolution_m;
+  params.occupancy = meta.occupancy;
+  params.scans.keep = false;
+  try {
+    params.validate();
+  } catch (const InvalidArgument& e) {
+    throw IoError(store.path() + ": bad parameters in the page store: " + e.what());
+  }
+  Map map(params);
+  const OccupancyModel& model = map.model();
+  const std::vector<uint8_t> last = store.readAll([&](const BlockKey& key, const Block& block) {
+    for (const Cell& c : block.cells) {
+      if (c.hits < 0) throw IoError(store.path() + ": negative hit count in a block record");
+      if (c.observed() && (c.log_odds_fx < model.min_fx || c.log_odds_fx > model.max_fx))
+        throw IoError(store.path() + ": log-odds outside the clamping range in a block record");
+    }
+    bool created = false;
+    const BlockIndex i = map.blocks_.findOrCreate(key, &created, /*initialise=*/false);
+    if (!created) throw IoError(store.path() + ": duplicate block record");
+    map.blocks_.block(i) = block;
+  });
+  const StoreMapMeta at_read = decodeStoreMeta(last, store.path());
+  map.scans_ = static_cast<size_t>(at_read.scans);
+  map.next_scan_id_ = at_read.scans;
+  map.revision_ = 1;
+  return map;
+}
+
+void Map::pageInBlocks(const BlockKey& lo, const BlockKey& hi) {
+  if (!pager_) return;
+  pager_->touch(lo, hi, scans_ + 1);
+  if (!pager_->anyPagedOut(lo, hi)) return;
+  // The device cache must not hold a view of the box while host blocks appear in it.
+  backend_->cache().invalidate(lo, hi, blocks_);
+  pager_->pageIn(lo, hi, blocks_);
+}
+
+void Map::pageInAllBlocks() {
+  if (!pager_ || pager_->pagedOutCount() == 0) return;
+  backend_->cache().invalidateAll(blocks_);
+  pager_->pageInAll(blocks_);
+}
+
+void Map::ensureResident(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map) {
+  if (!min_map.allFinite() || !max_map.allFinite())
+    throw InvalidArgument("box corners must be finite");
+  if ((min_map.array() > max_map.array()).any())
+    throw InvalidArgument("box min corner must not exceed the max corner");
+  pageInBlocks(clampedBlockOf(min_map, params_.resolution_m),
+               clampedBlockOf(max_map, params_.resolution_m));
+}
+
+void Map::ensureAllResident() { pageInAllBlocks(); }
+
+Map Map::extract(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map, Backend backend,
+                 SubmapStats* stats) {
+  if (pager_ && min_map.allFinite() && max_map.allFinite() &&
+      (min_map.array() <= max_map.array()).all())
+    ensureResident(min_map, max_map);
+  return static_cast<const Map&>(*this).extract(min_map, max_map, backend, stats);
+}
+
+void Map::commitPages() {
+  if (!pager_) return;
+  {
+    std::lock_guard<std::mutex> lock(*sync_mutex_);
+    backend_->cache().sync(blocks_);
+  }
+  pager_->commit(blocks_, revision_, metaOf(params_, scans_));
+}
+
+void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
+  pager_->noteResident(blocks_.size());
+  const bool over = pager_->overBudget(blocks_);
+  if (!over && !pager_->commitDue(scans_)) return;
+  if (over) {
+    // Paged-out blocks must have no device copy: the cache is written back and emptied.
+    std::lock_guard<std::mutex> lock(*sync_mutex_);
+    backend_->cache().invalidateAll(blocks_);
+  } else {
+    std::lock_guard<std::mutex> lock(*sync_mutex_);
+    backend_->cache().sync(blocks_);
+  }
+  pager_->commit(blocks_, revision_, metaOf(params_, scans_));
+  if (over) pager_->evict(blocks_, sensor_map);
+}
+
+void Map::closePaging() noexcept {
+  if (!pager_) return;
+  try {
+    commitPages();
+  } catch (const std::exception& e) {
+    logMessage(LogLevel::kWarning,
+               std::string("paging: the last commit at close failed (the store keeps its "
+                           "previous commit): ") +
+                   e.what());
+  }
+  pager_.reset();
+}
+
+PagingStats Map::pagingStats() const {
+  if (!pager_) return PagingStats();
+  return pager_->stats(blocks_);
+}
+
+}  // namespace fragg

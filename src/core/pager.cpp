@@ -1,0 +1,285 @@
+#include "fragg_map/internal/pager.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <tuple>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/internal/byte_io.h"
+
+namespace fragg {
+
+namespace {
+constexpr char kStoreMetaMagic[8] = {'F', 'R', 'A', 'G', 'G', 'P', 'G', 'S'};
+constexpr uint32_t kStoreMetaVersion = 1;
+/// RAM one resident block takes: cells, metadata, index entries (as BlockMap::hostBytes
+/// counts them), and its share of the store's key set.
+constexpr size_t kResidentBlockBytes = sizeof(Block) + sizeof(BlockMeta) + 64;
+
+/// Regions in [slo, shi] (as a double: a box over the whole key range overflows 64 bits).
+double regionCount(const BlockKey& slo, const BlockKey& shi) {
+  return (double{1} + shi.x - slo.x) * (double{1} + shi.y - slo.y) * (double{1} + shi.z - slo.z);
+}
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+void PagingPolicy::validate() const {
+  if (!std::isfinite(budget_mb) || budget_mb < 0)
+    throw InvalidArgument("paging budget must be a finite number of MB >= 0");
+  if (!std::isfinite(radius_m) || radius_m < 0)
+    throw InvalidArgument("paging radius must be a finite distance >= 0");
+  if (!(low_water > 0 && low_water <= 1))
+    throw InvalidArgument("paging low_water must be in (0, 1]");
+  if (!std::isfinite(commit_every_s) || commit_every_s < 0)
+    throw InvalidArgument("paging commit interval must be a finite number of seconds >= 0");
+}
+
+std::vector<uint8_t> encodeStoreMeta(const StoreMapMeta& meta) {
+  ByteWriter w;
+  w.put(kStoreMetaMagic, sizeof(kStoreMetaMagic));
+  w.put(kStoreMetaVersion);
+  w.put(meta.resolution_m);
+  const OccupancyParams& o = meta.occupancy;
+  for (double v : {o.prob_hit, o.prob_miss, o.clamp_min, o.clamp_max, o.unknown_band}) w.put(v);
+  w.put(static_cast<uint32_t>(kBlockSize));
+  w.put(meta.scans);
+  return w.bytes;
+}
+
+StoreMapMeta decodeStoreMeta(const std::vector<uint8_t>& bytes, const std::string& where) {
+  ByteReader r(bytes, bytes.size(), where, "not a fragg_map page store");
+  char magic[8];
+  r.take(magic, sizeof(magic), "magic");
+  if (std::memcmp(magic, kStoreMetaMagic, sizeof(magic)) != 0) r.fail("wrong metadata magic");
+  const auto version = r.get<uint32_t>("version");
+  if (version != kStoreMetaVersion) r.fail("unsupported version " + std::to_string(version));
+  StoreMapMeta m;
+  m.resolution_m = r.get<double>("resolution");
+  OccupancyParams& o = m.occupancy;
+  o.prob_hit = r.get<double>("prob_hit");
+  o.prob_miss = r.get<double>("prob_miss");
+  o.clamp_min = r.get<double>("clamp_min");
+  o.clamp_max = r.get<double>("clamp_max");
+  o.unknown_band = r.get<double>("unknown_band");
+  if (r.get<uint32_t>("block edge") != static_cast<uint32_t>(kBlockSize))
+    r.fail("block edge is not " + std::to_string(kBlockSize));
+  m.scans = r.get<uint64_t>("scan count");
+  if (r.remaining() != 0) r.fail("trailing bytes in the metadata");
+  return m;
+}
+
+Pager::Pager(std::shared_ptr<PageStore> store, const PagingPolicy& policy, double resolution_m)
+    : store_(std::move(store)), policy_(policy), block_m_(resolution_m * kBlockSize) {
+  policy_.validate();
+  for (const BlockKey& k : store_->keys()) addPagedOut(k);
+  counters_.enabled = true;
+  counters_.store = std::string(store_->kind()) + ":" + store_->path();
+}
+
+void Pager::addPagedOut(const BlockKey& key) {
+  if (paged_out_.insert(key).second) paged_super_[superOf(key)].push_back(key);
+}
+
+void Pager::removePagedOut(const BlockKey& key) {
+  if (paged_out_.erase(key) == 0) return;
+  auto it = paged_super_.find(superOf(key));
+  std::vector<BlockKey>& v = it->second;
+  v.erase(std::find(v.begin(), v.end(), key));
+  if (v.empty()) paged_super_.erase(it);
+}
+
+bool Pager::anyPagedOut(const BlockKey& lo, const BlockKey& hi) const {
+  if (paged_out_.empty()) return false;
+  const BlockKey slo = superOf(lo), shi = superOf(hi);
+  const double volume = regionCount(slo, shi);
+  auto inBox = [&](const BlockKey& k) {
+    return k.x >= lo.x && k.x <= hi.x && k.y >= lo.y && k.y <= hi.y && k.z >= lo.z && k.z <= hi.z;
+  };
+  if (volume > static_cast<double>(paged_super_.size())) {
+    for (const auto& [s, keys] : paged_super_)
+      for (const BlockKey& k : keys)
+        if (inBox(k)) return true;
+    return false;
+  }
+  for (int32_t z = slo.z; z <= shi.z; ++z)
+    for (int32_t y = slo.y; y <= shi.y; ++y)
+      for (int32_t x = slo.x; x <= shi.x; ++x) {
+        auto it = paged_super_.find({x, y, z});
+        if (it == paged_super_.end()) continue;
+        for (const BlockKey& k : it->second)
+          if (inBox(k)) return true;
+      }
+  return false;
+}
+
+void Pager::readInto(const BlockKey& key, BlockMap& blocks) {
+  bool created = false;
+  const BlockIndex i = blocks.findOrCreate(key, &created, /*initialise=*/false);
+  if (!created) throw IoError("paging: block paged out and resident at once (internal error)");
+  bool found = false;
+  try {
+    found = store_->read(key, &blocks.block(i));
+  } catch (...) {
+    blocks.erase(key);  // the block stays paged out; the map is as before
+    throw;
+  }
+  if (!found) {
+    blocks.erase(key);
+    throw IoError(store_->path() + ": block record missing from the page store");
+  }
+  BlockMeta& m = blocks.meta(i);
+  m.changed_at = m.occupied_at = 0;  // clean: equal to its record
+  ++counters_.pages_read;
+}
+
+size_t Pager::pageIn(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) {
+  if (paged_out_.empty()) return 0;
+  const auto t0 = Clock::now();
+  std::vector<BlockKey> wanted;
+  const BlockKey slo = superOf(lo), shi = superOf(hi);
+  const double volume = regionCount(slo, shi);
+  auto collect = [&](const std::vector<BlockKey>& keys) {
+    for (const BlockKey& k : keys)
+      if (k.x >= lo.x && k.x <= hi.x && k.y >= lo.y && k.y <= hi.y && k.z >= lo.z && k.z <= hi.z)
+        wanted.push_back(k);
+  };
+  if (volume > static_cast<double>(paged_super_.size())) {
+    for (const auto& [s, keys] : paged_super_) collect(keys);
+  } else {
+    for (int32_t z = slo.z; z <= shi.z; ++z)
+      for (int32_t y = slo.y; y <= shi.y; ++y)
+        for (int32_t x = slo.x; x <= shi.x; ++x) {
+          auto it = paged_super_.find({x, y, z});
+          if (it != paged_super_.end()) collect(it->second);
+        }
+  }
+  if (wanted.empty()) return 0;
+  // Key order: the stores keep records sorted, so neighbouring reads share pages.
+  std::sort(wanted.begin(), wanted.end(), [](const BlockKey& a, const BlockKey& b) {
+    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+  });
+  blocks.reserve(wanted.size());
+  for (const BlockKey& k : wanted) {
+    readInto(k, blocks);
+    removePagedOut(k);
+  }
+  noteResident(blocks.size());
+  counters_.seconds_page_in += secondsSince(t0);
+  return wanted.size();
+}
+
+size_t Pager::pageInAll(BlockMap& blocks) {
+  if (paged_out_.empty()) return 0;
+  const int32_t lim = 0x7fffffff >> kBlockBits;
+  return pageIn({-lim - 1, -lim - 1, -lim - 1}, {lim, lim, lim}, blocks);
+}
+
+void Pager::touch(const BlockKey& lo, const BlockKey& hi, uint64_t stamp) {
+  const BlockKey slo = superOf(lo), shi = superOf(hi);
+  const double volume = regionCount(slo, shi);
+  if (volume > 4194304.0) return;  // a box this large is not a sensor's or a query's
+  for (int32_t z = slo.z; z <= shi.z; ++z)
+    for (int32_t y = slo.y; y <= shi.y; ++y)
+      for (int32_t x = slo.x; x <= shi.x; ++x) last_used_[{x, y, z}] = stamp;
+}
+
+void Pager::forgetAll(const BlockMap& blocks) {
+  for (const BlockKey& k : paged_out_) erased_.push_back(k);
+  blocks.forEach([&](BlockIndex i) { erased_.push_back(blocks.meta(i).key); });
+  paged_out_.clear();
+  paged_super_.clear();
+  last_used_.clear();
+}
+
+bool Pager::commitDue(uint64_t scans) const {
+  if (policy_.commit_every_scans > 0 && scans >= committed_scans_ + policy_.commit_every_scans)
+    return true;
+  return policy_.commit_every_s > 0 && secondsSince(last_commit_) >= policy_.commit_every_s;
+}
+
+size_t Pager::budgetBlocks() const {
+  return static_cast<size_t>(policy_.budget_mb * 1024.0 * 1024.0 / kResidentBlockBytes);
+}
+
+bool Pager::overBudget(const BlockMap& blocks) const {
+  return policy_.budget_mb > 0 && blocks.size() > budgetBlocks();
+}
+
+void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta& meta) {
+  const auto t0 = Clock::now();
+  std::vector<std::pair<BlockKey, const Block*>> puts;
+  blocks.forEach([&](BlockIndex i) {
+    const BlockMeta& m = blocks.meta(i);
+    if (all_dirty_ || m.changed_at > committed_revision_)
+      puts.emplace_back(m.key, &blocks.block(i));
+  });
+  std::sort(puts.begin(), puts.end(), [](const auto& a, const auto& b) {
+    return std::tie(a.first.z, a.first.y, a.first.x) < std::tie(b.first.z, b.first.y, b.first.x);
+  });
+  // An erased key that is resident again (re-observed) is written instead.
+  std::vector<BlockKey> erases;
+  for (const BlockKey& k : erased_)
+    if (blocks.find(k) == kNoBlock && !isPagedOut(k)) erases.push_back(k);
+  store_->commit(puts, erases, encodeStoreMeta(meta));
+  erased_.clear();
+  all_dirty_ = false;
+  committed_revision_ = revision;
+  committed_scans_ = meta.scans;
+  last_commit_ = Clock::now();
+  counters_.pages_written += puts.size();
+  ++counters_.commits;
+  counters_.committed_scans = meta.scans;
+  counters_.seconds_commit += secondsSince(t0);
+}
+
+void Pager::evict(BlockMap& blocks, const Eigen::Vector3d& sensor_m) {
+  const size_t target =
+      static_cast<size_t>(static_cast<double>(budgetBlocks()) * policy_.low_water);
+  if (blocks.size() <= target) return;
+  struct Candidate {
+    uint64_t used;
+    BlockKey key;
+  };
+  std::vector<Candidate> candidates;
+  const double r2 = policy_.radius_m * policy_.radius_m;
+  blocks.forEach([&](BlockIndex i) {
+    const BlockKey& k = blocks.meta(i).key;
+    const Eigen::Vector3d c = (Eigen::Vector3d(k.x, k.y, k.z).array() + 0.5).matrix() * block_m_;
+    if ((c - sensor_m).squaredNorm() <= r2) return;
+    auto it = last_used_.find(superOf(k));
+    candidates.push_back({it == last_used_.end() ? 0 : it->second, k});
+  });
+  const size_t n = std::min(candidates.size(), blocks.size() - target);
+  // Oldest first; ties by key so that the same run pages out the same blocks.
+  auto older = [](const Candidate& a, const Candidate& b) {
+    return std::tie(a.used, a.key.z, a.key.y, a.key.x) <
+           std::tie(b.used, b.key.z, b.key.y, b.key.x);
+  };
+  std::nth_element(candidates.begin(), candidates.begin() + static_cast<long>(n), candidates.end(),
+                   older);
+  for (size_t j = 0; j < n; ++j) {
+    blocks.erase(candidates[j].key);
+    addPagedOut(candidates[j].key);
+  }
+  counters_.pages_evicted += n;
+}
+
+void Pager::noteResident(size_t resident) {
+  counters_.peak_resident_blocks = std::max<uint64_t>(counters_.peak_resident_blocks, resident);
+}
+
+PagingStats Pager::stats(const BlockMap& blocks) const {
+  PagingStats s = counters_;
+  s.resident_blocks = blocks.size();
+  s.peak_resident_blocks = std::max<uint64_t>(s.peak_resident_blocks, blocks.size());
+  s.paged_blocks = paged_out_.size();
+  s.store_bytes = store_->diskBytes();
+  return s;
+}
+
+}  // namespace fragg

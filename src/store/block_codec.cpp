@@ -1,0 +1,66 @@
+#include "block_codec.h"
+
+#include <cstring>
+
+#include "fragg_map/errors.h"
+
+namespace fragg {
+
+namespace {
+constexpr int kLevel = 1;  // the fastest level: records are small, commits are on the hot path
+}
+
+BlockCodec::BlockCodec() : cctx_(ZSTD_createCCtx()), dctx_(ZSTD_createDCtx()) {
+  if (!cctx_ || !dctx_) throw IoError("zstd: cannot create a compression context");
+  ZSTD_CCtx_setParameter(cctx_, ZSTD_c_compressionLevel, kLevel);
+  ZSTD_CCtx_setParameter(cctx_, ZSTD_c_checksumFlag, 1);
+  buffer_.resize(ZSTD_compressBound(sizeof(Block)));
+}
+
+BlockCodec::~BlockCodec() {
+  ZSTD_freeCCtx(cctx_);
+  ZSTD_freeDCtx(dctx_);
+}
+
+const std::vector<uint8_t>& BlockCodec::encode(const Block& block) {
+  buffer_.resize(ZSTD_compressBound(sizeof(Block)));
+  const size_t n = ZSTD_compress2(cctx_, buffer_.data(), buffer_.size(), &block, sizeof(Block));
+  if (ZSTD_isError(n)) throw IoError(std::string("zstd: ") + ZSTD_getErrorName(n));
+  buffer_.resize(n);
+  return buffer_;
+}
+
+void BlockCodec::decode(const void* data, size_t size, Block* out, const std::string& where) {
+  const unsigned long long content = ZSTD_getFrameContentSize(data, size);
+  if (content != sizeof(Block))
+    throw IoError(where + ": block record does not hold a " + std::to_string(sizeof(Block)) +
+                  "-byte block");
+  const size_t n = ZSTD_decompressDCtx(dctx_, out, sizeof(Block), data, size);
+  if (ZSTD_isError(n) || n != sizeof(Block))
+    throw IoError(where + ": block record does not decompress (" +
+                  (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "wrong size") + ")");
+}
+
+StoreKey storeKeyOf(const BlockKey& key) {
+  StoreKey k;
+  const int32_t v[3] = {key.z, key.y, key.x};
+  for (int a = 0; a < 3; ++a) {
+    const uint32_t u = static_cast<uint32_t>(v[a]) ^ 0x80000000u;
+    for (int b = 0; b < 4; ++b) k.bytes[4 * a + b] = static_cast<uint8_t>(u >> (24 - 8 * b));
+  }
+  return k;
+}
+
+BlockKey blockKeyOfStoreKey(const void* data, size_t size, const std::string& where) {
+  if (size != sizeof(StoreKey::bytes)) throw IoError(where + ": block record key is not 12 bytes");
+  const auto* p = static_cast<const uint8_t*>(data);
+  int32_t v[3];
+  for (int a = 0; a < 3; ++a) {
+    uint32_t u = 0;
+    for (int b = 0; b < 4; ++b) u = (u << 8) | p[4 * a + b];
+    v[a] = static_cast<int32_t>(u ^ 0x80000000u);
+  }
+  return {v[2], v[1], v[0]};
+}
+
+}  // namespace fragg

@@ -1,0 +1,195 @@
+// The LMDB page store (built when LMDB is found): one file (MDB_NOSUBDIR) plus its lock file
+// "<path>-lock", named databases "blocks" (12-byte key -> zstd'd cells) and "meta". Commits
+// sync the data, not the meta page (MDB_NOMETASYNC): a commit survives the process being
+// killed; a power loss may take the last commit back, never the database's integrity.
+#include "fragg_map/errors.h"
+#include "fragg_map/store/page_stores.h"
+
+#if FRAGG_HAVE_LMDB
+#include <lmdb.h>
+
+#include <filesystem>
+#include <mutex>
+
+#include "block_codec.h"
+#endif
+
+namespace fragg {
+
+#if FRAGG_HAVE_LMDB
+namespace {
+/// Address space reserved for the map file (the file grows only as records are written).
+constexpr size_t kMapSizeBytes = size_t{1} << 40;
+
+class LmdbPageStore final : public PageStore {
+ public:
+  LmdbPageStore(const std::string& path, bool read_only) : path_(path) {
+    std::error_code ec;
+    if (read_only && !std::filesystem::exists(path, ec))
+      throw IoError("cannot read " + path + ": no such file");
+    check(mdb_env_create(&env_), "create");
+    try {
+      check(mdb_env_set_mapsize(env_, kMapSizeBytes), "set map size");
+      check(mdb_env_set_maxdbs(env_, 2), "set databases");
+      const unsigned flags = MDB_NOSUBDIR | MDB_NOTLS | (read_only ? MDB_RDONLY : MDB_NOMETASYNC);
+      check(mdb_env_open(env_, path.c_str(), flags, 0644), "open");
+      MDB_txn* txn = nullptr;
+      check(mdb_txn_begin(env_, nullptr, read_only ? MDB_RDONLY : 0, &txn), "begin");
+      const unsigned create = read_only ? 0 : MDB_CREATE;
+      int rc = mdb_dbi_open(txn, "blocks", create, &blocks_);
+      if (rc == 0) rc = mdb_dbi_open(txn, "meta", create, &meta_);
+      if (rc != 0) {
+        mdb_txn_abort(txn);
+        if (rc == MDB_NOTFOUND) throw IoError(path + ": not a fragg_map page store");
+        check(rc, "open databases");
+      }
+      check(mdb_txn_commit(txn), "commit");
+    } catch (...) {
+      mdb_env_close(env_);
+      throw;
+    }
+  }
+  ~LmdbPageStore() override { mdb_env_close(env_); }
+
+  const char* kind() const override { return "lmdb"; }
+  const std::string& path() const override { return path_; }
+
+  std::vector<BlockKey> keys() override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::vector<BlockKey> out;
+    ReadTxn txn(*this);
+    forEachRecord(txn.txn, [&](const MDB_val& k, const MDB_val&) {
+      out.push_back(blockKeyOfStoreKey(k.mv_data, k.mv_size, path_));
+    });
+    return out;
+  }
+
+  bool read(const BlockKey& key, Block* out) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ReadTxn txn(*this);
+    StoreKey sk = storeKeyOf(key);
+    MDB_val k{sizeof(sk.bytes), sk.bytes}, v;
+    const int rc = mdb_get(txn.txn, blocks_, &k, &v);
+    if (rc == MDB_NOTFOUND) return false;
+    check(rc, "read");
+    codec_.decode(v.mv_data, v.mv_size, out, path_);
+    return true;
+  }
+
+  std::vector<uint8_t> readMeta() override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ReadTxn txn(*this);
+    return metaIn(txn.txn);
+  }
+
+  std::vector<uint8_t> readAll(
+      const std::function<void(const BlockKey&, const Block&)>& fn) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ReadTxn txn(*this);  // one snapshot for the blocks and the metadata
+    Block block;
+    forEachRecord(txn.txn, [&](const MDB_val& k, const MDB_val& v) {
+      const BlockKey key = blockKeyOfStoreKey(k.mv_data, k.mv_size, path_);
+      codec_.decode(v.mv_data, v.mv_size, &block, path_);
+      fn(key, block);
+    });
+    return metaIn(txn.txn);
+  }
+
+  void commit(const std::vector<std::pair<BlockKey, const Block*>>& puts,
+              const std::vector<BlockKey>& erases, const std::vector<uint8_t>& meta) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    MDB_txn* txn = nullptr;
+    check(mdb_txn_begin(env_, nullptr, 0, &txn), "begin");
+    try {
+      for (const BlockKey& key : erases) {
+        StoreKey sk = storeKeyOf(key);
+        MDB_val k{sizeof(sk.bytes), sk.bytes};
+        const int rc = mdb_del(txn, blocks_, &k, nullptr);
+        if (rc != MDB_NOTFOUND) check(rc, "erase");
+      }
+      for (const auto& [key, block] : puts) {
+        StoreKey sk = storeKeyOf(key);
+        const std::vector<uint8_t>& bytes = codec_.encode(*block);
+        MDB_val k{sizeof(sk.bytes), sk.bytes};
+        MDB_val v{bytes.size(), const_cast<uint8_t*>(bytes.data())};
+        check(mdb_put(txn, blocks_, &k, &v, 0), "write");
+      }
+      char name[] = "map";
+      MDB_val k{3, name};
+      MDB_val v{meta.size(), const_cast<uint8_t*>(meta.data())};
+      check(mdb_put(txn, meta_, &k, &v, 0), "write metadata");
+    } catch (...) {
+      mdb_txn_abort(txn);
+      throw;
+    }
+    check(mdb_txn_commit(txn), "commit");
+  }
+
+  uint64_t diskBytes() const override {
+    std::error_code ec;
+    const auto s = std::filesystem::file_size(path_, ec);
+    return ec ? 0 : s;
+  }
+
+ private:
+  struct ReadTxn {
+    explicit ReadTxn(LmdbPageStore& s) {
+      s.check(mdb_txn_begin(s.env_, nullptr, MDB_RDONLY, &txn), "begin read");
+    }
+    ~ReadTxn() { mdb_txn_abort(txn); }
+    MDB_txn* txn = nullptr;
+  };
+
+  void check(int rc, const char* what) const {
+    if (rc != 0) throw IoError(path_ + ": LMDB " + what + ": " + mdb_strerror(rc));
+  }
+  template <class Fn>
+  void forEachRecord(MDB_txn* txn, Fn&& fn) {
+    MDB_cursor* cursor = nullptr;
+    check(mdb_cursor_open(txn, blocks_, &cursor), "cursor");
+    MDB_val k, v;
+    int rc = mdb_cursor_get(cursor, &k, &v, MDB_FIRST);
+    try {
+      while (rc == 0) {
+        fn(k, v);
+        rc = mdb_cursor_get(cursor, &k, &v, MDB_NEXT);
+      }
+    } catch (...) {
+      mdb_cursor_close(cursor);
+      throw;
+    }
+    mdb_cursor_close(cursor);
+    if (rc != MDB_NOTFOUND) check(rc, "iterate");
+  }
+  std::vector<uint8_t> metaIn(MDB_txn* txn) {
+    char name[] = "map";
+    MDB_val k{3, name}, v;
+    const int rc = mdb_get(txn, meta_, &k, &v);
+    if (rc == MDB_NOTFOUND) return {};
+    check(rc, "read metadata");
+    const auto* p = static_cast<const uint8_t*>(v.mv_data);
+    return std::vector<uint8_t>(p, p + v.mv_size);
+  }
+
+  std::string path_;
+  MDB_env* env_ = nullptr;
+  MDB_dbi blocks_ = 0, meta_ = 0;
+  std::mutex mutex_;
+  BlockCodec codec_;
+};
+}  // namespace
+
+bool lmdbAvailable() { return true; }
+
+std::shared_ptr<PageStore> openLmdbPageStore(const std::string& path, bool read_only) {
+  return std::make_shared<LmdbPageStore>(path, read_only);
+}
+#else
+bool lmdbAvailable() { return false; }
+
+std::shared_ptr<PageStore> openLmdbPageStore(const std::string& path, bool) {
+  throw InvalidArgument(path + ": this fragg_map was built without LMDB");
+}
+#endif
+
+}  // namespace fragg

@@ -1,0 +1,238 @@
+// Out-of-core paging on the CPU backend: a map built with a small RAM budget pages blocks out
+// to the store and back in, and ends byte-identical to the map built in memory; queries and
+// edits page in what they reach; a store is a map on its own and a build continues it.
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <memory>
+#include <string>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/store/page_stores.h"
+#include "paging_scenes.h"
+
+namespace fragg::test {
+namespace {
+
+constexpr int kScans = 80;
+
+PagingPolicy smallBudget() {
+  PagingPolicy p;
+  p.budget_mb = 3.0;  // ~1400 blocks; the corridor map has several times that
+  p.radius_m = 4.0;
+  p.commit_every_scans = 7;
+  p.commit_every_s = 0;
+  return p;
+}
+
+Map inMemory(int scans) {
+  Map map(corridorParams());
+  for (int i = 0; i < scans; ++i) {
+    const Eigen::Isometry3d T = corridorPose(i, kScans);
+    map.insert(corridorScan(T), T, corridorSensor());
+  }
+  return map;
+}
+
+const Map& fullInMemory() {
+  static const Map map = inMemory(kScans);
+  return map;
+}
+
+void insertScans(Map& map, int from, int to) {
+  for (int i = from; i < to; ++i) {
+    const Eigen::Isometry3d T = corridorPose(i, kScans);
+    map.insert(corridorScan(T), T, corridorSensor());
+  }
+}
+
+/// The centre of an occupied cell of `map` with x in [x0, x1) (a wall or the ground).
+Eigen::Vector3d occupiedCellIn(const Map& map, double x0, double x1) {
+  Eigen::Vector3d found = Eigen::Vector3d::Constant(NAN);
+  map.forEachBlock([&](const BlockKey& k, const Block& b) {
+    for (int c = 0; c < kCellsPerBlock && !found.allFinite(); ++c) {
+      const Eigen::Vector3d p = map.centerOf(voxelKeyOf(k, c));
+      if (p.x() >= x0 && p.x() < x1 && map.state(b.cells[c]) == CellState::kOccupied) found = p;
+    }
+  });
+  EXPECT_TRUE(found.allFinite()) << "no occupied cell with x in [" << x0 << ", " << x1 << ")";
+  return found;
+}
+
+class Paging : public ::testing::TestWithParam<PageStoreKind> {
+ protected:
+  std::string storePath(const std::string& dir) const {
+    return dir + (GetParam() == PageStoreKind::kLmdb ? "/map.lmdb" : "/map.db");
+  }
+  void SetUp() override {
+    if (GetParam() == PageStoreKind::kLmdb && !lmdbAvailable()) GTEST_SKIP() << "no LMDB";
+  }
+};
+
+TEST_P(Paging, PagedBuildIsByteIdenticalToTheInMemoryBuild) {
+  const std::string dir = testDir();
+  const std::string path = storePath(dir);
+  Map paged(corridorParams());
+  paged.attachPageStore(openPageStore(path, false), smallBudget());
+  insertScans(paged, 0, kScans);
+  const PagingStats st = paged.pagingStats();
+  // The budget was met by paging out, and the way back read blocks in again.
+  EXPECT_GT(st.pages_evicted, 1000u);
+  EXPECT_GT(st.pages_read, 100u);
+  EXPECT_GT(st.paged_blocks, 0u);
+  EXPECT_LT(st.peak_resident_blocks, fullInMemory().blockCount());
+  EXPECT_LT(st.resident_blocks, fullInMemory().blockCount());
+
+  // save() writes paged-out blocks too: the same bytes as the in-memory map's file.
+  paged.save(dir + "/paged.fgm");
+  fullInMemory().save(dir + "/memory.fgm");
+  EXPECT_EQ(readBytes(dir + "/paged.fgm"), readBytes(dir + "/memory.fgm"));
+
+  // The store alone (read whole, another handle) is the map.
+  paged.commitPages();
+  const Map from_store = Map::loadPageStore(*openPageStore(path, true));
+  EXPECT_EQ(from_store.scanCount(), static_cast<size_t>(kScans));
+  std::string why;
+  EXPECT_TRUE(sameBlocks(from_store, fullInMemory(), &why)) << why;
+
+  paged.ensureAllResident();
+  EXPECT_EQ(paged.pagingStats().paged_blocks, 0u);
+  EXPECT_TRUE(sameBlocks(paged, fullInMemory(), &why)) << why;
+}
+
+TEST_P(Paging, QueriesAndEditsPageInWhatTheyReach) {
+  const std::string dir = testDir();
+  Map paged(corridorParams());
+  PagingPolicy policy = smallBudget();
+  policy.budget_mb = 1.0;
+  paged.attachPageStore(openPageStore(storePath(dir), false), policy);
+  insertScans(paged, 0, kScans / 2);  // the sensor ends at x = 40: the start is paged out
+  ASSERT_GT(paged.pagingStats().paged_blocks, 0u);
+  const Map reference = inMemory(kScans / 2);
+
+  // A wall cell near the start: a const reader sees only resident blocks, the map pages it in.
+  const Eigen::Vector3d wall = occupiedCellIn(reference, 0.0, 2.0);
+  ASSERT_EQ(reference.query(wall), CellState::kOccupied);
+  const Map& as_const = paged;
+  EXPECT_EQ(as_const.query(wall), CellState::kUnknown);
+  EXPECT_EQ(paged.query(wall), CellState::kOccupied);
+
+  // extract over a paged-out box equals the in-memory extract.
+  const Eigen::Vector3d lo(2, -5, -1), hi(9, 5, 4);
+  std::string why;
+  EXPECT_TRUE(sameBlocks(paged.extract(lo, hi), reference.extract(lo, hi), &why)) << why;
+
+  // ensureResident brings a box back for const readers.
+  const Eigen::Vector3d far_wall = occupiedCellIn(reference, 12.0, 13.0);
+  paged.ensureResident(far_wall, far_wall);
+  EXPECT_EQ(as_const.query(far_wall), reference.query(far_wall));
+  EXPECT_THROW(paged.ensureResident(hi, lo), InvalidArgument);
+
+  // Edits over paged-out blocks: clearBox, truncate, merge, then the store reopened.
+  Map ref = inMemory(kScans / 2);
+  for (Map* m : {&paged, &ref}) {
+    m->clearBox({14, -5, -1}, {16, 5, 4});
+    Map cut = m->truncate({20, -5, -1}, {24, 5, 4});
+    Map sub = cut.extract({20, -5, -1}, {22, 5, 4});
+    m->merge(sub, MergeMode::kOverwrite);
+  }
+  insertScans(paged, kScans / 2, kScans);
+  insertScans(ref, kScans / 2, kScans);
+  paged.commitPages();
+  const Map from_store = Map::loadPageStore(*openPageStore(storePath(dir), true));
+  EXPECT_TRUE(sameBlocks(from_store, ref, &why)) << why;
+  paged.ensureAllResident();
+  EXPECT_TRUE(sameBlocks(paged, ref, &why)) << why;
+}
+
+TEST_P(Paging, AStoreIsContinuedWhereItStopped) {
+  const std::string dir = testDir();
+  const std::string path = storePath(dir);
+  {
+    Map first(corridorParams());
+    first.attachPageStore(openPageStore(path, false), smallBudget());
+    insertScans(first, 0, 33);
+  }  // closed: the last scans are committed
+  Map again = Map::openPageStore(openPageStore(path, false), corridorParams(), smallBudget());
+  EXPECT_EQ(again.scanCount(), 33u);
+  insertScans(again, 33, kScans);
+  again.ensureAllResident();
+  std::string why;
+  EXPECT_TRUE(sameBlocks(again, fullInMemory(), &why)) << why;
+}
+
+TEST_P(Paging, RefusesWhatItCannotPage) {
+  const std::string dir = testDir();
+  const std::string path = storePath(dir);
+  Map first(corridorParams());
+  first.attachPageStore(openPageStore(path, false), smallBudget());
+  insertScans(first, 0, 3);
+  first.commitPages();
+
+  MapParams other = corridorParams();
+  other.resolution_m = 0.2;
+  Map wrong_resolution(other);
+  EXPECT_THROW(wrong_resolution.attachPageStore(openPageStore(path, true), smallBudget()),
+               InvalidArgument);
+  Map not_empty = inMemory(1);
+  EXPECT_THROW(not_empty.attachPageStore(openPageStore(path, true), smallBudget()),
+               InvalidArgument);
+  MapParams keep = corridorParams();
+  keep.scans.keep = true;
+  Map keeps(keep);
+  EXPECT_THROW(keeps.attachPageStore(openPageStore(dir + "/other.db", false), smallBudget()),
+               InvalidArgument);
+  PagingPolicy bad = smallBudget();
+  bad.budget_mb = -1;
+  Map fresh(corridorParams());
+  EXPECT_THROW(fresh.attachPageStore(openPageStore(dir + "/other2.db", false), bad),
+               InvalidArgument);
+  EXPECT_FALSE(fresh.paging());
+  EXPECT_THROW(openPageStore(dir + "/missing.db", true), IoError);
+  writeBytes(dir + "/garbage.db", std::string(4096, 'x'));
+  EXPECT_THROW(openPageStore(dir + "/garbage.db", true), IoError);
+}
+
+TEST(SqlitePageStore, ACorruptRecordIsRefusedWhenRead) {
+  const std::string dir = testDir();
+  const std::string path = dir + "/map.db";
+  {
+    Map map(corridorParams());
+    map.attachPageStore(openPageStore(path, false), smallBudget());
+    insertScans(map, 0, 2);
+  }
+  ASSERT_GT(Map::loadPageStore(*openPageStore(path, true)).blockCount(), 0u);
+  // One record's value overwritten behind the store's back (as a disk error would).
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db,
+                         "UPDATE blocks SET v = substr(v, 1, length(v) - 3) || x'000000' WHERE k "
+                         "= (SELECT k FROM blocks LIMIT 1)",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  try {
+    Map::loadPageStore(*openPageStore(path, true));
+    FAIL() << "a corrupt record was read";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("block record"), std::string::npos) << e.what();
+  }
+  // Continuing the map reads that block when a scan reaches it: refused the same way.
+  Map again = Map::openPageStore(openPageStore(path, false), corridorParams(), smallBudget());
+  const Eigen::Isometry3d T = corridorPose(0, kScans);
+  const size_t resident = again.pagingStats().resident_blocks;
+  EXPECT_THROW(again.insert(corridorScan(T), T, corridorSensor()), IoError);
+  EXPECT_EQ(again.scanCount(), 2u);
+  // The blocks read before the bad one are clean copies; the bad one stays paged out.
+  EXPECT_GE(again.pagingStats().paged_blocks, 1u);
+  EXPECT_GE(again.pagingStats().resident_blocks, resident);
+}
+
+INSTANTIATE_TEST_SUITE_P(Stores, Paging,
+                         ::testing::Values(PageStoreKind::kSqlite, PageStoreKind::kLmdb),
+                         [](const auto& info) {
+                           return info.param == PageStoreKind::kLmdb ? "Lmdb" : "Sqlite";
+                         });
+
+}  // namespace
+}  // namespace fragg::test

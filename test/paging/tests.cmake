@@ -1,0 +1,19 @@
+# Out-of-core paging (issue 13): page stores (SQLite, LMDB), paged builds byte-identical to
+# in-memory ones, queries and edits paging in, stores continued. Needs fragg_map_store.
+if(TARGET fragg_map_store)
+  fragg_add_test(fragg_paging_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/paging_test.cpp
+    LIBS fragg_map_store SQLite::SQLite3
+    LABELS core paging)
+
+  # kill -9 of `fragg_map build --page-store` at several moments; the store read meanwhile.
+  fragg_add_test(cli_store_crash_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/store_crash_test.cpp
+    LIBS fragg_map_store
+    LABELS cli paging)
+  if(TARGET cli_store_crash_test)
+    add_dependencies(cli_store_crash_test fragg_map_cli)
+    target_compile_definitions(cli_store_crash_test PRIVATE
+      FRAGG_CLI_PATH="$<TARGET_FILE:fragg_map_cli>")
+  endif()
+endif()
