@@ -162,6 +162,10 @@ class Map {
   const OccupancyModel& model() const { return model_; }
   double resolution() const { return params_.resolution_m; }
   uint64_t revision() const { return revision_; }
+  /// The revision at which a block was last erased (clearBox, truncate, reset; 0: never).
+  /// changedBlocksSince() does not list erased blocks: incremental readers (frontiers)
+  /// recompute everything when this is newer than the revision they last saw.
+  uint64_t blocksErasedAt() const { return blocks_erased_at_; }
   size_t scanCount() const { return scans_; }
   const char* backendName() const;
   /// Why that backend ("auto: CUDA device 0 (...)", "auto: CPU backend (no CUDA device)").
@@ -220,6 +224,7 @@ class Map {
   std::unique_ptr<std::mutex> sync_mutex_;
   std::unique_ptr<Culler> culler_;
   uint64_t revision_ = 0;
+  uint64_t blocks_erased_at_ = 0;
   size_t scans_ = 0;
   ScanId next_scan_id_ = 0;
   std::unique_ptr<ScanStore> scan_store_;

@@ -291,6 +291,7 @@ uint64_t Map::clearCellsWhere(const std::vector<BlockIndex>& blocks,
       if (any_cleared) blocks_.meta(i).changed_at = blocks_.meta(i).occupied_at = revision_;
     } else {
       blocks_.erase(key);
+      blocks_erased_at_ = revision_;
       if (blocks_erased) ++*blocks_erased;
     }
   }
@@ -311,6 +312,7 @@ void Map::reset() {
   culler_->reset();
   scan_store_->clear();
   ++revision_;
+  blocks_erased_at_ = revision_;
   scans_ = 0;
   next_scan_id_ = 0;
 }

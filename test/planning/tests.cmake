@@ -27,3 +27,13 @@ if(fcl_FOUND)
 else()
   message(STATUS "fragg_map: FCL not found: no FCL oracle test for collision checking")
 endif()
+
+# Frontier cells against a brute force, incremental against full over a simulated drive,
+# clusters, viewpoints and gains against a brute-force ray count.
+fragg_add_test(fragg_frontier_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/frontier_test.cpp
+  LIBS fragg_map_planning fragg_map_sim_lib
+  LABELS planning)
+if(TARGET fragg_frontier_test)
+  target_compile_definitions(fragg_frontier_test PRIVATE FRAGG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+endif()
