@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   fragg::cli::addEvalCommand(app);
   fragg::cli::addOctomapBuildCommand(app);
   fragg::cli::addCollideCommand(app);
+  fragg::cli::addFrontiersCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
