@@ -1,6 +1,7 @@
 #include "fragg_map/planning/viewpoints.h"
 
 #include <fmt/format.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -154,6 +155,28 @@ double viewpointGainBits(const Map& map, const BlockView& view, const Eigen::Vec
   return gain;
 }
 
+std::vector<double> viewpointGainsBits(const Map& map,
+                                       const std::vector<Eigen::Vector3d>& positions_m,
+                                       const std::vector<double>& yaws_rad,
+                                       const GainSensor& sensor, int threads) {
+  sensor.validate();
+  if (positions_m.size() != yaws_rad.size())
+    throw InvalidArgument(
+        fmt::format("{} viewpoint positions but {} yaws", positions_m.size(), yaws_rad.size()));
+  if (threads < 0) throw InvalidArgument(fmt::format("threads must be >= 0, got {}", threads));
+  for (size_t i = 0; i < positions_m.size(); ++i)
+    if (!positions_m[i].allFinite() || !std::isfinite(yaws_rad[i]))
+      throw InvalidArgument(fmt::format("viewpoint {} has a non-finite position or yaw", i));
+  const BlockView view = map.blockView();
+  std::vector<double> gains(positions_m.size());
+  const int n_threads = threads > 0 ? threads : omp_get_max_threads();
+  const int64_t n = static_cast<int64_t>(positions_m.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(n_threads)
+  for (int64_t i = 0; i < n; ++i)
+    gains[i] = viewpointGainBits(map, view, positions_m[i], yaws_rad[i], sensor);
+  return gains;
+}
+
 std::vector<Viewpoint> clusterViewpoints(const Map& map, const FrontierCluster& cluster,
                                          const ViewpointOptions& options) {
   options.validate();
@@ -161,7 +184,7 @@ std::vector<Viewpoint> clusterViewpoints(const Map& map, const FrontierCluster& 
   CollisionOptions clearance;
   clearance.unknown_is_occupied = true;
   const CollisionShape sphere = CollisionShape::sphere(std::max(options.clearance_m, 1e-9));
-  std::vector<Viewpoint> out;
+  std::vector<Viewpoint> candidates;
   for (double h : options.heights_m)
     for (double r : options.radii_m)
       for (int a = 0; a < options.angles; ++a) {
@@ -178,15 +201,27 @@ std::vector<Viewpoint> clusterViewpoints(const Map& map, const FrontierCluster& 
         }
         const Eigen::Vector3d to_centroid = cluster.centroid_m - v.position_m;
         v.yaw_rad = std::atan2(to_centroid.y(), to_centroid.x());
-        v.gain_bits = viewpointGainBits(map, view, v.position_m, v.yaw_rad, options.sensor);
-        if (v.gain_bits <= 0.0) continue;
-        v.score = v.gain_bits;
-        if (options.robot_m) {
-          v.distance_m = (v.position_m - *options.robot_m).norm();
-          v.score = v.gain_bits / std::max(v.distance_m, map.resolution());
-        }
-        out.push_back(v);
+        candidates.push_back(v);
       }
+  std::vector<Eigen::Vector3d> positions;
+  std::vector<double> yaws;
+  for (const Viewpoint& v : candidates) {
+    positions.push_back(v.position_m);
+    yaws.push_back(v.yaw_rad);
+  }
+  const std::vector<double> gains = viewpointGainsBits(map, positions, yaws, options.sensor);
+  std::vector<Viewpoint> out;
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    Viewpoint v = candidates[i];
+    v.gain_bits = gains[i];
+    if (v.gain_bits <= 0.0) continue;
+    v.score = v.gain_bits;
+    if (options.robot_m) {
+      v.distance_m = (v.position_m - *options.robot_m).norm();
+      v.score = v.gain_bits / std::max(v.distance_m, map.resolution());
+    }
+    out.push_back(v);
+  }
   std::stable_sort(out.begin(), out.end(),
                    [](const Viewpoint& a, const Viewpoint& b) { return a.score > b.score; });
   if (out.size() > size_t(options.top_k)) out.resize(options.top_k);

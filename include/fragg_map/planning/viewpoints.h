@@ -34,6 +34,13 @@ struct GainSensor {
 double viewpointGainBits(const Map& map, const BlockView& view, const Eigen::Vector3d& position_m,
                          double yaw_rad, const GainSensor& sensor);
 
+/// Gains of many viewpoints at once (OpenMP, `threads` 0 = every core); result i belongs to
+/// position i and yaw i (the two must have the same length).
+std::vector<double> viewpointGainsBits(const Map& map,
+                                       const std::vector<Eigen::Vector3d>& positions_m,
+                                       const std::vector<double>& yaws_rad,
+                                       const GainSensor& sensor, int threads = 0);
+
 /// Entropy (bits) of a cell as the gain counts it: 1 for never observed, H(p) inside the
 /// unknown band, 0 for free and occupied cells.
 double cellEntropyBits(const Map& map, const Cell* cell);
