@@ -117,10 +117,16 @@ bool FrontierFilter::keeps(const Map& map, const BlockView& view, const VoxelKey
   return true;
 }
 
-bool keyLess(const VoxelKey& a, const VoxelKey& b) {
+bool blockOrder(const BlockKey& a, const BlockKey& b) {
   if (a.z != b.z) return a.z < b.z;
   if (a.y != b.y) return a.y < b.y;
   return a.x < b.x;
+}
+
+bool frontierOrder(const VoxelKey& a, const VoxelKey& b) {
+  const BlockKey ba = blockKeyOf(a), bb = blockKeyOf(b);
+  if (ba != bb) return blockOrder(ba, bb);
+  return cellIndexOf(a) < cellIndexOf(b);
 }
 
 std::vector<uint16_t> frontierCellsOfBlock(const Map& map, const BlockView& view,
@@ -149,18 +155,20 @@ std::vector<VoxelKey> findFrontierCells(const Map& map, const FrontierFilter& fi
     const BlockKey hi = blockKeyOf(map.keyOf(filter.box_max_m));
     blocks = view.in(lo, hi);
   }
+  // Blocks in order, cells in index order within each: the result needs no sort of its own.
+  std::sort(blocks.begin(), blocks.end(),
+            [](const BlockRef& a, const BlockRef& b) { return blockOrder(a.key, b.key); });
   const int n_threads = threads > 0 ? threads : omp_get_max_threads();
-  std::vector<std::vector<VoxelKey>> per_thread(n_threads);
+  std::vector<std::vector<uint16_t>> found(blocks.size());
   const int64_t n = static_cast<int64_t>(blocks.size());
 #pragma omp parallel for schedule(dynamic, 64) num_threads(n_threads)
-  for (int64_t i = 0; i < n; ++i) {
-    std::vector<VoxelKey>& out = per_thread[omp_get_thread_num()];
-    for (uint16_t c : frontierCellsOfBlock(map, view, blocks[i].key, filter))
-      out.push_back(voxelKeyOf(blocks[i].key, c));
-  }
+  for (int64_t i = 0; i < n; ++i) found[i] = frontierCellsOfBlock(map, view, blocks[i].key, filter);
+  size_t total = 0;
+  for (const auto& f : found) total += f.size();
   std::vector<VoxelKey> cells;
-  for (auto& v : per_thread) cells.insert(cells.end(), v.begin(), v.end());
-  std::sort(cells.begin(), cells.end(), keyLess);
+  cells.reserve(total);
+  for (size_t i = 0; i < blocks.size(); ++i)
+    for (uint16_t c : found[i]) cells.push_back(voxelKeyOf(blocks[i].key, c));
   return cells;
 }
 

@@ -5,7 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <unordered_set>
+#include <unordered_map>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/planning/frontier_cells.h"
@@ -14,25 +14,106 @@ namespace fragg::planning {
 
 namespace {
 
-using KeySet = std::unordered_set<VoxelKey, VoxelKeyHash>;
-
-std::vector<std::vector<VoxelKey>> components(const std::vector<VoxelKey>& cells) {
-  KeySet left(cells.begin(), cells.end());
-  std::vector<std::vector<VoxelKey>> out;
-  for (const VoxelKey& seed : cells) {  // sorted input: deterministic components
-    if (!left.erase(seed)) continue;
-    std::vector<VoxelKey> comp{seed};
-    for (size_t i = 0; i < comp.size(); ++i) {
-      const VoxelKey k = comp[i];
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const VoxelKey n{k.x + dx, k.y + dy, k.z + dz};
-            if (left.erase(n)) comp.push_back(n);
-          }
+// Frontier cells grouped by block: a 512-bit mask per block and the index of its first cell,
+// so that a cell's index is its block's base plus its rank in the mask.
+class CellIndex {
+ public:
+  explicit CellIndex(const std::vector<VoxelKey>& sorted) {
+    for (size_t i = 0; i < sorted.size(); ++i) {
+      const BlockKey b = blockKeyOf(sorted[i]);
+      if (blocks_.empty() || blocks_.back().key != b) {
+        blocks_.push_back({b, {}, {}, static_cast<uint32_t>(i)});
+        lookup_.emplace(b, static_cast<uint32_t>(blocks_.size() - 1));
+      }
+      const int c = cellIndexOf(sorted[i]);
+      blocks_.back().mask[c >> 6] |= uint64_t{1} << (c & 63);
     }
-    std::sort(comp.begin(), comp.end(), keyLess);
-    out.push_back(std::move(comp));
+    for (Entry& e : blocks_) {
+      uint32_t n = 0;
+      for (int w = 0; w < 8; ++w) {
+        e.before[w] = n;
+        n += static_cast<uint32_t>(__builtin_popcountll(e.mask[w]));
+      }
+    }
+  }
+  struct Entry {
+    BlockKey key;
+    uint64_t mask[8];
+    uint32_t before[8];  ///< cells in the words before
+    uint32_t base;       ///< index of the block's first cell
+  };
+  const std::vector<Entry>& blocks() const { return blocks_; }
+  /// Index of the entry for block `b`, -1 when it holds no cell.
+  int64_t find(const BlockKey& b) const {
+    const auto it = lookup_.find(b);
+    return it == lookup_.end() ? -1 : int64_t{it->second};
+  }
+  /// Index of cell `c` of entry `e`, -1 when it is not a frontier cell.
+  int64_t cell(const Entry& e, int c) const {
+    const uint64_t word = e.mask[c >> 6], bit = uint64_t{1} << (c & 63);
+    if (!(word & bit)) return -1;
+    return int64_t{e.base} + e.before[c >> 6] + __builtin_popcountll(word & (bit - 1));
+  }
+
+ private:
+  std::vector<Entry> blocks_;
+  std::unordered_map<BlockKey, uint32_t, BlockKeyHash> lookup_;
+};
+
+uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t i) {
+  while (parent[i] != i) {
+    parent[i] = parent[parent[i]];
+    i = parent[i];
+  }
+  return i;
+}
+
+// 26-connected components of `sorted` (frontierOrder), each in that order, ordered by their
+// first cell: union-find over the cells, each joined with its 13 neighbours that come before
+// it (lexicographically negative offsets).
+std::vector<std::vector<VoxelKey>> components(const std::vector<VoxelKey>& sorted) {
+  const CellIndex index(sorted);
+  std::vector<uint32_t> parent(sorted.size());
+  for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  for (const CellIndex::Entry& e : index.blocks()) {
+    int64_t near[27];
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx)
+          near[(dz + 1) * 9 + (dy + 1) * 3 + dx + 1] =
+              index.find({e.key.x + dx, e.key.y + dy, e.key.z + dz});
+    for (int w = 0; w < 8; ++w)
+      for (uint64_t bits = e.mask[w]; bits; bits &= bits - 1) {
+        const int c = w * 64 + __builtin_ctzll(bits);
+        const uint32_t self = static_cast<uint32_t>(index.cell(e, c));
+        const int x = c & kBlockMask, y = (c >> kBlockBits) & kBlockMask, z = c >> (2 * kBlockBits);
+        for (int o = 0; o < 13; ++o) {  // offsets before (0, 0, 0) in (dz, dy, dx) order
+          const int dz = o / 9 - 1, dy = (o / 3) % 3 - 1, dx = o % 3 - 1;
+          const int nx = x + dx, ny = y + dy, nz = z + dz;
+          const int bx = nx < 0 ? 0 : (nx >= kBlockSize ? 2 : 1);
+          const int by = ny < 0 ? 0 : (ny >= kBlockSize ? 2 : 1);
+          const int bz = nz < 0 ? 0 : (nz >= kBlockSize ? 2 : 1);
+          const int64_t nb = near[bz * 9 + by * 3 + bx];
+          if (nb < 0) continue;
+          const int nc = (nx & kBlockMask) | ((ny & kBlockMask) << kBlockBits) |
+                         ((nz & kBlockMask) << (2 * kBlockBits));
+          const int64_t other = index.cell(index.blocks()[nb], nc);
+          if (other < 0) continue;
+          const uint32_t ra = findRoot(parent, self), rb = findRoot(parent, uint32_t(other));
+          if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+        }
+      }
+  }
+  // The root of a component is its smallest cell index, i.e. its first cell.
+  std::vector<uint32_t> slot(sorted.size(), UINT32_MAX);
+  std::vector<std::vector<VoxelKey>> out;
+  for (uint32_t i = 0; i < sorted.size(); ++i) {
+    const uint32_t r = findRoot(parent, i);
+    if (slot[r] == UINT32_MAX) {
+      slot[r] = static_cast<uint32_t>(out.size());
+      out.emplace_back();
+    }
+    out[slot[r]].push_back(sorted[i]);
   }
   return out;
 }
@@ -86,17 +167,33 @@ void describe(const Map& map, const BlockView& view, FrontierCluster& c) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero(), dir = Eigen::Vector3d::Zero();
   c.min_m = Eigen::Vector3d::Constant(1e300);
   c.max_m = -c.min_m;
+  // Cells come grouped by block: the 27 blocks around are looked up once per block.
+  BlockKey current{INT32_MIN, INT32_MIN, INT32_MIN};
+  const Block* near[27] = {};
   for (const VoxelKey& k : c.cells) {
+    const BlockKey b = blockKeyOf(k);
+    if (b != current) {
+      current = b;
+      for (int i = 0; i < 27; ++i)
+        near[i] = view.findBlock({b.x + i % 3 - 1, b.y + (i / 3) % 3 - 1, b.z + i / 9 - 1});
+    }
     const Eigen::Vector3d p = map.centerOf(k);
     sum += p;
     c.min_m = c.min_m.cwiseMin(p - Eigen::Vector3d::Constant(half));
     c.max_m = c.max_m.cwiseMax(p + Eigen::Vector3d::Constant(half));
+    const int x = k.x & kBlockMask, y = k.y & kBlockMask, z = k.z & kBlockMask;
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           if (!dx && !dy && !dz) continue;
-          const Cell* n = view.findCell({k.x + dx, k.y + dy, k.z + dz});
-          if (!n || map.state(*n) == CellState::kUnknown)
+          const int nx = x + dx, ny = y + dy, nz = z + dz;
+          const int bx = nx < 0 ? 0 : (nx >= kBlockSize ? 2 : 1);
+          const int by = ny < 0 ? 0 : (ny >= kBlockSize ? 2 : 1);
+          const int bz = nz < 0 ? 0 : (nz >= kBlockSize ? 2 : 1);
+          const Block* nb = near[bz * 9 + by * 3 + bx];
+          const int nc = (nx & kBlockMask) | ((ny & kBlockMask) << kBlockBits) |
+                         ((nz & kBlockMask) << (2 * kBlockBits));
+          if (!nb || map.state(nb->cells[nc]) == CellState::kUnknown)
             dir += Eigen::Vector3d(dx, dy, dz).normalized();
         }
   }
@@ -121,15 +218,17 @@ FrontierClusterer::FrontierClusterer(const ClusterOptions& options) : options_(o
 std::vector<FrontierCluster> FrontierClusterer::cluster(const Map& map,
                                                         const std::vector<VoxelKey>& cells) {
   std::vector<VoxelKey> sorted = cells;
-  std::sort(sorted.begin(), sorted.end(), keyLess);
+  if (!std::is_sorted(sorted.begin(), sorted.end(), frontierOrder))
+    std::sort(sorted.begin(), sorted.end(), frontierOrder);
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
   std::vector<std::vector<VoxelKey>> pieces;
   for (const auto& comp : components(sorted)) {
     if (comp.size() < options_.min_cells) continue;
     splitToExtent(comp, options_.max_extent_m / map.resolution(), pieces);
   }
-  for (auto& p : pieces) std::sort(p.begin(), p.end(), keyLess);
+  // Components and their pieces keep the input's order: no sort within them.
   std::sort(pieces.begin(), pieces.end(),
-            [](const auto& a, const auto& b) { return keyLess(a.front(), b.front()); });
+            [](const auto& a, const auto& b) { return frontierOrder(a.front(), b.front()); });
 
   const BlockView view = map.blockView();
   std::unordered_map<uint64_t, uint64_t> now;

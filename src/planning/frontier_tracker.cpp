@@ -89,11 +89,14 @@ FrontierUpdateStats FrontierTracker::update(const Map& map) {
 }
 
 std::vector<VoxelKey> FrontierTracker::cells() const {
+  std::vector<BlockKey> blocks;
+  blocks.reserve(by_block_.size());
+  for (const auto& entry : by_block_) blocks.push_back(entry.first);
+  std::sort(blocks.begin(), blocks.end(), blockOrder);
   std::vector<VoxelKey> out;
   out.reserve(total_);
-  for (const auto& [block, indices] : by_block_)
-    for (uint16_t c : indices) out.push_back(voxelKeyOf(block, c));
-  std::sort(out.begin(), out.end(), keyLess);
+  for (const BlockKey& b : blocks)
+    for (uint16_t c : by_block_.at(b)) out.push_back(voxelKeyOf(b, c));
   return out;
 }
 

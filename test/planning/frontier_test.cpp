@@ -59,7 +59,7 @@ std::vector<VoxelKey> bruteForceFrontiers(const Map& map, const FrontierFilter& 
       if (!near) out.push_back(k);
     }
   });
-  std::sort(out.begin(), out.end(), keyLess);
+  std::sort(out.begin(), out.end(), frontierOrder);
   return out;
 }
 

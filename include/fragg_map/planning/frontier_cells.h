@@ -31,10 +31,12 @@ struct FrontierFilter {
   bool any() const { return use_box || use_height || min_obstacle_distance_m > 0.0; }
 };
 
-/// Orders keys by z, then y, then x (the order frontier results are returned in).
-bool keyLess(const VoxelKey& a, const VoxelKey& b);
+/// The order frontier results are returned in: by block (z, then y, then x block key), then by
+/// cell index within the block (cellIndexOf: local z, y, x).
+bool frontierOrder(const VoxelKey& a, const VoxelKey& b);
+bool blockOrder(const BlockKey& a, const BlockKey& b);
 
-/// Every frontier cell of the map that passes `filter`, sorted by keyLess; blocks examined in
+/// Every frontier cell of the map that passes `filter`, sorted by frontierOrder; blocks examined in
 /// parallel (`threads` OpenMP threads, 0 = every core). Hold the map's read lock.
 std::vector<VoxelKey> findFrontierCells(const Map& map, const FrontierFilter& filter = {},
                                         int threads = 0);

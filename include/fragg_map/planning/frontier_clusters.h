@@ -23,7 +23,7 @@ struct ClusterOptions {
 
 struct FrontierCluster {
   uint64_t id = 0;
-  std::vector<VoxelKey> cells;                           ///< sorted by keyLess
+  std::vector<VoxelKey> cells;                           ///< sorted by frontierOrder
   Eigen::Vector3d centroid_m = Eigen::Vector3d::Zero();  ///< mean of the cell centres
   Eigen::Vector3d min_m = Eigen::Vector3d::Zero();       ///< bounds of the cells' cubes
   Eigen::Vector3d max_m = Eigen::Vector3d::Zero();
@@ -36,7 +36,7 @@ class FrontierClusterer {
  public:
   explicit FrontierClusterer(const ClusterOptions& options = {});
 
-  /// Clusters of `cells` (frontier cells of `map`), ordered by their first cell (keyLess).
+  /// Clusters of `cells` (frontier cells of `map`), ordered by their first cell (frontierOrder).
   /// Ids carry over from the previous call for clusters with exactly the same cells; new
   /// clusters get ids never used before.
   std::vector<FrontierCluster> cluster(const Map& map, const std::vector<VoxelKey>& cells);

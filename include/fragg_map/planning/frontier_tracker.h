@@ -30,7 +30,7 @@ class FrontierTracker {
   /// Forgets everything: the next update is a full one.
   void reset();
 
-  /// The frontier cells, sorted by keyLess.
+  /// The frontier cells, sorted by frontierOrder.
   std::vector<VoxelKey> cells() const;
   uint64_t size() const { return total_; }
   /// The map revision the set belongs to.
