@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <unordered_set>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/planning/collision_check.h"
@@ -39,6 +38,60 @@ std::vector<Eigen::Vector3d> sensorRays(const GainSensor& s) {
   return rays;
 }
 
+// Cells a viewpoint's rays already counted: open addressing over packed keys, emptied in
+// O(1) between viewpoints by a generation number.
+class SeenCells {
+ public:
+  SeenCells() { resize(1 << 16); }
+  void clear() {
+    if (++generation_ == 0) {  // wrapped: really empty the table
+      std::fill(stamps_.begin(), stamps_.end(), 0u);
+      generation_ = 1;
+    }
+    size_ = 0;
+  }
+  /// True when `key` was not in the set (it is now).
+  bool insert(uint64_t key) {
+    if (2 * (size_ + 1) > keys_.size()) grow();
+    size_t i = slotOf(key);
+    while (stamps_[i] == generation_) {
+      if (keys_[i] == key) return false;
+      i = (i + 1) & (keys_.size() - 1);
+    }
+    stamps_[i] = generation_;
+    keys_[i] = key;
+    ++size_;
+    return true;
+  }
+
+ private:
+  size_t slotOf(uint64_t key) const {
+    key ^= key >> 31;
+    key *= 0x9e3779b97f4a7c15ULL;
+    return static_cast<size_t>(key >> 20) & (keys_.size() - 1);
+  }
+  void resize(size_t n) {
+    keys_.assign(n, 0);
+    stamps_.assign(n, 0);
+    generation_ = 1;
+    size_ = 0;
+  }
+  void grow() {
+    std::vector<uint64_t> old_keys;
+    std::vector<uint32_t> old_stamps;
+    old_keys.swap(keys_);
+    old_stamps.swap(stamps_);
+    const uint32_t old_generation = generation_;
+    resize(old_keys.size() * 2);
+    for (size_t i = 0; i < old_keys.size(); ++i)
+      if (old_stamps[i] == old_generation) insert(old_keys[i]);
+  }
+  std::vector<uint64_t> keys_;
+  std::vector<uint32_t> stamps_;
+  uint32_t generation_ = 1;
+  size_t size_ = 0;
+};
+
 uint64_t packKey(const VoxelKey& k) {
   return (uint64_t(uint32_t(k.x)) & 0x1fffff) | ((uint64_t(uint32_t(k.y)) & 0x1fffff) << 21) |
          ((uint64_t(uint32_t(k.z)) & 0x1fffff) << 42);
@@ -48,7 +101,7 @@ uint64_t packKey(const VoxelKey& k) {
 // voxels, adding the entropy of each unknown cell not seen before; stops after an occupied
 // cell.
 double walkRay(const Map& map, const BlockView& view, const Eigen::Vector3d& origin_v,
-               const Eigen::Vector3d& dir, double length_v, std::unordered_set<uint64_t>& seen) {
+               const Eigen::Vector3d& dir, double length_v, SeenCells& seen) {
   int cur[3], step[3];
   double t_max[3], t_delta[3];
   for (int a = 0; a < 3; ++a) {
@@ -80,8 +133,7 @@ double walkRay(const Map& map, const BlockView& view, const Eigen::Vector3d& ori
     const Cell* cell = block ? &block->cells[cellIndexOf(k)] : nullptr;
     const CellState s = cell ? map.state(*cell) : CellState::kUnknown;
     if (s == CellState::kOccupied) break;
-    if (s == CellState::kUnknown && seen.insert(packKey(k)).second)
-      gain += cellEntropyBits(map, cell);
+    if (s == CellState::kUnknown && seen.insert(packKey(k))) gain += cellEntropyBits(map, cell);
     const int a =
         t_max[0] < t_max[1] ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
     t = t_max[a];
@@ -147,8 +199,8 @@ double viewpointGainBits(const Map& map, const BlockView& view, const Eigen::Vec
   const double res = map.resolution();
   const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Vector3d origin_v = position_m / res;
-  std::unordered_set<uint64_t> seen;
-  seen.reserve(4096);
+  thread_local SeenCells seen;
+  seen.clear();
   double gain = 0.0;
   for (const Eigen::Vector3d& ray : sensorRays(sensor))
     gain += walkRay(map, view, origin_v, R * ray, sensor.max_range_m / res, seen);

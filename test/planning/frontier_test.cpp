@@ -273,6 +273,26 @@ TEST(Viewpoints, GainMatchesBruteForceRayCount) {
             viewpointGainBits(map, map.blockView(), origin, 3.14159, s));
 }
 
+TEST(Viewpoints, GainInUnknownSpaceCountsEveryDistinctCell) {
+  MapParams p;
+  p.resolution_m = 0.1;
+  const Map map(p);  // nothing observed: every cell is 1 bit
+  GainSensor s;
+  s.columns = 32;
+  s.rows = 24;
+  s.max_range_m = 8.0;
+  const Eigen::Vector3d origin(0.01, 0.02, 0.03);
+  const double expected = bruteForceGain(map, origin, 0.3, s);
+  ASSERT_GT(expected, 40000.0) << "enough cells to grow the gain's cell set several times";
+  const double gain = viewpointGainBits(map, map.blockView(), origin, 0.3, s);
+  EXPECT_GE(gain, expected);
+  EXPECT_LE(gain, expected * 1.01);
+  // The same viewpoint again (the set is reused between viewpoints) and in a batch.
+  EXPECT_EQ(viewpointGainBits(map, map.blockView(), origin, 0.3, s), gain);
+  const auto batch = viewpointGainsBits(map, {origin, origin}, {0.3, 0.3}, s);
+  EXPECT_EQ(batch, std::vector<double>({gain, gain}));
+}
+
 TEST(Viewpoints, RankedCandidatesInFreeSpace) {
   MapParams p;
   p.resolution_m = 0.1;
