@@ -4,6 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_map>
 
@@ -106,51 +107,57 @@ std::vector<std::vector<VoxelKey>> components(const std::vector<VoxelKey>& sorte
   }
   // The root of a component is its smallest cell index, i.e. its first cell.
   std::vector<uint32_t> slot(sorted.size(), UINT32_MAX);
-  std::vector<std::vector<VoxelKey>> out;
+  std::vector<uint32_t> sizes;
   for (uint32_t i = 0; i < sorted.size(); ++i) {
     const uint32_t r = findRoot(parent, i);
+    parent[i] = r;
     if (slot[r] == UINT32_MAX) {
-      slot[r] = static_cast<uint32_t>(out.size());
-      out.emplace_back();
+      slot[r] = static_cast<uint32_t>(sizes.size());
+      sizes.push_back(0);
     }
-    out[slot[r]].push_back(sorted[i]);
+    ++sizes[slot[r]];
   }
+  std::vector<std::vector<VoxelKey>> out(sizes.size());
+  for (size_t c = 0; c < sizes.size(); ++c) out[c].reserve(sizes[c]);
+  for (uint32_t i = 0; i < sorted.size(); ++i) out[slot[parent[i]]].push_back(sorted[i]);
   return out;
 }
 
-// Splits `cells` along their principal axis until each piece's bounding box edge is at most
-// max_extent_cells (in cells).
-void splitToExtent(const std::vector<VoxelKey>& cells, double max_extent_cells,
-                   std::vector<std::vector<VoxelKey>>& out) {
+// Splits cells[begin, end) in place along their principal axis (at the mean) until each
+// piece's bounding box edge is at most max_extent_cells (in cells); appends the pieces'
+// ranges; each piece keeps the cells' order (a stable partition).
+void splitToExtent(std::vector<VoxelKey>& cells, size_t begin, size_t end, double max_extent_cells,
+                   std::vector<std::pair<size_t, size_t>>& out) {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo, mean = Eigen::Vector3d::Zero();
-  for (const VoxelKey& k : cells) {
-    const Eigen::Vector3d p(k.x, k.y, k.z);
+  for (size_t i = begin; i < end; ++i) {
+    const Eigen::Vector3d p(cells[i].x, cells[i].y, cells[i].z);
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
     mean += p;
   }
-  mean /= double(cells.size());
-  if (max_extent_cells <= 0.0 || cells.size() < 2 ||
+  mean /= double(end - begin);
+  if (max_extent_cells <= 0.0 || end - begin < 2 ||
       (hi - lo).maxCoeff() + 1.0 <= max_extent_cells + 1e-9) {
-    out.push_back(cells);
+    out.emplace_back(begin, end);
     return;
   }
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const VoxelKey& k : cells) {
-    const Eigen::Vector3d d = Eigen::Vector3d(k.x, k.y, k.z) - mean;
+  for (size_t i = begin; i < end; ++i) {
+    const Eigen::Vector3d d = Eigen::Vector3d(cells[i].x, cells[i].y, cells[i].z) - mean;
     cov += d * d.transpose();
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
   const Eigen::Vector3d axis = eig.eigenvectors().col(2);  // largest eigenvalue
-  std::vector<VoxelKey> a, b;
-  for (const VoxelKey& k : cells)
-    (axis.dot(Eigen::Vector3d(k.x, k.y, k.z) - mean) < 0.0 ? a : b).push_back(k);
-  if (a.empty() || b.empty()) {  // cannot happen for >= 2 distinct cells; be safe
-    out.push_back(cells);
+  const auto middle = std::stable_partition(
+      cells.begin() + begin, cells.begin() + end,
+      [&](const VoxelKey& k) { return axis.dot(Eigen::Vector3d(k.x, k.y, k.z) - mean) < 0.0; });
+  const size_t mid = static_cast<size_t>(middle - cells.begin());
+  if (mid == begin || mid == end) {  // cannot happen for >= 2 distinct cells; be safe
+    out.emplace_back(begin, end);
     return;
   }
-  splitToExtent(a, max_extent_cells, out);
-  splitToExtent(b, max_extent_cells, out);
+  splitToExtent(cells, begin, mid, max_extent_cells, out);
+  splitToExtent(cells, mid, end, max_extent_cells, out);
 }
 
 uint64_t hashCells(const std::vector<VoxelKey>& cells) {
@@ -167,6 +174,15 @@ void describe(const Map& map, const BlockView& view, FrontierCluster& c) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero(), dir = Eigen::Vector3d::Zero();
   c.min_m = Eigen::Vector3d::Constant(1e300);
   c.max_m = -c.min_m;
+  // Unit vectors towards the 27 neighbours (the centre's is zero and never used).
+  static const auto kUnit = [] {
+    std::array<Eigen::Vector3d, 27> u;
+    for (int i = 0; i < 27; ++i) {
+      const Eigen::Vector3d d(i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1);
+      u[i] = i == 13 ? d : Eigen::Vector3d(d.normalized());
+    }
+    return u;
+  }();
   // Cells come grouped by block: the 27 blocks around are looked up once per block.
   BlockKey current{INT32_MIN, INT32_MIN, INT32_MIN};
   const Block* near[27] = {};
@@ -194,7 +210,7 @@ void describe(const Map& map, const BlockView& view, FrontierCluster& c) {
           const int nc = (nx & kBlockMask) | ((ny & kBlockMask) << kBlockBits) |
                          ((nz & kBlockMask) << (2 * kBlockBits));
           if (!nb || map.state(nb->cells[nc]) == CellState::kUnknown)
-            dir += Eigen::Vector3d(dx, dy, dz).normalized();
+            dir += kUnit[(dz + 1) * 9 + (dy + 1) * 3 + dx + 1];
         }
   }
   c.centroid_m = sum / double(c.cells.size());
@@ -222,11 +238,17 @@ std::vector<FrontierCluster> FrontierClusterer::cluster(const Map& map,
     std::sort(sorted.begin(), sorted.end(), frontierOrder);
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
   std::vector<std::vector<VoxelKey>> pieces;
-  for (const auto& comp : components(sorted)) {
+  for (auto& comp : components(sorted)) {
     if (comp.size() < options_.min_cells) continue;
-    splitToExtent(comp, options_.max_extent_m / map.resolution(), pieces);
+    std::vector<std::pair<size_t, size_t>> ranges;
+    // stable_partition keeps the order on each side: pieces stay in frontierOrder.
+    splitToExtent(comp, 0, comp.size(), options_.max_extent_m / map.resolution(), ranges);
+    if (ranges.size() == 1) {
+      pieces.push_back(std::move(comp));
+      continue;
+    }
+    for (const auto& [b, e] : ranges) pieces.emplace_back(comp.begin() + b, comp.begin() + e);
   }
-  // Components and their pieces keep the input's order: no sort within them.
   std::sort(pieces.begin(), pieces.end(),
             [](const auto& a, const auto& b) { return frontierOrder(a.front(), b.front()); });
 
