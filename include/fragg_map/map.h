@@ -175,6 +175,12 @@ class Map {
   const OccupancyModel& model() const { return model_; }
   double resolution() const { return params_.resolution_m; }
   uint64_t revision() const { return revision_; }
+  /// Changes whenever blocks leave or join the map's view other than through their cells
+  /// changing: erased (clearBox, truncate, reset) or paged out or in. changedBlocksSince()
+  /// lists neither, so incremental readers (frontiers) recompute everything when it differs
+  /// from the value they last saw. Unique across maps: a new or loaded map never has the
+  /// value of another map.
+  uint64_t viewEpoch() const { return view_epoch_; }
   size_t scanCount() const { return scans_; }
   const char* backendName() const;
   /// Why that backend ("auto: CUDA device 0 (...)", "auto: CPU backend (no CUDA device)").
@@ -272,6 +278,9 @@ class Map {
   std::unique_ptr<std::mutex> sync_mutex_;
   std::unique_ptr<Culler> culler_;
   uint64_t revision_ = 0;
+  uint64_t view_epoch_ = 0;
+  /// A new value for view_epoch_ (from a process-wide counter).
+  void bumpViewEpoch();
   size_t scans_ = 0;
   ScanId next_scan_id_ = 0;
   std::unique_ptr<ScanStore> scan_store_;

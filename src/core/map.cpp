@@ -1,6 +1,7 @@
 #include "fragg_map/map.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -64,8 +65,14 @@ double farthestPoint(const PointCloud& cloud) {
 }
 }  // namespace
 
+void Map::bumpViewEpoch() {
+  static std::atomic<uint64_t> counter{0};
+  view_epoch_ = ++counter;
+}
+
 Map::Map(const MapParams& params)
     : params_(validated(params)), model_(OccupancyModel::fromParams(params.occupancy)) {
+  bumpViewEpoch();
   BackendChoice choice = makeBackend(params_);
   backend_ = std::move(choice.backend);
   backend_reason_ = std::move(choice.reason);
@@ -87,6 +94,7 @@ Map& Map::operator=(Map&& other) noexcept {
   sync_mutex_ = std::move(other.sync_mutex_);
   culler_ = std::move(other.culler_);
   revision_ = other.revision_;
+  view_epoch_ = other.view_epoch_;
   scans_ = other.scans_;
   next_scan_id_ = other.next_scan_id_;
   scan_store_ = std::move(other.scan_store_);
@@ -359,6 +367,7 @@ uint64_t Map::clearCellsWhere(const std::vector<BlockIndex>& blocks,
     } else {
       blocks_.erase(key);
       if (pager_) pager_->noteErased(key);
+      bumpViewEpoch();
       if (blocks_erased) ++*blocks_erased;
     }
   }
@@ -381,6 +390,7 @@ void Map::reset() {
   culler_->reset();
   scan_store_->clear();
   ++revision_;
+  bumpViewEpoch();
   scans_ = 0;
   next_scan_id_ = 0;
 }

@@ -125,12 +125,14 @@ void Map::pageInBlocks(const BlockKey& lo, const BlockKey& hi) {
   // The device cache must not hold a view of the box while host blocks appear in it.
   backend_->cache().invalidate(lo, hi, blocks_);
   pager_->pageIn(lo, hi, blocks_);
+  bumpViewEpoch();
 }
 
 void Map::pageInAllBlocks() {
   if (!pager_ || pager_->pagedOutCount() == 0) return;
   backend_->cache().invalidateAll(blocks_);
   pager_->pageInAll(blocks_);
+  bumpViewEpoch();
 }
 
 void Map::ensureResident(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map) {
@@ -174,7 +176,10 @@ void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
     backend_->cache().sync(blocks_);
   }
   pager_->commit(blocks_, revision_, metaOf(params_, scans_));
-  if (over) pager_->evict(blocks_, sensor_map);
+  if (over) {
+    pager_->evict(blocks_, sensor_map);
+    bumpViewEpoch();
+  }
 }
 
 void Map::closePaging() noexcept {

@@ -27,3 +27,24 @@ if(fcl_FOUND)
 else()
   message(STATUS "fragg_map: FCL not found: no FCL oracle test for collision checking")
 endif()
+
+# Frontier cells against a brute force, incremental against full over a simulated drive,
+# clusters, viewpoints and gains against a brute-force ray count.
+fragg_add_test(fragg_frontier_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/frontier_test.cpp
+  LIBS fragg_map_planning fragg_map_sim_lib
+  LABELS planning)
+if(TARGET fragg_frontier_test)
+  target_compile_definitions(fragg_frontier_test PRIVATE FRAGG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+endif()
+
+# Runs the built `fragg_map frontiers` on hand-written maps saved as .fgm.
+fragg_add_test(cli_frontiers_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/cli_frontiers_test.cpp
+  LIBS fragg_map_planning nlohmann_json::nlohmann_json
+  LABELS cli planning)
+if(TARGET cli_frontiers_test)
+  add_dependencies(cli_frontiers_test fragg_map_cli)
+  target_compile_definitions(cli_frontiers_test PRIVATE FRAGG_CLI_PATH="$<TARGET_FILE:fragg_map_cli>")
+  target_include_directories(cli_frontiers_test PRIVATE ${CMAKE_CURRENT_LIST_DIR}/../interop)
+endif()

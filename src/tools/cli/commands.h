@@ -18,5 +18,6 @@ void addCompareCommand(CLI::App& app);
 void addEvalCommand(CLI::App& app);
 void addOctomapBuildCommand(CLI::App& app);
 void addCollideCommand(CLI::App& app);
+void addFrontiersCommand(CLI::App& app);
 
 }  // namespace fragg::cli

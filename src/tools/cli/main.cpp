@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   fragg::cli::addEvalCommand(app);
   fragg::cli::addOctomapBuildCommand(app);
   fragg::cli::addCollideCommand(app);
+  fragg::cli::addFrontiersCommand(app);
   const std::string command_error = fragg::tools::commandError(app, argc, argv);
   if (!command_error.empty()) {
     std::fprintf(stderr, "fragg_map: error: %s\n", command_error.c_str());

@@ -1,0 +1,76 @@
+// Viewpoints for frontier clusters, scored by information gain: the expected entropy reduction
+// of the cells a sensor at the viewpoint would observe. Rays of the sensor model are cast from
+// the viewpoint through the map (exact DDA) until they reach an occupied cell or the maximum
+// range; every distinct unknown cell they cross (never observed, or inside the unknown band)
+// adds its entropy in bits (1 bit for a never-observed cell, H(p) for a cell in the band).
+// Known cells add nothing: observing them again cannot reduce their entropy by much.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <vector>
+
+#include "fragg_map/map.h"
+#include "fragg_map/planning/frontier_clusters.h"
+
+namespace fragg::planning {
+
+/// The sensor a gain is computed for; its frame looks along +x rotated by the viewpoint's yaw
+/// (pitch and roll zero).
+struct GainSensor {
+  enum class Kind { kPinhole, kLidar };
+  Kind kind = Kind::kPinhole;
+  /// Rays: pinhole, columns x rows over the field of view; LiDAR, azimuths (full turn) x
+  /// elevations.
+  int columns = 64, rows = 48;
+  double horizontal_fov_rad = 1.5708, vertical_fov_rad = 1.2;      ///< pinhole, (0, pi)
+  double min_elevation_rad = -0.2618, max_elevation_rad = 0.2618;  ///< LiDAR
+  double max_range_m = 10.0;
+  /// Throws InvalidArgument naming the bad field.
+  void validate() const;
+};
+
+/// Entropy gain (bits) of the sensor at `position_m` with `yaw_rad`. Hold the map's read lock.
+double viewpointGainBits(const Map& map, const BlockView& view, const Eigen::Vector3d& position_m,
+                         double yaw_rad, const GainSensor& sensor);
+
+/// Gains of many viewpoints at once (OpenMP, `threads` 0 = every core); result i belongs to
+/// position i and yaw i (the two must have the same length).
+std::vector<double> viewpointGainsBits(const Map& map,
+                                       const std::vector<Eigen::Vector3d>& positions_m,
+                                       const std::vector<double>& yaws_rad,
+                                       const GainSensor& sensor, int threads = 0);
+
+/// Entropy (bits) of a cell as the gain counts it: 1 for never observed, H(p) inside the
+/// unknown band, 0 for free and occupied cells.
+double cellEntropyBits(const Map& map, const Cell* cell);
+
+struct ViewpointOptions {
+  std::vector<double> radii_m = {1.5, 3.0};  ///< ring radii around the cluster centroid, > 0
+  int angles = 12;                           ///< candidates per ring, >= 1
+  std::vector<double> heights_m = {0.0};     ///< offsets from the centroid's z
+  /// > 0: the candidate must be free with no occupied or unknown cell within this radius
+  /// (a sphere collision check with unknown cells as obstacles); 0: its own cell free.
+  double clearance_m = 0.3;
+  int top_k = 3;  ///< >= 1
+  GainSensor sensor;
+  /// Ranks by gain per metre of straight-line distance from this position (else by gain).
+  std::optional<Eigen::Vector3d> robot_m;
+  /// Throws InvalidArgument naming the bad field.
+  void validate() const;
+};
+
+struct Viewpoint {
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+  double yaw_rad = 0.0;  ///< facing the cluster centroid
+  double gain_bits = 0.0;
+  double distance_m = 0.0;  ///< from the robot (0 without one)
+  double score = 0.0;       ///< gain, or gain per metre with a robot position
+};
+
+/// The best `top_k` viewpoints of a cluster (highest score first; candidates with zero gain
+/// are dropped). Hold the map's read lock.
+std::vector<Viewpoint> clusterViewpoints(const Map& map, const FrontierCluster& cluster,
+                                         const ViewpointOptions& options);
+
+}  // namespace fragg::planning

@@ -1,0 +1,283 @@
+#include "fragg_map/planning/viewpoints.h"
+
+#include <fmt/format.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/planning/collision_check.h"
+
+namespace fragg::planning {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Unit ray directions of the sensor in its own frame (x forward, z up).
+std::vector<Eigen::Vector3d> sensorRays(const GainSensor& s) {
+  std::vector<Eigen::Vector3d> rays;
+  rays.reserve(size_t(s.columns) * size_t(s.rows));
+  for (int r = 0; r < s.rows; ++r)
+    for (int c = 0; c < s.columns; ++c) {
+      if (s.kind == GainSensor::Kind::kPinhole) {
+        // Pixel centres on the image plane at x = 1.
+        const double u = ((c + 0.5) / s.columns - 0.5) * 2.0 * std::tan(0.5 * s.horizontal_fov_rad);
+        const double v = ((r + 0.5) / s.rows - 0.5) * 2.0 * std::tan(0.5 * s.vertical_fov_rad);
+        rays.push_back(Eigen::Vector3d(1.0, -u, -v).normalized());
+      } else {
+        const double az = 2.0 * kPi * c / s.columns;
+        const double el = s.rows == 1
+                              ? 0.5 * (s.min_elevation_rad + s.max_elevation_rad)
+                              : s.min_elevation_rad +
+                                    (s.max_elevation_rad - s.min_elevation_rad) * r / (s.rows - 1);
+        rays.emplace_back(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+      }
+    }
+  return rays;
+}
+
+// Cells a viewpoint's rays already counted: open addressing over packed keys, emptied in
+// O(1) between viewpoints by a generation number.
+class SeenCells {
+ public:
+  SeenCells() { resize(1 << 16); }
+  void clear() {
+    if (++generation_ == 0) {  // wrapped: really empty the table
+      std::fill(stamps_.begin(), stamps_.end(), 0u);
+      generation_ = 1;
+    }
+    size_ = 0;
+  }
+  /// True when `key` was not in the set (it is now).
+  bool insert(uint64_t key) {
+    if (2 * (size_ + 1) > keys_.size()) grow();
+    size_t i = slotOf(key);
+    while (stamps_[i] == generation_) {
+      if (keys_[i] == key) return false;
+      i = (i + 1) & (keys_.size() - 1);
+    }
+    stamps_[i] = generation_;
+    keys_[i] = key;
+    ++size_;
+    return true;
+  }
+
+ private:
+  size_t slotOf(uint64_t key) const {
+    key ^= key >> 31;
+    key *= 0x9e3779b97f4a7c15ULL;
+    return static_cast<size_t>(key >> 20) & (keys_.size() - 1);
+  }
+  void resize(size_t n) {
+    keys_.assign(n, 0);
+    stamps_.assign(n, 0);
+    generation_ = 1;
+    size_ = 0;
+  }
+  void grow() {
+    std::vector<uint64_t> old_keys;
+    std::vector<uint32_t> old_stamps;
+    old_keys.swap(keys_);
+    old_stamps.swap(stamps_);
+    const uint32_t old_generation = generation_;
+    resize(old_keys.size() * 2);
+    for (size_t i = 0; i < old_keys.size(); ++i)
+      if (old_stamps[i] == old_generation) insert(old_keys[i]);
+  }
+  std::vector<uint64_t> keys_;
+  std::vector<uint32_t> stamps_;
+  uint32_t generation_ = 1;
+  size_t size_ = 0;
+};
+
+uint64_t packKey(const VoxelKey& k) {
+  return (uint64_t(uint32_t(k.x)) & 0x1fffff) | ((uint64_t(uint32_t(k.y)) & 0x1fffff) << 21) |
+         ((uint64_t(uint32_t(k.z)) & 0x1fffff) << 42);
+}
+
+// Walks one ray (exact DDA in voxel units) from `origin_v` along unit `dir` for `length_v`
+// voxels, adding the entropy of each unknown cell not seen before; stops after an occupied
+// cell.
+double walkRay(const Map& map, const BlockView& view, const Eigen::Vector3d& origin_v,
+               const Eigen::Vector3d& dir, double length_v, SeenCells& seen) {
+  int cur[3], step[3];
+  double t_max[3], t_delta[3];
+  for (int a = 0; a < 3; ++a) {
+    cur[a] = static_cast<int>(std::floor(origin_v[a]));
+    if (dir[a] > 0.0) {
+      step[a] = 1;
+      t_delta[a] = 1.0 / dir[a];
+      t_max[a] = (cur[a] + 1 - origin_v[a]) / dir[a];
+    } else if (dir[a] < 0.0) {
+      step[a] = -1;
+      t_delta[a] = -1.0 / dir[a];
+      t_max[a] = (origin_v[a] - cur[a]) / -dir[a];
+    } else {
+      step[a] = 0;
+      t_delta[a] = t_max[a] = INFINITY;
+    }
+  }
+  double gain = 0.0;
+  BlockKey last_block{INT32_MIN, INT32_MIN, INT32_MIN};
+  const Block* block = nullptr;
+  double t = 0.0;
+  while (t <= length_v) {
+    const VoxelKey k{cur[0], cur[1], cur[2]};
+    const BlockKey b = blockKeyOf(k);
+    if (b != last_block) {
+      block = view.findBlock(b);
+      last_block = b;
+    }
+    const Cell* cell = block ? &block->cells[cellIndexOf(k)] : nullptr;
+    const CellState s = cell ? map.state(*cell) : CellState::kUnknown;
+    if (s == CellState::kOccupied) break;
+    if (s == CellState::kUnknown && seen.insert(packKey(k))) gain += cellEntropyBits(map, cell);
+    const int a =
+        t_max[0] < t_max[1] ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
+    t = t_max[a];
+    t_max[a] += t_delta[a];
+    cur[a] += step[a];
+  }
+  return gain;
+}
+
+}  // namespace
+
+void GainSensor::validate() const {
+  if (columns < 1 || rows < 1)
+    throw InvalidArgument(
+        fmt::format("gain sensor needs >= 1 column and row, got {} x {}", columns, rows));
+  if (!std::isfinite(max_range_m) || max_range_m <= 0.0)
+    throw InvalidArgument(
+        fmt::format("gain sensor max range must be finite and > 0, got {}", max_range_m));
+  if (kind == Kind::kPinhole) {
+    for (double fov : {horizontal_fov_rad, vertical_fov_rad})
+      if (!std::isfinite(fov) || fov <= 0.0 || fov >= kPi)
+        throw InvalidArgument(fmt::format("pinhole field of view must be in (0, pi), got {}", fov));
+  } else if (!std::isfinite(min_elevation_rad) || !std::isfinite(max_elevation_rad) ||
+             min_elevation_rad > max_elevation_rad || min_elevation_rad < -0.5 * kPi ||
+             max_elevation_rad > 0.5 * kPi) {
+    throw InvalidArgument(fmt::format("LiDAR elevations must satisfy -pi/2 <= {} <= {} <= pi/2",
+                                      min_elevation_rad, max_elevation_rad));
+  }
+}
+
+void ViewpointOptions::validate() const {
+  sensor.validate();
+  if (radii_m.empty()) throw InvalidArgument("viewpoint rings need at least one radius");
+  for (double r : radii_m)
+    if (!std::isfinite(r) || r <= 0.0)
+      throw InvalidArgument(fmt::format("viewpoint ring radius must be finite and > 0, got {}", r));
+  if (heights_m.empty()) throw InvalidArgument("viewpoint rings need at least one height");
+  for (double h : heights_m)
+    if (!std::isfinite(h)) throw InvalidArgument("viewpoint heights must be finite");
+  if (angles < 1)
+    throw InvalidArgument(fmt::format("viewpoint angles must be >= 1, got {}", angles));
+  if (!std::isfinite(clearance_m) || clearance_m < 0.0)
+    throw InvalidArgument(
+        fmt::format("viewpoint clearance must be finite and >= 0, got {}", clearance_m));
+  if (top_k < 1)
+    throw InvalidArgument(fmt::format("viewpoints per cluster (k) must be >= 1, got {}", top_k));
+  if (robot_m && !robot_m->allFinite()) throw InvalidArgument("robot position must be finite");
+}
+
+double cellEntropyBits(const Map& map, const Cell* cell) {
+  if (!cell || !cell->observed()) return 1.0;
+  if (map.state(*cell) != CellState::kUnknown) return 0.0;
+  const double p = probabilityOf(cell->log_odds_fx);
+  if (p <= 0.0 || p >= 1.0) return 0.0;
+  return -(p * std::log2(p) + (1.0 - p) * std::log2(1.0 - p));
+}
+
+double viewpointGainBits(const Map& map, const BlockView& view, const Eigen::Vector3d& position_m,
+                         double yaw_rad, const GainSensor& sensor) {
+  sensor.validate();
+  if (!position_m.allFinite() || !std::isfinite(yaw_rad))
+    throw InvalidArgument("viewpoint position and yaw must be finite");
+  const double res = map.resolution();
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Vector3d origin_v = position_m / res;
+  thread_local SeenCells seen;
+  seen.clear();
+  double gain = 0.0;
+  for (const Eigen::Vector3d& ray : sensorRays(sensor))
+    gain += walkRay(map, view, origin_v, R * ray, sensor.max_range_m / res, seen);
+  return gain;
+}
+
+std::vector<double> viewpointGainsBits(const Map& map,
+                                       const std::vector<Eigen::Vector3d>& positions_m,
+                                       const std::vector<double>& yaws_rad,
+                                       const GainSensor& sensor, int threads) {
+  sensor.validate();
+  if (positions_m.size() != yaws_rad.size())
+    throw InvalidArgument(
+        fmt::format("{} viewpoint positions but {} yaws", positions_m.size(), yaws_rad.size()));
+  if (threads < 0) throw InvalidArgument(fmt::format("threads must be >= 0, got {}", threads));
+  for (size_t i = 0; i < positions_m.size(); ++i)
+    if (!positions_m[i].allFinite() || !std::isfinite(yaws_rad[i]))
+      throw InvalidArgument(fmt::format("viewpoint {} has a non-finite position or yaw", i));
+  const BlockView view = map.blockView();
+  std::vector<double> gains(positions_m.size());
+  const int n_threads = threads > 0 ? threads : omp_get_max_threads();
+  const int64_t n = static_cast<int64_t>(positions_m.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(n_threads)
+  for (int64_t i = 0; i < n; ++i)
+    gains[i] = viewpointGainBits(map, view, positions_m[i], yaws_rad[i], sensor);
+  return gains;
+}
+
+std::vector<Viewpoint> clusterViewpoints(const Map& map, const FrontierCluster& cluster,
+                                         const ViewpointOptions& options) {
+  options.validate();
+  const BlockView view = map.blockView();
+  CollisionOptions clearance;
+  clearance.unknown_is_occupied = true;
+  const CollisionShape sphere = CollisionShape::sphere(std::max(options.clearance_m, 1e-9));
+  std::vector<Viewpoint> candidates;
+  for (double h : options.heights_m)
+    for (double r : options.radii_m)
+      for (int a = 0; a < options.angles; ++a) {
+        const double phi = 2.0 * kPi * a / options.angles;
+        Viewpoint v;
+        v.position_m =
+            cluster.centroid_m + Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), h);
+        const Cell* own = view.findCell(map.keyOf(v.position_m));
+        if (!own || map.state(*own) != CellState::kFree) continue;
+        if (options.clearance_m > 0.0) {
+          Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+          T.translation() = v.position_m;
+          if (checkPose(map, sphere, T, clearance).collides) continue;
+        }
+        const Eigen::Vector3d to_centroid = cluster.centroid_m - v.position_m;
+        v.yaw_rad = std::atan2(to_centroid.y(), to_centroid.x());
+        candidates.push_back(v);
+      }
+  std::vector<Eigen::Vector3d> positions;
+  std::vector<double> yaws;
+  for (const Viewpoint& v : candidates) {
+    positions.push_back(v.position_m);
+    yaws.push_back(v.yaw_rad);
+  }
+  const std::vector<double> gains = viewpointGainsBits(map, positions, yaws, options.sensor);
+  std::vector<Viewpoint> out;
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    Viewpoint v = candidates[i];
+    v.gain_bits = gains[i];
+    if (v.gain_bits <= 0.0) continue;
+    v.score = v.gain_bits;
+    if (options.robot_m) {
+      v.distance_m = (v.position_m - *options.robot_m).norm();
+      v.score = v.gain_bits / std::max(v.distance_m, map.resolution());
+    }
+    out.push_back(v);
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const Viewpoint& a, const Viewpoint& b) { return a.score > b.score; });
+  if (out.size() > size_t(options.top_k)) out.resize(options.top_k);
+  return out;
+}
+
+}  // namespace fragg::planning

@@ -1,0 +1,371 @@
+// Frontier cells against a brute force over every cell and every neighbour (random and
+// simulated maps, with and without filters), the incremental tracker against full recomputes
+// after every scan of a W1-like drive, clusters and ids, gains against a brute-force ray
+// count, and bad arguments.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <set>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/geometry/mesh_bvh.h"
+#include "fragg_map/planning/frontier_cells.h"
+#include "fragg_map/planning/frontier_clusters.h"
+#include "fragg_map/planning/frontier_tracker.h"
+#include "fragg_map/planning/viewpoints.h"
+#include "fragg_map/sim/lidar_sensor.h"
+#include "fragg_map/sim/scene.h"
+#include "fragg_map/sim/trajectory.h"
+#include "planning/collision_reference.h"
+
+namespace fragg::planning::test {
+namespace {
+
+bool unknownAt(const Map& map, const VoxelKey& k) {
+  const Cell* c = map.findCell(k);
+  return !c || map.state(*c) == CellState::kUnknown;
+}
+
+// Every observed cell, every one of its 26 neighbours, the filter written out again.
+std::vector<VoxelKey> bruteForceFrontiers(const Map& map, const FrontierFilter& f = {}) {
+  std::vector<VoxelKey> out;
+  map.forEachBlock([&](const BlockKey& b, const Block& block) {
+    for (int i = 0; i < kCellsPerBlock; ++i) {
+      if (map.state(block.cells[i]) != CellState::kFree) continue;
+      const VoxelKey k = voxelKeyOf(b, i);
+      bool frontier = false;
+      for (int dz = -1; dz <= 1 && !frontier; ++dz)
+        for (int dy = -1; dy <= 1 && !frontier; ++dy)
+          for (int dx = -1; dx <= 1 && !frontier; ++dx)
+            if ((dx || dy || dz) && unknownAt(map, {k.x + dx, k.y + dy, k.z + dz})) frontier = true;
+      if (!frontier) continue;
+      const Eigen::Vector3d c = map.centerOf(k);
+      if (f.use_box &&
+          !(c.x() >= f.box_min_m.x() && c.y() >= f.box_min_m.y() && c.z() >= f.box_min_m.z() &&
+            c.x() <= f.box_max_m.x() && c.y() <= f.box_max_m.y() && c.z() <= f.box_max_m.z()))
+        continue;
+      if (f.use_height && !(c.z() >= f.min_z_m && c.z() <= f.max_z_m)) continue;
+      bool near = false;
+      if (f.min_obstacle_distance_m > 0.0)
+        map.forEachBlock([&](const BlockKey& ob, const Block& oblock) {
+          for (int j = 0; j < kCellsPerBlock && !near; ++j)
+            if (map.state(oblock.cells[j]) == CellState::kOccupied &&
+                (map.centerOf(voxelKeyOf(ob, j)) - c).norm() <
+                    f.min_obstacle_distance_m - 1e-9 * map.resolution())
+              near = true;
+        });
+      if (!near) out.push_back(k);
+    }
+  });
+  std::sort(out.begin(), out.end(), frontierOrder);
+  return out;
+}
+
+TEST(FrontierCells, MatchBruteForceOnRandomMaps) {
+  for (uint32_t seed : {1u, 2u, 3u}) {
+    const Map map = randomMap(0.1, 16, seed);
+    const auto expected = bruteForceFrontiers(map);
+    ASSERT_GT(expected.size(), 100u);
+    EXPECT_EQ(findFrontierCells(map), expected) << "seed " << seed;
+    EXPECT_EQ(findFrontierCells(map, {}, 1), expected) << "one thread, seed " << seed;
+  }
+}
+
+TEST(FrontierCells, FiltersMatchBruteForce) {
+  const Map map = randomMap(0.1, 16, 7);
+  FrontierFilter box;
+  box.use_box = true;
+  box.box_min_m = Eigen::Vector3d(-0.75, -1.0, -0.3);
+  box.box_max_m = Eigen::Vector3d(0.55, 0.4, 1.0);
+  FrontierFilter band;
+  band.use_height = true;
+  band.min_z_m = -0.5;
+  band.max_z_m = 0.25;
+  FrontierFilter distance;
+  distance.min_obstacle_distance_m = 0.25;
+  for (const FrontierFilter& f : {box, band, distance}) {
+    const auto expected = bruteForceFrontiers(map, f);
+    ASSERT_FALSE(expected.empty());
+    ASSERT_LT(expected.size(), bruteForceFrontiers(map).size()) << "the filter must drop some";
+    EXPECT_EQ(findFrontierCells(map, f), expected);
+  }
+}
+
+TEST(FrontierCells, CrossBlockBordersAndMissingBlocks) {
+  MapParams p;
+  p.resolution_m = 0.1;
+  Map map(p);
+  // A free slab filling block (0,0,0) exactly; everything around it has no block.
+  map.writeCells([&](CellWriter& w) {
+    for (int z = 0; z < 8; ++z)
+      for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) w.set({x, y, z}, Cell{0, -2000});
+  });
+  auto cells = findFrontierCells(map);
+  EXPECT_EQ(cells.size(), 512u - 6u * 6u * 6u) << "the block's surface cells";
+  // A free neighbour block on +x: the shared face stops being a frontier.
+  map.writeCells([&](CellWriter& w) {
+    for (int z = 0; z < 8; ++z)
+      for (int y = 0; y < 8; ++y)
+        for (int x = 8; x < 16; ++x) w.set({x, y, z}, Cell{0, -2000});
+  });
+  cells = findFrontierCells(map);
+  EXPECT_EQ(cells, bruteForceFrontiers(map));
+  EXPECT_EQ(std::count_if(cells.begin(), cells.end(),
+                          [](const VoxelKey& k) { return k.x == 7 || k.x == 8; }),
+            2 * 64 - 2 * 36)
+      << "only the rims of the inner faces stay frontier";
+}
+
+// A W1-like drive (the campus street, LiDAR at 1.8 m) with fewer beams than W1 so that 100
+// scans stay quick; the tracker after each scan equals a full recompute.
+TEST(FrontierTracker, IncrementalEqualsFullOverAHundredScans) {
+  sim::Scene scene = sim::loadScene(std::string(FRAGG_SOURCE_DIR) + "/config/scenes/campus.json");
+  const sim::Terrain terrain = scene.terrain;
+  const auto poses = sim::sampleTrajectory(
+      scene.trajectories.at("street"),
+      [&terrain](double x, double y) { return terrain.heightAt(x, y); }, sim::DriftSpec(), 101,
+      100);
+  const geometry::MeshBvh bvh(std::move(scene.mesh));
+  sim::LidarSpec spec;
+  spec.beams = 16;
+  spec.azimuth_steps = 360;
+  spec.elevation_min_deg = -25;
+  spec.elevation_max_deg = 15;
+  spec.max_range_m = 80;
+  Eigen::Isometry3d T_base_sensor = Eigen::Isometry3d::Identity();
+  T_base_sensor.translation().z() = 1.8;
+
+  MapParams p;
+  p.resolution_m = 0.2;
+  Map map(p);
+  FrontierTracker tracker;
+  FrontierFilter band;
+  band.use_height = true;
+  band.min_z_m = 0.0;
+  band.max_z_m = 3.0;
+  FrontierTracker banded(band);
+  const SensorModel sensor = SensorModel::autoFromCloud(0.0, 30.0);
+  uint64_t incremental_updates = 0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const Eigen::Isometry3d T = poses[i].T_map_base * T_base_sensor;
+    map.insert(sim::simulateLidar(bvh, spec, T, 101, i), T, sensor);
+    const FrontierUpdateStats st = tracker.update(map);
+    banded.update(map);
+    if (!st.full) ++incremental_updates;
+    if (i % 10 == 9 || i < 3) {  // full recomputes are the slow part
+      ASSERT_EQ(tracker.cells(), findFrontierCells(map)) << "after scan " << i;
+      ASSERT_EQ(banded.cells(), findFrontierCells(map, band)) << "after scan " << i;
+    }
+  }
+  EXPECT_EQ(incremental_updates, poses.size() - 1);
+  EXPECT_GT(tracker.size(), 1000u);
+  // Erasing blocks (clear box) forces a full recompute; the set stays exact.
+  const Eigen::Vector3d c = poses[50].T_map_base.translation();
+  map.clearBox(c - Eigen::Vector3d(4, 4, 1), c + Eigen::Vector3d(4, 4, 3));
+  EXPECT_TRUE(tracker.update(map).full);
+  EXPECT_EQ(tracker.cells(), findFrontierCells(map));
+  // The brute force agrees on this real-looking map too.
+  EXPECT_EQ(tracker.cells(), bruteForceFrontiers(map));
+}
+
+TEST(FrontierClusters, ComponentsSplitsDropsAndStableIds) {
+  MapParams p;
+  p.resolution_m = 0.1;
+  Map map(p);
+  // Free lines along x in unknown space: A of 40 cells, B of 8 cells, C of 3 cells.
+  map.writeCells([&](CellWriter& w) {
+    for (int x = 0; x < 40; ++x) w.set({x, 0, 0}, Cell{0, -2000});
+    for (int x = 0; x < 8; ++x) w.set({x, 50, 0}, Cell{0, -2000});
+    for (int x = 100; x < 103; ++x) w.set({x, 0, 0}, Cell{0, -2000});
+  });
+  const auto cells = findFrontierCells(map);
+  ASSERT_EQ(cells.size(), 51u);
+  ClusterOptions o;
+  o.min_cells = 5;
+  o.max_extent_m = 1.5;  // 15 cells: A is split into pieces of <= 15
+  FrontierClusterer clusterer(o);
+  const auto clusters = clusterer.cluster(map, cells);
+  // A: 40 -> 20 + 20 -> 4 x 10 (ordered by x), then B; C is dropped.
+  ASSERT_EQ(clusters.size(), 5u);
+  std::set<uint64_t> ids;
+  for (int i = 0; i < 4; ++i) {
+    const auto& c = clusters[i];
+    EXPECT_EQ(c.cells.size(), 10u);
+    EXPECT_NEAR(c.min_m.x(), 1.0 * i, 1e-9);
+    EXPECT_NEAR(c.max_m.x(), 1.0 * i + 1.0, 1e-9);
+    EXPECT_NEAR(c.centroid_m.x(), 1.0 * i + 0.5, 1e-9);
+    EXPECT_NEAR(c.centroid_m.y(), 0.05, 1e-9);
+    ids.insert(c.id);
+  }
+  // Unknown all around a line cancels out, except past its ends.
+  EXPECT_TRUE(clusters[0].direction.isApprox(Eigen::Vector3d(-1, 0, 0), 1e-9));
+  EXPECT_NEAR(clusters[1].direction.norm(), 0.0, 1e-9);
+  EXPECT_TRUE(clusters[3].direction.isApprox(Eigen::Vector3d(1, 0, 0), 1e-9));
+  EXPECT_EQ(clusters[4].cells.size(), 8u);
+  EXPECT_NEAR(clusters[4].centroid_m.y(), 5.05, 1e-9);
+  ids.insert(clusters[4].id);
+  EXPECT_EQ(ids.size(), 5u);
+  // Same cells again: same ids. B changed: only B gets a new id.
+  const auto again = clusterer.cluster(map, cells);
+  ASSERT_EQ(again.size(), clusters.size());
+  for (size_t i = 0; i < again.size(); ++i) EXPECT_EQ(again[i].id, clusters[i].id);
+  map.writeCells([&](CellWriter& w) { w.set({7, 50, 0}, Cell{1, 3000}); });
+  const auto changed = clusterer.cluster(map, findFrontierCells(map));
+  ASSERT_EQ(changed.size(), 5u);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(changed[i].id, clusters[i].id);
+  EXPECT_EQ(changed[4].cells.size(), 7u);
+  EXPECT_EQ(ids.count(changed[4].id), 0u);
+}
+
+// Brute-force gain: every ray sampled finely; the distinct unknown cells sampled before the
+// first occupied one.
+double bruteForceGain(const Map& map, const Eigen::Vector3d& origin, double yaw,
+                      const GainSensor& s) {
+  std::set<std::tuple<int, int, int>> seen;
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const double step = map.resolution() / 97.0;
+  for (int r = 0; r < s.rows; ++r)
+    for (int c = 0; c < s.columns; ++c) {
+      const double u = ((c + 0.5) / s.columns - 0.5) * 2.0 * std::tan(0.5 * s.horizontal_fov_rad);
+      const double v = ((r + 0.5) / s.rows - 0.5) * 2.0 * std::tan(0.5 * s.vertical_fov_rad);
+      const Eigen::Vector3d d = R * Eigen::Vector3d(1.0, -u, -v).normalized();
+      for (double t = 0.0; t <= s.max_range_m; t += step) {
+        const VoxelKey k = map.keyOf(origin + t * d);
+        const Cell* cell = map.findCell(k);
+        if (cell && map.state(*cell) == CellState::kOccupied) break;
+        if (cell && map.state(*cell) == CellState::kFree) continue;
+        seen.insert({k.x, k.y, k.z});
+      }
+    }
+  return double(seen.size());  // every unknown cell here is never observed: 1 bit each
+}
+
+TEST(Viewpoints, GainMatchesBruteForceRayCount) {
+  MapParams p;
+  p.resolution_m = 0.1;
+  Map map(p);
+  // A free room 2 x 2 x 1 m around the origin with an occupied wall at x = 0.6 m over half
+  // its height; unknown beyond.
+  map.writeCells([&](CellWriter& w) {
+    for (int z = -5; z < 5; ++z)
+      for (int y = -10; y < 10; ++y)
+        for (int x = -10; x < 10; ++x)
+          w.set({x, y, z}, (x == 6 && z < 0) ? Cell{1, 3000} : Cell{0, -2000});
+  });
+  GainSensor s;
+  s.columns = 16;
+  s.rows = 12;
+  s.max_range_m = 2.5;
+  const Eigen::Vector3d origin(0.03, -0.02, 0.04);
+  for (double yaw : {0.0, 0.7, 2.5}) {
+    const double expected = bruteForceGain(map, origin, yaw, s);
+    const double gain = viewpointGainBits(map, map.blockView(), origin, yaw, s);
+    ASSERT_GT(expected, 50.0);
+    // Sampling can miss a cell a ray only clips at a corner, never add one.
+    EXPECT_GE(gain, expected) << "yaw " << yaw;
+    EXPECT_LE(gain, expected * 1.01 + 2.0) << "yaw " << yaw;
+  }
+  // Behind the wall there is less to see.
+  EXPECT_LT(viewpointGainBits(map, map.blockView(), origin, 0.0, s),
+            viewpointGainBits(map, map.blockView(), origin, 3.14159, s));
+}
+
+TEST(Viewpoints, GainInUnknownSpaceCountsEveryDistinctCell) {
+  MapParams p;
+  p.resolution_m = 0.1;
+  const Map map(p);  // nothing observed: every cell is 1 bit
+  GainSensor s;
+  s.columns = 32;
+  s.rows = 24;
+  s.max_range_m = 8.0;
+  const Eigen::Vector3d origin(0.01, 0.02, 0.03);
+  const double expected = bruteForceGain(map, origin, 0.3, s);
+  ASSERT_GT(expected, 40000.0) << "enough cells to grow the gain's cell set several times";
+  const double gain = viewpointGainBits(map, map.blockView(), origin, 0.3, s);
+  EXPECT_GE(gain, expected);
+  EXPECT_LE(gain, expected * 1.01);
+  // The same viewpoint again (the set is reused between viewpoints) and in a batch.
+  EXPECT_EQ(viewpointGainBits(map, map.blockView(), origin, 0.3, s), gain);
+  const auto batch = viewpointGainsBits(map, {origin, origin}, {0.3, 0.3}, s);
+  EXPECT_EQ(batch, std::vector<double>({gain, gain}));
+}
+
+TEST(Viewpoints, RankedCandidatesInFreeSpace) {
+  MapParams p;
+  p.resolution_m = 0.1;
+  Map map(p);
+  // Free corridor x in [-3, 3] m, y in [-1, 1] m, z in [-0.5, 0.5] m; a frontier at both ends.
+  map.writeCells([&](CellWriter& w) {
+    for (int z = -5; z < 5; ++z)
+      for (int y = -10; y < 10; ++y)
+        for (int x = -30; x < 30; ++x) w.set({x, y, z}, Cell{0, -2000});
+  });
+  FrontierClusterer clusterer;
+  FrontierFilter end;
+  end.use_box = true;
+  end.box_min_m = Eigen::Vector3d(2.85, -1.0, -0.5);
+  end.box_max_m = Eigen::Vector3d(3.0, 1.0, 0.5);
+  const auto clusters = clusterer.cluster(map, findFrontierCells(map, end));
+  ASSERT_EQ(clusters.size(), 1u);
+  ViewpointOptions o;
+  o.radii_m = {1.0, 2.0};
+  o.clearance_m = 0.2;
+  o.top_k = 4;
+  const auto views = clusterViewpoints(map, clusters[0], o);
+  ASSERT_FALSE(views.empty());
+  for (size_t i = 0; i < views.size(); ++i) {
+    EXPECT_EQ(map.query(views[i].position_m), CellState::kFree);
+    EXPECT_GT(views[i].gain_bits, 0.0);
+    if (i) {
+      EXPECT_GE(views[i - 1].score, views[i].score);
+    }
+    EXPECT_NEAR(
+        views[i].gain_bits,
+        viewpointGainBits(map, map.blockView(), views[i].position_m, views[i].yaw_rad, o.sensor),
+        1e-9);
+  }
+  // Gain per metre from a robot position.
+  o.robot_m = Eigen::Vector3d(0.0, 0.0, 0.0);
+  const auto near = clusterViewpoints(map, clusters[0], o);
+  ASSERT_FALSE(near.empty());
+  EXPECT_NEAR(near.front().score, near.front().gain_bits / near.front().distance_m, 1e-9);
+}
+
+TEST(FrontierArguments, RefusedCleanly) {
+  const Map map = randomMap(0.1, 8, 3);
+  FrontierFilter f;
+  f.use_box = true;
+  f.box_min_m = Eigen::Vector3d(NAN, 0, 0);
+  EXPECT_THROW(findFrontierCells(map, f), InvalidArgument);
+  f.box_min_m = Eigen::Vector3d(1, 0, 0);
+  f.box_max_m = Eigen::Vector3d(0, 1, 1);
+  EXPECT_THROW(findFrontierCells(map, f), InvalidArgument);
+  FrontierFilter band;
+  band.use_height = true;
+  band.min_z_m = 1;
+  band.max_z_m = 0;
+  EXPECT_THROW(FrontierTracker{band}, InvalidArgument);
+  FrontierFilter dist;
+  dist.min_obstacle_distance_m = -1;
+  EXPECT_THROW(findFrontierCells(map, dist), InvalidArgument);
+  EXPECT_THROW(findFrontierCells(map, {}, -1), InvalidArgument);
+  ClusterOptions c;
+  c.min_cells = 0;
+  EXPECT_THROW(FrontierClusterer{c}, InvalidArgument);
+  FrontierCluster cluster;
+  ViewpointOptions v;
+  v.top_k = 0;
+  EXPECT_THROW(clusterViewpoints(map, cluster, v), InvalidArgument);
+  v.top_k = 1;
+  v.sensor.max_range_m = NAN;
+  EXPECT_THROW(clusterViewpoints(map, cluster, v), InvalidArgument);
+  v.sensor.max_range_m = 5;
+  v.radii_m = {0.0};
+  EXPECT_THROW(clusterViewpoints(map, cluster, v), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace fragg::planning::test
