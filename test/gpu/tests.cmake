@@ -16,3 +16,10 @@ if(FRAGG_HAVE_CUDA)
     LABELS gpu)
   target_include_directories(fragg_gpu_cache_test PRIVATE ${PROJECT_SOURCE_DIR}/cuda)
 endif()
+
+# The CUDA collision checker against the CPU one (all shapes, options, paths; skips without a
+# device; built in every build: without CUDA it checks that cuda is refused and auto falls back).
+fragg_add_test(fragg_gpu_collision_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/collision_gpu_test.cpp
+  LIBS fragg_map_planning
+  LABELS gpu)

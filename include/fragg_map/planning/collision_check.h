@@ -1,5 +1,8 @@
-// Collision checks of a shape against a map on the CPU: one pose, a batch of poses (OpenMP
-// threads) and a path (planning/path_check.h).
+// Collision checks of a shape against a map: one pose, a batch of poses and a path
+// (planning/path_check.h), on the CPU (OpenMP threads) or the GPU (CUDA builds), with identical
+// answers. A batch classifies the cells of the blocks its poses reach once (obstacle masks);
+// the CUDA checker uploads those masks and runs one thread a pose (box, sphere, capsule) or one
+// thread a candidate cell (mesh).
 //
 // Semantics. A pose collides when some occupied cell's cube overlaps the shape with positive
 // volume: the shape must reach more than kTouchEpsilon_m into the cube (the cube shrunk by
@@ -18,10 +21,12 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
+#include "fragg_map/map_params.h"
 #include "fragg_map/planning/collision_shape.h"
 
 namespace fragg::planning {
@@ -50,13 +55,20 @@ struct CollisionResult {
 void validate(const CollisionOptions& options);
 void validatePose(const Eigen::Isometry3d& T_map_shape);
 
+/// Where a check runs: kCpu (OpenMP), kCuda (throws InvalidArgument without a CUDA build or a
+/// device), kAuto (CUDA when built with it and a device is present, else the CPU). `why` gets
+/// one line saying what was chosen and why.
+Backend resolveCollisionBackend(Backend requested, std::string* why = nullptr);
+
 /// One pose (checks its arguments first).
 CollisionResult checkPose(const Map& map, const CollisionShape& shape,
-                          const Eigen::Isometry3d& T_map_shape, const CollisionOptions& options);
+                          const Eigen::Isometry3d& T_map_shape, const CollisionOptions& options,
+                          Backend backend = Backend::kCpu);
 
 /// Every pose, in parallel; result i belongs to pose i. Hold the map's read lock.
 std::vector<CollisionResult> checkPoses(const Map& map, const CollisionShape& shape,
                                         const std::vector<Eigen::Isometry3d>& T_map_shape,
-                                        const CollisionOptions& options);
+                                        const CollisionOptions& options,
+                                        Backend backend = Backend::kCpu);
 
 }  // namespace fragg::planning
