@@ -118,7 +118,9 @@ TEST(CollisionGpu, EveryShapeAndOptionMatchesTheCpu) {
                       colliding, poses.size());
           // Both outcomes exercised (unknown space as obstacles: most poses collide).
           EXPECT_GT(colliding, 20) << what;
-          if (!unknown) EXPECT_LT(colliding, static_cast<int>(poses.size()) - 20) << what;
+          if (!unknown) {
+            EXPECT_LT(colliding, static_cast<int>(poses.size()) - 20) << what;
+          }
         }
   }
 }
@@ -135,7 +137,9 @@ TEST(CollisionGpu, SinglePosesMatchTheCpu) {
     const CollisionResult gpu = checkPose(map, box, poses[i], o, Backend::kCuda);
     ASSERT_EQ(cpu.collides, gpu.collides) << i;
     ASSERT_EQ(cpu.colliding_cells, gpu.colliding_cells) << i;
-    if (cpu.collides) ASSERT_EQ(cpu.first_cell, gpu.first_cell) << i;
+    if (cpu.collides) {
+      ASSERT_EQ(cpu.first_cell, gpu.first_cell) << i;
+    }
   }
 }
 

@@ -40,6 +40,7 @@ struct Options {
   size_t poses = 100000, mesh_poses = 1000, fcl_poses = 20000;
   std::vector<double> box = {0.6, 0.6, 0.4};
   std::vector<std::string> backends = {"cpu", "cuda"};
+  std::vector<std::string> shapes = {"box", "sphere", "capsule", "mesh"};
   int repeats = 3;
   uint32_t seed = 15;
 };
@@ -138,18 +139,24 @@ void run(const Options& o) {
   const geometry::TriangleMesh mesh =
       geometry::ellipsoidMesh(Eigen::Vector3f(0.35f, 0.3f, 0.25f), 50, 50);
   struct Case {
-    std::string name;
+    std::string key, name;
     planning::CollisionShape shape;
     const std::vector<Eigen::Isometry3d>* poses;
   };
-  const std::vector<Case> cases = {
-      {fmt::format("box {}x{}x{} m", o.box[0], o.box[1], o.box[2]),
+  std::vector<Case> cases = {
+      {"box", fmt::format("box {}x{}x{} m", o.box[0], o.box[1], o.box[2]),
        planning::CollisionShape::box(0.5 * box_m), &poses},
-      {"sphere r 0.3 m", planning::CollisionShape::sphere(0.3), &poses},
-      {"capsule r 0.2 m L 0.6 m", planning::CollisionShape::capsule(0.2, 0.6), &poses},
-      {fmt::format("closed ellipsoid mesh, {} triangles", mesh.size()),
+      {"sphere", "sphere r 0.3 m", planning::CollisionShape::sphere(0.3), &poses},
+      {"capsule", "capsule r 0.2 m L 0.6 m", planning::CollisionShape::capsule(0.2, 0.6), &poses},
+      {"mesh", fmt::format("closed ellipsoid mesh, {} triangles", mesh.size()),
        planning::CollisionShape::mesh(mesh), &mesh_poses}};
 
+  cases.erase(std::remove_if(cases.begin(), cases.end(),
+                             [&](const Case& c) {
+                               return std::find(o.shapes.begin(), o.shapes.end(), c.key) ==
+                                      o.shapes.end();
+                             }),
+              cases.end());
   nlohmann::json j = {{"map", o.map_path}, {"threads", omp_get_max_threads()}, {"runs", {}}};
   std::vector<planning::CollisionResult> box_cpu;
   fmt::print("{:<40} {:>8} {:>8} {:>10} {:>10} {:>12}\n", "shape", "backend", "poses", "colliding",
@@ -175,7 +182,7 @@ void run(const Options& o) {
                            {"colliding", r.colliding},
                            {"ms_median", r.ms_median},
                            {"ms_min", r.ms_min}});
-      if (&c == &cases.front() && requested == Backend::kCpu) box_cpu = answers;
+      if (c.key == "box" && requested == Backend::kCpu) box_cpu = answers;
       per_backend.push_back(std::move(answers));
     }
     // Backends must agree exactly (the gpu test asserts it; the benchmark says so too).
@@ -223,6 +230,7 @@ int main(int argc, char** argv) {
   app.add_option("--mesh-poses", o.mesh_poses, "Mesh poses")->capture_default_str();
   app.add_option("--box", o.box, "Box full lengths (metres)")->expected(3)->capture_default_str();
   app.add_option("--backends", o.backends, "cpu cuda (auto too)")->capture_default_str();
+  app.add_option("--shapes", o.shapes, "Subset of box sphere capsule mesh")->capture_default_str();
   app.add_option("--repeats", o.repeats, "Batches per shape and backend (median)")
       ->capture_default_str();
   app.add_option("--fcl-poses", o.fcl_poses, "Box poses for FCL (the first N; 0: none)")

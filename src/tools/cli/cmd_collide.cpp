@@ -133,7 +133,6 @@ void writeCollisionPng(const std::string& path_png, const Map& map,
 void runCollide(const CollideOptions& o, const CLI::App& c) {
   std::string why;
   const Backend backend = planning::resolveCollisionBackend(backendFromString(o.backend), &why);
-  if (o.backend == "auto" && backend == Backend::kCpu) std::fprintf(stderr, "%s\n", why.c_str());
   if (!o.png.empty()) {
     if (extensionOf(o.png) != "png")
       throw InvalidArgument(fmt::format("--png must name a .png file, got '{}'", o.png));
@@ -149,6 +148,8 @@ void runCollide(const CollideOptions& o, const CLI::App& c) {
   const std::vector<Eigen::Isometry3d> poses = planning::readWaypoints(o.waypoints);
   if (poses.empty()) throw IoError(o.waypoints + " holds no waypoints");
   const Map map = loadMapFile(o.map);
+  // After the inputs were accepted: a refused input still gets exactly one line.
+  if (o.backend == "auto" && backend == Backend::kCpu) std::fprintf(stderr, "%s\n", why.c_str());
 
   const auto start = std::chrono::steady_clock::now();
   const std::vector<planning::CollisionResult> results =
