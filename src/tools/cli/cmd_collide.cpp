@@ -58,7 +58,7 @@ void drawFootprint(RenderImage& image, const planning::CollisionShape& shape,
   const auto polygon = [&](const std::vector<Eigen::Vector3d>& shape_points) {
     for (size_t i = 0; i < shape_points.size(); ++i)
       image.drawLine(T * shape_points[i], T * shape_points[(i + 1) % shape_points.size()], color,
-                     2.0);
+                     3.0);
   };
   const auto circle = [&](const Eigen::Vector3d& centre_map, double r) {
     std::vector<Eigen::Vector3d> points;
@@ -67,7 +67,7 @@ void drawFootprint(RenderImage& image, const planning::CollisionShape& shape,
       points.push_back(centre_map + r * Eigen::Vector3d(std::cos(a), std::sin(a), 0));
     }
     for (size_t i = 0; i < points.size(); ++i)
-      image.drawLine(points[i], points[(i + 1) % points.size()], color, 2.0);
+      image.drawLine(points[i], points[(i + 1) % points.size()], color, 3.0);
   };
   Eigen::Vector3d half = shape.halfExtents();
   switch (shape.kind()) {
@@ -78,7 +78,7 @@ void drawFootprint(RenderImage& image, const planning::CollisionShape& shape,
       const Eigen::Vector3d axis = T.linear().col(2) * (0.5 * shape.length());
       circle(T.translation() - axis, shape.radius());
       circle(T.translation() + axis, shape.radius());
-      image.drawLine(T.translation() - axis, T.translation() + axis, color, 2.0);
+      image.drawLine(T.translation() - axis, T.translation() + axis, color, 3.0);
       return;
     }
     case planning::ShapeKind::kMesh: {
