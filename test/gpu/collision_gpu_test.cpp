@@ -148,8 +148,13 @@ TEST(CollisionGpu, PathsMatchTheCpu) {
   const Map& map = roomMap();
   int colliding = 0, clear = 0;
   for (const NamedShape& s : shapes()) {
-    for (uint32_t seed = 0; seed < 8; ++seed) {
-      const std::vector<Eigen::Isometry3d> waypoints = randomPoses(map, 4, 100 + seed);
+    for (uint32_t seed = 0; seed < 12; ++seed) {
+      // Four waypoints within a few decimetres of each other: some paths clear, some not.
+      std::vector<Eigen::Isometry3d> waypoints = randomPoses(map, 4, 100 + seed);
+      for (size_t k = 1; k < waypoints.size(); ++k)
+        waypoints[k].translation() =
+            waypoints[k - 1].translation() +
+            0.3 * (waypoints[k].translation() - waypoints[k - 1].translation()).normalized();
       for (const bool unknown : {false, true}) {
         CollisionOptions o;
         o.unknown_is_occupied = unknown;
@@ -173,6 +178,7 @@ TEST(CollisionGpu, PathsMatchTheCpu) {
   }
   std::printf("[gpu] collision paths: %d collide, %d clear, CPU == CUDA\n", colliding, clear);
   EXPECT_GT(colliding, 5);
+  EXPECT_GT(clear, 5);
 }
 
 TEST(CollisionGpu, CudaRequestedWithoutADeviceIsRefused) {
