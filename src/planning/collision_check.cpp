@@ -112,7 +112,7 @@ std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape
   BlockKey lo, hi;
   batchBlockRange(map, shape, T_map_shape, options, &lo, &hi);
   const BlockView view = map.blockView();
-  const ObstacleIndex index(map, view, lo, hi, options.unknown_is_occupied);
+  const ObstacleIndex index(map, view, lo, hi, options.unknown_is_occupied, options.threads);
 #if FRAGG_HAVE_CUDA
   if (use == Backend::kCuda) return checkOnCuda(map, index, shape, T_map_shape, options);
 #else

@@ -1,5 +1,7 @@
 #include "obstacle_index.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cstring>
 
@@ -27,7 +29,7 @@ __attribute__((optimize("vect-cost-model=dynamic"))) void classifyCells(const Ce
 }  // namespace
 
 ObstacleIndex::ObstacleIndex(const Map& map, const BlockView& view, const BlockKey& lo,
-                             const BlockKey& hi, bool unknown_is_occupied)
+                             const BlockKey& hi, bool unknown_is_occupied, int threads)
     : default_word_(unknown_is_occupied ? ~uint64_t{0} : 0) {
   const std::vector<BlockRef> blocks = view.in(lo, hi);
   const int64_t n = static_cast<int64_t>(blocks.size());
@@ -35,7 +37,8 @@ ObstacleIndex::ObstacleIndex(const Map& map, const BlockView& view, const BlockK
   std::vector<uint8_t> keep(blocks.size(), 0);
   const OccupancyModel& model = map.model();
   const int occupied_above = model.occupied_above_fx, free_below = model.free_below_fx;
-#pragma omp parallel for schedule(static)
+  const int use_threads = threads > 0 ? threads : omp_get_max_threads();
+#pragma omp parallel for schedule(static) num_threads(use_threads)
   for (int64_t b = 0; b < n; ++b) {
     const Cell* cells = blocks[b].block->cells;
     uint64_t* words = all.data() + b * kMaskWords;

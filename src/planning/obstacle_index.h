@@ -16,9 +16,10 @@ namespace fragg::planning {
 
 class ObstacleIndex {
  public:
-  /// The blocks of `view` in [lo, hi] (inclusive); cells classified by map.state().
+  /// The blocks of `view` in [lo, hi] (inclusive), their cells classified as map.state() does,
+  /// on `threads` OpenMP threads (0: every core).
   ObstacleIndex(const Map& map, const BlockView& view, const BlockKey& lo, const BlockKey& hi,
-                bool unknown_is_occupied);
+                bool unknown_is_occupied, int threads = 0);
 
   ObstacleMasksView view() const;
   /// Stored masks (blocks that differ from the default).
