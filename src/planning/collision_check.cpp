@@ -104,6 +104,18 @@ std::vector<CollisionResult> checkOnCuda(const Map& map, const ObstacleIndex& in
 }
 #endif
 
+std::vector<CollisionResult> checkWithIndex(const Map& map, const ObstacleIndex& index,
+                                            const CollisionShape& shape,
+                                            const std::vector<Eigen::Isometry3d>& T_map_shape,
+                                            const CollisionOptions& options, Backend use) {
+#if FRAGG_HAVE_CUDA
+  if (use == Backend::kCuda) return checkOnCuda(map, index, shape, T_map_shape, options);
+#else
+  (void)use;  // kCuda cannot be resolved without CUDA
+#endif
+  return checkOnCpu(map, index, shape, T_map_shape, options);
+}
+
 std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape& shape,
                                             const std::vector<Eigen::Isometry3d>& T_map_shape,
                                             const CollisionOptions& options, Backend backend) {
@@ -113,12 +125,7 @@ std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape
   batchBlockRange(map, shape, T_map_shape, options, &lo, &hi);
   const BlockView view = map.blockView();
   const ObstacleIndex index(map, view, lo, hi, options.unknown_is_occupied, options.threads);
-#if FRAGG_HAVE_CUDA
-  if (use == Backend::kCuda) return checkOnCuda(map, index, shape, T_map_shape, options);
-#else
-  (void)use;  // kCuda cannot be resolved without CUDA
-#endif
-  return checkOnCpu(map, index, shape, T_map_shape, options);
+  return checkWithIndex(map, index, shape, T_map_shape, options, use);
 }
 
 }  // namespace
@@ -173,6 +180,30 @@ std::vector<CollisionResult> checkPoses(const Map& map, const CollisionShape& sh
   validate(options);
   for (const Eigen::Isometry3d& T : T_map_shape) validatePose(T);
   return checkValidated(map, shape, T_map_shape, options, backend);
+}
+
+PreparedMap::PreparedMap(const Map& map, bool unknown_is_occupied, int threads)
+    : map_(&map), revision_(map.revision()), unknown_is_occupied_(unknown_is_occupied) {
+  if (threads < 0) throw InvalidArgument(fmt::format("threads must be >= 0, got {}", threads));
+  const BlockView view = map.blockView();
+  const BlockKey lo{INT32_MIN, INT32_MIN, INT32_MIN}, hi{INT32_MAX, INT32_MAX, INT32_MAX};
+  index_ = std::make_shared<const ObstacleIndex>(map, view, lo, hi, unknown_is_occupied, threads);
+}
+
+size_t PreparedMap::blockCount() const { return index_->blockCount(); }
+
+std::vector<CollisionResult> checkPoses(const PreparedMap& prepared, const CollisionShape& shape,
+                                        const std::vector<Eigen::Isometry3d>& T_map_shape,
+                                        const CollisionOptions& options, Backend backend) {
+  validate(options);
+  for (const Eigen::Isometry3d& T : T_map_shape) validatePose(T);
+  if (options.unknown_is_occupied != prepared.unknownIsOccupied())
+    throw InvalidArgument("the prepared map was classified for the other unknown_is_occupied");
+  if (prepared.map().revision() != prepared.revision())
+    throw InvalidArgument("the map changed since it was prepared for collision checks");
+  const Backend use = resolveCollisionBackend(backend);
+  if (T_map_shape.empty()) return {};
+  return checkWithIndex(prepared.map(), *prepared.index_, shape, T_map_shape, options, use);
 }
 
 }  // namespace fragg::planning

@@ -38,12 +38,22 @@ void compareRandomPoses(const CollisionShape& shape, const Reference& reference,
     CollisionOptions first_only = options;
     first_only.count_cells = false;
     const auto batch = checkPoses(map, shape, poses, first_only);
+    // A prepared map (every block classified once) answers alike, counts included.
+    const PreparedMap prepared(map, unknown);
+    const auto prepared_first = checkPoses(prepared, shape, poses, first_only);
+    const auto prepared_count = checkPoses(prepared, shape, poses, options);
     for (size_t i = 0; i < poses.size(); ++i) {
       const std::vector<VoxelKey> expected = reference(map, poses[i], unknown);
       const CollisionResult r = checkPose(map, shape, poses[i], options);
       ASSERT_EQ(r.collides, !expected.empty()) << "pose " << i << " unknown " << unknown;
       ASSERT_EQ(r.colliding_cells, expected.size()) << "pose " << i << " unknown " << unknown;
       ASSERT_EQ(batch[i].collides, r.collides) << "pose " << i;
+      ASSERT_EQ(prepared_first[i].collides, r.collides) << "pose " << i;
+      ASSERT_EQ(prepared_count[i].colliding_cells, r.colliding_cells) << "pose " << i;
+      if (r.collides) {
+        ASSERT_EQ(prepared_first[i].first_cell, r.first_cell) << "pose " << i;
+        ASSERT_EQ(prepared_count[i].first_cell, r.first_cell) << "pose " << i;
+      }
       if (r.collides) {
         ++colliding_poses;
         EXPECT_EQ(r.first_cell, *std::min_element(expected.begin(), expected.end(), scanOrderLess))

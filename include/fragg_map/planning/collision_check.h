@@ -21,6 +21,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -67,6 +68,38 @@ CollisionResult checkPose(const Map& map, const CollisionShape& shape,
 
 /// Every pose, in parallel; result i belongs to pose i. Hold the map's read lock.
 std::vector<CollisionResult> checkPoses(const Map& map, const CollisionShape& shape,
+                                        const std::vector<Eigen::Isometry3d>& T_map_shape,
+                                        const CollisionOptions& options,
+                                        Backend backend = Backend::kCpu);
+
+class ObstacleIndex;
+
+/// A map prepared for many collision batches: every block's cells classified once (obstacle
+/// masks, for one unknown_is_occupied setting), so that a planner checking batch after batch
+/// against an unchanged map pays only for the poses. Checks through it answer exactly as
+/// checkPoses on the map. It refers to `map` (which must outlive it); checks throw
+/// InvalidArgument once Map::revision() moved on (any insertion or edit), but a map object
+/// replaced by assignment (a load into the same variable) is not detected: prepare again.
+class PreparedMap {
+ public:
+  PreparedMap(const Map& map, bool unknown_is_occupied, int threads = 0);
+  const Map& map() const { return *map_; }
+  bool unknownIsOccupied() const { return unknown_is_occupied_; }
+  uint64_t revision() const { return revision_; }
+  size_t blockCount() const;  ///< blocks with a stored mask
+
+ private:
+  friend std::vector<CollisionResult> checkPoses(const PreparedMap&, const CollisionShape&,
+                                                 const std::vector<Eigen::Isometry3d>&,
+                                                 const CollisionOptions&, Backend);
+  const Map* map_;
+  uint64_t revision_;
+  bool unknown_is_occupied_;
+  std::shared_ptr<const ObstacleIndex> index_;
+};
+
+/// checkPoses over a prepared map (options.unknown_is_occupied must match it).
+std::vector<CollisionResult> checkPoses(const PreparedMap& prepared, const CollisionShape& shape,
                                         const std::vector<Eigen::Isometry3d>& T_map_shape,
                                         const CollisionOptions& options,
                                         Backend backend = Backend::kCpu);
