@@ -143,6 +143,25 @@ TEST(CollisionGpu, SinglePosesMatchTheCpu) {
   }
 }
 
+TEST(CollisionGpu, PreparedMapsMatchTheCpu) {
+  REQUIRE_DEVICE();
+  const Map& map = roomMap();
+  const std::vector<Eigen::Isometry3d> poses = randomPoses(map, 2000, 9);
+  for (const bool unknown : {false, true}) {
+    const PreparedMap prepared(map, unknown);
+    for (const NamedShape& s : shapes()) {
+      CollisionOptions o;
+      o.unknown_is_occupied = unknown;
+      o.count_cells = true;
+      const auto cpu = checkPoses(map, s.shape, poses, o, Backend::kCpu);
+      const auto gpu = checkPoses(prepared, s.shape, poses, o, Backend::kCuda);
+      int colliding = 0;
+      expectSame(cpu, gpu, s.name + " prepared" + (unknown ? " unknown-occupied" : ""), &colliding);
+      EXPECT_GT(colliding, 20) << s.name;
+    }
+  }
+}
+
 TEST(CollisionGpu, PathsMatchTheCpu) {
   REQUIRE_DEVICE();
   const Map& map = roomMap();
