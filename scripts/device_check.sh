@@ -3,8 +3,11 @@
 # compute-sanitizer, and the benchmark. Data and liboctomap come staged under .device/
 # (real/ copied from ../shared/data/real, octomap/ from ../shared/tools/stage-octomap.sh, store/
 # from scripts/stage_store.sh).
-# Usage: bash scripts/device_check.sh [tests] [sanitize] [workloads LIST] [bench ARGS...]
-# (workloads go to .device/workloads; bench ARGS are fragg_map_bench's).
+# Usage: bash scripts/device_check.sh [tests] [sanitize] [workloads LIST] [collision [MAP]]
+#        [bench ARGS...]
+# (workloads go to .device/workloads; bench ARGS are fragg_map_bench's; collision runs
+# fragg_map_collision_bench on MAP, default .device/w1.fgm, built from .device/workloads/
+# w1_lidar360 at 5 cm, 30 m, when missing: run `workloads w1` before it).
 # Logs go to $OUT when set (the device tool brings them back).
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -51,6 +54,17 @@ while [ $# -gt 0 ]; do
       bash "$root/scripts/make_workloads.sh" --out "$root/.device/workloads" --only "$2" \
         --sim "$build/bin/fragg_map_sim" 2>&1 | grep -v "^  " | tail -8
       shift 2 ;;
+    collision)
+      map="$root/.device/w1.fgm"
+      if [ $# -gt 1 ] && [ -f "$2" ]; then map="$2"; shift; fi
+      if [ ! -f "$map" ]; then
+        "$build/bin/fragg_map" build "$root/.device/workloads/w1_lidar360" -o "$map" \
+          --resolution 0.05 --max-range 30 --backend cuda >"$out/w1_build.log" 2>&1 ||
+          { tail -5 "$out/w1_build.log"; status=1; shift; continue; }
+      fi
+      "$build/bin/fragg_map_collision_bench" --map "$map" --backends cpu cuda \
+        --json "$out/collision_bench.json" 2>&1 | tee "$out/collision_bench.log" || status=1
+      shift ;;
     bench)
       shift
       "$build/bin/fragg_map_bench" "$@" 2>&1 | tee "$out/bench.log" | tail -40

@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/geometry/bvh_traversal.h"
 
 namespace fragg::geometry {
 namespace {
@@ -61,7 +62,9 @@ MeshBvh::MeshBvh(TriangleMesh mesh) : mesh_(std::move(mesh)) {
   nodes_.reserve(2 * n / kLeafSize + 2);
   if (n > 0) build(0, static_cast<uint32_t>(n), centroids, boxes, 0);
   tris_.resize(n);
+  solid_of_slot_.resize(n);
   for (size_t i = 0; i < n; ++i) {
+    solid_of_slot_[i] = mesh_.solid_of_triangle[order_[i]];
     const Eigen::Vector3i& t = mesh_.triangles[order_[i]];
     const Eigen::Vector3f& a = mesh_.vertices_m[t[0]];
     tris_[i] = {a, mesh_.vertices_m[t[1]] - a, mesh_.vertices_m[t[2]] - a};
@@ -212,34 +215,20 @@ bool MeshBvh::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& di
   return true;
 }
 
-bool MeshBvh::inside(const Eigen::Vector3f& p) const {
+Eigen::Vector3f MeshBvh::insideRayDirection() {
   // An irrational-looking direction, steep upwards: few solids lie above a point, and no
   // axis-aligned face or edge (buildings, boxes, slabs) is parallel to it.
   static const Eigen::Vector3f kDir = Eigen::Vector3f(0.0917f, 0.0531f, 1.0f).normalized();
-  int32_t solids[32];
-  int parity[32];
-  int n = 0;
+  return kDir;
+}
+
+bool MeshBvh::inside(const Eigen::Vector3f& p) const {
+  if (nodes_.empty()) return false;
   bool overflow = false;
-  // Exact limits here: a crossing counted twice would flip the parity.
-  traverseRay(p, kDir, INFINITY, 0.f, [&](uint32_t slot, float, float t_max) {
-    const int32_t s = mesh_.solid_of_triangle[order_[slot]];
-    int k = 0;
-    while (k < n && solids[k] != s) ++k;
-    if (k == n) {
-      if (n == 32) {
-        overflow = true;
-        return t_max;
-      }
-      solids[n] = s;
-      parity[n++] = 0;
-    }
-    parity[k] ^= 1;
-    return t_max;
-  });
+  const bool in = bvhInside(nodes_.data(), tris_.data(), solid_of_slot_.data(), p,
+                            insideRayDirection(), &overflow);
   if (overflow) throw InvalidArgument("inside test: more than 32 solids above one point");
-  for (int k = 0; k < n; ++k)
-    if (parity[k]) return true;
-  return false;
+  return in;
 }
 
 bool MeshBvh::withinDistance(const Eigen::Vector3f& p, float r_m) const {

@@ -4,5 +4,6 @@
 set(FRAGG_GEOMETRY_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/triangle_mesh.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mesh_bvh.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/mesh_primitives.cpp
   ${CMAKE_CURRENT_LIST_DIR}/obj_file.cpp
 )

@@ -56,6 +56,51 @@ Rgb heightColor(double t) {
 
 RenderInfo renderTopDown(const Map& map, const std::string& path_png,
                          const RenderOptions& options) {
+  const RenderImage image = renderTopDownImage(map, options);
+  writePng(image, path_png);
+  return image.info;
+}
+
+void writePng(const RenderImage& image, const std::string& path_png) {
+  internal::writePngRgb(path_png, image.info.width_px, image.info.height_px, image.rgb);
+}
+
+Eigen::Vector2d RenderImage::pixelOf(const Eigen::Vector3d& p_map) const {
+  const double per_voxel =
+      static_cast<double>(info.scale) / static_cast<double>(info.voxels_per_pixel);
+  return Eigen::Vector2d((p_map.x() / resolution_m - info.min_key.x) * per_voxel,
+                         (info.max_key.y + 1 - p_map.y() / resolution_m) * per_voxel);
+}
+
+void RenderImage::drawLine(const Eigen::Vector3d& a_map, const Eigen::Vector3d& b_map,
+                           const Rgb& color, double width_px) {
+  const Eigen::Vector2d a = pixelOf(a_map), b = pixelOf(b_map);
+  const double r = std::max(0.5, 0.5 * width_px);
+  const Eigen::Vector2d lo = a.cwiseMin(b).array() - r, hi = a.cwiseMax(b).array() + r;
+  const int x0 = std::max(0, static_cast<int>(std::floor(lo.x())));
+  const int y0 = std::max(0, static_cast<int>(std::floor(lo.y())));
+  const int x1 = std::min(info.width_px - 1, static_cast<int>(std::ceil(hi.x())));
+  const int y1 = std::min(info.height_px - 1, static_cast<int>(std::ceil(hi.y())));
+  const Eigen::Vector2d d = b - a;
+  const double len_sq = d.squaredNorm();
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      const Eigen::Vector2d p(x + 0.5, y + 0.5);
+      const double t = len_sq > 0 ? std::clamp((p - a).dot(d) / len_sq, 0.0, 1.0) : 0.0;
+      if ((a + t * d - p).squaredNorm() > r * r) continue;
+      uint8_t* px = &rgb[(static_cast<size_t>(y) * info.width_px + x) * 3];
+      px[0] = color.r, px[1] = color.g, px[2] = color.b;
+    }
+}
+
+void RenderImage::fillDisc(const Eigen::Vector3d& centre_map, double radius_m, const Rgb& color) {
+  const double per_voxel =
+      static_cast<double>(info.scale) / static_cast<double>(info.voxels_per_pixel);
+  const double r_px = std::max(1.0, radius_m / resolution_m * per_voxel);
+  drawLine(centre_map, centre_map, color, 2.0 * r_px);
+}
+
+RenderImage renderTopDownImage(const Map& map, const RenderOptions& options) {
   const RenderLayout layout = internal::renderLayout(map, options);
   const size_t pixels = static_cast<size_t>(layout.grid_w) * layout.grid_h;
   constexpr int32_t kNone = std::numeric_limits<int32_t>::min();
@@ -95,9 +140,11 @@ RenderInfo renderTopDown(const Map& map, const std::string& path_png,
     info.z_min_m = map.centerOf(VoxelKey{0, 0, z_lo}).z();
     info.z_max_m = map.centerOf(VoxelKey{0, 0, z_hi}).z();
   }
-  internal::writePngRgb(path_png, info.width_px, info.height_px,
-                        internal::scaleToImage(layout, grid));
-  return info;
+  RenderImage image;
+  image.info = info;
+  image.rgb = internal::scaleToImage(layout, grid);
+  image.resolution_m = map.resolution();
+  return image;
 }
 
 RenderInfo renderSlice(const Map& map, double z_m, const std::string& path_png,

@@ -3,77 +3,129 @@
 #include <fmt/format.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
+#include <mutex>
 
+#include "collision_batch.h"
 #include "fragg_map/errors.h"
-#include "fragg_map/geometry/cube_overlap.h"
+#include "fragg_map/internal/backend_factory.h"
 #include "mesh_collision.h"
-#include "obstacle_cells.h"
+#include "obstacle_index.h"
 
 namespace fragg::planning {
 
 namespace {
 
-// Box, sphere, capsule: the shape's map-frame box gives the cell range, every obstacle cell in
-// it gets the exact test against its cube shrunk by the touching epsilon.
-CollisionResult checkPrimitivePose(const Map& map, const BlockView& view,
-                                   const CollisionShape& shape,
-                                   const Eigen::Isometry3d& T_map_shape,
-                                   const CollisionOptions& options) {
-  const double half_m = 0.5 * map.resolution() - kTouchEpsilon_m;
-  const Eigen::Matrix3d R = T_map_shape.linear();
-  const Eigen::Vector3d centre_map = T_map_shape.translation();
-  const Eigen::Vector3d box_half_m =
-      shape.halfExtents() + Eigen::Vector3d::Constant(options.margin_m);
-  const double radius_m = shape.radius() + options.margin_m;
-  const Eigen::Vector3d axis_map = R.col(2) * (0.5 * shape.length());
-  const Eigen::Vector3d seg_a = centre_map - axis_map, seg_b = centre_map + axis_map;
-
-  Eigen::Vector3d extent_m;
-  switch (shape.kind()) {
-    case ShapeKind::kBox:
-      extent_m = R.cwiseAbs() * box_half_m;
-      break;
-    case ShapeKind::kSphere:
-      extent_m = Eigen::Vector3d::Constant(radius_m);
-      break;
-    default:  // capsule
-      extent_m = axis_map.cwiseAbs() + Eigen::Vector3d::Constant(radius_m);
-      break;
-  }
-  const VoxelKey lo = map.keyOf(centre_map - extent_m);
-  const VoxelKey hi = map.keyOf(centre_map + extent_m);
-
-  const auto overlaps = [&](const Eigen::Vector3d& cell_centre) {
-    switch (shape.kind()) {
-      case ShapeKind::kBox:
-        return geometry::orientedBoxCubeOverlap(centre_map, R, box_half_m, cell_centre, half_m);
-      case ShapeKind::kSphere:
-        return geometry::pointCubeDistanceSq(centre_map, cell_centre, half_m) <=
-               radius_m * radius_m;
-      default:
-        return geometry::segmentCubeDistanceSq(seg_a, seg_b, cell_centre, half_m) <=
-               radius_m * radius_m;
-    }
-  };
+// Box, sphere, capsule: every obstacle cell of the shape's cell range gets the exact test
+// against its cube shrunk by the touching epsilon.
+CollisionResult checkPrimitive(const ObstacleMasksView& masks, const PrimitivePose& pose,
+                               double resolution_m, bool count_cells) {
+  const double half_m = 0.5 * resolution_m - kTouchEpsilon_m;
   CollisionResult result;
-  forEachObstacleCell(map, view, lo, hi, options.unknown_is_occupied, [&](const VoxelKey& k) {
-    if (!overlaps(map.centerOf(k))) return false;
+  forEachObstacleCell(masks, pose.lo, pose.hi, [&](const VoxelKey& k) {
+    if (!primitiveOverlapsCell(pose, cellCentre(k, resolution_m), half_m)) return false;
     if (!result.collides) result.first_cell = k;
     result.collides = true;
     ++result.colliding_cells;
-    return !options.count_cells;
+    return !count_cells;
   });
   return result;
 }
 
-CollisionResult checkValidated(const Map& map, const BlockView& view, const CollisionShape& shape,
-                               const Eigen::Isometry3d& T_map_shape,
-                               const CollisionOptions& options) {
-  if (shape.kind() == ShapeKind::kMesh)
-    return checkMeshPose(map, view, shape, T_map_shape, options);
-  return checkPrimitivePose(map, view, shape, T_map_shape, options);
+std::vector<CollisionResult> checkOnCpu(const Map& map, const ObstacleIndex& index,
+                                        const CollisionShape& shape,
+                                        const std::vector<Eigen::Isometry3d>& T_map_shape,
+                                        const CollisionOptions& options) {
+  const ObstacleMasksView masks = index.view();
+  std::vector<CollisionResult> results(T_map_shape.size());
+  std::exception_ptr error;
+  const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+  const int64_t n = static_cast<int64_t>(T_map_shape.size());
+  const bool mesh = shape.kind() == ShapeKind::kMesh;
+#pragma omp parallel for schedule(dynamic, 64) num_threads(threads)
+  for (int64_t i = 0; i < n; ++i) {
+    try {
+      results[i] =
+          mesh ? checkMeshPose(map, masks, shape, T_map_shape[i], options)
+               : checkPrimitive(masks, preparePrimitive(map, shape, T_map_shape[i], options),
+                                map.resolution(), options.count_cells);
+    } catch (...) {
+#pragma omp critical(fragg_collision_error)
+      if (!error) error = std::current_exception();
+    }
+  }
+  if (error) std::rethrow_exception(error);
+  return results;
+}
+
+#if FRAGG_HAVE_CUDA
+CollisionResult resultOf(const CollisionAnswer& a) {
+  CollisionResult r;
+  r.collides = a.collides;
+  r.colliding_cells = a.colliding_cells;
+  r.first_cell = a.first_cell;
+  return r;
+}
+
+// One device checker per process, its buffers kept between batches; batches take turns.
+std::mutex cuda_mutex;
+std::unique_ptr<CudaCollision> cuda_checker;
+
+std::vector<CollisionResult> checkOnCuda(const Map& map, const ObstacleIndex& index,
+                                         const CollisionShape& shape,
+                                         const std::vector<Eigen::Isometry3d>& T_map_shape,
+                                         const CollisionOptions& options) {
+  ObstacleMasksHost masks;
+  masks.keys = &index.tableKeys();
+  masks.slots = &index.tableSlots();
+  masks.masks = &index.masks();
+  masks.default_word = index.defaultWord();
+  std::vector<CollisionAnswer> answers;
+  {
+    std::lock_guard<std::mutex> lock(cuda_mutex);
+    if (!cuda_checker) cuda_checker = makeCudaCollision(0);
+    if (shape.kind() == ShapeKind::kMesh) {
+      answers =
+          cuda_checker->checkMesh(masks, meshPoses(T_map_shape), meshCheck(map, shape, options));
+    } else {
+      std::vector<PrimitivePose> poses(T_map_shape.size());
+      for (size_t i = 0; i < poses.size(); ++i)
+        poses[i] = preparePrimitive(map, shape, T_map_shape[i], options);
+      answers = cuda_checker->checkPrimitives(masks, poses, map.resolution(),
+                                              0.5 * map.resolution() - kTouchEpsilon_m,
+                                              options.count_cells);
+    }
+  }
+  std::vector<CollisionResult> results(answers.size());
+  for (size_t i = 0; i < answers.size(); ++i) results[i] = resultOf(answers[i]);
+  return results;
+}
+#endif
+
+std::vector<CollisionResult> checkWithIndex(const Map& map, const ObstacleIndex& index,
+                                            const CollisionShape& shape,
+                                            const std::vector<Eigen::Isometry3d>& T_map_shape,
+                                            const CollisionOptions& options, Backend use) {
+#if FRAGG_HAVE_CUDA
+  if (use == Backend::kCuda) return checkOnCuda(map, index, shape, T_map_shape, options);
+#else
+  (void)use;  // kCuda cannot be resolved without CUDA
+#endif
+  return checkOnCpu(map, index, shape, T_map_shape, options);
+}
+
+std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape& shape,
+                                            const std::vector<Eigen::Isometry3d>& T_map_shape,
+                                            const CollisionOptions& options, Backend backend) {
+  const Backend use = resolveCollisionBackend(backend);
+  if (T_map_shape.empty()) return {};
+  BlockKey lo, hi;
+  batchBlockRange(map, shape, T_map_shape, options, &lo, &hi);
+  const BlockView view = map.blockView();
+  const ObstacleIndex index(map, view, lo, hi, options.unknown_is_occupied, options.threads);
+  return checkWithIndex(map, index, shape, T_map_shape, options, use);
 }
 
 }  // namespace
@@ -95,34 +147,63 @@ void validatePose(const Eigen::Isometry3d& T_map_shape) {
         fmt::format("shape pose rotation is not a rotation (orthonormality error {})", err));
 }
 
+Backend resolveCollisionBackend(Backend requested, std::string* why) {
+  if (requested == Backend::kCpu) {
+    if (why) *why = "cpu: requested";
+    return Backend::kCpu;
+  }
+  std::string why_not;
+  const std::string device = cudaDeviceName(0, &why_not);
+  if (!device.empty()) {
+    if (why)
+      *why = fmt::format("{}: CUDA device 0 ({})",
+                         requested == Backend::kAuto ? "auto" : "requested", device);
+    return Backend::kCuda;
+  }
+  if (requested == Backend::kCuda)
+    throw InvalidArgument("collision backend cuda requested, but " + why_not);
+  if (why) *why = "auto: CPU (" + why_not + ")";
+  return Backend::kCpu;
+}
+
 CollisionResult checkPose(const Map& map, const CollisionShape& shape,
-                          const Eigen::Isometry3d& T_map_shape, const CollisionOptions& options) {
+                          const Eigen::Isometry3d& T_map_shape, const CollisionOptions& options,
+                          Backend backend) {
   validate(options);
   validatePose(T_map_shape);
-  return checkValidated(map, map.blockView(), shape, T_map_shape, options);
+  return checkValidated(map, shape, {T_map_shape}, options, backend).front();
 }
 
 std::vector<CollisionResult> checkPoses(const Map& map, const CollisionShape& shape,
                                         const std::vector<Eigen::Isometry3d>& T_map_shape,
-                                        const CollisionOptions& options) {
+                                        const CollisionOptions& options, Backend backend) {
   validate(options);
   for (const Eigen::Isometry3d& T : T_map_shape) validatePose(T);
+  return checkValidated(map, shape, T_map_shape, options, backend);
+}
+
+PreparedMap::PreparedMap(const Map& map, bool unknown_is_occupied, int threads)
+    : map_(&map), revision_(map.revision()), unknown_is_occupied_(unknown_is_occupied) {
+  if (threads < 0) throw InvalidArgument(fmt::format("threads must be >= 0, got {}", threads));
   const BlockView view = map.blockView();
-  std::vector<CollisionResult> results(T_map_shape.size());
-  std::exception_ptr error;
-  const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
-  const int64_t n = static_cast<int64_t>(T_map_shape.size());
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-  for (int64_t i = 0; i < n; ++i) {
-    try {
-      results[i] = checkValidated(map, view, shape, T_map_shape[i], options);
-    } catch (...) {
-#pragma omp critical(fragg_collision_error)
-      if (!error) error = std::current_exception();
-    }
-  }
-  if (error) std::rethrow_exception(error);
-  return results;
+  const BlockKey lo{INT32_MIN, INT32_MIN, INT32_MIN}, hi{INT32_MAX, INT32_MAX, INT32_MAX};
+  index_ = std::make_shared<const ObstacleIndex>(map, view, lo, hi, unknown_is_occupied, threads);
+}
+
+size_t PreparedMap::blockCount() const { return index_->blockCount(); }
+
+std::vector<CollisionResult> checkPoses(const PreparedMap& prepared, const CollisionShape& shape,
+                                        const std::vector<Eigen::Isometry3d>& T_map_shape,
+                                        const CollisionOptions& options, Backend backend) {
+  validate(options);
+  for (const Eigen::Isometry3d& T : T_map_shape) validatePose(T);
+  if (options.unknown_is_occupied != prepared.unknownIsOccupied())
+    throw InvalidArgument("the prepared map was classified for the other unknown_is_occupied");
+  if (prepared.map().revision() != prepared.revision())
+    throw InvalidArgument("the map changed since it was prepared for collision checks");
+  const Backend use = resolveCollisionBackend(backend);
+  if (T_map_shape.empty()) return {};
+  return checkWithIndex(prepared.map(), *prepared.index_, shape, T_map_shape, options, use);
 }
 
 }  // namespace fragg::planning

@@ -6,19 +6,21 @@
 #include <vector>
 
 #include "fragg_map/geometry/cube_overlap.h"
-#include "obstacle_cells.h"
+#include "fragg_map/internal/collision_pose.h"
 
 namespace fragg::planning {
 
-CollisionResult checkMeshPose(const Map& map, const BlockView& view, const CollisionShape& shape,
-                              const Eigen::Isometry3d& T_map_shape,
+CollisionResult checkMeshPose(const Map& map, const ObstacleMasksView& masks,
+                              const CollisionShape& shape, const Eigen::Isometry3d& T_map_shape,
                               const CollisionOptions& options) {
   const geometry::MeshBvh& bvh = *shape.meshBvh();
   const geometry::TriangleMesh& mesh = bvh.mesh();
+  const Eigen::Matrix3d R = T_map_shape.linear();
+  const Eigen::Vector3d t = T_map_shape.translation();
   std::vector<Eigen::Vector3d> vertices_map(mesh.vertices_m.size());
   Eigen::AlignedBox3d bounds_map;
   for (size_t i = 0; i < vertices_map.size(); ++i) {
-    vertices_map[i] = T_map_shape * mesh.vertices_m[i].cast<double>();
+    vertices_map[i] = transformPoint(R, t, mesh.vertices_m[i].cast<double>());
     bounds_map.extend(vertices_map[i]);
   }
   const double grow_m = options.margin_m;
@@ -27,7 +29,7 @@ CollisionResult checkMeshPose(const Map& map, const BlockView& view, const Colli
 
   // Obstacle cells in scan order, and where each is in that list.
   std::vector<VoxelKey> cells;
-  forEachObstacleCell(map, view, lo, hi, options.unknown_is_occupied, [&](const VoxelKey& k) {
+  forEachObstacleCell(masks, lo, hi, [&](const VoxelKey& k) {
     cells.push_back(k);
     return false;
   });
@@ -38,7 +40,8 @@ CollisionResult checkMeshPose(const Map& map, const BlockView& view, const Colli
   for (uint32_t i = 0; i < cells.size(); ++i) index_of.emplace(cells[i], i);
 
   // Cells a triangle cuts (the cube grown by the margin, shrunk by the touching epsilon).
-  const double half_m = 0.5 * map.resolution() + grow_m - kTouchEpsilon_m;
+  const double res_m = map.resolution();
+  const double half_m = 0.5 * res_m + grow_m - kTouchEpsilon_m;
   std::vector<uint8_t> cut(cells.size(), 0);
   for (const Eigen::Vector3i& t : mesh.triangles) {
     const Eigen::Vector3d &a = vertices_map[t[0]], &b = vertices_map[t[1]], &c = vertices_map[t[2]];
@@ -46,7 +49,7 @@ CollisionResult checkMeshPose(const Map& map, const BlockView& view, const Colli
     const Eigen::Vector3d tri_hi = a.cwiseMax(b).cwiseMax(c) + Eigen::Vector3d::Constant(grow_m);
     const VoxelKey kl = map.keyOf(tri_lo), kh = map.keyOf(tri_hi);
     const auto test = [&](uint32_t i) {
-      if (!cut[i] && geometry::triangleCubeOverlap(a, b, c, map.centerOf(cells[i]), half_m))
+      if (!cut[i] && geometry::triangleCubeOverlap(a, b, c, cellCentre(cells[i], res_m), half_m))
         cut[i] = 1;
     };
     const double range_cells =
@@ -70,10 +73,13 @@ CollisionResult checkMeshPose(const Map& map, const BlockView& view, const Colli
 
   // A cell no triangle cuts is wholly inside or wholly outside: its centre decides.
   const Eigen::Isometry3d T_shape_map = T_map_shape.inverse();
+  const Eigen::Matrix3d R_inv = T_shape_map.linear();
+  const Eigen::Vector3d t_inv = T_shape_map.translation();
   for (uint32_t i = 0; i < cells.size(); ++i) {
     const bool collides =
         cut[i] ||
-        (shape.meshClosed() && bvh.inside((T_shape_map * map.centerOf(cells[i])).cast<float>()));
+        (shape.meshClosed() &&
+         bvh.inside(transformPoint(R_inv, t_inv, cellCentre(cells[i], res_m)).cast<float>()));
     if (!collides) continue;
     if (!result.collides) result.first_cell = cells[i];
     result.collides = true;

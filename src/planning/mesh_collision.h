@@ -4,13 +4,14 @@
 
 #include <Eigen/Geometry>
 
+#include "fragg_map/internal/obstacle_masks.h"
 #include "fragg_map/map.h"
 #include "fragg_map/planning/collision_check.h"
 
 namespace fragg::planning {
 
-CollisionResult checkMeshPose(const Map& map, const BlockView& view, const CollisionShape& shape,
-                              const Eigen::Isometry3d& T_map_shape,
+CollisionResult checkMeshPose(const Map& map, const ObstacleMasksView& masks,
+                              const CollisionShape& shape, const Eigen::Isometry3d& T_map_shape,
                               const CollisionOptions& options);
 
 }  // namespace fragg::planning

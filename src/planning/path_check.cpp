@@ -45,7 +45,7 @@ void appendSegment(const std::vector<Eigen::Isometry3d>& w, int64_t i, double st
 
 PathResult checkPath(const Map& map, const CollisionShape& shape,
                      const std::vector<Eigen::Isometry3d>& waypoints_T_map_shape,
-                     const CollisionOptions& options, const PathOptions& path) {
+                     const CollisionOptions& options, const PathOptions& path, Backend backend) {
   const auto& w = waypoints_T_map_shape;
   if (w.empty()) throw InvalidArgument("a path needs at least one waypoint");
   validate(options);
@@ -56,6 +56,7 @@ PathResult checkPath(const Map& map, const CollisionShape& shape,
       path.max_rotation_step_rad <= 0.0)
     throw InvalidArgument("path steps must be finite, the rotation step > 0");
 
+  const Backend use = resolveCollisionBackend(backend);  // once, not per chunk
   CollisionOptions first_only = options;
   first_only.count_cells = false;
   PathResult result;
@@ -71,7 +72,7 @@ PathResult checkPath(const Map& map, const CollisionShape& shape,
     if (poses.empty()) break;
     std::vector<Eigen::Isometry3d> Ts(poses.size());
     for (size_t i = 0; i < poses.size(); ++i) Ts[i] = poses[i].T_map_shape;
-    const std::vector<CollisionResult> r = checkPoses(map, shape, Ts, first_only);
+    const std::vector<CollisionResult> r = checkPoses(map, shape, Ts, first_only, use);
     result.poses_checked += poses.size();
     for (size_t i = 0; i < r.size(); ++i) {
       if (!r[i].collides) continue;
@@ -79,7 +80,7 @@ PathResult checkPath(const Map& map, const CollisionShape& shape,
       result.first_segment = poses[i].segment;
       result.fraction = poses[i].fraction;
       result.T_map_shape_hit = poses[i].T_map_shape;
-      result.hit = options.count_cells ? checkPose(map, shape, Ts[i], options) : r[i];
+      result.hit = options.count_cells ? checkPose(map, shape, Ts[i], options, use) : r[i];
       result.poses_checked -= r.size() - i - 1;
       return result;
     }

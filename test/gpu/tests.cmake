@@ -25,3 +25,10 @@ if(TARGET fragg_map_store)
     LIBS fragg_map_store
     LABELS gpu paging)
 endif()
+
+# The CUDA collision checker against the CPU one (all shapes, options, paths; skips without a
+# device; built in every build: without CUDA it checks that cuda is refused and auto falls back).
+fragg_add_test(fragg_gpu_collision_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/collision_gpu_test.cpp
+  LIBS fragg_map_planning
+  LABELS gpu)

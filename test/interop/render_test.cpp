@@ -2,7 +2,6 @@
 #include "fragg_map/interop/render.h"
 
 #include <gtest/gtest.h>
-#include <png.h>
 
 #include <cstring>
 #include <string>
@@ -10,42 +9,18 @@
 
 #include "fragg_map/errors.h"
 #include "interop_test_util.h"
+#include "png_test_util.h"
 
 namespace fragg {
 namespace {
 
 using test::fileExists;
+using test::Image;
 using test::listDir;
 using test::paramsAt;
+using test::readPng;
 using test::setCell;
 using test::testDir;
-
-struct Image {
-  int width = 0, height = 0;
-  std::vector<uint8_t> rgb;
-  Rgb at(int x, int y) const {
-    const size_t i = (static_cast<size_t>(y) * width + x) * 3;
-    return {rgb[i], rgb[i + 1], rgb[i + 2]};
-  }
-};
-
-Image readPng(const std::string& path) {
-  png_image image;
-  std::memset(&image, 0, sizeof(image));
-  image.version = PNG_IMAGE_VERSION;
-  Image out;
-  if (!png_image_begin_read_from_file(&image, path.c_str())) {
-    ADD_FAILURE() << "cannot read " << path << ": " << image.message;
-    return out;
-  }
-  image.format = PNG_FORMAT_RGB;
-  out.width = static_cast<int>(image.width);
-  out.height = static_cast<int>(image.height);
-  out.rgb.resize(PNG_IMAGE_SIZE(image));
-  if (!png_image_finish_read(&image, nullptr, out.rgb.data(), 0, nullptr))
-    ADD_FAILURE() << "cannot decode " << path << ": " << image.message;
-  return out;
-}
 
 /// Voxel columns at 10 cm, x in [0, 2], y in [0, 1]:
 ///   (0,0): occupied at z = 0 and z = 5, free at z = 2  -> top z = 5

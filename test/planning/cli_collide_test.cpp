@@ -2,14 +2,18 @@
 // shape, and bad input refused with one line and the CLI's exit codes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "fragg_map/geometry/obj_file.h"
+#include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/map.h"
 #include "geometry/mesh_test_util.h"
 #include "interop_test_util.h"
+#include "png_test_util.h"
 
 namespace fragg {
 namespace {
@@ -94,6 +98,51 @@ TEST(CliCollide, MeshFromObjWithScale) {
   EXPECT_EQ(nlohmann::json::parse(r.out)["colliding"], 1);
 }
 
+TEST(CliCollide, PngShowsFreeAndCollidingPosesAndThePath) {
+  const std::string dir = testDir();
+  const std::string map = wallMap(dir), wp = dir + "/png_wp.txt", png = dir + "/collide.png";
+  // Free at x = 0.5, colliding at the wall (x = 1.05), free beyond it at x = 1.6.
+  writeText(wp, "0.5 0.05 0.05 0 0 0 1\n1.05 0.05 0.05 0 0 0 1\n1.6 0.05 0.05 0 0 0 1\n");
+  const auto r = runCli(dir, "collide '" + map + "' --waypoints '" + wp +
+                                 "' --box 0.2 0.2 0.2 --path --backend cpu --png '" + png + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const test::Image img = test::readPng(png);
+  ASSERT_GT(img.width, 0);
+  // Count the footprint colours: green outlines for the two free poses, red for the colliding
+  // one and the path's first collision.
+  int green = 0, red = 0, white = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const Rgb c = img.at(x, y);
+      green += c == Rgb{40, 200, 60};
+      red += c == Rgb{235, 30, 30};
+      white += c == Rgb{255, 255, 255};
+    }
+  EXPECT_GT(green, 50);
+  EXPECT_GT(red, 50);
+  EXPECT_GT(white, 20);  // the path's segments
+  // The image spans the waypoints +- (bounding radius + 2 m), whole 0.1 m voxel columns: the
+  // free pose's outline runs along x = 0.4 m in green, the colliding pose's along x = 0.95 m
+  // in red.
+  const double pad_m = std::sqrt(0.03) + 2.0;
+  const int lo_x = int(std::floor((0.5 - pad_m) / 0.1)),
+            hi_x = int(std::floor((1.6 + pad_m) / 0.1));
+  const int px_per_voxel = img.width / (hi_x - lo_x + 1);
+  ASSERT_GT(px_per_voxel, 0);
+  const auto column = [&](double x_m) {
+    return int(std::lround((x_m / 0.1 - lo_x) * px_per_voxel));
+  };
+  int green_at_free = 0, red_at_hit = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int dx = -1; dx <= 1; ++dx) {
+      const int xf = column(0.4) + dx, xh = column(0.95) + dx;
+      if (xf >= 0 && xf < img.width) green_at_free += img.at(xf, y) == Rgb{40, 200, 60};
+      if (xh >= 0 && xh < img.width) red_at_hit += img.at(xh, y) == Rgb{235, 30, 30};
+    }
+  EXPECT_GT(green_at_free, 5);
+  EXPECT_GT(red_at_hit, 5);
+}
+
 TEST(CliCollide, BadInputIsRefusedWithOneLine) {
   const std::string dir = testDir();
   const std::string map = wallMap(dir), good = dir + "/good.txt", obj = dir + "/flat.obj";
@@ -125,10 +174,15 @@ TEST(CliCollide, BadInputIsRefusedWithOneLine) {
       {base + "'" + good + "' --sphere 0", 2},
       {base + "'" + good + "' --capsule 0.1", 2},
       {base + "'" + good + "' --sphere 0.1 --margin -0.1", 2},
-      {base + "'" + good + "' --sphere 0.1 --backend cuda", 2},
+      {base + "'" + good + "' --sphere 0.1 --backend gpu", 2},
+      {base + "'" + good + "' --sphere 0.1 --png '" + dir + "/out.jpg'", 2},
       {base + "'" + good + "' --mesh '" + obj + "' --mesh-scale 0", 2},
   };
-  for (const Case& k : cases) {
+  std::vector<Case> all(std::begin(cases), std::end(cases));
+  std::string why;
+  if (cudaDeviceName(0, &why).empty())  // cuda requested without a device
+    all.push_back({base + "'" + good + "' --sphere 0.1 --backend cuda", 2});
+  for (const Case& k : all) {
     const auto r = runCli(dir, k.args);
     EXPECT_EQ(r.exit_code, k.exit_code) << k.args << "\n" << r.err;
     EXPECT_EQ(r.err.find("fragg_map: error: "), 0u) << r.err;

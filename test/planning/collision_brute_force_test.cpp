@@ -14,6 +14,15 @@ namespace {
 
 using Reference = std::function<std::vector<VoxelKey>(const Map&, const Eigen::Isometry3d&, bool)>;
 
+// The documented scan order: blocks by z, y, x key, then cells x fastest within a block.
+bool scanOrderLess(const VoxelKey& a, const VoxelKey& b) {
+  const BlockKey ba = blockKeyOf(a), bb = blockKeyOf(b);
+  if (ba.z != bb.z) return ba.z < bb.z;
+  if (ba.y != bb.y) return ba.y < bb.y;
+  if (ba.x != bb.x) return ba.x < bb.x;
+  return cellIndexOf(a) < cellIndexOf(b);
+}
+
 void compareRandomPoses(const CollisionShape& shape, const Reference& reference, uint32_t seed,
                         double margin_m = 0.0) {
   const Map map = randomMap(0.1, 16, seed);
@@ -29,15 +38,26 @@ void compareRandomPoses(const CollisionShape& shape, const Reference& reference,
     CollisionOptions first_only = options;
     first_only.count_cells = false;
     const auto batch = checkPoses(map, shape, poses, first_only);
+    // A prepared map (every block classified once) answers alike, counts included.
+    const PreparedMap prepared(map, unknown);
+    const auto prepared_first = checkPoses(prepared, shape, poses, first_only);
+    const auto prepared_count = checkPoses(prepared, shape, poses, options);
     for (size_t i = 0; i < poses.size(); ++i) {
       const std::vector<VoxelKey> expected = reference(map, poses[i], unknown);
       const CollisionResult r = checkPose(map, shape, poses[i], options);
       ASSERT_EQ(r.collides, !expected.empty()) << "pose " << i << " unknown " << unknown;
       ASSERT_EQ(r.colliding_cells, expected.size()) << "pose " << i << " unknown " << unknown;
       ASSERT_EQ(batch[i].collides, r.collides) << "pose " << i;
+      ASSERT_EQ(prepared_first[i].collides, r.collides) << "pose " << i;
+      ASSERT_EQ(prepared_count[i].colliding_cells, r.colliding_cells) << "pose " << i;
+      if (r.collides) {
+        ASSERT_EQ(prepared_first[i].first_cell, r.first_cell) << "pose " << i;
+        ASSERT_EQ(prepared_count[i].first_cell, r.first_cell) << "pose " << i;
+      }
       if (r.collides) {
         ++colliding_poses;
-        EXPECT_NE(std::find(expected.begin(), expected.end(), r.first_cell), expected.end());
+        EXPECT_EQ(r.first_cell, *std::min_element(expected.begin(), expected.end(), scanOrderLess))
+            << "pose " << i << ": the first colliding cell in scan order";
         EXPECT_EQ(batch[i].first_cell, r.first_cell) << "first cell follows the scan order";
         EXPECT_EQ(batch[i].colliding_cells, 1u);
       } else {

@@ -217,6 +217,24 @@ TEST(CollisionInputs, BadShapesOptionsAndPosesAreRefused) {
   EXPECT_THROW(checkPath(map, sphere, {}, CollisionOptions()), InvalidArgument);
 }
 
+TEST(CollisionInputs, PreparedMapRefusesAChangedMapAndOtherOptions) {
+  MapParams params;
+  params.resolution_m = 0.1;
+  Map map(params);
+  map.writeCells([](CellWriter& w) { w.set({0, 0, 0}, Cell{1, 3000}); });
+  const PreparedMap prepared(map, false);
+  const CollisionShape sphere = CollisionShape::sphere(0.2);
+  const std::vector<Eigen::Isometry3d> at_origin(1, Eigen::Isometry3d::Identity());
+  EXPECT_TRUE(checkPoses(prepared, sphere, at_origin, CollisionOptions())[0].collides);
+  CollisionOptions unknown;
+  unknown.unknown_is_occupied = true;
+  EXPECT_THROW(checkPoses(prepared, sphere, at_origin, unknown), InvalidArgument);
+  map.writeCells([](CellWriter& w) { w.set({0, 0, 0}, Cell{0, -3000}); });  // now free
+  EXPECT_THROW(checkPoses(prepared, sphere, at_origin, CollisionOptions()), InvalidArgument);
+  EXPECT_FALSE(
+      checkPoses(PreparedMap(map, false), sphere, at_origin, CollisionOptions())[0].collides);
+}
+
 TEST(CollisionInputs, WaypointLines) {
   const Eigen::Isometry3d T = parseWaypoint("1 2 3 0 0 0.7071067811865476 0.7071067811865476");
   EXPECT_NEAR(T.translation().y(), 2.0, 0);

@@ -9,7 +9,7 @@ fragg_add_test(fragg_planning_test
 # Runs the built `fragg_map collide` on a hand-written map saved as .fgm.
 fragg_add_test(cli_collide_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/cli_collide_test.cpp
-  LIBS fragg_map_core fragg_map_geometry nlohmann_json::nlohmann_json
+  LIBS fragg_map_core fragg_map_geometry nlohmann_json::nlohmann_json PNG::PNG
   LABELS cli planning)
 if(TARGET cli_collide_test)
   add_dependencies(cli_collide_test fragg_map_cli)

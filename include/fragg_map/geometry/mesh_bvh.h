@@ -42,7 +42,6 @@ class MeshBvh {
   /// above p: more throws InvalidArgument).
   bool inside(const Eigen::Vector3f& p) const;
 
- private:
   struct Node {
     Eigen::Vector3f lo, hi;
     uint32_t first = 0;  ///< leaf: first triangle (in order_); inner: right child
@@ -51,6 +50,15 @@ class MeshBvh {
   struct Tri {
     Eigen::Vector3f v0, e1, e2;
   };
+  /// The flat hierarchy (node 0 the root), for device copies (geometry/bvh_traversal.h).
+  const std::vector<Node>& nodes() const { return nodes_; }
+  const std::vector<Tri>& leafTriangles() const { return tris_; }            ///< in leaf order
+  const std::vector<uint32_t>& leafOrder() const { return order_; }          ///< triangle of a slot
+  const std::vector<int32_t>& leafSolids() const { return solid_of_slot_; }  ///< solid of a slot
+  /// The direction of inside()'s parity rays.
+  static Eigen::Vector3f insideRayDirection();
+
+ private:
   uint32_t build(uint32_t begin, uint32_t end, const std::vector<Eigen::Vector3f>& centroids,
                  const std::vector<Eigen::AlignedBox3f>& boxes, int depth);
   template <typename Visit>
@@ -59,8 +67,9 @@ class MeshBvh {
 
   TriangleMesh mesh_;
   std::vector<Node> nodes_;
-  std::vector<uint32_t> order_;  ///< triangle index of each leaf slot
-  std::vector<Tri> tris_;        ///< in leaf order
+  std::vector<uint32_t> order_;         ///< triangle index of each leaf slot
+  std::vector<Tri> tris_;               ///< in leaf order
+  std::vector<int32_t> solid_of_slot_;  ///< in leaf order
 };
 
 }  // namespace fragg::geometry

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fragg_map/hd.h"
+
 namespace fragg::geometry {
 
 /// Squared distance from p to the triangle (a, b, c).
@@ -38,13 +40,14 @@ inline float pointTriangleDistanceSq(const Eigen::Vector3f& p, const Eigen::Vect
 }
 
 /// Möller-Trumbore: distance t along dir to the triangle (v0, v0 + e1, v0 + e2), or a negative
-/// value when the line misses it. Barycentric limits are widened by edge_eps.
-inline float rayTriangle(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
-                         const Eigen::Vector3f& v0, const Eigen::Vector3f& e1,
-                         const Eigen::Vector3f& e2, float edge_eps = 0.f) {
+/// value when the line misses it. Barycentric limits are widened by edge_eps. FRAGG_HD: the CUDA
+/// collision kernels' inside test runs it too.
+FRAGG_HD float rayTriangle(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
+                           const Eigen::Vector3f& v0, const Eigen::Vector3f& e1,
+                           const Eigen::Vector3f& e2, float edge_eps = 0.f) {
   const Eigen::Vector3f pv = dir.cross(e2);
   const float det = e1.dot(pv);
-  if (std::abs(det) < 1e-12f) return -1.f;
+  if (fabsf(det) < 1e-12f) return -1.f;
   const float inv = 1.f / det;
   const Eigen::Vector3f tv = origin - v0;
   const float u = tv.dot(pv) * inv;

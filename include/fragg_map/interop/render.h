@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "fragg_map/map.h"
 
@@ -45,6 +46,22 @@ struct RenderInfo {
   double z_min_m = 0, z_max_m = 0;  ///< top view: heights at the ends of the colour ramp
 };
 
+/// A rendered image in memory: packed RGB rows, top to bottom, and where map points fall on it
+/// (for drawing over the map: fragg_map collide --png).
+struct RenderImage {
+  RenderInfo info;
+  std::vector<uint8_t> rgb;  ///< width_px * height_px * 3
+  double resolution_m = 0.0;
+
+  /// Image position (pixels, x right, y down, fractional) of a map point's x and y.
+  Eigen::Vector2d pixelOf(const Eigen::Vector3d& p_map) const;
+  /// A line between two map points' image positions, `width_px` wide (clipped to the image).
+  void drawLine(const Eigen::Vector3d& a_map, const Eigen::Vector3d& b_map, const Rgb& color,
+                double width_px = 1.0);
+  /// A filled disc about a map point's image position, radius in metres (at least 1 px).
+  void fillDisc(const Eigen::Vector3d& centre_map, double radius_m, const Rgb& color);
+};
+
 /// Colour ramp for heights, t in [0, 1] (clamped): blue, cyan, green, yellow, red.
 Rgb heightColor(double t);
 
@@ -55,6 +72,10 @@ Rgb heightColor(double t);
 /// an empty map without a crop box, IoError when the file cannot be written.
 RenderInfo renderTopDown(const Map& map, const std::string& path_png,
                          const RenderOptions& options = RenderOptions());
+/// The same image in memory.
+RenderImage renderTopDownImage(const Map& map, const RenderOptions& options = RenderOptions());
+/// Writes an image as PNG, atomically (IoError when it cannot).
+void writePng(const RenderImage& image, const std::string& path_png);
 
 /// Horizontal slice through the voxel layer that holds height `z_m`: occupied_color,
 /// free_color and unknown_color per cell state (map's own occupancy model). Same image

@@ -1,5 +1,8 @@
-// Collision checks of a shape against a map on the CPU: one pose, a batch of poses (OpenMP
-// threads) and a path (planning/path_check.h).
+// Collision checks of a shape against a map: one pose, a batch of poses and a path
+// (planning/path_check.h), on the CPU (OpenMP threads) or the GPU (CUDA builds), with identical
+// answers. A batch classifies the cells of the blocks its poses reach once (obstacle masks);
+// the CUDA checker uploads those masks and runs one thread a pose (box, sphere, capsule) or one
+// thread a candidate cell (mesh).
 //
 // Semantics. A pose collides when some occupied cell's cube overlaps the shape with positive
 // volume: the shape must reach more than kTouchEpsilon_m into the cube (the cube shrunk by
@@ -18,10 +21,13 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
+#include "fragg_map/map_params.h"
 #include "fragg_map/planning/collision_shape.h"
 
 namespace fragg::planning {
@@ -50,13 +56,52 @@ struct CollisionResult {
 void validate(const CollisionOptions& options);
 void validatePose(const Eigen::Isometry3d& T_map_shape);
 
+/// Where a check runs: kCpu (OpenMP), kCuda (throws InvalidArgument without a CUDA build or a
+/// device), kAuto (CUDA when built with it and a device is present, else the CPU). `why` gets
+/// one line saying what was chosen and why.
+Backend resolveCollisionBackend(Backend requested, std::string* why = nullptr);
+
 /// One pose (checks its arguments first).
 CollisionResult checkPose(const Map& map, const CollisionShape& shape,
-                          const Eigen::Isometry3d& T_map_shape, const CollisionOptions& options);
+                          const Eigen::Isometry3d& T_map_shape, const CollisionOptions& options,
+                          Backend backend = Backend::kCpu);
 
 /// Every pose, in parallel; result i belongs to pose i. Hold the map's read lock.
 std::vector<CollisionResult> checkPoses(const Map& map, const CollisionShape& shape,
                                         const std::vector<Eigen::Isometry3d>& T_map_shape,
-                                        const CollisionOptions& options);
+                                        const CollisionOptions& options,
+                                        Backend backend = Backend::kCpu);
+
+class ObstacleIndex;
+
+/// A map prepared for many collision batches: every block's cells classified once (obstacle
+/// masks, for one unknown_is_occupied setting), so that a planner checking batch after batch
+/// against an unchanged map pays only for the poses. Checks through it answer exactly as
+/// checkPoses on the map. It refers to `map` (which must outlive it); checks throw
+/// InvalidArgument once Map::revision() moved on (any insertion or edit), but a map object
+/// replaced by assignment (a load into the same variable) is not detected: prepare again.
+class PreparedMap {
+ public:
+  PreparedMap(const Map& map, bool unknown_is_occupied, int threads = 0);
+  const Map& map() const { return *map_; }
+  bool unknownIsOccupied() const { return unknown_is_occupied_; }
+  uint64_t revision() const { return revision_; }
+  size_t blockCount() const;  ///< blocks with a stored mask
+
+ private:
+  friend std::vector<CollisionResult> checkPoses(const PreparedMap&, const CollisionShape&,
+                                                 const std::vector<Eigen::Isometry3d>&,
+                                                 const CollisionOptions&, Backend);
+  const Map* map_;
+  uint64_t revision_;
+  bool unknown_is_occupied_;
+  std::shared_ptr<const ObstacleIndex> index_;
+};
+
+/// checkPoses over a prepared map (options.unknown_is_occupied must match it).
+std::vector<CollisionResult> checkPoses(const PreparedMap& prepared, const CollisionShape& shape,
+                                        const std::vector<Eigen::Isometry3d>& T_map_shape,
+                                        const CollisionOptions& options,
+                                        Backend backend = Backend::kCpu);
 
 }  // namespace fragg::planning

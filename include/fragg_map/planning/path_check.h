@@ -29,9 +29,11 @@ struct PathResult {
   uint64_t poses_checked = 0;  ///< interpolated poses checked (the waypoints included)
 };
 
+/// Interpolation runs on the host; the poses are checked in batches on `backend`.
 /// Throws InvalidArgument for an empty path, a bad pose, bad options or step limits.
 PathResult checkPath(const Map& map, const CollisionShape& shape,
                      const std::vector<Eigen::Isometry3d>& waypoints_T_map_shape,
-                     const CollisionOptions& options, const PathOptions& path = PathOptions());
+                     const CollisionOptions& options, const PathOptions& path = PathOptions(),
+                     Backend backend = Backend::kCpu);
 
 }  // namespace fragg::planning

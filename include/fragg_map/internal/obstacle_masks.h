@@ -1,0 +1,100 @@
+// Obstacle masks of a collision batch, shared by the CPU checker and the CUDA collision kernels
+// (FRAGG_HD): per block, 512 bits (8 words, word = local z, bit = x + 8 y), set where the cell
+// counts as an obstacle (occupied, or unknown with unknown_is_occupied). Blocks whose mask
+// equals the default (no block: all clear, or all set with unknown_is_occupied) are not
+// stored. The table is open addressing (linear probing) over block keys; built on the host
+// (src/planning/obstacle_index.cpp) from the map's blocks and read by plain pointers, host or
+// device.
+#pragma once
+
+#include <cstdint>
+
+#include "fragg_map/hd.h"
+#include "fragg_map/key.h"
+
+namespace fragg {
+
+constexpr int kMaskWords = kCellsPerBlock / 64;  ///< 8: one word per z layer of a block
+/// Key of an empty table entry (x can never be INT32_MIN for a block: voxel keys >> 3).
+constexpr int32_t kEmptyMaskKey = INT32_MIN;
+
+/// Plain pointers into an obstacle index (host or device memory).
+struct ObstacleMasksView {
+  const BlockKey* keys = nullptr;   ///< capacity entries; x == kEmptyMaskKey: empty
+  const int32_t* slots = nullptr;   ///< capacity entries: which mask a key has
+  const uint64_t* masks = nullptr;  ///< kMaskWords per slot
+  uint32_t capacity_mask = 0;       ///< capacity - 1 (capacity a power of two)
+  uint64_t default_word = 0;        ///< a block without a stored mask: 0 or ~0
+};
+
+FRAGG_HD uint32_t maskTableHash(const BlockKey& k) {
+  uint64_t h = static_cast<uint64_t>(static_cast<uint32_t>(k.x)) * 73856093ULL;
+  h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.y)) * 19349669ULL << 21;
+  h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.z)) * 83492791ULL << 42;
+  h ^= h >> 29;
+  h *= 0xbf58476d1ce4e5b9ULL;
+  return static_cast<uint32_t>(h ^ (h >> 32));
+}
+
+/// The block's 8 mask words, or nullptr when it has none stored (then default_word applies).
+FRAGG_HD const uint64_t* findMasks(const ObstacleMasksView& v, const BlockKey& k) {
+  if (v.keys == nullptr) return nullptr;
+  for (uint32_t i = maskTableHash(k) & v.capacity_mask;; i = (i + 1) & v.capacity_mask) {
+    const BlockKey& e = v.keys[i];
+    if (e.x == kEmptyMaskKey) return nullptr;
+    if (e == k) return v.masks + static_cast<uint64_t>(v.slots[i]) * kMaskWords;
+  }
+}
+
+FRAGG_HD int lowestSetBit(uint64_t w) {
+#if defined(__CUDA_ARCH__)
+  return __ffsll(static_cast<long long>(w)) - 1;
+#else
+  return __builtin_ctzll(w);
+#endif
+}
+
+/// Bits of one z layer for local x in [x0, x1] and y in [y0, y1] (0..7 each).
+FRAGG_HD uint64_t layerRangeMask(int x0, int x1, int y0, int y1) {
+  const uint64_t row = (0xFFull >> (7 - x1)) & (0xFFull << x0);
+  uint64_t m = 0;
+  for (int y = y0; y <= y1; ++y) m |= row << (8 * y);
+  return m;
+}
+
+/// Calls visit(key) for every obstacle cell in [lo, hi] (inclusive), in scan order: blocks by
+/// z, y, x key, cells x fastest within a block, until visit returns true (then returns true).
+template <typename Visit>
+FRAGG_HD bool forEachObstacleCell(const ObstacleMasksView& v, const VoxelKey& lo,
+                                  const VoxelKey& hi, Visit&& visit) {
+  const BlockKey bl = blockKeyOf(lo), bh = blockKeyOf(hi);
+  for (int64_t bz = bl.z; bz <= bh.z; ++bz)
+    for (int64_t by = bl.y; by <= bh.y; ++by)
+      for (int64_t bx = bl.x; bx <= bh.x; ++bx) {
+        const BlockKey b{static_cast<int32_t>(bx), static_cast<int32_t>(by),
+                         static_cast<int32_t>(bz)};
+        const uint64_t* masks = findMasks(v, b);
+        if (masks == nullptr && v.default_word == 0) continue;
+        const int64_t ox = bx * kBlockSize, oy = by * kBlockSize, oz = bz * kBlockSize;
+        const int x0 = static_cast<int>(lo.x > ox ? lo.x - ox : 0);
+        const int x1 = static_cast<int>(hi.x < ox + kBlockMask ? hi.x - ox : kBlockMask);
+        const int y0 = static_cast<int>(lo.y > oy ? lo.y - oy : 0);
+        const int y1 = static_cast<int>(hi.y < oy + kBlockMask ? hi.y - oy : kBlockMask);
+        const int z0 = static_cast<int>(lo.z > oz ? lo.z - oz : 0);
+        const int z1 = static_cast<int>(hi.z < oz + kBlockMask ? hi.z - oz : kBlockMask);
+        const uint64_t range = layerRangeMask(x0, x1, y0, y1);
+        for (int z = z0; z <= z1; ++z) {
+          uint64_t w = (masks ? masks[z] : v.default_word) & range;
+          while (w != 0) {
+            const int bit = lowestSetBit(w);
+            w &= w - 1;
+            const VoxelKey k{static_cast<int32_t>(ox + (bit & 7)),
+                             static_cast<int32_t>(oy + (bit >> 3)), static_cast<int32_t>(oz + z)};
+            if (visit(k)) return true;
+          }
+        }
+      }
+  return false;
+}
+
+}  // namespace fragg

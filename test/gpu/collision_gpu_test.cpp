@@ -1,0 +1,216 @@
+// The CUDA collision checker against the CPU one: every shape (box, sphere, capsule, closed and
+// open meshes), with and without unknown_is_occupied, margins and cell counts, and path mode,
+// on a map built from a real scan with random poses. The answers must be identical: collides,
+// colliding cell count, first colliding cell, and for paths the segment, fraction and poses
+// checked. Needs a device (skips without one).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/geometry/mesh_primitives.h"
+#include "fragg_map/internal/backend_factory.h"
+#include "fragg_map/io/dataset.h"
+#include "fragg_map/planning/collision_check.h"
+#include "fragg_map/planning/path_check.h"
+#include "geometry/mesh_test_util.h"
+
+namespace fragg::planning {
+namespace {
+
+#define REQUIRE_DEVICE()                                                     \
+  do {                                                                       \
+    std::string why;                                                         \
+    if (cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "skipped: " << why; \
+  } while (0)
+
+const std::string kRoomScan = std::string(FRAGG_REAL_DATA) + "/pcl_room_scans/room_scan1.pcd";
+
+const Map& roomMap() {
+  static const Map map = [] {
+    MapParams params;
+    params.resolution_m = 0.05;
+    params.backend = Backend::kCpu;
+    Map m(params);
+    auto source = openDataset(kRoomScan);
+    Scan scan;
+    while (source->next(scan))
+      m.insert(scan.cloud, scan.T_map_sensor, SensorModel::autoFromCloud());
+    return m;
+  }();
+  return map;
+}
+
+std::vector<Eigen::Isometry3d> randomPoses(const Map& map, size_t n, uint32_t seed) {
+  const KeyBounds b = map.bounds();
+  const Eigen::Vector3d lo = map.centerOf(b.min), hi = map.centerOf(b.max);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> ux(lo.x(), hi.x()), uy(lo.y(), hi.y()), uz(lo.z(), hi.z()),
+      u(-1.0, 1.0);
+  std::vector<Eigen::Isometry3d> out(n);
+  for (Eigen::Isometry3d& T : out) {
+    Eigen::Quaterniond q(u(rng), u(rng), u(rng), u(rng));
+    if (q.norm() < 1e-3) q = Eigen::Quaterniond::Identity();
+    T = Eigen::Isometry3d::Identity();
+    T.linear() = q.normalized().toRotationMatrix();
+    T.translation() = Eigen::Vector3d(ux(rng), uy(rng), uz(rng));
+  }
+  return out;
+}
+
+struct NamedShape {
+  std::string name;
+  CollisionShape shape;
+};
+
+std::vector<NamedShape> shapes() {
+  geometry::TriangleMesh open =
+      geometry::test::boxSolid({-0.3f, -0.2f, -0.1f}, {0.3f, 0.2f, 0.25f});
+  open.triangles.resize(10);  // a box missing its top: a surface only
+  open.solid_of_triangle.resize(10);
+  geometry::TriangleMesh two_solids =
+      geometry::test::boxSolid({-0.25f, -0.1f, -0.1f}, {0.25f, 0.1f, 0.1f});
+  two_solids.appendSolid(geometry::ellipsoidMesh({0.12f, 0.12f, 0.2f}, 8, 10));
+  return {{"box", CollisionShape::box({0.3, 0.2, 0.15})},
+          {"sphere", CollisionShape::sphere(0.22)},
+          {"capsule", CollisionShape::capsule(0.12, 0.4)},
+          {"closed ellipsoid mesh",
+           CollisionShape::mesh(geometry::ellipsoidMesh({0.35f, 0.3f, 0.25f}, 12, 16))},
+          {"two closed solids", CollisionShape::mesh(two_solids)},
+          {"open mesh", CollisionShape::mesh(open)}};
+}
+
+void expectSame(const std::vector<CollisionResult>& cpu, const std::vector<CollisionResult>& gpu,
+                const std::string& what, int* colliding) {
+  ASSERT_EQ(cpu.size(), gpu.size()) << what;
+  for (size_t i = 0; i < cpu.size(); ++i) {
+    ASSERT_EQ(cpu[i].collides, gpu[i].collides) << what << " pose " << i;
+    ASSERT_EQ(cpu[i].colliding_cells, gpu[i].colliding_cells) << what << " pose " << i;
+    if (!cpu[i].collides) continue;
+    ++*colliding;
+    ASSERT_EQ(cpu[i].first_cell, gpu[i].first_cell) << what << " pose " << i;
+  }
+}
+
+TEST(CollisionGpu, EveryShapeAndOptionMatchesTheCpu) {
+  REQUIRE_DEVICE();
+  const Map& map = roomMap();
+  ASSERT_GT(map.blockCount(), 0u);
+  const std::vector<Eigen::Isometry3d> poses = randomPoses(map, 3000, 7);
+  for (const NamedShape& s : shapes()) {
+    for (const bool unknown : {false, true})
+      for (const double margin : {0.0, 0.07})
+        for (const bool count : {false, true}) {
+          CollisionOptions o;
+          o.unknown_is_occupied = unknown;
+          o.margin_m = margin;
+          o.count_cells = count;
+          const std::string what = s.name + (unknown ? " unknown-occupied" : "") +
+                                   (margin > 0 ? " margin" : "") + (count ? " count" : "");
+          const auto cpu = checkPoses(map, s.shape, poses, o, Backend::kCpu);
+          const auto gpu = checkPoses(map, s.shape, poses, o, Backend::kCuda);
+          int colliding = 0;
+          expectSame(cpu, gpu, what, &colliding);
+          std::printf("[gpu] collision %s: %d of %zu poses collide, CPU == CUDA\n", what.c_str(),
+                      colliding, poses.size());
+          // Both outcomes exercised (unknown space as obstacles: most poses collide).
+          EXPECT_GT(colliding, 20) << what;
+          if (!unknown) {
+            EXPECT_LT(colliding, static_cast<int>(poses.size()) - 20) << what;
+          }
+        }
+  }
+}
+
+TEST(CollisionGpu, SinglePosesMatchTheCpu) {
+  REQUIRE_DEVICE();
+  const Map& map = roomMap();
+  const std::vector<Eigen::Isometry3d> poses = randomPoses(map, 50, 8);
+  const CollisionShape box = CollisionShape::box({0.2, 0.3, 0.1});
+  CollisionOptions o;
+  o.count_cells = true;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const CollisionResult cpu = checkPose(map, box, poses[i], o, Backend::kCpu);
+    const CollisionResult gpu = checkPose(map, box, poses[i], o, Backend::kCuda);
+    ASSERT_EQ(cpu.collides, gpu.collides) << i;
+    ASSERT_EQ(cpu.colliding_cells, gpu.colliding_cells) << i;
+    if (cpu.collides) {
+      ASSERT_EQ(cpu.first_cell, gpu.first_cell) << i;
+    }
+  }
+}
+
+TEST(CollisionGpu, PreparedMapsMatchTheCpu) {
+  REQUIRE_DEVICE();
+  const Map& map = roomMap();
+  const std::vector<Eigen::Isometry3d> poses = randomPoses(map, 2000, 9);
+  for (const bool unknown : {false, true}) {
+    const PreparedMap prepared(map, unknown);
+    for (const NamedShape& s : shapes()) {
+      CollisionOptions o;
+      o.unknown_is_occupied = unknown;
+      o.count_cells = true;
+      const auto cpu = checkPoses(map, s.shape, poses, o, Backend::kCpu);
+      const auto gpu = checkPoses(prepared, s.shape, poses, o, Backend::kCuda);
+      int colliding = 0;
+      expectSame(cpu, gpu, s.name + " prepared" + (unknown ? " unknown-occupied" : ""), &colliding);
+      EXPECT_GT(colliding, 20) << s.name;
+    }
+  }
+}
+
+TEST(CollisionGpu, PathsMatchTheCpu) {
+  REQUIRE_DEVICE();
+  const Map& map = roomMap();
+  int colliding = 0, clear = 0;
+  for (const NamedShape& s : shapes()) {
+    for (uint32_t seed = 0; seed < 12; ++seed) {
+      // Four waypoints within a few decimetres of each other: some paths clear, some not.
+      std::vector<Eigen::Isometry3d> waypoints = randomPoses(map, 4, 100 + seed);
+      for (size_t k = 1; k < waypoints.size(); ++k)
+        waypoints[k].translation() =
+            waypoints[k - 1].translation() +
+            0.3 * (waypoints[k].translation() - waypoints[k - 1].translation()).normalized();
+      for (const bool unknown : {false, true}) {
+        CollisionOptions o;
+        o.unknown_is_occupied = unknown;
+        o.count_cells = seed % 2 == 0;
+        const PathResult cpu = checkPath(map, s.shape, waypoints, o, PathOptions(), Backend::kCpu);
+        const PathResult gpu = checkPath(map, s.shape, waypoints, o, PathOptions(), Backend::kCuda);
+        const std::string what = s.name + " path " + std::to_string(seed);
+        ASSERT_EQ(cpu.collides, gpu.collides) << what;
+        ASSERT_EQ(cpu.poses_checked, gpu.poses_checked) << what;
+        if (!cpu.collides) {
+          ++clear;
+          continue;
+        }
+        ++colliding;
+        ASSERT_EQ(cpu.first_segment, gpu.first_segment) << what;
+        ASSERT_EQ(cpu.fraction, gpu.fraction) << what;
+        ASSERT_EQ(cpu.hit.colliding_cells, gpu.hit.colliding_cells) << what;
+        ASSERT_EQ(cpu.hit.first_cell, gpu.hit.first_cell) << what;
+      }
+    }
+  }
+  std::printf("[gpu] collision paths: %d collide, %d clear, CPU == CUDA\n", colliding, clear);
+  EXPECT_GT(colliding, 5);
+  EXPECT_GT(clear, 5);
+}
+
+TEST(CollisionGpu, CudaRequestedWithoutADeviceIsRefused) {
+  std::string why;
+  if (!cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "a device is present";
+  const Map& map = roomMap();
+  EXPECT_THROW(checkPoses(map, CollisionShape::sphere(0.1), {Eigen::Isometry3d::Identity()},
+                          CollisionOptions(), Backend::kCuda),
+               InvalidArgument);
+  // auto falls back to the CPU.
+  EXPECT_EQ(resolveCollisionBackend(Backend::kAuto, &why), Backend::kCpu);
+  EXPECT_NE(why.find("auto: CPU"), std::string::npos) << why;
+}
+
+}  // namespace
+}  // namespace fragg::planning
