@@ -14,18 +14,22 @@
 #   --bin DIR        folder with fragg_map and fragg_map_sim (default: ws/devel/lib/fragg_map,
 #                    else build-core/bin)
 #   --budget-mb N    paged build's --page-budget-mb (default 512)
+#   --store lmdb|db  page store of the paged build: LMDB (default) or SQLite
+#   --radius M       paged build's --page-radius (default 40: a 30 m scan's reach and more)
 #   --scans N        only the first N scans (default: all)
 #   --keep-maps      keep the map file and the page store (several GB each) after the run
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
 workloads="${FRAGG_WORKLOADS:-$HOME/.cache/fragg_map/workloads}"
-out="" bin="" budget_mb=512 backend=auto scans=0 paged=1 keep=0
+out="" bin="" budget_mb=512 store_ext=lmdb radius_m=40 backend=auto scans=0 paged=1 keep=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --workloads) workloads="${2:?}"; shift 2 ;;
     --out) out="${2:?}"; shift 2 ;;
     --bin) bin="${2:?}"; shift 2 ;;
     --budget-mb) budget_mb="${2:?}"; shift 2 ;;
+    --store) store_ext="${2:?}"; shift 2 ;;
+    --radius) radius_m="${2:?}"; shift 2 ;;
     --backend) backend="${2:?}"; shift 2 ;;
     --scans) scans="${2:?}"; shift 2 ;;
     --no-paged) paged=0; shift ;;
@@ -69,9 +73,10 @@ runs=(in_memory)
 if [ "$paged" = 1 ]; then
   if "$fm" build --help | grep -q -- '--page-store'; then
     # The store is the map: no .fgm is written (that would page every block back in).
-    rm -f "$out/w4_pages.db"*
-    build paged --page-store "$out/w4_pages.db" --page-budget-mb "$budget_mb"
-    [ "$keep" = 1 ] || rm -f "$out/w4_pages.db"*
+    rm -f "$out/w4_pages.$store_ext"*
+    build paged --page-store "$out/w4_pages.$store_ext" --page-budget-mb "$budget_mb" \
+      --page-radius "$radius_m"
+    [ "$keep" = 1 ] || rm -f "$out/w4_pages.$store_ext"*
     runs+=(paged)
   else
     echo "w4: this fragg_map has no --page-store: in-memory build only" >&2
