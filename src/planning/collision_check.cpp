@@ -138,6 +138,25 @@ void validate(const CollisionOptions& options) {
     throw InvalidArgument(fmt::format("threads must be >= 0, got {}", options.threads));
 }
 
+void pageInForCollision(Map& map, const CollisionShape& shape,
+                        const std::vector<Eigen::Isometry3d>& T_map_shape,
+                        const CollisionOptions& options) {
+  validate(options);
+  for (const Eigen::Isometry3d& T : T_map_shape) validatePose(T);
+  if (T_map_shape.empty() || !map.pagingStats().enabled) return;
+  Eigen::Vector3d lo = T_map_shape.front().translation(), hi = lo;
+  for (const Eigen::Isometry3d& T : T_map_shape) {
+    lo = lo.cwiseMin(T.translation());
+    hi = hi.cwiseMax(T.translation());
+  }
+  // A margin grows box half extents (or, for a mesh, each cell) per axis: sqrt(3) margins at
+  // most from the origin.
+  const double reach_m =
+      shape.boundingRadius() + std::sqrt(3.0) * options.margin_m + map.resolution();
+  map.ensureResident(lo - Eigen::Vector3d::Constant(reach_m),
+                     hi + Eigen::Vector3d::Constant(reach_m));
+}
+
 void validatePose(const Eigen::Isometry3d& T_map_shape) {
   if (!T_map_shape.matrix().allFinite()) throw InvalidArgument("shape pose is not finite");
   const Eigen::Matrix3d R = T_map_shape.linear();

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/planning/collision_check.h"
 #include "fragg_map/store/page_stores.h"
 #include "paging_scenes.h"
 
@@ -143,6 +144,50 @@ TEST_P(Paging, QueriesAndEditsPageInWhatTheyReach) {
   EXPECT_TRUE(sameBlocks(from_store, ref, &why)) << why;
   paged.ensureAllResident();
   EXPECT_TRUE(sameBlocks(paged, ref, &why)) << why;
+}
+
+TEST_P(Paging, CollisionChecksPageInWhatThePosesReach) {
+  const std::string dir = testDir();
+  Map paged(corridorParams());
+  PagingPolicy policy = smallBudget();
+  policy.budget_mb = 1.0;
+  paged.attachPageStore(openPageStore(storePath(dir), false), policy);
+  insertScans(paged, 0, kScans / 2);  // the sensor ends at x = 40: the start is paged out
+  const Map reference = inMemory(kScans / 2);
+  // Spheres on wall cells all along the corridor, and the same poses shifted into free space.
+  const auto sphere = planning::CollisionShape::sphere(0.12);
+  std::vector<Eigen::Isometry3d> poses;
+  for (double x = 0.0; x < 38.0; x += 2.0) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = occupiedCellIn(reference, x, x + 1.0);
+    poses.push_back(T);
+    T.translation().z() += 0.6;
+    poses.push_back(T);
+  }
+  planning::CollisionOptions options;
+  options.margin_m = 0.05;
+  const auto expected = planning::checkPoses(reference, sphere, poses, options);
+  const auto before = planning::checkPoses(static_cast<const Map&>(paged), sphere, poses, options);
+  int expected_hits = 0, hits_before = 0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    expected_hits += expected[i].collides;
+    hits_before += before[i].collides;
+  }
+  EXPECT_GE(expected_hits, 19);
+  EXPECT_LT(hits_before, expected_hits) << "the paged-out walls are missing before paging in";
+  planning::pageInForCollision(paged, sphere, poses, options);
+  const auto after = planning::checkPoses(static_cast<const Map&>(paged), sphere, poses, options);
+  for (size_t i = 0; i < poses.size(); ++i) {
+    EXPECT_EQ(after[i].collides, expected[i].collides) << "pose " << i;
+    if (expected[i].collides) EXPECT_EQ(after[i].first_cell, expected[i].first_cell) << i;
+  }
+  EXPECT_THROW(planning::pageInForCollision(paged, sphere, poses,
+                                            [] {
+                                              planning::CollisionOptions bad;
+                                              bad.margin_m = -1.0;
+                                              return bad;
+                                            }()),
+               InvalidArgument);
 }
 
 TEST_P(Paging, AStoreIsContinuedWhereItStopped) {

@@ -72,6 +72,16 @@ std::vector<CollisionResult> checkPoses(const Map& map, const CollisionShape& sh
                                         const CollisionOptions& options,
                                         Backend backend = Backend::kCpu);
 
+/// On a paged map (Map::attachPageStore) const readers see only resident blocks: before a
+/// batch, bring back every paged-out block the shape can reach at any of the poses (the poses'
+/// box grown by the shape's bounding radius, sqrt(3) margins and one cell). It changes the map
+/// (blocks come back into RAM): call it under the write lock, then checkPoses / checkPath under
+/// the read lock (a path: pass its waypoints; the segments between them stay within their
+/// box). No-op without paging. Throws InvalidArgument for a bad pose or margin (map untouched).
+void pageInForCollision(Map& map, const CollisionShape& shape,
+                        const std::vector<Eigen::Isometry3d>& T_map_shape,
+                        const CollisionOptions& options);
+
 class ObstacleIndex;
 
 /// A map prepared for many collision batches: every block's cells classified once (obstacle
