@@ -215,13 +215,6 @@ bool MeshBvh::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& di
   return true;
 }
 
-Eigen::Vector3f MeshBvh::insideRayDirection() {
-  // An irrational-looking direction, steep upwards: few solids lie above a point, and no
-  // axis-aligned face or edge (buildings, boxes, slabs) is parallel to it.
-  static const Eigen::Vector3f kDir = Eigen::Vector3f(0.0917f, 0.0531f, 1.0f).normalized();
-  return kDir;
-}
-
 bool MeshBvh::inside(const Eigen::Vector3f& p) const {
   if (nodes_.empty()) return false;
   bool overflow = false;

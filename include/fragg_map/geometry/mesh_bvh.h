@@ -55,8 +55,13 @@ class MeshBvh {
   const std::vector<Tri>& leafTriangles() const { return tris_; }            ///< in leaf order
   const std::vector<uint32_t>& leafOrder() const { return order_; }          ///< triangle of a slot
   const std::vector<int32_t>& leafSolids() const { return solid_of_slot_; }  ///< solid of a slot
-  /// The direction of inside()'s parity rays.
-  static Eigen::Vector3f insideRayDirection();
+  /// The direction of inside()'s parity rays: an irrational-looking direction, steep upwards
+  /// (few solids lie above a point, and no axis-aligned face or edge of buildings, boxes or
+  /// slabs is parallel to it). Inline: the CUDA collision code in the core's CUDA object
+  /// library uses it, and the core does not link the geometry library.
+  static Eigen::Vector3f insideRayDirection() {
+    return Eigen::Vector3f(0.0917f, 0.0531f, 1.0f).normalized();
+  }
 
  private:
   uint32_t build(uint32_t begin, uint32_t end, const std::vector<Eigen::Vector3f>& centroids,
