@@ -191,20 +191,30 @@ double cellEntropyBits(const Map& map, const Cell* cell) {
   return -(p * std::log2(p) + (1.0 - p) * std::log2(1.0 - p));
 }
 
-double viewpointGainBits(const Map& map, const BlockView& view, const Eigen::Vector3d& position_m,
-                         double yaw_rad, const GainSensor& sensor) {
-  sensor.validate();
-  if (!position_m.allFinite() || !std::isfinite(yaw_rad))
-    throw InvalidArgument("viewpoint position and yaw must be finite");
+namespace {
+
+// One viewpoint's gain over the sensor's ray directions (sensor frame), already built.
+double gainAlongRays(const Map& map, const BlockView& view, const Eigen::Vector3d& position_m,
+                     double yaw_rad, const std::vector<Eigen::Vector3d>& rays, double max_range_m) {
   const double res = map.resolution();
   const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Vector3d origin_v = position_m / res;
   thread_local SeenCells seen;
   seen.clear();
   double gain = 0.0;
-  for (const Eigen::Vector3d& ray : sensorRays(sensor))
-    gain += walkRay(map, view, origin_v, R * ray, sensor.max_range_m / res, seen);
+  for (const Eigen::Vector3d& ray : rays)
+    gain += walkRay(map, view, origin_v, R * ray, max_range_m / res, seen);
   return gain;
+}
+
+}  // namespace
+
+double viewpointGainBits(const Map& map, const BlockView& view, const Eigen::Vector3d& position_m,
+                         double yaw_rad, const GainSensor& sensor) {
+  sensor.validate();
+  if (!position_m.allFinite() || !std::isfinite(yaw_rad))
+    throw InvalidArgument("viewpoint position and yaw must be finite");
+  return gainAlongRays(map, view, position_m, yaw_rad, sensorRays(sensor), sensor.max_range_m);
 }
 
 std::vector<double> viewpointGainsBits(const Map& map,
@@ -220,12 +230,13 @@ std::vector<double> viewpointGainsBits(const Map& map,
     if (!positions_m[i].allFinite() || !std::isfinite(yaws_rad[i]))
       throw InvalidArgument(fmt::format("viewpoint {} has a non-finite position or yaw", i));
   const BlockView view = map.blockView();
+  const std::vector<Eigen::Vector3d> rays = sensorRays(sensor);
   std::vector<double> gains(positions_m.size());
   const int n_threads = threads > 0 ? threads : omp_get_max_threads();
   const int64_t n = static_cast<int64_t>(positions_m.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(n_threads)
   for (int64_t i = 0; i < n; ++i)
-    gains[i] = viewpointGainBits(map, view, positions_m[i], yaws_rad[i], sensor);
+    gains[i] = gainAlongRays(map, view, positions_m[i], yaws_rad[i], rays, sensor.max_range_m);
   return gains;
 }
 
@@ -246,15 +257,22 @@ std::vector<Viewpoint> clusterViewpoints(const Map& map, const FrontierCluster& 
             cluster.centroid_m + Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), h);
         const Cell* own = view.findCell(map.keyOf(v.position_m));
         if (!own || map.state(*own) != CellState::kFree) continue;
-        if (options.clearance_m > 0.0) {
-          Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-          T.translation() = v.position_m;
-          if (checkPose(map, sphere, T, clearance).collides) continue;
-        }
         const Eigen::Vector3d to_centroid = cluster.centroid_m - v.position_m;
         v.yaw_rad = std::atan2(to_centroid.y(), to_centroid.x());
         candidates.push_back(v);
       }
+  if (options.clearance_m > 0.0) {  // one collision batch for every candidate
+    std::vector<Eigen::Isometry3d> poses;
+    for (const Viewpoint& v : candidates) {
+      poses.push_back(Eigen::Isometry3d::Identity());
+      poses.back().translation() = v.position_m;
+    }
+    const std::vector<CollisionResult> hits = checkPoses(map, sphere, poses, clearance);
+    std::vector<Viewpoint> clear;
+    for (size_t i = 0; i < candidates.size(); ++i)
+      if (!hits[i].collides) clear.push_back(candidates[i]);
+    candidates = std::move(clear);
+  }
   std::vector<Eigen::Vector3d> positions;
   std::vector<double> yaws;
   for (const Viewpoint& v : candidates) {
