@@ -6,98 +6,216 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <unordered_set>
 
+#include "block_index_table.h"
 #include "fragg_map/errors.h"
+#include "frontier_masks.h"
 
 namespace fragg::planning {
 
-FrontierTracker::FrontierTracker(const FrontierFilter& filter, int threads)
-    : filter_(filter), threads_(threads) {
-  filter_.validate();
-  if (threads < 0) throw InvalidArgument(fmt::format("threads must be >= 0, got {}", threads));
-}
+namespace {
 
-void FrontierTracker::reset() {
-  valid_ = false;
-  revision_ = 0;
-  total_ = 0;
-  by_block_.clear();
-}
+// One block of the map as the tracker knows it.
+struct BlockRecord {
+  BlockKey key;
+  StateMasks state;
+  FrontierBits frontier;
+  uint32_t count = 0;  ///< frontier cells (after the filter)
+  uint32_t mark = 0;   ///< update number that queued it for examination
+};
 
-void FrontierTracker::recompute(const Map& map, const BlockView& view,
-                                const std::vector<BlockKey>& blocks) {
-  std::vector<std::vector<uint16_t>> found(blocks.size());
-  const int n_threads = threads_ > 0 ? threads_ : omp_get_max_threads();
-  const int64_t n = static_cast<int64_t>(blocks.size());
-#pragma omp parallel for schedule(dynamic, 32) num_threads(n_threads)
-  for (int64_t i = 0; i < n; ++i) found[i] = frontierCellsOfBlock(map, view, blocks[i], filter_);
-  for (size_t i = 0; i < blocks.size(); ++i) {
-    auto it = by_block_.find(blocks[i]);
-    if (it != by_block_.end()) {
-      total_ -= it->second.size();
-      if (found[i].empty()) {
-        by_block_.erase(it);
-        continue;
-      }
-      it->second = std::move(found[i]);
-      total_ += it->second.size();
-    } else if (!found[i].empty()) {
-      total_ += found[i].size();
-      by_block_.emplace(blocks[i], std::move(found[i]));
-    }
+}  // namespace
+
+struct FrontierTracker::State {
+  FrontierFilter filter;
+  int threads = 0;
+  bool valid = false;
+  uint64_t revision = 0;
+  uint64_t epoch = 0;  ///< Map::viewEpoch() at the last update
+  uint64_t total = 0;
+  uint32_t update_number = 0;
+  std::vector<BlockRecord> records;
+  BlockIndexTable index;  ///< key -> records index
+
+  int threadCount() const { return threads > 0 ? threads : omp_get_max_threads(); }
+
+  void clear() {
+    valid = false;
+    revision = 0;
+    total = 0;
+    records.clear();
+    index.clear();
   }
+
+  /// Whether the filter's box can hold cells of block `b` (always, without a box).
+  bool inRange(const Map& map, const BlockKey& b) const {
+    if (!filter.use_box) return true;
+    const BlockKey lo = blockKeyOf(map.keyOf(filter.box_min_m));
+    const BlockKey hi = blockKeyOf(map.keyOf(filter.box_max_m));
+    return b.x >= lo.x && b.y >= lo.y && b.z >= lo.z && b.x <= hi.x && b.y <= hi.y && b.z <= hi.z;
+  }
+
+  /// Recomputes the frontier bits of records `which` (parallel) and the total.
+  void examine(const Map& map, const BlockView& view, const std::vector<uint32_t>& which) {
+    const int64_t n = static_cast<int64_t>(which.size());
+    std::vector<uint32_t> old_counts(which.size());
+    for (int64_t i = 0; i < n; ++i) old_counts[i] = records[which[i]].count;
+#pragma omp parallel for schedule(dynamic, 256) num_threads(threadCount())
+    for (int64_t i = 0; i < n; ++i) {
+      BlockRecord& r = records[which[i]];
+      const StateMasks* around[27];
+      for (int dz = -1, j = 0; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx, ++j) {
+            const uint32_t k = index.find({r.key.x + dx, r.key.y + dy, r.key.z + dz});
+            around[j] = k == BlockIndexTable::kNone ? nullptr : &records[k].state;
+          }
+      r.frontier = frontierBitsOf(around);
+      if (filter.any()) applyFilter(map, view, r);
+      uint32_t count = 0;
+      for (int w = 0; w < kMaskWords; ++w) count += __builtin_popcountll(r.frontier.words[w]);
+      r.count = count;
+    }
+    for (int64_t i = 0; i < n; ++i) total = total - old_counts[i] + records[which[i]].count;
+  }
+
+  void applyFilter(const Map& map, const BlockView& view, BlockRecord& r) const {
+    for (int w = 0; w < kMaskWords; ++w)
+      for (uint64_t bits = r.frontier.words[w]; bits; bits &= bits - 1) {
+        const int b = __builtin_ctzll(bits);
+        if (!filter.keeps(map, view, voxelKeyOf(r.key, w * 64 + b)))
+          r.frontier.words[w] &= ~(uint64_t(1) << b);
+      }
+  }
+
+  /// Every block read again; returns the number of records examined.
+  uint64_t full(const Map& map, const BlockView& view) {
+    clear();
+    const std::vector<BlockRef> blocks = view.all();
+    const int64_t n = static_cast<int64_t>(blocks.size());
+    records.resize(blocks.size());
+    const OccupancyModel& model = map.model();
+#pragma omp parallel for schedule(static) num_threads(threadCount())
+    for (int64_t i = 0; i < n; ++i) {
+      records[i].key = blocks[i].key;
+      records[i].state = stateMasksOf(model, blocks[i].block);
+    }
+    index.reserve(blocks.size());
+    std::vector<uint32_t> which;
+    which.reserve(blocks.size());
+    for (uint32_t i = 0; i < records.size(); ++i) {
+      index.insert(records[i].key, i);
+      if (inRange(map, records[i].key)) which.push_back(i);
+    }
+    examine(map, view, which);
+    return which.size();
+  }
+
+  /// The changed blocks read again, their neighbourhoods examined where states changed.
+  /// Returns {changed blocks, records examined}.
+  std::pair<uint64_t, uint64_t> incremental(const Map& map, const BlockView& view) {
+    const std::vector<BlockKey> changed = view.changedSince(revision, BlockChange::kAny);
+    const int64_t n = static_cast<int64_t>(changed.size());
+    std::vector<StateMasks> fresh(changed.size());
+    const OccupancyModel& model = map.model();
+#pragma omp parallel for schedule(static) num_threads(threadCount())
+    for (int64_t i = 0; i < n; ++i) fresh[i] = stateMasksOf(model, view.findBlock(changed[i]));
+    std::vector<BlockKey> moved;  // blocks whose cell states changed
+    for (int64_t i = 0; i < n; ++i) {
+      uint32_t k = index.find(changed[i]);
+      if (k == BlockIndexTable::kNone) {
+        k = static_cast<uint32_t>(records.size());
+        records.push_back(BlockRecord{changed[i], fresh[i], FrontierBits{}, 0, 0});
+        index.insert(changed[i], k);
+      } else if (records[k].state == fresh[i]) {
+        continue;
+      } else {
+        records[k].state = fresh[i];
+      }
+      moved.push_back(changed[i]);
+    }
+    // A block's states decide the frontier cells of its own and its neighbours' borders, and
+    // with the obstacle distance filter those of every block within that distance.
+    const int reach_cells =
+        static_cast<int>(std::ceil(filter.min_obstacle_distance_m / map.resolution()));
+    const int reach = 1 + (reach_cells + kBlockMask) / kBlockSize;
+    if (++update_number == 0) {
+      for (BlockRecord& r : records) r.mark = 0;
+      update_number = 1;
+    }
+    std::vector<uint32_t> which;
+    for (const BlockKey& b : moved)
+      for (int dz = -reach; dz <= reach; ++dz)
+        for (int dy = -reach; dy <= reach; ++dy)
+          for (int dx = -reach; dx <= reach; ++dx) {
+            const BlockKey nb{b.x + dx, b.y + dy, b.z + dz};
+            const uint32_t k = index.find(nb);
+            if (k == BlockIndexTable::kNone || records[k].mark == update_number) continue;
+            records[k].mark = update_number;
+            if (inRange(map, nb)) which.push_back(k);
+          }
+    examine(map, view, which);
+    return {changed.size(), which.size()};
+  }
+};
+
+FrontierTracker::FrontierTracker(const FrontierFilter& filter, int threads)
+    : state_(std::make_unique<State>()) {
+  filter.validate();
+  if (threads < 0) throw InvalidArgument(fmt::format("threads must be >= 0, got {}", threads));
+  state_->filter = filter;
+  state_->threads = threads;
 }
+
+FrontierTracker::~FrontierTracker() = default;
+FrontierTracker::FrontierTracker(FrontierTracker&&) noexcept = default;
+FrontierTracker& FrontierTracker::operator=(FrontierTracker&&) noexcept = default;
+
+void FrontierTracker::reset() { state_->clear(); }
+
+uint64_t FrontierTracker::size() const { return state_->total; }
+uint64_t FrontierTracker::revision() const { return state_->revision; }
+const FrontierFilter& FrontierTracker::filter() const { return state_->filter; }
 
 FrontierUpdateStats FrontierTracker::update(const Map& map) {
   const auto t0 = std::chrono::steady_clock::now();
+  State& s = *state_;
   FrontierUpdateStats stats;
   const BlockView view = map.blockView();
-  const bool full = !valid_ || map.viewEpoch() != epoch_ || map.revision() < revision_;
-  std::vector<BlockKey> blocks;
-  if (full) {
-    by_block_.clear();
-    total_ = 0;
-    if (filter_.use_box) {
-      for (const BlockRef& r : view.in(blockKeyOf(map.keyOf(filter_.box_min_m)),
-                                       blockKeyOf(map.keyOf(filter_.box_max_m))))
-        blocks.push_back(r.key);
-    } else {
-      for (const BlockRef& r : view.all()) blocks.push_back(r.key);
-    }
-  } else if (map.revision() != revision_) {
-    // A changed block changes the frontier cells of its own and of its neighbours' border,
-    // and with the obstacle distance filter those of every block within that distance.
-    const int reach_cells =
-        static_cast<int>(std::ceil(filter_.min_obstacle_distance_m / map.resolution()));
-    const int reach = 1 + (reach_cells + kBlockMask) / kBlockSize;
-    std::unordered_set<BlockKey, BlockKeyHash> dirty;
-    for (const BlockKey& b : view.changedSince(revision_, BlockChange::kAny))
-      for (int dz = -reach; dz <= reach; ++dz)
-        for (int dy = -reach; dy <= reach; ++dy)
-          for (int dx = -reach; dx <= reach; ++dx) dirty.insert({b.x + dx, b.y + dy, b.z + dz});
-    blocks.assign(dirty.begin(), dirty.end());
+  stats.full = !s.valid || map.viewEpoch() != s.epoch || map.revision() < s.revision;
+  if (stats.full) {
+    stats.blocks_examined = s.full(map, view);
+    stats.blocks_changed = view.size();
+  } else if (map.revision() != s.revision) {
+    std::tie(stats.blocks_changed, stats.blocks_examined) = s.incremental(map, view);
   }
-  recompute(map, view, blocks);
-  valid_ = true;
-  revision_ = map.revision();
-  epoch_ = map.viewEpoch();
-  stats.full = full;
-  stats.blocks_examined = blocks.size();
-  stats.cells = total_;
+  s.valid = true;
+  s.revision = map.revision();
+  s.epoch = map.viewEpoch();
+  stats.cells = s.total;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;
 }
 
+void FrontierTracker::forEachBlock(
+    const std::function<void(const BlockKey&, const uint64_t* bits)>& fn) const {
+  std::vector<uint32_t> with_cells;
+  for (uint32_t i = 0; i < state_->records.size(); ++i)
+    if (state_->records[i].count) with_cells.push_back(i);
+  const auto& records = state_->records;
+  std::sort(with_cells.begin(), with_cells.end(),
+            [&](uint32_t a, uint32_t b) { return blockOrder(records[a].key, records[b].key); });
+  for (uint32_t i : with_cells) fn(records[i].key, records[i].frontier.words);
+}
+
 std::vector<VoxelKey> FrontierTracker::cells() const {
-  std::vector<BlockKey> blocks;
-  blocks.reserve(by_block_.size());
-  for (const auto& entry : by_block_) blocks.push_back(entry.first);
-  std::sort(blocks.begin(), blocks.end(), blockOrder);
   std::vector<VoxelKey> out;
-  out.reserve(total_);
-  for (const BlockKey& b : blocks)
-    for (uint16_t c : by_block_.at(b)) out.push_back(voxelKeyOf(b, c));
+  out.reserve(state_->total);
+  forEachBlock([&](const BlockKey& b, const uint64_t* bits) {
+    for (int w = 0; w < kMaskWords; ++w)
+      for (uint64_t m = bits[w]; m; m &= m - 1)
+        out.push_back(voxelKeyOf(b, w * 64 + __builtin_ctzll(m)));
+  });
   return out;
 }
 

@@ -1,0 +1,115 @@
+// Bit-parallel frontier test (internal to fragg_map_planning). A block's cells as 512-bit
+// masks, one 64-bit word per z slab, bit y * 8 + x (so bit i of the mask is cell index i,
+// cellIndexOf). The frontier cells of a block follow from the unknown masks of the 27 blocks
+// around it: the unknown cells are dilated by one cell (x, then y, then z: the 3 x 3 x 3 box is
+// separable) and ANDed with the block's free cells. Shared by the CPU path and the CUDA path
+// (FRAGG_HD), so both give the same bits.
+#pragma once
+
+#include <cstdint>
+
+#include "fragg_map/cell.h"
+#include "fragg_map/hd.h"
+#include "fragg_map/key.h"
+#include "fragg_map/occupancy.h"
+
+namespace fragg::planning {
+
+constexpr int kMaskWords = kCellsPerBlock / 64;  // 8 slabs of 64 cells
+static_assert(kBlockSize == 8, "the frontier masks assume 8^3 blocks");
+
+/// Which cells of a block are free and which unknown (the rest are occupied).
+struct StateMasks {
+  uint64_t free[kMaskWords];
+  uint64_t unknown[kMaskWords];
+};
+
+/// Frontier cells of a block, bit i = cell index i.
+struct FrontierBits {
+  uint64_t words[kMaskWords];
+};
+
+/// State masks of a block's cells; a missing block (nullptr) is all unknown.
+FRAGG_HD StateMasks stateMasksOf(const OccupancyModel& model, const Block* block) {
+  StateMasks m;
+  for (int w = 0; w < kMaskWords; ++w) {
+    uint64_t free_bits = 0, unknown_bits = 0;
+    if (block) {
+      for (int b = 0; b < 64; ++b) {
+        const CellState s = model.state(block->cells[w * 64 + b]);
+        free_bits |= uint64_t(s == CellState::kFree) << b;
+        unknown_bits |= uint64_t(s == CellState::kUnknown) << b;
+      }
+    } else {
+      unknown_bits = ~uint64_t(0);
+    }
+    m.free[w] = free_bits;
+    m.unknown[w] = unknown_bits;
+  }
+  return m;
+}
+
+FRAGG_HD bool operator==(const StateMasks& a, const StateMasks& b) {
+  for (int w = 0; w < kMaskWords; ++w)
+    if (a.free[w] != b.free[w] || a.unknown[w] != b.unknown[w]) return false;
+  return true;
+}
+
+FRAGG_HD bool anyBit(const FrontierBits& f) {
+  uint64_t any = 0;
+  for (int w = 0; w < kMaskWords; ++w) any |= f.words[w];
+  return any != 0;
+}
+
+namespace mask_detail {
+
+constexpr uint64_t kColumn0 = 0x0101010101010101ULL;  // cells with x = 0
+constexpr uint64_t kColumn7 = kColumn0 << 7;          // cells with x = 7
+
+/// Slab `c` dilated by one cell along x, with the same slab of the blocks at x - 1 (`left`)
+/// and x + 1 (`right`).
+FRAGG_HD uint64_t dilateX(uint64_t c, uint64_t left, uint64_t right) {
+  return c | ((c << 1) & ~kColumn0) | ((c >> 1) & ~kColumn7) | ((left >> 7) & kColumn0) |
+         ((right << 7) & kColumn7);
+}
+
+/// An x-dilated slab dilated along y, with the x-dilated slabs of the blocks at y - 1 and y + 1.
+FRAGG_HD uint64_t dilateY(uint64_t c, uint64_t below, uint64_t above) {
+  return c | (c << 8) | (c >> 8) | (below >> 56) | (above << 56);
+}
+
+}  // namespace mask_detail
+
+/// Frontier cells of the centre block given the state masks of the 27 blocks around it,
+/// index (dz + 1) * 9 + (dy + 1) * 3 + (dx + 1) (13: the centre); nullptr = missing block
+/// (all unknown; a missing centre has no free cell, so no frontier).
+FRAGG_HD FrontierBits frontierBitsOf(const StateMasks* const around[27]) {
+  using namespace mask_detail;
+  FrontierBits out{};
+  const StateMasks* centre = around[13];
+  if (!centre) return out;
+  uint64_t any_free = 0;
+  for (int w = 0; w < kMaskWords; ++w) any_free |= centre->free[w];
+  if (!any_free) return out;
+  // planes[i]: the unknown cells of slab z = i - 1 (z = -1 and 8 from the blocks below and
+  // above) dilated along x and y.
+  uint64_t planes[kMaskWords + 2];
+  for (int i = 0; i < kMaskWords + 2; ++i) {
+    const int layer = i == 0 ? 0 : (i == kMaskWords + 1 ? 2 : 1);
+    const int slab = i == 0 ? kMaskWords - 1 : (i == kMaskWords + 1 ? 0 : i - 1);
+    uint64_t rows[3];
+    for (int dy = 0; dy < 3; ++dy) {
+      const StateMasks* const* row = around + layer * 9 + dy * 3;
+      const uint64_t l = row[0] ? row[0]->unknown[slab] : ~uint64_t(0);
+      const uint64_t c = row[1] ? row[1]->unknown[slab] : ~uint64_t(0);
+      const uint64_t r = row[2] ? row[2]->unknown[slab] : ~uint64_t(0);
+      rows[dy] = dilateX(c, l, r);
+    }
+    planes[i] = dilateY(rows[1], rows[0], rows[2]);
+  }
+  for (int z = 0; z < kMaskWords; ++z)
+    out.words[z] = centre->free[z] & (planes[z] | planes[z + 1] | planes[z + 2]);
+  return out;
+}
+
+}  // namespace fragg::planning
