@@ -10,6 +10,8 @@
 #include "device_block_cache.h"
 #include "fragg_map/internal/backend.h"
 #include "fragg_map/internal/cpu_backend.h"
+#include "state_bits.h"
+#include "viewpoint_gains.h"
 
 namespace fragg::cuda {
 
@@ -23,6 +25,16 @@ class CudaBackend : public MapBackend {
   size_t deviceBytes() const override { return cache_.deviceBytes() + integrator_.deviceBytes(); }
   size_t deviceEstimateBytes() const override;
   std::shared_ptr<ChunkAllocator> hostAllocator() const override { return host_allocator_; }
+  bool cellStateBits(const std::vector<BlockKey>& keys, const OccupancyModel& model,
+                     BlockMap& blocks, uint64_t* out) override {
+    state_bits_.compute(cache_, keys, model, blocks, out);
+    return true;
+  }
+  bool viewpointGains(const GainBatch& batch, const OccupancyModel& model, BlockMap& blocks,
+                      double* out) override {
+    gains_.compute(cache_, batch, model, blocks, out);
+    return true;
+  }
 
  protected:
   void update(const ScanInput& scan, ScanUpdate what, const UpdateSettings& how, BlockMap& blocks,
@@ -39,6 +51,8 @@ class CudaBackend : public MapBackend {
   DeviceBlockCache cache_;
   CudaIntegrator integrator_;
   CpuBackend cpu_;  ///< for scans whose window would not fit
+  CellStateBits state_bits_{stream_.get()};
+  ViewpointGains gains_{stream_.get()};
   int64_t estimate_blocks_ = 0;
 };
 

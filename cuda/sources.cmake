@@ -21,6 +21,10 @@ set(FRAGG_CUDA_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/residency_kernels.cu
   ${CMAKE_CURRENT_LIST_DIR}/cuda_collision.cpp
   ${CMAKE_CURRENT_LIST_DIR}/collision_kernels.cu
+  ${CMAKE_CURRENT_LIST_DIR}/state_bits.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/state_bits_kernel.cu
+  ${CMAKE_CURRENT_LIST_DIR}/viewpoint_gains.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/gain_kernels.cu
 )
 # Eigen in device code (collision kernels): its defaulted special members draw warning 20012,
 # its constexpr helpers need relaxed constexpr, its nvcc pragmas are unknown to g++.

@@ -38,6 +38,7 @@
 namespace fragg {
 
 class MapBackend;
+struct GainBatch;
 class Culler;
 class Pager;
 struct ScanRecord;
@@ -121,6 +122,18 @@ class Map {
                                            BlockChange what = BlockChange::kAny) const {
     return blockView().changedSince(revision, what);
   }
+
+  /// Cell-state bitmaps of the blocks `keys` computed where the backend holds the blocks (CUDA:
+  /// a kernel over the device block cache; the frontier tracker uses it), 16 words per key
+  /// into `out`: 8 of free cells, then 8 of unknown cells (bit i = cell index i); a missing
+  /// block is all unknown. False (nothing written) when the backend has no such path: read
+  /// the host blocks instead.
+  bool cellStateBitsOnBackend(const std::vector<BlockKey>& keys, uint64_t* out) const;
+
+  /// Viewpoint gains (fragg_map_planning's viewpointGainsBits) computed where the backend holds
+  /// the blocks (CUDA: one thread per ray over the device block cache), one per viewpoint into
+  /// `out`. False (nothing written) when the backend has no such path.
+  bool viewpointGainsOnBackend(const GainBatch& batch, double* out) const;
 
   // Named edits besides insertion and correction.
   /// Makes every cell in the box unknown (block-granular memory release where possible).

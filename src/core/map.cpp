@@ -403,6 +403,16 @@ const BlockMap& Map::hostBlocks() const {
 
 const char* Map::backendName() const { return backend_->name(); }
 
+bool Map::viewpointGainsOnBackend(const GainBatch& batch, double* out) const {
+  std::lock_guard<std::mutex> lock(*sync_mutex_);
+  return backend_->viewpointGains(batch, model_, blocks_, out);
+}
+
+bool Map::cellStateBitsOnBackend(const std::vector<BlockKey>& keys, uint64_t* out) const {
+  std::lock_guard<std::mutex> lock(*sync_mutex_);
+  return backend_->cellStateBits(keys, model_, blocks_, out);
+}
+
 size_t Map::knownVoxelCount() const {
   size_t n = 0;
   const BlockMap& host = hostBlocks();

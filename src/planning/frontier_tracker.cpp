@@ -34,6 +34,7 @@ struct FrontierTracker::State {
   uint64_t epoch = 0;  ///< Map::viewEpoch() at the last update
   uint64_t total = 0;
   uint32_t update_number = 0;
+  bool on_device = false;  ///< the last states were read by the map's backend
   std::vector<BlockRecord> records;
   BlockIndexTable index;  ///< key -> records index
 
@@ -88,21 +89,39 @@ struct FrontierTracker::State {
       }
   }
 
+  /// State masks of `keys` into `out` (resized): on the map's backend where it has a path
+  /// (CUDA: over its block cache), else from the host blocks (parallel).
+  void readStates(const Map& map, const BlockView& view, const std::vector<BlockKey>& keys,
+                  std::vector<StateMasks>& out) {
+    out.resize(keys.size());
+    static_assert(sizeof(StateMasks) == 16 * sizeof(uint64_t), "16 words per block");
+    on_device =
+        !keys.empty() && map.cellStateBitsOnBackend(keys, reinterpret_cast<uint64_t*>(out.data()));
+    if (on_device || keys.empty()) return;
+    const int64_t n = static_cast<int64_t>(keys.size());
+    const OccupancyModel& model = map.model();
+#pragma omp parallel for schedule(static) num_threads(threadCount())
+    for (int64_t i = 0; i < n; ++i) out[i] = stateMasksOf(model, view.findBlock(keys[i]));
+  }
+
   /// Every block read again; returns the number of records examined.
   uint64_t full(const Map& map, const BlockView& view) {
     clear();
-    const std::vector<BlockRef> blocks = view.all();
-    const int64_t n = static_cast<int64_t>(blocks.size());
-    records.resize(blocks.size());
-    const OccupancyModel& model = map.model();
+    std::vector<BlockKey> keys;
+    keys.reserve(view.size());
+    view.forEach([&](const BlockKey& key, const Block&) { keys.push_back(key); });
+    std::vector<StateMasks> states;
+    readStates(map, view, keys, states);
+    const int64_t n = static_cast<int64_t>(keys.size());
+    records.resize(keys.size());
 #pragma omp parallel for schedule(static) num_threads(threadCount())
     for (int64_t i = 0; i < n; ++i) {
-      records[i].key = blocks[i].key;
-      records[i].state = stateMasksOf(model, blocks[i].block);
+      records[i].key = keys[i];
+      records[i].state = states[i];
     }
-    index.reserve(blocks.size());
+    index.reserve(keys.size());
     std::vector<uint32_t> which;
-    which.reserve(blocks.size());
+    which.reserve(keys.size());
     for (uint32_t i = 0; i < records.size(); ++i) {
       index.insert(records[i].key, i);
       if (inRange(map, records[i].key)) which.push_back(i);
@@ -116,10 +135,8 @@ struct FrontierTracker::State {
   std::pair<uint64_t, uint64_t> incremental(const Map& map, const BlockView& view) {
     const std::vector<BlockKey> changed = view.changedSince(revision, BlockChange::kAny);
     const int64_t n = static_cast<int64_t>(changed.size());
-    std::vector<StateMasks> fresh(changed.size());
-    const OccupancyModel& model = map.model();
-#pragma omp parallel for schedule(static) num_threads(threadCount())
-    for (int64_t i = 0; i < n; ++i) fresh[i] = stateMasksOf(model, view.findBlock(changed[i]));
+    std::vector<StateMasks> fresh;
+    readStates(map, view, changed, fresh);
     std::vector<BlockKey> moved;  // blocks whose cell states changed
     for (int64_t i = 0; i < n; ++i) {
       uint32_t k = index.find(changed[i]);
@@ -182,6 +199,7 @@ FrontierUpdateStats FrontierTracker::update(const Map& map) {
   State& s = *state_;
   FrontierUpdateStats stats;
   const BlockView view = map.blockView();
+  s.on_device = false;
   stats.full = !s.valid || map.viewEpoch() != s.epoch || map.revision() < s.revision;
   if (stats.full) {
     stats.blocks_examined = s.full(map, view);
@@ -189,6 +207,7 @@ FrontierUpdateStats FrontierTracker::update(const Map& map) {
   } else if (map.revision() != s.revision) {
     std::tie(stats.blocks_changed, stats.blocks_examined) = s.incremental(map, view);
   }
+  stats.states_on_device = s.on_device;
   s.valid = true;
   s.revision = map.revision();
   s.epoch = map.viewEpoch();

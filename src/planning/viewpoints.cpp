@@ -5,8 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/gain_walk.h"
+#include "fragg_map/log.h"
 #include "fragg_map/planning/collision_check.h"
 
 namespace fragg::planning {
@@ -97,34 +100,17 @@ uint64_t packKey(const VoxelKey& k) {
          ((uint64_t(uint32_t(k.z)) & 0x1fffff) << 42);
 }
 
-// Walks one ray (exact DDA in voxel units) from `origin_v` along unit `dir` for `length_v`
-// voxels, adding the entropy of each unknown cell not seen before; stops after an occupied
-// cell.
-double walkRay(const Map& map, const BlockView& view, const Eigen::Vector3d& origin_v,
-               const Eigen::Vector3d& dir, double length_v, SeenCells& seen) {
-  int cur[3], step[3];
-  double t_max[3], t_delta[3];
-  for (int a = 0; a < 3; ++a) {
-    cur[a] = static_cast<int>(std::floor(origin_v[a]));
-    if (dir[a] > 0.0) {
-      step[a] = 1;
-      t_delta[a] = 1.0 / dir[a];
-      t_max[a] = (cur[a] + 1 - origin_v[a]) / dir[a];
-    } else if (dir[a] < 0.0) {
-      step[a] = -1;
-      t_delta[a] = -1.0 / dir[a];
-      t_max[a] = (origin_v[a] - cur[a]) / -dir[a];
-    } else {
-      step[a] = 0;
-      t_delta[a] = t_max[a] = INFINITY;
-    }
-  }
+// Walks one ray (exact DDA in voxel units, internal/gain_walk.h: the CUDA kernel walks the
+// same cells) from `origin_v` along unit `dir` for `length_v` voxels, adding the entropy of each
+// unknown cell not seen before; stops after an occupied cell.
+double walkRay(const Map& map, const BlockView& view, const double* origin_v, const double* dir,
+               double length_v, SeenCells& seen) {
+  GainDda dda(origin_v, dir);
   double gain = 0.0;
   BlockKey last_block{INT32_MIN, INT32_MIN, INT32_MIN};
   const Block* block = nullptr;
-  double t = 0.0;
-  while (t <= length_v) {
-    const VoxelKey k{cur[0], cur[1], cur[2]};
+  for (double t = 0.0; t <= length_v; t = dda.next()) {
+    const VoxelKey k = dda.cell();
     const BlockKey b = blockKeyOf(k);
     if (b != last_block) {
       block = view.findBlock(b);
@@ -133,12 +119,8 @@ double walkRay(const Map& map, const BlockView& view, const Eigen::Vector3d& ori
     const Cell* cell = block ? &block->cells[cellIndexOf(k)] : nullptr;
     const CellState s = cell ? map.state(*cell) : CellState::kUnknown;
     if (s == CellState::kOccupied) break;
-    if (s == CellState::kUnknown && seen.insert(packKey(k))) gain += cellEntropyBits(map, cell);
-    const int a =
-        t_max[0] < t_max[1] ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
-    t = t_max[a];
-    t_max[a] += t_delta[a];
-    cur[a] += step[a];
+    if (s == CellState::kUnknown && seen.insert(packKey(k)))
+      gain += cellGainBits(map.model(), cell);
   }
   return gain;
 }
@@ -183,13 +165,7 @@ void ViewpointOptions::validate() const {
   if (robot_m && !robot_m->allFinite()) throw InvalidArgument("robot position must be finite");
 }
 
-double cellEntropyBits(const Map& map, const Cell* cell) {
-  if (!cell || !cell->observed()) return 1.0;
-  if (map.state(*cell) != CellState::kUnknown) return 0.0;
-  const double p = probabilityOf(cell->log_odds_fx);
-  if (p <= 0.0 || p >= 1.0) return 0.0;
-  return -(p * std::log2(p) + (1.0 - p) * std::log2(1.0 - p));
-}
+double cellEntropyBits(const Map& map, const Cell* cell) { return cellGainBits(map.model(), cell); }
 
 namespace {
 
@@ -197,13 +173,16 @@ namespace {
 double gainAlongRays(const Map& map, const BlockView& view, const Eigen::Vector3d& position_m,
                      double yaw_rad, const std::vector<Eigen::Vector3d>& rays, double max_range_m) {
   const double res = map.resolution();
-  const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const Eigen::Vector3d origin_v = position_m / res;
+  const double origin_v[3] = {position_m.x() / res, position_m.y() / res, position_m.z() / res};
+  const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
   thread_local SeenCells seen;
   seen.clear();
   double gain = 0.0;
-  for (const Eigen::Vector3d& ray : rays)
-    gain += walkRay(map, view, origin_v, R * ray, max_range_m / res, seen);
+  for (const Eigen::Vector3d& ray : rays) {
+    double dir[3];
+    yawRotate(c, s, ray.data(), dir);
+    gain += walkRay(map, view, origin_v, dir, max_range_m / res, seen);
+  }
   return gain;
 }
 
@@ -217,10 +196,47 @@ double viewpointGainBits(const Map& map, const BlockView& view, const Eigen::Vec
   return gainAlongRays(map, view, position_m, yaw_rad, sensorRays(sensor), sensor.max_range_m);
 }
 
+namespace {
+
+// The gains on the map's backend (CUDA: over its block cache). False: walk the host blocks.
+// Backend::kCuda insists (a CPU map or a device error throws); kAuto falls back with one
+// log line when the device cannot take the batch.
+bool gainsOnBackend(const Map& map, const std::vector<Eigen::Vector3d>& positions_m,
+                    const std::vector<double>& yaws_rad, const std::vector<Eigen::Vector3d>& rays,
+                    double max_range_m, Backend backend, std::vector<double>& gains) {
+  const bool on_cuda = std::string(map.backendName()) == "cuda";
+  if (!on_cuda) {
+    if (backend == Backend::kCuda)
+      throw InvalidArgument(
+          fmt::format("viewpoint gains on CUDA need a map integrating on CUDA (this one: {})",
+                      map.backendName()));
+    return false;
+  }
+  GainBatch batch;
+  const double res = map.resolution();
+  for (size_t i = 0; i < positions_m.size(); ++i) {
+    for (int a = 0; a < 3; ++a) batch.origins_v.push_back(positions_m[i][a] / res);
+    batch.cos_yaw.push_back(std::cos(yaws_rad[i]));
+    batch.sin_yaw.push_back(std::sin(yaws_rad[i]));
+  }
+  for (const Eigen::Vector3d& r : rays)
+    for (int a = 0; a < 3; ++a) batch.rays_sensor.push_back(r[a]);
+  batch.length_v = max_range_m / res;
+  try {
+    return map.viewpointGainsOnBackend(batch, gains.data());
+  } catch (const std::exception& e) {
+    if (backend == Backend::kCuda) throw;
+    logMessage(LogLevel::kWarning, fmt::format("viewpoint gains: on the CPU ({})", e.what()));
+    return false;
+  }
+}
+
+}  // namespace
+
 std::vector<double> viewpointGainsBits(const Map& map,
                                        const std::vector<Eigen::Vector3d>& positions_m,
                                        const std::vector<double>& yaws_rad,
-                                       const GainSensor& sensor, int threads) {
+                                       const GainSensor& sensor, int threads, Backend backend) {
   sensor.validate();
   if (positions_m.size() != yaws_rad.size())
     throw InvalidArgument(
@@ -229,9 +245,13 @@ std::vector<double> viewpointGainsBits(const Map& map,
   for (size_t i = 0; i < positions_m.size(); ++i)
     if (!positions_m[i].allFinite() || !std::isfinite(yaws_rad[i]))
       throw InvalidArgument(fmt::format("viewpoint {} has a non-finite position or yaw", i));
-  const BlockView view = map.blockView();
   const std::vector<Eigen::Vector3d> rays = sensorRays(sensor);
   std::vector<double> gains(positions_m.size());
+  if (backend != Backend::kCpu && !positions_m.empty()) {
+    if (gainsOnBackend(map, positions_m, yaws_rad, rays, sensor.max_range_m, backend, gains))
+      return gains;
+  }
+  const BlockView view = map.blockView();
   const int n_threads = threads > 0 ? threads : omp_get_max_threads();
   const int64_t n = static_cast<int64_t>(positions_m.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(n_threads)
@@ -279,7 +299,8 @@ std::vector<Viewpoint> clusterViewpoints(const Map& map, const FrontierCluster& 
     positions.push_back(v.position_m);
     yaws.push_back(v.yaw_rad);
   }
-  const std::vector<double> gains = viewpointGainsBits(map, positions, yaws, options.sensor);
+  const std::vector<double> gains =
+      viewpointGainsBits(map, positions, yaws, options.sensor, 0, options.backend);
   std::vector<Viewpoint> out;
   for (size_t i = 0; i < candidates.size(); ++i) {
     Viewpoint v = candidates[i];

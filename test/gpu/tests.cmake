@@ -32,3 +32,11 @@ fragg_add_test(fragg_gpu_collision_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/collision_gpu_test.cpp
   LIBS fragg_map_planning
   LABELS gpu)
+
+# Frontiers on the CUDA backend (cell states read over the device block cache) against the
+# CPU backend over a simulated drive; skips without a device.
+fragg_add_test(fragg_gpu_frontier_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/frontier_gpu_test.cpp
+  LIBS fragg_map_planning fragg_map_sim_lib
+  LABELS gpu)
+target_compile_definitions(fragg_gpu_frontier_test PRIVATE FRAGG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")

@@ -365,6 +365,12 @@ TEST(FrontierArguments, RefusedCleanly) {
   v.sensor.max_range_m = 5;
   v.radii_m = {0.0};
   EXPECT_THROW(clusterViewpoints(map, cluster, v), InvalidArgument);
+  // Gains on CUDA need a map integrating on CUDA; auto on a CPU map walks the host blocks.
+  const std::vector<Eigen::Vector3d> at = {Eigen::Vector3d(0.35, 0.35, 0.35)};
+  EXPECT_THROW(viewpointGainsBits(map, at, {0.0}, GainSensor(), 0, Backend::kCuda),
+               InvalidArgument);
+  EXPECT_EQ(viewpointGainsBits(map, at, {0.0}, GainSensor(), 0, Backend::kAuto),
+            viewpointGainsBits(map, at, {0.0}, GainSensor(), 0, Backend::kCpu));
 }
 
 }  // namespace

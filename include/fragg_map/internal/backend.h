@@ -13,6 +13,7 @@
 #include "fragg_map/culling.h"
 #include "fragg_map/frustum.h"
 #include "fragg_map/insert_stats.h"
+#include "fragg_map/internal/gain_walk.h"
 #include "fragg_map/map_params.h"
 #include "fragg_map/occupancy.h"
 #include "fragg_map/point_cloud.h"
@@ -109,6 +110,23 @@ class MapBackend {
   virtual size_t deviceBytes() const { return cache().deviceBytes(); }
   /// The paper's formula (1): the sensor's visible volume in blocks, as device bytes.
   virtual size_t deviceEstimateBytes() const { return 0; }
+  /// Cell-state bitmaps of the blocks `keys` where the backend holds them (the CUDA backend: a
+  /// kernel over its block cache), 16 words per key into `out`: 8 words of free cells, then 8
+  /// of unknown cells, bit i of the 512 = cell index i; a missing block is all unknown. False
+  /// when the backend has nothing faster than reading the host blocks (the caller does that).
+  virtual bool cellStateBits(const std::vector<BlockKey>& keys, const OccupancyModel& model,
+                             BlockMap& blocks, uint64_t* out) {
+    (void)keys, (void)model, (void)blocks, (void)out;
+    return false;
+  }
+  /// Gains of a batch of viewpoints (internal/gain_walk.h) where the backend holds the blocks
+  /// (CUDA: a kernel over its block cache), one per viewpoint into `out`. False when the
+  /// backend has no such path (the caller walks the host blocks).
+  virtual bool viewpointGains(const GainBatch& batch, const OccupancyModel& model, BlockMap& blocks,
+                              double* out) {
+    (void)batch, (void)model, (void)blocks, (void)out;
+    return false;
+  }
   /// Where the host map's blocks are allocated (pinned memory for the CUDA backend).
   virtual std::shared_ptr<ChunkAllocator> hostAllocator() const { return plainChunkAllocator(); }
 

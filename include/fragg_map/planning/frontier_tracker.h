@@ -22,6 +22,9 @@ struct FrontierUpdateStats {
   uint64_t blocks_changed = 0;   ///< changed blocks whose cell states were read again
   uint64_t blocks_examined = 0;  ///< blocks whose frontier cells were recomputed
   uint64_t cells = 0;            ///< frontier cells after the update
+  /// The cell states were read by the map's backend (CUDA: a kernel over its block cache)
+  /// rather than from the host blocks.
+  bool states_on_device = false;
   double seconds = 0.0;
 };
 

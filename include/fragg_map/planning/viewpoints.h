@@ -34,12 +34,17 @@ struct GainSensor {
 double viewpointGainBits(const Map& map, const BlockView& view, const Eigen::Vector3d& position_m,
                          double yaw_rad, const GainSensor& sensor);
 
-/// Gains of many viewpoints at once (OpenMP, `threads` 0 = every core); result i belongs to
-/// position i and yaw i (the two must have the same length).
+/// Gains of many viewpoints at once; result i belongs to position i and yaw i (the two must
+/// have the same length). `backend`: kCpu walks the host blocks (OpenMP, `threads` 0 = every
+/// core); kAuto uses the map's backend where it has a gain path (a map integrating on CUDA:
+/// one device thread per ray over its block cache, the same cells as the CPU walk; sums equal
+/// to rounding), else the CPU, falling back to the CPU with one log line when the device
+/// cannot take the batch; kCuda insists (InvalidArgument for a map not on CUDA).
 std::vector<double> viewpointGainsBits(const Map& map,
                                        const std::vector<Eigen::Vector3d>& positions_m,
                                        const std::vector<double>& yaws_rad,
-                                       const GainSensor& sensor, int threads = 0);
+                                       const GainSensor& sensor, int threads = 0,
+                                       Backend backend = Backend::kCpu);
 
 /// Entropy (bits) of a cell as the gain counts it: 1 for never observed, H(p) inside the
 /// unknown band, 0 for free and occupied cells.
@@ -54,6 +59,8 @@ struct ViewpointOptions {
   double clearance_m = 0.3;
   int top_k = 3;  ///< >= 1
   GainSensor sensor;
+  /// Where the gains are computed (viewpointGainsBits): kAuto follows the map's backend.
+  Backend backend = Backend::kAuto;
   /// Ranks by gain per metre of straight-line distance from this position (else by gain).
   std::optional<Eigen::Vector3d> robot_m;
   /// Throws InvalidArgument naming the bad field.

@@ -54,7 +54,8 @@ int run(const Options& o) {
   Map map(params);
   const SensorModel sensor = SensorModel::autoFromCloud(0.0, o.max_range_m);
   planning::FrontierTracker tracker({}, o.threads);
-  std::vector<double> insert_ms, update_ms, examined;
+  std::vector<double> insert_ms, update_ms, examined, changed;
+  bool states_on_device = false;
   for (const Scan& s : w.scans) {
     auto t0 = Clock::now();
     map.insert(s.cloud, s.T_map_sensor, sensor);
@@ -63,6 +64,8 @@ int run(const Options& o) {
     if (!st.full) {
       update_ms.push_back(st.seconds * 1e3);
       examined.push_back(double(st.blocks_examined));
+      changed.push_back(double(st.blocks_changed));
+      states_on_device = st.states_on_device;
     }
   }
   std::vector<double> full_ms;
@@ -96,7 +99,7 @@ int run(const Options& o) {
   planning::GainSensor camera;  // pinhole 64 x 48, 90 x 68.8 degrees, 10 m
   t0 = Clock::now();
   const std::vector<double> gains =
-      planning::viewpointGainsBits(map, positions, yaws, camera, o.threads);
+      planning::viewpointGainsBits(map, positions, yaws, camera, o.threads, Backend::kAuto);
   const double gain_ms = msSince(t0);
   double gain_sum = 0.0;
   for (double g : gains) gain_sum += g;
@@ -110,9 +113,11 @@ int run(const Options& o) {
                                   percentile(insert_ms, 0.5), percentile(insert_ms, 0.95))
                           .c_str());
   std::printf("%s\n", fmt::format("incremental update median {:7.2f} ms  p95 {:8.2f} ms  max "
-                                  "{:8.2f} ms  ({:.0f} blocks examined, median)",
+                                  "{:8.2f} ms  ({:.0f} changed blocks read, {:.0f} examined, "
+                                  "median; cell states read on the {})",
                                   percentile(update_ms, 0.5), percentile(update_ms, 0.95),
-                                  percentile(update_ms, 1.0), percentile(examined, 0.5))
+                                  percentile(update_ms, 1.0), percentile(changed, 0.5),
+                                  percentile(examined, 0.5), states_on_device ? "device" : "host")
                           .c_str());
   std::printf("%s\n", fmt::format("full recompute    median {:8.2f} ms  (incremental set {} the "
                                   "full one)",
@@ -134,6 +139,9 @@ int run(const Options& o) {
                               {"insert_ms_median", percentile(insert_ms, 0.5)},
                               {"update_ms_median", percentile(update_ms, 0.5)},
                               {"update_ms_p95", percentile(update_ms, 0.95)},
+                              {"blocks_changed_median", percentile(changed, 0.5)},
+                              {"blocks_examined_median", percentile(examined, 0.5)},
+                              {"states_on_device", states_on_device},
                               {"full_ms_median", percentile(full_ms, 0.5)},
                               {"incremental_equals_full", equal},
                               {"cluster_ms", cluster_ms},

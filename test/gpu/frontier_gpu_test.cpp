@@ -1,0 +1,113 @@
+// Frontiers on the CUDA backend against the CPU backend: the same W1-like drive integrated by
+// each; after every scan the CUDA map's incremental tracker (cell states read by the kernel
+// over the device block cache) equals the CPU map's, and full recomputes agree. Needs a
+// device (skips without one). Then viewpoint gains: the CUDA kernel against the CPU walk.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "fragg_map/geometry/mesh_bvh.h"
+#include "fragg_map/internal/backend_factory.h"
+#include "fragg_map/map.h"
+#include "fragg_map/planning/frontier_cells.h"
+#include "fragg_map/planning/frontier_tracker.h"
+#include "fragg_map/planning/viewpoints.h"
+#include "fragg_map/sim/lidar_sensor.h"
+#include "fragg_map/sim/scene.h"
+#include "fragg_map/sim/trajectory.h"
+
+namespace fragg::planning {
+namespace {
+
+#define REQUIRE_DEVICE()                                                     \
+  do {                                                                       \
+    std::string why;                                                         \
+    if (cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "skipped: " << why; \
+  } while (0)
+
+TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
+  REQUIRE_DEVICE();
+  sim::Scene scene = sim::loadScene(std::string(FRAGG_SOURCE_DIR) + "/config/scenes/campus.json");
+  const sim::Terrain terrain = scene.terrain;
+  const auto poses = sim::sampleTrajectory(
+      scene.trajectories.at("street"),
+      [&terrain](double x, double y) { return terrain.heightAt(x, y); }, sim::DriftSpec(), 7, 60);
+  const geometry::MeshBvh bvh(std::move(scene.mesh));
+  sim::LidarSpec spec;
+  spec.beams = 32;
+  spec.azimuth_steps = 720;
+  spec.elevation_min_deg = -25;
+  spec.elevation_max_deg = 15;
+  spec.max_range_m = 60;
+  Eigen::Isometry3d T_base_sensor = Eigen::Isometry3d::Identity();
+  T_base_sensor.translation().z() = 1.8;
+
+  MapParams p;
+  p.resolution_m = 0.1;
+  p.backend = Backend::kCpu;
+  Map cpu_map(p);
+  p.backend = Backend::kCuda;
+  Map cuda_map(p);
+  FrontierTracker cpu_tracker, cuda_tracker;
+  FrontierFilter band;
+  band.use_height = true;
+  band.min_z_m = 0.5;
+  band.max_z_m = 2.5;
+  FrontierTracker cuda_banded(band);
+  const SensorModel sensor = SensorModel::autoFromCloud(0.0, 30.0);
+  uint64_t device_updates = 0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const Eigen::Isometry3d T = poses[i].T_map_base * T_base_sensor;
+    const PointCloud cloud = sim::simulateLidar(bvh, spec, T, 7, i);
+    cpu_map.insert(cloud, T, sensor);
+    cuda_map.insert(cloud, T, sensor);
+    const FrontierUpdateStats cpu_st = cpu_tracker.update(cpu_map);
+    const FrontierUpdateStats cuda_st = cuda_tracker.update(cuda_map);
+    cuda_banded.update(cuda_map);
+    EXPECT_FALSE(cpu_st.states_on_device);
+    device_updates += cuda_st.states_on_device ? 1 : 0;
+    EXPECT_EQ(cuda_st.full, i == 0);
+    ASSERT_EQ(cuda_tracker.size(), cpu_tracker.size()) << "after scan " << i;
+    if (i % 10 == 9 || i < 3) {
+      const std::vector<VoxelKey> expected = cpu_tracker.cells();
+      ASSERT_EQ(cuda_tracker.cells(), expected) << "after scan " << i;
+      ASSERT_EQ(findFrontierCells(cuda_map), expected) << "full, after scan " << i;
+      ASSERT_EQ(cuda_banded.cells(), findFrontierCells(cpu_map, band)) << "after scan " << i;
+    }
+  }
+  EXPECT_EQ(device_updates, poses.size()) << "every update read the states on the device";
+  EXPECT_GT(cpu_tracker.size(), 10000u);
+
+  // Viewpoint gains: the CUDA kernel walks the same cells as the CPU walk (the sums may differ
+  // by rounding only), for a pinhole camera and a LiDAR.
+  std::vector<Eigen::Vector3d> positions;
+  std::vector<double> yaws;
+  for (size_t i = 0; i < poses.size(); i += 3)
+    for (int a = 0; a < 8; ++a) {
+      positions.push_back(poses[i].T_map_base.translation() + Eigen::Vector3d(0, 0, 1.2 + 0.1 * a));
+      yaws.push_back(0.785 * a - 3.0);
+    }
+  GainSensor camera;  // 64 x 48 rays, 10 m
+  GainSensor lidar;
+  lidar.kind = GainSensor::Kind::kLidar;
+  lidar.columns = 360;
+  lidar.rows = 16;
+  lidar.max_range_m = 20.0;
+  for (const GainSensor& sensor : {camera, lidar}) {
+    const std::vector<double> cpu = viewpointGainsBits(cpu_map, positions, yaws, sensor, 0);
+    const std::vector<double> gpu =
+        viewpointGainsBits(cuda_map, positions, yaws, sensor, 0, Backend::kCuda);
+    ASSERT_EQ(gpu.size(), cpu.size());
+    double total = 0.0;
+    for (size_t i = 0; i < cpu.size(); ++i) {
+      EXPECT_NEAR(gpu[i], cpu[i], 1e-9 * std::max(1.0, cpu[i])) << "viewpoint " << i;
+      total += cpu[i];
+    }
+    EXPECT_GT(total, 1000.0);
+  }
+}
+
+}  // namespace
+}  // namespace fragg::planning
