@@ -4,6 +4,7 @@
 # (real/ copied from ../shared/data/real, octomap/ from ../shared/tools/stage-octomap.sh, store/
 # from scripts/stage_store.sh).
 # Usage: bash scripts/device_check.sh [tests] [sanitize] [workloads LIST] [collision [MAP]]
+#        [frontiers]
 #        [bench ARGS...]
 # (workloads go to .device/workloads; bench ARGS are fragg_map_bench's; collision runs
 # fragg_map_collision_bench on MAP, default .device/w1.fgm, built from .device/workloads/
@@ -64,6 +65,14 @@ while [ $# -gt 0 ]; do
       fi
       "$build/bin/fragg_map_collision_bench" --map "$map" --backends cpu cuda \
         --json "$out/collision_bench.json" 2>&1 | tee "$out/collision_bench.log" || status=1
+      shift ;;
+    frontiers)
+      # Issue 14's figures: W1 at 5 cm, 30 m on each backend (needs `workloads w1` first).
+      for backend in cuda cpu; do
+        "$build/bin/fragg_map_frontier_bench" --workloads "$root/.device/workloads" \
+          --backend "$backend" --json "$out/frontier_bench_$backend.json" 2>&1 |
+          tee "$out/frontier_bench_$backend.log" || status=1
+      done
       shift ;;
     bench)
       shift
