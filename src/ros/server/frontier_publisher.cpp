@@ -13,19 +13,20 @@
 namespace fragg::ros {
 
 FrontierPublisher::FrontierPublisher(::ros::NodeHandle& nh, const ServerParams& params,
-                                     SharedMap* shared)
+                                     SharedMap* shared, ServerStats* stats)
     : params_(params),
       shared_(shared),
+      stats_(stats),
       tracker_(params.frontiers.filter, params.map.threads),
       clusterer_(params.frontiers.clusters) {
   markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("frontiers", 1, params_.latch);
   cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("frontier_cells", 1, params_.latch);
   timer_ = nh.createSteadyTimer(::ros::WallDuration(1.0 / params_.frontiers.rate_hz),
                                 &FrontierPublisher::onTimer, this);
-  ROS_INFO("fragg_map: frontiers and frontier_cells at most %.2f Hz while subscribed, at most %d "
-           "cells each (frontiers/max_marker_cells), %d viewpoints per cluster",
-           params_.frontiers.rate_hz, params_.frontiers.max_marker_cells,
-           params_.frontiers.viewpoints);
+  ROS_INFO(
+      "fragg_map: frontiers and frontier_cells at most %.2f Hz while subscribed, at most %d "
+      "cells each (frontiers/max_marker_cells), %d viewpoints per cluster",
+      params_.frontiers.rate_hz, params_.frontiers.max_marker_cells, params_.frontiers.viewpoints);
 }
 
 void FrontierPublisher::onTimer(const ::ros::SteadyTimerEvent&) {
@@ -67,15 +68,13 @@ void FrontierPublisher::onTimer(const ::ros::SteadyTimerEvent&) {
     ROS_ERROR_THROTTLE(5.0, "fragg_map: frontier update failed: %s", e.what());
     return;
   }
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-
   const ::ros::Time stamp = ::ros::Time::now();
   const uint64_t cap = static_cast<uint64_t>(fp.max_marker_cells);
   if (cells.size() > cap && !warned_cap_) {
-    ROS_INFO("fragg_map: %zu frontier cells: frontiers and frontier_cells carry an even subsample "
-             "of at most %llu (frontiers/max_marker_cells)",
-             cells.size(), static_cast<unsigned long long>(cap));
+    ROS_INFO(
+        "fragg_map: %zu frontier cells: frontiers and frontier_cells carry an even subsample "
+        "of at most %llu (frontiers/max_marker_cells)",
+        cells.size(), static_cast<unsigned long long>(cap));
     warned_cap_ = true;
   }
   if (marker_subs > 0) {
@@ -89,11 +88,15 @@ void FrontierPublisher::onTimer(const ::ros::SteadyTimerEvent&) {
     cloud_pub_.publish(frontierCloud(cells, resolution_m, params_.frame_id, stamp, cap));
   published_ = true;
   published_revision_ = revision;
-  ROS_DEBUG("fragg_map: frontiers at revision %llu: %zu cells, %zu clusters, %llu blocks examined "
-            "(%s), %.1f ms",
-            static_cast<unsigned long long>(revision), cells.size(), clusters.size(),
-            static_cast<unsigned long long>(update.blocks_examined),
-            update.full ? "full" : "incremental", ms);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  stats_->addFrontierUpdate(update.full, update.blocks_examined, cells.size(), ms);
+  ROS_DEBUG(
+      "fragg_map: frontiers at revision %llu: %zu cells, %zu clusters, %llu blocks examined "
+      "(%s), %.1f ms",
+      static_cast<unsigned long long>(revision), cells.size(), clusters.size(),
+      static_cast<unsigned long long>(update.blocks_examined), update.full ? "full" : "incremental",
+      ms);
 }
 
 }  // namespace fragg::ros

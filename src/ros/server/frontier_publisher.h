@@ -19,19 +19,22 @@
 #include "fragg_map/planning/frontier_clusters.h"
 #include "fragg_map/planning/frontier_tracker.h"
 #include "fragg_map/ros/server_params.h"
+#include "server_stats.h"
 #include "shared_map.h"
 
 namespace fragg::ros {
 
 class FrontierPublisher {
  public:
-  FrontierPublisher(::ros::NodeHandle& nh, const ServerParams& params, SharedMap* shared);
+  FrontierPublisher(::ros::NodeHandle& nh, const ServerParams& params, SharedMap* shared,
+                    ServerStats* stats);
 
  private:
   void onTimer(const ::ros::SteadyTimerEvent& event);
 
   const ServerParams params_;
   SharedMap* shared_;
+  ServerStats* stats_;
   std::mutex mutex_;  ///< the tracker, the clusterer and the bookkeeping below
   planning::FrontierTracker tracker_;
   planning::FrontierClusterer clusterer_;

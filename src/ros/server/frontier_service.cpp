@@ -75,7 +75,8 @@ planning::GainSensor sensorFrom(const fragg_map::GetFrontiers::Request& req,
     return n == 2;
   };
   if (pair("rays", req.rays.size())) s.columns = req.rays[0], s.rows = req.rays[1];
-  if (pair("fov", req.fov.size())) s.horizontal_fov_rad = req.fov[0], s.vertical_fov_rad = req.fov[1];
+  if (pair("fov", req.fov.size()))
+    s.horizontal_fov_rad = req.fov[0], s.vertical_fov_rad = req.fov[1];
   if (pair("elevation", req.elevation.size()))
     s.min_elevation_rad = req.elevation[0], s.max_elevation_rad = req.elevation[1];
   if (std::isnan(req.max_range) || req.max_range < 0.0)
@@ -89,8 +90,8 @@ planning::GainSensor sensorFrom(const fragg_map::GetFrontiers::Request& req,
 }  // namespace
 
 FrontierService::FrontierService(::ros::NodeHandle& private_nh, const ServerParams& params,
-                                 const tf2_ros::Buffer& tf, SharedMap* shared)
-    : params_(params), tf_(tf), shared_(shared) {
+                                 const tf2_ros::Buffer& tf, SharedMap* shared, ServerStats* stats)
+    : params_(params), tf_(tf), shared_(shared), stats_(stats) {
   service_ = private_nh.advertiseService("get_frontiers", &FrontierService::get, this);
 }
 
@@ -101,9 +102,10 @@ FrontierService::Query FrontierService::queryFrom(const fragg_map::GetFrontiers:
     throw fragg::InvalidArgument("k (viewpoints per cluster) must be >= 1, got " +
                                  std::to_string(req.k));
   if (req.min_cluster < 0)
-    throw fragg::InvalidArgument("min_cluster must be >= 1 (0: the frontiers/min_cluster "
-                                 "parameter), got " +
-                                 std::to_string(req.min_cluster));
+    throw fragg::InvalidArgument(
+        "min_cluster must be >= 1 (0: the frontiers/min_cluster "
+        "parameter), got " +
+        std::to_string(req.min_cluster));
   q.filter = p.filter;
   if (req.use_box) {
     q.filter.use_box = true;
@@ -173,6 +175,7 @@ bool FrontierService::get(fragg_map::GetFrontiers::Request& req,
       with_views += views[i].empty() ? 0 : 1;
     }
     res.success = true;
+    stats_->addFrontierQuery();
     res.message = std::to_string(cells.size()) + " frontier cells in " +
                   std::to_string(clusters.size()) + " clusters (" + std::to_string(with_views) +
                   " with viewpoints), " + std::to_string(res.ms) + " ms";

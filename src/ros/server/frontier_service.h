@@ -20,6 +20,7 @@
 #include "fragg_map/planning/frontier_clusters.h"
 #include "fragg_map/planning/viewpoints.h"
 #include "fragg_map/ros/server_params.h"
+#include "server_stats.h"
 #include "shared_map.h"
 
 namespace fragg::ros {
@@ -27,7 +28,7 @@ namespace fragg::ros {
 class FrontierService {
  public:
   FrontierService(::ros::NodeHandle& private_nh, const ServerParams& params,
-                  const tf2_ros::Buffer& tf, SharedMap* shared);
+                  const tf2_ros::Buffer& tf, SharedMap* shared, ServerStats* stats);
 
   /// The request's options over the frontiers/* parameters, validated (throws
   /// fragg::InvalidArgument naming the bad field). The robot frame is left to the caller.
@@ -47,6 +48,7 @@ class FrontierService {
   const ServerParams params_;
   const tf2_ros::Buffer& tf_;
   SharedMap* shared_;
+  ServerStats* stats_;
   ::ros::ServiceServer service_;
 };
 

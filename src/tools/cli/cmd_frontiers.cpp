@@ -61,11 +61,11 @@ void runFrontiers(const FrontierCommandOptions& o) {
     std::printf("%s\n", j.dump().c_str());
     return;
   }
-  std::printf("%s\n", fmt::format("{} frontier cells in {} clusters ({:.1f} ms cells, {:.1f} ms "
-                                  "clusters and viewpoints)",
-                                  cells.size(), clusters.size(), r.cells_ms,
-                                  r.clusters_viewpoints_ms)
-                          .c_str());
+  std::printf("%s\n",
+              fmt::format("{} frontier cells in {} clusters ({:.1f} ms cells, {:.1f} ms "
+                          "clusters and viewpoints)",
+                          cells.size(), clusters.size(), r.cells_ms, r.clusters_viewpoints_ms)
+                  .c_str());
   std::printf("%6s %7s %26s %22s %28s\n", "id", "cells", "centroid (m)", "direction",
               "best viewpoint (m, gain)");
   for (size_t i = 0; i < clusters.size(); ++i) {

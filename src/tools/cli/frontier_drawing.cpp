@@ -35,8 +35,10 @@ void fillCell(RenderImage& image, const Map& map, const VoxelKey& key, const Rgb
   const Eigen::Vector3d lo(key.x * r, key.y * r, 0.0), hi((key.x + 1) * r, (key.y + 1) * r, 0.0);
   const Eigen::Vector2d a = image.pixelOf(lo), b = image.pixelOf(hi);  // b.y() < a.y()
   const Eigen::Vector2d c = 0.5 * (a + b);
-  int x0 = static_cast<int>(std::floor(a.x() + 1e-9)), x1 = static_cast<int>(std::ceil(b.x() - 1e-9));
-  int y0 = static_cast<int>(std::floor(b.y() + 1e-9)), y1 = static_cast<int>(std::ceil(a.y() - 1e-9));
+  int x0 = static_cast<int>(std::floor(a.x() + 1e-9)),
+      x1 = static_cast<int>(std::ceil(b.x() - 1e-9));
+  int y0 = static_cast<int>(std::floor(b.y() + 1e-9)),
+      y1 = static_cast<int>(std::ceil(a.y() - 1e-9));
   if (x1 <= x0) x0 = static_cast<int>(std::floor(c.x())), x1 = x0 + 1;
   if (y1 <= y0) y0 = static_cast<int>(std::floor(c.y())), y1 = y0 + 1;
   x0 = std::max(x0, 0), y0 = std::max(y0, 0);
@@ -70,8 +72,8 @@ FrontierDrawStats drawFrontiers(RenderImage& image, const Map& map, const Fronti
       if (!inside(crop, v.position_m)) continue;
       const double radius_px = i == 0 ? 4.0 : 2.5;
       const Eigen::Vector3d tip =
-          v.position_m +
-          (4.0 * radius_px * m_per_px) * Eigen::Vector3d(std::cos(v.yaw_rad), std::sin(v.yaw_rad), 0);
+          v.position_m + (4.0 * radius_px * m_per_px) *
+                             Eigen::Vector3d(std::cos(v.yaw_rad), std::sin(v.yaw_rad), 0);
       image.drawLine(v.position_m, tip, kViewpointOutline, 4.0);
       image.fillDisc(v.position_m, (radius_px + 1.5) * m_per_px, kViewpointOutline);
       image.drawLine(v.position_m, tip, kViewpointColor, 2.0);

@@ -72,8 +72,7 @@ void addFrontierFlags(CLI::App* c, FrontierFlags* o, CLI::Option* needs) {
           ->expected(2));
   add(c->add_option("--fov", o->fov_deg, "Pinhole field of view H V in degrees (default 90 68.8)")
           ->expected(2));
-  add(c->add_option("--elevation", o->elevation_deg,
-                    "LiDAR elevations MIN MAX, degrees (-15 15)")
+  add(c->add_option("--elevation", o->elevation_deg, "LiDAR elevations MIN MAX, degrees (-15 15)")
           ->expected(2));
   add(c->add_option("--max-range", o->max_range_m, "Gain sensor range (m)")->capture_default_str());
   add(c->add_option("--radii", o->radii, "Viewpoint ring radii around each cluster (m)")
