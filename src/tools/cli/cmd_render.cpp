@@ -64,6 +64,7 @@ void runRender(const RenderArgs& args) {
   if (frontier_settings) {
     const FrontierResult frontiers = computeFrontiers(map, *frontier_settings);
     RenderImage image = renderTopDownImage(map, options);
+    fadeForOverlay(image);
     const FrontierDrawStats drawn = drawFrontiers(image, map, frontiers, options.crop);
     writePng(image, args.output);
     info = image.info;
@@ -113,7 +114,8 @@ void addRenderCommand(CLI::App& app) {
   CLI::Option* frontiers = cmd->add_flag(
       "--frontiers", args->frontiers,
       "Draw frontier clusters (cells coloured by cluster) and their best viewpoints (white "
-      "discs with a heading line) over the top view; the options below are those of "
+      "discs with a heading line) over the top view (faded to half contrast); the options "
+      "below are those of "
       "`fragg_map frontiers` (here --viewpoints defaults to 1)");
   addFrontierFlags(cmd, &args->frontier_flags, frontiers);
   cmd->callback([args] { runRender(*args); });

@@ -23,6 +23,10 @@ Rgb clusterColor(uint64_t id) {
   return kPalette[id % kPalette.size()];
 }
 
+void fadeForOverlay(RenderImage& image) {
+  for (uint8_t& c : image.rgb) c = static_cast<uint8_t>((c + 128) / 2);
+}
+
 namespace {
 
 bool inside(const std::optional<Eigen::AlignedBox3d>& crop, const Eigen::Vector3d& p) {

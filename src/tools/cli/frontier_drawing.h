@@ -1,5 +1,6 @@
-// Frontiers drawn over a rendered top view (fragg_map render --frontiers): each cluster's cells
-// as filled cell squares in the cluster's colour, each viewpoint as a disc with a line along
+// Frontiers drawn over a rendered top view (fragg_map render --frontiers): the map faded
+// towards mid grey, each cluster's cells as filled cell squares in the cluster's colour (fully
+// saturated, so never mistaken for the faded map), each viewpoint as a disc with a line along
 // its heading (the best one of a cluster larger).
 #pragma once
 
@@ -16,6 +17,10 @@ namespace fragg::cli {
 /// A saturated colour per cluster id (12 colours in turn), none of them the map's grey, black
 /// or the viewpoint white.
 Rgb clusterColor(uint64_t id);
+
+/// Halves the image's contrast towards mid grey: every channel c becomes (c + 128) / 2 (so
+/// within [64, 191]), which keeps the map readable under the clusters' colours.
+void fadeForOverlay(RenderImage& image);
 
 /// The viewpoints' fill colour and outline.
 inline constexpr Rgb kViewpointColor{255, 255, 255};
