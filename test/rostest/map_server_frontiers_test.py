@@ -4,7 +4,8 @@
 test_1: nobody subscribed to frontiers / frontier_cells while the bag played, so no update
 was made (MapStats.frontier_updates 0) although the map changed with every scan.
 test_2: ~get_frontiers equals `fragg_map frontiers SAVED --json` on the map saved through
-~save_map, with the same options: frontier cell count, every cluster's id, cells, centroid,
+~save_map, with the same options (the node's frontiers/* parameters as the CLI's cli_views and
+cli_sensor): frontier cell count, every cluster's id, cells, centroid,
 bounds and direction, and its viewpoints (position, yaw, gain, and with a robot position the
 distance and gain per metre) within float tolerance; with the parameters' defaults, with a
 box, a robot position, the LiDAR sensor and a larger min_cluster, and with the robot given as
@@ -143,8 +144,10 @@ class MapServerFrontiersTest(unittest.TestCase):
         map_path = self.saved("frontiers.fgm")
         queries = self.stats().frontier_queries
 
+        views = rospy.get_param("~cli_views").split()
         res = self.call(k=2)
-        cli = self.cli_frontiers(map_path, "--viewpoints", "2")
+        cli = self.cli_frontiers(map_path, "--viewpoints", "2", *views,
+                                 *rospy.get_param("~cli_sensor").split())
         self.assert_same(res, cli, "defaults")
         rospy.loginfo("defaults: %d frontier cells, %d clusters, %.1f ms (CLI %.1f + %.1f ms)",
                       res.frontier_cells, len(res.clusters), res.ms, cli["ms_cells"],
@@ -160,7 +163,8 @@ class MapServerFrontiersTest(unittest.TestCase):
         res = self.call(k=3, min_cluster=20, use_box=True, box_min=box_min, box_max=box_max,
                         use_robot_position=True, robot_position=robot, sensor="lidar",
                         rays=[90, 8], max_range=8.0)
-        cli = self.cli_frontiers(map_path, "--viewpoints", "3", "--min-cluster", "20", "--box",
+        cli = self.cli_frontiers(map_path, *views, "--viewpoints", "3", "--min-cluster", "20",
+                                 "--box",
                                  *[repr(v) for v in xyz(box_min) + xyz(box_max)], "--robot",
                                  *[repr(v) for v in xyz(robot)], "--sensor", "lidar", "--rays",
                                  "90", "8", "--max-range", "8")
@@ -216,7 +220,7 @@ class MapServerFrontiersTest(unittest.TestCase):
     def check_topics_against_service(self, arrays_from, clouds_from, what):
         """Waits for the messages published after the given counts and compares them with a
         ~get_frontiers answer (k = frontiers/viewpoints) made now."""
-        wait_for(lambda: len(self.arrays) > arrays_from and len(self.clouds) > clouds_from, 20,
+        wait_for(lambda: len(self.arrays) > arrays_from and len(self.clouds) > clouds_from, 90,
                  "frontier topics (%s)" % what)
         k = rospy.get_param(NS + "frontiers/viewpoints")
         cap = rospy.get_param(NS + "frontiers/max_marker_cells")
@@ -235,6 +239,10 @@ class MapServerFrontiersTest(unittest.TestCase):
             self.assertEqual(m.type, Marker.CUBE_LIST)
         for m in arrows:
             self.assertEqual(m.type, Marker.ARROW)
+        clustered = sum(c.cells for c in res.clusters)
+        stride_c = 1 if clustered <= cap else -(-clustered // cap)
+        self.assertEqual(sum(len(m.points) for m in cubes), len(range(0, clustered, stride_c)),
+                         what)
         if n <= cap:
             # One CUBE_LIST per cluster with its cells; every clustered cell is in the cloud.
             self.assertEqual(sorted(len(m.points) for m in cubes),
@@ -273,7 +281,7 @@ class MapServerFrontiersTest(unittest.TestCase):
         arrays, clouds = len(self.arrays), len(self.clouds)
         pub.publish(self.last_cloud)
         wait_for(lambda: self.stats().scans == scans + 1, 30, "the scan inserted again")
-        wait_for(lambda: self.stats().frontier_updates > updates, 20, "an incremental update")
+        wait_for(lambda: self.stats().frontier_updates > updates, 90, "an incremental update")
         s = self.stats()
         self.assertFalse(s.frontier_update_full, "an insertion updates incrementally")
         self.assertGreater(s.frontier_blocks_examined, 0)

@@ -68,6 +68,10 @@ void FrontierPublisher::onTimer(const ::ros::SteadyTimerEvent&) {
     ROS_ERROR_THROTTLE(5.0, "fragg_map: frontier update failed: %s", e.what());
     return;
   }
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  // Counted before the messages go out, so that whoever receives them sees the count.
+  stats_->addFrontierUpdate(update.full, update.blocks_examined, cells.size(), ms);
   const ::ros::Time stamp = ::ros::Time::now();
   const uint64_t cap = static_cast<uint64_t>(fp.max_marker_cells);
   if (cells.size() > cap && !warned_cap_) {
@@ -88,9 +92,6 @@ void FrontierPublisher::onTimer(const ::ros::SteadyTimerEvent&) {
     cloud_pub_.publish(frontierCloud(cells, resolution_m, params_.frame_id, stamp, cap));
   published_ = true;
   published_revision_ = revision;
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  stats_->addFrontierUpdate(update.full, update.blocks_examined, cells.size(), ms);
   ROS_DEBUG(
       "fragg_map: frontiers at revision %llu: %zu cells, %zu clusters, %llu blocks examined "
       "(%s), %.1f ms",
