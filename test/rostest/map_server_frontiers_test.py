@@ -13,9 +13,10 @@ the tf frame base_link (its latest pose: the last scan's).
 test_3: bad requests (k 0 or negative, a NaN or inverted box, an unknown sensor or frame, ...)
 answer success=false with the reason and leave the map as it was.
 test_4: subscribed, the topics arrive: the cloud holds the service's frontier cells, the
-markers the service's clusters (one CUBE_LIST each, the same cells) and arrows at the service's
-viewpoints (k = frontiers/viewpoints); a scan inserted again updates them incrementally (only
-changed blocks examined) to the service's new answer.
+markers the service's clusters (one CUBE_LIST each, the same cells; an even subsample of both
+beyond frontiers/max_marker_cells) and arrows at the service's viewpoints (k =
+frontiers/viewpoints); a sector of a scan inserted again updates them incrementally (fewer
+blocks examined than the map holds) to the service's new answer.
 test_5: unsubscribed again, a map change makes no update."""
 import json
 import math
@@ -273,13 +274,18 @@ class MapServerFrontiersTest(unittest.TestCase):
         time.sleep(1.5)
         self.assertEqual(self.stats().frontier_updates, updates)
 
-        # The last scan inserted again (its transform is the latest tf holds): an incremental
-        # update, only the blocks it changed and their neighbours examined.
+        # A 30-degree sector of the last scan inserted again (its transform is the latest tf
+        # holds): an incremental update, only the blocks it changed and their neighbours
+        # examined, fewer than the map holds.
         pub = rospy.Publisher(rospy.get_param("~topic"), PointCloud2, queue_size=1)
         wait_for(lambda: pub.get_num_connections() > 0, 10, "the node subscribing the clouds")
         scans = self.stats().scans
         arrays, clouds = len(self.arrays), len(self.clouds)
-        pub.publish(self.last_cloud)
+        sector = [p for p in point_cloud2.read_points(self.last_cloud, ("x", "y", "z"),
+                                                       skip_nans=True)
+                  if 0.0 < math.atan2(p[1], p[0]) < math.radians(30.0)]
+        self.assertGreater(len(sector), 10)
+        pub.publish(point_cloud2.create_cloud_xyz32(self.last_cloud.header, sector))
         wait_for(lambda: self.stats().scans == scans + 1, 30, "the scan inserted again")
         wait_for(lambda: self.stats().frontier_updates > updates, 90, "an incremental update")
         s = self.stats()
