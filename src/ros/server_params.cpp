@@ -2,10 +2,12 @@
 // ("sensor_model/hit"). The values of the core's fields are checked by the core's validate()
 // only; its messages name the core's fields, renamed here to the parameters (kParameterNames).
 // What is checked here belongs to the server alone (frame_id, queue, tf, markers, correction,
-// collision).
+// collision, frontiers: the planning library's checks, named by parameter).
 #include "fragg_map/ros/server_params.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -68,6 +70,26 @@ void readString(const XmlRpcValue& root, const std::string& name, std::string* o
   XmlRpcValue copy = *v;
   if (copy.getType() != XmlRpcValue::TypeString) badParam(name, "expected a string");
   *out = static_cast<std::string>(copy);
+}
+
+// A list of numbers (each an int or a double); absent keeps `out`.
+void readDoubleList(const XmlRpcValue& root, const std::string& name, std::vector<double>* out) {
+  const XmlRpcValue* v = lookup(root, name);
+  if (!v) return;
+  XmlRpcValue copy = *v;
+  if (copy.getType() != XmlRpcValue::TypeArray) badParam(name, "expected a list of numbers");
+  std::vector<double> values;
+  for (int i = 0; i < copy.size(); ++i) {
+    XmlRpcValue item = copy[i];
+    if (item.getType() == XmlRpcValue::TypeDouble)
+      values.push_back(static_cast<double>(item));
+    else if (item.getType() == XmlRpcValue::TypeInt)
+      values.push_back(static_cast<int>(item));
+    else
+      badParam(name, "expected a list of numbers");
+    if (!std::isfinite(values.back())) badParam(name, "holds a value that is not finite");
+  }
+  *out = values;
 }
 
 void requireOrdered(const std::string& lo_name, double lo, const std::string& hi_name, double hi) {
@@ -194,6 +216,106 @@ void readCollision(const XmlRpcValue& root, CollisionParams& c) {
   if (c.max_markers < 0) badParam("collision/max_markers", "must be >= 0");
 }
 
+// The planning library's checks, their messages prefixed with the parameter group.
+template <typename Fn>
+void asFrontierParameters(const std::string& group, Fn&& fn) {
+  try {
+    fn();
+  } catch (const fragg::InvalidArgument& e) {
+    badParam(group, e.what());
+  }
+}
+
+void readFrontierSensor(const XmlRpcValue& root, planning::GainSensor& s) {
+  std::string type = "pinhole";
+  readString(root, "frontiers/sensor/type", &type);
+  if (type == "lidar") {
+    s.kind = planning::GainSensor::Kind::kLidar;
+    s.columns = 360;  // as `fragg_map frontiers --sensor lidar`
+    s.rows = 16;
+  } else if (type != "pinhole") {
+    badParam("frontiers/sensor/type", "must be pinhole or lidar, got '" + type + "'");
+  }
+  readInt(root, "frontiers/sensor/columns", &s.columns);
+  readInt(root, "frontiers/sensor/rows", &s.rows);
+  readDouble(root, "frontiers/sensor/hfov", &s.horizontal_fov_rad);
+  readDouble(root, "frontiers/sensor/vfov", &s.vertical_fov_rad);
+  readDouble(root, "frontiers/sensor/elevation_min", &s.min_elevation_rad);
+  readDouble(root, "frontiers/sensor/elevation_max", &s.max_elevation_rad);
+  readDouble(root, "frontiers/sensor/max_range", &s.max_range_m);
+  asFrontierParameters("frontiers/sensor", [&] { s.validate(); });
+}
+
+void readFrontiers(const XmlRpcValue& root, FrontierParams& f) {
+  readDouble(root, "frontiers/rate_hz", &f.rate_hz);
+  if (!(f.rate_hz > 0.0) || !std::isfinite(f.rate_hz))
+    badParam("frontiers/rate_hz", "must be a finite rate in Hz > 0");
+  std::vector<double> box_min, box_max;
+  readDoubleList(root, "frontiers/box_min", &box_min);
+  readDoubleList(root, "frontiers/box_max", &box_max);
+  if (!box_min.empty() || !box_max.empty()) {
+    if (box_min.size() != 3 || box_max.size() != 3)
+      badParam("frontiers/box_min", "box_min and box_max take [x, y, z] each, both or neither");
+    f.filter.use_box = true;
+    f.filter.box_min_m = Eigen::Vector3d(box_min[0], box_min[1], box_min[2]);
+    f.filter.box_max_m = Eigen::Vector3d(box_max[0], box_max[1], box_max[2]);
+  }
+  double min_z = -std::numeric_limits<double>::infinity();
+  double max_z = std::numeric_limits<double>::infinity();
+  readDouble(root, "frontiers/min_z", &min_z);
+  readDouble(root, "frontiers/max_z", &max_z);
+  if (std::isfinite(min_z) || std::isfinite(max_z)) {
+    constexpr double kOpen = 1e9;  // an open side of the band
+    f.filter.use_height = true;
+    f.filter.min_z_m = std::isfinite(min_z) ? min_z : -kOpen;
+    f.filter.max_z_m = std::isfinite(max_z) ? max_z : kOpen;
+  }
+  readDouble(root, "frontiers/min_obstacle_distance", &f.filter.min_obstacle_distance_m);
+  // The library's checks, one part at a time so that the message names the parameter.
+  const auto check_filter_part = [&](const std::string& name, auto&& set_part) {
+    planning::FrontierFilter part;
+    set_part(part);
+    asFrontierParameters(name, [&] { part.validate(); });
+  };
+  check_filter_part("frontiers/box_min", [&](planning::FrontierFilter& p) {
+    p.use_box = f.filter.use_box, p.box_min_m = f.filter.box_min_m;
+    p.box_max_m = f.filter.box_max_m;
+  });
+  check_filter_part("frontiers/min_z", [&](planning::FrontierFilter& p) {
+    p.use_height = f.filter.use_height, p.min_z_m = f.filter.min_z_m;
+    p.max_z_m = f.filter.max_z_m;
+  });
+  check_filter_part("frontiers/min_obstacle_distance", [&](planning::FrontierFilter& p) {
+    p.min_obstacle_distance_m = f.filter.min_obstacle_distance_m;
+  });
+  int min_cluster = static_cast<int>(f.clusters.min_cells);
+  readInt(root, "frontiers/min_cluster", &min_cluster);
+  if (min_cluster < 1) badParam("frontiers/min_cluster", "must be >= 1");
+  f.clusters.min_cells = static_cast<uint64_t>(min_cluster);
+  readDouble(root, "frontiers/max_extent", &f.clusters.max_extent_m);
+  asFrontierParameters("frontiers/max_extent", [&] { f.clusters.validate(); });
+  readInt(root, "frontiers/viewpoints", &f.viewpoints);
+  if (f.viewpoints < 0) badParam("frontiers/viewpoints", "must be >= 0 (0: no viewpoints)");
+  const auto check_view_part = [&](const std::string& name, auto&& set_part) {
+    planning::ViewpointOptions part;
+    set_part(part);
+    asFrontierParameters(name, [&] { part.validate(); });
+  };
+  readDoubleList(root, "frontiers/radii", &f.views.radii_m);
+  check_view_part("frontiers/radii", [&](auto& p) { p.radii_m = f.views.radii_m; });
+  readDoubleList(root, "frontiers/heights", &f.views.heights_m);
+  check_view_part("frontiers/heights", [&](auto& p) { p.heights_m = f.views.heights_m; });
+  readInt(root, "frontiers/angles", &f.views.angles);
+  check_view_part("frontiers/angles", [&](auto& p) { p.angles = f.views.angles; });
+  readDouble(root, "frontiers/clearance", &f.views.clearance_m);
+  check_view_part("frontiers/clearance", [&](auto& p) { p.clearance_m = f.views.clearance_m; });
+  readFrontierSensor(root, f.views.sensor);
+  f.views.top_k = std::max(f.viewpoints, 1);
+  f.views.validate();
+  readInt(root, "frontiers/max_marker_cells", &f.max_marker_cells);
+  if (f.max_marker_cells < 0) badParam("frontiers/max_marker_cells", "must be >= 0");
+}
+
 }  // namespace
 
 ServerParams parseParameters(const XmlRpcValue& root) {
@@ -251,6 +373,7 @@ ServerParams parseParameters(const XmlRpcValue& root) {
     badParam("markers/color_min_z", "must be finite and below markers/color_max_z");
   readCorrection(root, p.correction);
   readCollision(root, p.collision);
+  readFrontiers(root, p.frontiers);
   return p;
 }
 

@@ -38,10 +38,10 @@ if(TARGET fragg_frontier_test)
   target_compile_definitions(fragg_frontier_test PRIVATE FRAGG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 endif()
 
-# Runs the built `fragg_map frontiers` on hand-written maps saved as .fgm.
+# Runs the built `fragg_map frontiers` and `render --frontiers` on hand-written maps saved as .fgm.
 fragg_add_test(cli_frontiers_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/cli_frontiers_test.cpp
-  LIBS fragg_map_planning nlohmann_json::nlohmann_json
+  LIBS fragg_map_planning nlohmann_json::nlohmann_json PNG::PNG
   LABELS cli planning)
 if(TARGET cli_frontiers_test)
   add_dependencies(cli_frontiers_test fragg_map_cli)

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fragg_map/errors.h"
@@ -365,3 +366,99 @@ TEST(ServerParamsConfig, DepthCameraYaml) {
 }
 
 }  // namespace
+
+// frontiers/*: the defaults are `fragg_map frontiers`' (so that ~get_frontiers answers as the
+// CLI does with the same options), every name is read, bad values name the parameter.
+TEST(ServerParams, FrontierDefaultsValuesAndRefusals) {
+  const fragg::ros::ServerParams d = fragg::ros::parseParameters(XmlRpcValue());
+  const fragg::ros::FrontierParams& f = d.frontiers;
+  EXPECT_EQ(f.rate_hz, 1.0);
+  EXPECT_FALSE(f.filter.any());
+  EXPECT_EQ(f.clusters.min_cells, 8u);
+  EXPECT_EQ(f.clusters.max_extent_m, 3.0);
+  EXPECT_EQ(f.viewpoints, 3);
+  EXPECT_EQ(f.views.radii_m, (std::vector<double>{1.5, 3.0}));
+  EXPECT_EQ(f.views.heights_m, (std::vector<double>{0.0}));
+  EXPECT_EQ(f.views.angles, 12);
+  EXPECT_EQ(f.views.clearance_m, 0.3);
+  EXPECT_EQ(f.views.sensor.kind, fragg::planning::GainSensor::Kind::kPinhole);
+  EXPECT_EQ(f.views.sensor.columns, 64);
+  EXPECT_EQ(f.views.sensor.rows, 48);
+  EXPECT_EQ(f.views.sensor.max_range_m, 10.0);
+  EXPECT_EQ(f.max_marker_cells, 200000);
+
+  XmlRpcValue root;
+  XmlRpcValue lo, hi, radii;
+  lo[0] = -1.0, lo[1] = -2.0, lo[2] = 0;  // an int among doubles
+  hi[0] = 1.0, hi[1] = 2.0, hi[2] = 3.0;
+  radii[0] = 2.0;
+  set(root, "frontiers/rate_hz", 5);
+  set(root, "frontiers/box_min", lo);
+  set(root, "frontiers/box_max", hi);
+  set(root, "frontiers/min_z", 0.5);
+  set(root, "frontiers/min_obstacle_distance", 0.2);
+  set(root, "frontiers/min_cluster", 20);
+  set(root, "frontiers/max_extent", 0.0);
+  set(root, "frontiers/viewpoints", 0);
+  set(root, "frontiers/radii", radii);
+  set(root, "frontiers/angles", 6);
+  set(root, "frontiers/clearance", 0.0);
+  set(root, "frontiers/sensor/type", std::string("lidar"));
+  set(root, "frontiers/sensor/rows", 8);
+  set(root, "frontiers/sensor/max_range", 20.0);
+  set(root, "frontiers/max_marker_cells", 1000);
+  const fragg::ros::FrontierParams p = fragg::ros::parseParameters(root).frontiers;
+  EXPECT_EQ(p.rate_hz, 5.0);
+  EXPECT_TRUE(p.filter.use_box);
+  EXPECT_EQ(p.filter.box_min_m, Eigen::Vector3d(-1, -2, 0));
+  EXPECT_EQ(p.filter.box_max_m, Eigen::Vector3d(1, 2, 3));
+  EXPECT_TRUE(p.filter.use_height);
+  EXPECT_EQ(p.filter.min_z_m, 0.5);
+  EXPECT_GT(p.filter.max_z_m, 1e6) << "max_z left open";
+  EXPECT_EQ(p.filter.min_obstacle_distance_m, 0.2);
+  EXPECT_EQ(p.clusters.min_cells, 20u);
+  EXPECT_EQ(p.clusters.max_extent_m, 0.0);
+  EXPECT_EQ(p.viewpoints, 0);
+  EXPECT_EQ(p.views.top_k, 1);
+  EXPECT_EQ(p.views.radii_m, (std::vector<double>{2.0}));
+  EXPECT_EQ(p.views.angles, 6);
+  EXPECT_EQ(p.views.clearance_m, 0.0);
+  EXPECT_EQ(p.views.sensor.kind, fragg::planning::GainSensor::Kind::kLidar);
+  EXPECT_EQ(p.views.sensor.columns, 360) << "the lidar's own default, as the CLI's";
+  EXPECT_EQ(p.views.sensor.rows, 8);
+  EXPECT_EQ(p.views.sensor.max_range_m, 20.0);
+  EXPECT_EQ(p.max_marker_cells, 1000);
+
+  expectRejected("frontiers/rate_hz", 0.0);
+  expectRejected("frontiers/rate_hz", std::numeric_limits<double>::infinity());
+  expectRejected("frontiers/min_cluster", 0);
+  expectRejected("frontiers/max_extent", -1.0);
+  expectRejected("frontiers/viewpoints", -1);
+  expectRejected("frontiers/angles", 0);
+  expectRejected("frontiers/clearance", -0.1);
+  expectRejected("frontiers/min_obstacle_distance", -0.1);
+  expectRejected("frontiers/max_marker_cells", -1);
+  expectRejected("frontiers/radii", 1.0);  // not a list
+  XmlRpcValue zero;
+  zero[0] = 0.0;
+  expectRejected("frontiers/radii", zero);
+  expectRejected("frontiers/box_min", hi);  // without box_max
+  XmlRpcValue band;
+  set(band, "frontiers/min_z", 2.0);
+  set(band, "frontiers/max_z", 1.0);
+  EXPECT_NE(rejection(band).find("'frontiers/min_z'"), std::string::npos) << rejection(band);
+  XmlRpcValue inverted;
+  set(inverted, "frontiers/box_min", hi);
+  set(inverted, "frontiers/box_max", lo);
+  EXPECT_NE(rejection(inverted).find("'frontiers/box_min'"), std::string::npos);
+  for (const auto& [name, value] :
+       std::vector<std::pair<std::string, XmlRpcValue>>{{"frontiers/sensor/type", "sonar"},
+                                                        {"frontiers/sensor/hfov", 4.0},
+                                                        {"frontiers/sensor/columns", 0},
+                                                        {"frontiers/sensor/max_range", -1.0}}) {
+    XmlRpcValue bad;
+    set(bad, name, value);
+    EXPECT_NE(rejection(bad).find("'frontiers/sensor"), std::string::npos)
+        << name << ": " << rejection(bad);
+  }
+}

@@ -21,6 +21,10 @@ if(FRAGG_HAVE_ROS)
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/collision_msgs_test.cpp
     LIBS fragg_map_ros
     LABELS ros)
+  fragg_add_test(ros_frontier_markers_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/frontier_markers_test.cpp
+    LIBS fragg_map_ros
+    LABELS ros)
   fragg_add_test(ros_pose_correction_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/pose_correction_test.cpp
     LIBS fragg_map_ros
@@ -33,7 +37,7 @@ endif()
 
 # rostests of the map server (the nodelet) on recorded bags: the smoke bag (with the service,
 # malformed-cloud and missing-tf tests; the loop-closure correction test; the collision, truncate
-# and merge services), the real Velodyne pair (make_test_bag.py: float32
+# and merge services; the frontier service and topics), the real Velodyne pair (make_test_bag.py: float32
 # unorganised + float64 organised with NaN, a leading-slash frame, one cloud without tf) and the
 # real RGB-D frames (make_rgbd_bag.py: organised xyz+rgb depth clouds in an optical frame).
 if(FRAGG_HAVE_ROS AND FRAGG_SMOKE_BAG)
@@ -46,6 +50,10 @@ if(FRAGG_HAVE_ROS AND FRAGG_SMOKE_BAG)
     ARGS bag:=${FRAGG_SMOKE_BAG})
   # ~check_collision against `fragg_map collide`, ~truncate + ~merge back to the same map.
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_services.test
+    ARGS bag:=${FRAGG_SMOKE_BAG})
+  # ~get_frontiers against `fragg_map frontiers` on the saved map; the frontier topics only
+  # while subscribed, incremental after an insertion.
+  add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_frontiers.test
     ARGS bag:=${FRAGG_SMOKE_BAG})
   if(EXISTS ${FRAGG_REAL_DATA}/small_gicp_pair/target.ply)
     set(_fragg_velodyne_bag ${CMAKE_BINARY_DIR}/bags/velodyne.bag)

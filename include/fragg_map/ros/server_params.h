@@ -10,6 +10,9 @@
 #include <string>
 
 #include "fragg_map/map_params.h"
+#include "fragg_map/planning/frontier_cells.h"
+#include "fragg_map/planning/frontier_clusters.h"
+#include "fragg_map/planning/viewpoints.h"
 #include "fragg_map/ros/pose_correction.h"
 #include "fragg_map/sensor_model.h"
 
@@ -37,6 +40,25 @@ struct CollisionParams {
   int max_markers = 500;    ///< collision/max_markers: poses drawn on `collisions` (>= 0)
 };
 
+/// Frontier topics (`frontiers`, `frontier_cells`) and ~get_frontiers: frontiers/*.
+struct FrontierParams {
+  /// frontiers/rate_hz: most topic updates per second (steady clock), > 0; an update happens
+  /// only while someone subscribes and the map changed.
+  double rate_hz = 1.0;
+  /// frontiers/box_min, frontiers/box_max ([x, y, z], both or neither), frontiers/min_z,
+  /// frontiers/max_z (either one turns the band on), frontiers/min_obstacle_distance [m].
+  planning::FrontierFilter filter;
+  planning::ClusterOptions clusters;  ///< frontiers/min_cluster, frontiers/max_extent [m]
+  /// frontiers/radii, heights [m lists], angles, clearance [m]; the gain sensor
+  /// frontiers/sensor/type (pinhole | lidar), columns, rows, hfov, vfov, elevation_min,
+  /// elevation_max [rad], max_range [m]. top_k is viewpoints below (at least 1).
+  planning::ViewpointOptions views;
+  int viewpoints = 3;  ///< frontiers/viewpoints: best k per cluster on `frontiers` (0: none)
+  /// frontiers/max_marker_cells: most frontier cells drawn on `frontiers` and sent on
+  /// `frontier_cells` (an even subsample beyond it, logged); >= 0.
+  int max_marker_cells = 200000;
+};
+
 struct ServerParams {
   /// resolution, sensor_model/hit|miss|min|max, backend, raycast; keep_scans and scan_store/*
   /// (map.scans: the server keeps scans by default, the core does not); pointcloud_min_z|max_z
@@ -58,6 +80,7 @@ struct ServerParams {
   double color_max_z_m = 4.0;   ///< marker colour ramp (markers/color_max_z)
   CorrectionParams correction;
   CollisionParams collision;
+  FrontierParams frontiers;
 
   /// The core's defaults with keep_scans on and a 2 GiB budget (scan_store/max_mb 2048).
   static fragg::MapParams withKeptScans() {

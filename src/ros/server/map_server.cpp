@@ -35,6 +35,9 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh)
       std::make_unique<SubmapServices>(private_nh, params_, shared_.get(), publish_changed);
   collision_service_ = std::make_unique<CollisionService>(nh, private_nh, params_, tf_buffer_,
                                                           shared_.get(), &stats_);
+  frontier_service_ =
+      std::make_unique<FrontierService>(private_nh, params_, tf_buffer_, shared_.get(), &stats_);
+  frontier_publisher_ = std::make_unique<FrontierPublisher>(nh, params_, shared_.get(), &stats_);
   if (params_.correction.subscribe_path)
     path_corrector_ = std::make_unique<PathCorrector>(nh, params_, tf_buffer_, shared_.get(),
                                                       &stats_, publish_changed);

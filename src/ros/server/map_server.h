@@ -1,6 +1,7 @@
 // The map server: parameters, the shared map, tf, and its parts (input, publishers, services,
 // loop-closure correction through ~correct_poses and corrected_path, sub-maps through ~truncate
-// and ~merge, collision checks through ~check_collision). MapServerNodelet::onInit
+// and ~merge, collision checks through ~check_collision, frontiers through ~get_frontiers and
+// the frontiers / frontier_cells topics). MapServerNodelet::onInit
 // builds one; it holds no logic of its own.
 #pragma once
 
@@ -14,6 +15,8 @@
 #include "collision_service.h"
 #include "correction_service.h"
 #include "fragg_map/ros/server_params.h"
+#include "frontier_publisher.h"
+#include "frontier_service.h"
 #include "map_publishers.h"
 #include "map_services.h"
 #include "path_corrector.h"
@@ -41,6 +44,8 @@ class MapServer {
   std::unique_ptr<CorrectionService> correction_service_;
   std::unique_ptr<SubmapServices> submap_services_;
   std::unique_ptr<CollisionService> collision_service_;
+  std::unique_ptr<FrontierService> frontier_service_;
+  std::unique_ptr<FrontierPublisher> frontier_publisher_;
   std::unique_ptr<PathCorrector> path_corrector_;  // only with correction/subscribe_path
   std::unique_ptr<CloudInput> input_;              // last: its thread uses everything above
 };

@@ -38,6 +38,21 @@ void ServerStats::addCollisionCheck(uint64_t poses, double ms) {
   collision_poses_ += poses;
 }
 
+void ServerStats::addFrontierQuery() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++frontier_queries_;
+}
+
+void ServerStats::addFrontierUpdate(bool full, uint64_t blocks_examined, uint64_t cells,
+                                    double ms) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++frontier_updates_;
+  frontier_update_full_ = full;
+  frontier_blocks_examined_ = blocks_examined;
+  frontier_cells_ = cells;
+  frontier_ms_last_ = ms;
+}
+
 void ServerStats::clearInsertions() {
   std::lock_guard<std::mutex> lock(mutex_);
   scans_ = 0;
@@ -85,6 +100,12 @@ fragg_map::MapStats ServerStats::toMsg(const fragg::Map& map, const std::string&
   msg.collision_poses = collision_poses_;
   msg.collision_ms_last = static_cast<float>(collision_ms_.lastMs());
   msg.collision_ms_mean = static_cast<float>(collision_ms_.meanMs());
+  msg.frontier_queries = frontier_queries_;
+  msg.frontier_updates = frontier_updates_;
+  msg.frontier_update_full = frontier_update_full_;
+  msg.frontier_blocks_examined = frontier_blocks_examined_;
+  msg.frontier_cells = frontier_cells_;
+  msg.frontier_ms_last = static_cast<float>(frontier_ms_last_);
   return msg;
 }
 

@@ -1,6 +1,6 @@
 // Counters of the map server (clouds inserted, dropped and why, insertion, correction and
-// collision-check times), safe to update from the insertion thread and read from service and
-// publisher threads.
+// collision-check times, frontier queries and topic updates), safe to update from the insertion
+// thread and read from service and publisher threads.
 #pragma once
 
 #include <cstdint>
@@ -23,6 +23,10 @@ class ServerStats {
   void addCorrection(uint64_t scans, double ms);
   /// A ~check_collision call that checked `poses` poses in `ms`.
   void addCollisionCheck(uint64_t poses, double ms);
+  /// A ~get_frontiers call answered.
+  void addFrontierQuery();
+  /// An update of the frontier topics (these counters run from start; ~reset keeps them).
+  void addFrontierUpdate(bool full, uint64_t blocks_examined, uint64_t cells, double ms);
   /// Forgets the insertions, corrections and collision checks (after ~reset); the drop
   /// counters keep counting.
   void clearInsertions();
@@ -45,6 +49,12 @@ class ServerStats {
   double correction_ms_last_ = 0.0;
   TimingStats collision_ms_{1};  // last and mean only (no percentile is published)
   uint64_t collision_poses_ = 0;
+  uint64_t frontier_queries_ = 0;
+  uint64_t frontier_updates_ = 0;
+  bool frontier_update_full_ = false;
+  uint64_t frontier_blocks_examined_ = 0;
+  uint64_t frontier_cells_ = 0;
+  double frontier_ms_last_ = 0.0;
 };
 
 }  // namespace fragg::ros

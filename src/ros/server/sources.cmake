@@ -6,6 +6,8 @@ set(FRAGG_ROS_SERVER_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/correction_service.cpp
   ${CMAKE_CURRENT_LIST_DIR}/submap_services.cpp
   ${CMAKE_CURRENT_LIST_DIR}/collision_service.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/frontier_service.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/frontier_publisher.cpp
   ${CMAKE_CURRENT_LIST_DIR}/path_corrector.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cloud_input.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_server.cpp

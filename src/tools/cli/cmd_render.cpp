@@ -1,11 +1,14 @@
-// fragg_map render MAP -o FILE.png [--view top|slice] [--z M] [--scale N]
+// fragg_map render MAP -o FILE.png [--view top|slice] [--z M] [--scale N] [--frontiers ...]
 #include <fmt/format.h>
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/frontier_drawing.h"
+#include "cli/frontier_options.h"
 #include "cli/map_input.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/interop/render.h"
@@ -22,6 +25,13 @@ struct RenderArgs {
   std::vector<double> crop;  // zero or six values
   int max_size = RenderOptions().max_side_px;
   bool no_downscale = false;
+  bool frontiers = false;
+  /// The options of `fragg_map frontiers`, but the best viewpoint of each cluster by default.
+  FrontierFlags frontier_flags = [] {
+    FrontierFlags f;
+    f.viewpoints = 1;
+    return f;
+  }();
 };
 
 RenderOptions optionsOf(const RenderArgs& args) {
@@ -43,11 +53,28 @@ void runRender(const RenderArgs& args) {
   const bool slice = args.view == "slice";
   if (slice && args.z.empty()) throw InvalidArgument("render: --view slice needs --z METRES");
   if (!slice && !args.z.empty()) throw InvalidArgument("render: --z applies to --view slice only");
+  if (slice && args.frontiers)
+    throw InvalidArgument("render: --frontiers draws over the top view, not --view slice");
   const RenderOptions options = optionsOf(args);
+  std::optional<FrontierSettings> frontier_settings;
+  if (args.frontiers) frontier_settings = frontierSettings(args.frontier_flags);
   checkOutputDirectory(args.output);
   const fragg::Map map = loadMapFile(args.input);
-  const RenderInfo info = slice ? renderSlice(map, args.z[0], args.output, options)
-                                : renderTopDown(map, args.output, options);
+  RenderInfo info;
+  if (frontier_settings) {
+    const FrontierResult frontiers = computeFrontiers(map, *frontier_settings);
+    RenderImage image = renderTopDownImage(map, options);
+    fadeForOverlay(image);
+    const FrontierDrawStats drawn = drawFrontiers(image, map, frontiers, options.crop);
+    writePng(image, args.output);
+    info = image.info;
+    fmt::print("frontiers: {} cells, {} clusters ({} cells drawn), {} viewpoints drawn\n",
+               frontiers.cells.size(), frontiers.clusters.size(), drawn.cells_drawn,
+               drawn.viewpoints_drawn);
+  } else {
+    info = slice ? renderSlice(map, args.z[0], args.output, options)
+                 : renderTopDown(map, args.output, options);
+  }
   std::string detail = fmt::format("{} px per voxel", info.scale);
   if (info.scale < args.scale)
     detail += fmt::format(", lowered from {} to fit --max-size {}", args.scale, args.max_size);
@@ -84,6 +111,13 @@ void addRenderCommand(CLI::App& app) {
   cmd->add_flag("--no-downscale", args->no_downscale,
                 "Fail when the image exceeds --max-size instead of drawing several voxels per "
                 "pixel");
+  CLI::Option* frontiers = cmd->add_flag(
+      "--frontiers", args->frontiers,
+      "Draw frontier clusters (cells coloured by cluster) and their best viewpoints (white "
+      "discs with a heading line) over the top view (faded to half contrast); the options "
+      "below are those of "
+      "`fragg_map frontiers` (here --viewpoints defaults to 1)");
+  addFrontierFlags(cmd, &args->frontier_flags, frontiers);
   cmd->callback([args] { runRender(*args); });
 }
 
