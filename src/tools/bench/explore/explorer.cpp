@@ -1,0 +1,268 @@
+#include "bench/explore/explorer.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/geometry/mesh_bvh.h"
+#include "fragg_map/map.h"
+#include "fragg_map/planning/collision_shape.h"
+#include "fragg_map/planning/frontier_tracker.h"
+#include "fragg_map/planning/path_check.h"
+
+namespace fragg::explore {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+Eigen::Isometry3d at(const Eigen::Vector3d& p_m) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = p_m;
+  return T;
+}
+
+/// The viewpoint heights (offsets from the centroid's z) for one cluster.
+std::vector<double> heightsFor(const Scenario& s, const planning::FrontierCluster& c) {
+  const Eigen::Vector3d& g = c.centroid_m;
+  double z_m = 0.0;
+  if (s.ground_height_m > 0.0) {
+    z_m = s.scene.terrain.heightAt(g.x(), g.y()) + s.ground_height_m;
+  } else {
+    z_m = std::clamp(g.z(), s.min_sensor_z_m, s.max_sensor_z_m);
+  }
+  return {z_m - g.z()};
+}
+
+/// Whether the sphere can move straight from `from_m` to `to_m` without touching a known
+/// occupied cell (the first robot radius of the way not checked, see explorer.h).
+bool pathFree(const Map& map, const planning::CollisionShape& robot, const Eigen::Vector3d& from_m,
+              const Eigen::Vector3d& to_m, const planning::CollisionOptions& options) {
+  const Eigen::Vector3d d = to_m - from_m;
+  const double length_m = d.norm();
+  const double skip_m = robot.radius();
+  std::vector<Eigen::Isometry3d> waypoints;
+  if (length_m > skip_m) waypoints.push_back(at(from_m + d * (skip_m / length_m)));
+  waypoints.push_back(at(to_m));
+  return !planning::checkPath(map, robot, waypoints, options).collides;
+}
+
+struct Choice {
+  planning::Viewpoint viewpoint;
+  uint64_t viewpoints = 0, rejected = 0;
+  double path_ms = 0.0;
+};
+
+std::optional<Choice> choose(const Map& map, const Scenario& s, Strategy strategy,
+                             const std::vector<planning::FrontierCluster>& clusters,
+                             const Eigen::Vector3d& robot_m, const ExploreLimits& limits,
+                             double* gain_ms) {
+  const planning::CollisionShape robot = planning::CollisionShape::sphere(s.robot_radius_m);
+  planning::CollisionOptions collision;
+  collision.threads = limits.threads;
+  Choice choice;
+  auto viewpointsOf = [&](const planning::FrontierCluster& c, int top_k) {
+    planning::ViewpointOptions o = s.viewpoints;
+    o.robot_m = robot_m;
+    o.heights_m = heightsFor(s, c);
+    o.top_k = top_k;
+    const auto t0 = Clock::now();
+    std::vector<planning::Viewpoint> v = planning::clusterViewpoints(map, c, o);
+    *gain_ms += msSince(t0);
+    v.erase(std::remove_if(v.begin(), v.end(),
+                           [&](const planning::Viewpoint& p) {
+                             return p.gain_bits < limits.min_gain_bits;
+                           }),
+            v.end());
+    choice.viewpoints += v.size();
+    return v;
+  };
+  auto free = [&](const planning::Viewpoint& v) {
+    const auto t0 = Clock::now();
+    const bool ok = pathFree(map, robot, robot_m, v.position_m, collision);
+    choice.path_ms += msSince(t0);
+    if (!ok) ++choice.rejected;
+    return ok;
+  };
+
+  if (strategy == Strategy::kGainPerMetre) {
+    std::vector<planning::Viewpoint> all;
+    for (const auto& c : clusters) {
+      const auto v = viewpointsOf(c, s.viewpoints.top_k);
+      all.insert(all.end(), v.begin(), v.end());
+    }
+    std::stable_sort(all.begin(), all.end(),
+                     [](const planning::Viewpoint& a, const planning::Viewpoint& b) {
+                       return a.score > b.score;
+                     });
+    for (const auto& v : all) {
+      if (free(v)) {
+        choice.viewpoint = v;
+        return choice;
+      }
+    }
+    return std::nullopt;
+  }
+  // Nearest frontier: clusters by centroid distance, then the cluster's viewpoints by distance.
+  std::vector<size_t> order(clusters.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return (clusters[a].centroid_m - robot_m).squaredNorm() <
+           (clusters[b].centroid_m - robot_m).squaredNorm();
+  });
+  const int every = int(s.viewpoints.radii_m.size()) * s.viewpoints.angles;
+  for (size_t i : order) {
+    auto v = viewpointsOf(clusters[i], every);
+    std::stable_sort(v.begin(), v.end(),
+                     [](const planning::Viewpoint& a, const planning::Viewpoint& b) {
+                       return a.distance_m < b.distance_m;
+                     });
+    for (const auto& p : v) {
+      if (free(p)) {
+        choice.viewpoint = p;
+        return choice;
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+const char* toString(Strategy s) {
+  return s == Strategy::kGainPerMetre ? "gain" : "nearest";
+}
+
+Strategy strategyFromString(const std::string& s) {
+  if (s == "gain") return Strategy::kGainPerMetre;
+  if (s == "nearest") return Strategy::kNearestFrontier;
+  throw InvalidArgument("strategy must be gain or nearest, not '" + s + "'");
+}
+
+void ExploreLimits::validate() const {
+  if (max_steps < 1) throw InvalidArgument("max_steps must be >= 1");
+  if (!(max_path_m >= 0.0) || !std::isfinite(max_path_m))
+    throw InvalidArgument("max_path_m must be finite and >= 0");
+  if (!(min_gain_bits >= 0.0) || !std::isfinite(min_gain_bits))
+    throw InvalidArgument("min_gain_bits must be finite and >= 0");
+  if (threads < 0) throw InvalidArgument("threads must be >= 0");
+}
+
+ExploreRun explore(const Scenario& scenario, const geometry::MeshBvh& scene,
+                   const ExploredVolume& truth, Strategy strategy, const ExploreLimits& limits) {
+  scenario.validate();
+  limits.validate();
+  MapParams params;
+  params.resolution_m = scenario.resolution_m;
+  params.backend = limits.backend;
+  params.threads = limits.threads;
+  params.clear_no_return_rays = true;  // the simulated clouds are organised
+  Map map(params);
+  const SensorModel model = integrationModel(scenario);
+
+  planning::FrontierFilter filter;
+  filter.use_box = true;
+  filter.box_min_m = scenario.box_min_m;
+  filter.box_max_m = scenario.box_max_m;
+  planning::FrontierTracker tracker(filter, limits.threads);
+  planning::FrontierClusterer clusterer(scenario.clusters);
+
+  ExploreRun run;
+  run.scenario = scenario.name;
+  run.strategy = strategy;
+  run.reference_cells = truth.referenceCells();
+  run.cell_m3 = truth.cellVolume_m3();
+  run.backend = map.backendName();
+
+  StepRecord rec;
+  rec.position_m = scenario.start_m;
+  rec.yaw_rad = scenario.start_yaw_rad;
+  for (int step = 0;; ++step) {
+    rec.step = step;
+    // Scan at the current pose, integrate it, measure.
+    const Eigen::Isometry3d T_map_sensor = sensorPose(scenario, rec.position_m, rec.yaw_rad);
+    auto t0 = Clock::now();
+    const PointCloud cloud = simulateScan(scenario, scene, T_map_sensor, uint64_t(step));
+    rec.simulate_ms = msSince(t0);
+    t0 = Clock::now();
+    map.insert(cloud, T_map_sensor, model);
+    rec.insert_ms = msSince(t0);
+    rec.known_cells = truth.knownReferenceCells(map);
+    rec.explored =
+        run.reference_cells ? double(rec.known_cells) / double(run.reference_cells) : 0.0;
+    run.steps.push_back(rec);
+    if (step >= limits.max_steps) {
+      run.stop_reason = "step budget";
+      break;
+    }
+
+    // Choose the next viewpoint.
+    rec = StepRecord();
+    const StepRecord& last = run.steps.back();
+    t0 = Clock::now();
+    tracker.update(map);
+    const std::vector<VoxelKey> cells = tracker.cells();
+    rec.frontier_ms = msSince(t0);
+    rec.frontier_cells = cells.size();
+    t0 = Clock::now();
+    const std::vector<planning::FrontierCluster> clusters = clusterer.cluster(map, cells);
+    rec.cluster_ms = msSince(t0);
+    rec.clusters = clusters.size();
+    const std::optional<Choice> choice =
+        choose(map, scenario, strategy, clusters, last.position_m, limits, &rec.gain_ms);
+    if (!choice) {
+      run.stop_reason = "no viewpoint with gain";
+      run.final_frontier_cells = rec.frontier_cells;
+      run.final_clusters = rec.clusters;
+      break;
+    }
+    const double move_m = (choice->viewpoint.position_m - last.position_m).norm();
+    if (limits.max_path_m > 0.0 && last.path_m + move_m > limits.max_path_m) {
+      run.stop_reason = "path budget";
+      run.final_frontier_cells = rec.frontier_cells;
+      run.final_clusters = rec.clusters;
+      break;
+    }
+    rec.path_ms = choice->path_ms;
+    rec.viewpoints = choice->viewpoints;
+    rec.rejected_paths = choice->rejected;
+    rec.position_m = choice->viewpoint.position_m;
+    rec.yaw_rad = choice->viewpoint.yaw_rad;
+    rec.gain_bits = choice->viewpoint.gain_bits;
+    rec.path_m = last.path_m + move_m;
+  }
+  return run;
+}
+
+std::string toCsv(const std::vector<ExploreRun>& runs, bool with_times) {
+  std::string out =
+      "scenario,strategy,step,x_m,y_m,z_m,yaw_rad,path_m,gain_bits,known_cells,reference_cells,"
+      "explored,known_m3,frontier_cells,clusters,viewpoints,rejected_paths";
+  if (with_times) out += ",frontier_ms,cluster_ms,gain_ms,path_ms,simulate_ms,insert_ms";
+  out += "\n";
+  for (const ExploreRun& r : runs) {
+    for (const StepRecord& s : r.steps) {
+      out += fmt::format("{},{},{},{:.4f},{:.4f},{:.4f},{:.5f},{:.4f},{:.2f},{},{},{:.6f},{:.3f},{},{},"
+                         "{},{}",
+                         r.scenario, toString(r.strategy), s.step, s.position_m.x(),
+                         s.position_m.y(), s.position_m.z(), s.yaw_rad, s.path_m, s.gain_bits,
+                         s.known_cells, r.reference_cells, s.explored,
+                         double(s.known_cells) * r.cell_m3, s.frontier_cells, s.clusters,
+                         s.viewpoints, s.rejected_paths);
+      if (with_times)
+        out += fmt::format(",{:.2f},{:.2f},{:.2f},{:.2f},{:.2f},{:.2f}", s.frontier_ms,
+                           s.cluster_ms, s.gain_ms, s.path_ms, s.simulate_ms, s.insert_ms);
+      out += "\n";
+    }
+  }
+  return out;
+}
+
+}  // namespace fragg::explore
