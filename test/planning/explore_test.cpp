@@ -55,17 +55,17 @@ Scenario roomScenario() {
   s.min_sensor_z_m = 0.6;
   s.max_sensor_z_m = 1.9;
   s.robot_radius_m = 0.15;
-  s.clusters.min_cells = 4;
+  s.clusters.min_cells = 10;
   s.clusters.max_extent_m = 1.5;
   s.viewpoints.radii_m = {0.8, 1.5};
-  s.viewpoints.angles = 8;
+  s.viewpoints.angles = 6;
   s.viewpoints.clearance_m = 0.3;
   s.viewpoints.top_k = 2;
-  s.viewpoints.sensor.columns = 24;
-  s.viewpoints.sensor.rows = 18;
+  s.viewpoints.sensor.columns = 16;
+  s.viewpoints.sensor.rows = 12;
   s.viewpoints.sensor.horizontal_fov_rad = 70.0 * M_PI / 180.0;
   s.viewpoints.sensor.vertical_fov_rad = 0.967;
-  s.viewpoints.sensor.max_range_m = 6.0;
+  s.viewpoints.sensor.max_range_m = 5.0;
   return s;
 }
 
@@ -118,7 +118,9 @@ TEST(ExploreTest, ExploredVolumeGrowsAndViewpointsAreClear) {
     for (size_t i = 1; i < run.steps.size(); ++i) {
       const StepRecord& a = run.steps[i - 1];
       const StepRecord& b = run.steps[i];
-      EXPECT_GE(b.known_cells, a.known_cells) << "step " << b.step;
+      // A scan can bring a few cells back into the unknown band (a free cell hit, an occupied
+      // one crossed), never many.
+      EXPECT_GE(double(b.known_cells), 0.99 * double(a.known_cells)) << "step " << b.step;
       EXPECT_NEAR(b.path_m - a.path_m, (b.position_m - a.position_m).norm(), 1e-9);
       EXPECT_GT(b.gain_bits, 0.0);
       EXPECT_GT(b.frontier_cells, 0u);
@@ -130,7 +132,8 @@ TEST(ExploreTest, ExploredVolumeGrowsAndViewpointsAreClear) {
       EXPECT_GE(b.position_m.z(), s.min_sensor_z_m - 1e-9);
       EXPECT_LE(b.position_m.z(), s.max_sensor_z_m + 1e-9);
     }
-    EXPECT_GT(run.steps.back().explored, run.steps.front().explored + 0.05);
+    EXPECT_GT(run.steps.back().explored, run.steps.front().explored + 0.1);
+    EXPECT_GT(run.steps[run.steps.size() / 2].explored, run.steps.front().explored);
     EXPECT_LE(run.steps.back().explored, 1.0);
   }
 }
@@ -157,12 +160,20 @@ TEST(ExploreTest, PathBudgetStopsTheRun) {
   const geometry::MeshBvh bvh(s.scene.mesh);
   const ExploredVolume truth(bvh, s.box_min_m, s.box_max_m, s.resolution_m, 2);
   ExploreLimits l = fewSteps();
-  l.max_path_m = 2.0;
+  l.max_steps = 4;
+  const ExploreRun free_run = explore(s, bvh, truth, Strategy::kNearestFrontier, l);
+  ASSERT_EQ(free_run.stop_reason, "step budget");
+  const double total_m = free_run.steps.back().path_m;
+  ASSERT_GT(total_m, 0.0);
+  // A budget just below the free run's path: the same moves, all but the last.
+  l.max_path_m = total_m - 1e-6;
   const ExploreRun run = explore(s, bvh, truth, Strategy::kNearestFrontier, l);
-  EXPECT_LE(run.steps.back().path_m, 2.0);
-  if (run.steps.size() <= size_t(l.max_steps)) {
-    EXPECT_TRUE(run.stop_reason == "path budget" || run.stop_reason == "no viewpoint with gain");
-  }
+  EXPECT_EQ(run.stop_reason, "path budget");
+  EXPECT_LE(run.steps.back().path_m, l.max_path_m);
+  ASSERT_EQ(run.steps.size() + 1, free_run.steps.size());
+  ExploreRun prefix = free_run;
+  prefix.steps.pop_back();
+  EXPECT_EQ(toCsv({run}, false), toCsv({prefix}, false));
 }
 
 TEST(ExploreTest, BadArgumentsAreRefused) {
@@ -216,11 +227,11 @@ TEST(ExploreTest, BadArgumentsAreRefused) {
 
 TEST(ExploreTest, ExecutableRefusesBadArguments) {
   const std::string dir = test::testDir();
-  for (const std::string args :
-       {"--scenario moon", "--scenario pipes --strategy random", "--scenario pipes --steps 0",
-        "--scenario pipes --resolution nan", "--scenario pipes --start 100 0 1",
-        "--scenario pipes --min-gain -3", "--scenario pipes --backend gpu2",
-        "--scenario pipes --scenes '" + dir + "/missing'"}) {
+  for (const std::string& args : std::vector<std::string>{
+           "--scenario moon", "--scenario pipes --strategy random", "--scenario pipes --steps 0",
+           "--scenario pipes --resolution nan", "--scenario pipes --start 100 0 1",
+           "--scenario pipes --min-gain -3", "--scenario pipes --backend gpu2",
+           "--scenario pipes --scenes '" + dir + "/missing'"}) {
     SCOPED_TRACE(args);
     const auto r = test::runCli(dir, args);
     EXPECT_NE(r.exit_code, 0);

@@ -112,14 +112,14 @@ int run(const Options& o) {
   const ExploredVolume truth(bvh, s.box_min_m, s.box_max_m, s.resolution_m, o.threads);
   const double truth_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("%s\n", fmt::format("{}: {} cm cells, box [{:.1f} {:.1f} {:.1f}]..[{:.1f} {:.1f} "
-                                  "{:.1f}] m, {} reference cells ({:.0f} m^3) of {} ({:.1f} s)",
-                                  s.name, s.resolution_m * 100, s.box_min_m.x(), s.box_min_m.y(),
-                                  s.box_min_m.z(), s.box_max_m.x(), s.box_max_m.y(),
-                                  s.box_max_m.z(), truth.referenceCells(),
-                                  double(truth.referenceCells()) * truth.cellVolume_m3(),
-                                  truth.boxCells(), truth_s)
-                          .c_str());
+  std::printf(
+      "%s\n",
+      fmt::format("{}: {} cm cells, box [{:.1f} {:.1f} {:.1f}]..[{:.1f} {:.1f} "
+                  "{:.1f}] m, {} reference cells ({:.0f} m^3) of {} ({:.1f} s)",
+                  s.name, s.resolution_m * 100, s.box_min_m.x(), s.box_min_m.y(), s.box_min_m.z(),
+                  s.box_max_m.x(), s.box_max_m.y(), s.box_max_m.z(), truth.referenceCells(),
+                  double(truth.referenceCells()) * truth.cellVolume_m3(), truth.boxCells(), truth_s)
+          .c_str());
   std::vector<ExploreRun> runs;
   nlohmann::json j = {{"scenario", s.name},
                       {"resolution_m", s.resolution_m},
@@ -140,8 +140,8 @@ int run(const Options& o) {
     std::printf("%s\n", fmt::format("  {:8s} {:3d} moves, {:7.1f} m, explored {:6.2f} % "
                                     "({:.0f} m^3), stop: {}, {:.1f} s",
                                     toString(st), int(r.steps.size()) - 1, r.steps.back().path_m,
-                                    100.0 * r.steps.back().explored,
-                                    sj["known_m3"].get<double>(), r.stop_reason, wall_s)
+                                    100.0 * r.steps.back().explored, sj["known_m3"].get<double>(),
+                                    r.stop_reason, wall_s)
                             .c_str());
     j["runs"].push_back(sj);
   }

@@ -20,8 +20,7 @@ int32_t lastKeyAtOrBelow(double v_m, double res_m) {
 }  // namespace
 
 ExploredVolume::ExploredVolume(const geometry::MeshBvh& scene, const Eigen::Vector3d& box_min_m,
-                               const Eigen::Vector3d& box_max_m, double resolution_m,
-                               int threads)
+                               const Eigen::Vector3d& box_max_m, double resolution_m, int threads)
     : resolution_m_(resolution_m), cell_m3_(resolution_m * resolution_m * resolution_m) {
   if (!(resolution_m > 0.0) || !std::isfinite(resolution_m))
     throw InvalidArgument("explored volume: resolution must be finite and > 0");

@@ -76,10 +76,9 @@ std::optional<Choice> choose(const Map& map, const Scenario& s, Strategy strateg
     const auto t0 = Clock::now();
     std::vector<planning::Viewpoint> v = planning::clusterViewpoints(map, c, o);
     *gain_ms += msSince(t0);
-    v.erase(std::remove_if(v.begin(), v.end(),
-                           [&](const planning::Viewpoint& p) {
-                             return p.gain_bits < limits.min_gain_bits;
-                           }),
+    v.erase(std::remove_if(
+                v.begin(), v.end(),
+                [&](const planning::Viewpoint& p) { return p.gain_bits < limits.min_gain_bits; }),
             v.end());
     choice.viewpoints += v.size();
     return v;
@@ -136,9 +135,7 @@ std::optional<Choice> choose(const Map& map, const Scenario& s, Strategy strateg
 
 }  // namespace
 
-const char* toString(Strategy s) {
-  return s == Strategy::kGainPerMetre ? "gain" : "nearest";
-}
+const char* toString(Strategy s) { return s == Strategy::kGainPerMetre ? "gain" : "nearest"; }
 
 Strategy strategyFromString(const std::string& s) {
   if (s == "gain") return Strategy::kGainPerMetre;
@@ -249,13 +246,13 @@ std::string toCsv(const std::vector<ExploreRun>& runs, bool with_times) {
   out += "\n";
   for (const ExploreRun& r : runs) {
     for (const StepRecord& s : r.steps) {
-      out += fmt::format("{},{},{},{:.4f},{:.4f},{:.4f},{:.5f},{:.4f},{:.2f},{},{},{:.6f},{:.3f},{},{},"
-                         "{},{}",
-                         r.scenario, toString(r.strategy), s.step, s.position_m.x(),
-                         s.position_m.y(), s.position_m.z(), s.yaw_rad, s.path_m, s.gain_bits,
-                         s.known_cells, r.reference_cells, s.explored,
-                         double(s.known_cells) * r.cell_m3, s.frontier_cells, s.clusters,
-                         s.viewpoints, s.rejected_paths);
+      out += fmt::format(
+          "{},{},{},{:.4f},{:.4f},{:.4f},{:.5f},{:.4f},{:.2f},{},{},{:.6f},{:.3f},{},{},"
+          "{},{}",
+          r.scenario, toString(r.strategy), s.step, s.position_m.x(), s.position_m.y(),
+          s.position_m.z(), s.yaw_rad, s.path_m, s.gain_bits, s.known_cells, r.reference_cells,
+          s.explored, double(s.known_cells) * r.cell_m3, s.frontier_cells, s.clusters, s.viewpoints,
+          s.rejected_paths);
       if (with_times)
         out += fmt::format(",{:.2f},{:.2f},{:.2f},{:.2f},{:.2f},{:.2f}", s.frontier_ms,
                            s.cluster_ms, s.gain_ms, s.path_ms, s.simulate_ms, s.insert_ms);

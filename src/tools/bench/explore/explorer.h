@@ -29,9 +29,9 @@ const char* toString(Strategy s);
 Strategy strategyFromString(const std::string& s);
 
 struct ExploreLimits {
-  int max_steps = 30;          ///< moves after the first scan, >= 1
-  double max_path_m = 0.0;     ///< > 0: stop before a move would exceed it; 0: no limit
-  double min_gain_bits = 1.0;  ///< viewpoints with less gain do not count, >= 0
+  int max_steps = 30;               ///< moves after the first scan, >= 1
+  double max_path_m = 0.0;          ///< > 0: stop before a move would exceed it; 0: no limit
+  double min_gain_bits = 1.0;       ///< viewpoints with less gain do not count, >= 0
   Backend backend = Backend::kCpu;  ///< map integration; collision checks run on the CPU
   int threads = 0;                  ///< 0 = every core
   /// Throws InvalidArgument naming the bad field.
@@ -42,13 +42,13 @@ struct StepRecord {
   int step = 0;  ///< 0: the scan at the start pose
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
   double yaw_rad = 0.0;
-  double path_m = 0.0;     ///< straight-line path length so far
-  double gain_bits = 0.0;  ///< expected gain of the chosen viewpoint (0 at step 0)
+  double path_m = 0.0;       ///< straight-line path length so far
+  double gain_bits = 0.0;    ///< expected gain of the chosen viewpoint (0 at step 0)
   uint64_t known_cells = 0;  ///< reference cells known after this step's scan
   double explored = 0.0;     ///< known_cells / reference cells
   uint64_t frontier_cells = 0, clusters = 0;  ///< before choosing this step's viewpoint
-  uint64_t viewpoints = 0;       ///< viewpoints with gain returned by clusterViewpoints
-  uint64_t rejected_paths = 0;   ///< better viewpoints skipped: their path collides
+  uint64_t viewpoints = 0;      ///< viewpoints with gain returned by clusterViewpoints
+  uint64_t rejected_paths = 0;  ///< better viewpoints skipped: their path collides
   double frontier_ms = 0.0, cluster_ms = 0.0, gain_ms = 0.0, path_ms = 0.0;
   double simulate_ms = 0.0, insert_ms = 0.0;
 };

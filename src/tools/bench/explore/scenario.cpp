@@ -28,9 +28,8 @@ void Scenario::validate() const {
     throw InvalidArgument("start position lies outside the box");
   if (!(ground_height_m >= 0.0) || !std::isfinite(ground_height_m))
     throw InvalidArgument("ground_height_m must be finite and >= 0");
-  if (ground_height_m == 0.0 &&
-      (!std::isfinite(min_sensor_z_m) || !std::isfinite(max_sensor_z_m) ||
-       min_sensor_z_m > max_sensor_z_m))
+  if (ground_height_m == 0.0 && (!std::isfinite(min_sensor_z_m) || !std::isfinite(max_sensor_z_m) ||
+                                 min_sensor_z_m > max_sensor_z_m))
     throw InvalidArgument("sensor height band: finite, min <= max");
   if (!(robot_radius_m > 0.0) || !std::isfinite(robot_radius_m))
     throw InvalidArgument("robot_radius_m must be finite and > 0");
@@ -66,16 +65,18 @@ Scenario pipesScenario(const std::string& scenes_dir) {
   s.min_sensor_z_m = 0.5;
   s.max_sensor_z_m = 5.5;
   s.robot_radius_m = 0.2;
-  s.clusters.min_cells = 8;
-  s.clusters.max_extent_m = 3.0;
+  s.clusters.min_cells = 20;
+  s.clusters.max_extent_m = 4.0;
   s.viewpoints.radii_m = {1.5, 3.0};
-  s.viewpoints.angles = 12;
+  s.viewpoints.angles = 8;
   s.viewpoints.heights_m = {0.0};
   s.viewpoints.clearance_m = 0.3;
   s.viewpoints.top_k = 3;
   s.viewpoints.sensor.kind = planning::GainSensor::Kind::kPinhole;
-  s.viewpoints.sensor.columns = 64;
-  s.viewpoints.sensor.rows = 48;
+  // A quarter of fragg_map frontiers' default rays: the gains of every cluster's candidates
+  // are computed at every step.
+  s.viewpoints.sensor.columns = 32;
+  s.viewpoints.sensor.rows = 24;
   s.viewpoints.sensor.horizontal_fov_rad = 70.0 * kDegToRad;
   s.viewpoints.sensor.vertical_fov_rad = 2.0 * std::atan(std::tan(35.0 * kDegToRad) * 480 / 640);
   s.viewpoints.sensor.max_range_m = 10.0;
@@ -98,31 +99,30 @@ Scenario campusScenario(const std::string& scenes_dir) {
   s.seed = 101;
   s.resolution_m = 0.2;
   s.integration_max_range_m = 30.0;
-  s.ground_height_m = 1.8;  // W1's LiDAR mount
+  s.ground_height_m = 1.8;                       // W1's LiDAR mount
   s.start_m = Eigen::Vector3d(-30.0, 0.0, 0.0);  // W1's first pose (the street)
   s.start_m.z() = s.scene.terrain.heightAt(-30.0, 0.0) + s.ground_height_m;
   s.start_yaw_rad = 0.0;
   s.box_min_m = Eigen::Vector3d(-40.0, -25.0, -1.5);
   s.box_max_m = Eigen::Vector3d(40.0, 35.0, 4.0);
   s.robot_radius_m = 0.4;
-  s.clusters.min_cells = 8;
+  s.clusters.min_cells = 20;
   s.clusters.max_extent_m = 6.0;
   s.viewpoints.radii_m = {2.0, 5.0};
-  s.viewpoints.angles = 12;
+  s.viewpoints.angles = 8;
   s.viewpoints.heights_m = {0.0};  // replaced per cluster (ground robot)
   s.viewpoints.clearance_m = 0.5;
   s.viewpoints.top_k = 3;
   s.viewpoints.sensor.kind = planning::GainSensor::Kind::kLidar;
-  s.viewpoints.sensor.columns = 90;
-  s.viewpoints.sensor.rows = 16;
+  s.viewpoints.sensor.columns = 60;
+  s.viewpoints.sensor.rows = 12;
   s.viewpoints.sensor.min_elevation_rad = -25.0 * kDegToRad;
   s.viewpoints.sensor.max_elevation_rad = 15.0 * kDegToRad;
   s.viewpoints.sensor.max_range_m = 15.0;
   return s;
 }
 
-Eigen::Isometry3d sensorPose(const Scenario& s, const Eigen::Vector3d& position_m,
-                             double yaw_rad) {
+Eigen::Isometry3d sensorPose(const Scenario& s, const Eigen::Vector3d& position_m, double yaw_rad) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = position_m;
   Eigen::Matrix3d R = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).matrix();
