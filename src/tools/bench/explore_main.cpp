@@ -29,6 +29,7 @@ struct Options {
   std::string scenario, strategy = "both", scenes_dir = FRAGG_SCENES_DIR, backend = "cpu";
   std::string csv_path, json_path;
   int steps = 30, threads = 0;
+  bool verbose = false;
   double max_path_m = 0.0, resolution_m = 0.0, min_gain_bits = 1.0;
   std::vector<double> start;
   double start_yaw_rad = std::numeric_limits<double>::quiet_NaN();
@@ -120,6 +121,7 @@ int run(const Options& o) {
                   s.box_max_m.x(), s.box_max_m.y(), s.box_max_m.z(), truth.referenceCells(),
                   double(truth.referenceCells()) * truth.cellVolume_m3(), truth.boxCells(), truth_s)
           .c_str());
+  std::fflush(stdout);
   std::vector<ExploreRun> runs;
   nlohmann::json j = {{"scenario", s.name},
                       {"resolution_m", s.resolution_m},
@@ -131,7 +133,16 @@ int run(const Options& o) {
                       {"runs", nlohmann::json::array()}};
   for (Strategy st : strategies) {
     const auto t1 = std::chrono::steady_clock::now();
-    runs.push_back(explore(s, bvh, truth, st, limits));
+    auto progress = [&](const StepRecord& r) {
+      if (!o.verbose) return;
+      std::fprintf(stderr, "%s\n",
+                   fmt::format("  {} step {:3d}: explored {:6.2f} %, path {:7.1f} m, frontiers "
+                               "{:.0f} ms, clusters {:.0f} ms, gains {:.0f} ms",
+                               toString(st), r.step, 100.0 * r.explored, r.path_m, r.frontier_ms,
+                               r.cluster_ms, r.gain_ms)
+                       .c_str());
+    };
+    runs.push_back(explore(s, bvh, truth, st, limits, progress));
     const double wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
     nlohmann::json sj = summary(runs.back());
@@ -143,6 +154,7 @@ int run(const Options& o) {
                                     100.0 * r.steps.back().explored, sj["known_m3"].get<double>(),
                                     r.stop_reason, wall_s)
                             .c_str());
+    std::fflush(stdout);
     j["runs"].push_back(sj);
   }
   if (!o.csv_path.empty()) {
@@ -178,6 +190,7 @@ int main(int argc, char** argv) {
   app.add_option("--scenes", o.scenes_dir, "Folder of the scene files")->capture_default_str();
   app.add_option("--csv", o.csv_path, "Per-step CSV");
   app.add_option("--json", o.json_path, "JSON summary");
+  app.add_flag("--verbose,-v", o.verbose, "One line per step on stderr");
   try {
     app.parse(argc, argv);
     return fragg::explore::run(o);

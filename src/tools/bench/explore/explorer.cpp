@@ -153,7 +153,8 @@ void ExploreLimits::validate() const {
 }
 
 ExploreRun explore(const Scenario& scenario, const geometry::MeshBvh& scene,
-                   const ExploredVolume& truth, Strategy strategy, const ExploreLimits& limits) {
+                   const ExploredVolume& truth, Strategy strategy, const ExploreLimits& limits,
+                   const std::function<void(const StepRecord&)>& on_step) {
   scenario.validate();
   limits.validate();
   MapParams params;
@@ -195,6 +196,7 @@ ExploreRun explore(const Scenario& scenario, const geometry::MeshBvh& scene,
     rec.explored =
         run.reference_cells ? double(rec.known_cells) / double(run.reference_cells) : 0.0;
     run.steps.push_back(rec);
+    if (on_step) on_step(rec);
     if (step >= limits.max_steps) {
       run.stop_reason = "step budget";
       break;

@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -66,9 +67,11 @@ struct ExploreRun {
 };
 
 /// Runs one exploration. `scene` is the scenario's scene as a BVH, `truth` its reference cells
-/// at the scenario's resolution. Throws InvalidArgument for a bad scenario or limits.
+/// at the scenario's resolution; `on_step` (optional) sees each step's record as it is made.
+/// Throws InvalidArgument for a bad scenario or limits.
 ExploreRun explore(const Scenario& scenario, const geometry::MeshBvh& scene,
-                   const ExploredVolume& truth, Strategy strategy, const ExploreLimits& limits);
+                   const ExploredVolume& truth, Strategy strategy, const ExploreLimits& limits,
+                   const std::function<void(const StepRecord&)>& on_step = nullptr);
 
 /// CSV of runs: a header, then one row per step of each run. Timing columns (milliseconds)
 /// only with `with_times` (without them two runs of the same arguments give the same text).
