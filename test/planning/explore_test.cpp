@@ -4,6 +4,7 @@
 // (by the library and by the executable).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -150,9 +151,22 @@ TEST(ExploreTest, TwoRunsGiveTheSameCsv) {
   const std::vector<ExploreRun> b = {explore(s, bvh, truth, Strategy::kGainPerMetre, other)};
   EXPECT_EQ(toCsv(a, false), toCsv(b, false));
   EXPECT_GE(a.front().steps.size(), 3u);
-  // With times the CSV has six more columns.
-  const std::string timed = toCsv(a, true);
-  EXPECT_NE(timed.find("frontier_ms"), std::string::npos);
+  // Every row has the header's columns; with times six more.
+  auto columns = [](const std::string& csv) {
+    std::vector<size_t> n;
+    size_t start = 0;
+    for (size_t end = csv.find('\n'); end != std::string::npos;
+         start = end + 1, end = csv.find('\n', start))
+      n.push_back(size_t(std::count(csv.begin() + start, csv.begin() + end, ',')) + 1);
+    return n;
+  };
+  const std::vector<size_t> plain = columns(toCsv(a, false)), timed = columns(toCsv(a, true));
+  ASSERT_EQ(plain.size(), a.front().steps.size() + 1);
+  ASSERT_EQ(timed.size(), plain.size());
+  for (size_t i = 0; i < plain.size(); ++i) {
+    EXPECT_EQ(plain[i], plain[0]) << "line " << i;
+    EXPECT_EQ(timed[i], plain[0] + 6) << "line " << i;
+  }
 }
 
 TEST(ExploreTest, PathBudgetStopsTheRun) {

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
+#include <unordered_set>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/geometry/mesh_bvh.h"
@@ -56,6 +57,7 @@ bool pathFree(const Map& map, const planning::CollisionShape& robot, const Eigen
 
 struct Choice {
   planning::Viewpoint viewpoint;
+  uint64_t cluster_id = 0;
   uint64_t viewpoints = 0, rejected = 0;
   double path_ms = 0.0;
 };
@@ -63,7 +65,7 @@ struct Choice {
 std::optional<Choice> choose(const Map& map, const Scenario& s, Strategy strategy,
                              const std::vector<planning::FrontierCluster>& clusters,
                              const Eigen::Vector3d& robot_m, const ExploreLimits& limits,
-                             double* gain_ms) {
+                             const std::vector<Eigen::Vector4d>& scanned, double* gain_ms) {
   const planning::CollisionShape robot = planning::CollisionShape::sphere(s.robot_radius_m);
   planning::CollisionOptions collision;
   collision.threads = limits.threads;
@@ -76,9 +78,19 @@ std::optional<Choice> choose(const Map& map, const Scenario& s, Strategy strateg
     const auto t0 = Clock::now();
     std::vector<planning::Viewpoint> v = planning::clusterViewpoints(map, c, o);
     *gain_ms += msSince(t0);
-    v.erase(std::remove_if(
-                v.begin(), v.end(),
-                [&](const planning::Viewpoint& p) { return p.gain_bits < limits.min_gain_bits; }),
+    // A scan again from a pose already scanned from sees the same cells: its gain (cells the
+    // sensor cannot resolve from there, e.g. left in the unknown band) is not to be had.
+    const double same_m = 0.5 * map.resolution();
+    auto repeated = [&](const planning::Viewpoint& p) {
+      for (const Eigen::Vector4d& q : scanned)
+        if ((q.head<3>() - p.position_m).norm() < same_m && std::abs(q.w() - p.yaw_rad) < 1e-6)
+          return true;
+      return false;
+    };
+    v.erase(std::remove_if(v.begin(), v.end(),
+                           [&](const planning::Viewpoint& p) {
+                             return p.gain_bits < limits.min_gain_bits || repeated(p);
+                           }),
             v.end());
     choice.viewpoints += v.size();
     return v;
@@ -92,18 +104,15 @@ std::optional<Choice> choose(const Map& map, const Scenario& s, Strategy strateg
   };
 
   if (strategy == Strategy::kGainPerMetre) {
-    std::vector<planning::Viewpoint> all;
-    for (const auto& c : clusters) {
-      const auto v = viewpointsOf(c, s.viewpoints.top_k);
-      all.insert(all.end(), v.begin(), v.end());
-    }
+    std::vector<std::pair<planning::Viewpoint, uint64_t>> all;  // viewpoint, cluster id
+    for (const auto& c : clusters)
+      for (const auto& v : viewpointsOf(c, s.viewpoints.top_k)) all.emplace_back(v, c.id);
     std::stable_sort(all.begin(), all.end(),
-                     [](const planning::Viewpoint& a, const planning::Viewpoint& b) {
-                       return a.score > b.score;
-                     });
-    for (const auto& v : all) {
+                     [](const auto& a, const auto& b) { return a.first.score > b.first.score; });
+    for (const auto& [v, id] : all) {
       if (free(v)) {
         choice.viewpoint = v;
+        choice.cluster_id = id;
         return choice;
       }
     }
@@ -126,6 +135,7 @@ std::optional<Choice> choose(const Map& map, const Scenario& s, Strategy strateg
     for (const auto& p : v) {
       if (free(p)) {
         choice.viewpoint = p;
+        choice.cluster_id = clusters[i].id;
         return choice;
       }
     }
@@ -179,6 +189,9 @@ ExploreRun explore(const Scenario& scenario, const geometry::MeshBvh& scene,
   run.cell_m3 = truth.cellVolume_m3();
   run.backend = map.backendName();
 
+  std::vector<Eigen::Vector4d> scanned;  // x, y, z, yaw of every scan so far
+  std::unordered_set<uint64_t> unexplorable;
+  uint64_t target_cluster = 0;
   StepRecord rec;
   rec.position_m = scenario.start_m;
   rec.yaw_rad = scenario.start_yaw_rad;
@@ -192,6 +205,7 @@ ExploreRun explore(const Scenario& scenario, const geometry::MeshBvh& scene,
     t0 = Clock::now();
     map.insert(cloud, T_map_sensor, model);
     rec.insert_ms = msSince(t0);
+    scanned.emplace_back(rec.position_m.x(), rec.position_m.y(), rec.position_m.z(), rec.yaw_rad);
     rec.known_cells = truth.knownReferenceCells(map);
     rec.explored =
         run.reference_cells ? double(rec.known_cells) / double(run.reference_cells) : 0.0;
@@ -211,11 +225,23 @@ ExploreRun explore(const Scenario& scenario, const geometry::MeshBvh& scene,
     rec.frontier_ms = msSince(t0);
     rec.frontier_cells = cells.size();
     t0 = Clock::now();
-    const std::vector<planning::FrontierCluster> clusters = clusterer.cluster(map, cells);
+    std::vector<planning::FrontierCluster> clusters = clusterer.cluster(map, cells);
     rec.cluster_ms = msSince(t0);
     rec.clusters = clusters.size();
+    // The cluster the last move went for, unchanged by the scan there (same id: same cells),
+    // cannot be explored from its viewpoints: left out from now on (until its cells change).
+    if (target_cluster != 0 &&
+        std::any_of(clusters.begin(), clusters.end(),
+                    [&](const planning::FrontierCluster& c) { return c.id == target_cluster; }))
+      unexplorable.insert(target_cluster);
+    clusters.erase(std::remove_if(clusters.begin(), clusters.end(),
+                                  [&](const planning::FrontierCluster& c) {
+                                    return unexplorable.count(c.id) > 0;
+                                  }),
+                   clusters.end());
+    rec.unexplorable = rec.clusters - clusters.size();
     const std::optional<Choice> choice =
-        choose(map, scenario, strategy, clusters, last.position_m, limits, &rec.gain_ms);
+        choose(map, scenario, strategy, clusters, last.position_m, limits, scanned, &rec.gain_ms);
     if (!choice) {
       run.stop_reason = "no viewpoint with gain";
       run.final_frontier_cells = rec.frontier_cells;
@@ -235,6 +261,7 @@ ExploreRun explore(const Scenario& scenario, const geometry::MeshBvh& scene,
     rec.position_m = choice->viewpoint.position_m;
     rec.yaw_rad = choice->viewpoint.yaw_rad;
     rec.gain_bits = choice->viewpoint.gain_bits;
+    target_cluster = choice->cluster_id;
     rec.path_m = last.path_m + move_m;
   }
   return run;
@@ -243,18 +270,18 @@ ExploreRun explore(const Scenario& scenario, const geometry::MeshBvh& scene,
 std::string toCsv(const std::vector<ExploreRun>& runs, bool with_times) {
   std::string out =
       "scenario,strategy,step,x_m,y_m,z_m,yaw_rad,path_m,gain_bits,known_cells,reference_cells,"
-      "explored,known_m3,frontier_cells,clusters,viewpoints,rejected_paths";
+      "explored,known_m3,frontier_cells,clusters,unexplorable_clusters,viewpoints,rejected_paths";
   if (with_times) out += ",frontier_ms,cluster_ms,gain_ms,path_ms,simulate_ms,insert_ms";
   out += "\n";
   for (const ExploreRun& r : runs) {
     for (const StepRecord& s : r.steps) {
       out += fmt::format(
           "{},{},{},{:.4f},{:.4f},{:.4f},{:.5f},{:.4f},{:.2f},{},{},{:.6f},{:.3f},{},{},"
-          "{},{}",
+          "{},{},{}",
           r.scenario, toString(r.strategy), s.step, s.position_m.x(), s.position_m.y(),
           s.position_m.z(), s.yaw_rad, s.path_m, s.gain_bits, s.known_cells, r.reference_cells,
-          s.explored, double(s.known_cells) * r.cell_m3, s.frontier_cells, s.clusters, s.viewpoints,
-          s.rejected_paths);
+          s.explored, double(s.known_cells) * r.cell_m3, s.frontier_cells, s.clusters,
+          s.unexplorable, s.viewpoints, s.rejected_paths);
       if (with_times)
         out += fmt::format(",{:.2f},{:.2f},{:.2f},{:.2f},{:.2f},{:.2f}", s.frontier_ms,
                            s.cluster_ms, s.gain_ms, s.path_ms, s.simulate_ms, s.insert_ms);

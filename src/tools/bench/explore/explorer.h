@@ -48,6 +48,9 @@ struct StepRecord {
   uint64_t known_cells = 0;  ///< reference cells known after this step's scan
   double explored = 0.0;     ///< known_cells / reference cells
   uint64_t frontier_cells = 0, clusters = 0;  ///< before choosing this step's viewpoint
+  /// Clusters left out as unexplorable: a move went for them and its scan left their cells
+  /// unchanged (kept out until their cells change).
+  uint64_t unexplorable = 0;
   uint64_t viewpoints = 0;      ///< viewpoints with gain returned by clusterViewpoints
   uint64_t rejected_paths = 0;  ///< better viewpoints skipped: their path collides
   double frontier_ms = 0.0, cluster_ms = 0.0, gain_ms = 0.0, path_ms = 0.0;
