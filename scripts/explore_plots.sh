@@ -3,19 +3,25 @@
 # (depth camera) and the campus (LiDAR), both strategies, and plots the explored volume against
 # the steps and against the path length, one PNG per scene. Needs gnuplot (gnuplot-nox).
 # Usage: bash scripts/explore_plots.sh EXPLORE_BINARY [OUT_DIR (default docs)] [STEPS (default 40)]
-#   writes OUT_DIR/explore_{pipes,campus}.png, .csv (per step) and .json (summary)
+#            [SCENE... (default: pipes campus)]
+#   writes OUT_DIR/explore_SCENE.png, .csv (per step) and .json (summary). With
+#   EXPLORE_PLOT_ONLY=1 an existing OUT_DIR/explore_SCENE.csv is plotted again without a run.
 set -euo pipefail
 usage="usage: bash scripts/explore_plots.sh EXPLORE_BINARY [OUT_DIR] [STEPS]"
 [ $# -ge 1 ] || { echo "$usage" >&2; exit 2; }
 bin="$1" out="${2:-docs}" steps="${3:-40}"
+shift $(($# < 3 ? $# : 3))
+scenes="${*:-pipes campus}"
 [ -x "$bin" ] || { echo "explore_plots: $bin is not an executable (build fragg_map_explore)" >&2; exit 2; }
 command -v gnuplot >/dev/null || { echo "explore_plots: gnuplot is missing (apt install gnuplot-nox)" >&2; exit 1; }
 mkdir -p "$out"
 data="$(mktemp -d)"
 trap 'rm -rf "$data"' EXIT
-for scene in pipes campus; do
-  "$bin" --scenario "$scene" --steps "$steps" --csv "$out/explore_$scene.csv" \
-    --json "$out/explore_$scene.json"
+for scene in $scenes; do
+  if [ "${EXPLORE_PLOT_ONLY:-0}" != 1 ] || [ ! -f "$out/explore_$scene.csv" ]; then
+    "$bin" --scenario "$scene" --steps "$steps" --csv "$out/explore_$scene.csv" \
+      --json "$out/explore_$scene.json"
+  fi
   # One file per strategy: "step path_m explored_percent".
   for strategy in gain nearest; do
     awk -F, -v s="$strategy" 'NR > 1 && $2 == s { print $3, $8, 100 * $12 }' \

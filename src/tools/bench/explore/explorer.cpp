@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "fragg_map/errors.h"
@@ -62,43 +63,63 @@ struct Choice {
   double path_ms = 0.0;
 };
 
+/// Every candidate viewpoint with gain of each live cluster, ranked by gain; computed when the
+/// cluster appears (a new id) and kept while its cells are unchanged (see explorer.h).
+using ViewpointCache = std::unordered_map<uint64_t, std::vector<planning::Viewpoint>>;
+
 std::optional<Choice> choose(const Map& map, const Scenario& s, Strategy strategy,
                              const std::vector<planning::FrontierCluster>& clusters,
                              const Eigen::Vector3d& robot_m, const ExploreLimits& limits,
-                             const std::vector<Eigen::Vector4d>& scanned, double* gain_ms) {
+                             const std::vector<Eigen::Vector4d>& scanned, ViewpointCache* cache,
+                             double* gain_ms) {
   const planning::CollisionShape robot = planning::CollisionShape::sphere(s.robot_radius_m);
   planning::CollisionOptions collision;
   collision.threads = limits.threads;
   Choice choice;
-  auto viewpointsOf = [&](const planning::FrontierCluster& c, int top_k) {
+
+  // Forget clusters gone; new ones are scored when first asked for (the baseline asks for few).
+  std::unordered_set<uint64_t> live;
+  for (const auto& c : clusters) live.insert(c.id);
+  for (auto it = cache->begin(); it != cache->end();)
+    it = live.count(it->first) ? std::next(it) : cache->erase(it);
+  auto viewpointsOf = [&](const planning::FrontierCluster& c) -> const auto& {
+    auto found = cache->find(c.id);
+    if (found != cache->end()) return found->second;
     planning::ViewpointOptions o = s.viewpoints;
-    o.robot_m = robot_m;
     o.heights_m = heightsFor(s, c);
-    o.top_k = top_k;
+    o.top_k = int(s.viewpoints.radii_m.size()) * s.viewpoints.angles;
     const auto t0 = Clock::now();
-    std::vector<planning::Viewpoint> v = planning::clusterViewpoints(map, c, o);
+    auto& v = (*cache)[c.id] = planning::clusterViewpoints(map, c, o);
     *gain_ms += msSince(t0);
-    // A scan again from a pose already scanned from sees the same cells: its gain (cells the
-    // sensor cannot resolve from there, e.g. left in the unknown band) is not to be had.
-    const double same_m = 0.5 * map.resolution();
-    auto repeated = [&](const planning::Viewpoint& p) {
-      for (const Eigen::Vector4d& q : scanned)
-        if ((q.head<3>() - p.position_m).norm() < same_m && std::abs(q.w() - p.yaw_rad) < 1e-6)
-          return true;
-      return false;
-    };
-    v.erase(std::remove_if(v.begin(), v.end(),
-                           [&](const planning::Viewpoint& p) {
-                             return p.gain_bits < limits.min_gain_bits || repeated(p);
-                           }),
-            v.end());
+    return v;
+  };
+
+  // This step's candidates: distance and gain per metre from the robot (as clusterViewpoints
+  // ranks them with a robot position), without poses already scanned from: a scan again from
+  // there sees the same cells, so its gain (cells the sensor cannot resolve from there, e.g.
+  // left in the unknown band) is not to be had.
+  const double same_m = 0.5 * map.resolution();
+  auto repeated = [&](const planning::Viewpoint& p) {
+    for (const Eigen::Vector4d& q : scanned)
+      if ((q.head<3>() - p.position_m).norm() < same_m && std::abs(q.w() - p.yaw_rad) < 1e-6)
+        return true;
+    return false;
+  };
+  auto candidatesOf = [&](const planning::FrontierCluster& c) {
+    std::vector<planning::Viewpoint> v;
+    for (planning::Viewpoint p : viewpointsOf(c)) {
+      if (p.gain_bits < limits.min_gain_bits || repeated(p)) continue;
+      p.distance_m = (p.position_m - robot_m).norm();
+      p.score = p.gain_bits / std::max(p.distance_m, map.resolution());
+      v.push_back(p);
+    }
     choice.viewpoints += v.size();
     return v;
   };
   auto free = [&](const planning::Viewpoint& v) {
-    const auto t0 = Clock::now();
+    const auto t1 = Clock::now();
     const bool ok = pathFree(map, robot, robot_m, v.position_m, collision);
-    choice.path_ms += msSince(t0);
+    choice.path_ms += msSince(t1);
     if (!ok) ++choice.rejected;
     return ok;
   };
@@ -106,7 +127,7 @@ std::optional<Choice> choose(const Map& map, const Scenario& s, Strategy strateg
   if (strategy == Strategy::kGainPerMetre) {
     std::vector<std::pair<planning::Viewpoint, uint64_t>> all;  // viewpoint, cluster id
     for (const auto& c : clusters)
-      for (const auto& v : viewpointsOf(c, s.viewpoints.top_k)) all.emplace_back(v, c.id);
+      for (const auto& v : candidatesOf(c)) all.emplace_back(v, c.id);
     std::stable_sort(all.begin(), all.end(),
                      [](const auto& a, const auto& b) { return a.first.score > b.first.score; });
     for (const auto& [v, id] : all) {
@@ -125,9 +146,8 @@ std::optional<Choice> choose(const Map& map, const Scenario& s, Strategy strateg
     return (clusters[a].centroid_m - robot_m).squaredNorm() <
            (clusters[b].centroid_m - robot_m).squaredNorm();
   });
-  const int every = int(s.viewpoints.radii_m.size()) * s.viewpoints.angles;
   for (size_t i : order) {
-    auto v = viewpointsOf(clusters[i], every);
+    auto v = candidatesOf(clusters[i]);
     std::stable_sort(v.begin(), v.end(),
                      [](const planning::Viewpoint& a, const planning::Viewpoint& b) {
                        return a.distance_m < b.distance_m;
@@ -192,6 +212,7 @@ ExploreRun explore(const Scenario& scenario, const geometry::MeshBvh& scene,
   std::vector<Eigen::Vector4d> scanned;  // x, y, z, yaw of every scan so far
   std::unordered_set<uint64_t> unexplorable;
   uint64_t target_cluster = 0;
+  ViewpointCache cache;
   StepRecord rec;
   rec.position_m = scenario.start_m;
   rec.yaw_rad = scenario.start_yaw_rad;
@@ -240,8 +261,8 @@ ExploreRun explore(const Scenario& scenario, const geometry::MeshBvh& scene,
                                   }),
                    clusters.end());
     rec.unexplorable = rec.clusters - clusters.size();
-    const std::optional<Choice> choice =
-        choose(map, scenario, strategy, clusters, last.position_m, limits, scanned, &rec.gain_ms);
+    const std::optional<Choice> choice = choose(map, scenario, strategy, clusters, last.position_m,
+                                                limits, scanned, &cache, &rec.gain_ms);
     if (!choice) {
       run.stop_reason = "no viewpoint with gain";
       run.final_frontier_cells = rec.frontier_cells;

@@ -2,14 +2,21 @@
 // viewpoints -> move the sensor to the chosen viewpoint along a straight line -> simulate a scan
 // there, integrate it -> repeat, until no viewpoint with gain is left or a budget runs out.
 //
-// Strategies. kGainPerMetre: every cluster's best viewpoints (expected entropy reduction per
-// metre of straight-line distance from the sensor), the best one overall. kNearestFrontier (the
-// baseline): the cluster whose centroid is nearest, the nearest of its viewpoints with gain,
-// whatever the gain. Both skip a viewpoint whose straight path collides (planning::checkPath,
-// a sphere of the robot's radius against the known occupied cells; unknown cells are not
-// obstacles on the path, they are around the viewpoint itself, which clusterViewpoints keeps
-// clear of occupied and unknown cells). The first robot_radius_m of the path is not checked
-// (the sensor is already there; a later scan may have put an occupied cell near it).
+// Viewpoints. Each cluster's candidates (planning::clusterViewpoints: rings around it, clear of
+// occupied and unknown cells, every candidate with gain) are computed when the cluster appears
+// (a new id) and kept while its cells are unchanged, as FUEL updates only the frontiers a scan
+// changed; a kept gain can be stale where a scan observed cells along its rays without changing
+// the cluster's cells. Each step, the candidates are ranked from the sensor's position.
+// Strategies. kGainPerMetre: the candidate of any cluster with the highest gain per metre of
+// straight-line distance (gain / max(distance, voxel), as clusterViewpoints ranks with a robot
+// position). kNearestFrontier (the baseline): the cluster whose centroid is nearest, the nearest
+// of its candidates with gain, whatever the gain.
+// Both skip a candidate whose straight path collides (planning::checkPath, a sphere of the
+// robot's radius against the known occupied cells; unknown cells do not block the path, the
+// viewpoint itself is clear of them); the first robot_radius_m of the path is not checked (the
+// sensor is already there; a later scan may have put an occupied cell near it). A pose already
+// scanned from is not chosen again, and a cluster that the last move went for and whose cells its
+// scan left unchanged is left out (unexplorable from its viewpoints) while those cells stay so.
 #pragma once
 
 #include <Eigen/Core>
