@@ -7,7 +7,7 @@
 #   writes OUT_DIR/explore_SCENE.png, .csv (per step) and .json (summary). With
 #   EXPLORE_PLOT_ONLY=1 an existing OUT_DIR/explore_SCENE.csv is plotted again without a run.
 set -euo pipefail
-usage="usage: bash scripts/explore_plots.sh EXPLORE_BINARY [OUT_DIR] [STEPS]"
+usage="usage: bash scripts/explore_plots.sh EXPLORE_BINARY [OUT_DIR] [STEPS] [SCENE...]"
 [ $# -ge 1 ] || { echo "$usage" >&2; exit 2; }
 bin="$1" out="${2:-docs}" steps="${3:-40}"
 shift $(($# < 3 ? $# : 3))
@@ -19,7 +19,7 @@ data="$(mktemp -d)"
 trap 'rm -rf "$data"' EXIT
 for scene in $scenes; do
   if [ "${EXPLORE_PLOT_ONLY:-0}" != 1 ] || [ ! -f "$out/explore_$scene.csv" ]; then
-    "$bin" --scenario "$scene" --steps "$steps" --csv "$out/explore_$scene.csv" \
+    "$bin" --scenario "$scene" --steps "$steps" --verbose --csv "$out/explore_$scene.csv" \
       --json "$out/explore_$scene.json"
   fi
   # One file per strategy: "step path_m explored_percent".
