@@ -61,7 +61,6 @@ Scenario roomScenario() {
   s.viewpoints.radii_m = {0.8, 1.5};
   s.viewpoints.angles = 6;
   s.viewpoints.clearance_m = 0.3;
-  s.viewpoints.top_k = 2;
   s.viewpoints.sensor.columns = 16;
   s.viewpoints.sensor.rows = 12;
   s.viewpoints.sensor.horizontal_fov_rad = 70.0 * M_PI / 180.0;

@@ -69,9 +69,8 @@ Scenario pipesScenario(const std::string& scenes_dir) {
   s.clusters.max_extent_m = 4.0;
   s.viewpoints.radii_m = {1.5, 3.0};
   s.viewpoints.angles = 8;
-  s.viewpoints.heights_m = {0.0};
+  s.viewpoints.heights_m = {0.0};  // replaced per cluster
   s.viewpoints.clearance_m = 0.3;
-  s.viewpoints.top_k = 3;
   s.viewpoints.sensor.kind = planning::GainSensor::Kind::kPinhole;
   // A quarter of fragg_map frontiers' default rays: the gains of every cluster's candidates
   // are computed at every step.
@@ -110,9 +109,8 @@ Scenario campusScenario(const std::string& scenes_dir) {
   s.clusters.max_extent_m = 6.0;
   s.viewpoints.radii_m = {2.0, 5.0};
   s.viewpoints.angles = 8;
-  s.viewpoints.heights_m = {0.0};  // replaced per cluster (ground robot)
+  s.viewpoints.heights_m = {0.0};  // replaced per cluster
   s.viewpoints.clearance_m = 0.5;
-  s.viewpoints.top_k = 3;
   s.viewpoints.sensor.kind = planning::GainSensor::Kind::kLidar;
   s.viewpoints.sensor.columns = 60;
   s.viewpoints.sensor.rows = 12;

@@ -46,7 +46,9 @@ struct Scenario {
   /// known occupied cells).
   double robot_radius_m = 0.2;
   planning::ClusterOptions clusters;
-  planning::ViewpointOptions viewpoints;  ///< top_k, radii, clearance, gain sensor; robot_m unset
+  /// Rings (radii, angles), clearance and gain sensor of the candidates; the explorer sets the
+  /// heights per cluster and keeps every candidate (top_k ignored); robot_m must stay unset.
+  planning::ViewpointOptions viewpoints;
 
   /// Throws InvalidArgument naming the bad field (also checks the sensor and viewpoint options,
   /// a start pose outside the box, and an empty scene).
