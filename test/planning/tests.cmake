@@ -48,3 +48,16 @@ if(TARGET cli_frontiers_test)
   target_compile_definitions(cli_frontiers_test PRIVATE FRAGG_CLI_PATH="$<TARGET_FILE:fragg_map_cli>")
   target_include_directories(cli_frontiers_test PRIVATE ${CMAKE_CURRENT_LIST_DIR}/../interop)
 endif()
+
+# fragg_map_explore's loop in a small room (explored volume grows, deterministic CSV, clear
+# viewpoints, reference cells against brute force) and bad arguments of the executable.
+fragg_add_test(fragg_explore_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/explore_test.cpp
+  LIBS fragg_map_explore_lib
+  LABELS planning)
+if(TARGET fragg_explore_test)
+  add_dependencies(fragg_explore_test fragg_map_explore)
+  target_compile_definitions(fragg_explore_test PRIVATE
+    FRAGG_CLI_PATH="$<TARGET_FILE:fragg_map_explore>")
+  target_include_directories(fragg_explore_test PRIVATE ${CMAKE_CURRENT_LIST_DIR}/../interop)
+endif()
