@@ -9,13 +9,18 @@ export PATH=/usr/local/cuda/bin:/usr/sbin:/usr/bin:/sbin:/bin
 # Loopback-only ROS networking, line-buffered ROS logs (rostests, later).
 export ROS_MASTER_URI=http://127.0.0.1:11311 ROS_IP=127.0.0.1 ROSCONSOLE_STDOUT_LINE_BUFFERED=1
 
-FRAGG_WS="${FRAGG_WS:-$FRAGG_REPO/ws}"
+# The catkin workspace lies beside the checkout, never inside it: a workspace inside the package
+# with its link back makes rospack and roslaunch walk a loop ("multiple files named
+# [fragg_map.launch]"). Default: <checkout>_ws next to it (e.g. ~/fragg_map -> ~/fragg_map_ws).
+fragg_default_ws() { printf '%s_ws\n' "$FRAGG_REPO"; }
+FRAGG_WS="${FRAGG_WS:-$(fragg_default_ws)}"
 FRAGG_JOBS="${FRAGG_JOBS:-2}"
 FRAGG_DEPS=1
 
 fragg_usage_common() {
   cat <<EOF
-  --ws DIR      catkin workspace (default: ws/ under the repository root; env FRAGG_WS)
+  --ws DIR      catkin workspace, outside the checkout (default: $(fragg_default_ws);
+                env FRAGG_WS)
   --jobs N      parallel compile jobs (default: 2; env FRAGG_JOBS)
   --no-deps     do not check or install the Debian packages (scripts/install_deps.sh)
 EOF
@@ -39,6 +44,16 @@ fragg_parse_common() {
   esac
   mkdir -p "$FRAGG_WS"
   FRAGG_WS="$(cd "$FRAGG_WS" && pwd -P)"
+  case "$FRAGG_WS/" in
+    "$FRAGG_REPO"/*)
+      echo "$(basename "$0"): the workspace $FRAGG_WS lies inside the package $FRAGG_REPO;" \
+        "rospack and roslaunch would find every file many times: use a --ws outside it" >&2
+      exit 2 ;;
+  esac
+  if [ -L "$FRAGG_REPO/ws/src/fragg_map" ]; then
+    echo "$(basename "$0"): warning: $FRAGG_REPO/ws is an old workspace inside the package" \
+      "(roslaunch fragg_map X.launch fails on its copies); remove it: rm -rf $FRAGG_REPO/ws" >&2
+  fi
 }
 
 fragg_step() { printf '\n==== %s ====\n' "$*"; }

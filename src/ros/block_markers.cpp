@@ -69,9 +69,17 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
   m.colors.reserve(cells.count());
   // Colours depend on the height only: one per z layer of the block.
   std_msgs::ColorRGBA layer_color[fragg::kBlockSize];
-  for (int z = 0; z < fragg::kBlockSize; ++z)
-    layer_color[z] = heightColor((key.z * fragg::kBlockSize + z + 0.5) * res_m, style.color_min_z_m,
-                                 style.color_max_z_m, style.alpha);
+  for (int z = 0; z < fragg::kBlockSize; ++z) {
+    if (style.height_colors) {
+      layer_color[z] = heightColor((key.z * fragg::kBlockSize + z + 0.5) * res_m,
+                                   style.color_min_z_m, style.color_max_z_m, style.alpha);
+    } else {
+      layer_color[z].r = style.flat_rgb[0];
+      layer_color[z].g = style.flat_rgb[1];
+      layer_color[z].b = style.flat_rgb[2];
+      layer_color[z].a = style.alpha;
+    }
+  }
   for (int c = 0; c < fragg::kCellsPerBlock; ++c) {
     if (!cells.test(c)) continue;
     const fragg::VoxelKey v = fragg::voxelKeyOf(key, c);

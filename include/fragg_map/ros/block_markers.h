@@ -24,6 +24,9 @@ struct MarkerStyle {
   double color_min_z_m = -1.0;                           ///< bottom of the height colour ramp
   double color_max_z_m = 4.0;                            ///< top of the height colour ramp
   float alpha = 1.0f;
+  /// false (octomap_server's height_map false): every cell in `flat_rgb` (alpha above).
+  bool height_colors = true;
+  float flat_rgb[3] = {0.0f, 0.0f, 1.0f};
 };
 
 /// Which cells of a block are drawn (bit i: cell index i).

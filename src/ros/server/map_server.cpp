@@ -6,11 +6,15 @@
 #include <string>
 
 #include "fragg_map/log.h"
+#include "octomap_compat_notes.h"
 
 namespace fragg::ros {
 
-MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh)
+MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
+                     const std::string& map_file_arg)
     : params_(readParameters(private_nh)), tf_listener_(tf_buffer_, nh) {
+  if (!map_file_arg.empty()) params_.octomap.map_file = map_file_arg;
+  logOctomapCompatNotes(params_);
   fragg::setLogSink([](fragg::LogLevel level, const std::string& line) {
     if (level == fragg::LogLevel::kWarning)
       ROS_WARN("fragg_map: %s", line.c_str());
@@ -22,6 +26,9 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh)
   services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_, [this] {
     publishers_->publishFull(::ros::Time::now());
   });
+  octomap_services_ = std::make_unique<OctomapCompatServices>(private_nh, services_.get());
+  if (!params_.octomap.map_file.empty())  // throws (the node does not start) when unreadable
+    ROS_INFO("fragg_map: map_file: %s", services_->loadMap(params_.octomap.map_file).c_str());
   auto publish_changed = [this] {
     try {
       publishers_->publishAfterCorrection(::ros::Time::now());
