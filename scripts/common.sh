@@ -15,6 +15,9 @@ export ROS_MASTER_URI=http://127.0.0.1:11311 ROS_IP=127.0.0.1 ROSCONSOLE_STDOUT_
 fragg_default_ws() { printf '%s_ws\n' "$FRAGG_REPO"; }
 FRAGG_WS="${FRAGG_WS:-$(fragg_default_ws)}"
 FRAGG_JOBS="${FRAGG_JOBS:-2}"
+# CUDA kernels: "all" (every supported architecture: build.sh, test.sh, CI) or "machine" (the
+# demo scripts: only the GPU present, native, and no CUDA at all without a GPU).
+FRAGG_CUDA="${FRAGG_CUDA:-all}"
 FRAGG_DEPS=1
 
 fragg_usage_common() {
@@ -85,11 +88,39 @@ fragg_build_ws() {
   fragg_catkin_make
 }
 
+# The CMake arguments for FRAGG_CUDA (set once by fragg_cuda_choice).
+FRAGG_CUDA_ARGS=()
+FRAGG_CUDA_NOTE=""
+fragg_cuda_choice() {
+  [ -n "$FRAGG_CUDA_NOTE" ] && return 0
+  case "$FRAGG_CUDA" in
+    all)
+      FRAGG_CUDA_ARGS=(-DFRAGG_WITH_CUDA=ON -DFRAGG_CUDA_NATIVE=OFF)
+      FRAGG_CUDA_NOTE="CUDA: kernels for every supported architecture (when nvcc is found)" ;;
+    machine)
+      local gpu=""
+      if command -v nvidia-smi >/dev/null 2>&1; then
+        gpu="$(nvidia-smi -L 2>/dev/null | head -n 1 || true)"
+      fi
+      if [ -n "$gpu" ]; then
+        FRAGG_CUDA_ARGS=(-DFRAGG_WITH_CUDA=ON -DFRAGG_CUDA_NATIVE=ON)
+        FRAGG_CUDA_NOTE="CUDA: kernels for this machine's GPU only (native): $gpu"
+      else
+        FRAGG_CUDA_ARGS=(-DFRAGG_WITH_CUDA=OFF -DFRAGG_CUDA_NATIVE=OFF)
+        FRAGG_CUDA_NOTE="CUDA: no GPU found (nvidia-smi): building without CUDA, CPU backend only"
+      fi ;;
+    *) echo "FRAGG_CUDA must be all or machine, not '$FRAGG_CUDA'" >&2; return 2 ;;
+  esac
+  echo "$FRAGG_CUDA_NOTE"
+}
+
 # catkin_make in $FRAGG_WS with the job count and the CMake arguments every run must repeat
 # (a --force-cmake reconfigure without them would fall back to catkin's defaults).
 fragg_catkin_make() {
+  fragg_cuda_choice
   (cd "$FRAGG_WS" && catkin_make -j"$FRAGG_JOBS" "$@" -DCMAKE_BUILD_TYPE=Release \
-    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3)
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+    "${FRAGG_CUDA_ARGS[@]}")
 }
 
 # Seconds since the script started, as "1m23s".

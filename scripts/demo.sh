@@ -7,6 +7,8 @@
 # Installs the missing Debian packages and builds the catkin workspace (<checkout>_ws) first.
 # Outputs go to out/demo/ under the repository root.
 set -euo pipefail
+# First-run speed: CUDA kernels for the GPU present only, none without a GPU (common.sh).
+FRAGG_CUDA="${FRAGG_CUDA:-machine}"
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 fragg_usage() {
