@@ -123,6 +123,30 @@ fragg_catkin_make() {
     "${FRAGG_CUDA_ARGS[@]}")
 }
 
+# CI (test.sh): without an installed octomap_msgs (Debian has none), builds the messages-only
+# stand-in of test/octomap_msgs_standin in a workspace of its own, <ws>/octomap_msgs_standin,
+# and sources it, so that fragg_map is built and tested with its octomap_msgs outputs.
+fragg_octomap_msgs_standin() {
+  local p
+  for p in /usr ${CMAKE_PREFIX_PATH:+${CMAKE_PREFIX_PATH//:/ }}; do
+    if [ -e "$p/share/octomap_msgs/cmake/octomap_msgsConfig.cmake" ] &&
+      [[ "$p" != "$FRAGG_WS/octomap_msgs_standin/"* ]]; then
+      echo "octomap_msgs found in $p: no stand-in needed"
+      return 0
+    fi
+  done
+  local under="$FRAGG_WS/octomap_msgs_standin"
+  fragg_step "octomap_msgs stand-in (messages only) in $under"
+  mkdir -p "$under/src"
+  ln -sfn "$FRAGG_REPO/test/octomap_msgs_standin/octomap_msgs" "$under/src/octomap_msgs"
+  (cd "$under" && catkin_make -j"$FRAGG_JOBS" -DCMAKE_BUILD_TYPE=Release \
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3) || return 1
+  set +u
+  # shellcheck disable=SC1091
+  source "$under/devel/setup.bash"
+  set -u
+}
+
 # Seconds since the script started, as "1m23s".
 fragg_elapsed() {
   local s=$SECONDS

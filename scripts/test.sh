@@ -18,7 +18,7 @@ failed=0
 
 fragg_install_deps
 
-if fragg_build_ws; then
+if fragg_octomap_msgs_standin && fragg_build_ws; then
   build="OK"
   fragg_step "tests (catkin_make run_tests)"
   # Results of earlier runs would hide missing ones: start from an empty folder.

@@ -18,6 +18,7 @@
 #include "map_publishers.h"
 #include "map_services.h"
 #include "octomap_compat_services.h"
+#include "octomap_outputs.h"
 #include "path_corrector.h"
 #include "server_stats.h"
 #include "shared_map.h"
@@ -43,6 +44,7 @@ class MapServer {
   std::unique_ptr<MapPublishers> publishers_;
   std::unique_ptr<MapServices> services_;
   std::unique_ptr<OctomapCompatServices> octomap_services_;
+  std::unique_ptr<OctomapOutputs> octomap_outputs_;  // only with octomap_msgs
   std::unique_ptr<CorrectionService> correction_service_;
   std::unique_ptr<SubmapServices> submap_services_;
   std::unique_ptr<CollisionService> collision_service_;

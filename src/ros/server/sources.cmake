@@ -15,4 +15,6 @@ set(FRAGG_ROS_SERVER_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/map_server.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_server_nodelet.cpp
 )
+# With octomap_msgs (and liboctomap) only: octomap_binary / octomap_full.
+set(FRAGG_ROS_OCTOMAP_MSGS_SOURCES ${CMAKE_CURRENT_LIST_DIR}/octomap_outputs.cpp)
 set(FRAGG_ROS_SERVER_NODE_SOURCES ${CMAKE_CURRENT_LIST_DIR}/server_node.cpp)
