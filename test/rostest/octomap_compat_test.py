@@ -276,17 +276,43 @@ class OctomapCompatTest(unittest.TestCase):
         self.assertIn("resolutoin (did you mean resolution?)", lines[0])
 
     def test_11_octomap_msgs_outputs_or_the_reason(self):
-        """With octomap_msgs at build time: octomap_binary / octomap_full topics and services;
-        without: the node says why, once."""
+        """With octomap_msgs at build time: octomap_binary / octomap_full topics and GetOctomap
+        services, the binary data equal to the data of the .bt ~save_map writes; without: the
+        node says why, once."""
         topics = {name for name, _ in rospy.get_published_topics()}
         proc, log = self.start_server("octomap_msgs_check")
         out = self.stop(proc, log)
-        if "/octomap_binary" in topics:
-            self.assertIn("/octomap_full", topics)
-            self.assertNotIn("no octomap_binary", out)
-        else:
+        try:
+            from octomap_msgs.msg import Octomap
+            from octomap_msgs.srv import GetOctomap
+        except ImportError:
+            Octomap = None
+        if Octomap is None:
+            self.assertNotIn("/octomap_binary", topics)
             self.assertEqual(out.count("no octomap_binary / octomap_full"), 1, out)
-
+            return
+        self.assertNotIn("no octomap_binary", out)
+        self.assertIn("/octomap_binary", topics)
+        self.assertIn("/octomap_full", topics)
+        # The map of the main server (loaded from before_clear.bt in test_08).
+        bt = os.path.join(self.tmp, "now.bt")
+        self.assertTrue(rospy.ServiceProxy(NS + "save_map", SaveMap)(bt).success)
+        with open(bt, "rb") as f:
+            file_data = f.read().split(b"\ndata\n", 1)[1]
+        got = []
+        sub = rospy.Subscriber("/octomap_binary", Octomap, got.append)
+        wait_for(lambda: got, 10, "octomap_binary")
+        sub.unregister()
+        for msg in (got[0], rospy.ServiceProxy("/octomap_binary", GetOctomap)().map):
+            self.assertTrue(msg.binary)
+            self.assertEqual(msg.id, "OcTree")
+            self.assertAlmostEqual(msg.resolution, RES)
+            self.assertEqual(msg.header.frame_id, "map")
+            self.assertEqual(bytes(b & 0xFF for b in msg.data), file_data)
+        full = rospy.ServiceProxy("/octomap_full", GetOctomap)().map
+        self.assertFalse(full.binary)
+        self.assertEqual(full.id, "OcTree")
+        self.assertGreater(len(full.data), len(file_data))
 
 if __name__ == "__main__":
     rostest.rosrun("fragg_map", "octomap_compat", OctomapCompatTest)

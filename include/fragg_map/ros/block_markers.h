@@ -27,6 +27,10 @@ struct MarkerStyle {
   /// false (octomap_server's height_map false): every cell in `flat_rgb` (alpha above).
   bool height_colors = true;
   float flat_rgb[3] = {0.0f, 0.0f, 1.0f};
+  /// filter_speckles: occupied cells without an occupied neighbour are not drawn (decided when
+  /// their block is drawn: a neighbour appearing in another block shows them at their block's
+  /// next change or full republish).
+  bool hide_speckles = false;
 };
 
 /// Which cells of a block are drawn (bit i: cell index i).

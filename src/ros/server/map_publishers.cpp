@@ -27,6 +27,7 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
     topic->style.color_max_z_m = params_.color_max_z_m;
   }
   occupied_markers_.style.height_colors = params_.octomap.height_map;
+  occupied_markers_.style.hide_speckles = params_.octomap.filter_speckles;
   occupied_markers_.style.alpha = params_.octomap.color_rgba[3];
   for (int i = 0; i < 3; ++i) occupied_markers_.style.flat_rgb[i] = params_.octomap.color_rgba[i];
   free_markers_.style.ns = "free";
@@ -70,9 +71,10 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
     const ::ros::Time now = ::ros::Time::now();
     if (pub == &projected_map_pub_)
       sub.publish(projectedMap(state->map, params_.occupancy_min_z_m, params_.occupancy_max_z_m,
-                               params_.frame_id, now));
+                               params_.frame_id, now, params_.octomap.filter_speckles));
     else
-      sub.publish(occupiedCloud(state->map, params_.frame_id, now));
+      sub.publish(
+          occupiedCloud(state->map, params_.frame_id, now, params_.octomap.filter_speckles));
   };
 }
 
@@ -102,13 +104,15 @@ void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
                                 bool full_markers) {
   publishMarkerTopics(map, stamp, full_markers);
   if (wanted(occupied_cloud_pub_) || wanted(centers_pub_)) {
-    const sensor_msgs::PointCloud2 cloud = occupiedCloud(map, params_.frame_id, stamp);
+    const sensor_msgs::PointCloud2 cloud =
+        occupiedCloud(map, params_.frame_id, stamp, params_.octomap.filter_speckles);
     if (wanted(occupied_cloud_pub_)) occupied_cloud_pub_.publish(cloud);
     if (wanted(centers_pub_)) centers_pub_.publish(cloud);
   }
   if (wanted(projected_map_pub_))
     projected_map_pub_.publish(projectedMap(map, params_.occupancy_min_z_m,
-                                            params_.occupancy_max_z_m, params_.frame_id, stamp));
+                                            params_.occupancy_max_z_m, params_.frame_id, stamp,
+                                            params_.octomap.filter_speckles));
   if (wanted(stats_pub_)) stats_pub_.publish(stats_->toMsg(map, params_.frame_id, stamp));
 }
 

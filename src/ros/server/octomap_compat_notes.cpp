@@ -12,10 +12,6 @@ void logOctomapCompatNotes(const ServerParams& params) {
         "fragg_map: filter_ground is not implemented yet: ground points are inserted as "
         "obstacles like every other point (base_frame_id '%s' is unused)",
         o.base_frame_id.c_str());
-  if (o.filter_speckles)
-    ROS_WARN(
-        "fragg_map: filter_speckles is not implemented yet: single occupied cells are "
-        "published");
   if (o.colored_map)
     ROS_WARN(
         "fragg_map: colored_map: the map's cells carry no colour; markers are coloured by "

@@ -1,5 +1,6 @@
 // What an octomap_server user should know at start-up: the octomap_server parameters set here
-// that fragg_map does not honour (yet), and why the octomap_msgs outputs are absent.
+// that fragg_map does not honour (filter_ground, colored_map), and why the octomap_msgs outputs
+// are absent.
 #pragma once
 
 #include "fragg_map/ros/server_params.h"
