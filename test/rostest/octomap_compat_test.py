@@ -229,17 +229,21 @@ class OctomapCompatTest(unittest.TestCase):
 
     # ---- start-up map and parameter names, in servers started here ----
     def start_server(self, name, args=(), params=None):
+        """A server in a namespace of its own (its public topics and services, octomap_binary
+        for one, must not replace the main server's); its private namespace is
+        /NAME/NAME/."""
+        private = "/%s/%s/" % (name, name)
         if params:
-            rosparam.upload_params("/" + name, params)
+            rosparam.upload_params(private, params)
         exe = find_in_workspaces(["libexec"], project="fragg_map", path="fragg_map_server",
                                  first_match_only=True)
         self.assertTrue(exe, "fragg_map_server is not in the workspace")
         log = open(os.path.join(self.tmp, name + ".log"), "w+")
         env = dict(os.environ, ROSCONSOLE_STDOUT_LINE_BUFFERED="1")
-        proc = subprocess.Popen([exe[0], "__name:=" + name, "_backend:=cpu"] + list(args),
-                                stdout=log, stderr=subprocess.STDOUT, env=env)
+        proc = subprocess.Popen([exe[0], "__ns:=/" + name, "__name:=" + name, "_backend:=cpu"] +
+                                list(args), stdout=log, stderr=subprocess.STDOUT, env=env)
         self.procs.append(proc)
-        rospy.wait_for_service("/" + name + "/get_stats", timeout=60)
+        rospy.wait_for_service(private + "get_stats", timeout=60)
         return proc, log
 
     def stop(self, proc, log):
@@ -252,12 +256,12 @@ class OctomapCompatTest(unittest.TestCase):
         bt = os.path.join(self.tmp, "before_clear.bt")
         fgm = os.path.join(self.tmp, "before_clear.fgm")
         proc, log = self.start_server("by_argument", [bt], {"resolution": RES})
-        known = self.stats("/by_argument/").known_voxels
+        known = self.stats("/by_argument/by_argument/").known_voxels
         self.stop(proc, log)
         self.assertGreater(known, 0)
         proc, log = self.start_server("by_parameter", [],
                                       {"resolution": RES, "map_file": fgm})
-        s = self.stats("/by_parameter/")
+        s = self.stats("/by_parameter/by_parameter/")
         self.stop(proc, log)
         self.assertEqual((s.known_voxels, s.scans), (known, 1))
 
