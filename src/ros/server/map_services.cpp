@@ -85,6 +85,7 @@ std::string MapServices::loadMap(const std::string& path) {
     message = "loaded " + std::to_string(state->map.blockCount()) + " blocks and " +
               std::to_string(state->map.scanStore().size()) + " kept scans from " + path;
   }
+  releaseFreeHeap();  // the replaced map's memory
   if (on_map_replaced_) on_map_replaced_();
   return message;
 }
