@@ -45,14 +45,14 @@ fragg_parse_common() {
   case "$FRAGG_JOBS" in
     ''|*[!0-9]*|0) echo "$(basename "$0"): --jobs must be a positive integer" >&2; exit 2 ;;
   esac
-  mkdir -p "$FRAGG_WS"
-  FRAGG_WS="$(cd "$FRAGG_WS" && pwd -P)"
+  FRAGG_WS="$(realpath -m "$FRAGG_WS")"  # checked before anything is created
   case "$FRAGG_WS/" in
     "$FRAGG_REPO"/*)
       echo "$(basename "$0"): the workspace $FRAGG_WS lies inside the package $FRAGG_REPO;" \
         "rospack and roslaunch would find every file many times: use a --ws outside it" >&2
       exit 2 ;;
   esac
+  mkdir -p "$FRAGG_WS"
   if [ -L "$FRAGG_REPO/ws/src/fragg_map" ]; then
     echo "$(basename "$0"): warning: $FRAGG_REPO/ws is an old workspace inside the package" \
       "(roslaunch fragg_map X.launch fails on its copies); remove it: rm -rf $FRAGG_REPO/ws" >&2
