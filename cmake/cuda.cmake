@@ -1,6 +1,8 @@
 # The CUDA backend is built when a CUDA compiler is found (nvcc need not have a GPU beside it:
 # CI compiles the kernels without one). FRAGG_WITH_CUDA=OFF leaves it out.
 option(FRAGG_WITH_CUDA "Build the CUDA backend when a CUDA compiler is found" ON)
+# The demo's first run: kernels for the GPU of this machine only (CMake >= 3.24; needs a GPU).
+option(FRAGG_CUDA_NATIVE "Compile the CUDA kernels for this machine's GPU only (native)" OFF)
 set(FRAGG_HAVE_CUDA OFF)
 if(FRAGG_WITH_CUDA)
   if(NOT CMAKE_CUDA_COMPILER AND NOT DEFINED ENV{CUDACXX} AND EXISTS /usr/local/cuda/bin/nvcc)
@@ -11,7 +13,9 @@ if(FRAGG_WITH_CUDA)
   if(CMAKE_CUDA_COMPILER)
     # Turing to Hopper as machine code, plus PTX for newer GPUs. Override with
     # -DCMAKE_CUDA_ARCHITECTURES=90 to build faster for one GPU.
-    if(NOT DEFINED CMAKE_CUDA_ARCHITECTURES)
+    if(FRAGG_CUDA_NATIVE)
+      set(CMAKE_CUDA_ARCHITECTURES native)
+    elseif(NOT DEFINED CMAKE_CUDA_ARCHITECTURES OR CMAKE_CUDA_ARCHITECTURES STREQUAL "native")
       set(CMAKE_CUDA_ARCHITECTURES "75-real;80-real;86-real;87-real;89-real;90-real;90-virtual")
     endif()
     enable_language(CUDA)

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds fragg_map as a catkin package: installs the missing Debian packages, links the
-# repository into a catkin workspace (ws/ by default) and runs catkin_make in Release.
+# repository into a catkin workspace beside it (<checkout>_ws by default) and runs catkin_make
+# in Release.
 # The CLI lands in <ws>/devel/lib/fragg_map/fragg_map.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"

@@ -9,13 +9,21 @@ export PATH=/usr/local/cuda/bin:/usr/sbin:/usr/bin:/sbin:/bin
 # Loopback-only ROS networking, line-buffered ROS logs (rostests, later).
 export ROS_MASTER_URI=http://127.0.0.1:11311 ROS_IP=127.0.0.1 ROSCONSOLE_STDOUT_LINE_BUFFERED=1
 
-FRAGG_WS="${FRAGG_WS:-$FRAGG_REPO/ws}"
+# The catkin workspace lies beside the checkout, never inside it: a workspace inside the package
+# with its link back makes rospack and roslaunch walk a loop ("multiple files named
+# [fragg_map.launch]"). Default: <checkout>_ws next to it (e.g. ~/fragg_map -> ~/fragg_map_ws).
+fragg_default_ws() { printf '%s_ws\n' "$FRAGG_REPO"; }
+FRAGG_WS="${FRAGG_WS:-$(fragg_default_ws)}"
 FRAGG_JOBS="${FRAGG_JOBS:-2}"
+# CUDA kernels: "all" (every supported architecture: build.sh, test.sh, CI) or "machine" (the
+# demo scripts: only the GPU present, native, and no CUDA at all without a GPU).
+FRAGG_CUDA="${FRAGG_CUDA:-all}"
 FRAGG_DEPS=1
 
 fragg_usage_common() {
   cat <<EOF
-  --ws DIR      catkin workspace (default: ws/ under the repository root; env FRAGG_WS)
+  --ws DIR      catkin workspace, outside the checkout (default: $(fragg_default_ws);
+                env FRAGG_WS)
   --jobs N      parallel compile jobs (default: 2; env FRAGG_JOBS)
   --no-deps     do not check or install the Debian packages (scripts/install_deps.sh)
 EOF
@@ -37,8 +45,18 @@ fragg_parse_common() {
   case "$FRAGG_JOBS" in
     ''|*[!0-9]*|0) echo "$(basename "$0"): --jobs must be a positive integer" >&2; exit 2 ;;
   esac
+  FRAGG_WS="$(realpath -m "$FRAGG_WS")"  # checked before anything is created
+  case "$FRAGG_WS/" in
+    "$FRAGG_REPO"/*)
+      echo "$(basename "$0"): the workspace $FRAGG_WS lies inside the package $FRAGG_REPO;" \
+        "rospack and roslaunch would find every file many times: use a --ws outside it" >&2
+      exit 2 ;;
+  esac
   mkdir -p "$FRAGG_WS"
-  FRAGG_WS="$(cd "$FRAGG_WS" && pwd -P)"
+  if [ -L "$FRAGG_REPO/ws/src/fragg_map" ]; then
+    echo "$(basename "$0"): warning: $FRAGG_REPO/ws is an old workspace inside the package" \
+      "(roslaunch fragg_map X.launch fails on its copies); remove it: rm -rf $FRAGG_REPO/ws" >&2
+  fi
 }
 
 fragg_step() { printf '\n==== %s ====\n' "$*"; }
@@ -70,11 +88,63 @@ fragg_build_ws() {
   fragg_catkin_make
 }
 
+# The CMake arguments for FRAGG_CUDA (set once by fragg_cuda_choice).
+FRAGG_CUDA_ARGS=()
+FRAGG_CUDA_NOTE=""
+fragg_cuda_choice() {
+  [ -n "$FRAGG_CUDA_NOTE" ] && return 0
+  case "$FRAGG_CUDA" in
+    all)
+      FRAGG_CUDA_ARGS=(-DFRAGG_WITH_CUDA=ON -DFRAGG_CUDA_NATIVE=OFF)
+      FRAGG_CUDA_NOTE="CUDA: kernels for every supported architecture (when nvcc is found)" ;;
+    machine)
+      local gpu=""
+      if command -v nvidia-smi >/dev/null 2>&1; then
+        gpu="$(nvidia-smi -L 2>/dev/null | head -n 1 || true)"
+      fi
+      if [ -n "$gpu" ]; then
+        FRAGG_CUDA_ARGS=(-DFRAGG_WITH_CUDA=ON -DFRAGG_CUDA_NATIVE=ON)
+        FRAGG_CUDA_NOTE="CUDA: kernels for this machine's GPU only (native): $gpu"
+      else
+        FRAGG_CUDA_ARGS=(-DFRAGG_WITH_CUDA=OFF -DFRAGG_CUDA_NATIVE=OFF)
+        FRAGG_CUDA_NOTE="CUDA: no GPU found (nvidia-smi): building without CUDA, CPU backend only"
+      fi ;;
+    *) echo "FRAGG_CUDA must be all or machine, not '$FRAGG_CUDA'" >&2; return 2 ;;
+  esac
+  echo "$FRAGG_CUDA_NOTE"
+}
+
 # catkin_make in $FRAGG_WS with the job count and the CMake arguments every run must repeat
 # (a --force-cmake reconfigure without them would fall back to catkin's defaults).
 fragg_catkin_make() {
+  fragg_cuda_choice
   (cd "$FRAGG_WS" && catkin_make -j"$FRAGG_JOBS" "$@" -DCMAKE_BUILD_TYPE=Release \
-    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3)
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+    "${FRAGG_CUDA_ARGS[@]}")
+}
+
+# CI (test.sh): without an installed octomap_msgs (Debian has none), builds the messages-only
+# stand-in of test/octomap_msgs_standin in a workspace of its own, <ws>/octomap_msgs_standin,
+# and sources it, so that fragg_map is built and tested with its octomap_msgs outputs.
+fragg_octomap_msgs_standin() {
+  local p
+  for p in /usr ${CMAKE_PREFIX_PATH:+${CMAKE_PREFIX_PATH//:/ }}; do
+    if [ -e "$p/share/octomap_msgs/cmake/octomap_msgsConfig.cmake" ] &&
+      [[ "$p" != "$FRAGG_WS/octomap_msgs_standin/"* ]]; then
+      echo "octomap_msgs found in $p: no stand-in needed"
+      return 0
+    fi
+  done
+  local under="$FRAGG_WS/octomap_msgs_standin"
+  fragg_step "octomap_msgs stand-in (messages only) in $under"
+  mkdir -p "$under/src"
+  ln -sfn "$FRAGG_REPO/test/octomap_msgs_standin/octomap_msgs" "$under/src/octomap_msgs"
+  (cd "$under" && catkin_make -j"$FRAGG_JOBS" -DCMAKE_BUILD_TYPE=Release \
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3) || return 1
+  set +u
+  # shellcheck disable=SC1091
+  source "$under/devel/setup.bash"
+  set -u
 }
 
 # Seconds since the script started, as "1m23s".

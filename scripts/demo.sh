@@ -4,9 +4,11 @@
 # (top-down height image and a horizontal slice) and exports them as OctoMap .bt files; then
 # maps the simulator's smoke workload and scores it against the scene's ground truth; then runs
 # the ROS map server nodelet on the smoke bag (scripts/demo_ros.sh).
-# Installs the missing Debian packages and builds the catkin workspace (ws/) first.
+# Installs the missing Debian packages and builds the catkin workspace (<checkout>_ws) first.
 # Outputs go to out/demo/ under the repository root.
 set -euo pipefail
+# First-run speed: CUDA kernels for the GPU present only, none without a GPU (common.sh).
+FRAGG_CUDA="${FRAGG_CUDA:-machine}"
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 fragg_usage() {

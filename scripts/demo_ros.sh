@@ -6,6 +6,8 @@
 # Usage: bash scripts/demo_ros.sh [--out DIR] [common options]
 # (scripts/demo.sh runs it after building the workspace: --no-deps and the same --ws.)
 set -euo pipefail
+# First-run speed: CUDA kernels for the GPU present only, none without a GPU (common.sh).
+FRAGG_CUDA="${FRAGG_CUDA:-machine}"
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 out="$FRAGG_REPO/out/demo"

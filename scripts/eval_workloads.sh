@@ -32,7 +32,7 @@ while [ $# -gt 0 ]; do
 done
 out="${out:-$workloads/eval}"
 if [ -z "$bin" ]; then
-  if [ -x "$repo/ws/devel/lib/fragg_map/fragg_map" ]; then bin="$repo/ws/devel/lib/fragg_map"
+  if [ -x "${FRAGG_WS:-${repo}_ws}/devel/lib/fragg_map/fragg_map" ]; then bin="${FRAGG_WS:-${repo}_ws}/devel/lib/fragg_map"
   else bin="$repo/build-core/bin"; fi
 fi
 fm="$bin/fragg_map"

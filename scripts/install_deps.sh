@@ -69,6 +69,30 @@ wait_for_apt_lock() {
   echo "install_deps: the lock is free after $((SECONDS - start)) s"
 }
 
+# What the first build will take, scaled from the one measured figure we have: ~11 min at -j2
+# on a fresh 2-core machine without a GPU, CUDA kernels for every architecture included
+# (issue 16). The demo builds no CUDA code on a machine without a GPU, which saves part of it.
+print_build_estimate() {
+  local cores
+  cores="$(nproc 2>/dev/null || echo 2)"
+  [ "$cores" -ge 1 ] 2>/dev/null || cores=2
+  echo "install_deps: next, the first build: about $(((11 * 2 + cores - 1) / cores)) min on" \
+    "$cores core(s) (measured: 11 min on 2 cores with CUDA for every architecture; the demo" \
+    "skips CUDA without a GPU)"
+}
+
+# The packages apt would install for `missing` (dependencies included, no recommends) and
+# their download size, from apt's own plan (needs the package lists).
+print_install_plan() {
+  local count mib
+  count="$(apt-get -s -o Debug::NoLocking=1 install --no-install-recommends "$@" 2>/dev/null |
+    grep -c '^Inst ' || true)"
+  mib="$(apt-get -qq -o Debug::NoLocking=1 install --no-install-recommends --print-uris "$@" \
+    2>/dev/null | awk '{s += $3} END {printf "%.1f", s / 1048576}' || true)"
+  echo "install_deps: apt will install ${count:-?} package(s) (the $# named and their" \
+    "dependencies, no recommends), ${mib:-?} MiB to download"
+}
+
 main() {
   dry_run=0
   for arg in "$@"; do
@@ -92,6 +116,8 @@ main() {
 
   echo "install_deps: missing ${#missing[@]} package(s): ${missing[*]}"
   if [ "$dry_run" -eq 1 ]; then
+    print_install_plan "${missing[@]}"
+    print_build_estimate
     exit 0
   fi
 
@@ -109,6 +135,8 @@ main() {
   # apt's own wait covers a lock taken again between the check and the call.
   lock_timeout=(-o "DPkg::Lock::Timeout=${FRAGG_APT_LOCK_WAIT_S:-600}")
   "${as_root[@]}" apt-get "${lock_timeout[@]}" update
+  print_install_plan "${missing[@]}"
+  print_build_estimate
   echo "install_deps: installing (no recommends): ${missing[*]}"
   "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive \
     apt-get "${lock_timeout[@]}" install -y --no-install-recommends "${missing[@]}"

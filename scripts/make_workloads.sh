@@ -11,7 +11,7 @@
 #                    of a 1,156 m loop through the campus laid out four times (~1.5 GB), and
 #                    scenes/campus_long.obj
 #   MANIFEST.sha256  checksums of every file: a rerun must give the same file
-# Uses the catkin build's fragg_map_sim (ws/, with bag output) when there is one, else builds
+# Uses the catkin build's fragg_map_sim (<checkout>_ws/, with bag output) when there is one, else builds
 # the plain CMake one (build-core/, no ROS: no bags) first.
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
@@ -22,7 +22,7 @@ usage: bash scripts/make_workloads.sh [--out DIR] [--only w1,w2,w3,smoke,w4] [--
   --out DIR    cache folder (default: \$FRAGG_WORKLOADS or ~/.cache/fragg_map/workloads)
   --only LIST  comma-separated subset of w1,w2,w3,smoke,w4 (default: w1,w2,w3,smoke; W4, the
                1.5 GB long drive, only when named)
-  --sim PATH   fragg_map_sim to use (default: ws/devel/lib/fragg_map/fragg_map_sim, else
+  --sim PATH   fragg_map_sim to use (default: <checkout>_ws/devel/lib/fragg_map/fragg_map_sim, else
                build-core/bin/fragg_map_sim, built with plain CMake when missing)
   --jobs N     compile jobs when building (default 2)
 USAGE
@@ -47,8 +47,8 @@ for w in ${only//,/ }; do
 done
 
 if [ -z "$sim" ]; then
-  if [ -x "$repo/ws/devel/lib/fragg_map/fragg_map_sim" ]; then
-    sim="$repo/ws/devel/lib/fragg_map/fragg_map_sim"
+  if [ -x "${FRAGG_WS:-${repo}_ws}/devel/lib/fragg_map/fragg_map_sim" ]; then
+    sim="${FRAGG_WS:-${repo}_ws}/devel/lib/fragg_map/fragg_map_sim"
   else
     sim="$repo/build-core/bin/fragg_map_sim"
     if [ ! -x "$sim" ]; then

@@ -9,6 +9,8 @@
 # Usage: bash scripts/render_rviz.sh [--out docs/rviz.png] [--bag FILE --cloud TOPIC]
 #        [--wait S] [--collision-demo] [common options]
 set -euo pipefail
+# First-run speed: CUDA kernels for the GPU present only, none without a GPU (common.sh).
+FRAGG_CUDA="${FRAGG_CUDA:-machine}"
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 out=""

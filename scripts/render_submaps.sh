@@ -9,7 +9,7 @@
 #   --workloads DIR  workload cache with w1_lidar360 (made with scripts/make_workloads.sh
 #                    --only w1 when missing; default $FRAGG_WORKLOADS or
 #                    ~/.cache/fragg_map/workloads)
-#   --bin DIR        folder with fragg_map (default: ws/devel/lib/fragg_map, else build-core/bin)
+#   --bin DIR        folder with fragg_map (default: <checkout>_ws/devel/lib/fragg_map, else build-core/bin)
 #   --out PNG        default docs/submaps.png
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
@@ -25,7 +25,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 if [ -z "$bin" ]; then
-  if [ -x "$repo/ws/devel/lib/fragg_map/fragg_map" ]; then bin="$repo/ws/devel/lib/fragg_map"
+  if [ -x "${FRAGG_WS:-${repo}_ws}/devel/lib/fragg_map/fragg_map" ]; then bin="${FRAGG_WS:-${repo}_ws}/devel/lib/fragg_map"
   else bin="$repo/build-core/bin"; fi
 fi
 fm="$bin/fragg_map"

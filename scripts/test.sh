@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Runs every test: installs the missing Debian packages, builds the catkin workspace (ws/ by
-# default), runs the gtests with `catkin_make run_tests`, gates on catkin_test_results
+# Runs every test: installs the missing Debian packages, builds the catkin workspace (beside the
+# checkout: <checkout>_ws by default), runs the gtests with `catkin_make run_tests`, gates on catkin_test_results
 # (run_tests itself exits 0 when tests fail) and checks the clang-format of the sources.
 # Exits non-zero when anything fails. CI runs this (.ci/run).
 # Real data is read from ../shared/data/real beside the checkout.
@@ -18,7 +18,7 @@ failed=0
 
 fragg_install_deps
 
-if fragg_build_ws; then
+if fragg_octomap_msgs_standin && fragg_build_ws; then
   build="OK"
   fragg_step "tests (catkin_make run_tests)"
   # Results of earlier runs would hide missing ones: start from an empty folder.

@@ -11,7 +11,7 @@
 #                           [--backend cpu|cuda|auto] [--scans N] [--no-paged] [--keep-maps]
 #   --workloads DIR  workload cache (default: $FRAGG_WORKLOADS or ~/.cache/fragg_map/workloads)
 #   --out DIR        maps, logs and JSON (default: WORKLOADS/w4_runs)
-#   --bin DIR        folder with fragg_map and fragg_map_sim (default: ws/devel/lib/fragg_map,
+#   --bin DIR        folder with fragg_map and fragg_map_sim (default: <checkout>_ws/devel/lib/fragg_map,
 #                    else build-core/bin)
 #   --budget-mb N    paged build's --page-budget-mb (default 512)
 #   --store lmdb|db  page store of the paged build: LMDB (default) or SQLite
@@ -39,7 +39,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 if [ -z "$bin" ]; then
-  if [ -x "$repo/ws/devel/lib/fragg_map/fragg_map" ]; then bin="$repo/ws/devel/lib/fragg_map"
+  if [ -x "${FRAGG_WS:-${repo}_ws}/devel/lib/fragg_map/fragg_map" ]; then bin="${FRAGG_WS:-${repo}_ws}/devel/lib/fragg_map"
   else bin="$repo/build-core/bin"; fi
 fi
 fm="$bin/fragg_map"

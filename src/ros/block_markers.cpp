@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "fragg_map/ros/height_color.h"
+#include "fragg_map/ros/speckles.h"
 
 namespace fragg::ros {
 namespace {
@@ -69,9 +70,17 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
   m.colors.reserve(cells.count());
   // Colours depend on the height only: one per z layer of the block.
   std_msgs::ColorRGBA layer_color[fragg::kBlockSize];
-  for (int z = 0; z < fragg::kBlockSize; ++z)
-    layer_color[z] = heightColor((key.z * fragg::kBlockSize + z + 0.5) * res_m, style.color_min_z_m,
-                                 style.color_max_z_m, style.alpha);
+  for (int z = 0; z < fragg::kBlockSize; ++z) {
+    if (style.height_colors) {
+      layer_color[z] = heightColor((key.z * fragg::kBlockSize + z + 0.5) * res_m,
+                                   style.color_min_z_m, style.color_max_z_m, style.alpha);
+    } else {
+      layer_color[z].r = style.flat_rgb[0];
+      layer_color[z].g = style.flat_rgb[1];
+      layer_color[z].b = style.flat_rgb[2];
+      layer_color[z].a = style.alpha;
+    }
+  }
   for (int c = 0; c < fragg::kCellsPerBlock; ++c) {
     if (!cells.test(c)) continue;
     const fragg::VoxelKey v = fragg::voxelKeyOf(key, c);
@@ -110,8 +119,10 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
   std::vector<CellMask> masks(changed.size());
   const int64_t n = static_cast<int64_t>(changed.size());
 #pragma omp parallel for schedule(static) if (n > 256)
-  for (int64_t j = 0; j < n; ++j)
+  for (int64_t j = 0; j < n; ++j) {
     masks[j] = cellMask(map, *blocks.findBlock(changed[j]), style.state);
+    if (style.hide_speckles) masks[j] = withoutSpeckles(map, blocks, changed[j], masks[j]);
+  }
   for (size_t j = 0; j < changed.size(); ++j) {
     const fragg::BlockKey& key = changed[j];
     const CellMask& cells = masks[j];
@@ -140,8 +151,10 @@ visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const Mar
   out.markers.push_back(markerHeader(style, stamp, 0, visualization_msgs::Marker::DELETEALL));
   ledger->ids_.clear();
   ledger->next_id_ = 0;
+  const fragg::BlockView blocks = map.blockView();
   map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& block) {
-    const CellMask cells = cellMask(map, block, style.state);
+    CellMask cells = cellMask(map, block, style.state);
+    if (style.hide_speckles) cells = withoutSpeckles(map, blocks, key, cells);
     if (cells.none()) return;
     const int32_t id = ledger->next_id_++;
     ledger->ids_.emplace(key, MarkerLedger::Shown{id, cells});

@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/ros/speckles.h"
 
 namespace fragg::ros {
 namespace {
@@ -16,7 +17,8 @@ constexpr int8_t kOccupied = 100;
 }  // namespace
 
 nav_msgs::OccupancyGrid projectedMap(const fragg::Map& map, double min_z_m, double max_z_m,
-                                     const std::string& frame_id, const ::ros::Time& stamp) {
+                                     const std::string& frame_id, const ::ros::Time& stamp,
+                                     bool hide_speckles) {
   if (std::isnan(min_z_m) || std::isnan(max_z_m))
     throw fragg::InvalidArgument("projected map heights must not be NaN");
   if (min_z_m > max_z_m)
@@ -38,6 +40,7 @@ nav_msgs::OccupancyGrid projectedMap(const fragg::Map& map, double min_z_m, doub
   grid.info.origin.position.y = bounds.min.y * res_m;
   grid.info.origin.position.z = 0.0;
   grid.data.assign(static_cast<size_t>(width * height), kUnknown);
+  const fragg::BlockView blocks = map.blockView();
   map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& b) {
     for (int c = 0; c < fragg::kCellsPerBlock; ++c) {
       const fragg::CellState s = map.state(b.cells[c]);
@@ -45,6 +48,7 @@ nav_msgs::OccupancyGrid projectedMap(const fragg::Map& map, double min_z_m, doub
       const fragg::VoxelKey v = fragg::voxelKeyOf(key, c);
       const double z_m = (v.z + 0.5) * res_m;
       if (z_m < min_z_m || z_m > max_z_m) continue;
+      if (hide_speckles && s == fragg::CellState::kOccupied && isSpeckle(map, blocks, v)) continue;
       int8_t& cell = grid.data[static_cast<size_t>((int64_t{v.y} - bounds.min.y) * width +
                                                    (int64_t{v.x} - bounds.min.x))];
       if (s == fragg::CellState::kOccupied)

@@ -5,9 +5,12 @@
 // collision, frontiers: the planning library's checks, named by parameter).
 #include "fragg_map/ros/server_params.h"
 
+#include <ros/console.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -23,8 +26,13 @@ using XmlRpc::XmlRpcValue;
   throw fragg::InvalidArgument("parameter '" + name + "': " + problem);
 }
 
+// Every name the parser asks for, present or not (parseParameters sets it): the names in the
+// namespace that none asked for are the unknown ones.
+thread_local std::set<std::string>* t_asked_names = nullptr;
+
 // The value at `path` ("a/b/c") in `root`, or nullptr when absent.
 const XmlRpcValue* lookup(const XmlRpcValue& root, const std::string& path) {
+  if (t_asked_names) t_asked_names->insert(path);
   const XmlRpcValue* node = &root;
   std::stringstream parts(path);
   std::string part;
@@ -316,9 +324,94 @@ void readFrontiers(const XmlRpcValue& root, FrontierParams& f) {
   if (f.max_marker_cells < 0) badParam("frontiers/max_marker_cells", "must be >= 0");
 }
 
+void readOctomapCompat(const XmlRpcValue& root, OctomapCompatParams& o) {
+  readString(root, "base_frame_id", &o.base_frame_id);
+  if (!o.base_frame_id.empty() && o.base_frame_id[0] == '/') o.base_frame_id.erase(0, 1);
+  if (o.base_frame_id.empty()) badParam("base_frame_id", "must not be empty");
+  readBool(root, "filter_ground", &o.filter_ground);
+  readDouble(root, "ground_filter/distance", &o.ground_distance_m);
+  readDouble(root, "ground_filter/angle", &o.ground_angle_rad);
+  readDouble(root, "ground_filter/plane_distance", &o.ground_plane_distance_m);
+  if (!(o.ground_distance_m > 0.0) || !std::isfinite(o.ground_distance_m))
+    badParam("ground_filter/distance", "must be a finite distance in metres > 0");
+  if (!(o.ground_angle_rad >= 0.0) || !(o.ground_angle_rad <= M_PI / 2))
+    badParam("ground_filter/angle", "must be in [0, pi/2] rad");
+  if (!(o.ground_plane_distance_m >= 0.0) || !std::isfinite(o.ground_plane_distance_m))
+    badParam("ground_filter/plane_distance", "must be a finite distance in metres >= 0");
+  readBool(root, "filter_speckles", &o.filter_speckles);
+  readBool(root, "height_map", &o.height_map);
+  readBool(root, "colored_map", &o.colored_map);
+  const char* channels[4] = {"color/r", "color/g", "color/b", "color/a"};
+  for (int i = 0; i < 4; ++i) {
+    double v = o.color_rgba[i];
+    readDouble(root, channels[i], &v);
+    if (!(v >= 0.0) || !(v <= 1.0)) badParam(channels[i], "must be in [0, 1]");
+    o.color_rgba[i] = static_cast<float>(v);
+  }
+  readBool(root, "incremental_2D_projection", &o.incremental_2D_projection);
+  readBool(root, "compress_map", &o.compress_map);
+  readString(root, "map_file", &o.map_file);
+}
+
+// Levenshtein distance (names are short).
+size_t editDistance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+// The leaves of `node` ("a/b/c") that no parameter asked for, with the nearest asked name as a
+// hint when it is close (at most 2 edits).
+void collectUnknown(const XmlRpcValue& node, const std::string& path,
+                    const std::set<std::string>& asked, std::vector<std::string>* unknown) {
+  if (node.getType() == XmlRpcValue::TypeStruct && !asked.count(path)) {
+    XmlRpcValue copy = node;
+    for (auto it = copy.begin(); it != copy.end(); ++it)
+      collectUnknown(it->second, path.empty() ? it->first : path + "/" + it->first, asked, unknown);
+    return;
+  }
+  if (path.empty() || asked.count(path)) return;
+  std::string hint;
+  size_t best = 3;
+  for (const std::string& name : asked) {
+    const size_t d = editDistance(path, name);
+    if (d < best) best = d, hint = name;
+  }
+  unknown->push_back(hint.empty() ? path : path + " (did you mean " + hint + "?)");
+}
+
+ServerParams parseKnown(const XmlRpcValue& root);
+
 }  // namespace
 
 ServerParams parseParameters(const XmlRpcValue& root) {
+  std::set<std::string> asked;
+  t_asked_names = &asked;
+  ServerParams p;
+  try {
+    p = parseKnown(root);
+  } catch (...) {
+    t_asked_names = nullptr;
+    throw;
+  }
+  t_asked_names = nullptr;
+  if (root.valid() && root.getType() == XmlRpcValue::TypeStruct)
+    collectUnknown(root, "", asked, &p.unknown_parameters);
+  return p;
+}
+
+namespace {
+
+ServerParams parseKnown(const XmlRpcValue& root) {
   if (root.valid() && root.getType() != XmlRpcValue::TypeStruct)
     badParam("~", "the private namespace is not a struct");
   ServerParams p;
@@ -374,13 +467,24 @@ ServerParams parseParameters(const XmlRpcValue& root) {
   readCorrection(root, p.correction);
   readCollision(root, p.collision);
   readFrontiers(root, p.frontiers);
+  readOctomapCompat(root, p.octomap);
   return p;
 }
+
+}  // namespace
 
 ServerParams readParameters(const ::ros::NodeHandle& private_nh) {
   XmlRpcValue root;  // stays invalid (every default) when the namespace holds nothing
   private_nh.getParam(private_nh.getNamespace(), root);
-  return parseParameters(root);
+  ServerParams p = parseParameters(root);
+  if (!p.unknown_parameters.empty()) {
+    std::string names;
+    for (const std::string& name : p.unknown_parameters)
+      names += (names.empty() ? "" : ", ") + name;
+    ROS_WARN("fragg_map: %zu parameter(s) under %s that fragg_map does not read (ignored): %s",
+             p.unknown_parameters.size(), private_nh.getNamespace().c_str(), names.c_str());
+  }
+  return p;
 }
 
 }  // namespace fragg::ros

@@ -5,6 +5,7 @@ set(FRAGG_ROS_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/height_color.cpp
   ${CMAKE_CURRENT_LIST_DIR}/block_markers.cpp
   ${CMAKE_CURRENT_LIST_DIR}/occupied_cloud.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/speckles.cpp
   ${CMAKE_CURRENT_LIST_DIR}/projected_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frustum_marker.cpp
   ${CMAKE_CURRENT_LIST_DIR}/server_params.cpp

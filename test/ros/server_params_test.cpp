@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -63,8 +64,68 @@ TEST(ServerParams, EmptyNamespaceGivesTheCoreDefaults) {
   EXPECT_EQ(p.sensor.type, fragg::SensorType::kAuto);
   EXPECT_LT(p.sensor.max_range_m, 0.0);
   EXPECT_EQ(p.queue_size, 5);
-  EXPECT_FALSE(p.latch);
+  EXPECT_TRUE(p.latch);  // octomap_server's default
   EXPECT_TRUE(std::isinf(p.map.height_filter.min_z_m));
+  EXPECT_TRUE(p.unknown_parameters.empty());
+}
+
+TEST(ServerParams, UnknownAndMisspelledNamesAreListedWithAHint) {
+  XmlRpcValue root;
+  set(root, "sensor_model/hitt", 0.7);  // one edit from sensor_model/hit
+  set(root, "sensor_model/hit", 0.7);
+  set(root, "resolutoin", 0.1);  // two edits from resolution
+  set(root, "totally_unrelated", true);
+  set(root, "frame_id", "map");
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(root);
+  ASSERT_EQ(p.unknown_parameters.size(), 3u);
+  std::vector<std::string> sorted = p.unknown_parameters;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_EQ(sorted[0], "resolutoin (did you mean resolution?)");
+  EXPECT_EQ(sorted[1], "sensor_model/hitt (did you mean sensor_model/hit?)");
+  EXPECT_EQ(sorted[2], "totally_unrelated");
+  // The misspelled value is not taken for the right name.
+  EXPECT_EQ(p.map.resolution_m, fragg::MapParams().resolution_m);
+}
+
+TEST(ServerParams, OctomapServerNamesAreRead) {
+  XmlRpcValue root;
+  set(root, "base_frame_id", "/base_link");
+  set(root, "filter_ground", true);
+  set(root, "ground_filter/distance", 0.05);
+  set(root, "ground_filter/angle", 0.2);
+  set(root, "ground_filter/plane_distance", 0.1);
+  set(root, "filter_speckles", true);
+  set(root, "height_map", false);
+  set(root, "colored_map", false);
+  set(root, "color/r", 1.0);
+  set(root, "color/g", 0.5);
+  set(root, "color/b", 0);
+  set(root, "color/a", 0.8);
+  set(root, "incremental_2D_projection", true);
+  set(root, "compress_map", false);
+  set(root, "map_file", "/tmp/x.bt");
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(root);
+  EXPECT_TRUE(p.unknown_parameters.empty());
+  const fragg::ros::OctomapCompatParams& o = p.octomap;
+  EXPECT_EQ(o.base_frame_id, "base_link");
+  EXPECT_TRUE(o.filter_ground);
+  EXPECT_EQ(o.ground_distance_m, 0.05);
+  EXPECT_EQ(o.ground_angle_rad, 0.2);
+  EXPECT_EQ(o.ground_plane_distance_m, 0.1);
+  EXPECT_TRUE(o.filter_speckles);
+  EXPECT_FALSE(o.height_map);
+  EXPECT_FLOAT_EQ(o.color_rgba[0], 1.0f);
+  EXPECT_FLOAT_EQ(o.color_rgba[1], 0.5f);
+  EXPECT_FLOAT_EQ(o.color_rgba[2], 0.0f);
+  EXPECT_FLOAT_EQ(o.color_rgba[3], 0.8f);
+  EXPECT_TRUE(o.incremental_2D_projection);
+  EXPECT_FALSE(o.compress_map);
+  EXPECT_EQ(o.map_file, "/tmp/x.bt");
+  expectRejected("color/r", 1.5);
+  expectRejected("ground_filter/distance", 0.0);
+  expectRejected("ground_filter/angle", -0.1);
+  expectRejected("base_frame_id", "");
+  expectRejected("height_map", 1);
 }
 
 TEST(ServerParams, ScanStoreAndCorrectionDefaults) {
@@ -165,7 +226,7 @@ TEST(ServerParams, ReadsEveryName) {
   set(root, "pointcloud_max_z", 5.0);
   set(root, "occupancy_min_z", 0.1);
   set(root, "occupancy_max_z", 1.8);
-  set(root, "latch", true);
+  set(root, "latch", false);
   set(root, "publish_free_space", true);
   set(root, "backend", std::string("cpu"));
   set(root, "raycast", std::string("bresenham"));
@@ -188,7 +249,7 @@ TEST(ServerParams, ReadsEveryName) {
   EXPECT_EQ(p.map.height_filter.max_z_m, 5.0);
   EXPECT_EQ(p.occupancy_min_z_m, 0.1);
   EXPECT_EQ(p.occupancy_max_z_m, 1.8);
-  EXPECT_TRUE(p.latch);
+  EXPECT_FALSE(p.latch);
   EXPECT_TRUE(p.publish_free_space);
   EXPECT_EQ(p.map.backend, fragg::Backend::kCpu);
   EXPECT_EQ(p.map.raycast, fragg::RayCast::kBresenham);
@@ -345,6 +406,14 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.collision.mesh, d.collision.mesh);
   EXPECT_EQ(p.collision.mesh_scale, d.collision.mesh_scale);
   EXPECT_EQ(p.collision.max_markers, d.collision.max_markers);
+}
+
+TEST(ServerParamsConfig, ShippedYamlsHoldNoUnknownName) {
+  for (const std::vector<std::string>& files : std::vector<std::vector<std::string>>{
+           {"default.yaml"}, {"default.yaml", "lidar.yaml"}, {"default.yaml", "depth_camera.yaml"}})
+    EXPECT_TRUE(fragg::ros::parseParameters(loadYaml(files)).unknown_parameters.empty())
+        << files.back() << ": "
+        << fragg::ros::parseParameters(loadYaml(files)).unknown_parameters[0];
 }
 
 TEST(ServerParamsConfig, LidarYaml) {

@@ -7,6 +7,7 @@ if(FRAGG_HAVE_ROS)
   fragg_add_test(ros_map_to_msgs_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/block_markers_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/map_msgs_test.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/speckles_test.cpp
     LIBS fragg_map_ros
     LABELS ros)
   fragg_add_test(ros_server_params_test
@@ -29,6 +30,13 @@ if(FRAGG_HAVE_ROS)
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/pose_correction_test.cpp
     LIBS fragg_map_ros
     LABELS ros)
+  # The server's map files (.fgm, .bt): the nodelet library's loader.
+  if(TARGET fragg_map_octomap)
+    fragg_add_test(ros_map_file_loader_test
+      SOURCES ${CMAKE_CURRENT_LIST_DIR}/map_file_loader_test.cpp
+      LIBS fragg_map_nodelet fragg_map_octomap
+      LABELS ros)
+  endif()
   target_compile_definitions(ros_server_params_test PRIVATE
     FRAGG_PYTHON3="/usr/bin/python3"
     FRAGG_YAML_TO_XMLRPC="${CMAKE_CURRENT_LIST_DIR}/yaml_to_xmlrpc.py"

@@ -42,10 +42,10 @@ class MapServerSmokeTest(MapServerBagChecks):
     @classmethod
     def setUpClass(cls):
         super().setUpClass()
-        for name in ("load_map", "reset", "clear_bbox"):
+        for name in ("load_map", "reset_map", "clear_bbox"):
             rospy.wait_for_service(NS + name, timeout=60)
         cls.load = rospy.ServiceProxy(NS + "load_map", LoadMap)
-        cls.reset = rospy.ServiceProxy(NS + "reset", Reset)
+        cls.reset = rospy.ServiceProxy(NS + "reset_map", Reset)
         cls.clear = rospy.ServiceProxy(NS + "clear_bbox", ClearBox)
         cls.pub = rospy.Publisher("/points", PointCloud2, queue_size=20)
 

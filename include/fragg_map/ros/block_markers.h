@@ -24,6 +24,13 @@ struct MarkerStyle {
   double color_min_z_m = -1.0;                           ///< bottom of the height colour ramp
   double color_max_z_m = 4.0;                            ///< top of the height colour ramp
   float alpha = 1.0f;
+  /// false (octomap_server's height_map false): every cell in `flat_rgb` (alpha above).
+  bool height_colors = true;
+  float flat_rgb[3] = {0.0f, 0.0f, 1.0f};
+  /// filter_speckles: occupied cells without an occupied neighbour are not drawn (decided when
+  /// their block is drawn: a neighbour appearing in another block shows them at their block's
+  /// next change or full republish).
+  bool hide_speckles = false;
 };
 
 /// Which cells of a block are drawn (bit i: cell index i).

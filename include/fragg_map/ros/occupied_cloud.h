@@ -12,7 +12,9 @@ namespace fragg::ros {
 
 /// An unorganised cloud (height 1) with packed float32 fields x, y, z (point_step 12) holding
 /// the centre of every occupied voxel, in `frame_id`.
+/// With `hide_speckles`, occupied cells without an occupied neighbour are left out
+/// (octomap_server's filter_speckles).
 sensor_msgs::PointCloud2 occupiedCloud(const fragg::Map& map, const std::string& frame_id,
-                                       const ::ros::Time& stamp);
+                                       const ::ros::Time& stamp, bool hide_speckles = false);
 
 }  // namespace fragg::ros

@@ -8,6 +8,7 @@
 
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "fragg_map/map_params.h"
 #include "fragg_map/planning/frontier_cells.h"
@@ -59,6 +60,25 @@ struct FrontierParams {
   int max_marker_cells = 200000;
 };
 
+/// octomap_server's parameters of the same name and meaning (README: "octomap_server ->
+/// fragg_map"; launch/octomap_compat.launch loads an octomap_server YAML unchanged).
+struct OctomapCompatParams {
+  /// The robot's base frame: the ground plane is sought in it (filter_ground).
+  std::string base_frame_id = "base_footprint";
+  bool filter_ground = false;             ///< (not implemented yet: warned at start-up)
+  double ground_distance_m = 0.04;        ///< ground_filter/distance: plane inlier distance
+  double ground_angle_rad = 0.15;         ///< ground_filter/angle: plane normal vs z at most
+  double ground_plane_distance_m = 0.07;  ///< ground_filter/plane_distance: |d| at most
+  bool filter_speckles = false;  ///< views leave out occupied cells with no occupied neighbour
+  bool height_map = true;        ///< markers coloured by height, else `color`
+  bool colored_map = false;      ///< (cells carry no colour: warned, height colours)
+  float color_rgba[4] = {0.0f, 0.0f, 1.0f, 1.0f};  ///< color/r|g|b|a with height_map false
+  bool incremental_2D_projection = false;  ///< projected_map patches only the changed columns
+  bool compress_map = true;                ///< (an octree's pruning: nothing to do here)
+  /// Map loaded at start-up (.fgm or .bt); also the node's first argument.
+  std::string map_file;
+};
+
 struct ServerParams {
   /// resolution, sensor_model/hit|miss|min|max, backend, raycast; keep_scans and scan_store/*
   /// (map.scans: the server keeps scans by default, the core does not); pointcloud_min_z|max_z
@@ -69,7 +89,8 @@ struct ServerParams {
   /// Heights projected into projected_map.
   double occupancy_min_z_m = -std::numeric_limits<double>::infinity();
   double occupancy_max_z_m = std::numeric_limits<double>::infinity();
-  bool latch = false;               ///< latched topics; full marker republish to late subscribers
+  bool latch =
+      true;  ///< latched topics (octomap_server's default); full markers to late subscribers
   bool publish_free_space = false;  ///< free_cells_vis_array
   int queue_size = 5;               ///< clouds waiting for insertion; the oldest are dropped
   double tf_tolerance_s = 0.5;      ///< how long a cloud may wait for its transform
@@ -81,14 +102,21 @@ struct ServerParams {
   CorrectionParams correction;
   CollisionParams collision;
   FrontierParams frontiers;
+};
 
-  /// The core's defaults with keep_scans on and a 2 GiB budget (scan_store/max_mb 2048).
-  static fragg::MapParams withKeptScans() {
-    fragg::MapParams m;
-    m.scans.keep = true;
-    m.scans.max_bytes = size_t{2048} << 20;
-    return m;
-  }
+OctomapCompatParams octomap;
+/// Names in the namespace that no parameter reads (misspelled, or of another program), each
+/// with a hint ("sensor_model/hitt (did you mean sensor_model/hit?)"); readParameters warns
+/// once naming them all.
+std::vector<std::string> unknown_parameters;
+
+/// The core's defaults with keep_scans on and a 2 GiB budget (scan_store/max_mb 2048).
+static fragg::MapParams withKeptScans() {
+  fragg::MapParams m;
+  m.scans.keep = true;
+  m.scans.max_bytes = size_t{2048} << 20;
+  return m;
+}
 };
 
 /// Fills ServerParams from a struct of parameters (the private namespace as one

@@ -26,6 +26,10 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
     topic->style.color_min_z_m = params_.color_min_z_m;
     topic->style.color_max_z_m = params_.color_max_z_m;
   }
+  occupied_markers_.style.height_colors = params_.octomap.height_map;
+  occupied_markers_.style.hide_speckles = params_.octomap.filter_speckles;
+  occupied_markers_.style.alpha = params_.octomap.color_rgba[3];
+  for (int i = 0; i < 3; ++i) occupied_markers_.style.flat_rgb[i] = params_.octomap.color_rgba[i];
   free_markers_.style.ns = "free";
   free_markers_.style.state = fragg::CellState::kFree;
   free_markers_.style.alpha = 0.3f;
@@ -43,13 +47,35 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
     free_markers_.pub = nh.advertise<visualization_msgs::MarkerArray>(
         "free_cells_vis_array", 1, connect(&free_markers_), ::ros::SubscriberStatusCallback(),
         ::ros::VoidConstPtr(), latch);
-  occupied_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("occupied_cells", 1, latch);
-  projected_map_pub_ = nh.advertise<nav_msgs::OccupancyGrid>("projected_map", 1, latch);
+  occupied_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>(
+      "occupied_cells", 1, currentMessageTo(&occupied_cloud_pub_),
+      ::ros::SubscriberStatusCallback(), ::ros::VoidConstPtr(), latch);
+  centers_pub_ = nh.advertise<sensor_msgs::PointCloud2>(
+      "octomap_point_cloud_centers", 1, currentMessageTo(&centers_pub_),
+      ::ros::SubscriberStatusCallback(), ::ros::VoidConstPtr(), latch);
+  projected_map_pub_ = nh.advertise<nav_msgs::OccupancyGrid>(
+      "projected_map", 1, currentMessageTo(&projected_map_pub_), ::ros::SubscriberStatusCallback(),
+      ::ros::VoidConstPtr(), latch);
   frustum_pub_ = nh.advertise<visualization_msgs::Marker>("frustum", 1, latch);
   stats_pub_ = private_nh.advertise<fragg_map::MapStats>("stats", 1, latch);
   if (marker_throttle_.limited())
     marker_flush_timer_ = nh.createSteadyTimer(::ros::WallDuration(marker_throttle_.periodS()),
                                                &MapPublishers::flushPendingMarkers, this);
+}
+
+::ros::SubscriberStatusCallback MapPublishers::currentMessageTo(const ::ros::Publisher* pub) {
+  if (params_.latch) return ::ros::SubscriberStatusCallback();
+  return [this, pub](const ::ros::SingleSubscriberPublisher& sub) {
+    std::lock_guard<std::mutex> publishing(publish_mutex_);
+    const SharedMap::ReadGuard state = shared_->read();
+    const ::ros::Time now = ::ros::Time::now();
+    if (pub == &projected_map_pub_)
+      sub.publish(projectedMap(state->map, params_.occupancy_min_z_m, params_.occupancy_max_z_m,
+                               params_.frame_id, now, params_.octomap.filter_speckles));
+    else
+      sub.publish(
+          occupiedCloud(state->map, params_.frame_id, now, params_.octomap.filter_speckles));
+  };
 }
 
 bool MapPublishers::wanted(const ::ros::Publisher& pub) const {
@@ -77,11 +103,16 @@ void MapPublishers::publishFull(const ::ros::Time& stamp) {
 void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
                                 bool full_markers) {
   publishMarkerTopics(map, stamp, full_markers);
-  if (wanted(occupied_cloud_pub_))
-    occupied_cloud_pub_.publish(occupiedCloud(map, params_.frame_id, stamp));
+  if (wanted(occupied_cloud_pub_) || wanted(centers_pub_)) {
+    const sensor_msgs::PointCloud2 cloud =
+        occupiedCloud(map, params_.frame_id, stamp, params_.octomap.filter_speckles);
+    if (wanted(occupied_cloud_pub_)) occupied_cloud_pub_.publish(cloud);
+    if (wanted(centers_pub_)) centers_pub_.publish(cloud);
+  }
   if (wanted(projected_map_pub_))
     projected_map_pub_.publish(projectedMap(map, params_.occupancy_min_z_m,
-                                            params_.occupancy_max_z_m, params_.frame_id, stamp));
+                                            params_.occupancy_max_z_m, params_.frame_id, stamp,
+                                            params_.octomap.filter_speckles));
   if (wanted(stats_pub_)) stats_pub_.publish(stats_->toMsg(map, params_.frame_id, stamp));
 }
 

@@ -55,6 +55,9 @@ class MapPublishers {
   void flushPendingMarkers(const ::ros::SteadyTimerEvent& event);
   void sendAllMarkersTo(MarkerTopic& topic, const ::ros::SingleSubscriberPublisher& sub);
   bool wanted(const ::ros::Publisher& pub) const;
+  /// Unlatched topics: the current message to a subscriber that connects late (a latched
+  /// topic's publisher keeps the last one itself).
+  ::ros::SubscriberStatusCallback currentMessageTo(const ::ros::Publisher* pub);
 
   const ServerParams params_;
   SharedMap* shared_;
@@ -67,6 +70,7 @@ class MapPublishers {
   MarkerThrottle marker_throttle_;
   ::ros::SteadyTimer marker_flush_timer_;
   ::ros::Publisher occupied_cloud_pub_;
+  ::ros::Publisher centers_pub_;  ///< octomap_point_cloud_centers: octomap_server's name
   ::ros::Publisher projected_map_pub_;
   ::ros::Publisher frustum_pub_;
   ::ros::Publisher stats_pub_;

@@ -6,11 +6,15 @@
 #include <string>
 
 #include "fragg_map/log.h"
+#include "octomap_compat_notes.h"
 
 namespace fragg::ros {
 
-MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh)
+MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
+                     const std::string& map_file_arg)
     : params_(readParameters(private_nh)), tf_listener_(tf_buffer_, nh) {
+  if (!map_file_arg.empty()) params_.octomap.map_file = map_file_arg;
+  logOctomapCompatNotes(params_);
   fragg::setLogSink([](fragg::LogLevel level, const std::string& line) {
     if (level == fragg::LogLevel::kWarning)
       ROS_WARN("fragg_map: %s", line.c_str());
@@ -19,12 +23,24 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh)
   });
   shared_ = std::make_unique<SharedMap>(MapState(fragg::Map(params_.map)));
   publishers_ = std::make_unique<MapPublishers>(nh, private_nh, params_, shared_.get(), &stats_);
-  services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_, [this] {
-    publishers_->publishFull(::ros::Time::now());
-  });
-  auto publish_changed = [this] {
+#if FRAGG_HAVE_OCTOMAP_MSGS
+  octomap_outputs_ = std::make_unique<OctomapOutputs>(nh, params_, shared_.get());
+#endif
+  auto publish_octomaps = [this](const ::ros::Time& stamp) {
+    if (octomap_outputs_) octomap_outputs_->publish(stamp);
+  };
+  services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_,
+                                            [this, publish_octomaps] {
+                                              publishers_->publishFull(::ros::Time::now());
+                                              publish_octomaps(::ros::Time::now());
+                                            });
+  octomap_services_ = std::make_unique<OctomapCompatServices>(private_nh, services_.get());
+  if (!params_.octomap.map_file.empty())  // throws (the node does not start) when unreadable
+    ROS_INFO("fragg_map: map_file: %s", services_->loadMap(params_.octomap.map_file).c_str());
+  auto publish_changed = [this, publish_octomaps] {
     try {
       publishers_->publishAfterCorrection(::ros::Time::now());
+      publish_octomaps(::ros::Time::now());
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
     }
@@ -43,10 +59,11 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh)
                                                       &stats_, publish_changed);
   input_ = std::make_unique<CloudInput>(
       nh, params_, tf_buffer_, shared_.get(), &stats_,
-      [this](const ::ros::Time& stamp, const fragg::SensorModel& sensor,
-             const Eigen::Isometry3d& T_map_sensor) {
+      [this, publish_octomaps](const ::ros::Time& stamp, const fragg::SensorModel& sensor,
+                               const Eigen::Isometry3d& T_map_sensor) {
         try {
           publishers_->publishAfterInsert(stamp, sensor, T_map_sensor);
+          publish_octomaps(stamp);
         } catch (const std::exception& e) {
           ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
         }

@@ -10,6 +10,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <memory>
+#include <string>
 
 #include "cloud_input.h"
 #include "collision_service.h"
@@ -19,6 +20,8 @@
 #include "frontier_service.h"
 #include "map_publishers.h"
 #include "map_services.h"
+#include "octomap_compat_services.h"
+#include "octomap_outputs.h"
 #include "path_corrector.h"
 #include "server_stats.h"
 #include "shared_map.h"
@@ -30,7 +33,9 @@ class MapServer {
  public:
   /// Reads and validates the parameters (throws fragg::InvalidArgument naming the bad one),
   /// builds the map and starts the parts.
-  MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh);
+  /// `map_file_arg` (the node's first argument), when not empty, overrides map_file.
+  MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
+            const std::string& map_file_arg = std::string());
   ~MapServer();
 
  private:
@@ -41,6 +46,8 @@ class MapServer {
   tf2_ros::TransformListener tf_listener_;
   std::unique_ptr<MapPublishers> publishers_;
   std::unique_ptr<MapServices> services_;
+  std::unique_ptr<OctomapCompatServices> octomap_services_;
+  std::unique_ptr<OctomapOutputs> octomap_outputs_;  // only with octomap_msgs
   std::unique_ptr<CorrectionService> correction_service_;
   std::unique_ptr<SubmapServices> submap_services_;
   std::unique_ptr<CollisionService> collision_service_;

@@ -4,8 +4,11 @@
 #include <ros/console.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "fragg_map/errors.h"
+#include "map_file_loader.h"
+#include "process_memory.h"
 #if FRAGG_HAVE_OCTOMAP
 #include "fragg_map/interop/octomap_io.h"
 #endif
@@ -45,7 +48,7 @@ MapServices::MapServices(::ros::NodeHandle& private_nh, const ServerParams& para
       on_map_replaced_(std::move(on_map_replaced)) {
   save_ = private_nh.advertiseService("save_map", &MapServices::saveMap, this);
   load_ = private_nh.advertiseService("load_map", &MapServices::loadMap, this);
-  reset_ = private_nh.advertiseService("reset", &MapServices::reset, this);
+  reset_ = private_nh.advertiseService("reset_map", &MapServices::reset, this);
   clear_ = private_nh.advertiseService("clear_bbox", &MapServices::clearBox, this);
   stats_srv_ = private_nh.advertiseService("get_stats", &MapServices::getStats, this);
 }
@@ -70,49 +73,65 @@ bool MapServices::saveMap(fragg_map::SaveMap::Request& req, fragg_map::SaveMap::
   });
 }
 
-bool MapServices::loadMap(fragg_map::LoadMap::Request& req, fragg_map::LoadMap::Response& res) {
-  const bool ok = answer("load_map", res, [&] {
-    if (!endsWith(req.path, ".fgm"))
-      throw fragg::InvalidArgument("unknown extension of '" + req.path + "': load_map reads .fgm");
-    // The file gives resolution, occupancy model and kept scans; the server's own settings
-    // (backend, threads, ray cast, scan store budget...) the rest. Validates first.
-    fragg::Map loaded = fragg::Map::load(req.path, params_.map);
-    if (std::abs(loaded.resolution() - params_.map.resolution_m) > 1e-12)
-      throw fragg::InvalidArgument("the file's resolution " + std::to_string(loaded.resolution()) +
-                                   " m differs from the server's " +
-                                   std::to_string(params_.map.resolution_m) + " m");
+std::string MapServices::loadMap(const std::string& path) {
+  // Validates the whole file before the map is touched.
+  fragg::Map loaded = loadMapFile(path, params_.map);
+  std::string message;
+  {
     const SharedMap::WriteGuard state = shared_->write();
     state->map = std::move(loaded);
     state->stamps.rebuild(state->map.scanStore());
-    return "loaded " + std::to_string(state->map.blockCount()) + " blocks and " +
-           std::to_string(state->map.scanStore().size()) + " kept scans from " + req.path;
-  });
-  if (res.success && on_map_replaced_) on_map_replaced_();
-  return ok;
+    stats_->restart(state->map.scanCount());
+    message = "loaded " + std::to_string(state->map.blockCount()) + " blocks and " +
+              std::to_string(state->map.scanStore().size()) + " kept scans from " + path;
+  }
+  releaseFreeHeap();  // the replaced map's memory
+  if (on_map_replaced_) on_map_replaced_();
+  return message;
+}
+
+std::string MapServices::resetMap() {
+  const size_t rss_before = residentBytes();
+  {
+    // A new map rather than Map::reset(), which keeps its block storage for reuse.
+    const SharedMap::WriteGuard state = shared_->write();
+    state->map = fragg::Map(params_.map);  // as MapServer builds it
+    state->stamps.clear();
+    stats_->restart(0);
+  }
+  releaseFreeHeap();
+  const size_t rss_after = residentBytes();
+  if (on_map_replaced_) on_map_replaced_();
+  char note[128];
+  std::snprintf(note, sizeof(note), "map reset; resident memory %.1f -> %.1f MiB",
+                rss_before / 1048576.0, rss_after / 1048576.0);
+  ROS_INFO("fragg_map: %s", note);
+  return note;
+}
+
+std::string MapServices::clearBox(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m) {
+  std::string message;
+  {
+    const SharedMap::WriteGuard state = shared_->write();
+    const size_t before = state->map.blockCount();
+    state->map.clearBox(min_m, max_m);  // validates the box first
+    message = "cleared; blocks " + std::to_string(before) + " -> " +
+              std::to_string(state->map.blockCount());
+  }
+  if (on_map_replaced_) on_map_replaced_();
+  return message;
+}
+
+bool MapServices::loadMap(fragg_map::LoadMap::Request& req, fragg_map::LoadMap::Response& res) {
+  return answer("load_map", res, [&] { return loadMap(req.path); });
 }
 
 bool MapServices::reset(fragg_map::Reset::Request&, fragg_map::Reset::Response& res) {
-  answer("reset", res, [&] {
-    const SharedMap::WriteGuard state = shared_->write();
-    state->map.reset();
-    state->stamps.clear();
-    stats_->clearInsertions();
-    return std::string("map reset");
-  });
-  if (res.success && on_map_replaced_) on_map_replaced_();
-  return true;
+  return answer("reset_map", res, [&] { return resetMap(); });
 }
 
 bool MapServices::clearBox(fragg_map::ClearBox::Request& req, fragg_map::ClearBox::Response& res) {
-  answer("clear_bbox", res, [&] {
-    const SharedMap::WriteGuard state = shared_->write();
-    const size_t before = state->map.blockCount();
-    state->map.clearBox(toEigen(req.min), toEigen(req.max));  // validates the box first
-    return "cleared; blocks " + std::to_string(before) + " -> " +
-           std::to_string(state->map.blockCount());
-  });
-  if (res.success && on_map_replaced_) on_map_replaced_();
-  return true;
+  return answer("clear_bbox", res, [&] { return clearBox(toEigen(req.min), toEigen(req.max)); });
 }
 
 bool MapServices::getStats(fragg_map::GetStats::Request&, fragg_map::GetStats::Response& res) {

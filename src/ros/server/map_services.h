@@ -1,12 +1,14 @@
 // The map server's services on the private handle: ~save_map (.fgm or .bt by extension),
-// ~load_map, ~reset, ~clear_bbox, ~get_stats. Each answers success + message; a bad request
-// (unknown extension, unwritable path, missing file, inverted or NaN box) answers
-// success=false with the reason and leaves the map unchanged. Nothing escapes a callback.
+// ~load_map (.fgm, .bt or .ot), ~reset_map, ~clear_bbox, ~get_stats (octomap_server's ~reset and
+// ~clear_bbx: octomap_compat_services.h, through resetMap() and clearBox()). Each answers success +
+// message; a bad request (unknown extension, unwritable path, missing file, inverted or NaN box)
+// answers success=false with the reason and leaves the map unchanged. Nothing escapes a callback.
 #pragma once
 
 #include <ros/node_handle.h>
 #include <ros/service_server.h>
 
+#include <Eigen/Core>
 #include <functional>
 #include <string>
 
@@ -26,6 +28,16 @@ class MapServices {
   /// `on_map_replaced` runs (map unlocked) after reset, load and clear_bbox.
   MapServices(::ros::NodeHandle& private_nh, const ServerParams& params, SharedMap* shared,
               ServerStats* stats, std::function<void()> on_map_replaced);
+
+  /// Replaces the map by an empty one (the old one's memory goes back to the system), zeroes
+  /// the statistics and republishes. Returns what it did (resident memory before and after).
+  std::string resetMap();
+  /// Makes the cells in [min, max] unknown (throws fragg::InvalidArgument for a bad box, map
+  /// untouched) and republishes. Returns what it did.
+  std::string clearBox(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m);
+  /// Replaces the map by the one in `path` (map_file_loader.h), restarts the statistics from
+  /// the file's scan count and republishes. Throws as loadMapFile does (map untouched).
+  std::string loadMap(const std::string& path);
 
  private:
   bool saveMap(fragg_map::SaveMap::Request& req, fragg_map::SaveMap::Response& res);

@@ -65,6 +65,15 @@ void ServerStats::clearInsertions() {
   collision_poses_ = 0;
 }
 
+void ServerStats::restart(uint64_t scans) {
+  clearInsertions();
+  std::lock_guard<std::mutex> lock(mutex_);
+  scans_ = scans;
+  dropped_no_tf_ = 0;
+  dropped_queue_full_ = 0;
+  rejected_ = 0;
+}
+
 uint64_t ServerStats::droppedNoTf() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return dropped_no_tf_;

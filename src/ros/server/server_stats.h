@@ -30,6 +30,9 @@ class ServerStats {
   /// Forgets the insertions, corrections and collision checks (after ~reset); the drop
   /// counters keep counting.
   void clearInsertions();
+  /// Every counter back to zero, drops included, with `scans` clouds in the map (after ~reset:
+  /// 0; after ~load_map or the start-up map: the file's count).
+  void restart(uint64_t scans);
 
   /// The statistics message; `map` must be locked by the caller.
   fragg_map::MapStats toMsg(const fragg::Map& map, const std::string& frame_id,

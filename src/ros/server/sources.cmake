@@ -3,6 +3,10 @@ set(FRAGG_ROS_SERVER_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/server_stats.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_publishers.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_services.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/map_file_loader.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/process_memory.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/octomap_compat_services.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/octomap_compat_notes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/correction_service.cpp
   ${CMAKE_CURRENT_LIST_DIR}/submap_services.cpp
   ${CMAKE_CURRENT_LIST_DIR}/collision_service.cpp
@@ -13,4 +17,6 @@ set(FRAGG_ROS_SERVER_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/map_server.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_server_nodelet.cpp
 )
+# With octomap_msgs (and liboctomap) only: octomap_binary / octomap_full.
+set(FRAGG_ROS_OCTOMAP_MSGS_SOURCES ${CMAKE_CURRENT_LIST_DIR}/octomap_outputs.cpp)
 set(FRAGG_ROS_SERVER_NODE_SOURCES ${CMAKE_CURRENT_LIST_DIR}/server_node.cpp)

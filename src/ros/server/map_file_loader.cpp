@@ -1,0 +1,57 @@
+// .fgm through Map::load, .bt / .ot through the OctoMap import merged into a map with the
+// server's settings.
+#include "map_file_loader.h"
+
+#include <cmath>
+
+#include "fragg_map/errors.h"
+#if FRAGG_HAVE_OCTOMAP
+#include "fragg_map/interop/octomap_io.h"
+#include "fragg_map/submap.h"
+#endif
+
+namespace fragg::ros {
+namespace {
+
+bool endsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+void requireResolution(const fragg::Map& loaded, const fragg::MapParams& runtime,
+                       const std::string& path) {
+  if (std::abs(loaded.resolution() - runtime.resolution_m) > 1e-12)
+    throw fragg::InvalidArgument(path + ": the file's resolution " +
+                                 std::to_string(loaded.resolution()) + " m differs from the " +
+                                 "server's " + std::to_string(runtime.resolution_m) + " m");
+}
+
+}  // namespace
+
+fragg::Map loadMapFile(const std::string& path, const fragg::MapParams& runtime) {
+  if (endsWith(path, ".fgm")) {
+    fragg::Map loaded = fragg::Map::load(path, runtime);
+    requireResolution(loaded, runtime, path);
+    return loaded;
+  }
+  if (endsWith(path, ".bt") || endsWith(path, ".ot")) {
+#if FRAGG_HAVE_OCTOMAP
+    const fragg::Map imported = fragg::importOctomap(path, fragg::Backend::kCpu);
+    requireResolution(imported, runtime, path);
+    // The tree's occupancy model (hit, miss, clamps), the server's other settings.
+    fragg::MapParams params = runtime;
+    params.occupancy.prob_hit = imported.params().occupancy.prob_hit;
+    params.occupancy.prob_miss = imported.params().occupancy.prob_miss;
+    params.occupancy.clamp_min = imported.params().occupancy.clamp_min;
+    params.occupancy.clamp_max = imported.params().occupancy.clamp_max;
+    fragg::Map map(params);
+    map.merge(imported, fragg::MergeMode::kOverwrite);
+    return map;
+#else
+    throw fragg::InvalidArgument(path + ": this build has no liboctomap: .bt/.ot are not readable");
+#endif
+  }
+  throw fragg::InvalidArgument("unknown extension of '" + path + "': use .fgm, .bt or .ot");
+}
+
+}  // namespace fragg::ros

@@ -1,0 +1,27 @@
+// Start-up notes for octomap_server users.
+#include "octomap_compat_notes.h"
+
+#include <ros/console.h>
+
+namespace fragg::ros {
+
+void logOctomapCompatNotes(const ServerParams& params) {
+  const OctomapCompatParams& o = params.octomap;
+  if (o.filter_ground)
+    ROS_WARN(
+        "fragg_map: filter_ground is not implemented yet: ground points are inserted as "
+        "obstacles like every other point (base_frame_id '%s' is unused)",
+        o.base_frame_id.c_str());
+  if (o.colored_map)
+    ROS_WARN(
+        "fragg_map: colored_map: the map's cells carry no colour; markers are coloured by "
+        "%s",
+        o.height_map ? "height" : "color/r|g|b|a");
+#if !FRAGG_HAVE_OCTOMAP_MSGS
+  ROS_INFO(
+      "fragg_map: no octomap_binary / octomap_full topics or services: this build found no "
+      "octomap_msgs (ros.org's ROS ships it, Debian does not; rebuild with it installed)");
+#endif
+}
+
+}  // namespace fragg::ros

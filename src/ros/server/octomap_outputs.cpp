@@ -1,0 +1,91 @@
+// Map -> OcTree -> octomap_msgs/Octomap, on topics and services.
+#include "octomap_outputs.h"
+
+#include <octomap_msgs/GetOctomap.h>
+#include <octomap_msgs/Octomap.h>
+#include <ros/console.h>
+#include <ros/single_subscriber_publisher.h>
+
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "fragg_map/interop/octomap_io.h"
+
+namespace fragg::ros {
+namespace {
+
+// As octomap_msgs' binaryMapToMsg / fullMapToMsg fill it, from the map under its read lock.
+octomap_msgs::Octomap octomapMsg(const fragg::Map& map, bool binary, const std::string& frame_id,
+                                 const ::ros::Time& stamp) {
+  const std::unique_ptr<octomap::OcTree> tree = fragg::toOcTree(map);
+  std::stringstream data;
+  if (binary) {
+    tree->toMaxLikelihood();
+    tree->prune();
+    tree->writeBinaryData(data);
+  } else {
+    tree->writeData(data);
+  }
+  const std::string bytes = data.str();
+  octomap_msgs::Octomap msg;
+  msg.header.frame_id = frame_id;
+  msg.header.stamp = stamp;
+  msg.binary = binary;
+  msg.id = tree->getTreeType();
+  msg.resolution = tree->getResolution();
+  msg.data.assign(bytes.begin(), bytes.end());
+  return msg;
+}
+
+}  // namespace
+
+OctomapOutputs::OctomapOutputs(::ros::NodeHandle& nh, const ServerParams& params, SharedMap* shared)
+    : params_(params), shared_(shared) {
+  auto to_new_subscriber = [this](bool binary) -> ::ros::SubscriberStatusCallback {
+    return [this, binary](const ::ros::SingleSubscriberPublisher& sub) {
+      std::lock_guard<std::mutex> publishing(publish_mutex_);
+      try {
+        sub.publish(octomapMsg(shared_->read()->map, binary, params_.frame_id, ::ros::Time::now()));
+      } catch (const std::exception& e) {
+        ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
+      }
+    };
+  };
+  binary_pub_ = nh.advertise<octomap_msgs::Octomap>("octomap_binary", 1, to_new_subscriber(true),
+                                                    ::ros::SubscriberStatusCallback(),
+                                                    ::ros::VoidConstPtr(), params_.latch);
+  full_pub_ = nh.advertise<octomap_msgs::Octomap>("octomap_full", 1, to_new_subscriber(false),
+                                                  ::ros::SubscriberStatusCallback(),
+                                                  ::ros::VoidConstPtr(), params_.latch);
+  auto service = [this](bool binary) {
+    return [this, binary](octomap_msgs::GetOctomap::Request&,
+                          octomap_msgs::GetOctomap::Response& res) {
+      try {
+        res.map = octomapMsg(shared_->read()->map, binary, params_.frame_id, ::ros::Time::now());
+        return true;
+      } catch (const std::exception& e) {
+        ROS_WARN("fragg_map: %s refused: %s", binary ? "octomap_binary" : "octomap_full", e.what());
+        return false;
+      }
+    };
+  };
+  binary_srv_ =
+      nh.advertiseService<octomap_msgs::GetOctomap::Request, octomap_msgs::GetOctomap::Response>(
+          "octomap_binary", service(true));
+  full_srv_ =
+      nh.advertiseService<octomap_msgs::GetOctomap::Request, octomap_msgs::GetOctomap::Response>(
+          "octomap_full", service(false));
+}
+
+void OctomapOutputs::publish(const ::ros::Time& stamp) {
+  const bool binary = binary_pub_.getNumSubscribers() > 0;
+  const bool full = full_pub_.getNumSubscribers() > 0;
+  if (!binary && !full) return;
+  std::lock_guard<std::mutex> publishing(publish_mutex_);
+  const SharedMap::ReadGuard state = shared_->read();
+  if (binary) binary_pub_.publish(octomapMsg(state->map, true, params_.frame_id, stamp));
+  if (full) full_pub_.publish(octomapMsg(state->map, false, params_.frame_id, stamp));
+}
+
+}  // namespace fragg::ros

@@ -1,0 +1,322 @@
+#!/usr/bin/python3
+"""rostest of fragg_map as a drop-in for octomap_server (launch/octomap_compat.launch, node
+named octomap_server, parameters from an octomap_server YAML): every row of README's
+"octomap_server -> fragg_map" table. One synthetic cloud from a sensor 1 m above the map
+origin: a wall at x = 3 m, a point beyond sensor_model/max_range, a point below
+pointcloud_min_z and one above occupancy_max_z. Further server processes (the node's
+executable, started here) check the start-up map (map_file, first argument) and the warning
+that names unknown parameters."""
+import os
+import shutil
+import signal
+import subprocess
+import tempfile
+import time
+import unittest
+
+import genmsg
+import genmsg.gentools
+import genmsg.msg_loader
+import rospkg
+import rosparam
+import rospy
+import rostest
+import sensor_msgs.point_cloud2 as pc2
+from catkin.find_in_workspaces import find_in_workspaces
+from geometry_msgs.msg import Point, TransformStamped
+from nav_msgs.msg import OccupancyGrid
+from sensor_msgs.msg import PointCloud2
+from std_msgs.msg import Header
+from std_srvs.srv import Empty
+from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import Marker, MarkerArray
+
+from fragg_map.srv import BoundingBoxQuery, GetStats, LoadMap, Reset, SaveMap
+
+NS = "/octomap_server/"
+RES = 0.1
+SENSOR_Z = 1.0  # the sensor frame's height in the map frame
+
+
+def wait_for(predicate, timeout_s, what):
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(0.05)
+    raise AssertionError("timed out waiting for " + what)
+
+
+def key(x, y, z):
+    return (int(x // RES), int(y // RES), int(z // RES))
+
+
+def scene_points():
+    """Sensor-frame points: the wall (x = 3 m, map z 0.55..1.45), beyond range, too low, high."""
+    wall = [(3.05, -0.45 + 0.1 * i, -0.45 + 0.1 * j) for i in range(10) for j in range(10)]
+    beyond = [(8.05, 0.05, 0.05)]        # 8 m > max_range 5 m: only clears up to 5 m
+    too_low = [(2.05, 1.05, -3.05)]      # map z -2.05 < pointcloud_min_z -1: not inserted
+    high = [(2.05, -1.05, 1.55)]         # map z 2.55 > occupancy_max_z 2: 3D only
+    return wall, beyond, too_low, high
+
+
+def occupied_keys(cloud):
+    return {key(x, y, z) for x, y, z in pc2.read_points(cloud, ("x", "y", "z"), skip_nans=True)}
+
+
+class OctomapCompatTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("octomap_compat_test")
+        cls.tmp = tempfile.mkdtemp(prefix="fragg_map_octomap_compat_")
+        cls.procs = []
+        cls.last = {}
+        cls.arrays = []
+        for topic, kind in (("occupied_cells_vis_array", MarkerArray),
+                            ("free_cells_vis_array", MarkerArray),
+                            ("octomap_point_cloud_centers", PointCloud2),
+                            ("occupied_cells", PointCloud2)):
+            rospy.Subscriber("/" + topic, kind, cls.keep(topic), queue_size=20)
+        rospy.Subscriber("/occupied_cells_vis_array", MarkerArray, cls.arrays.append,
+                         queue_size=20)
+        tf = TransformStamped()
+        tf.header.frame_id = "map"
+        tf.child_frame_id = "sensor"
+        tf.transform.translation.z = SENSOR_Z
+        tf.transform.rotation.w = 1.0
+        cls.tf_pub = rospy.Publisher("/tf_static", TFMessage, queue_size=1, latch=True)
+        cls.tf_pub.publish(TFMessage([tf]))
+        for name in ("get_stats", "save_map", "load_map", "reset", "reset_map", "clear_bbx"):
+            rospy.wait_for_service(NS + name, timeout=60)
+        cls.get_stats = rospy.ServiceProxy(NS + "get_stats", GetStats)
+        cls.cloud_pub = rospy.Publisher("/cloud_in", PointCloud2, queue_size=2)
+        wait_for(lambda: cls.cloud_pub.get_num_connections() > 0, 20, "the server on cloud_in")
+        cls.publish_scene()
+        wait_for(lambda: cls.get_stats().stats.scans >= 1, 30, "the cloud inserted")
+        wait_for(lambda: all(t in cls.last for t in ("occupied_cells_vis_array",
+                                                      "octomap_point_cloud_centers",
+                                                      "occupied_cells")), 20, "the map topics")
+
+    @classmethod
+    def keep(cls, topic):
+        return lambda msg: cls.last.__setitem__(topic, msg)
+
+    @classmethod
+    def publish_scene(cls):
+        wall, beyond, too_low, high = scene_points()
+        header = Header(frame_id="sensor", stamp=rospy.Time.now())
+        cls.cloud_pub.publish(pc2.create_cloud_xyz32(header, wall + beyond + too_low + high))
+
+    @classmethod
+    def tearDownClass(cls):
+        for proc in cls.procs:
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGINT)
+                try:
+                    proc.wait(10)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def stats(self, ns=NS):
+        res = rospy.ServiceProxy(ns + "get_stats", GetStats)()
+        self.assertTrue(res.success, res.message)
+        return res.stats
+
+    # ---- parameters of the YAML ----
+    def test_01_frame_resolution_and_flat_colour(self):
+        """frame_id, resolution, height_map false with color/*: every marker cell red."""
+        markers = [m for m in self.last["occupied_cells_vis_array"].markers
+                   if m.action == Marker.ADD]
+        self.assertTrue(markers)
+        for m in markers:
+            self.assertEqual(m.header.frame_id, "map")
+            self.assertAlmostEqual(m.scale.x, RES)
+            for c in m.colors:
+                self.assertEqual((c.r, c.g, c.b, c.a), (1.0, 0.0, 0.0, 1.0))
+
+    def test_02_publish_free_space(self):
+        wait_for(lambda: "free_cells_vis_array" in self.last, 10, "free_cells_vis_array")
+        self.assertTrue(any(m.points for m in self.last["free_cells_vis_array"].markers))
+
+    def test_03_max_range_and_pointcloud_height_band(self):
+        occupied = occupied_keys(self.last["occupied_cells"])
+        wall, beyond, too_low, high = scene_points()
+        for x, y, z in wall:
+            self.assertIn(key(x, y, z + SENSOR_Z), occupied)
+        for x, y, z in beyond + too_low:
+            self.assertNotIn(key(x, y, z + SENSOR_Z), occupied)
+        x, y, z = high[0]
+        self.assertIn(key(x, y, z + SENSOR_Z), occupied)
+        self.assertEqual(len(occupied), len(wall) + 1)
+
+    def test_04_point_cloud_centers_alias_of_occupied_cells(self):
+        centers = self.last["octomap_point_cloud_centers"]
+        cells = self.last["occupied_cells"]
+        self.assertEqual(centers.header.frame_id, "map")
+        self.assertEqual(occupied_keys(centers), occupied_keys(cells))
+        self.assertEqual(centers.width * centers.height, cells.width * cells.height)
+
+    def test_05_projected_map_reaches_a_late_subscriber_unlatched(self):
+        """latch false (the YAML): a subscriber arriving after the last update still gets the
+        grid; occupancy_min_z/max_z: the high point is not projected, the wall is."""
+        grids = []
+        sub = rospy.Subscriber("/projected_map", OccupancyGrid, grids.append)
+        wait_for(lambda: grids, 10, "projected_map for a late subscriber")
+        sub.unregister()
+        grid = grids[0]
+        self.assertAlmostEqual(grid.info.resolution, RES, places=6)
+
+        def at(x, y):
+            i = int((x - grid.info.origin.position.x) / RES)
+            j = int((y - grid.info.origin.position.y) / RES)
+            return grid.data[j * grid.info.width + i]
+        self.assertEqual(at(3.05, 0.05), 100)
+        self.assertNotEqual(at(2.05, -1.05), 100)
+        self.assertEqual(at(1.55, 0.05), 0)  # the rays' free cells below 2 m
+
+    # ---- services ----
+    def test_06_clear_bbx_with_octomap_msgs_type(self):
+        """~clear_bbx has octomap_msgs/BoundingBoxQuery's md5sum (computed from the definition
+        text of the stand-in, field for field octomap_msgs') and clears the box."""
+        ctx = genmsg.MsgContext.create_default()
+        path = os.path.join(rospy.get_param("~standin"), "srv", "BoundingBoxQuery.srv")
+        with open(path) as f:
+            spec = genmsg.msg_loader.load_srv_from_string(ctx, f.read(),
+                                                          "octomap_msgs/BoundingBoxQuery")
+        search = {"geometry_msgs": [os.path.join(rospkg.RosPack().get_path("geometry_msgs"), "msg")]}
+        genmsg.msg_loader.load_depends(ctx, spec.request, search)
+        genmsg.msg_loader.load_depends(ctx, spec.response, search)
+        octomap_md5 = genmsg.gentools.compute_md5(ctx, spec)
+        self.assertEqual(BoundingBoxQuery._md5sum, octomap_md5)
+        saved = os.path.join(self.tmp, "before_clear.fgm")
+        self.assertTrue(rospy.ServiceProxy(NS + "save_map", SaveMap)(saved).success)
+        self.assertTrue(rospy.ServiceProxy(NS + "save_map", SaveMap)(
+            os.path.join(self.tmp, "before_clear.bt")).success)
+        before = self.stats().known_voxels
+        rospy.ServiceProxy(NS + "clear_bbx", BoundingBoxQuery)(Point(2.9, -1, 0), Point(3.2, 1, 2))
+        self.assertLess(self.stats().known_voxels, before)
+        wait_for(lambda: key(3.05, 0.05, 1.05) not in occupied_keys(self.last["occupied_cells"]),
+                 10, "the wall gone from occupied_cells")
+        with self.assertRaises(rospy.ServiceException):  # an inverted box: a failed call
+            rospy.ServiceProxy(NS + "clear_bbx", BoundingBoxQuery)(Point(1, 1, 1), Point(0, 0, 0))
+
+    def test_07_reset_std_srvs_empty_and_stats_follow(self):
+        n = len(self.arrays)
+        rospy.ServiceProxy(NS + "reset", Empty)()
+        s = self.stats()
+        self.assertEqual((s.known_voxels, s.scans, s.points, s.dropped_clouds), (0, 0, 0, 0))
+        wait_for(lambda: any(m.action == Marker.DELETEALL for a in self.arrays[n:]
+                             for m in a.markers), 10, "a full marker republish after reset")
+        res = rospy.ServiceProxy(NS + "reset_map", Reset)()  # fragg's richer reset
+        self.assertTrue(res.success, res.message)
+        self.assertIn("resident memory", res.message)
+
+    def test_08_load_map_reads_bt_and_fgm_stats_follow(self):
+        load = rospy.ServiceProxy(NS + "load_map", LoadMap)
+        res = load(os.path.join(self.tmp, "before_clear.fgm"))
+        self.assertTrue(res.success, res.message)
+        s = self.stats()
+        known = s.known_voxels
+        self.assertGreater(known, 0)
+        self.assertEqual(s.scans, 1)  # the file's count
+        rospy.ServiceProxy(NS + "reset", Empty)()
+        res = load(os.path.join(self.tmp, "before_clear.bt"))
+        self.assertTrue(res.success, res.message)
+        s = self.stats()
+        self.assertEqual(s.known_voxels, known)  # a .bt keeps every observed cell
+        self.assertEqual(s.scans, 0)
+
+    # ---- start-up map and parameter names, in servers started here ----
+    def start_server(self, name, args=(), params=None):
+        """A server in a namespace of its own (its public topics and services, octomap_binary
+        for one, must not replace the main server's); its private namespace is
+        /NAME/NAME/."""
+        private = "/%s/%s/" % (name, name)
+        if params:
+            rosparam.upload_params(private, params)
+        exe = find_in_workspaces(["libexec"], project="fragg_map", path="fragg_map_server",
+                                 first_match_only=True)
+        self.assertTrue(exe, "fragg_map_server is not in the workspace")
+        log = open(os.path.join(self.tmp, name + ".log"), "w+")
+        env = dict(os.environ, ROSCONSOLE_STDOUT_LINE_BUFFERED="1")
+        proc = subprocess.Popen([exe[0], "__ns:=/" + name, "__name:=" + name, "_backend:=cpu"] +
+                                list(args), stdout=log, stderr=subprocess.STDOUT, env=env)
+        self.procs.append(proc)
+        rospy.wait_for_service(private + "get_stats", timeout=60)
+        return proc, log
+
+    def stop(self, proc, log):
+        proc.send_signal(signal.SIGINT)
+        proc.wait(20)
+        log.seek(0)
+        return log.read()
+
+    def test_09_map_file_at_start_up(self):
+        bt = os.path.join(self.tmp, "before_clear.bt")
+        fgm = os.path.join(self.tmp, "before_clear.fgm")
+        proc, log = self.start_server("by_argument", [bt], {"resolution": RES})
+        known = self.stats("/by_argument/by_argument/").known_voxels
+        self.stop(proc, log)
+        self.assertGreater(known, 0)
+        proc, log = self.start_server("by_parameter", [],
+                                      {"resolution": RES, "map_file": fgm})
+        s = self.stats("/by_parameter/by_parameter/")
+        self.stop(proc, log)
+        self.assertEqual((s.known_voxels, s.scans), (known, 1))
+
+    def test_10_unknown_parameters_named_in_one_warning(self):
+        with open(rospy.get_param("~yaml")) as f:
+            yaml_params = rosparam.load_str(f.read(), "")[0][0]
+        proc, log = self.start_server("yaml_check", [], yaml_params)
+        out = self.stop(proc, log)
+        self.assertNotIn("does not read", out, "an octomap_server name is unknown:\n" + out)
+        proc, log = self.start_server("typo_check", [], {"sensor_model": {"hitt": 0.7},
+                                                         "resolutoin": 0.1})
+        out = self.stop(proc, log)
+        lines = [line for line in out.splitlines() if "does not read" in line]
+        self.assertEqual(len(lines), 1, out)
+        self.assertIn("sensor_model/hitt (did you mean sensor_model/hit?)", lines[0])
+        self.assertIn("resolutoin (did you mean resolution?)", lines[0])
+
+    def test_11_octomap_msgs_outputs_or_the_reason(self):
+        """With octomap_msgs at build time: octomap_binary / octomap_full topics and GetOctomap
+        services, the binary data equal to the data of the .bt ~save_map writes; without: the
+        node says why, once."""
+        topics = {name for name, _ in rospy.get_published_topics()}
+        proc, log = self.start_server("octomap_msgs_check")
+        out = self.stop(proc, log)
+        try:
+            from octomap_msgs.msg import Octomap
+            from octomap_msgs.srv import GetOctomap
+        except ImportError:
+            Octomap = None
+        if Octomap is None:
+            self.assertNotIn("/octomap_binary", topics)
+            self.assertEqual(out.count("no octomap_binary / octomap_full"), 1, out)
+            return
+        self.assertNotIn("no octomap_binary", out)
+        self.assertIn("/octomap_binary", topics)
+        self.assertIn("/octomap_full", topics)
+        # The map of the main server (loaded from before_clear.bt in test_08).
+        bt = os.path.join(self.tmp, "now.bt")
+        self.assertTrue(rospy.ServiceProxy(NS + "save_map", SaveMap)(bt).success)
+        with open(bt, "rb") as f:
+            file_data = f.read().split(b"\ndata\n", 1)[1]
+        got = []
+        sub = rospy.Subscriber("/octomap_binary", Octomap, got.append)
+        wait_for(lambda: got, 10, "octomap_binary")
+        sub.unregister()
+        for msg in (got[0], rospy.ServiceProxy("/octomap_binary", GetOctomap)().map):
+            self.assertTrue(msg.binary)
+            self.assertEqual(msg.id, "OcTree")
+            self.assertAlmostEqual(msg.resolution, RES)
+            self.assertEqual(msg.header.frame_id, "map")
+            self.assertEqual(bytes(b & 0xFF for b in msg.data), file_data)
+        full = rospy.ServiceProxy("/octomap_full", GetOctomap)().map
+        self.assertFalse(full.binary)
+        self.assertEqual(full.id, "OcTree")
+        self.assertGreater(len(full.data), len(file_data))
+
+if __name__ == "__main__":
+    rostest.rosrun("fragg_map", "octomap_compat", OctomapCompatTest)

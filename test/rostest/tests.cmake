@@ -1,0 +1,8 @@
+# rostests that need no recorded bag: roslaunch by package name, and fragg_map as a drop-in for
+# octomap_server (an octomap_server YAML through launch/octomap_compat.launch, every row of
+# README's compatibility table).
+if(FRAGG_HAVE_ROS)
+  find_package(rostest REQUIRED)
+  add_rostest(${CMAKE_CURRENT_LIST_DIR}/roslaunch_by_name.test)
+  add_rostest(${CMAKE_CURRENT_LIST_DIR}/octomap_compat.test)
+endif()
