@@ -125,7 +125,10 @@ std::vector<std::vector<VoxelKey>> components(const std::vector<VoxelKey>& sorte
 
 // Splits cells[begin, end) in place along their principal axis (at the mean) until each
 // piece's bounding box edge is at most max_extent_cells (in cells); appends the pieces'
-// ranges; each piece keeps the cells' order (a stable partition).
+// ranges; each piece keeps the cells' order (a stable partition). Halves of more than
+// kTaskCells cells are split as OpenMP tasks (the pieces come out in the same order).
+constexpr size_t kTaskCells = size_t(1) << 15;
+
 void splitToExtent(std::vector<VoxelKey>& cells, size_t begin, size_t end, double max_extent_cells,
                    std::vector<std::pair<size_t, size_t>>& out) {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo, mean = Eigen::Vector3d::Zero();
@@ -156,8 +159,19 @@ void splitToExtent(std::vector<VoxelKey>& cells, size_t begin, size_t end, doubl
     out.emplace_back(begin, end);
     return;
   }
-  splitToExtent(cells, begin, mid, max_extent_cells, out);
-  splitToExtent(cells, mid, end, max_extent_cells, out);
+  if (end - begin < kTaskCells) {
+    splitToExtent(cells, begin, mid, max_extent_cells, out);
+    splitToExtent(cells, mid, end, max_extent_cells, out);
+    return;
+  }
+  std::vector<std::pair<size_t, size_t>> left, right;
+#pragma omp task default(shared)
+  splitToExtent(cells, begin, mid, max_extent_cells, left);
+#pragma omp task default(shared)
+  splitToExtent(cells, mid, end, max_extent_cells, right);
+#pragma omp taskwait
+  out.insert(out.end(), left.begin(), left.end());
+  out.insert(out.end(), right.begin(), right.end());
 }
 
 uint64_t hashCells(const std::vector<VoxelKey>& cells) {
@@ -237,17 +251,28 @@ std::vector<FrontierCluster> FrontierClusterer::cluster(const Map& map,
   if (!std::is_sorted(sorted.begin(), sorted.end(), frontierOrder))
     std::sort(sorted.begin(), sorted.end(), frontierOrder);
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  std::vector<std::vector<VoxelKey>> comps = components(sorted);
+  comps.erase(std::remove_if(comps.begin(), comps.end(),
+                             [&](const auto& c) { return c.size() < options_.min_cells; }),
+              comps.end());
+  // stable_partition keeps the order on each side: pieces stay in frontierOrder. Components
+  // are split as OpenMP tasks (large ones split their halves as tasks too).
+  std::vector<std::vector<std::pair<size_t, size_t>>> ranges(comps.size());
+  const double max_extent_cells = options_.max_extent_m / map.resolution();
+#pragma omp parallel
+#pragma omp single
+  for (size_t i = 0; i < comps.size(); ++i) {
+#pragma omp task default(shared) firstprivate(i)
+    splitToExtent(comps[i], 0, comps[i].size(), max_extent_cells, ranges[i]);
+  }
   std::vector<std::vector<VoxelKey>> pieces;
-  for (auto& comp : components(sorted)) {
-    if (comp.size() < options_.min_cells) continue;
-    std::vector<std::pair<size_t, size_t>> ranges;
-    // stable_partition keeps the order on each side: pieces stay in frontierOrder.
-    splitToExtent(comp, 0, comp.size(), options_.max_extent_m / map.resolution(), ranges);
-    if (ranges.size() == 1) {
-      pieces.push_back(std::move(comp));
+  for (size_t i = 0; i < comps.size(); ++i) {
+    if (ranges[i].size() == 1) {
+      pieces.push_back(std::move(comps[i]));
       continue;
     }
-    for (const auto& [b, e] : ranges) pieces.emplace_back(comp.begin() + b, comp.begin() + e);
+    for (const auto& [b, e] : ranges[i])
+      pieces.emplace_back(comps[i].begin() + b, comps[i].begin() + e);
   }
   std::sort(pieces.begin(), pieces.end(),
             [](const auto& a, const auto& b) { return frontierOrder(a.front(), b.front()); });
@@ -263,9 +288,11 @@ std::vector<FrontierCluster> FrontierClusterer::cluster(const Map& map,
     c.id = (it != previous_.end() && !now.count(h)) ? it->second : next_id_++;
     now[h] = c.id;
     c.cells = std::move(p);
-    describe(map, view, c);
     out.push_back(std::move(c));
   }
+  const int64_t n = static_cast<int64_t>(out.size());
+#pragma omp parallel for schedule(dynamic, 8)
+  for (int64_t i = 0; i < n; ++i) describe(map, view, out[i]);
   previous_ = std::move(now);
   return out;
 }
