@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <unordered_set>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/gain_walk.h"
@@ -41,70 +42,86 @@ std::vector<Eigen::Vector3d> sensorRays(const GainSensor& s) {
   return rays;
 }
 
-// Cells a viewpoint's rays already counted: open addressing over packed keys, emptied in
-// O(1) between viewpoints by a generation number.
-class SeenCells {
+// Cells a viewpoint's rays already counted: a bitmap of the cube its rays can reach (origin
+// cell +- half), as the CUDA kernel keeps, emptied between viewpoints by clearing only the
+// words that were set; a hash set when that cube would pass kMaxCubeWords (long ranges).
+class SeenCube {
  public:
-  SeenCells() { resize(1 << 16); }
-  void clear() {
-    if (++generation_ == 0) {  // wrapped: really empty the table
-      std::fill(stamps_.begin(), stamps_.end(), 0u);
-      generation_ = 1;
-    }
-    size_ = 0;
+  static constexpr uint64_t kMaxCubeWords = uint64_t(1) << 23;  // 64 MiB
+
+  /// Starts a viewpoint whose rays stay within `half` cells of `centre` (per axis).
+  void begin(const VoxelKey& centre, int half) {
+    for (uint64_t w : touched_) words_[w] = 0;
+    touched_.clear();
+    hashed_.clear();
+    centre_ = centre;
+    half_ = half;
+    side_ = 2 * int64_t(half) + 1;
+    const uint64_t n = uint64_t((side_ * side_ * side_ + 63) / 64);
+    use_hash_ = n > kMaxCubeWords;
+    if (!use_hash_ && words_.size() < n) words_.assign(n, 0);
   }
-  /// True when `key` was not in the set (it is now).
-  bool insert(uint64_t key) {
-    if (2 * (size_ + 1) > keys_.size()) grow();
-    size_t i = slotOf(key);
-    while (stamps_[i] == generation_) {
-      if (keys_[i] == key) return false;
-      i = (i + 1) & (keys_.size() - 1);
-    }
-    stamps_[i] = generation_;
-    keys_[i] = key;
-    ++size_;
+  /// True when `k` was not in the set (it is now).
+  bool insert(const VoxelKey& k) {
+    const int64_t lx = int64_t(k.x) - centre_.x + half_, ly = int64_t(k.y) - centre_.y + half_,
+                  lz = int64_t(k.z) - centre_.z + half_;
+    if (lx < 0 || ly < 0 || lz < 0 || lx >= side_ || ly >= side_ || lz >= side_)
+      return hashed_
+          .insert(~(uint64_t(uint32_t(k.x)) ^ (uint64_t(uint32_t(k.y)) << 21) ^
+                    (uint64_t(uint32_t(k.z)) << 42)))
+          .second;  // never reached: rays stay within half (kept exact all the same)
+    const uint64_t bit = uint64_t((lz * side_ + ly) * side_ + lx);
+    if (use_hash_) return hashed_.insert(bit).second;
+    uint64_t& word = words_[bit >> 6];
+    const uint64_t mask = uint64_t(1) << (bit & 63);
+    if (word & mask) return false;
+    if (!word) touched_.push_back(bit >> 6);
+    word |= mask;
     return true;
   }
 
  private:
-  size_t slotOf(uint64_t key) const {
-    key ^= key >> 31;
-    key *= 0x9e3779b97f4a7c15ULL;
-    return static_cast<size_t>(key >> 20) & (keys_.size() - 1);
-  }
-  void resize(size_t n) {
-    keys_.assign(n, 0);
-    stamps_.assign(n, 0);
-    generation_ = 1;
-    size_ = 0;
-  }
-  void grow() {
-    std::vector<uint64_t> old_keys;
-    std::vector<uint32_t> old_stamps;
-    old_keys.swap(keys_);
-    old_stamps.swap(stamps_);
-    const uint32_t old_generation = generation_;
-    resize(old_keys.size() * 2);
-    for (size_t i = 0; i < old_keys.size(); ++i)
-      if (old_stamps[i] == old_generation) insert(old_keys[i]);
-  }
-  std::vector<uint64_t> keys_;
-  std::vector<uint32_t> stamps_;
-  uint32_t generation_ = 1;
-  size_t size_ = 0;
+  std::vector<uint64_t> words_;
+  std::vector<uint64_t> touched_;
+  std::unordered_set<uint64_t> hashed_;
+  bool use_hash_ = false;
+  VoxelKey centre_;
+  int half_ = 0;
+  int64_t side_ = 0;
 };
-
-uint64_t packKey(const VoxelKey& k) {
-  return (uint64_t(uint32_t(k.x)) & 0x1fffff) | ((uint64_t(uint32_t(k.y)) & 0x1fffff) << 21) |
-         ((uint64_t(uint32_t(k.z)) & 0x1fffff) << 42);
-}
 
 // Walks one ray (exact DDA in voxel units, internal/gain_walk.h: the CUDA kernel walks the
 // same cells) from `origin_v` along unit `dir` for `length_v` voxels, adding the entropy of each
 // unknown cell not seen before; stops after an occupied cell.
-double walkRay(const Map& map, const BlockView& view, const double* origin_v, const double* dir,
-               double length_v, SeenCells& seen) {
+// The blocks a viewpoint's rays visit, remembered in a small direct-mapped table: the rays
+// of one viewpoint fan out from one cell and cross the same blocks near it again and again,
+// where the map's hash lookup is the walk's dearest step.
+class NearBlocks {
+ public:
+  explicit NearBlocks(const BlockView& view) : view_(view) {
+    for (Entry& e : entries_) e.key = BlockKey{INT32_MIN, INT32_MIN, INT32_MIN};
+  }
+  const Block* find(const BlockKey& b) {
+    Entry& e = entries_[(uint32_t(b.x) * 3u + uint32_t(b.y) * 5u + uint32_t(b.z) * 7u) & kMask];
+    if (e.key != b) {
+      e.key = b;
+      e.block = view_.findBlock(b);
+    }
+    return e.block;
+  }
+
+ private:
+  static constexpr uint32_t kMask = 1023;
+  struct Entry {
+    BlockKey key;
+    const Block* block = nullptr;
+  };
+  const BlockView& view_;
+  Entry entries_[kMask + 1];
+};
+
+double walkRay(const Map& map, NearBlocks& blocks, const double* origin_v, const double* dir,
+               double length_v, SeenCube& seen) {
   GainDda dda(origin_v, dir);
   double gain = 0.0;
   BlockKey last_block{INT32_MIN, INT32_MIN, INT32_MIN};
@@ -113,14 +130,13 @@ double walkRay(const Map& map, const BlockView& view, const double* origin_v, co
     const VoxelKey k = dda.cell();
     const BlockKey b = blockKeyOf(k);
     if (b != last_block) {
-      block = view.findBlock(b);
+      block = blocks.find(b);
       last_block = b;
     }
     const Cell* cell = block ? &block->cells[cellIndexOf(k)] : nullptr;
     const CellState s = cell ? map.state(*cell) : CellState::kUnknown;
     if (s == CellState::kOccupied) break;
-    if (s == CellState::kUnknown && seen.insert(packKey(k)))
-      gain += cellGainBits(map.model(), cell);
+    if (s == CellState::kUnknown && seen.insert(k)) gain += cellGainBits(map.model(), cell);
   }
   return gain;
 }
@@ -175,13 +191,18 @@ double gainAlongRays(const Map& map, const BlockView& view, const Eigen::Vector3
   const double res = map.resolution();
   const double origin_v[3] = {position_m.x() / res, position_m.y() / res, position_m.z() / res};
   const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
-  thread_local SeenCells seen;
-  seen.clear();
+  const double length_v = max_range_m / res;
+  // Every cell a ray enters lies within ceil(length) + 1 cells of the origin cell per axis.
+  thread_local SeenCube seen;
+  seen.begin(VoxelKey{int(std::floor(origin_v[0])), int(std::floor(origin_v[1])),
+                      int(std::floor(origin_v[2]))},
+             static_cast<int>(std::ceil(length_v)) + 2);
   double gain = 0.0;
+  NearBlocks blocks(view);
   for (const Eigen::Vector3d& ray : rays) {
     double dir[3];
     yawRotate(c, s, ray.data(), dir);
-    gain += walkRay(map, view, origin_v, dir, max_range_m / res, seen);
+    gain += walkRay(map, blocks, origin_v, dir, length_v, seen);
   }
   return gain;
 }

@@ -1,11 +1,15 @@
 // fragg_map_frontier_bench: the frontier figures of issue 14 on W1 (scripts/make_workloads.sh).
 // The map is built scan by scan; after each scan the incremental frontier tracker is updated
 // (timed); then on the final map: a full recompute, clustering, and the gain of N candidate
-// viewpoints (pinhole 64 x 48 rays, 10 m) on free cells around the clusters.
+// viewpoints (pinhole 64 x 48 rays, 10 m) on free cells around the clusters. Wall and process
+// CPU times are printed (CPU time is the steadier figure on a shared machine). With --map the
+// final map is a saved one (no incremental part).
 //
-//   fragg_map_frontier_bench --workloads DIR [--max-scans 100] [--resolution 0.05]
-//       [--max-range 30] [--backend cpu|cuda|auto] [--viewpoints 1000] [--json FILE]
+//   fragg_map_frontier_bench (--workloads DIR | --map MAP.fgm) [--max-scans 100]
+//       [--resolution 0.05] [--max-range 30] [--backend cpu|cuda|auto] [--viewpoints 1000]
+//       [--threads N] [--json FILE]
 #include <fmt/format.h>
+#include <sys/resource.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -36,27 +40,40 @@ double msSince(Clock::time_point t0) {
 }
 
 struct Options {
-  std::string workloads, backend = "auto", json_path;
+  std::string workloads, backend = "auto", json_path, map_path;
   size_t max_scans = 100, viewpoints = 1000;
   double resolution_m = 0.05, max_range_m = 30.0;
   int threads = 0;
 };
 
+/// Process CPU time (user + system), ms: with other work on the machine, the steadier figure.
+double cpuMs() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return (u.ru_utime.tv_sec + u.ru_stime.tv_sec) * 1e3 +
+         (u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-3;
+}
+
 int run(const Options& o) {
-  const auto loads = simWorkloads(o.workloads, o.max_scans,
-                                  [](const std::string& n) { return n == "W1 lidar360 30 m"; });
-  if (loads.empty()) throw IoError("no W1 workload in " + o.workloads);
-  const Workload& w = loads.front();
+  std::vector<Workload> loads;
+  if (o.map_path.empty()) {
+    loads = simWorkloads(o.workloads, o.max_scans,
+                         [](const std::string& n) { return n == "W1 lidar360 30 m"; });
+    if (loads.empty()) throw IoError("no W1 workload in " + o.workloads);
+  }
   MapParams params;
   params.resolution_m = o.resolution_m;
   params.backend = backendFromString(o.backend);
   params.threads = o.threads;
-  Map map(params);
+  Map map = o.map_path.empty() ? Map(params) : Map::load(o.map_path, params.backend);
   const SensorModel sensor = SensorModel::autoFromCloud(0.0, o.max_range_m);
   planning::FrontierTracker tracker({}, o.threads);
   std::vector<double> insert_ms, update_ms, examined, changed;
   bool states_on_device = false;
-  for (const Scan& s : w.scans) {
+  const std::vector<Scan> no_scans;
+  const std::vector<Scan>& scans = loads.empty() ? no_scans : loads.front().scans;
+  if (scans.empty()) tracker.update(map);
+  for (const Scan& s : scans) {
     auto t0 = Clock::now();
     map.insert(s.cloud, s.T_map_sensor, sensor);
     insert_ms.push_back(msSince(t0));
@@ -68,18 +85,27 @@ int run(const Options& o) {
       states_on_device = st.states_on_device;
     }
   }
-  std::vector<double> full_ms;
+  std::vector<double> full_ms, full_cpu_ms;
   std::vector<VoxelKey> full;
   for (int i = 0; i < 3; ++i) {
     const auto t0 = Clock::now();
-    full = planning::findFrontierCells(map, {}, o.threads);
+    const double c0 = cpuMs();
+    planning::FrontierTracker fresh({}, o.threads);  // a full recompute, set as block masks
+    fresh.update(map);
     full_ms.push_back(msSince(t0));
+    full_cpu_ms.push_back(cpuMs() - c0);
+    if (i == 2) full = fresh.cells();
   }
   const bool equal = full == tracker.cells();
   auto t0 = Clock::now();
+  double c0 = cpuMs();
+  const std::vector<VoxelKey> listed = planning::findFrontierCells(map, {}, o.threads);
+  const double list_ms = msSince(t0), list_cpu_ms = cpuMs() - c0;
+  t0 = Clock::now();
+  c0 = cpuMs();
   planning::FrontierClusterer clusterer;
-  const auto clusters = clusterer.cluster(map, full);
-  const double cluster_ms = msSince(t0);
+  const auto clusters = clusterer.cluster(map, listed);
+  const double cluster_ms = msSince(t0), cluster_cpu_ms = cpuMs() - c0;
 
   // Candidates: free cells on rings around the clusters, facing them, round robin.
   std::vector<Eigen::Vector3d> positions;
@@ -97,17 +123,22 @@ int run(const Options& o) {
       yaws.push_back(std::atan2(c.centroid_m.y() - p.y(), c.centroid_m.x() - p.x()));
     }
   planning::GainSensor camera;  // pinhole 64 x 48, 90 x 68.8 degrees, 10 m
+  // Once to warm up (the device table and bitmaps are allocated on the first call), then timed.
+  planning::viewpointGainsBits(map, positions, yaws, camera, o.threads, Backend::kAuto);
   t0 = Clock::now();
+  c0 = cpuMs();
   const std::vector<double> gains =
       planning::viewpointGainsBits(map, positions, yaws, camera, o.threads, Backend::kAuto);
-  const double gain_ms = msSince(t0);
+  const double gain_ms = msSince(t0), gain_cpu_ms = cpuMs() - c0;
   double gain_sum = 0.0;
   for (double g : gains) gain_sum += g;
 
-  std::printf("%s\n", fmt::format("W1 {} scans at {} m, {} m range, backend {}: {} blocks, {} "
-                                  "frontier cells, {} clusters",
-                                  w.scans.size(), o.resolution_m, o.max_range_m, map.backendName(),
-                                  map.blockCount(), full.size(), clusters.size())
+  std::printf("%s\n", fmt::format("{}: backend {}: {} blocks, {} frontier cells, {} clusters",
+                                  o.map_path.empty()
+                                      ? fmt::format("W1 {} scans at {} m, {} m range", scans.size(),
+                                                    o.resolution_m, o.max_range_m)
+                                      : o.map_path,
+                                  map.backendName(), map.blockCount(), full.size(), clusters.size())
                           .c_str());
   std::printf("%s\n", fmt::format("insert            median {:8.2f} ms  p95 {:8.2f} ms",
                                   percentile(insert_ms, 0.5), percentile(insert_ms, 0.95))
@@ -119,18 +150,32 @@ int run(const Options& o) {
                                   percentile(update_ms, 1.0), percentile(changed, 0.5),
                                   percentile(examined, 0.5), states_on_device ? "device" : "host")
                           .c_str());
-  std::printf("%s\n", fmt::format("full recompute    median {:8.2f} ms  (incremental set {} the "
-                                  "full one)",
-                                  percentile(full_ms, 0.5), equal ? "equals" : "DIFFERS FROM")
+  std::printf("%s\n", fmt::format("full recompute    median {:8.2f} ms, CPU time {:.2f} ms "
+                                  "(incremental set {} the full one)",
+                                  percentile(full_ms, 0.5), percentile(full_cpu_ms, 0.5),
+                                  equal ? "equals" : "DIFFERS FROM")
                           .c_str());
-  std::printf("%s\n", fmt::format("clustering        {:8.2f} ms", cluster_ms).c_str());
+  std::printf("%s\n", fmt::format("cells listed      {:8.2f} ms, CPU time {:.2f} ms "
+                                  "(findFrontierCells: recompute + the list of keys)",
+                                  list_ms, list_cpu_ms)
+                          .c_str());
+  std::printf("%s\n", fmt::format("clustering        {:8.2f} ms, CPU time {:.2f} ms", cluster_ms,
+                                  cluster_cpu_ms)
+                          .c_str());
   std::printf("%s\n", fmt::format("gain of {} viewpoints (pinhole {} x {}, {} m): {:.2f} ms, "
-                                  "mean {:.0f} bits",
+                                  "CPU time {:.2f} ms, mean {:.0f} bits",
                                   positions.size(), camera.columns, camera.rows, camera.max_range_m,
-                                  gain_ms, positions.empty() ? 0.0 : gain_sum / positions.size())
+                                  gain_ms, gain_cpu_ms,
+                                  positions.empty() ? 0.0 : gain_sum / positions.size())
                           .c_str());
   if (!o.json_path.empty()) {
-    const nlohmann::json j = {{"scans", w.scans.size()},
+    const nlohmann::json j = {{"scans", scans.size()},
+                              {"map", o.map_path},
+                              {"full_cpu_ms_median", percentile(full_cpu_ms, 0.5)},
+                              {"list_ms", list_ms},
+                              {"cluster_cpu_ms", cluster_cpu_ms},
+                              {"gain_cpu_ms", gain_cpu_ms},
+                              {"gain_sum_bits", gain_sum},
                               {"resolution_m", o.resolution_m},
                               {"backend", map.backendName()},
                               {"blocks", map.blockCount()},
@@ -158,7 +203,12 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   fragg::bench::Options o;
   CLI::App app{"Frontier benchmark on W1: incremental updates, full recompute, viewpoint gains"};
-  app.add_option("--workloads", o.workloads, "Folder of scripts/make_workloads.sh")->required();
+  auto* workloads =
+      app.add_option("--workloads", o.workloads, "Folder of scripts/make_workloads.sh");
+  auto* map_file = app.add_option(
+      "--map", o.map_path, "A saved map instead of W1 (no incremental part; its own resolution)");
+  workloads->excludes(map_file);
+  map_file->excludes(workloads);
   app.add_option("--max-scans", o.max_scans, "W1 scans to use")->capture_default_str();
   app.add_option("--resolution", o.resolution_m, "Voxel edge (m)")->capture_default_str();
   app.add_option("--max-range", o.max_range_m, "Max range (m)")->capture_default_str();
@@ -170,6 +220,8 @@ int main(int argc, char** argv) {
   app.add_option("--json", o.json_path, "Write the figures as JSON");
   try {
     app.parse(argc, argv);
+    if (o.workloads.empty() && o.map_path.empty())
+      throw fragg::InvalidArgument("give --workloads DIR or --map MAP.fgm");
     return fragg::bench::run(o);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
