@@ -7,7 +7,9 @@
 
 #if FRAGG_HAVE_LMDB
 #include <lmdb.h>
+#include <sys/mman.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <mutex>
 
@@ -107,13 +109,12 @@ class LmdbPageStore final : public PageStore {
         const int rc = mdb_del(txn, blocks_, &k, nullptr);
         if (rc != MDB_NOTFOUND) check(rc, "erase");
       }
-      for (const auto& [key, block] : puts) {
+      forEachEncoded(puts, [&](const BlockKey& key, const std::vector<uint8_t>& bytes) {
         StoreKey sk = storeKeyOf(key);
-        const std::vector<uint8_t>& bytes = codec_.encode(*block);
         MDB_val k{sizeof(sk.bytes), sk.bytes};
         MDB_val v{bytes.size(), const_cast<uint8_t*>(bytes.data())};
         check(mdb_put(txn, blocks_, &k, &v, 0), "write");
-      }
+      });
       char name[] = "map";
       MDB_val k{3, name};
       MDB_val v{meta.size(), const_cast<uint8_t*>(meta.data())};
@@ -123,6 +124,18 @@ class LmdbPageStore final : public PageStore {
       throw;
     }
     check(mdb_txn_commit(txn), "commit");
+  }
+
+  void releaseMappedPages() override {
+    // Every record read or written maps its file pages into this process (LMDB reads through
+    // its memory map): without this the process's resident memory grows with the store.
+    std::lock_guard<std::mutex> lock(mutex_);  // no transaction of ours is open
+    MDB_envinfo info;
+    MDB_stat stat;
+    if (mdb_env_info(env_, &info) != 0 || mdb_env_stat(env_, &stat) != 0 || !info.me_mapaddr)
+      return;
+    const size_t used = (static_cast<size_t>(info.me_last_pgno) + 1) * stat.ms_psize;
+    madvise(info.me_mapaddr, std::min(used, info.me_mapsize), MADV_DONTNEED);
   }
 
   uint64_t diskBytes() const override {
