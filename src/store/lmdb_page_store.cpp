@@ -109,11 +109,13 @@ class LmdbPageStore final : public PageStore {
         const int rc = mdb_del(txn, blocks_, &k, nullptr);
         if (rc != MDB_NOTFOUND) check(rc, "erase");
       }
+      size_t written = 0;
       forEachEncoded(puts, [&](const BlockKey& key, const std::vector<uint8_t>& bytes) {
         StoreKey sk = storeKeyOf(key);
         MDB_val k{sizeof(sk.bytes), sk.bytes};
         MDB_val v{bytes.size(), const_cast<uint8_t*>(bytes.data())};
         check(mdb_put(txn, blocks_, &k, &v, 0), "write");
+        if (++written % 8192 == 0) dropMappedPages();
       });
       char name[] = "map";
       MDB_val k{3, name};
@@ -124,18 +126,12 @@ class LmdbPageStore final : public PageStore {
       throw;
     }
     check(mdb_txn_commit(txn), "commit");
+    dropMappedPages();
   }
 
   void releaseMappedPages() override {
-    // Every record read or written maps its file pages into this process (LMDB reads through
-    // its memory map): without this the process's resident memory grows with the store.
-    std::lock_guard<std::mutex> lock(mutex_);  // no transaction of ours is open
-    MDB_envinfo info;
-    MDB_stat stat;
-    if (mdb_env_info(env_, &info) != 0 || mdb_env_stat(env_, &stat) != 0 || !info.me_mapaddr)
-      return;
-    const size_t used = (static_cast<size_t>(info.me_last_pgno) + 1) * stat.ms_psize;
-    madvise(info.me_mapaddr, std::min(used, info.me_mapsize), MADV_DONTNEED);
+    std::lock_guard<std::mutex> lock(mutex_);
+    dropMappedPages();
   }
 
   uint64_t diskBytes() const override {
@@ -152,6 +148,21 @@ class LmdbPageStore final : public PageStore {
     ~ReadTxn() { mdb_txn_abort(txn); }
     MDB_txn* txn = nullptr;
   };
+
+  /// Drops the map's file pages from this process's resident memory: every record read or
+  /// written (a put reads its leaf through the map) maps file pages into the process, and a
+  /// commit's puts reach most leaves of the store (keys in z, y, x order), so without this
+  /// the process's resident memory grows with the store. Safe inside a transaction: the map
+  /// is read-only and shared (pages come back from the page cache when touched), a write
+  /// transaction's dirty pages are in its own memory until the commit.
+  void dropMappedPages() {
+    MDB_envinfo info;
+    MDB_stat stat;
+    if (mdb_env_info(env_, &info) != 0 || mdb_env_stat(env_, &stat) != 0 || !info.me_mapaddr)
+      return;
+    const size_t used = (static_cast<size_t>(info.me_last_pgno) + 1) * stat.ms_psize;
+    madvise(info.me_mapaddr, std::min(used, info.me_mapsize), MADV_DONTNEED);
+  }
 
   void check(int rc, const char* what) const {
     if (rc != 0) throw IoError(path_ + ": LMDB " + what + ": " + mdb_strerror(rc));
