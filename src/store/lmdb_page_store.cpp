@@ -10,8 +10,11 @@
 #include <sys/mman.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
+#include <string>
 
 #include "block_codec.h"
 #endif
@@ -50,6 +53,7 @@ class LmdbPageStore final : public PageStore {
       mdb_env_close(env_);
       throw;
     }
+    locateMap();
   }
   ~LmdbPageStore() override { mdb_env_close(env_); }
 
@@ -158,10 +162,28 @@ class LmdbPageStore final : public PageStore {
   void dropMappedPages() {
     MDB_envinfo info;
     MDB_stat stat;
-    if (mdb_env_info(env_, &info) != 0 || mdb_env_stat(env_, &stat) != 0 || !info.me_mapaddr)
-      return;
+    if (!map_addr_ || mdb_env_info(env_, &info) != 0 || mdb_env_stat(env_, &stat) != 0) return;
     const size_t used = (static_cast<size_t>(info.me_last_pgno) + 1) * stat.ms_psize;
-    madvise(info.me_mapaddr, std::min(used, info.me_mapsize), MADV_DONTNEED);
+    madvise(map_addr_, std::min(used, map_bytes_), MADV_DONTNEED);
+  }
+  /// Where LMDB mapped the file (mdb_env_info gives the address only with MDB_FIXEDMAP): the
+  /// largest mapping of the file in /proc/self/maps. None found: pages are not dropped.
+  void locateMap() {
+    std::error_code ec;
+    const std::string file = std::filesystem::canonical(path_, ec).string();
+    if (ec) return;
+    std::ifstream maps("/proc/self/maps");
+    std::string line;
+    while (std::getline(maps, line)) {
+      const size_t slash = line.find('/');
+      if (slash == std::string::npos || line.compare(slash, std::string::npos, file) != 0) continue;
+      unsigned long start = 0, end = 0;
+      if (std::sscanf(line.c_str(), "%lx-%lx", &start, &end) != 2) continue;
+      if (end - start > map_bytes_) {
+        map_addr_ = reinterpret_cast<void*>(start);
+        map_bytes_ = end - start;
+      }
+    }
   }
 
   void check(int rc, const char* what) const {
@@ -198,6 +220,8 @@ class LmdbPageStore final : public PageStore {
   std::string path_;
   MDB_env* env_ = nullptr;
   MDB_dbi blocks_ = 0, meta_ = 0;
+  void* map_addr_ = nullptr;  ///< LMDB's map of the file (locateMap)
+  size_t map_bytes_ = 0;
   std::mutex mutex_;
   BlockCodec codec_;
 };
