@@ -184,4 +184,20 @@ void DeviceBlockCache::invalidateAll(BlockMap& blocks) {
   any_dirty_ = false;
 }
 
+void DeviceBlockCache::forget(const std::vector<BlockIndex>& host_blocks, BlockMap& blocks) {
+  std::vector<int32_t> slots;
+  for (BlockIndex i : host_blocks) {
+    const int32_t s = slotOf(i);
+    if (s >= 0) slots.push_back(s);
+  }
+  dropSlots(slots, blocks);  // written back when dirty; their blocks are host-only now
+  if (!host_only_stale_)
+    for (BlockIndex i : host_blocks) host_only_.remove(i, blocks.meta(i).key);
+}
+
+void DeviceBlockCache::added(const std::vector<BlockIndex>& host_blocks, const BlockMap& blocks) {
+  if (host_only_stale_) return;  // rebuilt from the host map when next read
+  for (BlockIndex i : host_blocks) host_only_.add(i, blocks.meta(i).key);
+}
+
 }  // namespace fragg::cuda

@@ -28,6 +28,8 @@ class DeviceBlockCache : public BlockCache {
   bool needsSync() const override { return any_dirty_; }
   void invalidate(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) override;
   void invalidateAll(BlockMap& blocks) override;
+  void forget(const std::vector<BlockIndex>& host_blocks, BlockMap& blocks) override;
+  void added(const std::vector<BlockIndex>& host_blocks, const BlockMap& blocks) override;
   size_t deviceBytes() const override { return pool_.deviceBytes() + transfer_.deviceBytes(); }
 
   /// Grows an empty pool to `slots` (capped by the pool's limit).

@@ -26,6 +26,9 @@ class ChunkAllocator {
   virtual void* allocate(size_t bytes) = 0;
   virtual void deallocate(void* p, size_t bytes) = 0;
   virtual const char* name() const = 0;
+  /// Whether whole free pages of a chunk may be handed back to the system (madvise: they read
+  /// zero when touched again); pinned memory may not.
+  virtual bool pagesReleasable() const { return false; }
 };
 std::shared_ptr<ChunkAllocator> plainChunkAllocator();
 
@@ -94,6 +97,11 @@ class BlockMap {
 
   size_t hostBytes() const;
 
+  /// Hands the memory pages that hold only free blocks back to the system (paging out leaves
+  /// the arena with holes the size of the blocks that left); no-op for an allocator whose
+  /// pages cannot be released. Returns the bytes released by this call.
+  size_t releaseFreePages();
+
  private:
   struct SuperKeyHash {
     size_t operator()(const BlockKey& k) const noexcept { return BlockKeyHash()(k); }
@@ -106,6 +114,8 @@ class BlockMap {
   std::vector<Block*> chunks_;
   std::vector<BlockMeta> meta_;
   std::vector<BlockIndex> free_;
+  /// Per memory page of the arena: handed back by releaseFreePages() and not used since.
+  std::vector<uint8_t> page_released_;
   std::unordered_map<BlockKey, BlockIndex, BlockKeyHash> index_;
   std::unordered_map<BlockKey, std::vector<BlockIndex>, SuperKeyHash> super_;
 };

@@ -249,6 +249,8 @@ class Map {
   void pageInAllBlocks();
   /// Paging after a scan (or removal): commits when due or over budget, then pages out.
   void pageAfterScan(const Eigen::Vector3d& sensor_map);
+  /// After paging out: the memory of the blocks that left goes back to the system.
+  void releasePagedOutMemory();
   /// Commits (at close and before a move-assignment); errors are logged, not thrown.
   void closePaging() noexcept;
   void fallBackToCpu(const std::string& why);

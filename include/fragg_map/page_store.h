@@ -42,6 +42,9 @@ class PageStore {
                       const std::vector<BlockKey>& erases, const std::vector<uint8_t>& meta) = 0;
   /// The store's size on disk (its files).
   virtual uint64_t diskBytes() const = 0;
+  /// Drops the store's file pages from this process's resident memory where the store maps
+  /// its file (they stay in the system's page cache); the map calls it after paging out.
+  virtual void releaseMappedPages() {}
 };
 
 /// When blocks leave RAM (Map::attachPageStore).
@@ -49,7 +52,9 @@ struct PagingPolicy {
   /// Resident blocks' memory (cells, metadata, index) above which blocks are paged out;
   /// 0: never page out (the store still receives every commit).
   double budget_mb = 0.0;
-  /// Blocks whose centre lies within this distance of the last sensor position stay in RAM.
+  /// Blocks whose centre lies within this distance of the last sensor position are paged
+  /// out last (farthest first), only when the others cannot bring the map within the budget:
+  /// the budget wins over the radius (a warning says so, once).
   double radius_m = 0.0;
   /// Paging out brings the resident blocks down to this fraction of the budget (hysteresis:
   /// fewer, larger rounds).
@@ -68,6 +73,7 @@ struct PagingStats {
   std::string store;             ///< "sqlite:/path/map.db"
   uint64_t resident_blocks = 0;  ///< in RAM now
   uint64_t peak_resident_blocks = 0;
+  uint64_t budget_blocks = 0;  ///< the RAM budget in resident blocks (0: no budget)
   uint64_t paged_blocks = 0;   ///< in the store only
   uint64_t pages_written = 0;  ///< block records written (commits of dirty blocks)
   uint64_t pages_read = 0;     ///< block records read back into RAM

@@ -1,5 +1,7 @@
 #include "fragg_map/block_map.h"
 
+#include <sys/mman.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <new>
@@ -16,7 +18,14 @@ class PlainChunkAllocator : public ChunkAllocator {
   }
   void deallocate(void* p, size_t) override { std::free(p); }
   const char* name() const override { return "plain"; }
+  bool pagesReleasable() const override { return true; }
 };
+
+constexpr size_t kPageBytes = 4096;
+static_assert(kPageBytes % sizeof(Block) == 0, "a memory page holds whole blocks");
+static_assert(BlockMap::kBlocksPerChunk * sizeof(Block) % kPageBytes == 0,
+              "a chunk holds whole memory pages");
+constexpr size_t kBlocksPerPage = kPageBytes / sizeof(Block);
 
 void initBlock(Block& b) {
   for (Cell& c : b.cells) c = Cell();
@@ -43,6 +52,7 @@ BlockMap& BlockMap::operator=(BlockMap&& o) noexcept {
   chunks_ = std::move(o.chunks_);
   meta_ = std::move(o.meta_);
   free_ = std::move(o.free_);
+  page_released_ = std::move(o.page_released_);
   index_ = std::move(o.index_);
   super_ = std::move(o.super_);
   o.allocator_ = allocator_;
@@ -80,6 +90,7 @@ BlockIndex BlockMap::findOrCreate(const BlockKey& key, bool* created, bool initi
     if (!free_.empty()) {
       i = free_.back();
       free_.pop_back();
+      if (i / kBlocksPerPage < page_released_.size()) page_released_[i / kBlocksPerPage] = 0;
     } else {
       i = static_cast<BlockIndex>(meta_.size());
       if (i % kBlocksPerChunk == 0)
@@ -114,7 +125,42 @@ void BlockMap::erase(const BlockKey& key) {
   free_.push_back(i);
 }
 
+size_t BlockMap::releaseFreePages() {
+  if (!allocator_->pagesReleasable() || free_.empty()) return 0;
+  const size_t pages = meta_.size() / kBlocksPerPage;  // whole pages in use by the arena
+  std::vector<uint8_t> free_blocks(meta_.size(), 0);
+  for (BlockIndex i : free_) free_blocks[i] = 1;
+  page_released_.resize(pages, 0);
+  size_t released = 0;
+  size_t run_start = 0, run_length = 0;  // consecutive pages of one chunk to release
+  auto flush = [&] {
+    if (run_length == 0) return;
+    const BlockIndex first = static_cast<BlockIndex>(run_start * kBlocksPerPage);
+    if (madvise(&block(first), run_length * kPageBytes, MADV_DONTNEED) == 0) {
+      for (size_t p = run_start; p < run_start + run_length; ++p) page_released_[p] = 1;
+      released += run_length * kPageBytes;
+    }
+    run_length = 0;
+  };
+  constexpr size_t kPagesPerChunk = kBlocksPerChunk / kBlocksPerPage;
+  for (size_t p = 0; p < pages; ++p) {
+    if (p % kPagesPerChunk == 0) flush();  // chunks are not contiguous
+    bool all_free = !page_released_[p];
+    for (size_t b = 0; all_free && b < kBlocksPerPage; ++b)
+      all_free = free_blocks[p * kBlocksPerPage + b] != 0;
+    if (!all_free) {
+      flush();
+      continue;
+    }
+    if (run_length == 0) run_start = p;
+    ++run_length;
+  }
+  flush();
+  return released;
+}
+
 void BlockMap::clear() {
+  page_released_.clear();  // releasing a page twice is harmless
   index_.clear();
   super_.clear();
   free_.clear();

@@ -1,5 +1,8 @@
 // Map's side of out-of-core paging: attaching a store, paging blocks in and out, commits.
 #include <chrono>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <cmath>
 #include <string>
 
@@ -122,16 +125,17 @@ void Map::pageInBlocks(const BlockKey& lo, const BlockKey& hi) {
   if (!pager_) return;
   pager_->touch(lo, hi, scans_ + 1);
   if (!pager_->anyPagedOut(lo, hi)) return;
-  // The device cache must not hold a view of the box while host blocks appear in it.
-  backend_->cache().invalidate(lo, hi, blocks_);
-  pager_->pageIn(lo, hi, blocks_);
+  // A paged-out block has no copy in the backend's cache (forget() took it when it left):
+  // the blocks read back are new host blocks to the cache, the rest of its copies stay.
+  const std::vector<BlockIndex> read = pager_->pageIn(lo, hi, blocks_);
+  backend_->cache().added(read, blocks_);
   bumpViewEpoch();
 }
 
 void Map::pageInAllBlocks() {
   if (!pager_ || pager_->pagedOutCount() == 0) return;
-  backend_->cache().invalidateAll(blocks_);
-  pager_->pageInAll(blocks_);
+  const std::vector<BlockIndex> read = pager_->pageInAll(blocks_);
+  backend_->cache().added(read, blocks_);
   bumpViewEpoch();
 }
 
@@ -166,20 +170,45 @@ void Map::commitPages() {
 void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
   pager_->noteResident(blocks_.size());
   const bool over = pager_->overBudget(blocks_);
-  if (!over && !pager_->commitDue(scans_)) return;
-  if (over) {
-    // Paged-out blocks must have no device copy: the cache is written back and emptied.
-    std::lock_guard<std::mutex> lock(*sync_mutex_);
-    backend_->cache().invalidateAll(blocks_);
-  } else {
+  const bool due = pager_->commitDue(scans_);
+  if (!over && !due) return;
+  {
+    // The host map is made complete (the device's changes written back) before it is
+    // committed or its clean blocks are chosen.
     std::lock_guard<std::mutex> lock(*sync_mutex_);
     backend_->cache().sync(blocks_);
   }
-  pager_->commit(blocks_, revision_, metaOf(params_, scans_));
-  if (over) {
-    pager_->evict(blocks_, sensor_map);
-    bumpViewEpoch();
+  const StoreMapMeta meta = metaOf(params_, scans_);
+  if (due) pager_->commit(blocks_, revision_, meta);
+  if (!over) return;
+  // Blocks unchanged since the last commit leave without a commit; only when they cannot
+  // bring the map within its budget is everything committed and any block may leave. The
+  // blocks near the sensor change with every scan: committing them at every paging round
+  // wrote them many times over.
+  std::vector<BlockIndex> out = pager_->victims(blocks_, sensor_map, /*clean_only=*/true);
+  if (pager_->excessOverBudget(blocks_.size() - out.size()) > 0) {
+    pager_->commit(blocks_, revision_, meta);
+    out = pager_->victims(blocks_, sensor_map, /*clean_only=*/false);
   }
+  {
+    // Only the leaving blocks' device copies go; the cache keeps the rest.
+    std::lock_guard<std::mutex> lock(*sync_mutex_);
+    backend_->cache().forget(out, blocks_);
+  }
+  pager_->pageOut(out, blocks_);
+  releasePagedOutMemory();
+  bumpViewEpoch();
+}
+
+void Map::releasePagedOutMemory() {
+  // The arena's pages that hold only free blocks, the store's mapped file pages, then the
+  // allocator's free memory (the index nodes of the blocks that left): without it the
+  // process keeps its peak.
+  blocks_.releaseFreePages();
+  pager_->store().releaseMappedPages();
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
 }
 
 void Map::closePaging() noexcept {

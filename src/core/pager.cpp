@@ -8,6 +8,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/byte_io.h"
+#include "fragg_map/log.h"
 
 namespace fragg {
 
@@ -82,42 +83,70 @@ Pager::Pager(std::shared_ptr<PageStore> store, const PagingPolicy& policy, doubl
 }
 
 void Pager::addPagedOut(const BlockKey& key) {
-  if (paged_out_.insert(key).second) paged_super_[superOf(key)].push_back(key);
+  RegionBits& bits = paged_super_[superOf(key)];
+  const size_t b = bitOf(key);
+  if (bits.test(b)) return;
+  bits.set(b);
+  ++paged_count_;
 }
 
 void Pager::removePagedOut(const BlockKey& key) {
-  if (paged_out_.erase(key) == 0) return;
   auto it = paged_super_.find(superOf(key));
-  std::vector<BlockKey>& v = it->second;
-  v.erase(std::find(v.begin(), v.end(), key));
-  if (v.empty()) paged_super_.erase(it);
+  if (it == paged_super_.end() || !it->second.test(bitOf(key))) return;
+  it->second.reset(bitOf(key));
+  --paged_count_;
+  if (it->second.none()) paged_super_.erase(it);
 }
 
-bool Pager::anyPagedOut(const BlockKey& lo, const BlockKey& hi) const {
-  if (paged_out_.empty()) return false;
+bool Pager::isPagedOut(const BlockKey& key) const {
+  auto it = paged_super_.find(superOf(key));
+  return it != paged_super_.end() && it->second.test(bitOf(key));
+}
+
+std::vector<BlockKey> Pager::pagedOutKeys() const {
+  std::vector<BlockKey> out;
+  out.reserve(paged_count_);
+  for (const auto& [region, bits] : paged_super_)
+    for (size_t b = bits._Find_first(); b < bits.size(); b = bits._Find_next(b))
+      out.push_back(keyOfBit(region, b));
+  return out;
+}
+
+template <class Fn>
+void Pager::forEachPagedOutIn(const BlockKey& lo, const BlockKey& hi, Fn&& fn) const {
+  if (paged_count_ == 0) return;
   const BlockKey slo = superOf(lo), shi = superOf(hi);
-  const double volume = regionCount(slo, shi);
-  auto inBox = [&](const BlockKey& k) {
-    return k.x >= lo.x && k.x <= hi.x && k.y >= lo.y && k.y <= hi.y && k.z >= lo.z && k.z <= hi.z;
+  auto visit = [&](const BlockKey& region, const RegionBits& bits) {
+    for (size_t b = bits._Find_first(); b < bits.size(); b = bits._Find_next(b)) {
+      const BlockKey k = keyOfBit(region, b);
+      if (k.x >= lo.x && k.x <= hi.x && k.y >= lo.y && k.y <= hi.y && k.z >= lo.z && k.z <= hi.z)
+        if (!fn(k)) return false;
+    }
+    return true;
   };
-  if (volume > static_cast<double>(paged_super_.size())) {
-    for (const auto& [s, keys] : paged_super_)
-      for (const BlockKey& k : keys)
-        if (inBox(k)) return true;
-    return false;
+  if (regionCount(slo, shi) > static_cast<double>(paged_super_.size())) {
+    for (const auto& [region, bits] : paged_super_)
+      if (!visit(region, bits)) return;
+    return;
   }
   for (int32_t z = slo.z; z <= shi.z; ++z)
     for (int32_t y = slo.y; y <= shi.y; ++y)
       for (int32_t x = slo.x; x <= shi.x; ++x) {
         auto it = paged_super_.find({x, y, z});
-        if (it == paged_super_.end()) continue;
-        for (const BlockKey& k : it->second)
-          if (inBox(k)) return true;
+        if (it != paged_super_.end() && !visit(it->first, it->second)) return;
       }
-  return false;
 }
 
-void Pager::readInto(const BlockKey& key, BlockMap& blocks) {
+bool Pager::anyPagedOut(const BlockKey& lo, const BlockKey& hi) const {
+  bool any = false;
+  forEachPagedOutIn(lo, hi, [&](const BlockKey&) {
+    any = true;
+    return false;  // one is enough
+  });
+  return any;
+}
+
+BlockIndex Pager::readInto(const BlockKey& key, BlockMap& blocks) {
   bool created = false;
   const BlockIndex i = blocks.findOrCreate(key, &created, /*initialise=*/false);
   if (!created) throw IoError("paging: block paged out and resident at once (internal error)");
@@ -135,46 +164,36 @@ void Pager::readInto(const BlockKey& key, BlockMap& blocks) {
   BlockMeta& m = blocks.meta(i);
   m.changed_at = m.occupied_at = 0;  // clean: equal to its record
   ++counters_.pages_read;
+  return i;
 }
 
-size_t Pager::pageIn(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) {
-  if (paged_out_.empty()) return 0;
+std::vector<BlockIndex> Pager::pageIn(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) {
+  if (paged_count_ == 0) return {};
   const auto t0 = Clock::now();
   std::vector<BlockKey> wanted;
-  const BlockKey slo = superOf(lo), shi = superOf(hi);
-  const double volume = regionCount(slo, shi);
-  auto collect = [&](const std::vector<BlockKey>& keys) {
-    for (const BlockKey& k : keys)
-      if (k.x >= lo.x && k.x <= hi.x && k.y >= lo.y && k.y <= hi.y && k.z >= lo.z && k.z <= hi.z)
-        wanted.push_back(k);
-  };
-  if (volume > static_cast<double>(paged_super_.size())) {
-    for (const auto& [s, keys] : paged_super_) collect(keys);
-  } else {
-    for (int32_t z = slo.z; z <= shi.z; ++z)
-      for (int32_t y = slo.y; y <= shi.y; ++y)
-        for (int32_t x = slo.x; x <= shi.x; ++x) {
-          auto it = paged_super_.find({x, y, z});
-          if (it != paged_super_.end()) collect(it->second);
-        }
-  }
-  if (wanted.empty()) return 0;
+  forEachPagedOutIn(lo, hi, [&](const BlockKey& k) {
+    wanted.push_back(k);
+    return true;
+  });
+  if (wanted.empty()) return {};
   // Key order: the stores keep records sorted, so neighbouring reads share pages.
   std::sort(wanted.begin(), wanted.end(), [](const BlockKey& a, const BlockKey& b) {
     return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
   });
   blocks.reserve(wanted.size());
+  std::vector<BlockIndex> read;
+  read.reserve(wanted.size());
   for (const BlockKey& k : wanted) {
-    readInto(k, blocks);
+    read.push_back(readInto(k, blocks));
     removePagedOut(k);
   }
   noteResident(blocks.size());
   counters_.seconds_page_in += secondsSince(t0);
-  return wanted.size();
+  return read;
 }
 
-size_t Pager::pageInAll(BlockMap& blocks) {
-  if (paged_out_.empty()) return 0;
+std::vector<BlockIndex> Pager::pageInAll(BlockMap& blocks) {
+  if (paged_count_ == 0) return {};
   const int32_t lim = 0x7fffffff >> kBlockBits;
   return pageIn({-lim - 1, -lim - 1, -lim - 1}, {lim, lim, lim}, blocks);
 }
@@ -189,10 +208,10 @@ void Pager::touch(const BlockKey& lo, const BlockKey& hi, uint64_t stamp) {
 }
 
 void Pager::forgetAll(const BlockMap& blocks) {
-  for (const BlockKey& k : paged_out_) erased_.push_back(k);
+  for (const BlockKey& k : pagedOutKeys()) erased_.push_back(k);
   blocks.forEach([&](BlockIndex i) { erased_.push_back(blocks.meta(i).key); });
-  paged_out_.clear();
   paged_super_.clear();
+  paged_count_ = 0;
   last_used_.clear();
 }
 
@@ -206,8 +225,12 @@ size_t Pager::budgetBlocks() const {
   return static_cast<size_t>(policy_.budget_mb * 1024.0 * 1024.0 / kResidentBlockBytes);
 }
 
-bool Pager::overBudget(const BlockMap& blocks) const {
-  return policy_.budget_mb > 0 && blocks.size() > budgetBlocks();
+bool Pager::overBudget(const BlockMap& blocks) const { return excessOverBudget(blocks.size()) > 0; }
+
+size_t Pager::excessOverBudget(size_t resident) const {
+  if (policy_.budget_mb <= 0) return 0;
+  const size_t budget = budgetBlocks();
+  return resident > budget ? resident - budget : 0;
 }
 
 void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta& meta) {
@@ -237,36 +260,74 @@ void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta
   counters_.seconds_commit += secondsSince(t0);
 }
 
-void Pager::evict(BlockMap& blocks, const Eigen::Vector3d& sensor_m) {
+std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vector3d& sensor_m,
+                                       bool clean_only) {
   const size_t target =
       static_cast<size_t>(static_cast<double>(budgetBlocks()) * policy_.low_water);
-  if (blocks.size() <= target) return;
+  if (blocks.size() <= target) return {};
   struct Candidate {
-    uint64_t used;
+    bool near;       ///< within the radius: after every other block
+    uint64_t order;  ///< outside: the last use; inside: farther first
     BlockKey key;
+    BlockIndex index;
   };
   std::vector<Candidate> candidates;
+  candidates.reserve(blocks.size());
   const double r2 = policy_.radius_m * policy_.radius_m;
   blocks.forEach([&](BlockIndex i) {
-    const BlockKey& k = blocks.meta(i).key;
+    const BlockMeta& m = blocks.meta(i);
+    if (clean_only && dirty(m)) return;
+    const BlockKey& k = m.key;
     const Eigen::Vector3d c = (Eigen::Vector3d(k.x, k.y, k.z).array() + 0.5).matrix() * block_m_;
-    if ((c - sensor_m).squaredNorm() <= r2) return;
-    auto it = last_used_.find(superOf(k));
-    candidates.push_back({it == last_used_.end() ? 0 : it->second, k});
+    const double d2 = (c - sensor_m).squaredNorm();
+    if (d2 <= r2) {
+      if (clean_only) return;  // near blocks leave only in a full round (after a commit)
+      // Millimetres from the radius inwards: the farthest near block goes first.
+      candidates.push_back({true, static_cast<uint64_t>((r2 - d2) * 1e3), k, i});
+    } else {
+      auto it = last_used_.find(superOf(k));
+      candidates.push_back({false, it == last_used_.end() ? 0 : it->second, k, i});
+    }
   });
   const size_t n = std::min(candidates.size(), blocks.size() - target);
-  // Oldest first; ties by key so that the same run pages out the same blocks.
-  auto older = [](const Candidate& a, const Candidate& b) {
-    return std::tie(a.used, a.key.z, a.key.y, a.key.x) <
-           std::tie(b.used, b.key.z, b.key.y, b.key.x);
+  auto before = [](const Candidate& a, const Candidate& b) {
+    return std::tie(a.near, a.order, a.key.z, a.key.y, a.key.x) <
+           std::tie(b.near, b.order, b.key.z, b.key.y, b.key.x);
   };
   std::nth_element(candidates.begin(), candidates.begin() + static_cast<long>(n), candidates.end(),
-                   older);
+                   before);
+  std::vector<BlockIndex> out;
+  out.reserve(n);
+  bool any_near = false;
   for (size_t j = 0; j < n; ++j) {
-    blocks.erase(candidates[j].key);
-    addPagedOut(candidates[j].key);
+    out.push_back(candidates[j].index);
+    any_near |= candidates[j].near;
   }
-  counters_.pages_evicted += n;
+  if (any_near && !radius_yield_warned_) {
+    radius_yield_warned_ = true;
+    logMessage(LogLevel::kWarning,
+               "paging: the blocks within the paging radius (" + std::to_string(policy_.radius_m) +
+                   " m) exceed the RAM budget (" + std::to_string(policy_.budget_mb) +
+                   " MB): the budget wins, the farthest of them are paged out");
+  }
+  return out;
+}
+
+void Pager::pageOut(const std::vector<BlockIndex>& victims, BlockMap& blocks) {
+  std::vector<BlockKey> keys;
+  keys.reserve(victims.size());
+  for (BlockIndex i : victims) {
+    if (dirty(blocks.meta(i)))
+      throw IoError(
+          "paging: a block changed since its last commit cannot be paged out "
+          "(internal error)");
+    keys.push_back(blocks.meta(i).key);
+  }
+  for (const BlockKey& k : keys) {
+    blocks.erase(k);
+    addPagedOut(k);
+  }
+  counters_.pages_evicted += keys.size();
 }
 
 void Pager::noteResident(size_t resident) {
@@ -277,7 +338,8 @@ PagingStats Pager::stats(const BlockMap& blocks) const {
   PagingStats s = counters_;
   s.resident_blocks = blocks.size();
   s.peak_resident_blocks = std::max<uint64_t>(s.peak_resident_blocks, blocks.size());
-  s.paged_blocks = paged_out_.size();
+  s.paged_blocks = paged_count_;
+  s.budget_blocks = policy_.budget_mb > 0 ? budgetBlocks() : 0;
   s.store_bytes = store_->diskBytes();
   return s;
 }

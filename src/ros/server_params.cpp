@@ -16,6 +16,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/field_names.h"
+#include "fragg_map/ros/paging_params.h"
 
 namespace fragg::ros {
 namespace {
@@ -404,6 +405,8 @@ ServerParams parseParameters(const XmlRpcValue& root) {
     throw;
   }
   t_asked_names = nullptr;
+  // paging/* are read by paging_params.cpp (the map server reads both).
+  for (const std::string& name : pagingParameterNames()) asked.insert(name);
   if (root.valid() && root.getType() == XmlRpcValue::TypeStruct)
     collectUnknown(root, "", asked, &p.unknown_parameters);
   return p;

@@ -1,6 +1,7 @@
 #include "block_codec.h"
 
 #include <cstring>
+#include <memory>
 
 #include "fragg_map/errors.h"
 
@@ -39,6 +40,42 @@ void BlockCodec::decode(const void* data, size_t size, Block* out, const std::st
   if (ZSTD_isError(n) || n != sizeof(Block))
     throw IoError(where + ": block record does not decompress (" +
                   (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "wrong size") + ")");
+}
+
+std::vector<std::vector<uint8_t>> encodeBlocks(const std::vector<const Block*>& blocks) {
+  std::vector<std::vector<uint8_t>> out(blocks.size());
+  const long n = static_cast<long>(blocks.size());
+  bool failed = false;
+  std::string why;
+#pragma omp parallel if (n > 256)
+  {
+    // A context per thread, made once per call (cheap against the blocks it compresses).
+    std::unique_ptr<BlockCodec> codec;
+    try {
+      codec = std::make_unique<BlockCodec>();
+    } catch (const std::exception& e) {
+#pragma omp critical(fragg_encode_blocks)
+      {
+        failed = true;
+        why = e.what();
+      }
+    }
+#pragma omp for schedule(static)
+    for (long j = 0; j < n; ++j) {
+      if (!codec) continue;
+      try {
+        out[j] = codec->encode(*blocks[j]);
+      } catch (const std::exception& e) {
+#pragma omp critical(fragg_encode_blocks)
+        {
+          failed = true;
+          why = e.what();
+        }
+      }
+    }
+  }
+  if (failed) throw IoError(why);
+  return out;
 }
 
 StoreKey storeKeyOf(const BlockKey& key) {

@@ -7,9 +7,14 @@
 
 #if FRAGG_HAVE_LMDB
 #include <lmdb.h>
+#include <sys/mman.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
+#include <string>
 
 #include "block_codec.h"
 #endif
@@ -48,6 +53,7 @@ class LmdbPageStore final : public PageStore {
       mdb_env_close(env_);
       throw;
     }
+    locateMap();
   }
   ~LmdbPageStore() override { mdb_env_close(env_); }
 
@@ -107,13 +113,14 @@ class LmdbPageStore final : public PageStore {
         const int rc = mdb_del(txn, blocks_, &k, nullptr);
         if (rc != MDB_NOTFOUND) check(rc, "erase");
       }
-      for (const auto& [key, block] : puts) {
+      size_t written = 0;
+      forEachEncoded(puts, [&](const BlockKey& key, const std::vector<uint8_t>& bytes) {
         StoreKey sk = storeKeyOf(key);
-        const std::vector<uint8_t>& bytes = codec_.encode(*block);
         MDB_val k{sizeof(sk.bytes), sk.bytes};
         MDB_val v{bytes.size(), const_cast<uint8_t*>(bytes.data())};
         check(mdb_put(txn, blocks_, &k, &v, 0), "write");
-      }
+        if (++written % 8192 == 0) dropMappedPages();
+      });
       char name[] = "map";
       MDB_val k{3, name};
       MDB_val v{meta.size(), const_cast<uint8_t*>(meta.data())};
@@ -123,6 +130,12 @@ class LmdbPageStore final : public PageStore {
       throw;
     }
     check(mdb_txn_commit(txn), "commit");
+    dropMappedPages();
+  }
+
+  void releaseMappedPages() override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    dropMappedPages();
   }
 
   uint64_t diskBytes() const override {
@@ -139,6 +152,39 @@ class LmdbPageStore final : public PageStore {
     ~ReadTxn() { mdb_txn_abort(txn); }
     MDB_txn* txn = nullptr;
   };
+
+  /// Drops the map's file pages from this process's resident memory: every record read or
+  /// written (a put reads its leaf through the map) maps file pages into the process, and a
+  /// commit's puts reach most leaves of the store (keys in z, y, x order), so without this
+  /// the process's resident memory grows with the store. Safe inside a transaction: the map
+  /// is read-only and shared (pages come back from the page cache when touched), a write
+  /// transaction's dirty pages are in its own memory until the commit.
+  void dropMappedPages() {
+    MDB_envinfo info;
+    MDB_stat stat;
+    if (!map_addr_ || mdb_env_info(env_, &info) != 0 || mdb_env_stat(env_, &stat) != 0) return;
+    const size_t used = (static_cast<size_t>(info.me_last_pgno) + 1) * stat.ms_psize;
+    madvise(map_addr_, std::min(used, map_bytes_), MADV_DONTNEED);
+  }
+  /// Where LMDB mapped the file (mdb_env_info gives the address only with MDB_FIXEDMAP): the
+  /// largest mapping of the file in /proc/self/maps. None found: pages are not dropped.
+  void locateMap() {
+    std::error_code ec;
+    const std::string file = std::filesystem::canonical(path_, ec).string();
+    if (ec) return;
+    std::ifstream maps("/proc/self/maps");
+    std::string line;
+    while (std::getline(maps, line)) {
+      const size_t slash = line.find('/');
+      if (slash == std::string::npos || line.compare(slash, std::string::npos, file) != 0) continue;
+      unsigned long start = 0, end = 0;
+      if (std::sscanf(line.c_str(), "%lx-%lx", &start, &end) != 2) continue;
+      if (end - start > map_bytes_) {
+        map_addr_ = reinterpret_cast<void*>(start);
+        map_bytes_ = end - start;
+      }
+    }
+  }
 
   void check(int rc, const char* what) const {
     if (rc != 0) throw IoError(path_ + ": LMDB " + what + ": " + mdb_strerror(rc));
@@ -174,6 +220,8 @@ class LmdbPageStore final : public PageStore {
   std::string path_;
   MDB_env* env_ = nullptr;
   MDB_dbi blocks_ = 0, meta_ = 0;
+  void* map_addr_ = nullptr;  ///< LMDB's map of the file (locateMap)
+  size_t map_bytes_ = 0;
   std::mutex mutex_;
   BlockCodec codec_;
 };

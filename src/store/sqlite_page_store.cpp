@@ -159,14 +159,13 @@ class SqlitePageStore final : public PageStore {
           del.reset();
         }
         Statement put(db_, "INSERT OR REPLACE INTO blocks(k, v) VALUES(?, ?)", path_);
-        for (const auto& [key, block] : puts) {
+        forEachEncoded(puts, [&](const BlockKey& key, const std::vector<uint8_t>& v) {
           const StoreKey k = storeKeyOf(key);
-          const std::vector<uint8_t>& v = codec_.encode(*block);
           sqlite3_bind_blob(put.get(), 1, k.bytes, sizeof(k.bytes), SQLITE_STATIC);
           sqlite3_bind_blob(put.get(), 2, v.data(), static_cast<int>(v.size()), SQLITE_STATIC);
           put.step();
           put.reset();
-        }
+        });
         Statement m(db_, "INSERT OR REPLACE INTO meta(name, v) VALUES('map', ?)", path_);
         sqlite3_bind_blob(m.get(), 1, meta.data(), static_cast<int>(meta.size()), SQLITE_STATIC);
         m.step();

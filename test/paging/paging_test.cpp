@@ -3,7 +3,9 @@
 // edits page in what they reach; a store is a map on its own and a build continues it.
 #include <gtest/gtest.h>
 #include <sqlite3.h>
+#include <unistd.h>
 
+#include <fstream>
 #include <memory>
 #include <string>
 
@@ -101,6 +103,35 @@ TEST_P(Paging, PagedBuildIsByteIdenticalToTheInMemoryBuild) {
   EXPECT_TRUE(sameBlocks(paged, fullInMemory(), &why)) << why;
 }
 
+TEST_P(Paging, TheBudgetWinsOverTheRadiusAndUnchangedBlocksAreNotWrittenAgain) {
+  const std::string dir = testDir();
+  Map paged(corridorParams());
+  PagingPolicy policy = smallBudget();
+  policy.radius_m = 100.0;  // the whole corridor: the radius alone would keep every block
+  policy.commit_every_scans = 0;
+  paged.attachPageStore(openPageStore(storePath(dir), false), policy);
+  const uint64_t budget = paged.pagingStats().budget_blocks;
+  ASSERT_GT(budget, 0u);
+  ASSERT_LT(budget, fullInMemory().blockCount());
+  for (int i = 0; i < kScans; ++i) {
+    insertScans(paged, i, i + 1);
+    ASSERT_LE(paged.pagingStats().resident_blocks, budget) << "after scan " << i;
+  }
+  EXPECT_GT(paged.pagingStats().pages_evicted, 1000u);
+
+  // Reading every block back changes none: the next commit writes nothing.
+  paged.commitPages();
+  const uint64_t written = paged.pagingStats().pages_written;
+  paged.ensureAllResident();
+  EXPECT_EQ(paged.pagingStats().paged_blocks, 0u);
+  paged.commitPages();
+  EXPECT_EQ(paged.pagingStats().pages_written, written);
+  std::string why;
+  EXPECT_TRUE(sameBlocks(paged, fullInMemory(), &why)) << why;
+  const Map from_store = Map::loadPageStore(*openPageStore(storePath(dir), true));
+  EXPECT_TRUE(sameBlocks(from_store, fullInMemory(), &why)) << why;
+}
+
 TEST_P(Paging, QueriesAndEditsPageInWhatTheyReach) {
   const std::string dir = testDir();
   Map paged(corridorParams());
@@ -179,7 +210,9 @@ TEST_P(Paging, CollisionChecksPageInWhatThePosesReach) {
   const auto after = planning::checkPoses(static_cast<const Map&>(paged), sphere, poses, options);
   for (size_t i = 0; i < poses.size(); ++i) {
     EXPECT_EQ(after[i].collides, expected[i].collides) << "pose " << i;
-    if (expected[i].collides) EXPECT_EQ(after[i].first_cell, expected[i].first_cell) << i;
+    if (expected[i].collides) {
+      EXPECT_EQ(after[i].first_cell, expected[i].first_cell) << i;
+    }
   }
   EXPECT_THROW(planning::pageInForCollision(paged, sphere, poses,
                                             [] {
@@ -236,6 +269,42 @@ TEST_P(Paging, RefusesWhatItCannotPage) {
   EXPECT_THROW(openPageStore(dir + "/missing.db", true), IoError);
   writeBytes(dir + "/garbage.db", std::string(4096, 'x'));
   EXPECT_THROW(openPageStore(dir + "/garbage.db", true), IoError);
+}
+
+/// The process's resident memory (/proc/self/statm), bytes.
+size_t residentBytes() {
+  std::ifstream statm("/proc/self/statm");
+  size_t pages = 0, resident = 0;
+  statm >> pages >> resident;
+  return resident * static_cast<size_t>(sysconf(_SC_PAGESIZE));
+}
+
+TEST(BlockMap, PagesOfFreeBlocksGoBackToTheSystemAndComeBackUsable) {
+  BlockMap blocks;
+  constexpr int kBlocks = 20000;  // 40 MiB of cells
+  for (int i = 0; i < kBlocks; ++i) {
+    Block& b = blocks.block(blocks.findOrCreate({i, 0, 0}));
+    for (Cell& c : b.cells) c.log_odds_fx = 7;
+  }
+  EXPECT_EQ(blocks.releaseFreePages(), 0u);  // nothing free
+  const size_t before = residentBytes();
+  for (int i = 0; i < kBlocks; ++i)
+    if (i % 1000 != 0) blocks.erase({i, 0, 0});  // 20 blocks stay
+  const size_t released = blocks.releaseFreePages();
+  EXPECT_GT(released, size_t{35} << 20);
+  EXPECT_LT(residentBytes() + (size_t{30} << 20), before) << "the released pages stayed resident";
+  EXPECT_EQ(blocks.releaseFreePages(), 0u);  // released already
+  for (int i = 0; i < kBlocks; i += 1000) {  // the blocks that stayed are intact
+    const Block* b = blocks.findBlock({i, 0, 0});
+    ASSERT_NE(b, nullptr);
+    for (const Cell& c : b->cells) ASSERT_EQ(c.log_odds_fx, 7);
+  }
+  for (int i = 0; i < kBlocks; ++i) {  // new blocks in released pages start unobserved
+    if (i % 1000 == 0) continue;
+    const Block& b = blocks.block(blocks.findOrCreate({i, 1, 0}));
+    for (const Cell& c : b.cells) ASSERT_FALSE(c.observed());
+  }
+  EXPECT_EQ(blocks.size(), static_cast<size_t>(kBlocks));
 }
 
 TEST(SqlitePageStore, ACorruptRecordIsRefusedWhenRead) {

@@ -37,6 +37,13 @@ if(FRAGG_HAVE_ROS)
       LIBS fragg_map_nodelet fragg_map_octomap
       LABELS ros)
   endif()
+  # paging/* and the server's map on a page store (needs the page stores).
+  if(TARGET fragg_map_store)
+    fragg_add_test(ros_paging_params_test
+      SOURCES ${CMAKE_CURRENT_LIST_DIR}/paging_params_test.cpp
+      LIBS fragg_map_ros
+      LABELS ros paging)
+  endif()
   target_compile_definitions(ros_server_params_test PRIVATE
     FRAGG_PYTHON3="/usr/bin/python3"
     FRAGG_YAML_TO_XMLRPC="${CMAKE_CURRENT_LIST_DIR}/yaml_to_xmlrpc.py"

@@ -59,6 +59,11 @@ class BlockCache {
   virtual void invalidate(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) = 0;
   /// invalidate() over the whole map (load, reset, import).
   virtual void invalidateAll(BlockMap& blocks) = 0;
+  /// Paging: the host blocks `host_blocks` are about to be erased (paged out): their cached
+  /// copies go, written back first when changed; the rest of the cache stays.
+  virtual void forget(const std::vector<BlockIndex>& host_blocks, BlockMap& blocks) = 0;
+  /// Paging: host blocks were created (paged in) where the cache holds no copy of a block.
+  virtual void added(const std::vector<BlockIndex>& host_blocks, const BlockMap& blocks) = 0;
   /// Memory the cache holds outside the host map.
   virtual size_t deviceBytes() const = 0;
 };
@@ -72,6 +77,8 @@ class HostBlockCache final : public BlockCache {
   bool needsSync() const override { return false; }
   void invalidate(const BlockKey&, const BlockKey&, BlockMap&) override {}
   void invalidateAll(BlockMap&) override {}
+  void forget(const std::vector<BlockIndex>&, BlockMap&) override {}
+  void added(const std::vector<BlockIndex>&, const BlockMap&) override {}
   size_t deviceBytes() const override { return 0; }
 };
 

@@ -5,11 +5,11 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <bitset>
 #include <chrono>
 #include <cstdint>
 #include <memory>
 #include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 #include "fragg_map/block_map.h"
@@ -38,14 +38,14 @@ class Pager {
 
   /// Whether a block of [lo, hi] is paged out (no store access).
   bool anyPagedOut(const BlockKey& lo, const BlockKey& hi) const;
-  bool isPagedOut(const BlockKey& key) const { return paged_out_.count(key) != 0; }
-  size_t pagedOutCount() const { return paged_out_.size(); }
-  std::vector<BlockKey> pagedOutKeys() const { return {paged_out_.begin(), paged_out_.end()}; }
-  /// Reads the paged-out blocks of [lo, hi] back into `blocks` (clean: stamped 0). Returns
-  /// their keys' bounding box through lo_read/hi_read; returns the count.
-  size_t pageIn(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks);
+  bool isPagedOut(const BlockKey& key) const;
+  size_t pagedOutCount() const { return paged_count_; }
+  std::vector<BlockKey> pagedOutKeys() const;
+  /// Reads the paged-out blocks of [lo, hi] back into `blocks` (clean: stamped 0); returns
+  /// their indices in `blocks`.
+  std::vector<BlockIndex> pageIn(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks);
   /// Every paged-out block.
-  size_t pageInAll(BlockMap& blocks);
+  std::vector<BlockIndex> pageInAll(BlockMap& blocks);
   /// Blocks of [lo, hi] were used at `stamp` (a scan number): they are paged out last.
   void touch(const BlockKey& lo, const BlockKey& hi, uint64_t stamp);
   /// A resident block was erased (all its cells unknown): its record goes at the next commit.
@@ -62,12 +62,21 @@ class Pager {
 
   bool commitDue(uint64_t scans) const;
   bool overBudget(const BlockMap& blocks) const;
+  /// Whether the block changed after the last commit (its record is older than it).
+  bool dirty(const BlockMeta& m) const { return all_dirty_ || m.changed_at > committed_revision_; }
   /// Writes the dirty resident blocks, the erasures and `meta` in one transaction; `revision`
   /// is the map's revision now (blocks changed after it are dirty next time).
   void commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta& meta);
-  /// After a commit (every resident block clean): drops least recently used blocks farther than
-  /// the radius from `sensor_m` until the resident blocks fit the low-water mark.
-  void evict(BlockMap& blocks, const Eigen::Vector3d& sensor_m);
+  /// The resident blocks to page out so that the resident blocks fit the low-water mark:
+  /// least recently used first, blocks within the radius of `sensor_m` last (farthest first:
+  /// the budget wins over the radius). With `clean_only`, dirty blocks and blocks within the
+  /// radius are left out (they may be fewer than needed). Deterministic (ties by key).
+  std::vector<BlockIndex> victims(const BlockMap& blocks, const Eigen::Vector3d& sensor_m,
+                                  bool clean_only);
+  /// The resident blocks above the budget (0 when within it).
+  size_t excessOverBudget(size_t resident) const;
+  /// Drops the blocks (clean: their records are committed) from RAM; they are paged out.
+  void pageOut(const std::vector<BlockIndex>& victims, BlockMap& blocks);
 
   PagingStats stats(const BlockMap& blocks) const;
   /// Resident block count after an edit (for the peak).
@@ -80,15 +89,32 @@ class Pager {
   }
   void addPagedOut(const BlockKey& key);
   void removePagedOut(const BlockKey& key);
-  void readInto(const BlockKey& key, BlockMap& blocks);
+  BlockIndex readInto(const BlockKey& key, BlockMap& blocks);
   size_t budgetBlocks() const;
 
   std::shared_ptr<PageStore> store_;
   PagingPolicy policy_;
   double block_m_;
-  std::unordered_set<BlockKey, BlockKeyHash> paged_out_;
-  /// paged_out_ by 8x8x8-block region, so that a box costs its regions, not its blocks.
-  std::unordered_map<BlockKey, std::vector<BlockKey>, BlockKeyHash> paged_super_;
+  /// Paged-out blocks: a bit per block of each 8x8x8-block region that holds one (64 bytes a
+  /// region, where a hash set of keys took about 50 bytes a block: the map's paged-out part
+  /// is unbounded), so that a box costs its regions, not its blocks.
+  using RegionBits = std::bitset<size_t{1} << (3 * kBlockBits)>;
+  static size_t bitOf(const BlockKey& b) {
+    constexpr int32_t m = (1 << kBlockBits) - 1;
+    return static_cast<size_t>((b.x & m) | ((b.y & m) << kBlockBits) |
+                               ((b.z & m) << (2 * kBlockBits)));
+  }
+  static BlockKey keyOfBit(const BlockKey& region, size_t bit) {
+    constexpr int32_t m = (1 << kBlockBits) - 1;
+    const auto v = static_cast<int32_t>(bit);
+    return {(region.x << kBlockBits) | (v & m), (region.y << kBlockBits) | ((v >> kBlockBits) & m),
+            (region.z << kBlockBits) | ((v >> (2 * kBlockBits)) & m)};
+  }
+  template <class Fn>
+  void forEachPagedOutIn(const BlockKey& lo, const BlockKey& hi, Fn&& fn) const;
+  std::unordered_map<BlockKey, RegionBits, BlockKeyHash> paged_super_;
+  size_t paged_count_ = 0;
+  bool radius_yield_warned_ = false;
   /// Last use (scan number) by 8x8x8-block region.
   std::unordered_map<BlockKey, uint64_t, BlockKeyHash> last_used_;
   std::vector<BlockKey> erased_;

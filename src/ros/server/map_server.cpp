@@ -21,7 +21,8 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
     else
       ROS_INFO("fragg_map: %s", line.c_str());
   });
-  shared_ = std::make_unique<SharedMap>(MapState(fragg::Map(params_.map)));
+  paging_ = readPagingParameters(private_nh, &params_.map);
+  shared_ = std::make_unique<SharedMap>(MapState(makeServerMap(params_.map, paging_)));
   publishers_ = std::make_unique<MapPublishers>(nh, private_nh, params_, shared_.get(), &stats_);
 #if FRAGG_HAVE_OCTOMAP_MSGS
   octomap_outputs_ = std::make_unique<OctomapOutputs>(nh, params_, shared_.get());
@@ -75,6 +76,15 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
              params_.latch ? "latched" : "unlatched", params_.map.resolution_m,
              params_.frame_id.c_str(), state->map.backendName(), state->map.backendReason().c_str(),
              params_.sensor.describe().c_str(), params_.queue_size);
+  }
+  if (!paging_.store.empty()) {
+    const SharedMap::ReadGuard state = shared_->read();
+    const fragg::PagingStats paging = state->map.pagingStats();
+    ROS_INFO(
+        "fragg_map: paging to %s (budget %.0f MB, radius %.1f m): %zu scans and %lu "
+        "blocks continued from it",
+        paging.store.c_str(), paging_.policy.budget_mb, paging_.policy.radius_m,
+        state->map.scanCount(), static_cast<unsigned long>(paging.paged_blocks));
   }
   const fragg::ScanStoreParams& scans = params_.map.scans;
   if (scans.keep) {

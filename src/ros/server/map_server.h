@@ -15,6 +15,7 @@
 #include "cloud_input.h"
 #include "collision_service.h"
 #include "correction_service.h"
+#include "fragg_map/ros/paging_params.h"
 #include "fragg_map/ros/server_params.h"
 #include "frontier_publisher.h"
 #include "frontier_service.h"
@@ -40,6 +41,7 @@ class MapServer {
 
  private:
   ServerParams params_;
+  PagingParams paging_;  ///< paging/* (paging_params.h)
   std::unique_ptr<SharedMap> shared_;
   ServerStats stats_;
   tf2_ros::Buffer tf_buffer_;

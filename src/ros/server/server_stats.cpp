@@ -89,6 +89,9 @@ fragg_map::MapStats ServerStats::toMsg(const fragg::Map& map, const std::string&
   const fragg::MemoryStats memory = map.memory();
   msg.known_voxels = memory.known_voxels;
   msg.blocks = memory.blocks;
+  const fragg::PagingStats paging = map.pagingStats();
+  msg.resident_blocks = paging.enabled ? paging.resident_blocks : memory.blocks;
+  msg.paged_blocks = paging.paged_blocks;
   msg.host_bytes = memory.host_block_bytes;
   msg.gpu_bytes = memory.device_bytes;
   msg.scans_kept = map.scanStore().size();

@@ -258,6 +258,7 @@ void runBuild(const BuildOptions& o) {
                      {"resumed_scans", resumed},
                      {"committed_scans", paging.committed_scans},
                      {"peak_resident_blocks", paging.peak_resident_blocks},
+                     {"budget_blocks", paging.budget_blocks},
                      {"resident_blocks", paging.resident_blocks},
                      {"paged_blocks", paging.paged_blocks},
                      {"pages_written", paging.pages_written},
@@ -374,7 +375,8 @@ void addBuildCommand(CLI::App& app) {
                 "Resident blocks' memory above which blocks are paged out (MB; 0 = never)")
       ->capture_default_str();
   c->add_option("--page-radius", o->paging.radius_m,
-                "Blocks within this distance of the sensor stay in memory (m)")
+                "Blocks within this distance of the sensor are paged out last, only when the "
+                "budget needs it (m)")
       ->capture_default_str();
   c->add_option("--commit-every", o->paging.commit_every_scans,
                 "Page store: commit the changed blocks every N scans (0 = by time only)")
