@@ -102,21 +102,19 @@ struct ServerParams {
   CorrectionParams correction;
   CollisionParams collision;
   FrontierParams frontiers;
-};
+  OctomapCompatParams octomap;
+  /// Names in the namespace that no parameter reads (misspelled, or of another program), each
+  /// with a hint ("sensor_model/hitt (did you mean sensor_model/hit?)"); readParameters warns
+  /// once naming them all.
+  std::vector<std::string> unknown_parameters;
 
-OctomapCompatParams octomap;
-/// Names in the namespace that no parameter reads (misspelled, or of another program), each
-/// with a hint ("sensor_model/hitt (did you mean sensor_model/hit?)"); readParameters warns
-/// once naming them all.
-std::vector<std::string> unknown_parameters;
-
-/// The core's defaults with keep_scans on and a 2 GiB budget (scan_store/max_mb 2048).
-static fragg::MapParams withKeptScans() {
-  fragg::MapParams m;
-  m.scans.keep = true;
-  m.scans.max_bytes = size_t{2048} << 20;
-  return m;
-}
+  /// The core's defaults with keep_scans on and a 2 GiB budget (scan_store/max_mb 2048).
+  static fragg::MapParams withKeptScans() {
+    fragg::MapParams m;
+    m.scans.keep = true;
+    m.scans.max_bytes = size_t{2048} << 20;
+    return m;
+  }
 };
 
 /// Fills ServerParams from a struct of parameters (the private namespace as one
