@@ -168,16 +168,17 @@ void Map::commitPages() {
 }
 
 void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
-  pager_->noteResident(blocks_.size());
-  const bool over = pager_->overBudget(blocks_);
-  const bool due = pager_->commitDue(scans_);
-  if (!over && !due) return;
   {
-    // The host map is made complete (the device's changes written back) before it is
+    // The host map is made complete (the device's changes written back, and the blocks the
+    // rays created on the device given host blocks) before it is counted against the budget,
     // committed or its clean blocks are chosen.
     std::lock_guard<std::mutex> lock(*sync_mutex_);
     backend_->cache().sync(blocks_);
   }
+  pager_->noteResident(blocks_.size());
+  const bool over = pager_->overBudget(blocks_);
+  const bool due = pager_->commitDue(scans_);
+  if (!over && !due) return;
   const StoreMapMeta meta = metaOf(params_, scans_);
   if (due) pager_->commit(blocks_, revision_, meta);
   if (!over) return;
