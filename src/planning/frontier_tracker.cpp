@@ -15,6 +15,10 @@ namespace fragg::planning {
 
 namespace {
 
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
 // One block of the map as the tracker knows it.
 struct BlockRecord {
   BlockKey key;
@@ -132,11 +136,15 @@ struct FrontierTracker::State {
 
   /// The changed blocks read again, their neighbourhoods examined where states changed.
   /// Returns {changed blocks, records examined}.
-  std::pair<uint64_t, uint64_t> incremental(const Map& map, const BlockView& view) {
+  std::pair<uint64_t, uint64_t> incremental(const Map& map, const BlockView& view,
+                                            FrontierUpdateStats& stats) {
+    auto t0 = std::chrono::steady_clock::now();
     const std::vector<BlockKey> changed = view.changedSince(revision, BlockChange::kAny);
     const int64_t n = static_cast<int64_t>(changed.size());
     std::vector<StateMasks> fresh;
     readStates(map, view, changed, fresh);
+    stats.states_seconds = secondsSince(t0);
+    t0 = std::chrono::steady_clock::now();
     std::vector<BlockKey> moved;  // blocks whose cell states changed
     for (int64_t i = 0; i < n; ++i) {
       uint32_t k = index.find(changed[i]);
@@ -171,7 +179,10 @@ struct FrontierTracker::State {
             records[k].mark = update_number;
             if (inRange(map, nb)) which.push_back(k);
           }
+    stats.compare_seconds = secondsSince(t0);
+    t0 = std::chrono::steady_clock::now();
     examine(map, view, which);
+    stats.examine_seconds = secondsSince(t0);
     return {changed.size(), which.size()};
   }
 };
@@ -205,7 +216,7 @@ FrontierUpdateStats FrontierTracker::update(const Map& map) {
     stats.blocks_examined = s.full(map, view);
     stats.blocks_changed = view.size();
   } else if (map.revision() != s.revision) {
-    std::tie(stats.blocks_changed, stats.blocks_examined) = s.incremental(map, view);
+    std::tie(stats.blocks_changed, stats.blocks_examined) = s.incremental(map, view, stats);
   }
   stats.states_on_device = s.on_device;
   s.valid = true;

@@ -26,6 +26,10 @@ struct FrontierUpdateStats {
   /// rather than from the host blocks.
   bool states_on_device = false;
   double seconds = 0.0;
+  /// Where the time went: listing the changed blocks and reading their cell states (on the
+  /// device or the host), comparing them and listing the neighbourhoods to examine, and
+  /// examining them (the bit-parallel test).
+  double states_seconds = 0.0, compare_seconds = 0.0, examine_seconds = 0.0;
 };
 
 class FrontierTracker {

@@ -68,7 +68,7 @@ int run(const Options& o) {
   Map map = o.map_path.empty() ? Map(params) : Map::load(o.map_path, params.backend);
   const SensorModel sensor = SensorModel::autoFromCloud(0.0, o.max_range_m);
   planning::FrontierTracker tracker({}, o.threads);
-  std::vector<double> insert_ms, update_ms, examined, changed;
+  std::vector<double> insert_ms, update_ms, examined, changed, states_ms, compare_ms, examine_ms;
   bool states_on_device = false;
   const std::vector<Scan> no_scans;
   const std::vector<Scan>& scans = loads.empty() ? no_scans : loads.front().scans;
@@ -82,6 +82,9 @@ int run(const Options& o) {
       update_ms.push_back(st.seconds * 1e3);
       examined.push_back(double(st.blocks_examined));
       changed.push_back(double(st.blocks_changed));
+      states_ms.push_back(st.states_seconds * 1e3);
+      compare_ms.push_back(st.compare_seconds * 1e3);
+      examine_ms.push_back(st.examine_seconds * 1e3);
       states_on_device = st.states_on_device;
     }
   }
@@ -150,6 +153,11 @@ int run(const Options& o) {
                                   percentile(update_ms, 1.0), percentile(changed, 0.5),
                                   percentile(examined, 0.5), states_on_device ? "device" : "host")
                           .c_str());
+  std::printf("%s\n", fmt::format("  of which (medians): changed blocks' cell states {:.2f} ms, "
+                                  "compare + neighbourhoods {:.2f} ms, examine {:.2f} ms",
+                                  percentile(states_ms, 0.5), percentile(compare_ms, 0.5),
+                                  percentile(examine_ms, 0.5))
+                          .c_str());
   std::printf("%s\n", fmt::format("full recompute    median {:8.2f} ms, CPU time {:.2f} ms "
                                   "(incremental set {} the full one)",
                                   percentile(full_ms, 0.5), percentile(full_cpu_ms, 0.5),
@@ -185,6 +193,9 @@ int run(const Options& o) {
                               {"update_ms_median", percentile(update_ms, 0.5)},
                               {"update_ms_p95", percentile(update_ms, 0.95)},
                               {"blocks_changed_median", percentile(changed, 0.5)},
+                              {"update_states_ms_median", percentile(states_ms, 0.5)},
+                              {"update_compare_ms_median", percentile(compare_ms, 0.5)},
+                              {"update_examine_ms_median", percentile(examine_ms, 0.5)},
                               {"blocks_examined_median", percentile(examined, 0.5)},
                               {"states_on_device", states_on_device},
                               {"full_ms_median", percentile(full_ms, 0.5)},
