@@ -145,22 +145,28 @@ struct FrontierTracker::State {
     readStates(map, view, changed, fresh);
     stats.states_seconds = secondsSince(t0);
     t0 = std::chrono::steady_clock::now();
+    // Compare in parallel (each changed key has its own record), then add the new blocks.
+    std::vector<uint32_t> found(changed.size());
+    std::vector<uint8_t> moved_flag(changed.size());
+#pragma omp parallel for schedule(static) num_threads(threadCount())
+    for (int64_t i = 0; i < n; ++i) {
+      const uint32_t k = index.find(changed[i]);
+      found[i] = k;
+      moved_flag[i] = k == BlockIndexTable::kNone || !(records[k].state == fresh[i]);
+      if (k != BlockIndexTable::kNone && moved_flag[i]) records[k].state = fresh[i];
+    }
     std::vector<BlockKey> moved;  // blocks whose cell states changed
     for (int64_t i = 0; i < n; ++i) {
-      uint32_t k = index.find(changed[i]);
-      if (k == BlockIndexTable::kNone) {
-        k = static_cast<uint32_t>(records.size());
+      if (!moved_flag[i]) continue;
+      if (found[i] == BlockIndexTable::kNone) {
+        index.insert(changed[i], static_cast<uint32_t>(records.size()));
         records.push_back(BlockRecord{changed[i], fresh[i], FrontierBits{}, 0, 0});
-        index.insert(changed[i], k);
-      } else if (records[k].state == fresh[i]) {
-        continue;
-      } else {
-        records[k].state = fresh[i];
       }
       moved.push_back(changed[i]);
     }
     // A block's states decide the frontier cells of its own and its neighbours' borders, and
-    // with the obstacle distance filter those of every block within that distance.
+    // with the obstacle distance filter those of every block within that distance. Marked in
+    // parallel: the first thread to stamp a record lists it.
     const int reach_cells =
         static_cast<int>(std::ceil(filter.min_obstacle_distance_m / map.resolution()));
     const int reach = 1 + (reach_cells + kBlockMask) / kBlockSize;
@@ -169,16 +175,28 @@ struct FrontierTracker::State {
       update_number = 1;
     }
     std::vector<uint32_t> which;
-    for (const BlockKey& b : moved)
-      for (int dz = -reach; dz <= reach; ++dz)
-        for (int dy = -reach; dy <= reach; ++dy)
-          for (int dx = -reach; dx <= reach; ++dx) {
-            const BlockKey nb{b.x + dx, b.y + dy, b.z + dz};
-            const uint32_t k = index.find(nb);
-            if (k == BlockIndexTable::kNone || records[k].mark == update_number) continue;
-            records[k].mark = update_number;
-            if (inRange(map, nb)) which.push_back(k);
-          }
+    const int64_t n_moved = static_cast<int64_t>(moved.size());
+#pragma omp parallel num_threads(threadCount())
+    {
+      std::vector<uint32_t> mine;
+#pragma omp for schedule(dynamic, 256) nowait
+      for (int64_t i = 0; i < n_moved; ++i) {
+        const BlockKey& b = moved[i];
+        for (int dz = -reach; dz <= reach; ++dz)
+          for (int dy = -reach; dy <= reach; ++dy)
+            for (int dx = -reach; dx <= reach; ++dx) {
+              const BlockKey nb{b.x + dx, b.y + dy, b.z + dz};
+              const uint32_t k = index.find(nb);
+              if (k == BlockIndexTable::kNone) continue;
+              if (__atomic_exchange_n(&records[k].mark, update_number, __ATOMIC_RELAXED) ==
+                  update_number)
+                continue;
+              if (inRange(map, nb)) mine.push_back(k);
+            }
+      }
+#pragma omp critical(frontier_which)
+      which.insert(which.end(), mine.begin(), mine.end());
+    }
     stats.compare_seconds = secondsSince(t0);
     t0 = std::chrono::steady_clock::now();
     examine(map, view, which);
