@@ -35,10 +35,15 @@ FRAGG_HD StateMasks stateMasksOf(const OccupancyModel& model, const Block* block
   for (int w = 0; w < kMaskWords; ++w) {
     uint64_t free_bits = 0, unknown_bits = 0;
     if (block) {
+      // OccupancyModel::state without branches (the unobserved value is below every
+      // threshold, so "free" also needs observed), so that the loop vectorises.
       for (int b = 0; b < 64; ++b) {
-        const CellState s = model.state(block->cells[w * 64 + b]);
-        free_bits |= uint64_t(s == CellState::kFree) << b;
-        unknown_bits |= uint64_t(s == CellState::kUnknown) << b;
+        const int16_t l = block->cells[w * 64 + b].log_odds_fx;
+        const bool observed = l != kUnobservedLogOdds;
+        const bool is_free = observed & (l < model.free_below_fx);
+        const bool occupied = observed & (l > model.occupied_above_fx);
+        free_bits |= uint64_t(is_free) << b;
+        unknown_bits |= uint64_t(!is_free & !occupied) << b;
       }
     } else {
       unknown_bits = ~uint64_t(0);
