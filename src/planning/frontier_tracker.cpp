@@ -52,12 +52,14 @@ struct FrontierTracker::State {
     index.clear();
   }
 
+  /// The blocks the filter's box reaches (set by update() for the map at hand).
+  BlockKey box_lo, box_hi;
+
   /// Whether the filter's box can hold cells of block `b` (always, without a box).
-  bool inRange(const Map& map, const BlockKey& b) const {
+  bool inRange(const BlockKey& b) const {
     if (!filter.use_box) return true;
-    const BlockKey lo = blockKeyOf(map.keyOf(filter.box_min_m));
-    const BlockKey hi = blockKeyOf(map.keyOf(filter.box_max_m));
-    return b.x >= lo.x && b.y >= lo.y && b.z >= lo.z && b.x <= hi.x && b.y <= hi.y && b.z <= hi.z;
+    return b.x >= box_lo.x && b.y >= box_lo.y && b.z >= box_lo.z && b.x <= box_hi.x &&
+           b.y <= box_hi.y && b.z <= box_hi.z;
   }
 
   /// Recomputes the frontier bits of records `which` (parallel) and the total.
@@ -128,7 +130,7 @@ struct FrontierTracker::State {
     which.reserve(keys.size());
     for (uint32_t i = 0; i < records.size(); ++i) {
       index.insert(records[i].key, i);
-      if (inRange(map, records[i].key)) which.push_back(i);
+      if (inRange(records[i].key)) which.push_back(i);
     }
     examine(map, view, which);
     return which.size();
@@ -191,7 +193,7 @@ struct FrontierTracker::State {
               if (__atomic_exchange_n(&records[k].mark, update_number, __ATOMIC_RELAXED) ==
                   update_number)
                 continue;
-              if (inRange(map, nb)) mine.push_back(k);
+              if (inRange(nb)) mine.push_back(k);
             }
       }
 #pragma omp critical(frontier_which)
@@ -229,6 +231,10 @@ FrontierUpdateStats FrontierTracker::update(const Map& map) {
   FrontierUpdateStats stats;
   const BlockView view = map.blockView();
   s.on_device = false;
+  if (s.filter.use_box) {
+    s.box_lo = blockKeyOf(map.keyOf(s.filter.box_min_m));
+    s.box_hi = blockKeyOf(map.keyOf(s.filter.box_max_m));
+  }
   stats.full = !s.valid || map.viewEpoch() != s.epoch || map.revision() < s.revision;
   if (stats.full) {
     stats.blocks_examined = s.full(map, view);

@@ -1,13 +1,11 @@
 // Frontier clusters, viewpoints and cells as MarkerArray and PointCloud2, bounded in size.
 #include "fragg_map/ros/frontier_markers.h"
 
-#include <sensor_msgs/PointField.h>
-
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/ros/occupied_cloud.h"
 
 namespace fragg::ros {
 namespace {
@@ -146,27 +144,7 @@ sensor_msgs::PointCloud2 frontierCloud(const std::vector<VoxelKey>& cells, doubl
                  {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)});
     }
   }
-  sensor_msgs::PointCloud2 msg;
-  msg.header.frame_id = frame_id;
-  msg.header.stamp = stamp;
-  msg.height = 1;
-  msg.width = static_cast<uint32_t>(xyz.size() / 3);
-  static const char* const kNames[3] = {"x", "y", "z"};
-  for (uint32_t a = 0; a < 3; ++a) {
-    sensor_msgs::PointField f;
-    f.name = kNames[a];
-    f.offset = 4 * a;
-    f.datatype = sensor_msgs::PointField::FLOAT32;
-    f.count = 1;
-    msg.fields.push_back(f);
-  }
-  msg.is_bigendian = __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__;
-  msg.point_step = 12;
-  msg.row_step = 12 * msg.width;
-  msg.is_dense = true;
-  msg.data.resize(xyz.size() * sizeof(float));
-  if (!xyz.empty()) std::memcpy(msg.data.data(), xyz.data(), msg.data.size());
-  return msg;
+  return packedXyzCloud(xyz, frame_id, stamp);
 }
 
 }  // namespace fragg::ros

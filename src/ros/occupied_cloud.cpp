@@ -10,20 +10,8 @@
 
 namespace fragg::ros {
 
-sensor_msgs::PointCloud2 occupiedCloud(const fragg::Map& map, const std::string& frame_id,
-                                       const ::ros::Time& stamp, bool hide_speckles) {
-  std::vector<float> xyz;
-  const fragg::BlockView blocks = map.blockView();
-  map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& b) {
-    for (int c = 0; c < fragg::kCellsPerBlock; ++c) {
-      if (map.state(b.cells[c]) != fragg::CellState::kOccupied) continue;
-      const fragg::VoxelKey v = fragg::voxelKeyOf(key, c);
-      if (hide_speckles && isSpeckle(map, blocks, v)) continue;
-      const Eigen::Vector3d p_map = map.centerOf(v);
-      xyz.insert(xyz.end(), {static_cast<float>(p_map.x()), static_cast<float>(p_map.y()),
-                             static_cast<float>(p_map.z())});
-    }
-  });
+sensor_msgs::PointCloud2 packedXyzCloud(const std::vector<float>& xyz, const std::string& frame_id,
+                                        const ::ros::Time& stamp) {
   sensor_msgs::PointCloud2 msg;
   msg.header.frame_id = frame_id;
   msg.header.stamp = stamp;
@@ -45,6 +33,23 @@ sensor_msgs::PointCloud2 occupiedCloud(const fragg::Map& map, const std::string&
   msg.data.resize(xyz.size() * sizeof(float));
   if (!xyz.empty()) std::memcpy(msg.data.data(), xyz.data(), msg.data.size());
   return msg;
+}
+
+sensor_msgs::PointCloud2 occupiedCloud(const fragg::Map& map, const std::string& frame_id,
+                                       const ::ros::Time& stamp, bool hide_speckles) {
+  std::vector<float> xyz;
+  const fragg::BlockView blocks = map.blockView();
+  map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& b) {
+    for (int c = 0; c < fragg::kCellsPerBlock; ++c) {
+      if (map.state(b.cells[c]) != fragg::CellState::kOccupied) continue;
+      const fragg::VoxelKey v = fragg::voxelKeyOf(key, c);
+      if (hide_speckles && isSpeckle(map, blocks, v)) continue;
+      const Eigen::Vector3d p_map = map.centerOf(v);
+      xyz.insert(xyz.end(), {static_cast<float>(p_map.x()), static_cast<float>(p_map.y()),
+                             static_cast<float>(p_map.z())});
+    }
+  });
+  return packedXyzCloud(xyz, frame_id, stamp);
 }
 
 }  // namespace fragg::ros

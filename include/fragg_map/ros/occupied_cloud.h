@@ -5,10 +5,16 @@
 #include <sensor_msgs/PointCloud2.h>
 
 #include <string>
+#include <vector>
 
 #include "fragg_map/map.h"
 
 namespace fragg::ros {
+
+/// An unorganised cloud (height 1) of the points `xyz` (x, y, z float triples, frame_id):
+/// packed float32 fields x, y, z, point_step 12. The occupied and frontier clouds use it.
+sensor_msgs::PointCloud2 packedXyzCloud(const std::vector<float>& xyz, const std::string& frame_id,
+                                        const ::ros::Time& stamp);
 
 /// An unorganised cloud (height 1) with packed float32 fields x, y, z (point_step 12) holding
 /// the centre of every occupied voxel, in `frame_id`.
