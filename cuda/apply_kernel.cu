@@ -23,14 +23,17 @@ __global__ void __launch_bounds__(kThreads)
     const bool fresh = s.fresh[slot] != 0;
     SlotScratch& marks = s.scratch[slot];
     Block& block = s.cells[slot];
-    bool changed = false, occupancy_changed = false;
+    bool changed = false, occupancy_changed = false, at_lower_clamp = true;
 #pragma unroll
     for (int k = 0; k < kCellsPerThread; ++k) {
       const int cell = threadIdx.x + k * kThreads;
       const uint32_t bit = 1u << (cell & 31);
       const bool hit = marks.hit[cell >> 5] & bit;
       const bool marked = hit || (marks.free[cell >> 5] & bit);
-      if (!marked && !fresh) continue;
+      if (!marked && !fresh) {
+        at_lower_clamp &= block.cells[cell].log_odds_fx == model.min_fx;
+        continue;
+      }
       Cell value = fresh ? Cell() : block.cells[cell];
       if (marked) {
         const Cell before = value;
@@ -41,15 +44,18 @@ __global__ void __launch_bounds__(kThreads)
         ++updated;
       }
       block.cells[cell] = value;
+      at_lower_clamp &= value.log_odds_fx == model.min_fx;
     }
     const bool any_changed = __syncthreads_or(changed);  // also: every read of marks is done
     const bool occupancy_flipped = __syncthreads_or(occupancy_changed);
+    const bool saturated = __syncthreads_and(at_lower_clamp);
     if (threadIdx.x < 2 * kScratchWords) {
       uint32_t* words = threadIdx.x < kScratchWords ? marks.free : marks.hit;
       words[threadIdx.x % kScratchWords] = 0u;
     }
     if (threadIdx.x == 0) {
       s.fresh[slot] = 0;
+      s.free_saturated[slot] = saturated ? 1 : 0;
       s.last_used[slot] = scan;
       if (fresh) s.occupied_at[slot] = 0;  // not the slot's previous block's
       if (any_changed) {

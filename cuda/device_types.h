@@ -59,6 +59,9 @@ struct SlotArrays {
   CullMemory* cull = nullptr;       ///< plane-rejection memory of the device frustum pass
   int32_t* free_stack = nullptr;    ///< free slots; the top is ScanCounters::free_top
   uint8_t* resident = nullptr;      ///< 1 while the slot holds a block
+  /// 1 when every cell of the slot is at the lower clamp (set by the apply kernel; 0 on
+  /// upload and for every free slot): the ray pass skips the misses of such a block.
+  uint8_t* free_saturated = nullptr;
   int32_t capacity = 0;
 };
 

@@ -31,6 +31,8 @@ struct RaycastArgs {
   /// A removal: a block without a slot or a host copy was never observed, so there is nothing
   /// to undo in it; no slot is taken for it and its cells are not marked.
   bool remove = false;
+  /// Misses skip blocks whose cells are all at the lower clamp (never when removing).
+  bool skip_saturated = true;
 };
 /// One thread a ray: marks FREE / HIT scratch bits, allocating slots for new blocks.
 void launchRaycast(const RaycastArgs& args, RayCast mode, bool readonly_loads, cudaStream_t stream);
@@ -43,6 +45,10 @@ void launchCompactTouched(const SlotArrays& slots, uint32_t scan, ScanCounters* 
 /// marks (or undoes them: `remove`), clears the scratch, sets dirty / changed_at / last_used.
 void launchApply(const SlotArrays& slots, const OccupancyModel& model, uint64_t revision,
                  uint32_t scan, bool remove, ScanCounters* counters, int grid, cudaStream_t stream);
+
+/// free_saturated[slots[j]] = 0 for j < n.
+void launchClearSaturated(const SlotArrays& s, const int32_t* slots, uint32_t n,
+                          cudaStream_t stream);
 
 /// Window entries: every one kWindowEmpty, then each resident slot whose block is inside.
 void launchWindowFill(const Window& w, const SlotArrays& slots, cudaStream_t stream);

@@ -81,13 +81,22 @@ struct DeviceMarker {
   MarkFilter filter;
   int32_t slot = -1;
   bool have_block = false;
+  bool saturated = false;   ///< the block's misses change nothing (inserting only)
+  bool skip_block = false;  ///< the last free cell was in such a block
+
+  /// Lets traverseDda walk past the rest of a saturated block (raycast.h).
+  __device__ bool skippingBlock() const { return skip_block; }
 
   __device__ void operator()(const VoxelKey& v, bool hit, int entry) {
     if (entry != kSameBlock || !have_block) {
       slot = resolveSlot(a, blockKeyOf(v));
       have_block = true;
+      // Written by earlier kernels only (apply, upload, the clear on release): a new slot
+      // taken in this pass comes off the free stack with 0.
+      saturated = slot >= 0 && a.skip_saturated && !a.remove && a.slots.free_saturated[slot] != 0;
     }
-    if (slot < 0) return;
+    skip_block = saturated && !hit;
+    if (slot < 0 || skip_block) return;
     const int cell = cellIndexOf(v);
     const uint32_t word_index = (hit ? kScratchWords : 0) + (cell >> 5);
     const uint32_t bit = 1u << (cell & 31);

@@ -37,8 +37,14 @@ __global__ void __launch_bounds__(kCopyThreads)
     s.last_used[slot] = scan;
     s.changed_at[slot] = 0;
     s.occupied_at[slot] = 0;
+    s.free_saturated[slot] = 0;  // known after the slot's first update
     s.cull[slot] = CullMemory();
   }
+}
+
+__global__ void clearSaturatedKernel(SlotArrays s, const int32_t* slots, uint32_t n) {
+  const uint32_t j = blockIdx.x * blockDim.x + threadIdx.x;
+  if (j < n) s.free_saturated[slots[j]] = 0;
 }
 
 __global__ void __launch_bounds__(kCopyThreads)
@@ -93,6 +99,13 @@ void launchUpload(const SlotArrays& s, const Block* const* src, const int32_t* s
   if (n == 0) return;
   uploadKernel<<<n, kCopyThreads, 0, stream>>>(s, src, slots, keys, scan);
   FRAGG_CUDA_CHECK_LAUNCH("uploadKernel");
+}
+
+void launchClearSaturated(const SlotArrays& s, const int32_t* slots, uint32_t n,
+                          cudaStream_t stream) {
+  if (n == 0) return;
+  clearSaturatedKernel<<<blocksFor(n, kThreads), kThreads, 0, stream>>>(s, slots, n);
+  FRAGG_CUDA_CHECK_LAUNCH("clearSaturatedKernel");
 }
 
 void launchDownload(const SlotArrays& s, Block* const* dst, const int32_t* slots, uint32_t n,

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "cuda_stream.h"
+#include "kernels.h"
 
 namespace fragg::cuda {
 
@@ -26,7 +27,7 @@ void regrow(DeviceArray<T>& a, size_t keep, size_t n, cudaStream_t s) {
 size_t SlotPool::bytesPerSlot() {
   return sizeof(Block) + sizeof(BlockKey) + sizeof(SlotScratch) + sizeof(int32_t) +
          2 * sizeof(uint8_t) + sizeof(uint32_t) + 2 * sizeof(uint64_t) + sizeof(CullMemory) +
-         sizeof(int32_t) + sizeof(uint8_t);
+         sizeof(int32_t) + 2 * sizeof(uint8_t);
 }
 
 void SlotPool::grow(int32_t capacity) {
@@ -53,6 +54,7 @@ void SlotPool::grow(int32_t capacity) {
   regrow(cull_, keep, n, stream_);
   regrow(free_stack_, size_t(table_.freeCount()), n, stream_);
   regrow(resident_, keep, n, stream_);
+  regrow(free_saturated_, keep, n, stream_);
   const int32_t top = table_.freeCount();
   table_.grow(capacity);
   uploadFreeStack(top);
@@ -65,6 +67,7 @@ void SlotPool::clear() {
   FRAGG_CUDA_CHECK(cudaMemsetAsync(fresh_.get(), 0, n, stream_));
   FRAGG_CUDA_CHECK(cudaMemsetAsync(dirty_.get(), 0, n, stream_));
   FRAGG_CUDA_CHECK(cudaMemsetAsync(resident_.get(), 0, n, stream_));
+  FRAGG_CUDA_CHECK(cudaMemsetAsync(free_saturated_.get(), 0, n, stream_));
   table_.clear();
   uploadFreeStack(0);
 }
@@ -83,6 +86,7 @@ SlotArrays SlotPool::arrays() const {
   a.cull = cull_.get();
   a.free_stack = free_stack_.get();
   a.resident = resident_.get();
+  a.free_saturated = free_saturated_.get();
   a.capacity = capacity();
   return a;
 }
@@ -96,6 +100,8 @@ std::vector<BlockIndex> SlotPool::release(const std::vector<int32_t>& slots) {
   const int32_t top = table_.freeCount();
   table_.push(slots);
   uploadFreeStack(top);
+  // A free slot is never marked saturated: a ray that takes it for a new block must not skip.
+  launchClearSaturated(arrays(), free_stack_.get() + top, uint32_t(slots.size()), stream_);
   return blocks;
 }
 

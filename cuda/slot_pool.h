@@ -58,6 +58,7 @@ class SlotPool {
   DeviceArray<CullMemory> cull_;
   DeviceArray<int32_t> free_stack_;
   DeviceArray<uint8_t> resident_;
+  DeviceArray<uint8_t> free_saturated_;
 };
 
 }  // namespace fragg::cuda

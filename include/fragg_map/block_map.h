@@ -39,7 +39,16 @@ struct BlockMeta {
   /// crossed the occupied threshold either way); <= changed_at. Occupied-cell markers need
   /// only the blocks with this newer than their last update.
   uint64_t occupied_at = 0;
+  /// Equal to changed_at while every cell of the block sits at the occupancy model's lower
+  /// clamp (set by the CPU backend's update; any other value means "not known"). A miss changes
+  /// nothing in such a block, so the ray pass skips its free cells (see freeSaturated()).
+  uint64_t free_saturated_at = kNotSaturated;
   CullMemory cull;
+
+  static constexpr uint64_t kNotSaturated = ~uint64_t{0};
+  /// Every cell at the lower clamp as of the block's last change. Writers other than the CPU
+  /// update move changed_at on and so end this without knowing about it.
+  bool freeSaturated() const { return free_saturated_at == changed_at; }
 };
 
 /// Inclusive voxel-key bounds of the observed map.

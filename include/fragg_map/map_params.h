@@ -74,6 +74,10 @@ struct MapParams {
   RayCast raycast = RayCast::kDda;
   /// Rays of organised clouds without a return clear free space up to the max range.
   bool clear_no_return_rays = false;
+  /// The ray pass walks past blocks whose every cell sits at the lower clamp without visiting
+  /// their cells (a miss changes nothing there: the map is the same either way). Off only to
+  /// measure what it saves.
+  bool skip_saturated_blocks = true;
   CullingParams culling;
   /// Worker threads for the CPU backend; 0 = every core.
   int threads = 0;

@@ -10,6 +10,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
+#include <utility>
 
 #include "fragg_map/hd.h"
 #include "fragg_map/key.h"
@@ -87,11 +89,35 @@ struct DdaAxis {
   }
 };
 
+/// A visitor may skip the rest of a block: when it has a member `bool skippingBlock() const`
+/// that returns true after a free cell's visit, traverseDda walks on to the next block (or the
+/// endpoint) without visiting the cells in between. The walk itself is unchanged, so the
+/// cells it lands on are the ones stepping would reach; only the visits are left out. The
+/// backends use it for blocks in which a miss changes nothing (every cell at the lower clamp).
+template <class V, class = void>
+struct CanSkipBlock : std::false_type {};
+template <class V>
+struct CanSkipBlock<V, std::void_t<decltype(std::declval<const V&>().skippingBlock())>>
+    : std::true_type {};
+
 /// Exact 3D DDA (Amanatides & Woo). Visits every cell the segment passes through, in order,
 /// 6-connected; the per-axis step counts are fixed up front, so the walk always ends in the
 /// endpoint's cell. `visit(key, is_hit, entry)` is called once per cell (entry: kSameBlock,
 /// kUnknownBlock or the face crossed into a new block) except the free cells inside a hit's
 /// clearing margin (then the hit comes with kUnknownBlock); returns how many cells it visited.
+/// One DDA step: the smallest t_max advances; ties go to the later axis, as in OctoMap's
+/// computeRayKeys. An exhausted axis has an infinite t_max, and an axis with steps left a
+/// finite one, so an exhausted axis is never chosen while steps remain. Returns the entry code
+/// of the new cell (kSameBlock or the face crossed).
+FRAGG_HD int ddaStep(DdaAxis& x, DdaAxis& y, DdaAxis& z) {
+  if (x.t_max < y.t_max) {
+    if (x.t_max < z.t_max) return x.advance() ? blockFace(0, x.step) : kSameBlock;
+    return z.advance() ? blockFace(2, z.step) : kSameBlock;
+  }
+  if (y.t_max < z.t_max) return y.advance() ? blockFace(1, y.step) : kSameBlock;
+  return z.advance() ? blockFace(2, z.step) : kSameBlock;
+}
+
 template <class Visit>
 FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
   DdaAxis x, y, z;
@@ -114,21 +140,18 @@ FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
       visit(VoxelKey{x.cur, y.cur, z.cur}, false, entry);
       ++visited;
     }
-    // Smallest t_max advances; ties go to the later axis, as in OctoMap's computeRayKeys. An
-    // exhausted axis has an infinite t_max, and an axis with steps left a finite one, so an
-    // exhausted axis is never chosen while steps remain.
-    if (x.t_max < y.t_max) {
-      if (x.t_max < z.t_max)
-        entry = x.advance() ? blockFace(0, x.step) : kSameBlock;
-      else
-        entry = z.advance() ? blockFace(2, z.step) : kSameBlock;
-    } else {
-      if (y.t_max < z.t_max)
-        entry = y.advance() ? blockFace(1, y.step) : kSameBlock;
-      else
-        entry = z.advance() ? blockFace(2, z.step) : kSameBlock;
-    }
+    entry = ddaStep(x, y, z);
     --total;
+    if constexpr (CanSkipBlock<Visit>::value) {
+      if (entry == kSameBlock && visit.skippingBlock()) {
+        // The rest of the block, unvisited; stops on the step into the next block, whose
+        // entry code the next visit (or the hit) gets as usual.
+        while (total > 0 && entry == kSameBlock) {
+          entry = ddaStep(x, y, z);
+          --total;
+        }
+      }
+    }
   }
   if (ray.end_is_hit) {
     visit(VoxelKey{x.cur, y.cur, z.cur}, true, skipped ? kUnknownBlock : entry);

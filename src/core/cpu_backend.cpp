@@ -18,7 +18,9 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 
 /// Marks the cells of rays in the scratch. Follows the ray from block to block through the
 /// blocks' face-neighbour links; other lookups go through a small direct-mapped cache of
-/// recent blocks (neighbouring rays share blocks) before the scratch's table.
+/// recent blocks (neighbouring rays share blocks) before the scratch's table. When inserting,
+/// free cells of blocks whose every cell is at the lower clamp are not marked (a miss changes
+/// nothing there) and the traversal walks past the rest of such a block.
 struct MarkCells {
   static constexpr int kCacheSize = 256;
   struct CacheEntry {
@@ -26,8 +28,12 @@ struct MarkCells {
     ScratchBlock* block = nullptr;
   };
   ScanScratch* scratch = nullptr;
+  const BlockMap* map = nullptr;  ///< null: no block is skipped (removal)
   ScratchBlock* current = nullptr;
+  bool skip_block = false;  ///< the last free cell's block is skipped
   CacheEntry cache[kCacheSize];
+
+  bool skippingBlock() const { return skip_block; }
 
   ScratchBlock* lookup(const BlockKey& b) {
     const uint32_t h = (static_cast<uint32_t>(b.x) * 73856093u) ^
@@ -37,6 +43,10 @@ struct MarkCells {
     if (!e.block || e.key != b) {
       e.block = &scratch->blockFor(b);
       e.key = b;
+      if (e.block->skip_free < 0) {
+        const BlockIndex i = map ? map->find(b) : kNoBlock;
+        e.block->skip_free = i != kNoBlock && map->meta(i).freeSaturated() ? 1 : 0;
+      }
     }
     return e.block;
   }
@@ -49,9 +59,17 @@ struct MarkCells {
     } else if (entry == kUnknownBlock) {
       current = lookup(blockKeyOf(v));
     }
-    current->mark(cellIndexOf(v), hit);
+    skip_block = !hit && current->skip_free > 0;
+    if (!skip_block) current->mark(cellIndexOf(v), hit);
   }
 };
+
+/// Whether a miss would change no cell of the block.
+bool allAtLowerClamp(const Block& block, const OccupancyModel& model) {
+  bool all = true;
+  for (const Cell& c : block.cells) all &= c.log_odds_fx == model.min_fx;
+  return all;
+}
 
 /// Bounding box, in blocks, of every cell the scan's rays can touch.
 void scanBlockBounds(const PreparedScan& scan, BlockKey* lo, BlockKey* hi) {
@@ -79,12 +97,13 @@ void CpuBackend::update(const ScanInput& in, ScanUpdate what, const UpdateSettin
   prepareScan(in.cloud, in.T_map_sensor, in.model, in.frustum, in.explicit_model, how.params,
               prepared_, stats);
   stats.seconds_prepare += secondsSince(t0);
-  updatePrepared(prepared_, what, how.model, how.params.raycast, how.revision, blocks, stats);
+  updatePrepared(prepared_, what, how.model, how.params.raycast, how.params.skip_saturated_blocks,
+                 how.revision, blocks, stats);
 }
 
 void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
-                                const OccupancyModel& model, RayCast raycast, uint64_t revision,
-                                BlockMap& blocks, InsertStats& stats) {
+                                const OccupancyModel& model, RayCast raycast, bool skip_saturated,
+                                uint64_t revision, BlockMap& blocks, InsertStats& stats) {
   const bool remove = what == ScanUpdate::kRemove;
   const int threads = threads_ > 0 ? threads_ : omp_get_max_threads();
   auto t0 = std::chrono::steady_clock::now();
@@ -107,6 +126,8 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
   {
     MarkCells mark;
     mark.scratch = scratch_[omp_get_thread_num()].get();
+    // An undone miss does change a clamped cell: a removal visits every cell.
+    mark.map = remove || !skip_saturated ? nullptr : &blocks;
 #pragma omp for schedule(dynamic, 512)
     for (long i = 0; i < n; ++i) {
       const RayVox ray = scan.ray(static_cast<size_t>(i));
@@ -130,15 +151,22 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
   t0 = std::chrono::steady_clock::now();
   const long touched = static_cast<long>(merged.touchedCount());
   std::vector<BlockIndex> target(static_cast<size_t>(touched), kNoBlock);
+  // A scratch block without marks was only entered by misses in a skipped block: nothing to do.
+  std::vector<char> marked(static_cast<size_t>(touched), 0);
 #pragma omp parallel for num_threads(threads) schedule(static)
-  for (long j = 0; j < touched; ++j) target[j] = blocks.find(merged.touched(j).key);
-  uint64_t created = 0;
+  for (long j = 0; j < touched; ++j) {
+    marked[j] = merged.touched(j).marked();
+    target[j] = marked[j] ? blocks.find(merged.touched(j).key) : kNoBlock;
+  }
+  uint64_t created = 0, touched_marked = 0;
   std::vector<char> fresh(static_cast<size_t>(touched), 0);
+  for (long j = 0; j < touched; ++j) touched_marked += marked[j] ? 1 : 0;
   // A removal has nothing to undo in a block that does not exist: none is created.
-  for (long j = 0; j < touched && !remove; ++j) created += target[j] == kNoBlock ? 1 : 0;
+  for (long j = 0; j < touched && !remove; ++j)
+    created += marked[j] && target[j] == kNoBlock ? 1 : 0;
   blocks.reserve(created);
   for (long j = 0; j < touched && !remove; ++j) {
-    if (target[j] != kNoBlock) continue;
+    if (!marked[j] || target[j] != kNoBlock) continue;
     target[j] = blocks.findOrCreate(merged.touched(j).key, nullptr, /*initialise=*/false);
     fresh[j] = 1;
   }
@@ -162,11 +190,14 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
         ++updated;
       }
     }
-    if (changed) blocks.meta(target[j]).changed_at = revision;
-    if (occupancy_changed) blocks.meta(target[j]).occupied_at = revision;
+    BlockMeta& meta = blocks.meta(target[j]);
+    if (changed) meta.changed_at = revision;
+    if (occupancy_changed) meta.occupied_at = revision;
+    meta.free_saturated_at =
+        allAtLowerClamp(block, model) ? meta.changed_at : BlockMeta::kNotSaturated;
   }
   stats.cells_updated += updated;
-  stats.blocks_touched += static_cast<uint64_t>(touched);
+  stats.blocks_touched += touched_marked;
   stats.blocks_created += created;
   stats.seconds_apply += secondsSince(t0);
 }

@@ -290,6 +290,39 @@ TEST(CudaBackendTest, TinyPoolEvictsWritesBackAndReuploads) {
   expectSameBlocks(cpu, gpu, "tiny pool, out and back");
 }
 
+/// CUDA with the saturated-block skip (the default) against the CPU without it: the same bytes,
+/// fewer visits on the device.
+void expectSkipIsExact(const std::vector<Input>& scans, MapParams p, const SensorModel& sensor,
+                       const char* what) {
+  p.backend = Backend::kCuda;
+  Map gpu(p);
+  p.backend = Backend::kCpu;
+  p.skip_saturated_blocks = false;
+  Map cpu(p);
+  uint64_t visits_gpu = 0, visits_cpu = 0;
+  for (const Input& s : scans) {
+    visits_gpu += gpu.insert(s.cloud, s.T, sensor).voxel_visits;
+    visits_cpu += cpu.insert(s.cloud, s.T, sensor).voxel_visits;
+  }
+  ASSERT_STREQ(gpu.backendName(), "cuda") << gpu.backendReason();
+  std::printf("[gpu] %s: %llu visits with the skip (cuda), %llu without (cpu): %.1f %%\n", what,
+              static_cast<unsigned long long>(visits_gpu),
+              static_cast<unsigned long long>(visits_cpu), 100.0 * visits_gpu / visits_cpu);
+  EXPECT_LT(visits_gpu, visits_cpu) << what;
+  expectSameBlocks(cpu, gpu, what);
+}
+
+TEST(CudaBackendTest, SaturatedBlockSkipIsExact) {
+  REQUIRE_DEVICE();
+  expectSkipIsExact(simulatedW1(4), paramsFor(Backend::kCuda, 0.05),
+                    SensorModel::autoFromCloud(0.0, 30.0), "W1 (25 of 100 scans) 30 m, skip");
+  // Evictions and uploads: a slot that leaves must not carry its flag to the next block.
+  MapParams small = paramsFor(Backend::kCuda, 0.1);
+  small.cuda.pool_max_bytes = size_t(12000) * 2300;
+  expectSkipIsExact(outAndBack(syntheticLidar(8, 4.0)), small,
+                    SensorModel::autoFromCloud(0.0, 20.0), "tiny pool out and back, skip");
+}
+
 TEST(CudaBackendTest, HostReadersSeeDeviceChanges) {
   REQUIRE_DEVICE();
   const auto scans = syntheticLidar(4, 2.0);

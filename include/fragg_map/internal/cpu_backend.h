@@ -24,8 +24,10 @@ class CpuBackend : public MapBackend {
 
  private:
   /// The ray cast and update of a prepared scan.
+  /// `skip_saturated`: see MapParams::skip_saturated_blocks (never used when removing).
   void updatePrepared(const PreparedScan& scan, ScanUpdate what, const OccupancyModel& model,
-                      RayCast raycast, uint64_t revision, BlockMap& blocks, InsertStats& stats);
+                      RayCast raycast, bool skip_saturated, uint64_t revision, BlockMap& blocks,
+                      InsertStats& stats);
 
   int threads_;
   HostBlockCache cache_;

@@ -18,8 +18,16 @@ struct ScratchBlock {
   uint64_t hit[kCellsPerBlock / 64];   ///< bit c: a ray ended in cell c
   ScratchBlock* neighbour[6];          ///< face neighbours found so far (see raycast.h)
   BlockKey key;
+  /// Whether misses may skip the block (every cell of the map's block at the lower clamp, so a
+  /// miss changes nothing); -1 until the ray pass has looked the block up.
+  int8_t skip_free = -1;
 
   void mark(int c, bool is_hit) { (is_hit ? hit : free)[c >> 6] |= uint64_t{1} << (c & 63); }
+  bool marked() const {
+    uint64_t any = 0;
+    for (int w = 0; w < kCellsPerBlock / 64; ++w) any |= free[w] | hit[w];
+    return any != 0;
+  }
   void orWith(const ScratchBlock& o) {
     for (int w = 0; w < kCellsPerBlock / 64; ++w) {
       free[w] |= o.free[w];

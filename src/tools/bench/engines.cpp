@@ -37,9 +37,11 @@ MapParams engineParams(const std::string& engine, const MapParams& base) {
       p.culling.translation_coherence = false;
     } else if (token == "bresenham") {
       p.raycast = RayCast::kBresenham;
+    } else if (token == "no-skip") {
+      p.skip_saturated_blocks = false;
     } else {
       throw InvalidArgument("unknown engine option '" + token + "' in '" + engine +
-                            "' (pageable, plain-loads, no-coherence, bresenham)");
+                            "' (pageable, plain-loads, no-coherence, bresenham, no-skip)");
     }
     begin = end + 1;
   }
