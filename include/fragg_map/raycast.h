@@ -51,32 +51,33 @@ FRAGG_HD float keepAfterT(const RayVox& ray) {
 
 FRAGG_HD int floorToInt(float v) { return static_cast<int>(floorf(v)); }
 
-/// Per-axis DDA state of one ray (scalars, so compilers keep it in registers).
+/// Per-axis DDA state of one ray (scalars, so compilers keep it in registers). The ray
+/// parameter of each boundary is computed from the ray's start (not accumulated step by
+/// step), so a walk can jump over cells and land exactly where stepping would.
 struct DdaAxis {
   int cur;        ///< absolute voxel key on this axis
   int step;       ///< +1, -1 or 0
   int remaining;  ///< steps left on this axis
   float t_max;    ///< ray parameter of the next boundary (INFINITY when none is left)
-  float t_delta;  ///< ray parameter between boundaries
+  float start_v;  ///< the ray's start on this axis, relative voxel units
+  float inv_d;    ///< 1 / (end_v - start_v)
+  int next_b;     ///< relative coordinate of the next boundary
 
-  FRAGG_HD void init(int ref, float start_v, float end_v) {
-    const int s = floorToInt(start_v), e = floorToInt(end_v);
-    const float d = end_v - start_v;
+  FRAGG_HD float boundaryT(int b) const { return (static_cast<float>(b) - start_v) * inv_d; }
+
+  FRAGG_HD void init(int ref, float start, float end_v) {
+    const int s = floorToInt(start), e = floorToInt(end_v);
+    start_v = start;
     cur = ref + s;
-    if (e > s) {
-      step = 1;
-      remaining = e - s;
-      t_delta = 1.f / d;
-      t_max = (static_cast<float>(s + 1) - start_v) / d;
-    } else if (e < s) {
-      step = -1;
-      remaining = s - e;
-      t_delta = -1.f / d;
-      t_max = (start_v - static_cast<float>(s)) / -d;
+    step = e > s ? 1 : (e < s ? -1 : 0);
+    remaining = e > s ? e - s : s - e;
+    if (step != 0) {
+      inv_d = 1.f / (end_v - start);
+      next_b = step > 0 ? s + 1 : s;
+      t_max = boundaryT(next_b);
     } else {
-      step = 0;
-      remaining = 0;
-      t_delta = 0.f;
+      inv_d = 0.f;
+      next_b = 0;
       t_max = INFINITY;
     }
   }
@@ -84,15 +85,27 @@ struct DdaAxis {
   FRAGG_HD bool advance() {
     cur += step;
     --remaining;
-    t_max = remaining ? t_max + t_delta : INFINITY;
+    next_b += step;
+    t_max = remaining ? boundaryT(next_b) : INFINITY;
     return (cur & kBlockMask) == (step > 0 ? 0 : kBlockMask);
+  }
+  /// `k` steps at once (k <= remaining).
+  FRAGG_HD void advanceBy(int k) {
+    cur += k * step;
+    remaining -= k;
+    next_b += k * step;
+    t_max = remaining ? boundaryT(next_b) : INFINITY;
+  }
+  /// Steps until this axis leaves the current block (meaningful when step != 0).
+  FRAGG_HD int stepsToBlockFace() const {
+    return step > 0 ? kBlockMask - (cur & kBlockMask) + 1 : (cur & kBlockMask) + 1;
   }
 };
 
 /// A visitor may skip the rest of a block: when it has a member `bool skippingBlock() const`
-/// that returns true after a free cell's visit, traverseDda walks on to the next block (or the
-/// endpoint) without visiting the cells in between. The walk itself is unchanged, so the
-/// cells it lands on are the ones stepping would reach; only the visits are left out. The
+/// that returns true after a free cell's visit, traverseDda jumps to the next block (or the
+/// endpoint) without visiting the cells in between (ddaLeaveBlock). The cells it lands on are
+/// the ones stepping would reach; only the visits are left out. The
 /// backends use it for blocks in which a miss changes nothing (every cell at the lower clamp).
 template <class V, class = void>
 struct CanSkipBlock : std::false_type {};
@@ -118,6 +131,50 @@ FRAGG_HD int ddaStep(DdaAxis& x, DdaAxis& y, DdaAxis& z) {
   return z.advance() ? blockFace(2, z.step) : kSameBlock;
 }
 
+/// Walks from the current cell to the first cell of the next block (or to the endpoint's cell
+/// when the ray ends in this block) without visiting anything in between: the same cells and
+/// state as calling ddaStep until it reports a new block, in O(1) per axis. The steps of the
+/// three axes form one sequence ordered by (t, later axis first on ties); the first step that
+/// leaves the block is the smallest of the axes' face crossings, and every earlier step of the
+/// other axes stays inside the block. Decrements `total` by the steps taken; returns the entry
+/// code of the cell reached (kSameBlock when the ray ended inside the block).
+FRAGG_HD int ddaLeaveBlock(DdaAxis& x, DdaAxis& y, DdaAxis& z, int& total) {
+  DdaAxis* axis[3] = {&x, &y, &z};
+  int exit_axis = -1, exit_steps = 0;
+  float exit_t = INFINITY;
+  for (int a = 0; a < 3; ++a) {
+    const DdaAxis& d = *axis[a];
+    if (d.step == 0) continue;
+    const int k = d.stepsToBlockFace();
+    if (k > d.remaining) continue;
+    const float t = d.boundaryT(d.next_b + (k - 1) * d.step);
+    if (t <= exit_t) {  // ties go to the later axis
+      exit_axis = a;
+      exit_steps = k;
+      exit_t = t;
+    }
+  }
+  if (exit_axis < 0) {  // the ray ends in this block
+    for (DdaAxis* d : axis) {
+      total -= d->remaining;
+      d->advanceBy(d->remaining);
+    }
+    return kSameBlock;
+  }
+  for (int b = 0; b < 3; ++b) {
+    if (b == exit_axis) continue;
+    DdaAxis& d = *axis[b];
+    while (d.remaining > 0 && (d.t_max < exit_t || (d.t_max == exit_t && b > exit_axis))) {
+      d.advance();
+      --total;
+    }
+  }
+  DdaAxis& e = *axis[exit_axis];
+  e.advanceBy(exit_steps);
+  total -= exit_steps;
+  return blockFace(exit_axis, e.step);
+}
+
 template <class Visit>
 FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
   DdaAxis x, y, z;
@@ -139,19 +196,15 @@ FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
     } else {
       visit(VoxelKey{x.cur, y.cur, z.cur}, false, entry);
       ++visited;
-    }
-    entry = ddaStep(x, y, z);
-    --total;
-    if constexpr (CanSkipBlock<Visit>::value) {
-      if (entry == kSameBlock && visit.skippingBlock()) {
-        // The rest of the block, unvisited; stops on the step into the next block, whose
-        // entry code the next visit (or the hit) gets as usual.
-        while (total > 0 && entry == kSameBlock) {
-          entry = ddaStep(x, y, z);
-          --total;
+      if constexpr (CanSkipBlock<Visit>::value) {
+        if (visit.skippingBlock()) {  // the rest of the block, unvisited
+          entry = ddaLeaveBlock(x, y, z, total);
+          continue;
         }
       }
     }
+    entry = ddaStep(x, y, z);
+    --total;
   }
   if (ray.end_is_hit) {
     visit(VoxelKey{x.cur, y.cur, z.cur}, true, skipped ? kUnknownBlock : entry);
