@@ -270,5 +270,68 @@ TEST(RaycastTest, BresenhamClearingMarginDropsTheLastFreeCells) {
   }
 }
 
+/// Skips the rest of every block whose key hashes into the chosen half (after a free visit).
+struct SkipSomeBlocks : Collect {
+  bool skip = false;
+  static bool skipped(const BlockKey& b) {
+    return ((static_cast<uint32_t>(b.x) * 73856093u) ^ (static_cast<uint32_t>(b.y) * 19349669u) ^
+            (static_cast<uint32_t>(b.z) * 83492791u)) %
+               3 !=
+           0;
+  }
+  void operator()(const VoxelKey& k, bool hit, int entry) {
+    Collect::operator()(k, hit, entry);
+    skip = !hit && skipped(blockKeyOf(k));
+  }
+  bool skippingBlock() const { return skip; }
+};
+
+TEST(RaycastTest, LeavingABlockInOneJumpLandsWhereSteppingDoes) {
+  // Reference: the full walk, then of each run of cells in a skipped block only the first
+  // kept (the hit always). The jumping walk must give exactly that sequence, entry codes
+  // included, for rays of every direction and length, with and without clearing margins.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-40.f, 40.f), frac(0.f, 1.f);
+  size_t jumped_cells = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    RayVox ray{VoxelKey{int(rng() % 64) - 32, int(rng() % 64) - 32, -5},
+               {frac(rng), frac(rng), frac(rng)},
+               {u(rng), u(rng), u(rng) / 4},
+               trial % 3 != 0,
+               trial % 5 == 0 ? 1.5f : 0.f};
+    if (trial % 7 == 0) ray.end_v[2] = ray.start_v[2] + 0.25f;  // flat rays: ties and zero steps
+    Collect all;
+    traverseDda(ray, all);
+    Collect want;
+    for (size_t i = 0; i < all.cells.size(); ++i) {
+      const bool same_block_as_previous =
+          i > 0 && blockKeyOf(all.cells[i]) == blockKeyOf(all.cells[i - 1]);
+      const bool previous_skips =
+          i > 0 && !all.hits[i - 1] && SkipSomeBlocks::skipped(blockKeyOf(all.cells[i - 1]));
+      // A cell is left out when a kept cell before it in the same run of its block skips.
+      if (!all.hits[i] && same_block_as_previous && previous_skips) continue;
+      if (all.hits[i] && same_block_as_previous && previous_skips) {
+        want(all.cells[i], true, kSameBlock);
+        continue;
+      }
+      want(all.cells[i], all.hits[i], all.entries[i]);
+    }
+    SkipSomeBlocks got;
+    const int visited = traverseDda(ray, got);
+    ASSERT_EQ(got.cells.size(), want.cells.size()) << "trial " << trial;
+    EXPECT_EQ(visited, static_cast<int>(got.cells.size()));
+    for (size_t i = 0; i < got.cells.size(); ++i) {
+      ASSERT_EQ(tupleOf(got.cells[i]), tupleOf(want.cells[i]))
+          << "trial " << trial << " cell " << i;
+      EXPECT_EQ(got.hits[i], want.hits[i]) << "trial " << trial << " cell " << i;
+      // After a jump the entry code names the face crossed into the new block.
+      if (i > 0 && blockKeyOf(got.cells[i]) != blockKeyOf(got.cells[i - 1]) && !got.hits[i])
+        EXPECT_EQ(got.entries[i], want.entries[i]) << "trial " << trial << " cell " << i;
+    }
+    jumped_cells += all.cells.size() - got.cells.size();
+  }
+  EXPECT_GT(jumped_cells, 20000u);
+}
+
 }  // namespace
 }  // namespace fragg
