@@ -47,6 +47,7 @@ struct Options {
 struct Samples {
   std::vector<double> fragg_ms, ohm_ms, ohm_gpu_ms;
   double ohm_sync_s = 0;  ///< syncVoxels after the last repeat
+  std::string ohm_model;  ///< OHM's occupancy model as used
 };
 
 struct Agreement {
@@ -98,7 +99,10 @@ Map runOhmOnce(const Workload& w, const Options& o, size_t count, Samples* sampl
       samples->ohm_gpu_ms.push_back(t.ms_gpu);
     }
   }
-  if (samples) samples->ohm_sync_s = ohm.syncToHost();
+  if (samples) {
+    samples->ohm_sync_s = ohm.syncToHost();
+    samples->ohm_model = ohm.describeModel();
+  }
   return ohm.toMap();
 }
 
@@ -132,7 +136,7 @@ nlohmann::json runWorkload(const Workload& w, const Options& o) {
     }
   }
   std::vector<Agreement> agree = {agreement("fragg-cuda", fragg_map, "ohm", ohm_map, n)};
-  const std::string model = OhmEngine(ohmOptions(w, o)).describeModel();
+  const std::string& model = s.ohm_model;
   double octomap_ms = 0;
   size_t n_octo = 0;
 #ifdef FRAGG_HAVE_OCTOMAP
