@@ -87,7 +87,7 @@ OhmEngine::OhmEngine(const OhmOptions& options) {
 
 OhmEngine::~OhmEngine() = default;
 
-OhmScanTimes OhmEngine::integrate(const Scan& scan) {
+OhmScanTimes OhmEngine::integrate(const Scan& scan, bool wait) {
   OhmScanTimes t;
   const auto t0 = Clock::now();
   std::vector<glm::dvec3>& rays = impl_->rays;
@@ -103,13 +103,15 @@ OhmScanTimes OhmEngine::integrate(const Scan& scan) {
   const auto t1 = Clock::now();
   t.rays =
       impl_->gpu_map.integrateRays(rays.data(), rays.size(), nullptr, nullptr, ohm::kRfDefault);
-  impl_->gpu_map.gpuCache()->gpuQueue().finish();
+  if (wait) finish();
   t.ms_gpu = msSince(t1);
   t.ms_total = msSince(t0);
   if (t.rays == 0 && !rays.empty())
     throw CudaError(fmt::format("OHM: integrateRays accepted none of {} rays", rays.size() / 2));
   return t;
 }
+
+void OhmEngine::finish() { impl_->gpu_map.gpuCache()->gpuQueue().finish(); }
 
 double OhmEngine::syncToHost() {
   const auto t0 = Clock::now();

@@ -40,8 +40,12 @@ class OhmEngine {
   OhmEngine& operator=(const OhmEngine&) = delete;
 
   /// Integrates one scan: finite, non-zero points (as OctoMap's insertion takes them) moved to
-  /// the map frame, one ray each from the sensor origin; returns once the GPU has finished.
-  OhmScanTimes integrate(const Scan& scan);
+  /// the map frame, one ray each from the sensor origin; returns once the GPU has finished, or
+  /// with `wait` false as soon as OHM has queued the work (its own pipelining across calls).
+  OhmScanTimes integrate(const Scan& scan, bool wait = true);
+
+  /// Waits until the GPU has finished every queued integration.
+  void finish();
 
   /// Writes the GPU cache back (GpuMap::syncVoxels) and returns the seconds it took.
   double syncToHost();
