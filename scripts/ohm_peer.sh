@@ -109,7 +109,8 @@ step_ohm() {
   echo "ohm_peer: OHM libraries built and installed in $((SECONDS - t0)) s"
   du -sh "$prefix"
   # Brought back by the device tool: unpack into .device/ and carry .device/ohm next time.
-  tar -C "$root/.device" -czf "$out/ohm-install.tar.gz" ohm && du -h "$out/ohm-install.tar.gz"
+  tar -C "$(dirname "$prefix")" -czf "$out/ohm-install.tar.gz" "$(basename "$prefix")" &&
+    du -h "$out/ohm-install.tar.gz"
 }
 
 step_bench() {
