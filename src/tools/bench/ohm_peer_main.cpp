@@ -97,7 +97,8 @@ Map runFraggOnce(const Workload& w, size_t count, std::vector<double>* ms) {
   return map;
 }
 
-Map runOhmOnce(const Workload& w, const Options& o, size_t count, Samples* samples) {
+/// One OHM run over the first `count` scans; its map is converted only when `keep` is given.
+void runOhmOnce(const Workload& w, const Options& o, size_t count, Samples* samples, Map* keep) {
   OhmEngine ohm(ohmOptions(w, o));
   for (size_t i = 0; i < count; ++i) {
     const OhmScanTimes t = ohm.integrate(w.scans[i]);
@@ -110,7 +111,7 @@ Map runOhmOnce(const Workload& w, const Options& o, size_t count, Samples* sampl
     samples->ohm_sync_s = ohm.syncToHost();
     samples->ohm_model = ohm.describeModel();
   }
-  return ohm.toMap();
+  if (keep) *keep = ohm.toMap();
 }
 
 /// OHM's throughput when it may overlap scans (GpuMap double-buffers its uploads): one run over
@@ -147,8 +148,7 @@ nlohmann::json runWorkload(const Workload& w, const Options& o) {
         Map m = runFraggOnce(w, n, &s.fragg_ms);
         if (last) fragg_map = std::move(m);
       } else {
-        Map m = runOhmOnce(w, o, n, &s);
-        if (last) ohm_map = std::move(m);
+        runOhmOnce(w, o, n, &s, last ? &ohm_map : nullptr);
       }
     }
   }
@@ -167,7 +167,8 @@ nlohmann::json runWorkload(const Workload& w, const Options& o) {
     octomap_ms = percentile(ms, 0.5);
     const Map octo = fromOcTree(tree);
     const Map fragg_same = runFraggOnce(w, n_octo, nullptr);
-    const Map ohm_same = runOhmOnce(w, o, n_octo, nullptr);
+    Map ohm_same;
+    runOhmOnce(w, o, n_octo, nullptr, &ohm_same);
     agree.push_back(agreement("fragg-cuda", fragg_same, "octomap", octo, n_octo));
     agree.push_back(agreement("ohm", ohm_same, "octomap", octo, n_octo));
     agree.push_back(agreement("fragg-cuda", fragg_same, "ohm", ohm_same, n_octo));
