@@ -8,6 +8,7 @@
 #include <ohm/OccupancyMap.h>
 #include <ohm/RayFilter.h>
 #include <ohm/RayFlag.h>
+#include <ohm/RayMapperOccupancy.h>
 #include <ohm/VoxelBlock.h>
 #include <ohm/VoxelBuffer.h>
 #include <ohm/VoxelOccupancy.h>
@@ -19,6 +20,7 @@
 #include <cmath>
 #include <cstring>
 #include <glm/glm.hpp>
+#include <memory>
 #include <vector>
 
 #include "fragg_map/cell_writer.h"
@@ -48,20 +50,29 @@ struct OhmEngine::Impl {
   // No compression (OHM's default flag kCompressed runs a background compression thread that
   // would share the host with the timed loop); no voxel mean, no extra layers.
   ohm::OccupancyMap map;
-  ohm::GpuMap gpu_map;
+  std::unique_ptr<ohm::GpuMap> gpu_map;  ///< null with options.cpu
+  std::unique_ptr<ohm::RayMapperOccupancy> cpu_mapper;
+  ohm::RayMapper* mapper = nullptr;
   std::vector<glm::dvec3> rays;  ///< origin/end pairs, reused across scans
 
   explicit Impl(const OhmOptions& o)
-      : options(o),
-        map(o.resolution_m, glm::u8vec3(0, 0, 0), ohm::MapFlag::kNone),
-        gpu_map(&map, true, static_cast<unsigned>(2 * o.expected_points),
-                o.gpu_cache_mib * size_t{1024} * 1024) {}
+      : options(o), map(o.resolution_m, glm::u8vec3(0, 0, 0), ohm::MapFlag::kNone) {
+    if (o.cpu) {
+      cpu_mapper = std::make_unique<ohm::RayMapperOccupancy>(&map);
+      mapper = cpu_mapper.get();
+    } else {
+      gpu_map =
+          std::make_unique<ohm::GpuMap>(&map, true, static_cast<unsigned>(2 * o.expected_points),
+                                        o.gpu_cache_mib * size_t{1024} * 1024);
+      mapper = gpu_map.get();
+    }
+  }
 };
 
 OhmEngine::OhmEngine(const OhmOptions& options) {
   if (!(options.resolution_m > 0)) throw InvalidArgument("OHM: resolution must be > 0");
   impl_ = std::make_unique<Impl>(options);
-  if (!impl_->gpu_map.gpuOk())
+  if (impl_->gpu_map && !impl_->gpu_map->gpuOk())
     throw CudaError("OHM: GpuMap could not initialise its CUDA program (gpuOk() is false)");
   ohm::OccupancyMap& map = impl_->map;
   if (options.matched_model) {
@@ -77,11 +88,15 @@ OhmEngine::OhmEngine(const OhmOptions& options) {
   if (options.max_range_m > 0) {
     const double max_range_m = options.max_range_m;
     // Rays longer than the range end free at the range, as OctoMap's maxrange and fragg's clip.
-    impl_->gpu_map.setRayFilter([max_range_m](glm::dvec3* start, glm::dvec3* end, unsigned* flags) {
+    const ohm::RayFilterFunction clip = [max_range_m](glm::dvec3* start, glm::dvec3* end,
+                                                      unsigned* flags) {
       return ohm::clipRayFilter(start, end, flags, max_range_m);
-    });
+    };
+    map.setRayFilter(clip);
+    if (impl_->gpu_map) impl_->gpu_map->setRayFilter(clip);
   }
-  if (options.ray_segment_m > 0) impl_->gpu_map.setRaySegmentLength(options.ray_segment_m);
+  if (options.ray_segment_m > 0 && impl_->gpu_map)
+    impl_->gpu_map->setRaySegmentLength(options.ray_segment_m);
   impl_->rays.reserve(2 * options.expected_points);
 }
 
@@ -102,7 +117,7 @@ OhmScanTimes OhmEngine::integrate(const Scan& scan, bool wait) {
   }
   const auto t1 = Clock::now();
   t.rays =
-      impl_->gpu_map.integrateRays(rays.data(), rays.size(), nullptr, nullptr, ohm::kRfDefault);
+      impl_->mapper->integrateRays(rays.data(), rays.size(), nullptr, nullptr, ohm::kRfDefault);
   if (wait) finish();
   t.ms_gpu = msSince(t1);
   t.ms_total = msSince(t0);
@@ -111,11 +126,13 @@ OhmScanTimes OhmEngine::integrate(const Scan& scan, bool wait) {
   return t;
 }
 
-void OhmEngine::finish() { impl_->gpu_map.gpuCache()->gpuQueue().finish(); }
+void OhmEngine::finish() {
+  if (impl_->gpu_map) impl_->gpu_map->gpuCache()->gpuQueue().finish();
+}
 
 double OhmEngine::syncToHost() {
   const auto t0 = Clock::now();
-  impl_->gpu_map.syncVoxels();
+  if (impl_->gpu_map) impl_->gpu_map->syncVoxels();
   return msSince(t0) / 1e3;
 }
 
@@ -167,11 +184,11 @@ Map OhmEngine::toMap() {
 
 std::string OhmEngine::describeModel() const {
   const ohm::OccupancyMap& m = impl_->map;
-  return fmt::format(
-      "hit {:.3g} miss {:.3g} clamp [{:.3g}, {:.3g}] occupied at p >= {:.3g}{}", m.hitProbability(),
-      m.missProbability(), m.minVoxelProbability(), m.maxVoxelProbability(),
-      m.occupancyThresholdProbability(),
-      impl_->options.matched_model ? " (matched to OctoMap's)" : " (OHM's defaults)");
+  return fmt::format("hit {:.3g} miss {:.3g} clamp [{:.3g}, {:.3g}] occupied at p >= {:.3g}{}{}",
+                     m.hitProbability(), m.missProbability(), m.minVoxelProbability(),
+                     m.maxVoxelProbability(), m.occupancyThresholdProbability(),
+                     impl_->options.matched_model ? " (matched to OctoMap's)" : " (OHM's defaults)",
+                     impl_->gpu_map ? "" : ", CPU mapper");
 }
 
 }  // namespace fragg::bench

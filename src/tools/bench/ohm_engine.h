@@ -20,6 +20,9 @@ struct OhmOptions {
   size_t gpu_cache_mib = 8192;  ///< OHM's GPU layer cache (its own default: 1 GiB at most)
   double ray_segment_m = 0.0;   ///< GpuMap::setRaySegmentLength; 0 keeps OHM's default
   size_t expected_points = 200000;
+  /// OHM's single-threaded CPU mapper (RayMapperOccupancy) instead of GpuMap: a check of the
+  /// driver and of the map conversion on a machine without a GPU, not a speed figure.
+  bool cpu = false;
 };
 
 /// Times of one scan: the whole call (rays to the map frame on the host, integrateRays, the
@@ -32,8 +35,8 @@ struct OhmScanTimes {
 
 class OhmEngine {
  public:
-  /// An empty OHM map with a GpuMap on the first CUDA device. Throws CudaError when OHM cannot
-  /// use the GPU.
+  /// An empty OHM map with a GpuMap on the first CUDA device (or the CPU mapper). Throws
+  /// CudaError when OHM cannot use the GPU.
   explicit OhmEngine(const OhmOptions& options);
   ~OhmEngine();
   OhmEngine(const OhmEngine&) = delete;

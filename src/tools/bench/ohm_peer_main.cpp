@@ -41,6 +41,7 @@ struct Options {
   std::string workloads, json_path, only;
   size_t workload_scans = 0;
   int repeats = 3, octomap_scans = 3;
+  std::string fragg_backend = "cuda";
   OhmOptions ohm;
 };
 
@@ -63,10 +64,10 @@ double mean(const std::vector<double>& v) {
   return v.empty() ? 0.0 : sum / v.size();
 }
 
-MapParams fraggParams(const Workload& w) {
+MapParams fraggParams(const Workload& w, const std::string& backend = "cuda") {
   MapParams p;
   p.resolution_m = w.resolution_m;
-  p.backend = Backend::kCuda;
+  p.backend = backendFromString(backend);
   p.occupancy.unknown_band = 0.0;  // OctoMap's rule, for the agreement figures
   return p;
 }
@@ -88,8 +89,8 @@ double insertTimed(Map& map, const Scan& s, double max_range_m) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-Map runFraggOnce(const Workload& w, size_t count, std::vector<double>* ms) {
-  Map map(fraggParams(w));
+Map runFraggOnce(const Workload& w, const Options& o, size_t count, std::vector<double>* ms) {
+  Map map(fraggParams(w, o.fragg_backend));
   for (size_t i = 0; i < count; ++i) {
     const double t = insertTimed(map, w.scans[i], w.max_range_m);
     if (ms) ms->push_back(t);
@@ -137,7 +138,7 @@ nlohmann::json runWorkload(const Workload& w, const Options& o) {
   {  // Warm-up, untimed: CUDA context, OHM's program, first allocations of both engines.
     OhmEngine warm(ohmOptions(w, o));
     warm.integrate(w.scans[0]);
-    runFraggOnce(w, 1, nullptr);
+    runFraggOnce(w, o, 1, nullptr);
   }
   Samples s;
   Map fragg_map, ohm_map;
@@ -145,7 +146,7 @@ nlohmann::json runWorkload(const Workload& w, const Options& o) {
     const bool last = r + 1 == o.repeats;
     for (int k = 0; k < 2; ++k) {
       if ((k == 0) == (r % 2 == 0)) {
-        Map m = runFraggOnce(w, n, &s.fragg_ms);
+        Map m = runFraggOnce(w, o, n, &s.fragg_ms);
         if (last) fragg_map = std::move(m);
       } else {
         runOhmOnce(w, o, n, &s, last ? &ohm_map : nullptr);
@@ -153,7 +154,9 @@ nlohmann::json runWorkload(const Workload& w, const Options& o) {
     }
   }
   s.ohm_pipelined_ms = ohmPipelinedMs(w, o);
-  std::vector<Agreement> agree = {agreement("fragg-cuda", fragg_map, "ohm", ohm_map, n)};
+  const std::string fragg_name = "fragg-" + o.fragg_backend;
+  const std::string ohm_name = o.ohm.cpu ? "ohm-cpu" : "ohm";
+  std::vector<Agreement> agree = {agreement(fragg_name, fragg_map, ohm_name, ohm_map, n)};
   const std::string& model = s.ohm_model;
   double octomap_ms = 0;
   size_t n_octo = 0;
@@ -166,12 +169,12 @@ nlohmann::json runWorkload(const Workload& w, const Options& o) {
       ms.push_back(insertIntoOcTree(tree, w.scans[i], w.max_range_m) * 1e3);
     octomap_ms = percentile(ms, 0.5);
     const Map octo = fromOcTree(tree);
-    const Map fragg_same = runFraggOnce(w, n_octo, nullptr);
+    const Map fragg_same = runFraggOnce(w, o, n_octo, nullptr);
     Map ohm_same;
     runOhmOnce(w, o, n_octo, nullptr, &ohm_same);
-    agree.push_back(agreement("fragg-cuda", fragg_same, "octomap", octo, n_octo));
-    agree.push_back(agreement("ohm", ohm_same, "octomap", octo, n_octo));
-    agree.push_back(agreement("fragg-cuda", fragg_same, "ohm", ohm_same, n_octo));
+    agree.push_back(agreement(fragg_name, fragg_same, "octomap", octo, n_octo));
+    agree.push_back(agreement(ohm_name, ohm_same, "octomap", octo, n_octo));
+    agree.push_back(agreement(fragg_name, fragg_same, ohm_name, ohm_same, n_octo));
   }
 #endif
 
@@ -182,12 +185,12 @@ nlohmann::json runWorkload(const Workload& w, const Options& o) {
   std::printf("\n### %s (%.2f m, range %s, %zu scans x %d repeats)\nOHM model: %s\n\n",
               w.name.c_str(), w.resolution_m, range.c_str(), n, o.repeats, model.c_str());
   std::printf("| engine | ms/scan median | p99 | OHM / fragg (median) |\n|---|---|---|---|\n");
-  std::printf("| fragg-cuda (Map::insert) | %.3f | %.3f | 1 |\n", fragg_med,
+  std::printf("| %s (Map::insert) | %.3f | %.3f | 1 |\n", fragg_name.c_str(), fragg_med,
               percentile(s.fragg_ms, 0.99));
-  std::printf("| ohm (host rays + integrateRays + finish) | %.3f | %.3f | %.2fx |\n", ohm_med,
-              percentile(s.ohm_ms, 0.99), ohm_med / fragg_med);
-  std::printf("| ohm (integrateRays + finish only) | %.3f | %.3f | %.2fx |\n", ohm_gpu_med,
-              percentile(s.ohm_gpu_ms, 0.99), ohm_gpu_med / fragg_med);
+  std::printf("| %s (host rays + integrateRays + finish) | %.3f | %.3f | %.2fx |\n",
+              ohm_name.c_str(), ohm_med, percentile(s.ohm_ms, 0.99), ohm_med / fragg_med);
+  std::printf("| %s (integrateRays + finish only) | %.3f | %.3f | %.2fx |\n", ohm_name.c_str(),
+              ohm_gpu_med, percentile(s.ohm_gpu_ms, 0.99), ohm_gpu_med / fragg_med);
   const double fragg_mean = mean(s.fragg_ms);
   std::printf(
       "| ohm pipelined (no wait between scans; mean, one run) | %.3f | - | %.2fx of "
@@ -222,13 +225,15 @@ nlohmann::json runWorkload(const Workload& w, const Options& o) {
           {"repeats", o.repeats},
           {"ohm_model", model},
           {"ohm_gpu_cache_mib", o.ohm.gpu_cache_mib},
-          {"fragg_cuda_ms_median", fragg_med},
-          {"fragg_cuda_ms_p99", percentile(s.fragg_ms, 0.99)},
+          {"fragg_engine", fragg_name},
+          {"ohm_engine", ohm_name},
+          {"fragg_ms_median", fragg_med},
+          {"fragg_ms_p99", percentile(s.fragg_ms, 0.99)},
           {"ohm_ms_median", ohm_med},
           {"ohm_ms_p99", percentile(s.ohm_ms, 0.99)},
           {"ohm_gpu_ms_median", ohm_gpu_med},
           {"ohm_over_fragg", ohm_med / fragg_med},
-          {"fragg_cuda_ms_mean", fragg_mean},
+          {"fragg_ms_mean", fragg_mean},
           {"ohm_pipelined_ms_mean", s.ohm_pipelined_ms},
           {"ohm_sync_ms", s.ohm_sync_s * 1e3},
           {"octomap_ms_median", octomap_ms},
@@ -261,6 +266,11 @@ int main(int argc, char** argv) {
   app.add_option("--ohm-ray-segment-m", o.ohm.ray_segment_m,
                  "OHM's ray segment length (0: its default)")
       ->capture_default_str();
+  app.add_option("--fragg-backend", o.fragg_backend, "fragg's backend (cuda; cpu for a check)")
+      ->capture_default_str();
+  app.add_flag("--ohm-cpu", o.ohm.cpu,
+               "OHM's CPU mapper instead of GpuMap: checks the driver and the map conversion on a "
+               "machine without a GPU (with --fragg-backend cpu); not a speed figure");
   bool ohm_defaults = false;
   app.add_flag("--ohm-default-model", ohm_defaults,
                "OHM's own occupancy model instead of OctoMap's (hit 0.7, miss 0.4, clamps)");
@@ -270,6 +280,7 @@ int main(int argc, char** argv) {
 
   try {
     if (o.repeats < 1) throw InvalidArgument("--repeats must be >= 1");
+    backendFromString(o.fragg_backend);  // rejects a typo before any work
     if (o.ohm.gpu_cache_mib == 0) throw InvalidArgument("--ohm-gpu-cache-mib must be > 0");
     if (o.ohm.ray_segment_m < 0) throw InvalidArgument("--ohm-ray-segment-m must be >= 0");
     const WantFn want = [&](const std::string& name) {
