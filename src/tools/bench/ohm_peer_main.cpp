@@ -193,9 +193,9 @@ nlohmann::json runWorkload(const Workload& w, const Options& o) {
               ohm_gpu_med, percentile(s.ohm_gpu_ms, 0.99), ohm_gpu_med / fragg_med);
   const double fragg_mean = mean(s.fragg_ms);
   std::printf(
-      "| ohm pipelined (no wait between scans; mean, one run) | %.3f | - | %.2fx of "
+      "| %s pipelined (no wait between scans; mean, one run) | %.3f | - | %.2fx of "
       "fragg's mean %.3f |\n",
-      s.ohm_pipelined_ms, s.ohm_pipelined_ms / fragg_mean, fragg_mean);
+      ohm_name.c_str(), s.ohm_pipelined_ms, s.ohm_pipelined_ms / fragg_mean, fragg_mean);
   std::printf("\nOHM syncVoxels after the last repeat: %.1f ms", s.ohm_sync_s * 1e3);
   if (n_octo > 0) std::printf("; OctoMap %.1f ms/scan over %zu scans", octomap_ms, n_octo);
   std::printf(
