@@ -5,10 +5,11 @@
 # from scripts/stage_store.sh).
 # Usage: bash scripts/device_check.sh [tests] [sanitize] [workloads LIST] [collision [MAP]]
 #        [frontiers]
-#        [bench ARGS...]
+#        [bench ARGS...] | [ohm ARGS...]
 # (workloads go to .device/workloads; bench ARGS are fragg_map_bench's; collision runs
 # fragg_map_collision_bench on MAP, default .device/w1.fgm, built from .device/workloads/
-# w1_lidar360 at 5 cm, 30 m, when missing: run `workloads w1` before it).
+# w1_lidar360 at 5 cm, 30 m, when missing: run `workloads w1` before it; ohm builds the peer
+# mapper OHM from .device/ohm-src and runs fragg_map_ohm_bench with ARGS: scripts/ohm_peer.sh).
 # Logs go to $OUT when set (the device tool brings them back).
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -74,6 +75,10 @@ while [ $# -gt 0 ]; do
           tee "$out/frontier_bench_$backend.log" || status=1
       done
       shift ;;
+    ohm)
+      shift
+      bash "$root/scripts/ohm_peer.sh" ohm bench "$@" || status=1
+      break ;;
     bench)
       shift
       "$build/bin/fragg_map_bench" "$@" 2>&1 | tee "$out/bench.log" | tail -40

@@ -30,6 +30,8 @@ packages=(
   libfcl-dev
   # docs: the benchmark figure (scripts/plot_fig5b.sh)
   gnuplot-nox
+  # the peer benchmark: glm's headers, copied into .device/ for OHM's build (scripts/ohm_peer.sh)
+  libglm-dev
 )
 
 # apt's and dpkg's lock files (apt and dpkg hold them with fcntl locks while they run).
