@@ -37,21 +37,20 @@ out="${out:-$(mktemp -d)}"
 mkdir -p "$out"
 args=("$input" --scans "$scans" --resolution "$resolution" --max-range "$range")
 
-now() { date +%s.%N; }
-# fragg NAME BIN ROUND: the whole process, wall clock; the JSON keeps the stage figures.
+# fragg NAME BIN ROUND: the whole process, wall clock (and its CPU seconds, user + system,
+# which a loaded machine disturbs less); the JSON keeps the stage figures.
 fragg_run() {
-  local t0 t1
-  t0=$(now)
-  "$2" build "${args[@]}" --backend "$backend" -o "$out/$1_$3.fgm" --json >"$out/$1_$3.json"
-  t1=$(now)
-  echo "$t1 - $t0" | bc -l | awk '{printf "%.3f\n", $1}' >"$out/$1_$3.s"
-  python3 - "$out/$1_$3.json" "$(cat "$out/$1_$3.s")" "$1" "$3" "$out/$1_$3.fgm" <<'EOF'
+  /usr/bin/time -o "$out/$1_$3.time" -f "%e %U %S" \
+    "$2" build "${args[@]}" --backend "$backend" -o "$out/$1_$3.fgm" --json >"$out/$1_$3.json"
+  cut -d' ' -f1 "$out/$1_$3.time" >"$out/$1_$3.s"
+  python3 - "$out/$1_$3.json" "$out/$1_$3.time" "$1" "$3" "$out/$1_$3.fgm" <<'EOF'
 import json, os, sys
 j = json.load(open(sys.argv[1]))
-print("%s round %s: process %.3f s, insertion loop %.3f s (insert %.3f s), %d scans, %d points, "
-      "%d known voxels, map %.1f MiB" % (sys.argv[3], sys.argv[4], float(sys.argv[2]),
-      j["seconds"], j["insert_seconds"], j["scans"], j["points"], j["known_voxels"],
-      os.path.getsize(sys.argv[5]) / 1048576.0))
+wall, user, sys_s = (float(v) for v in open(sys.argv[2]).read().split())
+print("%s round %s: process %.3f s (CPU %.3f s), insertion loop %.3f s (insert %.3f s), "
+      "%d scans, %d points, %d known voxels, map %.1f MiB" % (sys.argv[3], sys.argv[4], wall,
+      user + sys_s, j["seconds"], j["insert_seconds"], j["scans"], j["points"],
+      j["known_voxels"], os.path.getsize(sys.argv[5]) / 1048576.0))
 EOF
 }
 octo_run() {
@@ -71,7 +70,8 @@ python3 - "$out" "$rounds" "$octo_rounds" "$before" <<'EOF'
 import statistics, sys
 out, rounds, octo_rounds, before = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
 read = lambda name, n: [float(open("%s/%s_%d.s" % (out, name, r)).read()) for r in range(1, n + 1)]
-octo = statistics.median(read("octomap", min(rounds, octo_rounds)))
+octo_runs = read("octomap", min(rounds, octo_rounds))
+octo = statistics.median(octo_runs) if octo_runs else float("nan")
 for name in ["after"] + (["before"] if before else []):
     s = read(name, rounds)
     m = statistics.median(s)
