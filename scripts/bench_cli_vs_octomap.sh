@@ -54,9 +54,11 @@ print("%s round %s: process %.3f s (CPU %.3f s), insertion loop %.3f s (insert %
 EOF
 }
 octo_run() {
-  "$fm" octomap-build "${args[@]}" -o "$out/octomap_$1.bt" >"$out/octomap_$1.log"
+  /usr/bin/time -o "$out/octomap_$1.time" -f "%e %U %S" \
+    "$fm" octomap-build "${args[@]}" -o "$out/octomap_$1.bt" >"$out/octomap_$1.log"
   sed -n 's/.* \([0-9.]*\) s in insertPointCloud.*/\1/p' "$out/octomap_$1.log" >"$out/octomap_$1.s"
-  echo "octomap round $1: insertion $(cat "$out/octomap_$1.s") s ($(cat "$out/octomap_$1.log"))"
+  echo "octomap round $1: insertion $(cat "$out/octomap_$1.s") s; whole octomap-build process" \
+    "(wall user system) $(cat "$out/octomap_$1.time") ($(cat "$out/octomap_$1.log"))"
 }
 
 echo "bench_cli_vs_octomap: $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg), $(date -u +%FT%TZ)"
