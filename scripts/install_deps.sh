@@ -24,8 +24,9 @@ packages=(
   # core, CLI, benchmark, tests, format check
   libcli11-dev nlohmann-json3-dev libpng-dev libfmt-dev libbenchmark-dev zlib1g-dev
   clang-format octomap-tools libgmock-dev bzip2
-  # page stores (optional in CMake): SQLite (the default), LMDB, zstd for the records
-  libsqlite3-dev liblmdb-dev libzstd-dev
+  # page stores (optional in CMake): SQLite (the default), LMDB, zstd for the records; zstd
+  # also packs the .fgm block chunks (zlib without it); the zstd tool reads them in rostests
+  libsqlite3-dev liblmdb-dev libzstd-dev zstd
   # collision checking: FCL as an oracle in the tests (optional in CMake)
   libfcl-dev
   # docs: the benchmark figure (scripts/plot_fig5b.sh)

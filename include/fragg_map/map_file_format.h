@@ -4,8 +4,13 @@
 //            u32 block edge (8) | u32 flags (bit 0: blocks zlib-compressed, bit 1: kept
 //            scans, bit 2: sub-map region) |
 //            u64 block count | u64 scans integrated
-//   blocks : i32 x, y, z | u32 payload bytes | payload (512 x {i16 hits, i16 log_odds_fx}),
-//            sorted by key so the same map always gives the same bytes
+//   blocks : sorted by key so the same map always gives the same bytes.
+//            version 5: u32 codec (1 zlib, 2 zstd) | u32 blocks per chunk N | per chunk of N
+//            blocks (the last one fewer): u32 packed bytes | the chunk compressed as one piece:
+//            n x (i32 x, y, z), then per block 512 x i16 hits, then 512 x i16 log_odds_fx
+//            (block_chunks.h; chunks are packed and unpacked on threads).
+//            versions 1 to 4: per block i32 x, y, z | u32 payload bytes | payload (zlib'd
+//            512 x {i16 hits, i16 log_odds_fx})
 //   region : only with flag bit 2 (a sub-map; version >= 4): u32 kind (1 box, 2 outside a
 //            sphere) | box: f64 min x, y, z, max x, y, z; sphere: f64 centre x, y, z, radius_m |
 //            u32 frame id length | frame id bytes
@@ -22,9 +27,10 @@
 namespace fragg {
 
 constexpr char kMapFileMagic[8] = {'F', 'R', 'A', 'G', 'G', 'M', 'A', 'P'};
-/// Versions 1 (no scan section), 2 (kept scans without range noise) and 3 (no region section)
-/// are read too. A map without a region is written as in version 3, with version 4.
-constexpr uint32_t kMapFileVersion = 4;
+/// Versions 1 (no scan section), 2 (kept scans without range noise), 3 (no region section)
+/// and 4 (blocks one by one, zlib) are read too. Version 5 writes the blocks in compressed
+/// chunks (zstd where built with it, else zlib); the other sections are as in version 4.
+constexpr uint32_t kMapFileVersion = 5;
 constexpr uint32_t kMapFileCompressed = 1u;
 constexpr uint32_t kMapFileScans = 2u;
 constexpr uint32_t kMapFileRegion = 4u;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <functional>
 #include <set>
 #include <string>
 #include <vector>
@@ -10,6 +11,7 @@
 #include "fragg_map/atomic_file.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/backend.h"
+#include "fragg_map/internal/block_chunks.h"
 #include "fragg_map/internal/byte_io.h"
 #include "fragg_map/internal/pager.h"
 #include "fragg_map/internal/scan_codec.h"
@@ -62,6 +64,37 @@ SubmapRegion readRegion(ByteReader& r) {
   }
   return region;
 }
+
+// Versions 1 to 4: per block i32 x, y, z | u32 payload bytes | zlib'd (or raw) cells.
+void readPerBlockSection(ByteReader& r, uint64_t count, uint32_t flags, BlockMap& blocks,
+                         const std::function<std::string(const Block&)>& check) {
+  std::vector<uint8_t> packed;
+  for (uint64_t b = 0; b < count; ++b) {
+    BlockKey key;
+    key.x = r.get<int32_t>("block key");
+    key.y = r.get<int32_t>("block key");
+    key.z = r.get<int32_t>("block key");
+    const auto size = r.get<uint32_t>("block size");
+    bool created = false;
+    const BlockIndex i = blocks.findOrCreate(key, &created);
+    if (!created) r.fail("duplicate block");
+    Block& block = blocks.block(i);
+    if (flags & kMapFileCompressed) {
+      if (size > r.remaining()) r.fail("truncated block");
+      packed.resize(size);
+      r.take(packed.data(), size, "block");
+      uLongf out_size = kBlockBytes;
+      if (uncompress(reinterpret_cast<Bytef*>(&block), &out_size, packed.data(), size) != Z_OK ||
+          out_size != kBlockBytes)
+        r.fail("block does not decompress to " + std::to_string(kBlockBytes) + " bytes");
+    } else {
+      if (size != kBlockBytes) r.fail("uncompressed block of wrong size");
+      r.take(&block, kBlockBytes, "block");
+    }
+    const std::string why = check(block);
+    if (!why.empty()) r.fail(why);
+  }
+}
 }  // namespace
 
 void Map::save(const std::string& path) const {
@@ -95,26 +128,31 @@ void Map::save(const std::string& path) const {
         (with_region ? kMapFileRegion : 0u));
   w.put(static_cast<uint64_t>(order.size()));
   w.put(static_cast<uint64_t>(scans_));
-  std::vector<uint8_t> packed(compressBound(kBlockBytes));
-  Block paged;
-  for (const Entry& e : order) {
-    const BlockKey& k = e.key;
-    const Block* block = &paged;
-    if (e.index != kNoBlock)
-      block = &blocks_.block(e.index);
-    else if (!pager_->store().read(k, &paged))
-      throw IoError("cannot write " + path + ": a paged-out block is missing from " +
-                    pager_->store().path());
-    w.put(k.x);
-    w.put(k.y);
-    w.put(k.z);
-    uLongf packed_size = packed.size();
-    if (compress2(packed.data(), &packed_size, reinterpret_cast<const Bytef*>(block), kBlockBytes,
-                  1) != Z_OK)
-      throw IoError("cannot write " + path + ": compression failed");
-    w.put(static_cast<uint32_t>(packed_size));
-    w.put(packed.data(), packed_size);
-  }
+  std::vector<BlockKey> keys(order.size());
+  for (size_t i = 0; i < order.size(); ++i) keys[i] = order[i].key;
+  // Paged-out blocks are read from the store a round of chunks at a time.
+  std::vector<Block> paged;
+  writeBlockChunks(
+      w, bestChunkCodec(), order.size(), keys,
+      [&](size_t first, size_t n, std::vector<const Block*>& out) {
+        size_t from_store = 0;
+        for (size_t i = first; i < first + n; ++i) from_store += order[i].index == kNoBlock;
+        paged.resize(from_store);
+        size_t next = 0;
+        for (size_t i = first; i < first + n; ++i) {
+          const Entry& e = order[i];
+          if (e.index != kNoBlock) {
+            out.push_back(&blocks_.block(e.index));
+            continue;
+          }
+          Block& b = paged[next++];
+          if (!pager_->store().read(e.key, &b))
+            throw IoError("cannot write " + path + ": a paged-out block is missing from " +
+                          pager_->store().path());
+          out.push_back(&b);
+        }
+      },
+      params_.threads);
   if (with_region) writeRegion(w, region_);
   if (with_scans) {
     w.put(static_cast<uint64_t>(next_scan_id_));
@@ -179,41 +217,35 @@ Map Map::loadFile(const std::string& path, const MapParams& runtime, bool keep_a
   if (flags & ~known_flags) r.fail("unknown flags " + std::to_string(flags));
   const auto count = r.get<uint64_t>("block count");
   const auto scans = r.get<uint64_t>("scan count");
-  // Every block takes at least 16 bytes: reject absurd counts before allocating.
-  if (count > r.remaining() / 16) r.fail("block count larger than the file");
+  // Before version 5 every block takes at least 16 bytes: reject absurd counts before
+  // allocating (version 5: readBlockChunks checks its chunk count).
+  if (version < 5 && count > r.remaining() / 16) r.fail("block count larger than the file");
 
   const bool file_has_scans = (flags & kMapFileScans) != 0;
   if (keep_as_file) params.scans.keep = file_has_scans;
   Map map(params);
   const OccupancyModel& model = map.model();
-  std::vector<uint8_t> packed;
-  for (uint64_t b = 0; b < count; ++b) {
-    BlockKey key;
-    key.x = r.get<int32_t>("block key");
-    key.y = r.get<int32_t>("block key");
-    key.z = r.get<int32_t>("block key");
-    const auto size = r.get<uint32_t>("block size");
-    bool created = false;
-    const BlockIndex i = map.blocks_.findOrCreate(key, &created);
-    if (!created) r.fail("duplicate block");
-    Block& block = map.blocks_.block(i);
-    if (flags & kMapFileCompressed) {
-      if (size > r.remaining()) r.fail("truncated block");
-      packed.resize(size);
-      r.take(packed.data(), size, "block");
-      uLongf out_size = kBlockBytes;
-      if (uncompress(reinterpret_cast<Bytef*>(&block), &out_size, packed.data(), size) != Z_OK ||
-          out_size != kBlockBytes)
-        r.fail("block does not decompress to " + std::to_string(kBlockBytes) + " bytes");
-    } else {
-      if (size != kBlockBytes) r.fail("uncompressed block of wrong size");
-      r.take(&block, kBlockBytes, "block");
-    }
+  const auto cellsValid = [&](const Block& block) -> std::string {
     for (const Cell& c : block.cells) {
-      if (c.hits < 0) r.fail("negative hit count");
+      if (c.hits < 0) return "negative hit count";
       if (c.observed() && (c.log_odds_fx < model.min_fx || c.log_odds_fx > model.max_fx))
-        r.fail("log-odds outside the clamping range");
+        return "log-odds outside the clamping range";
     }
+    return {};
+  };
+  if (version >= 5) {
+    if (!(flags & kMapFileCompressed)) r.fail("version 5 blocks are always compressed");
+    map.blocks_.reserve(static_cast<size_t>(std::min<uint64_t>(count, r.remaining())));
+    readBlockChunks(
+        r, count,
+        [&](const BlockKey& key) -> Block* {
+          bool created = false;
+          const BlockIndex i = map.blocks_.findOrCreate(key, &created, /*initialise=*/false);
+          return created ? &map.blocks_.block(i) : nullptr;
+        },
+        cellsValid, params.threads);
+  } else {
+    readPerBlockSection(r, count, flags, map.blocks_, cellsValid);
   }
   if (flags & kMapFileRegion) map.region_ = readRegion(r);
   if (flags & kMapFileScans) {

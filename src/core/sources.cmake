@@ -20,6 +20,7 @@ set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/backend_factory.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cell_writer.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/block_chunks.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_paging.cpp
   ${CMAKE_CURRENT_LIST_DIR}/pager.cpp

@@ -7,13 +7,17 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <map>
+#include <random>
 #include <string>
 #include <vector>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/block_chunks.h"
 #include "fragg_map/internal/scan_codec.h"
 #include "fragg_map/map.h"
 #include "fragg_map/map_file_format.h"
+#include "legacy_map_file.h"
 #include "test_scenes.h"
 
 namespace fragg {
@@ -109,6 +113,127 @@ TEST(MapFileTest, TruncatedCorruptedAndWrongVersionFilesAreRejected) {
   expectRejected(tmpPath("next_version.fgm"), "version " + std::to_string(version));
 
   expectRejected(tmpPath("does_not_exist.fgm"), "does_not_exist");
+}
+
+TEST(MapFileTest, ReadsVersionOneAndFourFiles) {
+  // Before version 5 the blocks were zlib'd one by one; such files still load cell for cell.
+  const Map map = sampleMap();
+  for (uint32_t version : {1u, 4u}) {
+    const std::string path = tmpPath("v" + std::to_string(version) + ".fgm");
+    test::writeLegacyMapFile(map, path, version, kMapFileCompressed);
+    const Map loaded = Map::load(path);
+    expectSameMaps(map, loaded);
+    // Saved again, it is a current file with the same cells.
+    loaded.save(tmpPath("resaved.fgm"));
+    expectSameMaps(map, Map::load(tmpPath("resaved.fgm")));
+    uint32_t resaved_version = 0;
+    std::memcpy(&resaved_version, readAll(tmpPath("resaved.fgm")).data() + 8, 4);
+    EXPECT_EQ(resaved_version, kMapFileVersion);
+  }
+}
+
+// Blocks with varied cells (runs of unobserved cells, as in maps) and scattered keys.
+std::vector<std::pair<BlockKey, Block>> variedBlocks(size_t n) {
+  std::mt19937 rng(7);
+  std::vector<std::pair<BlockKey, Block>> blocks(n);
+  for (size_t i = 0; i < n; ++i) {
+    blocks[i].first = {static_cast<int32_t>(i % 37) - 18, static_cast<int32_t>(i / 37) - 20,
+                       static_cast<int32_t>(rng() % 5) - 2 + 10 * static_cast<int32_t>(i % 3)};
+    for (int k = 0; k < kCellsPerBlock; ++k) {
+      Cell& c = blocks[i].second.cells[k];
+      if (rng() % 3 == 0) continue;  // unobserved
+      c.hits = static_cast<int16_t>(rng() % 4);
+      c.log_odds_fx = static_cast<int16_t>(static_cast<int>(rng() % 4000) - 2000);
+    }
+  }
+  return blocks;
+}
+
+TEST(MapFileTest, BlockChunksRoundTripWithEveryCodecAndThreadCount) {
+  // More blocks than one round of chunks on one thread (4 chunks of 256), a last chunk that
+  // is not full, and zero blocks.
+  for (ChunkCodec codec : {ChunkCodec::kZlib, ChunkCodec::kZstd}) {
+    if (!chunkCodecAvailable(codec)) continue;
+    for (size_t n : {size_t{0}, size_t{1}, size_t{1300}}) {
+      for (int threads : {1, 2, 3}) {
+        const auto blocks = variedBlocks(n);
+        std::vector<BlockKey> keys;
+        for (const auto& b : blocks) keys.push_back(b.first);
+        ByteWriter w;
+        size_t fetched = 0;
+        writeBlockChunks(
+            w, codec, n, keys,
+            [&](size_t first, size_t count, std::vector<const Block*>& out) {
+              EXPECT_EQ(first, fetched);
+              fetched += count;
+              for (size_t i = first; i < first + count; ++i) out.push_back(&blocks[i].second);
+            },
+            threads);
+        EXPECT_EQ(fetched, n);
+        ByteReader r(w.bytes, w.bytes.size(), "mem", "chunks");
+        std::map<std::tuple<int, int, int>, Block> got;
+        std::vector<BlockKey> order;
+        readBlockChunks(
+            r, n,
+            [&](const BlockKey& k) {
+              order.push_back(k);
+              return &got[{k.x, k.y, k.z}];
+            },
+            [](const Block&) { return std::string(); }, threads);
+        EXPECT_EQ(r.remaining(), 0u);
+        ASSERT_EQ(order.size(), n);
+        for (size_t i = 0; i < n; ++i) {
+          EXPECT_EQ(order[i], keys[i]) << i;
+          const Block& b = got[{keys[i].x, keys[i].y, keys[i].z}];
+          ASSERT_EQ(std::memcmp(&b, &blocks[i].second, sizeof(Block)), 0)
+              << chunkCodecName(codec) << " block " << i << " of " << n;
+        }
+      }
+    }
+  }
+}
+
+TEST(MapFileTest, DamagedChunksAreRejected) {
+  const auto blocks = variedBlocks(300);
+  std::vector<BlockKey> keys;
+  for (const auto& b : blocks) keys.push_back(b.first);
+  ByteWriter w;
+  writeBlockChunks(w, bestChunkCodec(), blocks.size(), keys,
+                   [&](size_t first, size_t count, std::vector<const Block*>& out) {
+                     for (size_t i = first; i < first + count; ++i)
+                       out.push_back(&blocks[i].second);
+                   });
+  Block sink;
+  const auto anywhere = [&](const BlockKey&) { return &sink; };
+  const auto fine = [](const Block&) { return std::string(); };
+  const auto expectRejected = [&](std::vector<uint8_t> bytes, uint64_t count, const char* what) {
+    ByteReader r(bytes, bytes.size(), "mem", "chunks");
+    try {
+      readBlockChunks(r, count, anywhere, fine);
+      ADD_FAILURE() << "accepted: " << what;
+    } catch (const IoError& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  std::vector<uint8_t> bad = w.bytes;
+  bad[0] = 9;  // codec
+  expectRejected(bad, blocks.size(), "unknown block codec 9");
+  bad = w.bytes;
+  bad[16] ^= 0xff;  // inside the first chunk
+  expectRejected(bad, blocks.size(), "decompress");
+  expectRejected(w.bytes, blocks.size() + 256, "truncated");  // a chunk more than written
+  expectRejected(w.bytes, uint64_t{1} << 40, "larger than the file");
+  std::vector<uint8_t> cut(w.bytes.begin(), w.bytes.end() - 10);
+  expectRejected(cut, blocks.size(), "truncated");
+  // A check that fails, and a key seen twice, stop the read.
+  ByteReader r(w.bytes, w.bytes.size(), "mem", "chunks");
+  EXPECT_THROW(readBlockChunks(r, blocks.size(), anywhere,
+                               [](const Block&) { return std::string("negative hit count"); }),
+               IoError);
+  ByteReader r2(w.bytes, w.bytes.size(), "mem", "chunks");
+  EXPECT_THROW(readBlockChunks(
+                   r2, blocks.size(), [](const BlockKey&) -> Block* { return nullptr; }, fine),
+               IoError);
 }
 
 TEST(MapFileTest, KeptFloat32ScansRoundTripBitForBit) {

@@ -1,4 +1,4 @@
-// .fgm version 4: the region section round trip; version 3 files are still read.
+// .fgm: the region section (since version 4) round trip; version 3 and 4 files are still read.
 #include <gtest/gtest.h>
 #include <zlib.h>
 
@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "../core/legacy_map_file.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/map_file_format.h"
 #include "submap_scenes.h"
@@ -20,17 +21,6 @@ std::string tmpPath(const std::string& name) { return std::string(FRAGG_TEST_TMP
 std::vector<uint8_t> readBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
-}
-
-/// Rewrites the version and flags fields and the CRC of a saved map.
-void patchHeader(const std::string& path, uint32_t version, uint32_t flags) {
-  std::vector<uint8_t> bytes = readBytes(path);
-  std::memcpy(bytes.data() + 8, &version, 4);
-  std::memcpy(bytes.data() + 8 + 4 + 4 + 8 * 6 + 4, &flags, 4);
-  const uint32_t crc = static_cast<uint32_t>(crc32(0L, bytes.data(), bytes.size() - 4));
-  std::memcpy(bytes.data() + bytes.size() - 4, &crc, 4);
-  std::ofstream(path, std::ios::binary)
-      .write(reinterpret_cast<const char*>(bytes.data()), bytes.size());
 }
 
 uint32_t versionOf(const std::string& path) {
@@ -48,7 +38,7 @@ TEST(SubmapFileTest, BoxRegionRoundTrips) {
   sub.setRegion(box);
   const std::string path = tmpPath("sub_box.fgm");
   sub.save(path);
-  EXPECT_EQ(versionOf(path), 4u);
+  EXPECT_EQ(versionOf(path), kMapFileVersion);
   const Map back = Map::load(path, Backend::kCpu);
   EXPECT_EQ(back.region().kind, SubmapRegion::Kind::kBox);
   EXPECT_EQ(back.region().min_map, box.min_map);
@@ -72,21 +62,24 @@ TEST(SubmapFileTest, SphereRegionRoundTripsAndWholeMapHasNone) {
   EXPECT_TRUE(Map::load(tmpPath("rest.fgm"), Backend::kCpu).region().empty());
 }
 
-TEST(SubmapFileTest, ReadsVersionThreeFiles) {
-  // A map without a region is written as in version 3 but for the version field.
+TEST(SubmapFileTest, ReadsVersionThreeAndFourFiles) {
   const Map map = test::roomMap();
   const std::string path = tmpPath("v3.fgm");
-  map.save(path);
-  patchHeader(path, 3, kMapFileCompressed);
+  test::writeLegacyMapFile(map, path, 3, kMapFileCompressed);
   const Map back = Map::load(path, Backend::kCpu);
   EXPECT_TRUE(back.region().empty());
   std::string why;
   EXPECT_TRUE(test::sameCells(back, map, &why)) << why;
-  // A version 3 file cannot carry a region.
+  // A version 3 file cannot carry a region; a version 4 file can.
   Map cut = test::roomMap();
-  cut.truncate(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()).save(path);
-  patchHeader(path, 3, kMapFileCompressed | kMapFileRegion);
+  const Map sub = cut.truncateOutside(Eigen::Vector3d(0.5, 0.2, 0.1), 2.25);
+  test::writeLegacyMapFile(sub, path, 3, kMapFileCompressed | kMapFileRegion);
   EXPECT_THROW(Map::load(path, Backend::kCpu), IoError);
+  test::writeLegacyMapFile(sub, path, 4, kMapFileCompressed | kMapFileRegion);
+  const Map sub_back = Map::load(path, Backend::kCpu);
+  EXPECT_EQ(sub_back.region().kind, SubmapRegion::Kind::kOutsideSphere);
+  EXPECT_EQ(sub_back.region().radius_m, 2.25);
+  EXPECT_TRUE(test::sameCells(sub_back, sub, &why)) << why;
 }
 
 TEST(SubmapFileTest, CorruptRegionIsRejected) {

@@ -43,6 +43,13 @@ class ByteReader {
     std::memcpy(out, bytes_.data() + pos_, n);
     pos_ += n;
   }
+  /// The next n bytes in place (valid while the buffer lives), skipped over.
+  const uint8_t* view(size_t n, const char* field) {
+    if (end_ - pos_ < n) fail(std::string("truncated while reading ") + field);
+    const uint8_t* at = bytes_.data() + pos_;
+    pos_ += n;
+    return at;
+  }
   size_t remaining() const { return end_ - pos_; }
   [[noreturn]] void fail(const std::string& why) const {
     throw IoError(path_ + ": " + what_ + ": " + why);

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <future>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -176,11 +177,21 @@ void runBuild(const BuildOptions& o) {
   Progress progress(source->size());
   InsertStats total;
   std::vector<double> ms_per_scan;
-  Scan scan;
+  Scan scan, ahead;
   size_t skipped_resumed = 0;
+  // The next scan is read on another thread while this one is integrated.
+  std::future<bool> ahead_read;
+  const auto readAhead = [&] {
+    ahead_read = std::async(std::launch::async, [&] { return source->next(ahead); });
+  };
+  const auto wanted = [&](size_t more) {
+    return o.max_scans == 0 || skipped_resumed + ms_per_scan.size() + more < o.max_scans;
+  };
   const auto t0 = std::chrono::steady_clock::now();
-  while ((o.max_scans == 0 || skipped_resumed + ms_per_scan.size() < o.max_scans) &&
-         source->next(scan)) {
+  if (wanted(0)) readAhead();
+  while (ahead_read.valid() && ahead_read.get()) {
+    std::swap(scan, ahead);
+    if (wanted(scan.cloud.empty() ? 0 : 1)) readAhead();
     if (scan.cloud.empty()) continue;  // an empty message carries nothing to integrate
     if (skipped_resumed < resumed) {   // in the store already
       ++skipped_resumed;
