@@ -2,6 +2,8 @@
 // to the point and leave the point's own cell as it was.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+
 #include "fragg_map/errors.h"
 #include "fragg_map/map.h"
 #include "test_scenes.h"
@@ -88,7 +90,11 @@ TEST(FreeOnlyPointsTest, FlaggedFloorIsFreeAndWallsStayOccupied) {
   unflagged.free_only.clear();
   plain.insert(unflagged, T_map_sensor, SensorModel::autoFromCloud());
 
-  // Floor layers: z keys -1 and 0 (the floor points lie on z = 0, either side in float).
+  // Floor layers: z keys -1 and 0 (the floor points lie on z = 0, either side in float), away
+  // from the walls (x, y = +-3 m), whose feet hold hits in those layers.
+  auto floorCell = [](const VoxelKey& k) {
+    return k.z <= 0 && std::abs(k.x) <= 27 && std::abs(k.y) <= 27;
+  };
   size_t floor_occupied = 0, floor_free = 0, plain_floor_occupied = 0;
   size_t above_occupied = 0, above_differ = 0;
   ground_free.forEachBlock([&](const BlockKey& bk, const Block& b) {
@@ -96,7 +102,7 @@ TEST(FreeOnlyPointsTest, FlaggedFloorIsFreeAndWallsStayOccupied) {
       if (!b.cells[c].observed()) continue;
       const VoxelKey k = voxelKeyOf(bk, c);
       const CellState st = ground_free.state(b.cells[c]);
-      if (k.z <= 0) {
+      if (floorCell(k)) {
         floor_occupied += st == CellState::kOccupied;
         floor_free += k.z == 0 && st == CellState::kFree;
       }
@@ -107,8 +113,8 @@ TEST(FreeOnlyPointsTest, FlaggedFloorIsFreeAndWallsStayOccupied) {
       if (!b.cells[c].observed()) continue;
       const VoxelKey k = voxelKeyOf(bk, c);
       const bool occupied = plain.state(b.cells[c]) == CellState::kOccupied;
-      if (k.z <= 0) {
-        plain_floor_occupied += occupied;
+      if (k.z <= 0) {  // floor layers (the wall feet there hold floor points too)
+        plain_floor_occupied += floorCell(k) && occupied;
         continue;
       }
       // Above the floor both maps hold the same hits (free-only rays never add one).
