@@ -69,15 +69,18 @@ TEST(GroundFilterTest, FloorIsGroundTableAndWallAreNot) {
 }
 
 TEST(GroundFilterTest, TheBaseFramePlacesTheGround) {
-  // Seen in the sensor frame (identity), the floor is 1 m below z = 0: not ground, and no
-  // point lies within plane_distance of z = 0 for the fallback either.
+  // Seen in the sensor frame (identity), the floor is 1 m below z = 0 and the table 0.3 m: both
+  // are set aside, no plane is ground, and the fallback band takes the one wall row at z = 0
+  // of the sensor frame (1 m above the floor), not the floor.
   Scene s = scene(20);
   const GroundSplit split =
       markGroundPoints(Eigen::Isometry3d::Identity(), GroundFilterParams(), &s.cloud);
   EXPECT_FALSE(split.plane_found);
   EXPECT_GE(split.other_planes, 2u);  // the table, then the floor
-  EXPECT_EQ(split.ground, 0u);
   EXPECT_EQ(flaggedOf(s, Part::kFloor), 0u);
+  EXPECT_EQ(flaggedOf(s, Part::kTable), 0u);
+  EXPECT_EQ(flaggedOf(s, Part::kWall), 20u);
+  EXPECT_EQ(split.ground, 20u);
 }
 
 TEST(GroundFilterTest, NoGroundPlaneFallsBackToTheHeightBand) {
