@@ -27,7 +27,8 @@ Eigen::Isometry3d sensorAboveBase() {
 }
 
 /// Base-frame parts, stored in the sensor frame: a floor (z = 0, +-1 cm noise) of
-/// `floor_side` x `floor_side` points, a table top at 0.7 m (30 x 30) and a wall at x = 3 m.
+/// `floor_side` x `floor_side` points, a table top at 0.75 m (30 x 30, a cell centre at 10 cm) and
+/// a wall at x = 3 m.
 Scene scene(int floor_side, bool table = true) {
   Scene s;
   std::mt19937 rng(3);
@@ -41,7 +42,7 @@ Scene scene(int floor_side, bool table = true) {
       add(0.5f + 0.1f * i, -1.0f + 0.1f * j, noise(rng), Part::kFloor);
   if (table)
     for (int i = 0; i < 30; ++i)
-      for (int j = 0; j < 30; ++j) add(1.0f + 0.02f * i, 0.5f + 0.02f * j, 0.7f, Part::kTable);
+      for (int j = 0; j < 30; ++j) add(1.0f + 0.02f * i, 0.5f + 0.02f * j, 0.75f, Part::kTable);
   for (int i = 0; i < 20; ++i)
     for (int j = 0; j < 15; ++j) add(3.0f, -1.0f + 0.1f * i, 0.1f + 0.1f * j, Part::kWall);
   return s;
@@ -54,7 +55,7 @@ size_t flaggedOf(const Scene& s, Part p) {
 }
 
 TEST(GroundFilterTest, FloorIsGroundTableAndWallAreNot) {
-  // The table (900 points) outnumbers the floor (400): RANSAC finds it first, it lies 0.7 m
+  // The table (900 points) outnumbers the floor (400): RANSAC finds it first, it lies 0.75 m
   // above z = 0, so it is set aside and the floor is found next.
   Scene s = scene(20);
   const GroundSplit split = markGroundPoints(sensorAboveBase(), GroundFilterParams(), &s.cloud);
@@ -69,7 +70,7 @@ TEST(GroundFilterTest, FloorIsGroundTableAndWallAreNot) {
 }
 
 TEST(GroundFilterTest, TheBaseFramePlacesTheGround) {
-  // Seen in the sensor frame (identity), the floor is 1 m below z = 0 and the table 0.3 m: both
+  // Seen in the sensor frame (identity), the floor is 1 m below z = 0 and the table 0.25 m: both
   // are set aside, no plane is ground, and the fallback band takes the one wall row at z = 0
   // of the sensor frame (1 m above the floor), not the floor.
   Scene s = scene(20);
