@@ -45,9 +45,16 @@ void DeviceScan::prepare(const ScanInput& in, const MapParams& params, int32_t f
     std::memcpy(dst + b, src + b, (e - b) * sizeof(float));
   }
   points_.toDevice(3 * n, stream_);
+  const uint8_t* free_only = nullptr;  // the device's flags, when the cloud has any
+  if (in.cloud.hasFreeOnly()) {
+    free_only_.reserve(n);
+    std::memcpy(free_only_.host(), in.cloud.free_only.data(), n);
+    free_only_.toDevice(n, stream_);
+    free_only = free_only_.device();
+  }
   countersToDevice();
-  launchPrepare(points_.device(), uint32_t(n), prep, in.frustum, rays_.get(), counters_.device(),
-                stream_);
+  launchPrepare(points_.device(), free_only, uint32_t(n), prep, in.frustum, rays_.get(),
+                counters_.device(), stream_);
   countersToHost();
   FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
   stats.points_in += n;

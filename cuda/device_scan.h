@@ -41,7 +41,7 @@ class DeviceScan {
   const float* startV() const { return prepared_.start_v; }
   const RayEnd* rays() const { return rays_.get(); }
   size_t deviceBytes() const {
-    return rays_.bytes() + points_.deviceBytes() + misses_.deviceBytes();
+    return rays_.bytes() + points_.deviceBytes() + free_only_.deviceBytes() + misses_.deviceBytes();
   }
 
  private:
@@ -51,6 +51,7 @@ class DeviceScan {
   cudaStream_t stream_;
   PreparedScan prepared_;  ///< ref and start; the rays too when prepared on the host
   MirroredBuffer<float> points_;
+  MirroredBuffer<uint8_t> free_only_;  ///< PointCloud::free_only, when the cloud has flags
   DeviceArray<RayEnd> rays_;
   MirroredBuffer<ScanCounters> counters_;
   MirroredBuffer<int32_t> misses_;

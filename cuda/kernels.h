@@ -13,9 +13,11 @@
 namespace fragg::cuda {
 
 /// Points (x, y, z float triples, sensor frame) -> compacted rays; counts points by outcome
-/// and bounds the rays (ScanCounters::lo_v / hi_v).
-void launchPrepare(const float* points_S, uint32_t n, const RayPrepParams& p, const Frustum& f,
-                   RayEnd* rays, ScanCounters* counters, cudaStream_t stream);
+/// and bounds the rays (ScanCounters::lo_v / hi_v). `free_only`: nullptr, or one flag per
+/// point (PointCloud::free_only).
+void launchPrepare(const float* points_S, const uint8_t* free_only, uint32_t n,
+                   const RayPrepParams& p, const Frustum& f, RayEnd* rays, ScanCounters* counters,
+                   cudaStream_t stream);
 
 struct RaycastArgs {
   const RayEnd* rays;

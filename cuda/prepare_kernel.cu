@@ -11,14 +11,17 @@ namespace fragg::cuda {
 namespace {
 constexpr unsigned kThreads = 256;
 
-__global__ void prepareKernel(const float* __restrict__ points_S, uint32_t n, RayPrepParams p,
-                              Frustum f, RayEnd* __restrict__ rays, ScanCounters* c) {
+__global__ void prepareKernel(const float* __restrict__ points_S,
+                              const uint8_t* __restrict__ free_only_flags, uint32_t n,
+                              RayPrepParams p, Frustum f, RayEnd* __restrict__ rays,
+                              ScanCounters* c) {
   const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   RayEnd ray{};
   RayPrep outcome = RayPrep::kInvalid;
   const bool valid = i < n;
   if (valid)
-    outcome = prepareRay(p, f, points_S[3 * i], points_S[3 * i + 1], points_S[3 * i + 2], &ray);
+    outcome = prepareRay(p, f, points_S[3 * i], points_S[3 * i + 1], points_S[3 * i + 2],
+                         free_only_flags != nullptr && free_only_flags[i] != 0, &ray);
   const bool keep = valid && (outcome == RayPrep::kHit || outcome == RayPrep::kFreeOnly);
   const unsigned lane = threadIdx.x & 31;
 
@@ -59,10 +62,12 @@ __global__ void prepareKernel(const float* __restrict__ points_S, uint32_t n, Ra
 }
 }  // namespace
 
-void launchPrepare(const float* points_S, uint32_t n, const RayPrepParams& p, const Frustum& f,
-                   RayEnd* rays, ScanCounters* counters, cudaStream_t stream) {
+void launchPrepare(const float* points_S, const uint8_t* free_only_flags, uint32_t n,
+                   const RayPrepParams& p, const Frustum& f, RayEnd* rays, ScanCounters* counters,
+                   cudaStream_t stream) {
   if (n == 0) return;
-  prepareKernel<<<blocksFor(n, kThreads), kThreads, 0, stream>>>(points_S, n, p, f, rays, counters);
+  prepareKernel<<<blocksFor(n, kThreads), kThreads, 0, stream>>>(points_S, free_only_flags, n, p, f,
+                                                                 rays, counters);
   FRAGG_CUDA_CHECK_LAUNCH("prepareKernel");
 }
 

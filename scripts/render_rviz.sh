@@ -7,14 +7,16 @@
 # robot box along a path through a wall) and renders rviz/collision.rviz, zoomed on that path,
 # to docs/collision_rviz.png.
 # Usage: bash scripts/render_rviz.sh [--out docs/rviz.png] [--bag FILE --cloud TOPIC]
-#        [--wait S] [--collision-demo] [common options]
+#        [--wait S] [--collision-demo] [--no-build] [common options]
+#   --no-build   use the workspace as it is (the nodelet built; --bag given or the smoke bag
+#                already made)
 set -euo pipefail
 # First-run speed: CUDA kernels for the GPU present only, none without a GPU (common.sh).
 FRAGG_CUDA="${FRAGG_CUDA:-machine}"
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 out=""
-bag="" cloud="/points" wait_s=25 collision_demo=0
+bag="" cloud="/points" wait_s=25 collision_demo=0 build=1
 args=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -23,11 +25,12 @@ while [ $# -gt 0 ]; do
     --cloud) cloud="$2"; shift 2 ;;
     --wait) wait_s="$2"; shift 2 ;;
     --collision-demo) collision_demo=1; shift ;;
+    --no-build) build=0; shift ;;
     *) args+=("$1"); shift ;;
   esac
 done
 fragg_usage() {
-  echo "usage: bash scripts/render_rviz.sh [--out PNG] [--bag FILE --cloud TOPIC] [--wait S] [--collision-demo]"
+  echo "usage: bash scripts/render_rviz.sh [--out PNG] [--bag FILE --cloud TOPIC] [--wait S] [--collision-demo] [--no-build]"
   fragg_usage_common
 }
 fragg_parse_common "${args[@]+"${args[@]}"}"
@@ -36,7 +39,7 @@ if [ "$FRAGG_DEPS" -eq 1 ]; then
   fragg_step "Debian packages (+ rviz, Xvfb, imagemagick)"
   bash "$FRAGG_REPO/scripts/install_deps.sh" rviz xvfb xauth imagemagick
 fi
-fragg_build_ws
+[ "$build" -eq 0 ] || fragg_build_ws
 rviz_config="$FRAGG_REPO/rviz/fragg_map.rviz"
 if [ "$collision_demo" -eq 1 ]; then
   rviz_config="$FRAGG_REPO/rviz/collision.rviz"

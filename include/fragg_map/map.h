@@ -71,12 +71,15 @@ class Map {
   Map& operator=(const Map&) = delete;
 
   /// Integrates one scan. `cloud` is in the sensor frame; `T_map_sensor` places the sensor.
-  /// Throws InvalidArgument for a non-finite pose or a bad sensor model (map untouched).
+  /// Points the cloud marks free-only (PointCloud::free_only) only clear: free cells up to the
+  /// point, the point's own cell not updated. Throws InvalidArgument for a non-finite pose, a
+  /// bad sensor model or a free-only flag count other than the point count (map untouched).
   /// With `params.scans.keep` the scan is kept (the map integrates the kept points: the
   /// cloud itself by default, quantised ones with scans.point_step_m > 0) under its insertion
   /// index, `InsertStats::scan_id`, with `stamp_ns` and `sensor_frame` (the cloud's frame id, at
   /// most kMaxSensorFrameChars characters; kept for the caller, e.g. to find the scan's sensor
-  /// again after loading the map).
+  /// again after loading the map). A kept scan with free-only points cannot be removed or
+  /// corrected (the store keeps points, not flags).
   InsertStats insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                      const SensorModel& sensor, int64_t stamp_ns = 0,
                      const std::string& sensor_frame = std::string());

@@ -13,15 +13,18 @@ size_t filterHeight(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sens
   out->height = cloud.height;
   out->points_S.clear();
   out->points_S.reserve(cloud.size());
+  out->free_only.clear();
+  const bool flags = cloud.hasFreeOnly();
+  if (flags) out->free_only.reserve(cloud.size());
   size_t dropped = 0;
-  for (const Eigen::Vector3f& p_S : cloud.points_S) {
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3f& p_S = cloud.points_S[i];
     const double z_m = row_z.dot(p_S.cast<double>()) + origin_z_m;
-    if ((z_m >= band.min_z_m && z_m <= band.max_z_m) || !std::isfinite(z_m)) {
-      out->points_S.push_back(p_S);
-      continue;
-    }
-    ++dropped;
-    if (organised) out->points_S.push_back(Eigen::Vector3f::Zero());
+    const bool in_band = (z_m >= band.min_z_m && z_m <= band.max_z_m) || !std::isfinite(z_m);
+    if (!in_band) ++dropped;
+    if (!in_band && !organised) continue;
+    out->points_S.push_back(in_band ? p_S : Eigen::Vector3f::Zero());
+    if (flags) out->free_only.push_back(cloud.free_only[i]);
   }
   if (!organised) {
     out->width = cloud.width == 0 ? 0 : static_cast<uint32_t>(out->points_S.size());

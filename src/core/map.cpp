@@ -113,6 +113,9 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
     throw InvalidArgument("sensor frame id longer than " + std::to_string(kMaxSensorFrameChars) +
                           " characters");
   if (cloud.empty()) throw InvalidArgument("point cloud is empty");
+  if (cloud.hasFreeOnly() && cloud.free_only.size() != cloud.size())
+    throw InvalidArgument("point cloud has " + std::to_string(cloud.free_only.size()) +
+                          " free-only flags for " + std::to_string(cloud.size()) + " points");
   // The height band first: a kept scan holds the points that were integrated.
   const bool by_height = params_.height_filter.active();
   PointCloud in_band;
@@ -127,6 +130,7 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   const bool quantise = keep && params_.scans.point_step_m > 0.0;
   if (keep)
     kept = encodePoints(filtered, params_.scans.point_step_m, quantise ? &quantised : nullptr);
+  if (quantise) quantised.free_only = filtered.free_only;
   const PointCloud& used = quantise ? quantised : filtered;
 
   ScanRecord how;
@@ -144,7 +148,13 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
 
   InsertStats stats = integrateScan(used, how, /*remove=*/false, /*host_cull=*/true);
   stats.seconds_cull += seconds_model;
-  if (keep) scan_store_->add(how, std::move(kept));
+  if (keep) {
+    // The store keeps points, not free-only flags: such a scan cannot be walked again.
+    if (std::any_of(filtered.free_only.begin(), filtered.free_only.end(),
+                    [](uint8_t f) { return f != 0; }))
+      how.removable = false;
+    scan_store_->add(how, std::move(kept));
+  }
   ++next_scan_id_;
   ++scans_;
   stats.scan_id = how.id;

@@ -105,7 +105,7 @@ void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
         ++invalid;
         continue;
       }
-      switch (prepareRay(prep, frustum, p.x(), p.y(), p.z(), &ray)) {
+      switch (prepareRay(prep, frustum, p.x(), p.y(), p.z(), cloud.freeOnly(i), &ray)) {
         case RayPrep::kHit:
           local.push_back(ray);
           ++hits;

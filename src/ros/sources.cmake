@@ -1,7 +1,9 @@
-# fragg_map_ros (ROS builds only): stateless converters between ROS messages and the map, and
-# the server's parameters, collision shapes from requests and their markers.
+# fragg_map_ros (ROS builds only): stateless converters between ROS messages and the map, the
+# ground filter (PCL plane segmentation), the server's parameters, collision shapes from
+# requests and their markers.
 set(FRAGG_ROS_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/cloud_from_msg.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/ground_filter.cpp
   ${CMAKE_CURRENT_LIST_DIR}/height_color.cpp
   ${CMAKE_CURRENT_LIST_DIR}/block_markers.cpp
   ${CMAKE_CURRENT_LIST_DIR}/occupied_cloud.cpp

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "fragg_map/io/dataset.h"
@@ -54,6 +55,49 @@ TEST(OctomapAgreementTest, VelodynePair) {
   const Eigen::Isometry3d T_target_source = readMatrix4(dir + "T_target_source.txt");
   expectAgreement({scanOf(dir + "target.ply"), scanOf(dir + "source.ply", T_target_source)}, 0.05,
                   30.0, "small_gicp_pair (Velodyne)");
+}
+
+/// filter_ground's ground points (free-only points) as octomap_server inserts them: the lower
+/// part of a Velodyne scan flagged, both maps built from the same flags.
+TEST(OctomapAgreementTest, FreeOnlyPointsAsOctomapServerGroundPoints) {
+  const std::string dir = kData + "/small_gicp_pair/";
+  Scan scan = scanOf(dir + "target.ply");
+  std::vector<uint8_t> ground(scan.cloud.size());
+  size_t flagged = 0;
+  for (size_t i = 0; i < ground.size(); ++i) {
+    ground[i] = scan.cloud.points_S[i].z() < -1.0f ? 1 : 0;
+    flagged += ground[i];
+  }
+  ASSERT_GT(flagged, 1000u);
+  ASSERT_LT(flagged, ground.size() - 1000u);
+  MapParams params;
+  params.resolution_m = 0.05;
+  params.occupancy.unknown_band = 0.0;
+  Map map(params);
+  octomap::OcTree tree = test::octomapWithParamsOf(params);
+  scan.cloud.free_only = ground;
+  const double max_range_m = 30.0;
+  map.insert(scan.cloud, scan.T_map_sensor, SensorModel::autoFromCloud(0.0, max_range_m));
+  test::insertLikeOctomapServer(tree, scan, ground, max_range_m);
+  const test::Agreement a = test::compareWithOctomap(map, tree);
+  std::printf("[agreement] ground points: %zu of %zu flagged: same state %.4f %%, either %.4f %%\n",
+              flagged, ground.size(), 100 * a.bothRatio(), 100 * a.eitherRatio());
+  EXPECT_GT(a.both, 10000u);
+  EXPECT_GE(a.bothRatio(), 0.995);
+  EXPECT_GE(a.eitherRatio(), 0.99);
+  // No flagged point's cell is occupied unless an unflagged point hit it too.
+  std::unordered_set<VoxelKey, test::VoxelKeyHasher> hit_cells;
+  for (size_t i = 0; i < ground.size(); ++i)
+    if (!ground[i] && scan.cloud.points_S[i].allFinite())
+      hit_cells.insert(map.keyOf(scan.cloud.points_S[i].cast<double>()));
+  size_t ground_occupied = 0;
+  for (size_t i = 0; i < ground.size(); ++i) {
+    if (!ground[i] || !scan.cloud.points_S[i].allFinite()) continue;
+    const VoxelKey k = map.keyOf(scan.cloud.points_S[i].cast<double>());
+    const Cell* c = map.findCell(k);
+    if (c && map.state(*c) == CellState::kOccupied && !hit_cells.count(k)) ++ground_occupied;
+  }
+  EXPECT_EQ(ground_occupied, 0u);
 }
 
 TEST(OctomapAgreementTest, IndoorRoomScans) {

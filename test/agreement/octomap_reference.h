@@ -35,6 +35,32 @@ inline void insertIntoOctomap(octomap::OcTree& tree, const Scan& scan, double ma
   tree.insertPointCloud(pc, octomap::point3d(o.x(), o.y(), o.z()), max_range_m);
 }
 
+/// octomap_server's insertScan: points whose `ground` flag is set only clear (the ray's cells,
+/// not the point's), the others as insertPointCloud inserts them; a cell hit in the scan is not
+/// also cleared.
+inline void insertLikeOctomapServer(octomap::OcTree& tree, const Scan& scan,
+                                    const std::vector<uint8_t>& ground, double max_range_m) {
+  const Eigen::Vector3d o = scan.T_map_sensor.translation();
+  const octomap::point3d origin(o.x(), o.y(), o.z());
+  octomap::KeySet free_cells, occupied_cells;
+  octomap::KeyRay ray;
+  for (size_t i = 0; i < scan.cloud.size(); ++i) {
+    const Eigen::Vector3f& p = scan.cloud.points_S[i];
+    if (!p.allFinite() || p.squaredNorm() == 0.f) continue;
+    const Eigen::Vector3d q = scan.T_map_sensor * p.cast<double>();
+    octomap::point3d end(static_cast<float>(q.x()), static_cast<float>(q.y()),
+                         static_cast<float>(q.z()));
+    const bool far = (end - origin).norm() > max_range_m;
+    if (far) end = origin + (end - origin).normalized() * max_range_m;
+    if (tree.computeRayKeys(origin, end, ray)) free_cells.insert(ray.begin(), ray.end());
+    octomap::OcTreeKey key;
+    if (!ground[i] && !far && tree.coordToKeyChecked(end, key)) occupied_cells.insert(key);
+  }
+  for (const octomap::OcTreeKey& k : free_cells)
+    if (!occupied_cells.count(k)) tree.updateNode(k, false);
+  for (const octomap::OcTreeKey& k : occupied_cells) tree.updateNode(k, true);
+}
+
 inline octomap::OcTree octomapWithParamsOf(const MapParams& p) {
   octomap::OcTree tree(p.resolution_m);
   tree.setProbHit(p.occupancy.prob_hit);

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "../core/test_scenes.h"
 #include "bench/synthetic_lidar.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/geometry/mesh_bvh.h"
@@ -258,6 +259,44 @@ TEST(CudaBackendTest, PrepareKernelCountsLikeTheCpu) {
   EXPECT_EQ(a.blocks_touched, b.blocks_touched);
   EXPECT_EQ(a.blocks_created, b.blocks_created);
   expectSameBlocks(cpu, gpu, "random cloud, pinhole");
+}
+
+/// Free-only points (filter_ground's ground points): the device's prepare kernel reads the
+/// flags and gives the same rays, counters and cells as the CPU, on the device path (an
+/// unorganised cloud) and on the host path (an organised one with no-return rays).
+TEST(CudaBackendTest, FreeOnlyPointsAreByteIdentical) {
+  REQUIRE_DEVICE();
+  std::vector<Input> in = velodynePair();
+  for (Input& s : in) {
+    s.cloud.free_only.resize(s.cloud.size());
+    for (size_t i = 0; i < s.cloud.size(); ++i)
+      s.cloud.free_only[i] = s.cloud.points_S[i].z() < -1.0f || i % 7 == 0 ? 1 : 0;
+  }
+  const SensorModel sensor = SensorModel::autoFromCloud(0.0, 30.0);
+  Map cpu(paramsFor(Backend::kCpu, 0.05)), gpu(paramsFor(Backend::kCuda, 0.05));
+  ASSERT_STREQ(gpu.backendName(), "cuda");
+  for (const Input& s : in) {
+    const InsertStats a = cpu.insert(s.cloud, s.T, sensor), b = gpu.insert(s.cloud, s.T, sensor);
+    EXPECT_EQ(a.rays_hit, b.rays_hit);
+    EXPECT_EQ(a.rays_free_only, b.rays_free_only);
+    EXPECT_GT(a.rays_free_only, 1000u);
+    EXPECT_EQ(a.cells_updated, b.cells_updated);
+  }
+  expectSameBlocks(cpu, gpu, "velodyne pair, free-only points");
+
+  MapParams p = paramsFor(Backend::kCpu, 0.05);
+  p.clear_no_return_rays = true;
+  std::vector<Input> room = {
+      {test::roomScan(3.0, 1.0, 1.5, 32, 360), Eigen::Isometry3d::Identity()}};
+  PointCloud& c = room[0].cloud;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  c.free_only.resize(c.size());
+  for (size_t i = 0; i < c.size(); ++i) {
+    if (i % 11 == 0) c.points_S[i] = Eigen::Vector3f::Constant(nan);
+    c.free_only[i] = c.points_S[i].z() < -0.98f ? 1 : 0;
+  }
+  expectBackendsAgree(room, p, SensorModel::autoFromCloud(0.0, 10.0),
+                      "organised room, no-return rays and free-only points");
 }
 
 TEST(CudaBackendTest, TinyPoolEvictsWritesBackAndReuploads) {

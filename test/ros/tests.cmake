@@ -10,6 +10,10 @@ if(FRAGG_HAVE_ROS)
             ${CMAKE_CURRENT_LIST_DIR}/speckles_test.cpp
     LIBS fragg_map_ros
     LABELS ros)
+  fragg_add_test(ros_ground_filter_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/ground_filter_test.cpp
+    LIBS fragg_map_ros
+    LABELS ros)
   fragg_add_test(ros_server_params_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/server_params_test.cpp
     LIBS fragg_map_ros

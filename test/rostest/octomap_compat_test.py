@@ -2,17 +2,41 @@
 """rostest of fragg_map as a drop-in for octomap_server (launch/octomap_compat.launch, node
 named octomap_server, parameters from an octomap_server YAML): every row of README's
 "octomap_server -> fragg_map" table. One synthetic cloud from a sensor 1 m above the map
-origin: a wall at x = 3 m, a point beyond sensor_model/max_range, a point below
-pointcloud_min_z and one above occupancy_max_z. Further server processes (the node's
-executable, started here) check the start-up map (map_file, first argument) and the warning
-that names unknown parameters."""
+origin: a wall at x = 3 m, a point beyond sensor_model/max_range, points below
+pointcloud_min_z and above pointcloud_max_z, one above occupancy_max_z and one below
+occupancy_min_z. Further server processes (the node's executable, started here, each in a
+namespace of its own: ExtraServer) check the start-up map (map_file, first argument), the
+warning that names unknown parameters, filter_ground and filter_speckles.
+
+README row -> test:
+  cloud_in, pointcloud_min_z/max_z, max_range                  test_03
+  occupied_cells_vis_array, frame_id, resolution, height_map/color  test_01
+  free_cells_vis_array, publish_free_space                      test_02
+  octomap_point_cloud_centers                                   test_04
+  projected_map, latch, occupancy_min_z/max_z                   test_05
+  sensor_model/hit, miss, min, max                              test_05a
+  ~clear_bbx                                                    test_06
+  ~reset                                                        test_07
+  ~load_map (.bt, .fgm)                                         test_08
+  map_file / first argument                                     test_09
+  compress_map and every other name of the YAML, unknown names  test_10
+  octomap_binary / octomap_full topics and services             test_11
+  base_frame_id, filter_ground, ground_filter/*                 test_12
+  filter_speckles                                               test_13
+A new row is one test function: ExtraServer(self, name, {parameters}) gives a server of its
+own with those parameters over the YAML's, .insert(points) feeds it a cloud, .occupied() /
+.cells() / .last(topic) read what it made."""
 import os
 import shutil
 import signal
+import struct
 import subprocess
 import tempfile
 import time
 import unittest
+
+import array
+import math
 
 import genmsg
 import genmsg.gentools
@@ -33,6 +57,8 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from fragg_map.srv import BoundingBoxQuery, GetStats, LoadMap, Reset, SaveMap
 
+import fgm_cells
+
 NS = "/octomap_server/"
 RES = 0.1
 SENSOR_Z = 1.0  # the sensor frame's height in the map frame
@@ -52,12 +78,50 @@ def key(x, y, z):
 
 
 def scene_points():
-    """Sensor-frame points: the wall (x = 3 m, map z 0.55..1.45), beyond range, too low, high."""
+    """Sensor-frame points: the wall (x = 3 m, map z 0.55..1.45), beyond range, not inserted
+    (outside the pointcloud height band), high and low (outside the occupancy band)."""
     wall = [(3.05, -0.45 + 0.1 * i, -0.45 + 0.1 * j) for i in range(10) for j in range(10)]
     beyond = [(8.05, 0.05, 0.05)]        # 8 m > max_range 5 m: only clears up to 5 m
     too_low = [(2.05, 1.05, -3.05)]      # map z -2.05 < pointcloud_min_z -1: not inserted
+    too_high = [(2.05, 1.05, 2.55)]      # map z 3.55 > pointcloud_max_z 3: not inserted
     high = [(2.05, -1.05, 1.55)]         # map z 2.55 > occupancy_max_z 2: 3D only
-    return wall, beyond, too_low, high
+    low = [(2.05, 2.05, -1.45)]          # map z -0.45 < occupancy_min_z 0: 3D only
+    return wall, beyond, too_low + too_high, high + low
+
+
+def floor_scene():
+    """Sensor-frame points of a floor (map z 0.02, 600 points from 1 to 4 m ahead), a wall
+    behind it (x = 4.55 m) and one point alone in the air (a speckle)."""
+    floor = [(1.05 + 0.1 * i, -0.95 + 0.1 * j, 0.02 - SENSOR_Z)
+             for i in range(30) for j in range(20)]
+    wall = [(4.55, -0.95 + 0.1 * i, -0.45 + 0.1 * j) for i in range(20) for j in range(10)]
+    speckle = [(2.05, -2.05, 0.55)]
+    return floor, wall, speckle
+
+
+def fixed_log_odds(p):
+    """The map's fixed-point log-odds of probability p (1/1024 units, rounded half away)."""
+    v = math.log(p / (1.0 - p)) * 1024.0
+    return int(math.floor(v + 0.5)) if v >= 0 else -int(math.floor(-v + 0.5))
+
+
+def cell_log_odds(path):
+    """{(x, y, z) voxel key: log_odds_fx} of the observed cells of a .fgm file."""
+    blocks, _ = fgm_cells.read_blocks(path)
+    cells = {}
+    edge = fgm_cells.BLOCK_EDGE
+    for (bx, by, bz), raw in blocks.items():
+        log_odds = array.array("h", raw)[1::2]
+        for i, v in enumerate(log_odds):
+            if v != fgm_cells.UNOBSERVED:
+                cells[(bx * edge + i % edge, by * edge + (i // edge) % edge,
+                       bz * edge + i // (edge * edge))] = v
+    return cells
+
+
+def yaml_params():
+    with open(rospy.get_param("~yaml")) as f:
+        return rosparam.load_str(f.read(), "")[0][0]
 
 
 def occupied_keys(cloud):
@@ -79,13 +143,16 @@ class OctomapCompatTest(unittest.TestCase):
             rospy.Subscriber("/" + topic, kind, cls.keep(topic), queue_size=20)
         rospy.Subscriber("/occupied_cells_vis_array", MarkerArray, cls.arrays.append,
                          queue_size=20)
-        tf = TransformStamped()
-        tf.header.frame_id = "map"
-        tf.child_frame_id = "sensor"
-        tf.transform.translation.z = SENSOR_Z
-        tf.transform.rotation.w = 1.0
+        transforms = []
+        for child, z in (("sensor", SENSOR_Z), ("base_link", 0.0)):  # base_link: the YAML's
+            tf = TransformStamped()
+            tf.header.frame_id = "map"
+            tf.child_frame_id = child
+            tf.transform.translation.z = z
+            tf.transform.rotation.w = 1.0
+            transforms.append(tf)
         cls.tf_pub = rospy.Publisher("/tf_static", TFMessage, queue_size=1, latch=True)
-        cls.tf_pub.publish(TFMessage([tf]))
+        cls.tf_pub.publish(TFMessage(transforms))
         for name in ("get_stats", "save_map", "load_map", "reset", "reset_map", "clear_bbx"):
             rospy.wait_for_service(NS + name, timeout=60)
         cls.get_stats = rospy.ServiceProxy(NS + "get_stats", GetStats)
@@ -103,9 +170,10 @@ class OctomapCompatTest(unittest.TestCase):
 
     @classmethod
     def publish_scene(cls):
-        wall, beyond, too_low, high = scene_points()
+        wall, beyond, not_inserted, outside_band = scene_points()
         header = Header(frame_id="sensor", stamp=rospy.Time.now())
-        cls.cloud_pub.publish(pc2.create_cloud_xyz32(header, wall + beyond + too_low + high))
+        cls.cloud_pub.publish(pc2.create_cloud_xyz32(header, wall + beyond + not_inserted +
+                                                     outside_band))
 
     @classmethod
     def tearDownClass(cls):
@@ -141,14 +209,12 @@ class OctomapCompatTest(unittest.TestCase):
 
     def test_03_max_range_and_pointcloud_height_band(self):
         occupied = occupied_keys(self.last["occupied_cells"])
-        wall, beyond, too_low, high = scene_points()
-        for x, y, z in wall:
+        wall, beyond, not_inserted, outside_band = scene_points()
+        for x, y, z in wall + outside_band:
             self.assertIn(key(x, y, z + SENSOR_Z), occupied)
-        for x, y, z in beyond + too_low:
+        for x, y, z in beyond + not_inserted:
             self.assertNotIn(key(x, y, z + SENSOR_Z), occupied)
-        x, y, z = high[0]
-        self.assertIn(key(x, y, z + SENSOR_Z), occupied)
-        self.assertEqual(len(occupied), len(wall) + 1)
+        self.assertEqual(len(occupied), len(wall) + len(outside_band))
 
     def test_04_point_cloud_centers_alias_of_occupied_cells(self):
         centers = self.last["octomap_point_cloud_centers"]
@@ -172,8 +238,23 @@ class OctomapCompatTest(unittest.TestCase):
             j = int((y - grid.info.origin.position.y) / RES)
             return grid.data[j * grid.info.width + i]
         self.assertEqual(at(3.05, 0.05), 100)
-        self.assertNotEqual(at(2.05, -1.05), 100)
+        self.assertNotEqual(at(2.05, -1.05), 100)  # above occupancy_max_z
+        self.assertNotEqual(at(2.05, 2.05), 100)   # below occupancy_min_z
         self.assertEqual(at(1.55, 0.05), 0)  # the rays' free cells below 2 m
+
+    def test_05a_sensor_model_probabilities(self):
+        """sensor_model/hit, miss, min, max (the YAML's, none of them the default): the saved
+        map's occupancy model, a wall cell hit once and a cell its ray crossed once."""
+        model = yaml_params()["sensor_model"]
+        path = os.path.join(self.tmp, "sensor_model.fgm")
+        self.assertTrue(rospy.ServiceProxy(NS + "save_map", SaveMap)(path).success)
+        with open(path, "rb") as f:
+            header = f.read(64)
+        self.assertEqual(struct.unpack_from("<4d", header, 24),
+                         (model["hit"], model["miss"], model["min"], model["max"]))
+        cells = cell_log_odds(path)
+        self.assertEqual(cells[key(3.05, 0.05, 1.05)], fixed_log_odds(model["hit"]))
+        self.assertEqual(cells[key(1.55, 0.05, 1.05)], fixed_log_odds(model["miss"]))
 
     # ---- services ----
     def test_06_clear_bbx_with_octomap_msgs_type(self):
@@ -266,9 +347,7 @@ class OctomapCompatTest(unittest.TestCase):
         self.assertEqual((s.known_voxels, s.scans), (known, 1))
 
     def test_10_unknown_parameters_named_in_one_warning(self):
-        with open(rospy.get_param("~yaml")) as f:
-            yaml_params = rosparam.load_str(f.read(), "")[0][0]
-        proc, log = self.start_server("yaml_check", [], yaml_params)
+        proc, log = self.start_server("yaml_check", [], yaml_params())
         out = self.stop(proc, log)
         self.assertNotIn("does not read", out, "an octomap_server name is unknown:\n" + out)
         proc, log = self.start_server("typo_check", [], {"sensor_model": {"hitt": 0.7},
@@ -317,6 +396,109 @@ class OctomapCompatTest(unittest.TestCase):
         self.assertFalse(full.binary)
         self.assertEqual(full.id, "OcTree")
         self.assertGreater(len(full.data), len(file_data))
+
+    # ---- filters, each in a server of its own fed the floor scene ----
+    def test_12_filter_ground(self):
+        """filter_ground with base_frame_id (base_link: the map's origin, the sensor 1 m above):
+        the floor's points clear their rays and do not become obstacles, the wall does; the
+        same scene without filter_ground makes the floor occupied."""
+        floor, wall, _ = floor_scene()
+        floor_keys = {key(x, y, z + SENSOR_Z) for x, y, z in floor}
+        for on in (True, False):
+            server = ExtraServer(self, "ground_" + ("on" if on else "off"), {"filter_ground": on})
+            server.insert(floor + wall)
+            occupied = server.occupied()
+            cells = server.cells()
+            server.stop()
+            for x, y, z in wall:
+                self.assertIn(key(x, y, z + SENSOR_Z), occupied)
+            floor_occupied = floor_keys & occupied
+            floor_free = [k for k, v in cells.items() if k[2] == 0 and v < 0]
+            if on:
+                self.assertEqual(floor_occupied, set())
+                self.assertGreater(len(floor_free), 100)  # crossed by the grazing rays
+            else:
+                self.assertGreater(len(floor_occupied), 300)
+
+    def test_13_filter_speckles(self):
+        """filter_speckles: the lone point's cell (no occupied neighbour) is left out of
+        occupied_cells / octomap_point_cloud_centers; the map keeps it; the wall stays."""
+        _, wall, speckle = floor_scene()
+        x, y, z = speckle[0]
+        speckle_key = key(x, y, z + SENSOR_Z)
+        for on in (True, False):
+            server = ExtraServer(self, "speckles_" + ("on" if on else "off"),
+                                 {"filter_speckles": on})
+            server.insert(wall + speckle)
+            occupied = server.occupied()
+            centers = occupied_keys(server.last("octomap_point_cloud_centers"))
+            cells = server.cells()
+            server.stop()
+            self.assertGreater(cells[speckle_key], 0)  # in the map either way
+            self.assertEqual(len(occupied), len(wall) + (0 if on else 1))
+            self.assertEqual(speckle_key in occupied, not on)
+            self.assertEqual(centers, occupied)
+
+
+class ExtraServer:
+    """A server of its own (OctomapCompatTest.start_server: namespace /NAME, node NAME) with
+    the YAML's parameters and `params` over them; its outputs are recorded from the start."""
+    TOPICS = ("occupied_cells", "octomap_point_cloud_centers", "projected_map",
+              "occupied_cells_vis_array")
+
+    def __init__(self, test, name, params):
+        self.test = test
+        self.name = name
+        self.ns = "/%s/" % name
+        self.private = "/%s/%s/" % (name, name)
+        self.msgs = {}
+        kinds = {"projected_map": OccupancyGrid, "occupied_cells_vis_array": MarkerArray}
+        self.subs = [rospy.Subscriber(self.ns + t, kinds.get(t, PointCloud2),
+                                      lambda m, t=t: self.msgs.__setitem__(t, m), queue_size=5)
+                     for t in self.TOPICS]
+        merged = yaml_params()
+        merged.update(params)
+        self.proc, self.log = test.start_server(name, [], merged)
+        self.pub = rospy.Publisher(self.ns + "cloud_in", PointCloud2, queue_size=2)
+        wait_for(lambda: self.pub.get_num_connections() > 0, 20, name + " on cloud_in")
+
+    def stats(self):
+        res = rospy.ServiceProxy(self.private + "get_stats", GetStats)()
+        self.test.assertTrue(res.success, res.message)
+        return res.stats
+
+    def insert(self, points):
+        """Feeds one cloud (sensor frame) and waits until it is in the map and published."""
+        scans = self.stats().scans
+        self.msgs.clear()
+        header = Header(frame_id="sensor", stamp=rospy.Time.now())
+        self.pub.publish(pc2.create_cloud_xyz32(header, points))
+        wait_for(lambda: self.stats().scans > scans, 30, self.name + ": the cloud inserted")
+
+    def last(self, topic):
+        """The latest message on `topic`; for a cloud, the latest with a point (every scene
+        here has occupied cells, so an empty one is from before the insertion)."""
+        def ready():
+            msg = self.msgs.get(topic)
+            return msg is not None and (not isinstance(msg, PointCloud2) or msg.width > 0)
+        wait_for(ready, 20, self.name + ": " + topic)
+        return self.msgs[topic]
+
+    def occupied(self):
+        return occupied_keys(self.last("occupied_cells"))
+
+    def cells(self):
+        path = os.path.join(self.test.tmp, self.name + ".fgm")
+        res = rospy.ServiceProxy(self.private + "save_map", SaveMap)(path)
+        self.test.assertTrue(res.success, res.message)
+        return cell_log_odds(path)
+
+    def stop(self):
+        for sub in self.subs:
+            sub.unregister()
+        self.pub.unregister()
+        return self.test.stop(self.proc, self.log)
+
 
 if __name__ == "__main__":
     rostest.rosrun("fragg_map", "octomap_compat", OctomapCompatTest)

@@ -36,7 +36,8 @@ RayPrepParams rayPrepParams(const Eigen::Isometry3d& T_map_sensor, const SensorM
                             bool explicit_model, const MapParams& params, PreparedScan& out);
 
 /// Transforms, filters and clips a cloud (OctoMap semantics: NaN/Inf and points closer than
-/// min range dropped; points beyond max range become free-only rays ending at max range).
+/// min range dropped; points beyond max range become free-only rays ending at max range; points
+/// marked free-only give free-only rays ending at the point).
 /// `model` must be resolved (not auto); when `explicit_model` is set, points outside the
 /// frustum are dropped and counted. Fills the point counters of `stats`.
 void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,

@@ -72,10 +72,12 @@ FRAGG_HD bool rayEndFromSensor(const RayPrepParams& p, const double s[3], uint32
 }
 
 /// OctoMap semantics: NaN/Inf and (0,0,0) points are invalid, points closer than min range
-/// dropped, points beyond max range become free-only rays ending at max range. A hit carries
-/// its clearing margin: the sensor's range noise at the measured range, in voxels.
+/// dropped, points beyond max range become free-only rays ending at max range. A point marked
+/// `free_only` (PointCloud::free_only) gives a free-only ray ending at the point (at max range
+/// when farther). A hit carries its clearing margin: the sensor's range noise at the measured
+/// range, in voxels.
 FRAGG_HD RayPrep prepareRay(const RayPrepParams& p, const Frustum& f, float x_S, float y_S,
-                            float z_S, RayEnd* ray) {
+                            float z_S, bool free_only, RayEnd* ray) {
   if (!finiteFloat(x_S) || !finiteFloat(y_S) || !finiteFloat(z_S)) return RayPrep::kInvalid;
   double s[3] = {x_S, y_S, z_S};
   const double range = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
@@ -93,13 +95,14 @@ FRAGG_HD RayPrep prepareRay(const RayPrepParams& p, const Frustum& f, float x_S,
           static_cast<float>(p.R[3 * a] * s[0] + p.R[3 * a + 1] * s[1] + p.R[3 * a + 2] * s[2]);
     if (!frustumContains(f, rel_f, p.slack_m)) return RayPrep::kOutside;
   }
+  const bool no_hit = clipped || free_only;
   uint32_t hit = 0u;
-  if (!clipped) {
+  if (!no_hit) {
     const double noise_m = p.noise_m + p.noise_quadratic_per_m * range * range;
     hit = hitCode(noise_m * p.inv_res);
   }
   if (!rayEndFromSensor(p, s, hit, ray)) return RayPrep::kInvalid;
-  return clipped ? RayPrep::kFreeOnly : RayPrep::kHit;
+  return no_hit ? RayPrep::kFreeOnly : RayPrep::kHit;
 }
 
 }  // namespace fragg

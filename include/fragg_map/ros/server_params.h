@@ -65,7 +65,8 @@ struct FrontierParams {
 struct OctomapCompatParams {
   /// The robot's base frame: the ground plane is sought in it (filter_ground).
   std::string base_frame_id = "base_footprint";
-  bool filter_ground = false;             ///< (not implemented yet: warned at start-up)
+  /// Ground points (PCL plane segmentation in base_frame_id) only clear (ground_filter.h).
+  bool filter_ground = false;
   double ground_distance_m = 0.04;        ///< ground_filter/distance: plane inlier distance
   double ground_angle_rad = 0.15;         ///< ground_filter/angle: plane normal vs z at most
   double ground_plane_distance_m = 0.07;  ///< ground_filter/plane_distance: |d| at most

@@ -10,12 +10,21 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/cloud_from_msg.h"
+#include "fragg_map/ros/ground_filter.h"
 
 namespace fragg::ros {
 namespace {
 
 std::string withoutLeadingSlash(const std::string& frame) {
   return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
+}
+
+GroundFilterParams groundFilterParamsOf(const OctomapCompatParams& o) {
+  GroundFilterParams g;
+  g.distance_m = o.ground_distance_m;
+  g.angle_rad = o.ground_angle_rad;
+  g.plane_distance_m = o.ground_plane_distance_m;
+  return g;
 }
 
 }  // namespace
@@ -67,17 +76,18 @@ void CloudInput::run() {
   }
 }
 
-bool CloudInput::waitForTransform(const sensor_msgs::PointCloud2& msg,
-                                  Eigen::Isometry3d* T_map_sensor) {
+bool CloudInput::waitForTransform(const std::string& target_frame,
+                                  const sensor_msgs::PointCloud2& msg,
+                                  Eigen::Isometry3d* T_target_sensor) {
   const std::string source = withoutLeadingSlash(msg.header.frame_id);
   const auto deadline =
       std::chrono::steady_clock::now() + std::chrono::duration<double>(params_.tf_tolerance_s);
   std::string error;
   while (!stopping_) {
     error.clear();  // canTransform appends its reason
-    if (tf_.canTransform(params_.frame_id, source, msg.header.stamp, &error)) {
-      *T_map_sensor =
-          tf2::transformToEigen(tf_.lookupTransform(params_.frame_id, source, msg.header.stamp));
+    if (tf_.canTransform(target_frame, source, msg.header.stamp, &error)) {
+      *T_target_sensor =
+          tf2::transformToEigen(tf_.lookupTransform(target_frame, source, msg.header.stamp));
       return true;
     }
     if (std::chrono::steady_clock::now() >= deadline) break;
@@ -88,7 +98,7 @@ bool CloudInput::waitForTransform(const sensor_msgs::PointCloud2& msg,
   ROS_WARN_THROTTLE(5.0,
                     "fragg_map: no transform %s <- %s at %.3f within tf_tolerance %.2f s; "
                     "cloud dropped (%lu so far): %s",
-                    params_.frame_id.c_str(), source.c_str(), msg.header.stamp.toSec(),
+                    target_frame.c_str(), source.c_str(), msg.header.stamp.toSec(),
                     params_.tf_tolerance_s, static_cast<unsigned long>(stats_->droppedNoTf()),
                     error.c_str());
   return false;
@@ -96,9 +106,23 @@ bool CloudInput::waitForTransform(const sensor_msgs::PointCloud2& msg,
 
 void CloudInput::process(const sensor_msgs::PointCloud2& msg) {
   if (msg.header.frame_id.empty()) throw fragg::InvalidArgument("cloud has no frame_id");
-  const fragg::PointCloud cloud = cloudFromMsg(msg);  // validate before waiting for tf
+  fragg::PointCloud cloud = cloudFromMsg(msg);  // validate before waiting for tf
   Eigen::Isometry3d T_map_sensor;
-  if (!waitForTransform(msg, &T_map_sensor)) return;
+  if (!waitForTransform(params_.frame_id, msg, &T_map_sensor)) return;
+  if (params_.octomap.filter_ground) {
+    Eigen::Isometry3d T_base_sensor;
+    if (!waitForTransform(params_.octomap.base_frame_id, msg, &T_base_sensor)) return;
+    const GroundSplit split =
+        markGroundPoints(T_base_sensor, groundFilterParamsOf(params_.octomap), &cloud);
+    ROS_DEBUG("fragg_map: %zu of %zu points are ground (%s)", split.ground, split.points,
+              split.plane_found ? "plane" : "no plane: height band around z = 0");
+    if (!split.plane_found && split.points >= 50)
+      ROS_WARN_THROTTLE(5.0,
+                        "fragg_map: no ground plane found in a cloud; points within %.3f m "
+                        "of z = 0 in %s taken as ground",
+                        params_.octomap.ground_plane_distance_m,
+                        params_.octomap.base_frame_id.c_str());
+  }
   const int64_t stamp_ns = static_cast<int64_t>(msg.header.stamp.toNSec());
   const std::string frame = withoutLeadingSlash(msg.header.frame_id);
   const auto start = std::chrono::steady_clock::now();

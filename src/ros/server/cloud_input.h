@@ -2,7 +2,9 @@
 // thread waits for each cloud's transform to frame_id at the cloud's stamp (up to
 // tf_tolerance of wall time; then the cloud is dropped and counted), converts the cloud and
 // inserts it (the map filters it by height in the map frame), taking the map's write lock for
-// that one scan, so the subscriber thread never does more than enqueue.
+// that one scan, so the subscriber thread never does more than enqueue. With filter_ground the
+// cloud's ground points (sought in base_frame_id, which then needs a transform too) are marked
+// free-only before insertion (fragg_map/ros/ground_filter.h).
 //
 // Why not tf2_ros::MessageFilter: Debian's MessageFilter has no per-message timeout (a cloud
 // whose tf never comes waits until its queue overflows), and it would run the callback on the
@@ -42,7 +44,10 @@ class CloudInput {
   void onCloud(const sensor_msgs::PointCloud2::ConstPtr& msg);
   void run();
   void process(const sensor_msgs::PointCloud2& msg);
-  bool waitForTransform(const sensor_msgs::PointCloud2& msg, Eigen::Isometry3d* T_map_sensor);
+  /// T_target_sensor at the cloud's stamp, waiting up to tf_tolerance; false (the cloud
+  /// counted as dropped and a warning logged) when it does not come.
+  bool waitForTransform(const std::string& target_frame, const sensor_msgs::PointCloud2& msg,
+                        Eigen::Isometry3d* T_target_sensor);
 
   const ServerParams params_;
   const tf2_ros::Buffer& tf_;

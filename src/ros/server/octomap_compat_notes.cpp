@@ -7,11 +7,10 @@ namespace fragg::ros {
 
 void logOctomapCompatNotes(const ServerParams& params) {
   const OctomapCompatParams& o = params.octomap;
-  if (o.filter_ground)
-    ROS_WARN(
-        "fragg_map: filter_ground is not implemented yet: ground points are inserted as "
-        "obstacles like every other point (base_frame_id '%s' is unused)",
-        o.base_frame_id.c_str());
+  if (o.filter_ground && params.map.scans.keep)
+    ROS_INFO(
+        "fragg_map: filter_ground with keep_scans: scans with ground points are kept but cannot "
+        "be corrected (~correct_poses); set keep_scans: false to keep no scans");
   if (o.colored_map)
     ROS_WARN(
         "fragg_map: colored_map: the map's cells carry no colour; markers are coloured by "

@@ -4,13 +4,19 @@
 // (changedBlockMarkers) after each insertion, or, with --marker-rate, when the server's
 // MarkerThrottle lets one out for clouds arriving at --cloud-rate (the skipped clouds' changes
 // go out with the next update, and a last update flushes what is pending at the end, as the
-// server's timer does); the insertion itself is timed for reference.
+// server's timer does); the insertion itself is timed for reference. The last line is what the
+// server's path (conversion + insertion, + marker updates unless --no-markers) sustains on this
+// machine in clouds per second, with the process's CPU time over that wall time (the share of
+// the cores it got: other programs count against it on a shared machine).
 //   fragg_map_ros_overhead [--scans N] [--resolution M] [--max-range M]
-//                          [--cloud-rate HZ] [--marker-rate HZ]
+//                          [--cloud-rate HZ] [--marker-rate HZ] [--no-markers]
+//                          [--beams N --columns N]   (128 x 1406 = 179,968 points a cloud)
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/PointField.h>
+#include <sys/resource.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -47,6 +53,14 @@ sensor_msgs::PointCloud2 toMsg(const fragg::PointCloud& cloud) {
   return msg;
 }
 
+/// User + system CPU time of the process so far [s].
+double processCpuSeconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 double msSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
       .count();
@@ -66,9 +80,15 @@ int main(int argc, char** argv) {
   app.add_option("--marker-rate", marker_rate_hz,
                  "most marker updates per second, as the server's marker_rate (0: every cloud)")
       ->check(CLI::NonNegativeNumber);
+  bool no_markers = false;
+  app.add_flag("--no-markers", no_markers, "no marker updates (nobody subscribes to markers)");
+  fragg::bench::SyntheticLidarOptions lidar_options;
+  app.add_option("--beams", lidar_options.beams, "LiDAR rows")->check(CLI::PositiveNumber);
+  app.add_option("--columns", lidar_options.azimuth_steps, "LiDAR columns (azimuth steps)")
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
 
-  fragg::bench::SyntheticLidar lidar{fragg::bench::SyntheticLidarOptions()};
+  fragg::bench::SyntheticLidar lidar{lidar_options};
   fragg::MapParams params;
   params.resolution_m = resolution_m;
   params.backend = fragg::Backend::kCpu;
@@ -90,9 +110,11 @@ int main(int argc, char** argv) {
     markers_sent += markers.markers.size();
     return update_ms.back();
   };
+  double path_wall_ms = 0.0, path_cpu_s = 0.0;  // conversion + insertion (+ markers)
   for (int i = 0; i < scans; ++i) {
     const fragg::Scan scan = lidar.scan(i);
     const sensor_msgs::PointCloud2 msg = toMsg(scan.cloud);
+    const double cpu0_s = processCpuSeconds();
     auto t0 = std::chrono::steady_clock::now();
     const fragg::PointCloud cloud = fragg::ros::cloudFromMsg(msg);
     convert_ms.push_back(msSince(t0));
@@ -102,15 +124,17 @@ int main(int argc, char** argv) {
     insert_ms.push_back(msSince(t0));
     const double now_s = i / cloud_rate_hz;  // the cloud's arrival, in sensor time
     double markers_ms = 0.0;
-    if (throttle.due(now_s)) {
+    if (!no_markers && throttle.due(now_s)) {
       markers_ms = markerUpdate();
       throttle.published(now_s);
     }
     overhead_ms.push_back(convert_ms.back() + markers_ms);
+    path_wall_ms += convert_ms.back() + insert_ms.back() + markers_ms;
+    path_cpu_s += processCpuSeconds() - cpu0_s;
   }
   // What the last clouds changed goes out once the clouds stop (the server's flush timer).
-  if (ledger.publishedRevision() != map.revision()) markerUpdate();
-  const size_t updates = update_ms.size();
+  if (!no_markers && ledger.publishedRevision() != map.revision()) markerUpdate();
+  const size_t updates = std::max<size_t>(update_ms.size(), 1);
   using fragg::tools::percentile;
   std::printf("%d scans of %zu points, %.3f m, max range %.0f m, CPU backend, %zu blocks\n", scans,
               points, resolution_m, max_range_m, map.blockCount());
@@ -122,7 +146,7 @@ int main(int argc, char** argv) {
                 percentile(v, 1.0));
   };
   row("conversion (PointCloud2)", convert_ms);
-  row("marker update (per update)", update_ms);
+  if (!update_ms.empty()) row("marker update (per update)", update_ms);
   row("overhead (per cloud)", overhead_ms);
   row("insertion (reference)", insert_ms);
   double convert_total_ms = 0.0;
@@ -132,5 +156,10 @@ int main(int argc, char** argv) {
               (convert_total_ms + markers_total_ms) / scans);
   std::printf("per update: blocks whose occupied cells changed %.0f, markers sent %.0f (means)\n",
               double(blocks_changed) / updates, double(markers_sent) / updates);
+  std::printf(
+      "sustained: %.2f clouds/s (conversion + insertion%s, mean %.1f ms a cloud), CPU time %.0f "
+      "%% of that wall time\n",
+      1000.0 * scans / path_wall_ms, no_markers ? "" : " + markers", path_wall_ms / scans,
+      100.0 * path_cpu_s / (path_wall_ms / 1000.0));
   return 0;
 }
