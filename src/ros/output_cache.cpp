@@ -29,41 +29,67 @@ MapOutputCache::MapOutputCache(const OutputCacheOptions& options) : options_(opt
 void MapOutputCache::computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
                                   const fragg::BlockKey& key, const fragg::Block& block,
                                   Piece* piece) const {
+  // One 64-bit word per z layer of the block (cell index x + 8 y + 64 z): occupied, free and
+  // observed masks, branch-free, then the columns and bounds from OR-ed layers.
+  const fragg::OccupancyModel& model = map.model();
+  const int16_t above = model.occupied_above_fx, below = model.free_below_fx;
+  uint64_t occupied[fragg::kBlockSize], free[fragg::kBlockSize], observed_xy = 0;
+  for (int z = 0; z < fragg::kBlockSize; ++z) {
+    const fragg::Cell* c = block.cells + 64 * z;
+    uint64_t o = 0, f = 0, seen = 0;
+    for (int i = 0; i < 64; ++i) {
+      const int16_t l = c[i].log_odds_fx;
+      const bool known = l != fragg::kUnobservedLogOdds;
+      o |= uint64_t{l > above} << i;
+      f |= uint64_t{known && l < below} << i;
+      seen |= uint64_t{known} << i;
+    }
+    occupied[z] = o;
+    free[z] = f;
+    observed_xy |= seen;
+  }
   piece->xyz.clear();
   piece->columns.fill(kUnknown);
   piece->in_band = false;
   piece->min_x = piece->min_y = fragg::kBlockSize;
   piece->max_x = piece->max_y = -1;
-  const double res_m = map.resolution();
-  for (int c = 0; c < fragg::kCellsPerBlock; ++c) {
-    const fragg::Cell& cell = block.cells[c];
-    if (!cell.observed()) continue;
-    const int lx = c & fragg::kBlockMask, ly = (c >> fragg::kBlockBits) & fragg::kBlockMask;
+  for (uint64_t m = observed_xy; m; m &= m - 1) {
+    const int i = __builtin_ctzll(m);
+    const int lx = i & fragg::kBlockMask, ly = i >> fragg::kBlockBits;
     piece->min_x = std::min(piece->min_x, lx);
     piece->max_x = std::max(piece->max_x, lx);
     piece->min_y = std::min(piece->min_y, ly);
     piece->max_y = std::max(piece->max_y, ly);
-    const fragg::CellState s = map.state(cell);
-    if (s == fragg::CellState::kUnknown) continue;
-    const fragg::VoxelKey v = fragg::voxelKeyOf(key, c);
-    const bool speckle =
-        s == fragg::CellState::kOccupied && options_.hide_speckles && isSpeckle(map, blocks, v);
-    if (s == fragg::CellState::kOccupied && !speckle) {
-      const Eigen::Vector3d p_map = map.centerOf(v);
+  }
+  const double res_m = map.resolution();
+  uint64_t band_occupied = 0, band_free = 0;
+  for (int z = 0; z < fragg::kBlockSize; ++z) {
+    uint64_t o = occupied[z];
+    if (options_.hide_speckles) {
+      for (uint64_t m = occupied[z]; m; m &= m - 1) {
+        const int i = __builtin_ctzll(m);
+        if (isSpeckle(map, blocks, fragg::voxelKeyOf(key, 64 * z + i))) o &= ~(uint64_t{1} << i);
+      }
+    }
+    for (uint64_t m = o; m; m &= m - 1) {
+      const Eigen::Vector3d p_map =
+          map.centerOf(fragg::voxelKeyOf(key, 64 * z + __builtin_ctzll(m)));
       piece->xyz.insert(piece->xyz.end(),
                         {static_cast<float>(p_map.x()), static_cast<float>(p_map.y()),
                          static_cast<float>(p_map.z())});
     }
-    const double z_m = (v.z + 0.5) * res_m;
+    const double z_m = (int64_t{key.z} * fragg::kBlockSize + z + 0.5) * res_m;
     if (z_m < options_.occupancy_min_z_m || z_m > options_.occupancy_max_z_m) continue;
-    if (speckle) continue;  // neither occupied nor free in the projection
-    int8_t& column = piece->columns[lx + fragg::kBlockSize * ly];
-    if (s == fragg::CellState::kOccupied)
-      column = kOccupied;
-    else if (column == kUnknown)
-      column = kFree;
-    piece->in_band = true;
+    band_occupied |= o;  // a speckle counts neither as occupied nor as free
+    band_free |= free[z];
   }
+  for (int i = 0; i < 64; ++i) {
+    if (band_occupied >> i & 1)
+      piece->columns[i] = kOccupied;
+    else if (band_free >> i & 1)
+      piece->columns[i] = kFree;
+  }
+  piece->in_band = (band_occupied | band_free) != 0;
 }
 
 void MapOutputCache::mergeColumn(const ColumnKey& ck, Column* col) const {
