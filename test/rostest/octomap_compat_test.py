@@ -323,7 +323,12 @@ class OctomapCompatTest(unittest.TestCase):
         """Publishes one cloud (sensor frame) to NS/cloud_in, with a packed rgb field if given."""
         import struct
         from sensor_msgs.msg import PointField
-        pub = rospy.Publisher("/%s/cloud_in" % ns, PointCloud2, queue_size=1)
+        # One publisher per server, kept (unregistering at once can drop the message).
+        pubs = self.__class__.__dict__.get("cloud_pubs") or {}
+        self.__class__.cloud_pubs = pubs
+        if ns not in pubs:
+            pubs[ns] = rospy.Publisher("/%s/cloud_in" % ns, PointCloud2, queue_size=5)
+        pub = pubs[ns]
         wait_for(lambda: pub.get_num_connections() > 0, 20, ns + " on cloud_in")
         header = Header(frame_id="sensor", stamp=rospy.Time.now())
         if rgb is None:
@@ -335,7 +340,6 @@ class OctomapCompatTest(unittest.TestCase):
                       PointField("z", 8, PointField.FLOAT32, 1),
                       PointField("rgb", 12, PointField.FLOAT32, 1)]
             pub.publish(pc2.create_cloud(header, fields, [p + (packed,) for p in points]))
-        pub.unregister()
 
     def test_12_colored_map_draws_the_points_colours(self):
         """colored_map with height_map false: the occupied markers take the points' colour
