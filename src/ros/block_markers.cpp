@@ -2,6 +2,8 @@
 // cells are occupied, for occupied markers; any change for the others).
 #include "fragg_map/ros/block_markers.h"
 
+#include <optional>
+#include <unordered_set>
 #include <vector>
 
 #include "fragg_map/ros/height_color.h"
@@ -90,6 +92,13 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
     p.z = (v.z + 0.5) * res_m;
     m.points.push_back(p);
     m.colors.push_back(layer_color[c >> (2 * fragg::kBlockBits)]);
+    if (style.colors) {
+      if (const std::optional<Rgb8> rgb = style.colors->find(v)) {
+        m.colors.back().r = rgb->r / 255.0f;
+        m.colors.back().g = rgb->g / 255.0f;
+        m.colors.back().b = rgb->b / 255.0f;
+      }
+    }
   }
   return m;
 }
@@ -112,9 +121,17 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
   }
   // Occupied markers: only blocks where a cell crossed the occupied threshold; other states:
   // every changed block.
-  const std::vector<fragg::BlockKey> changed = blocks.changedSince(
+  std::vector<fragg::BlockKey> changed = blocks.changedSince(
       since, style.state == fragg::CellState::kOccupied ? fragg::BlockChange::kOccupied
                                                         : fragg::BlockChange::kAny);
+  // colored_map: blocks whose colours changed are redrawn even with the same cells.
+  std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> recolored;
+  if (style.colors) {
+    for (const fragg::BlockKey& k : style.colors->recoloredSince(ledger->colors_drawn_))
+      if (blocks.findBlock(k)) recolored.insert(k);
+    for (const fragg::BlockKey& k : changed) recolored.erase(k);
+    changed.insert(changed.end(), recolored.begin(), recolored.end());
+  }
   // The masks in parallel (read-only), the ledger and the messages in order.
   std::vector<CellMask> masks(changed.size());
   const int64_t n = static_cast<int64_t>(changed.size());
@@ -136,12 +153,13 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
       out.markers.push_back(
           markerHeader(style, stamp, shown->second.id, visualization_msgs::Marker::DELETE));
       ledger->ids_.erase(shown);
-    } else if (cells != shown->second.cells) {
+    } else if (cells != shown->second.cells || recolored.count(key)) {
       shown->second.cells = cells;
       out.markers.push_back(blockMarker(map, key, cells, style, stamp, shown->second.id));
     }
   }
   ledger->published_revision_ = map.revision();
+  if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
   return out;
 }
 
@@ -161,6 +179,7 @@ visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const Mar
     out.markers.push_back(blockMarker(map, key, cells, style, stamp, id));
   });
   ledger->published_revision_ = map.revision();
+  if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
   return out;
 }
 

@@ -6,7 +6,9 @@ set(FRAGG_ROS_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/ground_filter.cpp
   ${CMAKE_CURRENT_LIST_DIR}/height_color.cpp
   ${CMAKE_CURRENT_LIST_DIR}/block_markers.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/cell_colors.cpp
   ${CMAKE_CURRENT_LIST_DIR}/occupied_cloud.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/output_cache.cpp
   ${CMAKE_CURRENT_LIST_DIR}/speckles.cpp
   ${CMAKE_CURRENT_LIST_DIR}/projected_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frustum_marker.cpp

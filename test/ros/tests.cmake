@@ -8,6 +8,8 @@ if(FRAGG_HAVE_ROS)
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/block_markers_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/map_msgs_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/speckles_test.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/output_cache_test.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/cell_colors_test.cpp
     LIBS fragg_map_ros
     LABELS ros)
   fragg_add_test(ros_ground_filter_test

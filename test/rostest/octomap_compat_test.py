@@ -440,6 +440,87 @@ class OctomapCompatTest(unittest.TestCase):
             self.assertEqual(centers, occupied)
 
 
+    # ---- colored_map and incremental_2D_projection, in servers started here ----
+    def cloud_to(self, ns, points, rgb=None):
+        """Publishes one cloud (sensor frame) to NS/cloud_in, with a packed rgb field if given."""
+        import struct
+        from sensor_msgs.msg import PointField
+        # One publisher per server, kept (unregistering at once can drop the message).
+        pubs = self.__class__.__dict__.get("cloud_pubs") or {}
+        self.__class__.cloud_pubs = pubs
+        if ns not in pubs:
+            pubs[ns] = rospy.Publisher("/%s/cloud_in" % ns, PointCloud2, queue_size=5)
+        pub = pubs[ns]
+        wait_for(lambda: pub.get_num_connections() > 0, 20, ns + " on cloud_in")
+        header = Header(frame_id="sensor", stamp=rospy.Time.now())
+        if rgb is None:
+            pub.publish(pc2.create_cloud_xyz32(header, points))
+        else:
+            packed = struct.unpack("f", struct.pack("I", rgb))[0]
+            fields = [PointField("x", 0, PointField.FLOAT32, 1),
+                      PointField("y", 4, PointField.FLOAT32, 1),
+                      PointField("z", 8, PointField.FLOAT32, 1),
+                      PointField("rgb", 12, PointField.FLOAT32, 1)]
+            pub.publish(pc2.create_cloud(header, fields, [p + (packed,) for p in points]))
+
+    def test_14_colored_map_draws_the_points_colours(self):
+        """colored_map with height_map false: the occupied markers take the points' colour
+        (cells without one keep `color`); with height_map true as well, height wins (as in
+        octomap_server) and the node says so."""
+        arrays = []
+        rospy.Subscriber("/colored/occupied_cells_vis_array", MarkerArray, arrays.append,
+                         queue_size=20)
+        proc, log = self.start_server("colored", [], {
+            "resolution": RES, "colored_map": True, "height_map": False,
+            "color": {"r": 0.0, "g": 0.0, "b": 1.0, "a": 1.0},
+            "sensor_model": {"max_range": 5.0}})
+        wall, _, _, _ = scene_points()
+        self.cloud_to("colored", wall, rgb=0x00C080)
+        wait_for(lambda: self.stats("/colored/colored/").scans >= 1, 30, "the coloured cloud")
+        wait_for(lambda: any(m.points for a in arrays for m in a.markers), 20, "markers")
+        colours = {(round(c.r, 3), round(c.g, 3), round(c.b, 3))
+                   for a in arrays for m in a.markers for c in m.colors}
+        out = self.stop(proc, log)
+        self.assertEqual(colours, {(0.0, round(0xC0 / 255.0, 3), round(0x80 / 255.0, 3))}, out)
+        proc, log = self.start_server("both_colours", [], {"colored_map": True,
+                                                           "height_map": True})
+        out = self.stop(proc, log)
+        self.assertIn("colored_map and height_map are both set", out)
+
+    def test_15_incremental_2D_projection_equals_a_full_projection(self):
+        """incremental_2D_projection (always on): after clouds that grow the grid and one that
+        changes cells inside it, projected_map equals the projection of the same map loaded
+        at start-up (built from scratch)."""
+        grids = {"incremental": [], "rebuilt": []}
+        for ns in grids:
+            rospy.Subscriber("/%s/projected_map" % ns, OccupancyGrid, grids[ns].append)
+        params = {"resolution": RES, "incremental_2D_projection": True,
+                  "occupancy_min_z": 0.0, "occupancy_max_z": 2.0,
+                  "sensor_model": {"max_range": 5.0}}
+        proc, log = self.start_server("incremental", [], params)
+        wall, _, _, _ = scene_points()
+        shifted = [(x - 1.0, y + 0.6, z) for x, y, z in wall]
+        for n, points in enumerate((wall, shifted, wall)):
+            self.cloud_to("incremental", points)
+            wait_for(lambda: self.stats("/incremental/incremental/").scans >= n + 1, 30,
+                     "cloud %d" % n)
+        fgm = os.path.join(self.tmp, "incremental.fgm")
+        self.assertTrue(rospy.ServiceProxy("/incremental/incremental/save_map", SaveMap)(fgm)
+                        .success)
+        wait_for(lambda: grids["incremental"], 20, "the incremental projected_map")
+        time.sleep(1.0)  # the last cloud's grid
+        self.stop(proc, log)
+        proc, log = self.start_server("rebuilt", [fgm], params)
+        wait_for(lambda: grids["rebuilt"], 20, "the rebuilt projected_map")
+        self.stop(proc, log)
+        got, want = grids["incremental"][-1], grids["rebuilt"][-1]
+        self.assertEqual((got.info.width, got.info.height), (want.info.width, want.info.height))
+        self.assertAlmostEqual(got.info.origin.position.x, want.info.origin.position.x)
+        self.assertAlmostEqual(got.info.origin.position.y, want.info.origin.position.y)
+        self.assertEqual(list(got.data), list(want.data))
+        self.assertIn(100, got.data)
+        self.assertIn(0, got.data)
+
 class ExtraServer:
     """A server of its own (OctomapCompatTest.start_server: namespace /NAME, node NAME) with
     the YAML's parameters and `params` over them; its outputs are recorded from the start."""

@@ -14,6 +14,7 @@
 
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
+#include "fragg_map/ros/cell_colors.h"
 
 namespace fragg::ros {
 
@@ -31,6 +32,9 @@ struct MarkerStyle {
   /// their block is drawn: a neighbour appearing in another block shows them at their block's
   /// next change or full republish).
   bool hide_speckles = false;
+  /// colored_map: cells with a colour in this table are drawn in it (others as above), and
+  /// blocks recoloured since the last update are redrawn. Not owned; nullptr: no colours.
+  const CellColors* colors = nullptr;
 };
 
 /// Which cells of a block are drawn (bit i: cell index i).
@@ -63,6 +67,7 @@ class MarkerLedger {
   std::unordered_map<fragg::BlockKey, Shown, fragg::BlockKeyHash> ids_;
   int32_t next_id_ = 0;
   uint64_t published_revision_ = 0;
+  uint64_t colors_drawn_ = 0;  ///< CellColors::sequence() of the last update (colored_map)
 };
 
 /// The CUBE_LIST marker of one block: centres of the cells in `cells`, coloured by height.

@@ -72,7 +72,8 @@ struct OctomapCompatParams {
   double ground_plane_distance_m = 0.07;  ///< ground_filter/plane_distance: |d| at most
   bool filter_speckles = false;  ///< views leave out occupied cells with no occupied neighbour
   bool height_map = true;        ///< markers coloured by height, else `color`
-  bool colored_map = false;      ///< (cells carry no colour: warned, height colours)
+  /// Occupied markers coloured by the points' rgb/rgba (CellColors); height_map wins.
+  bool colored_map = false;
   float color_rgba[4] = {0.0f, 0.0f, 1.0f, 1.0f};  ///< color/r|g|b|a with height_map false
   bool incremental_2D_projection = false;  ///< projected_map patches only the changed columns
   bool compress_map = true;                ///< (an octree's pruning: nothing to do here)

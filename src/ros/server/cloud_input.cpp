@@ -138,7 +138,7 @@ void CloudInput::process(const sensor_msgs::PointCloud2& msg) {
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   stats_->addInsertion(cloud.size(), ms);
-  if (on_inserted_) on_inserted_(msg.header.stamp, inserted.sensor, T_map_sensor);
+  if (on_inserted_) on_inserted_(msg, inserted.sensor, T_map_sensor);
 }
 
 }  // namespace fragg::ros

@@ -30,9 +30,11 @@ namespace fragg::ros {
 class CloudInput {
  public:
   /// Called on the insertion thread after each insertion (the map is not locked), with the
-  /// sensor model the map used (an `auto` model resolved for the cloud).
-  using InsertedFn = std::function<void(const ::ros::Time& stamp, const fragg::SensorModel&,
-                                        const Eigen::Isometry3d& T_map_sensor)>;
+  /// sensor model the map used (an `auto` model resolved for the cloud) and the message
+  /// (colored_map reads its colours).
+  using InsertedFn =
+      std::function<void(const sensor_msgs::PointCloud2& msg, const fragg::SensorModel&,
+                         const Eigen::Isometry3d& T_map_sensor)>;
 
   CloudInput(::ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
              SharedMap* shared, ServerStats* stats, InsertedFn on_inserted);

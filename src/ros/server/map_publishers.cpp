@@ -10,16 +10,20 @@
 
 #include <optional>
 
+#include "fragg_map/errors.h"
 #include "fragg_map/ros/frustum_marker.h"
-#include "fragg_map/ros/occupied_cloud.h"
-#include "fragg_map/ros/projected_map.h"
 
 namespace fragg::ros {
 
 MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
                              const ServerParams& params, SharedMap* shared,
                              const ServerStats* stats)
-    : params_(params), shared_(shared), stats_(stats), marker_throttle_(params.marker_rate_hz) {
+    : params_(params),
+      shared_(shared),
+      stats_(stats),
+      marker_throttle_(params.marker_rate_hz),
+      outputs_(OutputCacheOptions{params.occupancy_min_z_m, params.occupancy_max_z_m,
+                                  params.octomap.filter_speckles}) {
   const bool latch = params_.latch;
   for (MarkerTopic* topic : {&occupied_markers_, &free_markers_}) {
     topic->style.frame_id = params_.frame_id;
@@ -29,6 +33,7 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
   occupied_markers_.style.height_colors = params_.octomap.height_map;
   occupied_markers_.style.hide_speckles = params_.octomap.filter_speckles;
   occupied_markers_.style.alpha = params_.octomap.color_rgba[3];
+  if (coloredMap()) occupied_markers_.style.colors = &colors_;
   for (int i = 0; i < 3; ++i) occupied_markers_.style.flat_rgb[i] = params_.octomap.color_rgba[i];
   free_markers_.style.ns = "free";
   free_markers_.style.state = fragg::CellState::kFree;
@@ -69,12 +74,11 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
     std::lock_guard<std::mutex> publishing(publish_mutex_);
     const SharedMap::ReadGuard state = shared_->read();
     const ::ros::Time now = ::ros::Time::now();
+    outputs_.update(state->map);
     if (pub == &projected_map_pub_)
-      sub.publish(projectedMap(state->map, params_.occupancy_min_z_m, params_.occupancy_max_z_m,
-                               params_.frame_id, now, params_.octomap.filter_speckles));
+      sub.publish(outputs_.projectedMap(params_.frame_id, now));
     else
-      sub.publish(
-          occupiedCloud(state->map, params_.frame_id, now, params_.octomap.filter_speckles));
+      sub.publish(outputs_.occupiedCloud(params_.frame_id, now));
   };
 }
 
@@ -82,37 +86,50 @@ bool MapPublishers::wanted(const ::ros::Publisher& pub) const {
   return pub && (params_.latch || pub.getNumSubscribers() > 0);
 }
 
-void MapPublishers::publishAfterInsert(const ::ros::Time& stamp, const fragg::SensorModel& sensor,
+void MapPublishers::publishAfterInsert(const sensor_msgs::PointCloud2& cloud,
+                                       const fragg::SensorModel& sensor,
                                        const Eigen::Isometry3d& T_map_sensor) {
+  const ::ros::Time& stamp = cloud.header.stamp;
   std::lock_guard<std::mutex> publishing(publish_mutex_);
-  publishMaps(shared_->read()->map, stamp, false);
+  const SharedMap::ReadGuard state = shared_->read();
+  if (coloredMap()) {
+    try {
+      colors_.integrate(cloud, T_map_sensor, sensor.max_range_m, state->map);
+    } catch (const fragg::InvalidArgument& e) {
+      ROS_WARN_THROTTLE(5.0, "fragg_map: colored_map: no colours from this cloud: %s", e.what());
+    }
+  }
+  publishMaps(state->map, stamp, false);
   if (wanted(frustum_pub_) && sensor.type != fragg::SensorType::kAuto && sensor.max_range_m > 0.0)
     frustum_pub_.publish(frustumMarker(sensor, T_map_sensor, params_.frame_id, stamp));
 }
 
 void MapPublishers::publishAfterCorrection(const ::ros::Time& stamp) {
   std::lock_guard<std::mutex> publishing(publish_mutex_);
-  publishMaps(shared_->read()->map, stamp, false);
+  const SharedMap::ReadGuard state = shared_->read();
+  if (coloredMap()) colors_.prune(state->map);  // truncated cells lose theirs
+  publishMaps(state->map, stamp, false);
 }
 
 void MapPublishers::publishFull(const ::ros::Time& stamp) {
   std::lock_guard<std::mutex> publishing(publish_mutex_);
-  publishMaps(shared_->read()->map, stamp, true);
+  const SharedMap::ReadGuard state = shared_->read();
+  if (coloredMap()) colors_.prune(state->map);  // reset, load, clear_bbx
+  publishMaps(state->map, stamp, true);
 }
 
 void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
                                 bool full_markers) {
   publishMarkerTopics(map, stamp, full_markers);
-  if (wanted(occupied_cloud_pub_) || wanted(centers_pub_)) {
-    const sensor_msgs::PointCloud2 cloud =
-        occupiedCloud(map, params_.frame_id, stamp, params_.octomap.filter_speckles);
+  const bool cloud_wanted = wanted(occupied_cloud_pub_) || wanted(centers_pub_);
+  const bool grid_wanted = wanted(projected_map_pub_);
+  if (cloud_wanted || grid_wanted) outputs_.update(map);  // the changed blocks only
+  if (cloud_wanted) {
+    const sensor_msgs::PointCloud2 cloud = outputs_.occupiedCloud(params_.frame_id, stamp);
     if (wanted(occupied_cloud_pub_)) occupied_cloud_pub_.publish(cloud);
     if (wanted(centers_pub_)) centers_pub_.publish(cloud);
   }
-  if (wanted(projected_map_pub_))
-    projected_map_pub_.publish(projectedMap(map, params_.occupancy_min_z_m,
-                                            params_.occupancy_max_z_m, params_.frame_id, stamp,
-                                            params_.octomap.filter_speckles));
+  if (grid_wanted) projected_map_pub_.publish(outputs_.projectedMap(params_.frame_id, stamp));
   if (wanted(stats_pub_)) stats_pub_.publish(stats_->toMsg(map, params_.frame_id, stamp));
 }
 

@@ -1,7 +1,9 @@
 // Every topic the map server publishes. Messages are built only for topics with subscribers
 // (or for every topic when latched). occupied_cells_vis_array and free_cells_vis_array are
 // incremental (one marker per changed block); they are republished in full after a reset or
-// load and, when latched, to each new subscriber. With `marker_rate` the marker updates are
+// load and, when latched, to each new subscriber. occupied_cells, octomap_point_cloud_centers
+// and projected_map always carry the whole map, assembled from per-block pieces that only the
+// changed blocks refresh (MapOutputCache). With `marker_rate` the marker updates are
 // throttled: the insertion thread publishes them when one is due, and a steady timer sends what
 // is still pending once the clouds stop.
 #pragma once
@@ -9,13 +11,16 @@
 #include <ros/node_handle.h>
 #include <ros/publisher.h>
 #include <ros/steady_timer.h>
+#include <sensor_msgs/PointCloud2.h>
 
 #include <Eigen/Geometry>
 #include <mutex>
 #include <string>
 
 #include "fragg_map/ros/block_markers.h"
+#include "fragg_map/ros/cell_colors.h"
 #include "fragg_map/ros/marker_throttle.h"
+#include "fragg_map/ros/output_cache.h"
 #include "fragg_map/ros/server_params.h"
 #include "server_stats.h"
 #include "shared_map.h"
@@ -27,9 +32,9 @@ class MapPublishers {
   MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh, const ServerParams& params,
                 SharedMap* shared, const ServerStats* stats);
 
-  /// After an insertion: incremental markers, occupied cloud, projected map, frustum, stats.
-  /// Takes the map's read lock itself.
-  void publishAfterInsert(const ::ros::Time& stamp, const fragg::SensorModel& sensor,
+  /// After an insertion of `cloud` (stamp, and with colored_map its colours): incremental
+  /// markers, occupied cloud, projected map, frustum, stats. Takes the map's read lock itself.
+  void publishAfterInsert(const sensor_msgs::PointCloud2& cloud, const fragg::SensorModel& sensor,
                           const Eigen::Isometry3d& T_map_sensor);
   /// After a pose correction, a truncation or a merge: the markers of the blocks it changed
   /// (incremental, as after an insertion; throttled by marker_rate), occupied cloud, projected
@@ -55,6 +60,8 @@ class MapPublishers {
   void flushPendingMarkers(const ::ros::SteadyTimerEvent& event);
   void sendAllMarkersTo(MarkerTopic& topic, const ::ros::SingleSubscriberPublisher& sub);
   bool wanted(const ::ros::Publisher& pub) const;
+  /// colored_map in effect: as octomap_server, height_map wins when both are set.
+  bool coloredMap() const { return params_.octomap.colored_map && !params_.octomap.height_map; }
   /// Unlatched topics: the current message to a subscriber that connects late (a latched
   /// topic's publisher keeps the last one itself).
   ::ros::SubscriberStatusCallback currentMessageTo(const ::ros::Publisher* pub);
@@ -65,10 +72,14 @@ class MapPublishers {
   /// The publishers' own state (marker ledgers, throttle): readers of the map run at once
   /// (insertion thread, services, timer), so they take this first, then the map's read lock.
   std::mutex publish_mutex_;
+  /// colored_map: the cells' colours (under publish_mutex_), drawn by the occupied markers.
+  CellColors colors_;
   MarkerTopic occupied_markers_;
   MarkerTopic free_markers_;
   MarkerThrottle marker_throttle_;
   ::ros::SteadyTimer marker_flush_timer_;
+  /// The occupied cloud's and projected map's pieces (under publish_mutex_).
+  MapOutputCache outputs_;
   ::ros::Publisher occupied_cloud_pub_;
   ::ros::Publisher centers_pub_;  ///< octomap_point_cloud_centers: octomap_server's name
   ::ros::Publisher projected_map_pub_;

@@ -60,11 +60,12 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
                                                       &stats_, publish_changed);
   input_ = std::make_unique<CloudInput>(
       nh, params_, tf_buffer_, shared_.get(), &stats_,
-      [this, publish_octomaps](const ::ros::Time& stamp, const fragg::SensorModel& sensor,
+      [this, publish_octomaps](const sensor_msgs::PointCloud2& msg,
+                               const fragg::SensorModel& sensor,
                                const Eigen::Isometry3d& T_map_sensor) {
         try {
-          publishers_->publishAfterInsert(stamp, sensor, T_map_sensor);
-          publish_octomaps(stamp);
+          publishers_->publishAfterInsert(msg, sensor, T_map_sensor);
+          publish_octomaps(msg.header.stamp);
         } catch (const std::exception& e) {
           ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
         }

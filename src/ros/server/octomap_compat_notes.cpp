@@ -11,11 +11,10 @@ void logOctomapCompatNotes(const ServerParams& params) {
     ROS_INFO(
         "fragg_map: filter_ground with keep_scans: scans with ground points are kept but cannot "
         "be corrected (~correct_poses); set keep_scans: false to keep no scans");
-  if (o.colored_map)
+  if (o.colored_map && o.height_map)
     ROS_WARN(
-        "fragg_map: colored_map: the map's cells carry no colour; markers are coloured by "
-        "%s",
-        o.height_map ? "height" : "color/r|g|b|a");
+        "fragg_map: colored_map and height_map are both set, which contradict each other: "
+        "markers are coloured by height (as octomap_server does)");
 #if !FRAGG_HAVE_OCTOMAP_MSGS
   ROS_INFO(
       "fragg_map: no octomap_binary / octomap_full topics or services: this build found no "

@@ -1,0 +1,112 @@
+// The map server's whole-map outputs kept incrementally: per-block pieces of the occupied
+// cloud (packed cell centres) and of the projected map (the block's 8 x 8 columns in the
+// height band), refreshed only for the blocks changed since the last update
+// (Map::changedBlocksSince, with the 26 neighbours of each when speckles are hidden), and
+// rebuilt from scratch when the map's view changed otherwise (Map::viewEpoch: erase,
+// clear_bbx, truncate, reset, load, paging) or the revision went back. The projected grid
+// itself is kept between updates and patched in the changed columns (octomap_server's
+// incremental_2D_projection); messages are assembled from the pieces (a copy of the output,
+// no pass over the cells). The results equal occupiedCloud() and projectedMap() of the same
+// map as sets (point order differs). Not thread-safe: one owner, under the map's read lock.
+#pragma once
+
+#include <nav_msgs/OccupancyGrid.h>
+#include <ros/time.h>
+#include <sensor_msgs/PointCloud2.h>
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "fragg_map/key.h"
+#include "fragg_map/map.h"
+
+namespace fragg::ros {
+
+struct OutputCacheOptions {
+  /// Heights projected into the projected map (the cell centre's z), as projectedMap().
+  double occupancy_min_z_m = -std::numeric_limits<double>::infinity();
+  double occupancy_max_z_m = std::numeric_limits<double>::infinity();
+  /// filter_speckles: occupied cells without an occupied neighbour are left out of both.
+  bool hide_speckles = false;
+};
+
+/// What an update did.
+struct OutputCacheUpdate {
+  bool full = false;          ///< rebuilt from every block
+  size_t blocks_read = 0;     ///< blocks whose pieces were recomputed
+  size_t columns_merged = 0;  ///< 8 x 8 column groups of the grid recomputed
+};
+
+class MapOutputCache {
+ public:
+  /// Throws fragg::InvalidArgument for NaN heights or min > max (as projectedMap).
+  explicit MapOutputCache(const OutputCacheOptions& options = OutputCacheOptions());
+
+  /// Brings the pieces and the grid up to date with `map` (held under its read lock).
+  OutputCacheUpdate update(const fragg::Map& map);
+  /// Forgets everything: the next update rebuilds.
+  void invalidate() { valid_ = false; }
+
+  /// The occupied cloud of the last update: packed float32 x, y, z (as occupiedCloud()).
+  sensor_msgs::PointCloud2 occupiedCloud(const std::string& frame_id,
+                                         const ::ros::Time& stamp) const;
+  /// The projected map of the last update (as projectedMap()).
+  nav_msgs::OccupancyGrid projectedMap(const std::string& frame_id, const ::ros::Time& stamp) const;
+  size_t occupiedCells() const { return occupied_cells_; }
+  uint64_t revision() const { return revision_; }
+
+ private:
+  struct Piece {
+    std::vector<float> xyz;  ///< occupied cell centres (speckles left out when hidden)
+    /// The block's columns in the height band (-1 unknown, 0 free, 100 occupied), x fastest.
+    std::array<int8_t, 64> columns;
+    bool in_band = false;  ///< some cell of the block lies in the band
+    /// Observed cells' xy key bounds within the block (lo > hi: none observed).
+    int32_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
+  };
+  /// A column of blocks (same x, y block key): the merged 8 x 8 grid patch and xy bounds.
+  struct Column {
+    std::unordered_set<int32_t> zs;  ///< block z keys present
+    std::array<int8_t, 64> merged;
+    int32_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
+  };
+  struct ColumnKey {
+    int32_t x, y;
+    bool operator==(const ColumnKey& o) const { return x == o.x && y == o.y; }
+  };
+  struct ColumnKeyHash {
+    size_t operator()(const ColumnKey& k) const {
+      return std::hash<uint64_t>()((uint64_t(uint32_t(k.x)) << 32) | uint32_t(k.y));
+    }
+  };
+
+  void computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
+                    const fragg::BlockKey& key, const fragg::Block& block, Piece* piece) const;
+  /// Recomputes `col`'s merged patch and bounds from its blocks' pieces.
+  void mergeColumn(const ColumnKey& ck, Column* col) const;
+  /// Grid bounds from the columns; reallocates and redraws the grid when they moved, else
+  /// draws the columns in `dirty`.
+  void refreshGrid(const std::unordered_set<ColumnKey, ColumnKeyHash>& dirty, bool all);
+  void drawColumn(const ColumnKey& ck, const Column& col);
+
+  OutputCacheOptions options_;
+  bool valid_ = false;
+  uint64_t revision_ = 0;
+  uint64_t epoch_ = 0;
+  double resolution_m_ = 0.0;
+  std::unordered_map<fragg::BlockKey, Piece, fragg::BlockKeyHash> pieces_;
+  std::unordered_map<ColumnKey, Column, ColumnKeyHash> columns_;
+  size_t occupied_cells_ = 0;
+  // The grid: cells [grid_min_x, +width) x [grid_min_y, +height), row-major (y rows).
+  bool grid_empty_ = true;
+  int32_t grid_min_x_ = 0, grid_min_y_ = 0;
+  int64_t grid_width_ = 0, grid_height_ = 0;
+  std::vector<int8_t> grid_;
+};
+
+}  // namespace fragg::ros

@@ -1,0 +1,282 @@
+// Whole-map outputs (occupied cloud, projected map) kept per block, refreshed for the changed
+// blocks only.
+#include "fragg_map/ros/output_cache.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/ros/occupied_cloud.h"
+#include "fragg_map/ros/speckles.h"
+
+namespace fragg::ros {
+namespace {
+
+constexpr int8_t kUnknown = -1;
+constexpr int8_t kFree = 0;
+constexpr int8_t kOccupied = 100;
+
+}  // namespace
+
+MapOutputCache::MapOutputCache(const OutputCacheOptions& options) : options_(options) {
+  if (std::isnan(options.occupancy_min_z_m) || std::isnan(options.occupancy_max_z_m))
+    throw fragg::InvalidArgument("projected map heights must not be NaN");
+  if (options.occupancy_min_z_m > options.occupancy_max_z_m)
+    throw fragg::InvalidArgument("projected map: occupancy_min_z exceeds occupancy_max_z");
+}
+
+void MapOutputCache::computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
+                                  const fragg::BlockKey& key, const fragg::Block& block,
+                                  Piece* piece) const {
+  // One 64-bit word per z layer of the block (cell index x + 8 y + 64 z): occupied, free and
+  // observed masks, branch-free, then the columns and bounds from OR-ed layers.
+  const fragg::OccupancyModel& model = map.model();
+  const int16_t above = model.occupied_above_fx, below = model.free_below_fx;
+  uint64_t occupied[fragg::kBlockSize], free[fragg::kBlockSize], observed_xy = 0;
+  for (int z = 0; z < fragg::kBlockSize; ++z) {
+    const fragg::Cell* c = block.cells + 64 * z;
+    uint64_t o = 0, f = 0, seen = 0;
+    for (int i = 0; i < 64; ++i) {
+      const int16_t l = c[i].log_odds_fx;
+      const bool known = l != fragg::kUnobservedLogOdds;
+      o |= uint64_t{l > above} << i;
+      f |= uint64_t{known && l < below} << i;
+      seen |= uint64_t{known} << i;
+    }
+    occupied[z] = o;
+    free[z] = f;
+    observed_xy |= seen;
+  }
+  piece->xyz.clear();
+  piece->columns.fill(kUnknown);
+  piece->in_band = false;
+  piece->min_x = piece->min_y = fragg::kBlockSize;
+  piece->max_x = piece->max_y = -1;
+  for (uint64_t m = observed_xy; m; m &= m - 1) {
+    const int i = __builtin_ctzll(m);
+    const int lx = i & fragg::kBlockMask, ly = i >> fragg::kBlockBits;
+    piece->min_x = std::min(piece->min_x, lx);
+    piece->max_x = std::max(piece->max_x, lx);
+    piece->min_y = std::min(piece->min_y, ly);
+    piece->max_y = std::max(piece->max_y, ly);
+  }
+  const double res_m = map.resolution();
+  uint64_t band_occupied = 0, band_free = 0;
+  for (int z = 0; z < fragg::kBlockSize; ++z) {
+    uint64_t o = occupied[z];
+    if (options_.hide_speckles) {
+      for (uint64_t m = occupied[z]; m; m &= m - 1) {
+        const int i = __builtin_ctzll(m);
+        if (isSpeckle(map, blocks, fragg::voxelKeyOf(key, 64 * z + i))) o &= ~(uint64_t{1} << i);
+      }
+    }
+    for (uint64_t m = o; m; m &= m - 1) {
+      const Eigen::Vector3d p_map =
+          map.centerOf(fragg::voxelKeyOf(key, 64 * z + __builtin_ctzll(m)));
+      piece->xyz.insert(piece->xyz.end(),
+                        {static_cast<float>(p_map.x()), static_cast<float>(p_map.y()),
+                         static_cast<float>(p_map.z())});
+    }
+    const double z_m = (int64_t{key.z} * fragg::kBlockSize + z + 0.5) * res_m;
+    if (z_m < options_.occupancy_min_z_m || z_m > options_.occupancy_max_z_m) continue;
+    band_occupied |= o;  // a speckle counts neither as occupied nor as free
+    band_free |= free[z];
+  }
+  for (int i = 0; i < 64; ++i) {
+    if (band_occupied >> i & 1)
+      piece->columns[i] = kOccupied;
+    else if (band_free >> i & 1)
+      piece->columns[i] = kFree;
+  }
+  piece->in_band = (band_occupied | band_free) != 0;
+}
+
+void MapOutputCache::mergeColumn(const ColumnKey& ck, Column* col) const {
+  col->merged.fill(kUnknown);
+  col->min_x = col->min_y = fragg::kBlockSize;
+  col->max_x = col->max_y = -1;
+  for (const int32_t z : col->zs) {
+    const Piece& p = pieces_.at(fragg::BlockKey{ck.x, ck.y, z});
+    if (p.max_x >= 0) {
+      col->min_x = std::min(col->min_x, p.min_x);
+      col->max_x = std::max(col->max_x, p.max_x);
+      col->min_y = std::min(col->min_y, p.min_y);
+      col->max_y = std::max(col->max_y, p.max_y);
+    }
+    if (!p.in_band) continue;
+    for (int i = 0; i < 64; ++i) col->merged[i] = std::max(col->merged[i], p.columns[i]);
+  }
+}
+
+OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
+  OutputCacheUpdate out;
+  const fragg::BlockView blocks = map.blockView();
+  const uint64_t revision = map.revision();
+  out.full = !valid_ || map.viewEpoch() != epoch_ || revision < revision_ ||
+             map.resolution() != resolution_m_;
+  // The blocks to recompute, and those that left the map.
+  std::vector<fragg::BlockRef> todo;
+  std::unordered_set<ColumnKey, ColumnKeyHash> dirty;
+  if (out.full) {
+    pieces_.clear();
+    columns_.clear();
+    occupied_cells_ = 0;
+    todo = blocks.all();
+  } else {
+    std::vector<fragg::BlockKey> changed = blocks.changedSince(revision_, fragg::BlockChange::kAny);
+    if (options_.hide_speckles && !changed.empty()) {
+      // A cell's speckle state follows its neighbours: the blocks around a change too.
+      std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around(changed.begin(),
+                                                                      changed.end());
+      for (const fragg::BlockKey& k : changed)
+        for (int dz = -1; dz <= 1; ++dz)
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) around.insert({k.x + dx, k.y + dy, k.z + dz});
+      changed.assign(around.begin(), around.end());
+    }
+    todo.reserve(changed.size());
+    for (const fragg::BlockKey& k : changed) {
+      const fragg::Block* b = blocks.findBlock(k);
+      if (b) {
+        todo.push_back({k, b});
+      } else if (const auto it = pieces_.find(k); it != pieces_.end()) {
+        // Only reachable through the neighbour ring: erased blocks change the view epoch.
+        occupied_cells_ -= it->second.xyz.size() / 3;
+        pieces_.erase(it);
+        const ColumnKey ck{k.x, k.y};
+        columns_[ck].zs.erase(k.z);
+        dirty.insert(ck);
+      }
+    }
+  }
+  // The pieces in parallel (read-only map), then the bookkeeping in order.
+  std::vector<Piece> fresh(todo.size());
+  const int64_t n = static_cast<int64_t>(todo.size());
+#pragma omp parallel for schedule(dynamic, 64) if (n > 256)
+  for (int64_t j = 0; j < n; ++j) computePiece(map, blocks, todo[j].key, *todo[j].block, &fresh[j]);
+  for (size_t j = 0; j < todo.size(); ++j) {
+    const fragg::BlockKey& k = todo[j].key;
+    Piece& slot = pieces_[k];
+    occupied_cells_ -= slot.xyz.size() / 3;
+    occupied_cells_ += fresh[j].xyz.size() / 3;
+    slot = std::move(fresh[j]);
+    const ColumnKey ck{k.x, k.y};
+    columns_[ck].zs.insert(k.z);
+    dirty.insert(ck);
+  }
+  out.blocks_read = todo.size();
+  for (const ColumnKey& ck : dirty) {
+    const auto it = columns_.find(ck);
+    if (it->second.zs.empty()) {
+      columns_.erase(it);
+      continue;
+    }
+    mergeColumn(ck, &it->second);
+  }
+  out.columns_merged = dirty.size();
+  refreshGrid(dirty, out.full);
+  valid_ = true;
+  revision_ = revision;
+  epoch_ = map.viewEpoch();
+  resolution_m_ = map.resolution();
+  return out;
+}
+
+void MapOutputCache::drawColumn(const ColumnKey& ck, const Column& col) {
+  const int64_t x0 = int64_t{ck.x} * fragg::kBlockSize - grid_min_x_;
+  const int64_t y0 = int64_t{ck.y} * fragg::kBlockSize - grid_min_y_;
+  for (int ly = 0; ly < fragg::kBlockSize; ++ly) {
+    const int64_t gy = y0 + ly;
+    if (gy < 0 || gy >= grid_height_) continue;
+    for (int lx = 0; lx < fragg::kBlockSize; ++lx) {
+      const int64_t gx = x0 + lx;
+      if (gx < 0 || gx >= grid_width_) continue;
+      grid_[static_cast<size_t>(gy * grid_width_ + gx)] = col.merged[lx + fragg::kBlockSize * ly];
+    }
+  }
+}
+
+void MapOutputCache::refreshGrid(const std::unordered_set<ColumnKey, ColumnKeyHash>& dirty,
+                                 bool all) {
+  // Bounds over the columns (one pass over the columns, not the cells).
+  bool empty = true;
+  int64_t lo_x = 0, hi_x = -1, lo_y = 0, hi_y = -1;
+  for (const auto& [ck, col] : columns_) {
+    if (col.max_x < 0) continue;
+    const int64_t x0 = int64_t{ck.x} * fragg::kBlockSize, y0 = int64_t{ck.y} * fragg::kBlockSize;
+    if (empty) {
+      lo_x = x0 + col.min_x, hi_x = x0 + col.max_x, lo_y = y0 + col.min_y, hi_y = y0 + col.max_y;
+      empty = false;
+      continue;
+    }
+    lo_x = std::min(lo_x, x0 + col.min_x);
+    hi_x = std::max(hi_x, x0 + col.max_x);
+    lo_y = std::min(lo_y, y0 + col.min_y);
+    hi_y = std::max(hi_y, y0 + col.max_y);
+  }
+  if (empty) {
+    grid_empty_ = true;
+    grid_.clear();
+    grid_width_ = grid_height_ = 0;
+    return;
+  }
+  const bool moved = grid_empty_ || lo_x != grid_min_x_ || lo_y != grid_min_y_ ||
+                     hi_x - lo_x + 1 != grid_width_ || hi_y - lo_y + 1 != grid_height_;
+  if (moved || all) {
+    grid_empty_ = false;
+    grid_min_x_ = static_cast<int32_t>(lo_x);
+    grid_min_y_ = static_cast<int32_t>(lo_y);
+    grid_width_ = hi_x - lo_x + 1;
+    grid_height_ = hi_y - lo_y + 1;
+    grid_.assign(static_cast<size_t>(grid_width_ * grid_height_), kUnknown);
+    for (const auto& [ck, col] : columns_) drawColumn(ck, col);
+    return;
+  }
+  // Same bounds: patch the changed columns (a column that left is drawn unknown).
+  static const Column kGone = [] {
+    Column c;
+    c.merged.fill(kUnknown);
+    return c;
+  }();
+  for (const ColumnKey& ck : dirty) {
+    const auto it = columns_.find(ck);
+    drawColumn(ck, it == columns_.end() ? kGone : it->second);
+  }
+}
+
+sensor_msgs::PointCloud2 MapOutputCache::occupiedCloud(const std::string& frame_id,
+                                                       const ::ros::Time& stamp) const {
+  sensor_msgs::PointCloud2 msg = packedXyzCloud(std::vector<float>(), frame_id, stamp);
+  msg.width = static_cast<uint32_t>(occupied_cells_);
+  msg.row_step = msg.point_step * msg.width;
+  msg.data.resize(occupied_cells_ * 3 * sizeof(float));
+  uint8_t* dst = msg.data.data();
+  for (const auto& [key, piece] : pieces_) {
+    const size_t bytes = piece.xyz.size() * sizeof(float);
+    if (bytes == 0) continue;
+    std::memcpy(dst, piece.xyz.data(), bytes);
+    dst += bytes;
+  }
+  return msg;
+}
+
+nav_msgs::OccupancyGrid MapOutputCache::projectedMap(const std::string& frame_id,
+                                                     const ::ros::Time& stamp) const {
+  nav_msgs::OccupancyGrid grid;
+  grid.header.frame_id = frame_id;
+  grid.header.stamp = stamp;
+  grid.info.map_load_time = stamp;
+  grid.info.resolution = static_cast<float>(resolution_m_);
+  grid.info.origin.orientation.w = 1.0;
+  if (grid_empty_) return grid;
+  grid.info.width = static_cast<uint32_t>(grid_width_);
+  grid.info.height = static_cast<uint32_t>(grid_height_);
+  grid.info.origin.position.x = grid_min_x_ * resolution_m_;
+  grid.info.origin.position.y = grid_min_y_ * resolution_m_;
+  grid.info.origin.position.z = 0.0;
+  grid.data = grid_;
+  return grid;
+}
+
+}  // namespace fragg::ros

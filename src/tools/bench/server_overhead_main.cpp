@@ -1,0 +1,231 @@
+// fragg_map_server_overhead: what the map server spends per W1 cloud outside insertion, with
+// one subscriber on every map output, before (main's path: occupied cloud and projected map
+// rebuilt over the whole map after every cloud) and after (MapOutputCache: the changed blocks'
+// pieces refreshed, messages assembled from them). Per cloud: the PointCloud2 conversion
+// (cloudFromMsg), the incremental markers (changedBlockMarkers, as the server publishes them),
+// the occupied cloud (occupied_cells and octomap_point_cloud_centers share one message), the
+// projected map, and each message serialised once as roscpp does for a subscriber in another
+// process (ros::serialization::serializeMessage). No ROS master: the builders are called
+// directly. Markers are the same incremental update on both paths (timed once); the whole-map
+// rebuilds of the old path run only after the scans whose rows are printed. Times are CPU
+// milliseconds of the process (the machine is shared).
+//   fragg_map_server_overhead --workloads DIR [--scans N] [--big-map FILE] [--big-scans K]
+#include <ros/serialization.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/PointField.h>
+#include <time.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "bench/workloads.h"
+#include "fragg_map/map.h"
+#include "fragg_map/ros/block_markers.h"
+#include "fragg_map/ros/cloud_from_msg.h"
+#include "fragg_map/ros/occupied_cloud.h"
+#include "fragg_map/ros/output_cache.h"
+#include "fragg_map/ros/projected_map.h"
+#include "percentile.h"
+
+namespace {
+
+/// CPU time of the whole process (all threads), so that figures taken on a shared, loaded
+/// machine count this program's work and not the time it waited for a core.
+struct Clock {
+  using time_point = double;
+  static double now() {
+    timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+  }
+};
+
+double msSince(double start_ms) { return Clock::now() - start_ms; }
+
+/// A Velodyne-like message: x y z intensity float32, point_step 16.
+sensor_msgs::PointCloud2 toMsg(const fragg::PointCloud& cloud) {
+  sensor_msgs::PointCloud2 msg;
+  msg.header.frame_id = "lidar";
+  msg.width = cloud.organised() ? cloud.width : static_cast<uint32_t>(cloud.size());
+  msg.height = cloud.organised() ? cloud.height : 1;
+  const char* names[4] = {"x", "y", "z", "intensity"};
+  for (uint32_t i = 0; i < 4; ++i) {
+    sensor_msgs::PointField f;
+    f.name = names[i];
+    f.offset = 4 * i;
+    f.datatype = sensor_msgs::PointField::FLOAT32;
+    f.count = 1;
+    msg.fields.push_back(f);
+  }
+  msg.point_step = 16;
+  msg.row_step = 16 * msg.width;
+  msg.data.assign(size_t{msg.row_step} * msg.height, 0);
+  for (size_t i = 0; i < cloud.size(); ++i)
+    std::memcpy(&msg.data[16 * i], cloud.points_S[i].data(), 12);
+  return msg;
+}
+
+/// One subscriber in another process: the message serialised once.
+template <typename M>
+size_t serialised(const M& msg) {
+  return ros::serialization::serializeMessage(msg).num_bytes;
+}
+
+struct Times {
+  double markers = 0, cloud = 0, grid = 0;
+  double serialise = 0;  ///< all three messages
+  size_t bytes = 0;
+  // The markers' share (the same on both paths).
+  double marker_serialise = 0;
+  size_t marker_bytes = 0;
+  double total() const { return markers + cloud + grid + serialise; }
+};
+
+/// The outputs after one cloud, one way or the other. `before`: the whole-map rebuilds.
+class Outputs {
+ public:
+  explicit Outputs(bool before) : before_(before) {}
+  Times publish(const fragg::Map& map) {
+    Times t;
+    auto t0 = Clock::now();
+    visualization_msgs::MarkerArray markers;
+    if (!before_) {
+      markers = fragg::ros::changedBlockMarkers(map, style_, ros::Time(), &ledger_);
+      t.markers = msSince(t0);
+    }
+    t0 = Clock::now();
+    sensor_msgs::PointCloud2 cloud;
+    nav_msgs::OccupancyGrid grid;
+    if (before_) {
+      cloud = fragg::ros::occupiedCloud(map, "map", ros::Time());
+      t.cloud = msSince(t0);
+      t0 = Clock::now();
+      grid = fragg::ros::projectedMap(map, kMinZ, kMaxZ, "map", ros::Time());
+      t.grid = msSince(t0);
+    } else {
+      cache_.update(map);
+      cloud = cache_.occupiedCloud("map", ros::Time());
+      t.cloud = msSince(t0);
+      t0 = Clock::now();
+      grid = cache_.projectedMap("map", ros::Time());
+      t.grid = msSince(t0);
+    }
+    t0 = Clock::now();
+    t.marker_bytes = before_ ? 0 : serialised(markers);
+    t.marker_serialise = msSince(t0);
+    t.bytes = t.marker_bytes + serialised(cloud) + serialised(grid);
+    t.serialise = msSince(t0);
+    return t;
+  }
+
+ private:
+  static constexpr double kMinZ = -std::numeric_limits<double>::infinity();
+  static constexpr double kMaxZ = std::numeric_limits<double>::infinity();
+  bool before_;
+  fragg::ros::MarkerStyle style_;
+  fragg::ros::MarkerLedger ledger_;
+  fragg::ros::MapOutputCache cache_;
+};
+
+void printHeader() {
+  std::printf("%-8s %-7s %9s %9s %9s %9s %9s %9s %10s %9s\n", "scan", "path", "convert", "markers",
+              "cloud", "grid", "serialise", "total", "MB out", "occupied");
+}
+
+void printRow(const std::string& scan, const char* path, double convert_ms, const Times& t,
+              size_t occupied) {
+  std::printf("%-8s %-7s %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %10.2f %9zu\n", scan.c_str(), path,
+              convert_ms, t.markers, t.cloud, t.grid, t.serialise, convert_ms + t.total(),
+              t.bytes / 1e6, occupied);
+}
+
+/// Feeds `scans` into `map`, both output paths after each; prints the rows of `shown` scans
+/// (1-based) and the medians.
+void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_range_m,
+         const std::vector<size_t>& shown, const std::string& label) {
+  Outputs before(true), after(false);
+  std::printf("\n%s\n", label.c_str());
+  printHeader();
+  // The first call reads the whole map (a loaded map, or nothing yet): untimed.
+  after.publish(map);
+  std::vector<double> total_before, total_after;
+  for (size_t i = 0; i < scans.size(); ++i) {
+    const sensor_msgs::PointCloud2 msg = toMsg(scans[i].cloud);
+    auto t0 = Clock::now();
+    const fragg::PointCloud cloud = fragg::ros::cloudFromMsg(msg);
+    const double convert_ms = msSince(t0);
+    map.insert(cloud, scans[i].T_map_sensor, fragg::SensorModel::autoFromCloud(0.0, max_range_m));
+    const Times a = after.publish(map);
+    total_after.push_back(convert_ms + a.total());
+    for (size_t s : shown) {
+      if (s != i + 1) continue;
+      Times b = before.publish(map);
+      b.markers = a.markers;  // the same incremental update
+      b.serialise += a.marker_serialise;
+      b.bytes += a.marker_bytes;
+      total_before.push_back(convert_ms + b.total());
+      size_t occupied = 0;
+      map.forEachBlock([&](const fragg::BlockKey&, const fragg::Block& blk) {
+        for (const fragg::Cell& c : blk.cells)
+          occupied += map.state(c) == fragg::CellState::kOccupied;
+      });
+      printRow(std::to_string(i + 1), "before", convert_ms, b, occupied);
+      printRow(std::to_string(i + 1), "after", convert_ms, a, occupied);
+    }
+  }
+  using fragg::tools::percentile;
+  std::printf("after: median %.2f ms, max %.2f ms per cloud over %zu clouds\n",
+              percentile(total_after, 0.5), percentile(total_after, 1.0), scans.size());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app("per-cloud map server overhead outside insertion, before and after");
+  std::string workloads, big_map;
+  size_t scans = 100, big_scans = 5;
+  std::vector<size_t> shown = {1, 10, 50, 100};
+  app.add_option("--workloads", workloads, "scripts/make_workloads.sh output (has w1_lidar360)")
+      ->required();
+  app.add_option("--scans", scans, "W1 scans fed into a new map")->check(CLI::PositiveNumber);
+  app.add_option("--show", shown, "scans (1-based) whose rows are printed");
+  app.add_option("--big-map", big_map, ".fgm to load and feed W1 scans into (e.g. W1's final map)");
+  app.add_option("--big-scans", big_scans, "W1 scans fed into the big map");
+  CLI11_PARSE(app, argc, argv);
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows as they come (long runs)
+
+  const auto want = [](const std::string& name) { return name == "W1 lidar360 30 m"; };
+  const std::vector<fragg::bench::Workload> w =
+      fragg::bench::simWorkloads(workloads, std::max(scans, big_scans), want);
+  const fragg::bench::Workload& w1 = w.at(0);
+  fragg::MapParams params;
+  params.resolution_m = w1.resolution_m;
+  params.backend = fragg::Backend::kCpu;
+  std::printf(
+      "%s, %.2f m, CPU backend; ms per cloud, MB out = bytes serialised for one "
+      "subscriber per topic\n",
+      w1.name.c_str(), w1.resolution_m);
+  {
+    fragg::Map map(params);
+    std::vector<fragg::Scan> first(w1.scans.begin(),
+                                   w1.scans.begin() + std::min(scans, w1.scans.size()));
+    run(map, first, w1.max_range_m, shown, "new map, W1 scans 1.." + std::to_string(first.size()));
+  }
+  if (!big_map.empty()) {
+    fragg::Map map = fragg::Map::load(big_map, params);
+    std::vector<fragg::Scan> first(w1.scans.begin(),
+                                   w1.scans.begin() + std::min(big_scans, w1.scans.size()));
+    std::vector<size_t> all;
+    for (size_t i = 1; i <= first.size(); ++i) all.push_back(i);
+    run(map, first, w1.max_range_m, all,
+        big_map + " (" + std::to_string(map.blockCount()) + " blocks) + W1 scans 1.." +
+            std::to_string(first.size()));
+  }
+  return 0;
+}

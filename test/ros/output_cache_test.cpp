@@ -1,0 +1,162 @@
+// MapOutputCache: after every edit (insertions, clear_bbx, erase by writeCells, truncate,
+// merge, removal of a kept scan, load, reset) the incrementally kept occupied cloud and
+// projected map equal a from-scratch build of the same map (occupiedCloud, projectedMap),
+// with and without speckle hiding and a height band; insertions are incremental.
+#include "fragg_map/ros/output_cache.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/ros/occupied_cloud.h"
+#include "fragg_map/ros/projected_map.h"
+#include "map_fixtures.h"
+
+namespace fragg::ros {
+namespace {
+
+using Triples = std::vector<std::array<float, 3>>;
+
+Triples pointsOf(const sensor_msgs::PointCloud2& msg) {
+  EXPECT_EQ(msg.point_step, 12u);
+  EXPECT_EQ(msg.data.size(), size_t{msg.width} * 12);
+  Triples out(msg.width);
+  if (msg.width) std::memcpy(out.data(), msg.data.data(), msg.data.size());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+/// The cache against a rebuild: same occupied centres, same grid (info and cells).
+void expectSameAsRebuild(const fragg::Map& map, const MapOutputCache& cache,
+                         const OutputCacheOptions& o, const std::string& step) {
+  SCOPED_TRACE(step);
+  const ::ros::Time stamp(7.0);
+  const Triples got = pointsOf(cache.occupiedCloud("map", stamp));
+  const Triples want = pointsOf(occupiedCloud(map, "map", stamp, o.hide_speckles));
+  EXPECT_EQ(got.size(), want.size());
+  EXPECT_TRUE(got == want);
+  EXPECT_EQ(cache.occupiedCells(), want.size());
+  const nav_msgs::OccupancyGrid g = cache.projectedMap("map", stamp);
+  const nav_msgs::OccupancyGrid w =
+      projectedMap(map, o.occupancy_min_z_m, o.occupancy_max_z_m, "map", stamp, o.hide_speckles);
+  EXPECT_EQ(g.info.width, w.info.width);
+  EXPECT_EQ(g.info.height, w.info.height);
+  EXPECT_DOUBLE_EQ(g.info.origin.position.x, w.info.origin.position.x);
+  EXPECT_DOUBLE_EQ(g.info.origin.position.y, w.info.origin.position.y);
+  EXPECT_FLOAT_EQ(g.info.resolution, w.info.resolution);
+  EXPECT_EQ(g.header.frame_id, w.header.frame_id);
+  ASSERT_EQ(g.data.size(), w.data.size());
+  size_t differing = 0;
+  for (size_t i = 0; i < g.data.size(); ++i) differing += g.data[i] != w.data[i];
+  EXPECT_EQ(differing, 0u);
+}
+
+/// A scan of scattered points (isolated hits make speckles) and a wall, from `sensor`.
+fragg::PointCloud scatteredScan(std::mt19937* rng, int points) {
+  std::uniform_real_distribution<float> u(-2.5f, 2.5f);
+  fragg::PointCloud cloud;
+  for (int i = 0; i < points; ++i)
+    cloud.points_S.emplace_back(2.0f + std::abs(u(*rng)), u(*rng), 0.4f * u(*rng));
+  return cloud;
+}
+
+class OutputCacheSequence : public ::testing::TestWithParam<int> {};
+
+TEST_P(OutputCacheSequence, EqualsARebuildAfterEveryEdit) {
+  OutputCacheOptions o;
+  if (GetParam() & 1) o.hide_speckles = true;
+  if (GetParam() & 2) {
+    o.occupancy_min_z_m = -0.3;
+    o.occupancy_max_z_m = 0.45;
+  }
+  fragg::MapParams params = test::cpuParams(0.1);
+  params.scans.keep = true;
+  fragg::Map map(params);
+  MapOutputCache cache(o);
+  std::mt19937 rng(17 + GetParam());
+  auto check = [&](const std::string& step, bool incremental) {
+    const OutputCacheUpdate u = cache.update(map);
+    if (incremental) {
+      EXPECT_FALSE(u.full) << step;
+    }
+    expectSameAsRebuild(map, cache, o, step);
+  };
+  check("empty map", false);
+  std::vector<fragg::ScanId> ids;
+  for (int i = 0; i < 6; ++i) {
+    Eigen::Isometry3d T_map_sensor = Eigen::Isometry3d::Identity();
+    T_map_sensor.translation() = Eigen::Vector3d(0.3 * i, 0.2 * i - 0.5, 0.1 * (i % 3));
+    T_map_sensor.rotate(Eigen::AngleAxisd(0.4 * i, Eigen::Vector3d::UnitZ()));
+    ids.push_back(map.insert(scatteredScan(&rng, 300), T_map_sensor,
+                             fragg::SensorModel::autoFromCloud(0.0, -1.0))
+                      .scan_id);
+    check("insert " + std::to_string(i), true);
+  }
+  test::insertWall(map, Eigen::Vector3d(-1.0, 0.0, 0.0), 3.0);
+  check("wall", true);
+  // Several scans between two updates (a throttled publisher).
+  test::insertWall(map, Eigen::Vector3d(0.0, 1.0, 0.2), 2.5);
+  map.insert(scatteredScan(&rng, 200), Eigen::Isometry3d::Identity(),
+             fragg::SensorModel::autoFromCloud(0.0, -1.0));
+  check("two scans", true);
+  map.remove(ids[2]);
+  check("remove a kept scan", false);
+  map.clearBox(Eigen::Vector3d(1.0, -1.0, -0.5), Eigen::Vector3d(2.2, 0.4, 0.3));
+  check("clear_bbx", false);
+  test::setCell(map, fragg::VoxelKey{60, 60, 0}, fragg::CellState::kOccupied);  // a far speckle
+  test::setCell(map, fragg::VoxelKey{25, -3, 1}, fragg::CellState::kFree);
+  check("written cells", true);
+  fragg::Map cut = map.truncate(Eigen::Vector3d(-5.0, -5.0, -5.0), Eigen::Vector3d(0.5, 5.0, 5.0));
+  check("truncate", false);
+  map.merge(cut, fragg::MergeMode::kOverwrite);
+  check("merge back", false);
+  const std::string path = ::testing::TempDir() + "output_cache_test.fgm";
+  map.save(path);
+  fragg::Map other(test::cpuParams(0.1));
+  test::insertWall(other, Eigen::Vector3d(0.0, 0.0, 0.0), 1.5);
+  check("still the first map", true);
+  map = fragg::Map::load(path, test::cpuParams(0.1));
+  check("load", false);
+  std::remove(path.c_str());
+  map.insert(scatteredScan(&rng, 300), Eigen::Isometry3d::Identity(),
+             fragg::SensorModel::autoFromCloud(0.0, -1.0));
+  check("insert after load", true);
+  map.reset();
+  check("reset", false);
+  test::insertWall(map, Eigen::Vector3d(0.5, 0.5, 0.0), 2.0);
+  check("insert after reset", false);
+}
+
+INSTANTIATE_TEST_SUITE_P(Options, OutputCacheSequence, ::testing::Values(0, 1, 2, 3));
+
+TEST(OutputCache, OnlyChangedBlocksAreRead) {
+  fragg::Map map(test::cpuParams(0.1));
+  MapOutputCache cache;
+  test::insertWall(map, Eigen::Vector3d(0.0, 0.0, 0.0), 2.0);
+  EXPECT_TRUE(cache.update(map).full);
+  EXPECT_EQ(cache.update(map).blocks_read, 0u);  // nothing changed
+  test::setCell(map, fragg::VoxelKey{100, 100, 0}, fragg::CellState::kOccupied);
+  const OutputCacheUpdate u = cache.update(map);
+  EXPECT_FALSE(u.full);
+  EXPECT_EQ(u.blocks_read, 1u);
+  expectSameAsRebuild(map, cache, OutputCacheOptions(), "one cell");
+}
+
+TEST(OutputCache, BadHeightsAreRefused) {
+  OutputCacheOptions o;
+  o.occupancy_min_z_m = 1.0;
+  o.occupancy_max_z_m = 0.0;
+  EXPECT_THROW(MapOutputCache{o}, fragg::InvalidArgument);
+  o.occupancy_min_z_m = std::nan("");
+  EXPECT_THROW(MapOutputCache{o}, fragg::InvalidArgument);
+}
+
+}  // namespace
+}  // namespace fragg::ros
