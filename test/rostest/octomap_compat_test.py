@@ -336,12 +336,18 @@ class OctomapCompatTest(unittest.TestCase):
     def test_09_map_file_at_start_up(self):
         bt = os.path.join(self.tmp, "before_clear.bt")
         fgm = os.path.join(self.tmp, "before_clear.fgm")
+        # The node advertises its services while it loads the start-up map (nodelet callbacks
+        # run at once): ask until the load is in.
         proc, log = self.start_server("by_argument", [bt], {"resolution": RES})
+        wait_for(lambda: self.stats("/by_argument/by_argument/").known_voxels > 0, 30,
+                 "the start-up .bt loaded")
         known = self.stats("/by_argument/by_argument/").known_voxels
         self.stop(proc, log)
         self.assertGreater(known, 0)
         proc, log = self.start_server("by_parameter", [],
                                       {"resolution": RES, "map_file": fgm})
+        wait_for(lambda: self.stats("/by_parameter/by_parameter/").scans > 0, 30,
+                 "the start-up .fgm loaded")
         s = self.stats("/by_parameter/by_parameter/")
         self.stop(proc, log)
         self.assertEqual((s.known_voxels, s.scans), (known, 1))
