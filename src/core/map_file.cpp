@@ -102,7 +102,7 @@ void Map::save(const std::string& path) const {
     const Block* block = &paged;
     if (e.index != kNoBlock)
       block = &blocks_.block(e.index);
-    else if (!pager_->store().read(k, &paged))
+    else if (!pager_->readPagedOut(k, &paged))
       throw IoError("cannot write " + path + ": a paged-out block is missing from " +
                     pager_->store().path());
     w.put(k.x);
