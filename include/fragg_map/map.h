@@ -220,7 +220,9 @@ class Map {
   // is the map: every block is committed to it (dirty blocks every policy.commit_every_scans
   // scans or commit_every_s seconds, before blocks are paged out, and at close) together with
   // the number of scans they hold; blocks beyond the budget leave RAM, least recently used
-  // first, never within policy.radius_m of the last sensor position. Insertion, removal,
+  // first, blocks within policy.radius_m of the last sensor position last. Commits are written
+  // by a background thread (policy.background_writer) while the map goes on; a block paged out
+  // before its commit is written is read back from that commit. Insertion, removal,
   // correction, clearBox, truncate, merge and writeCells page in what they reach first; const
   // readers see the resident blocks (ensureResident brings a box back). Kept scans are not
   // stored: a map that keeps scans cannot page (InvalidArgument).
@@ -239,7 +241,7 @@ class Map {
   /// Brings every paged-out block whose cells may lie in the box back into RAM.
   void ensureResident(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map);
   void ensureAllResident();
-  /// Commits the dirty blocks and the scan count now.
+  /// Commits the dirty blocks and the scan count now; they are in the store when it returns.
   void commitPages();
   bool paging() const { return pager_ != nullptr; }
   PagingStats pagingStats() const;

@@ -18,6 +18,9 @@
 
 namespace fragg {
 
+/// A block record: the store's encoding of one block's cells (compressed, with a checksum).
+using BlockRecord = std::vector<uint8_t>;
+
 class PageStore {
  public:
   virtual ~PageStore() = default;
@@ -36,10 +39,27 @@ class PageStore {
   /// for each block, then the metadata is returned. IoError when a record does not decode.
   virtual std::vector<uint8_t> readAll(
       const std::function<void(const BlockKey&, const Block&)>& fn) = 0;
-  /// Writes the blocks, erases the keys and replaces the metadata in one transaction: after
-  /// a crash the store holds either all of it or none of it. Throws IoError (nothing written).
-  virtual void commit(const std::vector<std::pair<BlockKey, const Block*>>& puts,
-                      const std::vector<BlockKey>& erases, const std::vector<uint8_t>& meta) = 0;
+  /// Reads the committed blocks `keys` from one snapshot into outs[j] (j-th key), decoding on
+  /// every core; found[j] says whether keys[j] has a record. IoError when a record does not
+  /// decode. The default reads them one at a time.
+  virtual std::vector<bool> readMany(const std::vector<BlockKey>& keys,
+                                     const std::vector<Block*>& outs);
+  /// The records of `blocks` (out[j] is blocks[j]'s), encoded on every core. Touches no store
+  /// state: safe on any thread, while the store reads or writes.
+  virtual std::vector<BlockRecord> encode(const std::vector<const Block*>& blocks) const = 0;
+  /// Decodes a record made by encode() (safe on any thread). IoError when it does not decode to
+  /// a block.
+  virtual void decode(const BlockRecord& record, Block* out) const = 0;
+  /// Writes the records, erases the keys and replaces the metadata in one transaction: after a
+  /// crash the store holds either all of it or none of it. Throws IoError (nothing written).
+  /// May run on another thread than the reads (the map's background writer): reads see the
+  /// last finished commit meanwhile.
+  virtual void commitRecords(const std::vector<std::pair<BlockKey, BlockRecord>>& puts,
+                             const std::vector<BlockKey>& erases,
+                             const std::vector<uint8_t>& meta) = 0;
+  /// encode() and commitRecords() on the calling thread.
+  void commit(const std::vector<std::pair<BlockKey, const Block*>>& puts,
+              const std::vector<BlockKey>& erases, const std::vector<uint8_t>& meta);
   /// The store's size on disk (its files).
   virtual uint64_t diskBytes() const = 0;
   /// Drops the store's file pages from this process's resident memory where the store maps
@@ -64,6 +84,9 @@ struct PagingPolicy {
   uint64_t commit_every_scans = 50;
   /// ... or when this many seconds passed since the last commit (0: never by time).
   double commit_every_s = 10.0;
+  /// Commits are written to the store by a background thread while the map goes on (the
+  /// records are encoded on the map's thread, a snapshot); false: on the map's thread.
+  bool background_writer = true;
 
   void validate() const;
 };
@@ -77,10 +100,13 @@ struct PagingStats {
   uint64_t paged_blocks = 0;   ///< in the store only
   uint64_t pages_written = 0;  ///< block records written (commits of dirty blocks)
   uint64_t pages_read = 0;     ///< block records read back into RAM
+  /// ... of them read from a commit not yet written (the background writer's batch)
+  uint64_t pages_read_pending = 0;
   uint64_t pages_evicted = 0;  ///< blocks dropped from RAM
   uint64_t commits = 0;
   uint64_t committed_scans = 0;  ///< scans the store holds (its last commit)
-  double seconds_commit = 0;     ///< time in commits
+  double seconds_commit = 0;     ///< time in commits on the map's thread
+  double seconds_writer = 0;     ///< time the background writer spent writing commits
   double seconds_page_in = 0;    ///< time reading blocks back
   uint64_t store_bytes = 0;      ///< on disk
 };

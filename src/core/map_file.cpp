@@ -146,7 +146,7 @@ void Map::save(const std::string& path) const {
             continue;
           }
           Block& b = paged[next++];
-          if (!pager_->store().read(e.key, &b))
+          if (!pager_->readPagedOut(e.key, &b))  // a pending commit's copy first
             throw IoError("cannot write " + path + ": a paged-out block is missing from " +
                           pager_->store().path());
           out.push_back(&b);

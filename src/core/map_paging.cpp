@@ -71,6 +71,7 @@ void Map::attachPageStore(std::shared_ptr<PageStore> store, const PagingPolicy& 
   auto pager = std::make_unique<Pager>(std::move(store), policy, params_.resolution_m);
   pager->markAllDirty();
   pager->commit(blocks_, revision_, metaOf(params_, scans_));
+  pager->flush();
   pager_ = std::move(pager);
 }
 
@@ -165,6 +166,7 @@ void Map::commitPages() {
     backend_->cache().sync(blocks_);
   }
   pager_->commit(blocks_, revision_, metaOf(params_, scans_));
+  pager_->flush();  // in the store when this returns
 }
 
 void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {

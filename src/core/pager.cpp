@@ -80,7 +80,10 @@ Pager::Pager(std::shared_ptr<PageStore> store, const PagingPolicy& policy, doubl
   for (const BlockKey& k : store_->keys()) addPagedOut(k);
   counters_.enabled = true;
   counters_.store = std::string(store_->kind()) + ":" + store_->path();
+  if (policy_.background_writer) writer_ = std::make_unique<PageWriter>(store_);
 }
+
+Pager::~Pager() = default;  // the writer waits for its batch in flight
 
 void Pager::addPagedOut(const BlockKey& key) {
   RegionBits& bits = paged_super_[superOf(key)];
@@ -146,25 +149,9 @@ bool Pager::anyPagedOut(const BlockKey& lo, const BlockKey& hi) const {
   return any;
 }
 
-BlockIndex Pager::readInto(const BlockKey& key, BlockMap& blocks) {
-  bool created = false;
-  const BlockIndex i = blocks.findOrCreate(key, &created, /*initialise=*/false);
-  if (!created) throw IoError("paging: block paged out and resident at once (internal error)");
-  bool found = false;
-  try {
-    found = store_->read(key, &blocks.block(i));
-  } catch (...) {
-    blocks.erase(key);  // the block stays paged out; the map is as before
-    throw;
-  }
-  if (!found) {
-    blocks.erase(key);
-    throw IoError(store_->path() + ": block record missing from the page store");
-  }
-  BlockMeta& m = blocks.meta(i);
-  m.changed_at = m.occupied_at = 0;  // clean: equal to its record
-  ++counters_.pages_read;
-  return i;
+bool Pager::readPagedOut(const BlockKey& key, Block* out) {
+  if (writer_ && writer_->findPending(key, out)) return true;
+  return store_->read(key, out);
 }
 
 std::vector<BlockIndex> Pager::pageIn(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) {
@@ -183,10 +170,46 @@ std::vector<BlockIndex> Pager::pageIn(const BlockKey& lo, const BlockKey& hi, Bl
   blocks.reserve(wanted.size());
   std::vector<BlockIndex> read;
   read.reserve(wanted.size());
+  // On any failure the blocks made here go again: they stay paged out, the map is as before.
+  auto undo = [&] {
+    for (size_t j = 0; j < read.size(); ++j) blocks.erase(wanted[j]);
+  };
   for (const BlockKey& k : wanted) {
-    read.push_back(readInto(k, blocks));
-    removePagedOut(k);
+    bool created = false;
+    const BlockIndex i = blocks.findOrCreate(k, &created, /*initialise=*/false);
+    if (!created) {
+      undo();
+      throw IoError("paging: block paged out and resident at once (internal error)");
+    }
+    read.push_back(i);
   }
+  try {
+    // A commit not yet written holds newer records than the store: those first, the rest
+    // from one snapshot of the store.
+    std::vector<BlockKey> from_store;
+    std::vector<Block*> outs;
+    for (size_t j = 0; j < wanted.size(); ++j) {
+      Block* out = &blocks.block(read[j]);
+      if (writer_ && writer_->findPending(wanted[j], out)) {
+        ++counters_.pages_read_pending;
+        continue;
+      }
+      from_store.push_back(wanted[j]);
+      outs.push_back(out);
+    }
+    const std::vector<bool> found = store_->readMany(from_store, outs);
+    for (bool f : found)
+      if (!f) throw IoError(store_->path() + ": block record missing from the page store");
+  } catch (...) {
+    undo();
+    throw;
+  }
+  for (size_t j = 0; j < wanted.size(); ++j) {
+    BlockMeta& m = blocks.meta(read[j]);
+    m.changed_at = m.occupied_at = 0;  // clean: equal to its record
+    removePagedOut(wanted[j]);
+  }
+  counters_.pages_read += wanted.size();
   noteResident(blocks.size());
   counters_.seconds_page_in += secondsSince(t0);
   return read;
@@ -233,6 +256,10 @@ size_t Pager::excessOverBudget(size_t resident) const {
   return resident > budget ? resident - budget : 0;
 }
 
+void Pager::flush() {
+  if (writer_) writer_->wait();
+}
+
 void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta& meta) {
   const auto t0 = Clock::now();
   std::vector<std::pair<BlockKey, const Block*>> puts;
@@ -245,10 +272,22 @@ void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta
     return std::tie(a.first.z, a.first.y, a.first.x) < std::tie(b.first.z, b.first.y, b.first.x);
   });
   // An erased key that is resident again (re-observed) is written instead.
-  std::vector<BlockKey> erases;
+  PageWriter::Batch batch;
   for (const BlockKey& k : erased_)
-    if (blocks.find(k) == kNoBlock && !isPagedOut(k)) erases.push_back(k);
-  store_->commit(puts, erases, encodeStoreMeta(meta));
+    if (blocks.find(k) == kNoBlock && !isPagedOut(k)) batch.erases.push_back(k);
+  // The records are the commit's snapshot: encoded here, on every core.
+  std::vector<const Block*> cells;
+  cells.reserve(puts.size());
+  for (const auto& p : puts) cells.push_back(p.second);
+  std::vector<BlockRecord> records = store_->encode(cells);
+  batch.puts.reserve(puts.size());
+  for (size_t j = 0; j < puts.size(); ++j)
+    batch.puts.emplace_back(puts[j].first, std::move(records[j]));
+  batch.meta = encodeStoreMeta(meta);
+  if (writer_)
+    writer_->submit(std::move(batch));  // waits for the previous commit first
+  else
+    store_->commitRecords(batch.puts, batch.erases, batch.meta);
   erased_.clear();
   all_dirty_ = false;
   committed_revision_ = revision;
@@ -341,6 +380,7 @@ PagingStats Pager::stats(const BlockMap& blocks) const {
   s.paged_blocks = paged_count_;
   s.budget_blocks = policy_.budget_mb > 0 ? budgetBlocks() : 0;
   s.store_bytes = store_->diskBytes();
+  if (writer_) s.seconds_writer = writer_->secondsWriting();
   return s;
 }
 

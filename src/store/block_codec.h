@@ -1,4 +1,5 @@
-// A block record's value: the block's 2048 bytes of cells, zstd-compressed with a checksum.
+// A block record's value: the block's 2048 bytes of cells, zstd-compressed (fast level -1) with
+// a checksum.
 #pragma once
 
 #include <zstd.h>
@@ -34,21 +35,12 @@ class BlockCodec {
 /// The records of `blocks`, compressed on every core (a context per thread): out[j] is
 /// blocks[j]'s. Compression is most of a commit's time; the database writes stay serial.
 std::vector<std::vector<uint8_t>> encodeBlocks(const std::vector<const Block*>& blocks);
-
-/// fn(key, record) for each of `puts` in order, compressed by encodeBlocks() a batch at a time
-/// (the records of one batch in memory, not those of a whole commit).
-template <class Fn>
-void forEachEncoded(const std::vector<std::pair<BlockKey, const Block*>>& puts, Fn&& fn) {
-  constexpr size_t kBatch = 8192;
-  std::vector<const Block*> batch;
-  for (size_t from = 0; from < puts.size(); from += kBatch) {
-    const size_t to = std::min(puts.size(), from + kBatch);
-    batch.clear();
-    for (size_t j = from; j < to; ++j) batch.push_back(puts[j].second);
-    const std::vector<std::vector<uint8_t>> records = encodeBlocks(batch);
-    for (size_t j = from; j < to; ++j) fn(puts[j].first, records[j - from]);
-  }
-}
+/// Decodes a record with this thread's codec (BlockCodec::decode).
+void decodeBlock(const void* data, size_t size, Block* out, const std::string& where);
+/// Decodes records[j] (data, size) into outs[j] on every core. IoError naming `where` when one
+/// does not decode.
+void decodeBlocks(const std::vector<std::pair<const void*, size_t>>& records,
+                  const std::vector<Block*>& outs, const std::string& where);
 
 /// The 12-byte record key: z, y, x big-endian with the sign bit flipped, so that the stores'
 /// byte order is the key order (z, then y, then x).

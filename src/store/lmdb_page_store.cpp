@@ -60,8 +60,9 @@ class LmdbPageStore final : public PageStore {
   const char* kind() const override { return "lmdb"; }
   const std::string& path() const override { return path_; }
 
+  // Reads take no lock: LMDB's read transactions run beside the write transaction of a
+  // commit on another thread (the map's background writer) and see the last finished commit.
   std::vector<BlockKey> keys() override {
-    std::lock_guard<std::mutex> lock(mutex_);
     std::vector<BlockKey> out;
     ReadTxn txn(*this);
     forEachRecord(txn.txn, [&](const MDB_val& k, const MDB_val&) {
@@ -71,38 +72,67 @@ class LmdbPageStore final : public PageStore {
   }
 
   bool read(const BlockKey& key, Block* out) override {
-    std::lock_guard<std::mutex> lock(mutex_);
     ReadTxn txn(*this);
     StoreKey sk = storeKeyOf(key);
     MDB_val k{sizeof(sk.bytes), sk.bytes}, v;
     const int rc = mdb_get(txn.txn, blocks_, &k, &v);
     if (rc == MDB_NOTFOUND) return false;
     check(rc, "read");
-    codec_.decode(v.mv_data, v.mv_size, out, path_);
+    decodeBlock(v.mv_data, v.mv_size, out, path_);
     return true;
   }
 
+  std::vector<bool> readMany(const std::vector<BlockKey>& keys,
+                             const std::vector<Block*>& outs) override {
+    std::vector<bool> found(keys.size(), false);
+    if (keys.empty()) return found;
+    ReadTxn txn(*this);  // one snapshot; the values stay valid until it ends
+    std::vector<std::pair<const void*, size_t>> records;
+    std::vector<Block*> to;
+    records.reserve(keys.size());
+    to.reserve(keys.size());
+    for (size_t j = 0; j < keys.size(); ++j) {
+      StoreKey sk = storeKeyOf(keys[j]);
+      MDB_val k{sizeof(sk.bytes), sk.bytes}, v;
+      const int rc = mdb_get(txn.txn, blocks_, &k, &v);
+      if (rc == MDB_NOTFOUND) continue;
+      check(rc, "read");
+      found[j] = true;
+      records.emplace_back(v.mv_data, v.mv_size);
+      to.push_back(outs[j]);
+    }
+    decodeBlocks(records, to, path_);
+    return found;
+  }
+
+  std::vector<BlockRecord> encode(const std::vector<const Block*>& blocks) const override {
+    return encodeBlocks(blocks);
+  }
+
+  void decode(const BlockRecord& record, Block* out) const override {
+    decodeBlock(record.data(), record.size(), out, path_);
+  }
+
   std::vector<uint8_t> readMeta() override {
-    std::lock_guard<std::mutex> lock(mutex_);
     ReadTxn txn(*this);
     return metaIn(txn.txn);
   }
 
   std::vector<uint8_t> readAll(
       const std::function<void(const BlockKey&, const Block&)>& fn) override {
-    std::lock_guard<std::mutex> lock(mutex_);
     ReadTxn txn(*this);  // one snapshot for the blocks and the metadata
     Block block;
     forEachRecord(txn.txn, [&](const MDB_val& k, const MDB_val& v) {
       const BlockKey key = blockKeyOfStoreKey(k.mv_data, k.mv_size, path_);
-      codec_.decode(v.mv_data, v.mv_size, &block, path_);
+      decodeBlock(v.mv_data, v.mv_size, &block, path_);
       fn(key, block);
     });
     return metaIn(txn.txn);
   }
 
-  void commit(const std::vector<std::pair<BlockKey, const Block*>>& puts,
-              const std::vector<BlockKey>& erases, const std::vector<uint8_t>& meta) override {
+  void commitRecords(const std::vector<std::pair<BlockKey, BlockRecord>>& puts,
+                     const std::vector<BlockKey>& erases,
+                     const std::vector<uint8_t>& meta) override {
     std::lock_guard<std::mutex> lock(mutex_);
     MDB_txn* txn = nullptr;
     check(mdb_txn_begin(env_, nullptr, 0, &txn), "begin");
@@ -114,13 +144,13 @@ class LmdbPageStore final : public PageStore {
         if (rc != MDB_NOTFOUND) check(rc, "erase");
       }
       size_t written = 0;
-      forEachEncoded(puts, [&](const BlockKey& key, const std::vector<uint8_t>& bytes) {
+      for (const auto& [key, bytes] : puts) {
         StoreKey sk = storeKeyOf(key);
         MDB_val k{sizeof(sk.bytes), sk.bytes};
         MDB_val v{bytes.size(), const_cast<uint8_t*>(bytes.data())};
         check(mdb_put(txn, blocks_, &k, &v, 0), "write");
         if (++written % 8192 == 0) dropMappedPages();
-      });
+      }
       char name[] = "map";
       MDB_val k{3, name};
       MDB_val v{meta.size(), const_cast<uint8_t*>(meta.data())};
@@ -133,10 +163,7 @@ class LmdbPageStore final : public PageStore {
     dropMappedPages();
   }
 
-  void releaseMappedPages() override {
-    std::lock_guard<std::mutex> lock(mutex_);
-    dropMappedPages();
-  }
+  void releaseMappedPages() override { dropMappedPages(); }
 
   uint64_t diskBytes() const override {
     std::error_code ec;
@@ -222,8 +249,7 @@ class LmdbPageStore final : public PageStore {
   MDB_dbi blocks_ = 0, meta_ = 0;
   void* map_addr_ = nullptr;  ///< LMDB's map of the file (locateMap)
   size_t map_bytes_ = 0;
-  std::mutex mutex_;
-  BlockCodec codec_;
+  std::mutex mutex_;  ///< one commit at a time
 };
 }  // namespace
 

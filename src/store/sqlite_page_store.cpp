@@ -111,10 +111,54 @@ class SqlitePageStore final : public PageStore {
     sqlite3_bind_blob(get_->get(), 1, k.bytes, sizeof(k.bytes), SQLITE_STATIC);
     const bool found = get_->step() == SQLITE_ROW;
     if (found)
-      codec_.decode(sqlite3_column_blob(get_->get(), 0), sqlite3_column_bytes(get_->get(), 0), out,
-                    path_);
+      decodeBlock(sqlite3_column_blob(get_->get(), 0), sqlite3_column_bytes(get_->get(), 0), out,
+                  path_);
     get_->reset();
     return found;
+  }
+
+  // Reads and commits share the connection and its lock: a read waits for a commit that the
+  // map's background writer is running (LMDB's reads do not).
+  std::vector<bool> readMany(const std::vector<BlockKey>& keys,
+                             const std::vector<Block*>& outs) override {
+    std::vector<bool> found(keys.size(), false);
+    if (keys.empty()) return found;
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!get_) get_ = std::make_unique<Statement>(db_, "SELECT v FROM blocks WHERE k=?", path_);
+    std::vector<BlockRecord> bytes;
+    std::vector<Block*> to;
+    exec("BEGIN");  // one snapshot
+    try {
+      for (size_t j = 0; j < keys.size(); ++j) {
+        const StoreKey k = storeKeyOf(keys[j]);
+        get_->reset();
+        sqlite3_bind_blob(get_->get(), 1, k.bytes, sizeof(k.bytes), SQLITE_STATIC);
+        if (get_->step() != SQLITE_ROW) continue;
+        const auto* p = static_cast<const uint8_t*>(sqlite3_column_blob(get_->get(), 0));
+        bytes.emplace_back(p, p + sqlite3_column_bytes(get_->get(), 0));
+        to.push_back(outs[j]);
+        found[j] = true;
+      }
+      get_->reset();
+      exec("COMMIT");
+    } catch (...) {
+      get_->reset();
+      sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+      throw;
+    }
+    std::vector<std::pair<const void*, size_t>> records;
+    records.reserve(bytes.size());
+    for (const BlockRecord& b : bytes) records.emplace_back(b.data(), b.size());
+    decodeBlocks(records, to, path_);
+    return found;
+  }
+
+  std::vector<BlockRecord> encode(const std::vector<const Block*>& blocks) const override {
+    return encodeBlocks(blocks);
+  }
+
+  void decode(const BlockRecord& record, Block* out) const override {
+    decodeBlock(record.data(), record.size(), out, path_);
   }
 
   std::vector<uint8_t> readMeta() override {
@@ -132,8 +176,8 @@ class SqlitePageStore final : public PageStore {
       while (all.step() == SQLITE_ROW) {
         const BlockKey key = blockKeyOfStoreKey(sqlite3_column_blob(all.get(), 0),
                                                 sqlite3_column_bytes(all.get(), 0), path_);
-        codec_.decode(sqlite3_column_blob(all.get(), 1), sqlite3_column_bytes(all.get(), 1), &block,
-                      path_);
+        decodeBlock(sqlite3_column_blob(all.get(), 1), sqlite3_column_bytes(all.get(), 1), &block,
+                    path_);
         fn(key, block);
       }
       std::vector<uint8_t> meta = readMetaLocked();
@@ -145,8 +189,9 @@ class SqlitePageStore final : public PageStore {
     }
   }
 
-  void commit(const std::vector<std::pair<BlockKey, const Block*>>& puts,
-              const std::vector<BlockKey>& erases, const std::vector<uint8_t>& meta) override {
+  void commitRecords(const std::vector<std::pair<BlockKey, BlockRecord>>& puts,
+                     const std::vector<BlockKey>& erases,
+                     const std::vector<uint8_t>& meta) override {
     std::lock_guard<std::mutex> lock(mutex_);
     exec("BEGIN IMMEDIATE");
     try {
@@ -159,13 +204,13 @@ class SqlitePageStore final : public PageStore {
           del.reset();
         }
         Statement put(db_, "INSERT OR REPLACE INTO blocks(k, v) VALUES(?, ?)", path_);
-        forEachEncoded(puts, [&](const BlockKey& key, const std::vector<uint8_t>& v) {
+        for (const auto& [key, v] : puts) {
           const StoreKey k = storeKeyOf(key);
           sqlite3_bind_blob(put.get(), 1, k.bytes, sizeof(k.bytes), SQLITE_STATIC);
           sqlite3_bind_blob(put.get(), 2, v.data(), static_cast<int>(v.size()), SQLITE_STATIC);
           put.step();
           put.reset();
-        });
+        }
         Statement m(db_, "INSERT OR REPLACE INTO meta(name, v) VALUES('map', ?)", path_);
         sqlite3_bind_blob(m.get(), 1, meta.data(), static_cast<int>(meta.size()), SQLITE_STATIC);
         m.step();
@@ -210,7 +255,6 @@ class SqlitePageStore final : public PageStore {
   std::string path_;
   sqlite3* db_ = nullptr;
   std::mutex mutex_;
-  BlockCodec codec_;
   std::unique_ptr<Statement> get_, keys_;
 };
 }  // namespace

@@ -1,8 +1,11 @@
-# rostests that need no recorded bag: roslaunch by package name, and fragg_map as a drop-in for
+# rostests that need no recorded bag: roslaunch by package name, the node killed on a page store,
+# and fragg_map as a drop-in for
 # octomap_server (an octomap_server YAML through launch/octomap_compat.launch, every row of
 # README's compatibility table).
 if(FRAGG_HAVE_ROS)
   find_package(rostest REQUIRED)
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/roslaunch_by_name.test)
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/octomap_compat.test)
+  # kill -9 of the node on a page store, restarted on it (issue 13's durability in the node).
+  add_rostest(${CMAKE_CURRENT_LIST_DIR}/map_server_store_kill.test)
 endif()

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "fragg_map/block_map.h"
+#include "fragg_map/internal/page_writer.h"
 #include "fragg_map/map_params.h"
 #include "fragg_map/page_store.h"
 
@@ -30,8 +31,11 @@ StoreMapMeta decodeStoreMeta(const std::vector<uint8_t>& bytes, const std::strin
 
 class Pager {
  public:
-  /// Every committed block of `store` starts paged out.
+  /// Every committed block of `store` starts paged out. With policy.background_writer the
+  /// commits are written by a PageWriter thread.
   Pager(std::shared_ptr<PageStore> store, const PagingPolicy& policy, double resolution_m);
+  /// Waits for the commit in flight.
+  ~Pager();
 
   PageStore& store() { return *store_; }
   const PagingPolicy& policy() const { return policy_; }
@@ -46,6 +50,9 @@ class Pager {
   std::vector<BlockIndex> pageIn(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks);
   /// Every paged-out block.
   std::vector<BlockIndex> pageInAll(BlockMap& blocks);
+  /// A paged-out block's cells (from a commit not yet written, else the store); false when
+  /// the store has no record of it.
+  bool readPagedOut(const BlockKey& key, Block* out);
   /// Blocks of [lo, hi] were used at `stamp` (a scan number): they are paged out last.
   void touch(const BlockKey& lo, const BlockKey& hi, uint64_t stamp);
   /// A resident block was erased (all its cells unknown): its record goes at the next commit.
@@ -65,8 +72,12 @@ class Pager {
   /// Whether the block changed after the last commit (its record is older than it).
   bool dirty(const BlockMeta& m) const { return all_dirty_ || m.changed_at > committed_revision_; }
   /// Writes the dirty resident blocks, the erasures and `meta` in one transaction; `revision`
-  /// is the map's revision now (blocks changed after it are dirty next time).
+  /// is the map's revision now (blocks changed after it are dirty next time). The records are
+  /// encoded here (the blocks may change or leave as soon as this returns); with the background
+  /// writer the transaction runs on its thread (flush() waits for it).
   void commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta& meta);
+  /// Waits until every commit is in the store; IoError when the last one failed.
+  void flush();
   /// The resident blocks to page out so that the resident blocks fit the low-water mark:
   /// least recently used first, blocks within the radius of `sensor_m` last (farthest first:
   /// the budget wins over the radius). With `clean_only`, dirty blocks and blocks within the
@@ -89,11 +100,11 @@ class Pager {
   }
   void addPagedOut(const BlockKey& key);
   void removePagedOut(const BlockKey& key);
-  BlockIndex readInto(const BlockKey& key, BlockMap& blocks);
   size_t budgetBlocks() const;
 
   std::shared_ptr<PageStore> store_;
   PagingPolicy policy_;
+  std::unique_ptr<PageWriter> writer_;  ///< null: commits on the map's thread
   double block_m_;
   /// Paged-out blocks: a bit per block of each 8x8x8-block region that holds one (64 bytes a
   /// region, where a hash set of keys took about 50 bytes a block: the map's paged-out part

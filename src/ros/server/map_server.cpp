@@ -86,6 +86,7 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
         "blocks continued from it",
         paging.store.c_str(), paging_.policy.budget_mb, paging_.policy.radius_m,
         state->map.scanCount(), static_cast<unsigned long>(paging.paged_blocks));
+    stats_.restart(state->map.scanCount());  // the clouds in the map: the store's, then ours
   }
   const fragg::ScanStoreParams& scans = params_.map.scans;
   if (scans.keep) {

@@ -274,9 +274,12 @@ void runBuild(const BuildOptions& o) {
                      {"paged_blocks", paging.paged_blocks},
                      {"pages_written", paging.pages_written},
                      {"pages_read", paging.pages_read},
+                     {"pages_read_pending", paging.pages_read_pending},
                      {"pages_evicted", paging.pages_evicted},
                      {"commits", paging.commits},
                      {"seconds_commit", paging.seconds_commit},
+                     {"seconds_writer", paging.seconds_writer},
+                     {"background_writer", o.paging.background_writer},
                      {"seconds_page_in", paging.seconds_page_in},
                      {"store_bytes", paging.store_bytes}};
     std::printf("%s\n", j.dump().c_str());
@@ -395,6 +398,9 @@ void addBuildCommand(CLI::App& app) {
   c->add_option("--commit-seconds", o->paging.commit_every_s,
                 "Page store: commit at least this often (s; 0 = by scans only)")
       ->capture_default_str();
+  c->add_flag_callback(
+      "--sync-commits", [o] { o->paging.background_writer = false; },
+      "Page store: write commits on the map's thread (default: a background writer)");
   c->add_flag("--json", o->json, "Print one JSON object on stdout");
   c->callback([o] { runBuild(*o); });
 }
