@@ -32,10 +32,11 @@ configure() {
     { [ "$sanitizer" = address ] && grep -q "^FRAGG_FUZZ:BOOL=ON$" "$cache"; }; }; then
     return 0
   fi
+  mkdir -p "$build"
   cmake -S "$root" -B "$build" -DCMAKE_CXX_COMPILER="$cxx" -DFRAGG_SANITIZE="$sanitizer" \
     -DFRAGG_WITH_ROS=OFF -DFRAGG_WITH_CUDA=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 >"$build.cmake.log" 2>&1 ||
-    { tail -20 "$build.cmake.log"; return 1; }
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 >"$build/sanitize-cmake.log" 2>&1 ||
+    { tail -20 "$build/sanitize-cmake.log"; return 1; }
 }
 
 # run_test LOG BINARY [ARGS...]: runs one test binary; prints its verdict.
@@ -68,8 +69,8 @@ for step in "${steps[@]}"; do
           targets+=("$t")
       done
       echo "sanitize: asan build ($build): ${targets[*]}"
-      cmake --build "$build" -j "$jobs" --target "${targets[@]}" >"$build.build.log" 2>&1 ||
-        { grep -E "error" "$build.build.log" | head -20; status=1; continue; }
+      cmake --build "$build" -j "$jobs" --target "${targets[@]}" >"$build/sanitize-build.log" 2>&1 ||
+        { grep -E "error" "$build/sanitize-build.log" | head -20; status=1; continue; }
       export ASAN_OPTIONS="detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1"
       export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
       for t in "${asan_tests[@]}"; do
@@ -80,15 +81,22 @@ for step in "${steps[@]}"; do
       build="${FRAGG_TSAN_BUILD:-$root/build-tsan}"
       configure "$build" thread || { status=1; continue; }
       echo "sanitize: tsan build ($build)"
-      cmake --build "$build" -j "$jobs" --target fragg_core_test ros_server_parts_test \
-        >"$build.build.log" 2>&1 || { grep -E "error" "$build.build.log" | head -20; status=1; continue; }
       # libgomp is not instrumented: one OpenMP thread, so that TSan sees only the threads the
       # tests start themselves (the map lock tests insert with threads = 1 anyway).
       export OMP_NUM_THREADS=1
       export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1"
-      run_test "$build/map_lock.sanitize.log" "$build/test/fragg_core_test" \
-        --gtest_filter='MapLock.*' || status=1
-      run_test "$build/server_parts.sanitize.log" "$build/test/ros_server_parts_test" || status=1
+      # The server's parts first (no map needed), then the map lock tests (the whole core).
+      if cmake --build "$build" -j "$jobs" --target ros_server_parts_test >"$build/sanitize-build.log" 2>&1; then
+        run_test "$build/server_parts.sanitize.log" "$build/test/ros_server_parts_test" || status=1
+      else
+        grep -E "error" "$build/sanitize-build.log" | head -20; status=1
+      fi
+      if cmake --build "$build" -j "$jobs" --target fragg_core_test >"$build/sanitize-build.log" 2>&1; then
+        run_test "$build/map_lock.sanitize.log" "$build/test/fragg_core_test" \
+          --gtest_filter='MapLock.*' || status=1
+      else
+        grep -E "error" "$build/sanitize-build.log" | head -20; status=1
+      fi
       ;;
     *) echo "sanitize: unknown step $step (asan | tsan)" >&2; exit 2 ;;
   esac

@@ -3,11 +3,11 @@
 # libFuzzer binary, fragg_fuzz_<target>, linked with only what its reader needs (the readers of
 # point and pose files do not need the map, so they build and start fuzzing first).
 set(_fuzz_dir ${CMAKE_CURRENT_LIST_DIR})
-# target | entry function | what it links (io: the dataset readers alone; map: the core)
+# target | entry function | what it links (readers: the readers' sources alone; map: the core)
 set(_fuzz_table
-  "fgm|fgm|map" "scan|scan|map" "pcd|pcd|io" "ply|ply|io" "xyz|xyz|io"
-  "kitti_bin|kittiBin|io" "scan_graph|scanGraph|io" "poses|poses|io" "waypoints|waypoints|io"
-  "obj|obj|planning")
+  "fgm|fgm|map" "scan|scan|readers" "pcd|pcd|readers" "ply|ply|readers" "xyz|xyz|readers"
+  "kitti_bin|kittiBin|readers" "scan_graph|scanGraph|readers" "poses|poses|readers"
+  "waypoints|waypoints|readers" "obj|obj|readers")
 
 # The PointCloud2 target: with ROS through fragg_map_ros; without catkin when Debian's ROS
 # headers and serialisation libraries are found (the converter compiled in).
@@ -45,9 +45,7 @@ function(fuzz_target_setup target kind)
   target_link_libraries(${target} Eigen3::Eigen)
   if(kind STREQUAL "map")
     target_link_libraries(${target} fragg_map_core ZLIB::ZLIB)
-  elseif(kind STREQUAL "planning")
-    target_link_libraries(${target} fragg_map_planning)
-  elseif(kind STREQUAL "io")
+  elseif(kind STREQUAL "readers")
     target_link_libraries(${target} fragg_fuzz_io_lib)
   elseif(kind STREQUAL "ros")
     target_link_libraries(${target} ${_fuzz_ros_libs})
@@ -69,10 +67,15 @@ target_compile_definitions(fragg_fuzz_corpus_test PRIVATE
 fuzz_target_setup(fragg_fuzz_corpus_test none)
 
 if(FRAGG_FUZZ)
-  # The dataset readers without the map (they need nothing of the core but the atomic file).
+  # The readers without the map: the dataset readers, kept-scan records, waypoints and OBJ meshes
+  # with what they use of the core, geometry and planning.
   include(${PROJECT_SOURCE_DIR}/src/io/sources.cmake)  # FRAGG_IO_SOURCES
-  add_library(fragg_fuzz_io_lib STATIC ${FRAGG_IO_SOURCES} ${PROJECT_SOURCE_DIR}/src/core/atomic_file.cpp
-    ${PROJECT_SOURCE_DIR}/src/planning/waypoint_file.cpp)
+  set(_src ${PROJECT_SOURCE_DIR}/src)
+  add_library(fragg_fuzz_io_lib STATIC ${FRAGG_IO_SOURCES} ${_src}/core/atomic_file.cpp
+    ${_src}/core/byte_io.cpp ${_src}/core/scan_codec.cpp ${_src}/core/sensor_model.cpp
+    ${_src}/planning/waypoint_file.cpp ${_src}/geometry/obj_file.cpp
+    ${_src}/geometry/triangle_mesh.cpp ${_src}/geometry/mesh_bvh.cpp
+    ${_src}/planning/collision_shape.cpp)
   target_include_directories(fragg_fuzz_io_lib PUBLIC ${PROJECT_SOURCE_DIR}/include)
   target_link_libraries(fragg_fuzz_io_lib PUBLIC Eigen3::Eigen PRIVATE ZLIB::ZLIB fmt::fmt)
   fragg_target_flags(fragg_fuzz_io_lib)

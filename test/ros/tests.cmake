@@ -114,6 +114,6 @@ else()
   fragg_add_test(ros_server_parts_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/server_parts_test.cpp
             ${PROJECT_SOURCE_DIR}/src/ros/timing_stats.cpp
-    LIBS fragg_map_core
     LABELS core)
+  target_include_directories(ros_server_parts_test PRIVATE ${PROJECT_SOURCE_DIR}/include)
 endif()
