@@ -59,7 +59,8 @@ foreach(_row ${_fuzz_table})
   list(APPEND _fuzz_sources ${_fuzz_dir}/fuzz_${_name}.cpp)
 endforeach()
 fragg_add_test(fragg_fuzz_corpus_test
-  SOURCES ${_fuzz_dir}/corpus_replay_test.cpp ${_fuzz_sources} ${_fuzz_ros_sources}
+  SOURCES ${_fuzz_dir}/corpus_replay_test.cpp ${_fuzz_dir}/regressions_test.cpp ${_fuzz_sources}
+          ${_fuzz_ros_sources}
   LIBS fragg_map_core fragg_map_geometry fragg_map_planning ${_fuzz_ros_libs} ZLIB::ZLIB
   LABELS fuzz)
 target_compile_definitions(fragg_fuzz_corpus_test PRIVATE
