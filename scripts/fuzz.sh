@@ -31,9 +31,10 @@ status=0
 for t in "${targets[@]}"; do
   mkdir -p "$work/$t/corpus"
   echo "fuzz.sh: $t for ${seconds} s (log $work/$t/fuzz.log)"
-  # -rss_limit_mb: a reader must not need more than 2 GiB for a small input.
+  # -rss_limit_mb: a reader must not need more than 2 GiB for a small input; -timeout: 60 s of
+  # wall time (a loaded machine starves a nice-19 fuzzer for seconds; a real hang still shows).
   (cd "$work/$t" && "$build/fuzz/fragg_fuzz_$t" corpus "$root/test/fuzz/corpus/$t" \
-    -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
+    -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=60 -print_final_stats=1 \
     ${FRAGG_FUZZ_ARGS:-} >fuzz.log 2>&1) || status=1
   grep -E "^#[0-9]+ *DONE|^stat::number_of_executed_units|^stat::average_exec_per_sec|ERROR|SUMMARY" \
     "$work/$t/fuzz.log" | head -8
