@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/byte_io.h"
+#include "fragg_map/internal/scan_codec.h"
 #include "fragg_map/map.h"
 #include "fuzz_util.h"
 
@@ -36,6 +38,19 @@ TEST(FuzzRegression, FgmEmptyCompressedBlockIsRefusedClearly) {
   } catch (const IoError& e) {
     EXPECT_NE(std::string(e.what()).find("does not decompress"), std::string::npos) << e.what();
   }
+}
+
+// Found by fragg_fuzz_scan, the same bug in a kept-scan record (version 2, read from memory):
+// "packed points size" 0 copied 0 bytes to the null data() of an empty vector. Now refused.
+TEST(FuzzRegression, ScanRecordWithZeroPackedPointsIsRefusedClearly) {
+  const std::vector<uint8_t> input = corpusFile("scan", "regress_zero_packed_points");
+  ASSERT_GT(input.size(), 1u);
+  ASSERT_EQ(input[0], 0);  // byte 0 = 0: a version-2 record in memory
+  const std::vector<uint8_t> bytes(input.begin() + 1, input.end());
+  ByteReader reader(bytes, bytes.size(), "regress_zero_packed_points", "scan record");
+  ScanRecord record;
+  EncodedPoints points;
+  EXPECT_THROW(readScan(reader, record, points, 2), IoError);
 }
 
 }  // namespace
