@@ -39,18 +39,31 @@ while [ $# -gt 0 ]; do
       grep -E "^\[gpu\]|PASSED|FAILED|Failure|Expected|Which is|actual" "$out/gpu_test_verbose.log" | head -60
       shift ;;
     sanitize)
-      for tool in memcheck racecheck; do
-        compute-sanitizer --tool "$tool" --error-exitcode 9 \
-          "$build/test/fragg_gpu_test" \
-          --gtest_filter='*PrepareKernel*:*HostReaders*:*TinyPool*:*VelodynePair*:*PoseCorrectionIsByteIdenticalOnRealScans*:*RangeNoise*' \
-          >"$out/sanitizer_$tool.log" 2>&1
-        echo "compute-sanitizer $tool: exit $?"; tail -3 "$out/sanitizer_$tool.log"
-        # The device block cache's own tests, whole.
-        compute-sanitizer --tool "$tool" --error-exitcode 9 "$build/test/fragg_gpu_cache_test" \
-          >"$out/sanitizer_cache_$tool.log" 2>&1
-        echo "compute-sanitizer $tool (cache tests): exit $?"
-        tail -3 "$out/sanitizer_cache_$tool.log"
+      # memcheck (with leak check): every gpu test binary, whole. racecheck (slower): the ray
+      # kernels (insertion, prepare, host readers, removal on real scans) and the device block
+      # cache's tests. A finding or a failed test sets the exit status.
+      for bin in fragg_gpu_test fragg_gpu_cache_test fragg_gpu_paging_test \
+        fragg_gpu_collision_test fragg_gpu_frontier_test fragg_gpu_submap_test; do
+        if [ ! -x "$build/test/$bin" ]; then echo "compute-sanitizer: $bin not built: skipped"; continue; fi
+        compute-sanitizer --tool memcheck --leak-check full --error-exitcode 9 \
+          "$build/test/$bin" >"$out/sanitizer_memcheck_$bin.log" 2>&1
+        rc=$?
+        echo "compute-sanitizer memcheck $bin: exit $rc"; tail -3 "$out/sanitizer_memcheck_$bin.log"
+        [ "$rc" -eq 0 ] || status=1
       done
+      compute-sanitizer --tool racecheck --error-exitcode 9 \
+        "$build/test/fragg_gpu_test" \
+        --gtest_filter='*PrepareKernel*:*HostReaders*:*TinyPool*:*VelodynePair*:*PoseCorrectionIsByteIdenticalOnRealScans*:*RangeNoise*' \
+        >"$out/sanitizer_racecheck.log" 2>&1
+      rc=$?
+      echo "compute-sanitizer racecheck (ray kernels): exit $rc"; tail -3 "$out/sanitizer_racecheck.log"
+      [ "$rc" -eq 0 ] || status=1
+      compute-sanitizer --tool racecheck --error-exitcode 9 "$build/test/fragg_gpu_cache_test" \
+        >"$out/sanitizer_racecheck_cache.log" 2>&1
+      rc=$?
+      echo "compute-sanitizer racecheck (cache tests): exit $rc"
+      tail -3 "$out/sanitizer_racecheck_cache.log"
+      [ "$rc" -eq 0 ] || status=1
       shift ;;
     workloads)
       bash "$root/scripts/make_workloads.sh" --out "$root/.device/workloads" --only "$2" \

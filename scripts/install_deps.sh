@@ -7,6 +7,8 @@
 # When another apt or dpkg holds its lock (common on a fresh machine: unattended upgrades), it
 # waits for it, at most FRAGG_APT_LOCK_WAIT_S seconds (default 600), saying so once.
 # Usage: bash scripts/install_deps.sh [--dry-run] [EXTRA_PACKAGE...]
+# Fuzzing and the clang sanitizer builds (optional, not needed by CI: scripts/fuzz.sh,
+# scripts/sanitize.sh): bash scripts/install_deps.sh clang-14 libfuzzer-14-dev libomp-14-dev
 # (Sourced, it only defines its functions: test/scripts/ tests the lock wait that way.)
 set -euo pipefail
 

@@ -114,4 +114,12 @@ if(FRAGG_HAVE_ROS AND FRAGG_SMOKE_BAG)
              rate:=0.5 octomap:=0.9999)
     endif()
   endif()
+else()
+  # Without ROS: the server's ROS-free parts (cloud queue, marker throttle, timing statistics)
+  # still run, e.g. in the TSan build of scripts/sanitize.sh.
+  fragg_add_test(ros_server_parts_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/server_parts_test.cpp
+            ${PROJECT_SOURCE_DIR}/src/ros/timing_stats.cpp
+    LABELS core)
+  target_include_directories(ros_server_parts_test PRIVATE ${PROJECT_SOURCE_DIR}/include)
 endif()

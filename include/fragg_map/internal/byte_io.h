@@ -40,6 +40,7 @@ class ByteReader {
   }
   void take(void* out, size_t n, const char* field) {
     if (end_ - pos_ < n) fail(std::string("truncated while reading ") + field);
+    if (n == 0) return;  // `out` may be null then (an empty vector's data()): no memcpy
     std::memcpy(out, bytes_.data() + pos_, n);
     pos_ += n;
   }

@@ -1,0 +1,19 @@
+// .bin point files: readKittiBin as the dataset readers and `fragg_map build` call it.
+#include "fragg_map/errors.h"
+#include "fragg_map/io/point_file.h"
+#include "fuzz_targets.h"
+#include "fuzz_util.h"
+
+namespace fragg::fuzz {
+
+int kittiBin(const uint8_t* data, size_t size) {
+  const std::string path = writeInputFile(data, size, ".bin");
+  try {
+    readKittiBin(path);
+  } catch (const IoError&) {
+  } catch (const InvalidArgument&) {
+  }
+  return 0;
+}
+
+}  // namespace fragg::fuzz

@@ -1,0 +1,19 @@
+// .ply point files: readPly as the dataset readers and `fragg_map build` call it.
+#include "fragg_map/errors.h"
+#include "fragg_map/io/point_file.h"
+#include "fuzz_targets.h"
+#include "fuzz_util.h"
+
+namespace fragg::fuzz {
+
+int ply(const uint8_t* data, size_t size) {
+  const std::string path = writeInputFile(data, size, ".ply");
+  try {
+    readPly(path);
+  } catch (const IoError&) {
+  } catch (const InvalidArgument&) {
+  }
+  return 0;
+}
+
+}  // namespace fragg::fuzz

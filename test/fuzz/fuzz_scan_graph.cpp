@@ -1,0 +1,22 @@
+// OctoMap ScanGraph files (.graph): openDataset, then every scan read as `fragg_map build` does.
+#include "fragg_map/errors.h"
+#include "fragg_map/io/dataset.h"
+#include "fuzz_targets.h"
+#include "fuzz_util.h"
+
+namespace fragg::fuzz {
+
+int scanGraph(const uint8_t* data, size_t size) {
+  const std::string path = writeInputFile(data, size, ".graph");
+  try {
+    const auto source = openDataset(path);
+    Scan scan;
+    while (source->next(scan)) {
+    }
+  } catch (const IoError&) {
+  } catch (const InvalidArgument&) {
+  }
+  return 0;
+}
+
+}  // namespace fragg::fuzz
