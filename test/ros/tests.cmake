@@ -37,6 +37,11 @@ if(FRAGG_HAVE_ROS)
       LIBS fragg_map_nodelet fragg_map_octomap
       LABELS ros)
   endif()
+  # autosave/* and file_root, the Autosaver and loading an autosave (no master needed).
+  fragg_add_test(ros_autosave_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/autosave_test.cpp
+    LIBS fragg_map_nodelet fragg_map_ros
+    LABELS ros)
   # paging/* and the server's map on a page store (needs the page stores).
   if(TARGET fragg_map_store)
     fragg_add_test(ros_paging_params_test
