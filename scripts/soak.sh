@@ -77,7 +77,8 @@ fi
 
 fragg_step "map server soak: $seconds s on $bag (master $ROS_MASTER_URI, output $out)"
 # The node's parameters: the default config, the CPU backend, a 32 MiB budget for the kept
-# scans (the oldest points dropped beyond it, so that memory reaches its plateau early), markers
+# scans (the oldest points dropped beyond it, so that memory reaches its plateau early), a
+# queue of 10 clouds (the final phase sends 10: none of them can be dropped), markers
 # throttled to 2 Hz, an autosave every 5 s into --out (file_root).
 node_ns=/fragg_map
 rosparam load "$FRAGG_REPO/config/default.yaml" "$node_ns"
@@ -85,6 +86,7 @@ rosparam set "$node_ns/backend" cpu
 rosparam set "$node_ns/frame_id" map
 rosparam set "$node_ns/scan_store/max_mb" 32
 rosparam set "$node_ns/marker_rate_hz" 2.0
+rosparam set "$node_ns/queue_size" 10
 rosparam set "$node_ns/file_root" "$out"
 rosparam set "$node_ns/autosave/path" soak_autosave.fgm
 rosparam set "$node_ns/autosave/period_s" 5.0
