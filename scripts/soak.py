@@ -7,8 +7,8 @@ Phases:
   mix   (most of the run): clouds looped at --rate_hz; every --call_every_s one service call,
         in turn: get_stats, save_map, load_map, clear_bbox, correct_poses, truncate (keep),
         merge, get_frontiers, check_collision, reset_map.
-  final: no service that changes the map; ~reset_map, then each of the bag's clouds once at
-        the same rate, then ~save_map; the saved map must equal `fragg_map build` on the bag
+  final: no service that changes the map; ~reset_map, then each of the bag's clouds once (the
+        next when the previous one is inserted, so that the queue drops none), then ~save_map; the saved map must equal `fragg_map build` on the bag
         (cell for cell), checked only when the stats say no cloud of this phase was dropped.
 
 Writes into --out: rss.tsv (seconds, RSS MiB, scans), calls.tsv (service, success, ms),
@@ -24,7 +24,6 @@ import time
 
 import rosbag
 import rospy
-import tf2_ros
 from geometry_msgs.msg import Point, Pose, PoseStamped
 from sensor_msgs.msg import PointCloud2
 from tf2_msgs.msg import TFMessage
@@ -97,8 +96,8 @@ class Soak:
         self.t0 = time.monotonic()
         self.pub = rospy.Publisher(args.topic, PointCloud2, queue_size=20)
         self.tf_pub = rospy.Publisher("/tf", TFMessage, queue_size=50)
-        self.static_pub = tf2_ros.StaticTransformBroadcaster()
-        self.static_pub.sendTransform(self.bag.static)
+        self.static_pub = rospy.Publisher("/tf_static", TFMessage, queue_size=1, latch=True)
+        self.static_pub.publish(TFMessage(transforms=self.bag.static))
         rospy.Subscriber("/occupied_cells_vis_array", MarkerArray, self.on_markers,
                          queue_size=5)
         for name in ("get_stats", "save_map", "load_map", "reset_map", "clear_bbox",
@@ -223,6 +222,14 @@ class Soak:
             self.stats()
             self.call("reset_map")
 
+    def note(self):
+        """One progress line."""
+        rss = self.rss[-1][1] if self.rss else float("nan")
+        failed = sum(1 for c in self.calls if not c[1])
+        print("soak: %6.0f s  sent %6d  RSS %7.1f MiB  calls %5d (%d failed)  dropped %s" %
+              (self.elapsed(), self.sent, rss, len(self.calls), failed,
+               self.counters.total), flush=True)
+
     # --- memory -------------------------------------------------------------------------
     def sample_loop(self):
         while self.sampling and not rospy.is_shutdown():
@@ -251,10 +258,15 @@ class Soak:
         publisher.start()
         mix_end = self.t0 + a.seconds - a.final_s
         k = 0
+        next_note = self.t0
         while time.monotonic() < mix_end and not rospy.is_shutdown():
             self.one_call(k)
             k += 1
+            if time.monotonic() >= next_note:
+                next_note += a.note_every_s
+                self.note()
             time.sleep(a.call_every_s)
+        self.note()
         self.publishing = False
         publisher.join()
         self.mix_sent = self.sent
@@ -265,10 +277,10 @@ class Soak:
         self.call("reset_map")
         before = self.stats()
         n = len(self.bag.clouds)
-        for i in range(n):
+        inserted = True
+        for i in range(n):  # each once it is inserted: the queue never drops one
             self.publish(i)
-            time.sleep(1.0 / a.rate_hz)
-        inserted = self.wait_for(lambda: self.stats().scans >= n, 60)
+            inserted = inserted and self.wait_for(lambda: self.stats().scans >= i + 1, 60)
         after = self.stats()
         self.sampling = False
         sampler.join()
@@ -355,6 +367,7 @@ def main():
     p.add_argument("--call_every_s", type=float, default=1.0)
     p.add_argument("--sample_s", type=float, default=2.0)
     p.add_argument("--warmup_s", type=float, default=20)
+    p.add_argument("--note_every_s", type=float, default=30, help="progress lines")
     args = p.parse_args(rospy.myargv()[1:])
     rospy.init_node("fragg_map_soak", disable_signals=True)
     ok = Soak(args).run()

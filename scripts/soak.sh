@@ -8,8 +8,8 @@
 #   - clouds dropped by the queue policy only (~get_stats: dropped_no_tf = rejected = 0);
 #   - no service call failed, markers were received, no ERROR / FATAL line in the node's log;
 #   - the final map equals `fragg_map build` on the bag: a final phase with no map-changing
-#     service (~reset_map, the bag's clouds once, ~save_map), compared only when the stats say
-#     none of its clouds was dropped.
+#     service (~reset_map, the bag's clouds once, each sent when the previous one is inserted,
+#     ~save_map), compared only when the stats say none of its clouds was dropped.
 # Writes to --out: node.log, rss.tsv, calls.tsv, summary.json and soak_rss.png (gnuplot).
 # Usage: bash scripts/soak.sh [--minutes N | --seconds S] [--out DIR] [--bag BAG]
 #          [--use-master] [common options: --ws DIR ...]
@@ -42,7 +42,10 @@ fragg_parse_common "${args[@]+"${args[@]}"}"
 [ -n "$bag" ] || bag="$FRAGG_WS/build/workloads/smoke.bag"
 [ -f "$bag" ] || { echo "soak: no bag at $bag (build the workspace, or --bag)" >&2; exit 2; }
 fragg="$FRAGG_WS/devel/lib/fragg_map/fragg_map"
-[ -x "$fragg" ] || { echo "soak: no $fragg (build the workspace)" >&2; exit 2; }
+[ -f "$FRAGG_WS/devel/lib/libfragg_map_nodelet.so" ] ||
+  { echo "soak: no map server in $FRAGG_WS (build the workspace)" >&2; exit 2; }
+# (fragg_map itself is needed at the end only, for the final comparison.)
+[ -x "$fragg" ] || echo "soak: $fragg is not built yet; the final comparison needs it" >&2
 mkdir -p "$out"
 out="$(cd "$out" && pwd -P)"
 rm -f "$out"/*.fgm "$out"/*.fgm.tmp.* "$out/summary.json"
@@ -76,17 +79,16 @@ if [ "$use_master" -eq 0 ]; then
 fi
 
 fragg_step "map server soak: $seconds s on $bag (master $ROS_MASTER_URI, output $out)"
-# The node's parameters: the default config, the CPU backend, a 32 MiB budget for the kept
-# scans (the oldest points dropped beyond it, so that memory reaches its plateau early), a
-# queue of 10 clouds (the final phase sends 10: none of them can be dropped), markers
+# The node's parameters: the default config (queue of 5 clouds), the CPU backend, a 16 MiB
+# budget for the kept scans (the oldest points dropped beyond it, so that memory reaches its
+# plateau early), markers
 # throttled to 2 Hz, an autosave every 5 s into --out (file_root).
 node_ns=/fragg_map
 rosparam load "$FRAGG_REPO/config/default.yaml" "$node_ns"
 rosparam set "$node_ns/backend" cpu
 rosparam set "$node_ns/frame_id" map
-rosparam set "$node_ns/scan_store/max_mb" 32
-rosparam set "$node_ns/marker_rate_hz" 2.0
-rosparam set "$node_ns/queue_size" 10
+rosparam set "$node_ns/scan_store/max_mb" 16
+rosparam set "$node_ns/marker_rate" 2.0
 rosparam set "$node_ns/file_root" "$out"
 rosparam set "$node_ns/autosave/path" soak_autosave.fgm
 rosparam set "$node_ns/autosave/period_s" 5.0

@@ -18,7 +18,6 @@ import unittest
 import rosbag
 import rospy
 import rostest
-import tf2_ros
 from catkin.find_in_workspaces import find_in_workspaces
 from sensor_msgs.msg import PointCloud2
 from tf2_msgs.msg import TFMessage
@@ -69,8 +68,8 @@ class AutosaveRecovery(unittest.TestCase):
                        for c in cls.clouds]
         cls.pub = rospy.Publisher("/autosave_points", PointCloud2, queue_size=50)
         cls.tf_pub = rospy.Publisher("/tf", TFMessage, queue_size=50)
-        cls.static_pub = tf2_ros.StaticTransformBroadcaster()
-        cls.static_pub.sendTransform(cls.static)
+        cls.static_pub = rospy.Publisher("/tf_static", TFMessage, queue_size=1, latch=True)
+        cls.static_pub.publish(TFMessage(transforms=cls.static))
         for name, value in (("backend", "cpu"), ("frame_id", "map"), ("queue_size", 50),
                             ("file_root", cls.tmp), ("autosave/path", "robot/auto.fgm"),
                             ("autosave/period_s", PERIOD_S)):
