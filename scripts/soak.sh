@@ -75,27 +75,20 @@ if [ "$use_master" -eq 0 ]; then
   export ROS_MASTER_URI="http://127.0.0.1:$port" ROS_IP=127.0.0.1
   rosmaster --core -p "$port" >"$out/master.log" 2>&1 &
   master_pid=$!
-  for _ in $(seq 100); do rostopic list >/dev/null 2>&1 && break; sleep 0.2; done
+  for _ in $(seq 300); do (exec 3<>"/dev/tcp/127.0.0.1/$port") 2>/dev/null && break; sleep 0.2; done
 fi
 
 fragg_step "map server soak: $seconds s on $bag (master $ROS_MASTER_URI, output $out)"
 # The node's parameters: the default config (queue of 5 clouds), the CPU backend, a 16 MiB
 # budget for the kept scans (the oldest points dropped beyond it, so that memory reaches its
-# plateau early), markers
-# throttled to 2 Hz, an autosave every 5 s into --out (file_root).
-node_ns=/fragg_map
-rosparam load "$FRAGG_REPO/config/default.yaml" "$node_ns"
-rosparam set "$node_ns/backend" cpu
-rosparam set "$node_ns/frame_id" map
-rosparam set "$node_ns/scan_store/max_mb" 16
-rosparam set "$node_ns/marker_rate" 2.0
-rosparam set "$node_ns/file_root" "$out"
-rosparam set "$node_ns/autosave/path" soak_autosave.fgm
-rosparam set "$node_ns/autosave/period_s" 5.0
-nodelet_bin="$(catkin_find --first-only nodelet nodelet 2>/dev/null || true)"
-[ -n "$nodelet_bin" ] || nodelet_bin=/usr/lib/nodelet/nodelet
+# plateau early), markers throttled to 2 Hz, an autosave every 5 s into --out (file_root).
+# Private parameters on the command line (no rosparam process per value: each takes seconds on
+# a loaded machine); every other parameter keeps the node's default (config/default.yaml).
+nodelet_bin=/usr/lib/nodelet/nodelet
+[ -x "$nodelet_bin" ] || nodelet_bin="$(catkin_find --first-only nodelet nodelet)"
 "$nodelet_bin" standalone fragg_map/MapServerNodelet __name:=fragg_map cloud_in:=/points \
-  >"$out/node.log" 2>&1 &
+  _backend:=cpu _frame_id:=map _scan_store/max_mb:=16 _marker_rate:=2.0 _file_root:="$out" \
+  _autosave/path:=soak_autosave.fgm _autosave/period_s:=5.0 >"$out/node.log" 2>&1 &
 node_pid=$!
 echo "node pid $node_pid, log $out/node.log"
 
