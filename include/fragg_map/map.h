@@ -42,6 +42,7 @@ struct GainBatch;
 class Culler;
 class Pager;
 struct ScanRecord;
+struct MapImage;
 
 /// What a pose correction did (Map::correctPoses).
 struct CorrectionStats {
@@ -208,6 +209,11 @@ class Map {
 
   /// Writes the whole map, paged-out blocks included (read from the store).
   void save(const std::string& path) const;
+  /// A copy of what save() writes, for writeMapImage (map_image.h) to compress and write
+  /// without the map (a memory copy of the blocks: what an autosave takes under the read
+  /// lock). InvalidArgument for a paged map (its store is the map; the copy would bring every
+  /// block into RAM).
+  MapImage image() const;
   /// Reads a .fgm file into a new map integrating with `backend` (other settings default; the
   /// map keeps scans if the file has them).
   static Map load(const std::string& path, Backend backend = Backend::kAuto);
@@ -248,6 +254,10 @@ class Map {
 
  private:
   static Map loadFile(const std::string& path, const MapParams& runtime, bool keep_as_file);
+  /// save() and image(): the file's header for `block_count` blocks, and what follows the
+  /// blocks (region, kept scans) appended to `out`.
+  void encodeHeader(std::vector<uint8_t>* out, uint64_t block_count) const;
+  void encodeTail(std::vector<uint8_t>* out) const;
   /// Paging: brings the paged-out blocks of [lo, hi] back (the backend's cache over them
   /// invalidated first) and marks the box as used now.
   void pageInBlocks(const BlockKey& lo, const BlockKey& hi);

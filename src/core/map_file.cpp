@@ -6,6 +6,8 @@
 #include <functional>
 #include <set>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "fragg_map/atomic_file.h"
@@ -17,6 +19,7 @@
 #include "fragg_map/internal/scan_codec.h"
 #include "fragg_map/map.h"
 #include "fragg_map/map_file_format.h"
+#include "fragg_map/map_image.h"
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the .fgm writer assumes little-endian");
 
@@ -97,24 +100,26 @@ void readPerBlockSection(ByteReader& r, uint64_t count, uint32_t flags, BlockMap
 }
 }  // namespace
 
-void Map::save(const std::string& path) const {
-  hostBlocks();  // the backend's cache written back
-  const OccupancyParams& occ = params_.occupancy;
-  // Resident blocks, and with paging the blocks that are in the store only (kNoBlock).
-  struct Entry {
-    BlockKey key;
-    BlockIndex index;
-  };
-  std::vector<Entry> order;
-  order.reserve(blocks_.size());
-  blocks_.forEach([&](BlockIndex i) { order.push_back({blocks_.meta(i).key, i}); });
-  if (pager_)
-    for (const BlockKey& k : pager_->pagedOutKeys()) order.push_back({k, kNoBlock});
-  std::sort(order.begin(), order.end(), [](const Entry& a, const Entry& b) {
-    return std::tie(a.key.z, a.key.y, a.key.x) < std::tie(b.key.z, b.key.y, b.key.x);
-  });
+namespace {
 
+void putCrcAndWrite(ByteWriter& w, const std::string& path) {
+  const uint32_t crc = static_cast<uint32_t>(crc32(0L, w.bytes.data(), w.bytes.size()));
+  w.put(crc);
+  AtomicFile file(path);
+  file.write(w.bytes.data(), w.bytes.size());
+  file.commit();
+}
+
+bool keyLess(const BlockKey& a, const BlockKey& b) {
+  return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+}
+
+}  // namespace
+
+void Map::encodeHeader(std::vector<uint8_t>* out, uint64_t block_count) const {
+  const OccupancyParams& occ = params_.occupancy;
   ByteWriter w;
+  w.bytes = std::move(*out);
   w.put(kMapFileMagic, sizeof(kMapFileMagic));
   w.put(kMapFileVersion);
   w.put(static_cast<uint32_t>(kHeaderBytes));
@@ -126,8 +131,41 @@ void Map::save(const std::string& path) const {
   const bool with_region = !region_.empty();
   w.put(kMapFileCompressed | (with_scans ? kMapFileScans : 0u) |
         (with_region ? kMapFileRegion : 0u));
-  w.put(static_cast<uint64_t>(order.size()));
+  w.put(block_count);
   w.put(static_cast<uint64_t>(scans_));
+  *out = std::move(w.bytes);
+}
+
+void Map::encodeTail(std::vector<uint8_t>* out) const {
+  ByteWriter w;
+  w.bytes = std::move(*out);
+  if (!region_.empty()) writeRegion(w, region_);
+  if (params_.scans.keep || scan_store_->size() > 0) {
+    w.put(static_cast<uint64_t>(next_scan_id_));
+    w.put(static_cast<uint64_t>(scan_store_->size()));
+    for (ScanId id : scan_store_->ids())
+      writeScan(w, scan_store_->record(id), scan_store_->points(id));
+  }
+  *out = std::move(w.bytes);
+}
+
+void Map::save(const std::string& path) const {
+  hostBlocks();  // the backend's cache written back
+  // Resident blocks, and with paging the blocks that are in the store only (kNoBlock).
+  struct Entry {
+    BlockKey key;
+    BlockIndex index;
+  };
+  std::vector<Entry> order;
+  order.reserve(blocks_.size());
+  blocks_.forEach([&](BlockIndex i) { order.push_back({blocks_.meta(i).key, i}); });
+  if (pager_)
+    for (const BlockKey& k : pager_->pagedOutKeys()) order.push_back({k, kNoBlock});
+  std::sort(order.begin(), order.end(),
+            [](const Entry& a, const Entry& b) { return keyLess(a.key, b.key); });
+
+  ByteWriter w;
+  encodeHeader(&w.bytes, order.size());
   std::vector<BlockKey> keys(order.size());
   for (size_t i = 0; i < order.size(); ++i) keys[i] = order[i].key;
   // Paged-out blocks are read from the store a round of chunks at a time.
@@ -153,18 +191,43 @@ void Map::save(const std::string& path) const {
         }
       },
       params_.threads);
-  if (with_region) writeRegion(w, region_);
-  if (with_scans) {
-    w.put(static_cast<uint64_t>(next_scan_id_));
-    w.put(static_cast<uint64_t>(scan_store_->size()));
-    for (ScanId id : scan_store_->ids())
-      writeScan(w, scan_store_->record(id), scan_store_->points(id));
+  encodeTail(&w.bytes);
+  putCrcAndWrite(w, path);
+}
+
+MapImage Map::image() const {
+  if (pager_)
+    throw InvalidArgument("a paged map has no image: its page store (" + pager_->store().path() +
+                          ") is the map");
+  hostBlocks();  // the backend's cache written back
+  std::vector<std::pair<BlockKey, BlockIndex>> order;
+  order.reserve(blocks_.size());
+  blocks_.forEach([&](BlockIndex i) { order.emplace_back(blocks_.meta(i).key, i); });
+  std::sort(order.begin(), order.end(),
+            [](const auto& a, const auto& b) { return keyLess(a.first, b.first); });
+  MapImage image;
+  encodeHeader(&image.header, order.size());
+  image.keys.reserve(order.size());
+  image.blocks.reserve(order.size());
+  for (const auto& [key, index] : order) {
+    image.keys.push_back(key);
+    image.blocks.push_back(blocks_.block(index));
   }
-  const uint32_t crc = static_cast<uint32_t>(crc32(0L, w.bytes.data(), w.bytes.size()));
-  w.put(crc);
-  AtomicFile file(path);
-  file.write(w.bytes.data(), w.bytes.size());
-  file.commit();
+  encodeTail(&image.tail);
+  return image;
+}
+
+void writeMapImage(const MapImage& image, const std::string& path) {
+  if (image.empty()) throw InvalidArgument("cannot write " + path + ": empty map image");
+  ByteWriter w;
+  w.bytes.reserve(image.header.size() + image.tail.size() + image.blocks.size() * 512 + 4);
+  w.put(image.header.data(), image.header.size());
+  writeBlockChunks(w, bestChunkCodec(), image.blocks.size(), image.keys,
+                   [&](size_t first, size_t n, std::vector<const Block*>& out) {
+                     for (size_t i = first; i < first + n; ++i) out.push_back(&image.blocks[i]);
+                   });
+  w.put(image.tail.data(), image.tail.size());
+  putCrcAndWrite(w, path);
 }
 
 Map Map::load(const std::string& path, Backend backend) {

@@ -16,6 +16,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/field_names.h"
+#include "fragg_map/ros/autosave_params.h"
 #include "fragg_map/ros/paging_params.h"
 
 namespace fragg::ros {
@@ -405,8 +406,10 @@ ServerParams parseParameters(const XmlRpcValue& root) {
     throw;
   }
   t_asked_names = nullptr;
-  // paging/* are read by paging_params.cpp (the map server reads both).
+  // paging/* are read by paging_params.cpp, autosave/* and file_root by autosave_params.cpp (the
+  // map server reads all three).
   for (const std::string& name : pagingParameterNames()) asked.insert(name);
+  for (const std::string& name : autosaveParameterNames()) asked.insert(name);
   if (root.valid() && root.getType() == XmlRpcValue::TypeStruct)
     collectUnknown(root, "", asked, &p.unknown_parameters);
   return p;

@@ -14,3 +14,18 @@ fragg_add_test(fragg_core_test
           ${CMAKE_CURRENT_LIST_DIR}/field_names_test.cpp
   LIBS fragg_map_core ZLIB::ZLIB
   LABELS core)
+# Map::image + writeMapImage (the server's autosave) and the kill test: fragg_map_save_loop
+# saves in a loop and is SIGKILLed at random moments.
+add_executable(fragg_map_save_loop ${CMAKE_CURRENT_LIST_DIR}/map_save_loop.cpp)
+target_link_libraries(fragg_map_save_loop fragg_map_core)
+target_include_directories(fragg_map_save_loop PRIVATE ${CMAKE_CURRENT_LIST_DIR})
+fragg_target_flags(fragg_map_save_loop)
+fragg_add_test(fragg_core_map_image_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/map_image_test.cpp
+  LIBS fragg_map_core
+  LABELS core)
+if(TARGET fragg_core_map_image_test)
+  add_dependencies(fragg_core_map_image_test fragg_map_save_loop)
+  target_compile_definitions(fragg_core_map_image_test PRIVATE
+    FRAGG_SAVE_LOOP="$<TARGET_FILE:fragg_map_save_loop>")
+endif()

@@ -43,6 +43,11 @@ if(FRAGG_HAVE_ROS)
       LIBS fragg_map_nodelet fragg_map_octomap
       LABELS ros)
   endif()
+  # autosave/* and file_root, the Autosaver and loading an autosave (no master needed).
+  fragg_add_test(ros_autosave_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/autosave_test.cpp
+    LIBS fragg_map_nodelet fragg_map_ros
+    LABELS ros)
   # paging/* and the server's map on a page store (needs the page stores).
   if(TARGET fragg_map_store)
     fragg_add_test(ros_paging_params_test
@@ -71,6 +76,12 @@ if(FRAGG_HAVE_ROS AND FRAGG_SMOKE_BAG)
     ARGS bag:=${FRAGG_SMOKE_BAG})
   # ~check_collision against `fragg_map collide`, ~truncate + ~merge back to the same map.
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_services.test
+    ARGS bag:=${FRAGG_SMOKE_BAG})
+  # Autosave: SIGKILL under load, restart, at most the last period lost; SIGINT saves.
+  add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_autosave.test
+    ARGS bag:=${FRAGG_SMOKE_BAG})
+  # A short soak (scripts/soak.sh, 75 s): RSS bounded, drops, errors, the final map.
+  add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_soak.test
     ARGS bag:=${FRAGG_SMOKE_BAG})
   # ~get_frontiers against `fragg_map frontiers` on the saved map; the frontier topics only
   # while subscribed, incremental after an insertion.

@@ -3,7 +3,9 @@
 
 #include <ros/console.h>
 
+#include <optional>
 #include <string>
+#include <utility>
 
 #include "fragg_map/log.h"
 #include "octomap_compat_notes.h"
@@ -22,6 +24,11 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
       ROS_INFO("fragg_map: %s", line.c_str());
   });
   paging_ = readPagingParameters(private_nh, &params_.map);
+  {
+    XmlRpc::XmlRpcValue root;  // stays invalid (every default) when the namespace holds nothing
+    private_nh.getParam(private_nh.getNamespace(), root);
+    autosave_params_ = parseAutosaveParameters(root);
+  }
   shared_ = std::make_unique<SharedMap>(MapState(makeServerMap(params_.map, paging_)));
   publishers_ = std::make_unique<MapPublishers>(nh, private_nh, params_, shared_.get(), &stats_);
 #if FRAGG_HAVE_OCTOMAP_MSGS
@@ -36,8 +43,7 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
                                               publish_octomaps(::ros::Time::now());
                                             });
   octomap_services_ = std::make_unique<OctomapCompatServices>(private_nh, services_.get());
-  if (!params_.octomap.map_file.empty())  // throws (the node does not start) when unreadable
-    ROS_INFO("fragg_map: map_file: %s", services_->loadMap(params_.octomap.map_file).c_str());
+  loadStartMap();  // throws (the node does not start) when a file is unreadable
   auto publish_changed = [this, publish_octomaps] {
     try {
       publishers_->publishAfterCorrection(::ros::Time::now());
@@ -70,6 +76,14 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
           ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
         }
       });
+  if (autosave_params_.enabled()) {
+    autosaver_ = std::make_unique<Autosaver>(autosave_params_, shared_.get());
+    if (autosave_params_.period_s > 0)
+      ROS_INFO("fragg_map: autosave to %s every %.1f s and on shutdown",
+               autosave_params_.path.c_str(), autosave_params_.period_s);
+    else
+      ROS_INFO("fragg_map: autosave to %s on shutdown", autosave_params_.path.c_str());
+  }
   publishers_->publishFull(::ros::Time::now());
   {
     const SharedMap::ReadGuard state = shared_->read();
@@ -100,8 +114,48 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
   }
 }
 
+void MapServer::loadStartMap() {
+  // What the map starts from: a page store > an autosave > map_file (README, ROS section).
+  const std::string& map_file = params_.octomap.map_file;
+  if (!paging_.store.empty()) {
+    if (autosave_params_.enabled())
+      ROS_WARN(
+          "fragg_map: autosave/path %s ignored: paging/store %s is the map (committed every "
+          "paging/commit_every_s)",
+          autosave_params_.path.c_str(), paging_.store.c_str());
+    autosave_params_ = AutosaveParams();
+    if (!map_file.empty())
+      ROS_INFO("fragg_map: map_file: %s", services_->loadMap(map_file).c_str());
+    return;  // the paging line below says what the store held
+  }
+  if (autosave_params_.enabled()) {
+    std::optional<fragg::Map> saved = loadAutosave(autosave_params_.path, params_.map);
+    if (saved) {
+      const size_t scans = saved->scanCount(), blocks = saved->blockCount();
+      {
+        const SharedMap::WriteGuard state = shared_->write();
+        state->map = std::move(*saved);
+        state->stamps.rebuild(state->map.scanStore());
+        stats_.restart(state->map.scanCount());
+      }
+      ROS_INFO("fragg_map: start map: autosave %s (%zu scans, %zu blocks)%s",
+               autosave_params_.path.c_str(), scans, blocks,
+               map_file.empty() ? "" : "; map_file not loaded (the autosave is newer)");
+      return;
+    }
+  }
+  if (!map_file.empty()) {
+    ROS_INFO("fragg_map: start map: map_file: %s", services_->loadMap(map_file).c_str());
+  } else {
+    const std::string note =
+        autosave_params_.enabled() ? " (no autosave at " + autosave_params_.path + " yet)" : "";
+    ROS_INFO("fragg_map: start map: empty%s", note.c_str());
+  }
+}
+
 MapServer::~MapServer() {
-  input_.reset();  // stop the insertion thread before the rest goes
+  input_.reset();      // stop the insertion thread before the rest goes
+  autosaver_.reset();  // then the last save
   fragg::setLogSink(fragg::LogSink());
 }
 

@@ -1,7 +1,7 @@
 // The map server: parameters, the shared map, tf, and its parts (input, publishers, services,
 // loop-closure correction through ~correct_poses and corrected_path, sub-maps through ~truncate
 // and ~merge, collision checks through ~check_collision, frontiers through ~get_frontiers and
-// the frontiers / frontier_cells topics). MapServerNodelet::onInit
+// the frontiers / frontier_cells topics, the autosave (autosave.h). MapServerNodelet::onInit
 // builds one; it holds no logic of its own.
 #pragma once
 
@@ -12,9 +12,11 @@
 #include <memory>
 #include <string>
 
+#include "autosave.h"
 #include "cloud_input.h"
 #include "collision_service.h"
 #include "correction_service.h"
+#include "fragg_map/ros/autosave_params.h"
 #include "fragg_map/ros/paging_params.h"
 #include "fragg_map/ros/server_params.h"
 #include "frontier_publisher.h"
@@ -40,8 +42,12 @@ class MapServer {
   ~MapServer();
 
  private:
+  /// The start map: the page store's, else an existing autosave, else map_file; one log line.
+  void loadStartMap();
+
   ServerParams params_;
-  PagingParams paging_;  ///< paging/* (paging_params.h)
+  PagingParams paging_;             ///< paging/* (paging_params.h)
+  AutosaveParams autosave_params_;  ///< autosave/*, file_root (autosave_params.h)
   std::unique_ptr<SharedMap> shared_;
   ServerStats stats_;
   tf2_ros::Buffer tf_buffer_;
@@ -56,6 +62,7 @@ class MapServer {
   std::unique_ptr<FrontierService> frontier_service_;
   std::unique_ptr<FrontierPublisher> frontier_publisher_;
   std::unique_ptr<PathCorrector> path_corrector_;  // only with correction/subscribe_path
+  std::unique_ptr<Autosaver> autosaver_;           // only with autosave/path
   std::unique_ptr<CloudInput> input_;              // last: its thread uses everything above
 };
 

@@ -1,0 +1,378 @@
+#!/usr/bin/python3
+"""The soak's driver (scripts/soak.sh starts the master and the node, then this): feeds the
+running map server a bag's clouds looped at a fixed rate with fresh stamps, calls its services
+in turn, listens to its markers, samples its resident memory, and at the end checks its map.
+
+Phases:
+  mix   (most of the run): clouds looped at --rate_hz; every --call_every_s one service call,
+        in turn: get_stats, save_map, load_map, clear_bbox, correct_poses, truncate (keep),
+        merge, get_frontiers, check_collision, reset_map.
+  final: no service that changes the map; ~reset_map, then each of the bag's clouds once (the
+        next when the previous one is inserted, so that the queue drops none), then ~save_map; the saved map must equal `fragg_map build` on the bag
+        (cell for cell), checked only when the stats say no cloud of this phase was dropped.
+
+Writes into --out: rss.tsv (seconds, RSS MiB, scans), calls.tsv (service, success, ms),
+summary.json (counts, checks). Exit status 1 when a check fails.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import threading
+import time
+
+import rosbag
+import rospy
+from geometry_msgs.msg import Point, Pose, PoseStamped
+from sensor_msgs.msg import PointCloud2
+from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import MarkerArray
+
+from fragg_map.srv import (CheckCollision, CheckCollisionRequest, ClearBox, CorrectPoses,
+                           GetFrontiers, GetFrontiersRequest, GetStats, LoadMap, Merge,
+                           Reset, SaveMap, Truncate, TruncateRequest)
+
+NS = "/fragg_map/"
+
+
+def rss_mib(pid):
+    with open("/proc/%d/status" % pid) as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0
+    return float("nan")
+
+
+class Bag:
+    """The bag's clouds, each with the transforms that place it (stamped as the cloud)."""
+
+    def __init__(self, path, topic):
+        self.clouds, self.tf, self.static = [], [], []
+        with rosbag.Bag(path) as bag:
+            for t, msg, _ in bag.read_messages(topics=[topic, "/tf", "/tf_static"]):
+                if t == topic:
+                    self.clouds.append(msg)
+                elif t == "/tf":
+                    self.tf.extend(msg.transforms)
+                else:
+                    self.static.extend(msg.transforms)
+        if not self.clouds:
+            sys.exit("soak: no %s clouds in %s" % (topic, path))
+        self.placing = []  # per cloud: the /tf transforms with the cloud's stamp
+        for c in self.clouds:
+            self.placing.append([t for t in self.tf if t.header.stamp == c.header.stamp])
+        self.frame = self.clouds[0].header.frame_id
+
+
+class Counters:
+    """Accumulates the node's drop counters across restarts (reset / load zero them)."""
+
+    NAMES = ("dropped_queue_full", "dropped_no_tf", "rejected_clouds")
+
+    def __init__(self):
+        self.total = {n: 0 for n in self.NAMES}
+        self.last = {n: 0 for n in self.NAMES}
+
+    def add(self, stats):
+        for n in self.NAMES:
+            v = getattr(stats, n)
+            self.total[n] += v - self.last[n] if v >= self.last[n] else v
+            self.last[n] = v
+
+
+class Soak:
+    def __init__(self, args):
+        self.args = args
+        self.bag = Bag(args.bag, args.topic)
+        self.lock = threading.Lock()  # service calls and stats, one at a time
+        self.sent = 0
+        self.sent_stamps = []  # (stamp, cloud index) of the recent clouds
+        self.markers = 0
+        self.counters = Counters()
+        self.calls = []  # (service, success, ms, message)
+        self.rss = []  # (s, MiB, scans)
+        self.publishing = True
+        self.t0 = time.monotonic()
+        self.pub = rospy.Publisher(args.topic, PointCloud2, queue_size=20)
+        self.tf_pub = rospy.Publisher("/tf", TFMessage, queue_size=50)
+        self.static_pub = rospy.Publisher("/tf_static", TFMessage, queue_size=1, latch=True)
+        self.static_pub.publish(TFMessage(transforms=self.bag.static))
+        rospy.Subscriber("/occupied_cells_vis_array", MarkerArray, self.on_markers,
+                         queue_size=5)
+        for name in ("get_stats", "save_map", "load_map", "reset_map", "clear_bbox",
+                     "correct_poses", "truncate", "merge", "get_frontiers", "check_collision"):
+            rospy.wait_for_service(NS + name, timeout=60)
+        self.srv = {
+            "get_stats": rospy.ServiceProxy(NS + "get_stats", GetStats),
+            "save_map": rospy.ServiceProxy(NS + "save_map", SaveMap),
+            "load_map": rospy.ServiceProxy(NS + "load_map", LoadMap),
+            "reset_map": rospy.ServiceProxy(NS + "reset_map", Reset),
+            "clear_bbox": rospy.ServiceProxy(NS + "clear_bbox", ClearBox),
+            "correct_poses": rospy.ServiceProxy(NS + "correct_poses", CorrectPoses),
+            "truncate": rospy.ServiceProxy(NS + "truncate", Truncate),
+            "merge": rospy.ServiceProxy(NS + "merge", Merge),
+            "get_frontiers": rospy.ServiceProxy(NS + "get_frontiers", GetFrontiers),
+            "check_collision": rospy.ServiceProxy(NS + "check_collision", CheckCollision),
+        }
+
+    def on_markers(self, _):
+        self.markers += 1
+
+    def elapsed(self):
+        return time.monotonic() - self.t0
+
+    # --- clouds -------------------------------------------------------------------------
+    def publish(self, i):
+        """Cloud i of the bag with its transforms, stamped now."""
+        now = rospy.Time.now()
+        transforms = []
+        for t in self.bag.placing[i]:
+            t.header.stamp = now
+            transforms.append(t)
+        self.tf_pub.publish(TFMessage(transforms=transforms))
+        cloud = self.bag.clouds[i]
+        cloud.header.stamp = now
+        time.sleep(0.002)  # the transform first
+        self.pub.publish(cloud)
+        self.sent += 1
+        self.sent_stamps = (self.sent_stamps + [(now, i)])[-200:]
+
+    def publish_loop(self):
+        period = 1.0 / self.args.rate_hz
+        next_t = time.monotonic()
+        i = 0
+        while self.publishing and not rospy.is_shutdown():
+            self.publish(i)
+            i = (i + 1) % len(self.bag.clouds)
+            next_t += period
+            time.sleep(max(0.0, next_t - time.monotonic()))
+
+    # --- services -----------------------------------------------------------------------
+    def call(self, name, *req):
+        with self.lock:
+            t = time.monotonic()
+            try:
+                res = self.srv[name](*req)
+                ok, msg = res.success, res.message
+            except rospy.ServiceException as e:
+                res, ok, msg = None, False, str(e)
+            ms = (time.monotonic() - t) * 1000.0
+        self.calls.append((name, ok, ms, msg))
+        return res
+
+    def stats(self):
+        res = self.call("get_stats")
+        if res is None or not res.success:
+            raise RuntimeError("get_stats failed")
+        self.counters.add(res.stats)
+        return res.stats
+
+    def recent_stamp(self):
+        """A stamp published 2-4 s ago (inserted and kept unless it was dropped)."""
+        now = rospy.Time.now()
+        for stamp, i in reversed(self.sent_stamps):
+            if (now - stamp).to_sec() > 2.0:
+                return stamp, i
+        return None
+
+    def one_call(self, k):
+        out = self.args.out
+        kind = k % 10
+        if kind == 0:
+            self.stats()
+        elif kind == 1:
+            self.call("save_map", os.path.join(out, "soak_saved.fgm"))
+        elif kind == 2:
+            if os.path.exists(os.path.join(out, "soak_saved.fgm")):
+                self.stats()  # the drop counters before the load zeroes them
+                self.call("load_map", os.path.join(out, "soak_saved.fgm"))
+        elif kind == 3:
+            self.call("clear_bbox", Point(0.5, 0.5, 0.0), Point(1.5, 1.5, 1.0))
+        elif kind == 4:
+            got = self.recent_stamp()
+            if got:
+                stamp, i = got
+                tr = self.bag.placing[i][-1].transform
+                pose = Pose()
+                pose.position = Point(tr.translation.x + 0.02, tr.translation.y,
+                                      tr.translation.z)
+                pose.orientation = tr.rotation
+                self.call("correct_poses", [stamp], [pose])
+        elif kind == 5:
+            req = TruncateRequest(region=TruncateRequest.BOX, min=Point(-2, -2, -1),
+                                  max=Point(2, 2, 2), path=os.path.join(out, "soak_sub.fgm"),
+                                  keep=True)
+            self.call("truncate", req)
+        elif kind == 6:
+            if os.path.exists(os.path.join(out, "soak_sub.fgm")):
+                self.call("merge", os.path.join(out, "soak_sub.fgm"), "overwrite", False, Pose())
+        elif kind == 7:
+            self.call("get_frontiers", GetFrontiersRequest(k=1))
+        elif kind == 8:
+            req = CheckCollisionRequest(shape="sphere", dimensions=[0.3])
+            for x in range(5):
+                p = PoseStamped()
+                p.header.frame_id = self.args.frame
+                p.pose.position = Point(x * 0.5, 0.0, 0.5)
+                p.pose.orientation.w = 1.0
+                req.poses.append(p)
+            self.call("check_collision", req)
+        else:
+            self.stats()
+            self.call("reset_map")
+
+    def note(self):
+        """One progress line."""
+        rss = self.rss[-1][1] if self.rss else float("nan")
+        failed = sum(1 for c in self.calls if not c[1])
+        print("soak: %6.0f s  sent %6d  RSS %7.1f MiB  calls %5d (%d failed)  dropped %s" %
+              (self.elapsed(), self.sent, rss, len(self.calls), failed,
+               self.counters.total), flush=True)
+
+    # --- memory -------------------------------------------------------------------------
+    def sample_loop(self):
+        while self.sampling and not rospy.is_shutdown():
+            try:
+                mib = rss_mib(self.args.pid)
+            except OSError:
+                break
+            self.rss.append((self.elapsed(), mib))
+            time.sleep(self.args.sample_s)
+
+    # --- run ----------------------------------------------------------------------------
+    def wait_for(self, predicate, timeout_s):
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if predicate():
+                return True
+            time.sleep(0.2)
+        return False
+
+    def run(self):
+        a = self.args
+        self.sampling = True
+        sampler = threading.Thread(target=self.sample_loop, daemon=True)
+        sampler.start()
+        publisher = threading.Thread(target=self.publish_loop, daemon=True)
+        publisher.start()
+        mix_end = self.t0 + a.seconds - a.final_s
+        k = 0
+        next_note = self.t0
+        while time.monotonic() < mix_end and not rospy.is_shutdown():
+            self.one_call(k)
+            k += 1
+            if time.monotonic() >= next_note:
+                next_note += a.note_every_s
+                self.note()
+            time.sleep(a.call_every_s)
+        self.note()
+        self.publishing = False
+        publisher.join()
+        self.mix_sent = self.sent
+
+        # Final phase: nothing that changes the map but the clouds themselves.
+        time.sleep(1.0)  # the queue drains
+        self.stats()
+        self.call("reset_map")
+        before = self.stats()
+        n = len(self.bag.clouds)
+        inserted = True
+        for i in range(n):  # each once it is inserted: the queue never drops one
+            self.publish(i)
+            inserted = inserted and self.wait_for(lambda: self.stats().scans >= i + 1, 60)
+        after = self.stats()
+        self.sampling = False
+        sampler.join()
+        final_saved = os.path.join(a.out, "soak_final.fgm")
+        self.call("save_map", final_saved)
+        return self.report(before, after, inserted, n, final_saved)
+
+    def report(self, before, after, inserted, n, final_saved):
+        a = self.args
+        s = {"seconds": round(self.elapsed(), 1), "rate_hz": a.rate_hz, "bag": a.bag,
+             "clouds_sent": self.sent, "marker_arrays": self.markers,
+             "dropped": dict(self.counters.total)}
+        calls = {}
+        for name, ok, ms, _ in self.calls:
+            c = calls.setdefault(name, {"calls": 0, "failed": 0, "ms_max": 0.0})
+            c["calls"] += 1
+            c["failed"] += 0 if ok else 1
+            c["ms_max"] = round(max(c["ms_max"], ms), 1)
+        s["calls"] = calls
+        failed = [(n_, m) for n_, ok, _, m in self.calls if not ok]
+        # correct_poses answers success with unknown stamps; a failure is a real one.
+        s["failed_calls"] = failed[:20]
+
+        # RSS: after the warm-up, the last third's peak against the first third's.
+        warm = max(a.warmup_s, 0.2 * (a.seconds - a.final_s))
+        steady = [m for t, m in self.rss if t >= warm]
+        third = len(steady) // 3
+        checks = {}
+        if third >= 2:
+            first, last = max(steady[:third]), max(steady[-third:])
+            s["rss_mib"] = {"warmup_s": warm, "first_third_max": round(first, 1),
+                            "last_third_max": round(last, 1),
+                            "overall_max": round(max(m for _, m in self.rss), 1),
+                            "samples": len(self.rss)}
+            checks["rss_bounded (last third max <= 1.1 x first third max)"] = last <= 1.1 * first
+        else:
+            checks["rss_bounded (enough samples)"] = False
+        checks["drops by the queue policy only (no_tf = rejected = 0)"] = (
+            self.counters.total["dropped_no_tf"] == 0 and
+            self.counters.total["rejected_clouds"] == 0)
+        checks["no failed service call"] = not failed
+        checks["markers received"] = self.markers > 0
+        final_dropped = (after.dropped_queue_full - before.dropped_queue_full +
+                         after.dropped_no_tf - before.dropped_no_tf)
+        s["final_phase"] = {"clouds": n, "scans": after.scans, "dropped": final_dropped}
+        if inserted and final_dropped == 0 and after.scans == n:
+            built = os.path.join(a.out, "soak_cli.fgm")
+            subprocess.run([a.cli, "build", a.bag, "-o", built, "--topic", a.topic, "--frame",
+                            a.frame], check=True, stdout=subprocess.DEVNULL)
+            cmp = json.loads(subprocess.run([a.cli, "compare", built, final_saved, "--json"],
+                                            check=True, stdout=subprocess.PIPE).stdout)
+            s["final_phase"]["compare"] = {"known_in_either": cmp["known_in_either"],
+                                           "agreeing": cmp["agreeing"]}
+            checks["final map == fragg_map build"] = (
+                cmp["known_in_either"] > 0 and cmp["agreeing"] == cmp["known_in_either"])
+        else:
+            s["final_phase"]["compare"] = "skipped: clouds of the final phase were dropped"
+        s["checks"] = checks
+        with open(os.path.join(a.out, "rss.tsv"), "w") as f:
+            f.write("# seconds\trss_mib\n")
+            for t, m in self.rss:
+                f.write("%.1f\t%.1f\n" % (t, m))
+        with open(os.path.join(a.out, "calls.tsv"), "w") as f:
+            f.write("# service\tsuccess\tms\tmessage\n")
+            for name, ok, ms, msg in self.calls:
+                f.write("%s\t%d\t%.1f\t%s\n" % (name, ok, ms, msg.replace("\n", " ")[:200]))
+        with open(os.path.join(a.out, "summary.json"), "w") as f:
+            json.dump(s, f, indent=2)
+        print(json.dumps(s, indent=2))
+        return all(checks.values())
+
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("--bag", required=True)
+    p.add_argument("--topic", default="/points")
+    p.add_argument("--frame", default="map")
+    p.add_argument("--pid", type=int, required=True, help="the node's process")
+    p.add_argument("--cli", required=True, help="the fragg_map executable")
+    p.add_argument("--out", required=True)
+    p.add_argument("--seconds", type=float, default=120)
+    p.add_argument("--final_s", type=float, default=10, help="time kept for the final phase")
+    p.add_argument("--rate_hz", type=float, default=10)
+    p.add_argument("--call_every_s", type=float, default=1.0)
+    p.add_argument("--sample_s", type=float, default=2.0)
+    p.add_argument("--warmup_s", type=float, default=20)
+    p.add_argument("--note_every_s", type=float, default=30, help="progress lines")
+    args = p.parse_args(rospy.myargv()[1:])
+    rospy.init_node("fragg_map_soak", disable_signals=True)
+    ok = Soak(args).run()
+    sys.exit(0 if ok else 1)
+
+
+if __name__ == "__main__":
+    main()

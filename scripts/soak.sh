@@ -1,0 +1,129 @@
+#!/usr/bin/env bash
+# Soak of the map server (issue 18): the nodelet fed the smoke bag's clouds looped at 10 Hz for
+# a set time, with service calls interleaved (save, load, clear box, correct poses, truncate,
+# merge, frontiers, collision, reset), a marker subscriber and an autosave every 5 s; samples
+# its resident memory every 2 s and checks, at the end (scripts/soak.py does the driving):
+#   - RSS bounded: after the warm-up (20% of the run, >= 20 s) the peak of the last third of
+#     the samples is at most 1.1 x the peak of the first third;
+#   - clouds dropped by the queue policy only (~get_stats: dropped_no_tf = rejected = 0);
+#   - no service call failed, markers were received, no ERROR / FATAL line in the node's log;
+#   - the final map equals `fragg_map build` on the bag: a final phase with no map-changing
+#     service (~reset_map, the bag's clouds once, each sent when the previous one is inserted,
+#     ~save_map), compared only when the stats say none of its clouds was dropped.
+# Writes to --out: node.log, rss.tsv, calls.tsv, summary.json and soak_rss.png (gnuplot).
+# Usage: bash scripts/soak.sh [--minutes N | --seconds S] [--out DIR] [--bag BAG]
+#          [--use-master] [common options: --ws DIR ...]
+#   --use-master: use the running ROS master of ROS_MASTER_URI (a rostest's) instead of
+#                 starting one on a free loopback port.
+# The workspace must be built (scripts/build.sh; this script builds nothing).
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+seconds=600
+out="$FRAGG_REPO/out/soak"
+bag=""
+use_master=0
+args=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --minutes) seconds=$(( ${2:?--minutes needs a number} * 60 )); shift 2 ;;
+    --seconds) seconds="${2:?--seconds needs a number}"; shift 2 ;;
+    --out) out="${2:?--out needs a folder}"; shift 2 ;;
+    --bag) bag="${2:?--bag needs a file}"; shift 2 ;;
+    --use-master) use_master=1; shift ;;
+    *) args+=("$1"); shift ;;
+  esac
+done
+fragg_usage() {
+  echo "usage: bash scripts/soak.sh [--minutes N | --seconds S] [--out DIR] [--bag BAG] [--use-master]"
+  fragg_usage_common
+}
+fragg_parse_common "${args[@]+"${args[@]}"}"
+[ -n "$bag" ] || bag="$FRAGG_WS/build/workloads/smoke.bag"
+[ -f "$bag" ] || { echo "soak: no bag at $bag (build the workspace, or --bag)" >&2; exit 2; }
+fragg="$FRAGG_WS/devel/lib/fragg_map/fragg_map"
+[ -f "$FRAGG_WS/devel/lib/libfragg_map_nodelet.so" ] ||
+  { echo "soak: no map server in $FRAGG_WS (build the workspace)" >&2; exit 2; }
+# (fragg_map itself is needed at the end only, for the final comparison.)
+[ -x "$fragg" ] || echo "soak: $fragg is not built yet; the final comparison needs it" >&2
+mkdir -p "$out"
+out="$(cd "$out" && pwd -P)"
+rm -f "$out"/*.fgm "$out"/*.fgm.tmp.* "$out/summary.json"
+
+set +u
+# shellcheck disable=SC1091
+source "$FRAGG_WS/devel/setup.bash"
+set -u
+export ROSCONSOLE_STDOUT_LINE_BUFFERED=1
+
+master_pid="" node_pid=""
+stop() {
+  if [ -n "$node_pid" ] && kill -0 "$node_pid" 2>/dev/null; then
+    kill -INT "$node_pid" 2>/dev/null || true
+    for _ in $(seq 100); do kill -0 "$node_pid" 2>/dev/null || break; sleep 0.2; done
+    kill -KILL "$node_pid" 2>/dev/null || true
+  fi
+  if [ -n "$master_pid" ] && kill -0 "$master_pid" 2>/dev/null; then
+    kill -TERM "$master_pid" 2>/dev/null || true
+    wait "$master_pid" 2>/dev/null || true
+  fi
+}
+trap stop EXIT
+
+if [ "$use_master" -eq 0 ]; then
+  port="$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')"
+  export ROS_MASTER_URI="http://127.0.0.1:$port" ROS_IP=127.0.0.1
+  rosmaster --core -p "$port" >"$out/master.log" 2>&1 &
+  master_pid=$!
+  for _ in $(seq 300); do (exec 3<>"/dev/tcp/127.0.0.1/$port") 2>/dev/null && break; sleep 0.2; done
+fi
+
+fragg_step "map server soak: $seconds s on $bag (master $ROS_MASTER_URI, output $out)"
+# The node's parameters: the default config (queue of 5 clouds), the CPU backend, a 16 MiB
+# budget for the kept scans (the oldest points dropped beyond it, so that memory reaches its
+# plateau early), markers throttled to 2 Hz, an autosave every 5 s into --out (file_root).
+# Private parameters on the command line (no rosparam process per value: each takes seconds on
+# a loaded machine); every other parameter keeps the node's default (config/default.yaml).
+nodelet_bin=/usr/lib/nodelet/nodelet
+[ -x "$nodelet_bin" ] || nodelet_bin="$(catkin_find --first-only nodelet nodelet)"
+"$nodelet_bin" standalone fragg_map/MapServerNodelet __name:=fragg_map cloud_in:=/points \
+  _backend:=cpu _frame_id:=map _scan_store/max_mb:=16 _marker_rate:=2.0 _file_root:="$out" \
+  _autosave/path:=soak_autosave.fgm _autosave/period_s:=5.0 >"$out/node.log" 2>&1 &
+node_pid=$!
+echo "node pid $node_pid, log $out/node.log"
+
+rc=0
+/usr/bin/python3 "$FRAGG_REPO/scripts/soak.py" --bag "$bag" --topic /points --frame map \
+  --pid "$node_pid" --cli "$fragg" --out "$out" --seconds "$seconds" || rc=$?
+stop
+node_pid=""
+
+fragg_step "node log"
+errors="$(grep -E '\[ *(ERROR|FATAL)\]' "$out/node.log" || true)"
+if [ -n "$errors" ]; then
+  echo "soak: ERROR lines in the node's log:" >&2
+  printf '%s\n' "$errors" | head -n 20 >&2
+  rc=1
+else
+  echo "no ERROR or FATAL line in $out/node.log ($(wc -l <"$out/node.log") lines)"
+fi
+grep -E 'autosave' "$out/node.log" | head -n 5 || true
+
+if command -v gnuplot >/dev/null && [ -s "$out/rss.tsv" ]; then
+  gnuplot <<EOT
+set terminal pngcairo size 900,450
+set output "$out/soak_rss.png"
+set title "fragg_map node soak: resident memory ($(date -u +%Y-%m-%d), $seconds s)"
+set xlabel "time [s]"
+set ylabel "RSS [MiB]"
+set yrange [0:*]
+set grid
+plot "$out/rss.tsv" using 1:2 with lines lw 2 title "VmRSS"
+EOT
+  echo "RSS curve: $out/soak_rss.png"
+fi
+if [ "$rc" -ne 0 ]; then
+  echo "soak: FAILED (see $out/summary.json, $out/node.log)" >&2
+  exit 1
+fi
+echo "soak: all checks passed ($out/summary.json)"

@@ -1,0 +1,47 @@
+#!/usr/bin/python3
+"""The short soak in CI: scripts/soak.sh on the rostest's master (--use-master), the workspace
+found from the fragg_map executable, output in a temporary folder; passes when the script's
+checks pass (summary.json says which failed)."""
+import json
+import os
+import shutil
+import subprocess
+import tempfile
+import unittest
+
+import rospkg
+import rospy
+import rostest
+from catkin.find_in_workspaces import find_in_workspaces
+
+
+class Soak(unittest.TestCase):
+    def test_short_soak(self):
+        rospy.init_node("map_server_soak_test")
+        found = find_in_workspaces(["libexec"], project="fragg_map", path="fragg_map",
+                                   first_match_only=True)
+        self.assertTrue(found, "the fragg_map executable is not in the workspace")
+        devel = found[0].split(os.sep + "lib" + os.sep + "fragg_map")[0]
+        ws = os.path.dirname(devel)
+        script = os.path.join(rospkg.RosPack().get_path("fragg_map"), "scripts", "soak.sh")
+        out = tempfile.mkdtemp(prefix="fragg_map_soak_")
+        try:
+            run = subprocess.run(
+                ["bash", script, "--seconds", str(rospy.get_param("~seconds")), "--out", out,
+                 "--bag", rospy.get_param("~bag"), "--use-master", "--ws", ws, "--no-deps"],
+                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
+            summary = {}
+            if os.path.exists(os.path.join(out, "summary.json")):
+                with open(os.path.join(out, "summary.json")) as f:
+                    summary = json.load(f)
+            self.assertEqual(run.returncode, 0, run.stdout[-6000:])
+            checks = summary.get("checks", {})
+            self.assertTrue(checks and all(checks.values()), checks)
+            self.assertGreater(summary["clouds_sent"], 500)
+            self.assertIsInstance(summary["final_phase"]["compare"], dict, summary)
+        finally:
+            shutil.rmtree(out, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("fragg_map", "map_server_soak", Soak)
