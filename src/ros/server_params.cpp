@@ -422,6 +422,7 @@ ServerParams parseKnown(const XmlRpcValue& root) {
   readDouble(root, "resolution", &m.resolution_m);
   readString(root, "frame_id", &p.frame_id);
   if (p.frame_id.empty()) badParam("frame_id", "must not be empty");
+  readString(root, "file_root", &p.file_root);
 
   readDouble(root, "sensor_model/hit", &m.occupancy.prob_hit);
   readDouble(root, "sensor_model/miss", &m.occupancy.prob_miss);

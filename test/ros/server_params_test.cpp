@@ -406,6 +406,7 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.collision.mesh, d.collision.mesh);
   EXPECT_EQ(p.collision.mesh_scale, d.collision.mesh_scale);
   EXPECT_EQ(p.collision.max_markers, d.collision.max_markers);
+  EXPECT_EQ(p.file_root, d.file_root);
 }
 
 TEST(ServerParamsConfig, ShippedYamlsHoldNoUnknownName) {

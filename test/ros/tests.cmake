@@ -37,6 +37,11 @@ if(FRAGG_HAVE_ROS)
       LIBS fragg_map_nodelet fragg_map_octomap
       LABELS ros)
   endif()
+  # file_root: the folder the server's file services are confined to (paths, .., symlinks).
+  fragg_add_test(ros_file_root_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/file_root_test.cpp
+    LIBS fragg_map_nodelet
+    LABELS ros)
   # paging/* and the server's map on a page store (needs the page stores).
   if(TARGET fragg_map_store)
     fragg_add_test(ros_paging_params_test

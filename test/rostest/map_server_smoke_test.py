@@ -87,8 +87,12 @@ class MapServerSmokeTest(MapServerBagChecks):
         p = Point
         for res in [
             self.save(os.path.join(self.tmp, "map.xyz")),
-            self.save("/nonexistent-dir/map.fgm"),
+            self.save("/nonexistent-dir/map.fgm"),  # outside file_root (/tmp)
+            self.save(os.path.join(self.tmp, "no-such-dir", "map.fgm")),
+            self.save("../escape.fgm"),
             self.save(""),
+            self.load("/etc/passwd.fgm"),
+            self.load("../" + os.path.basename(self.tmp) + "/../../etc/x.fgm"),
             self.load(os.path.join(self.tmp, "missing.fgm")),
             self.load(os.path.join(self.tmp, "map.bt")),
             self.clear(p(1, 1, 1), p(0, 0, 0)),
@@ -97,6 +101,7 @@ class MapServerSmokeTest(MapServerBagChecks):
             self.assertFalse(res.success)
             self.assertTrue(res.message)
         self.assertEqual(self.stats().known_voxels, before)
+        self.assertFalse(os.path.exists("/escape.fgm"))
 
     def test_7_good_service_arguments(self):
         saved = os.path.join(self.tmp, "before_reset.fgm")
@@ -116,7 +121,8 @@ class MapServerSmokeTest(MapServerBagChecks):
         wait_for(lambda: any(m.action == Marker.DELETEALL
                              for a in self.arrays[n:] for m in a.markers), 10,
                  "a full marker republish after reset")
-        res = self.load(saved)
+        # A path relative to file_root (/tmp here) names the same file.
+        res = self.load(os.path.relpath(saved, rospy.get_param(NS + "file_root")))
         self.assertTrue(res.success, res.message)
         self.assertEqual(self.stats().known_voxels, known)
 

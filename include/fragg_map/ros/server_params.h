@@ -86,6 +86,10 @@ struct ServerParams {
   fragg::MapParams map = withKeptScans();
   fragg::SensorModel sensor;  ///< sensor/type|hfov|vfov, sensor_model/min_range|max_range
   std::string frame_id = "map";
+  /// file_root: the folder ~save_map, ~load_map, ~truncate and ~merge read and write in
+  /// (server/file_root.h); "": $ROS_HOME/fragg_map, else ~/.ros/fragg_map. Created at start-up.
+  /// map_file (the operator's start-up map) is not restricted to it.
+  std::string file_root;
   /// Heights projected into projected_map.
   double occupancy_min_z_m = -std::numeric_limits<double>::infinity();
   double occupancy_max_z_m = std::numeric_limits<double>::infinity();
