@@ -37,6 +37,12 @@ if(FRAGG_HAVE_ROS)
       LIBS fragg_map_nodelet fragg_map_octomap
       LABELS ros)
   endif()
+  # The input path's faults (cloud_inserter): malformed clouds, huge points, bad transforms,
+  # tf missing / from the future / too old, a cloud the map refuses; the map unchanged.
+  fragg_add_test(ros_cloud_faults_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/cloud_faults_test.cpp
+    LIBS fragg_map_nodelet
+    LABELS ros)
   # file_root: the folder the server's file services are confined to (paths, .., symlinks).
   fragg_add_test(ros_file_root_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/file_root_test.cpp

@@ -1,8 +1,9 @@
 // Input of the map server: cloud_in -> bounded drop-oldest queue -> insertion thread. The
-// thread waits for each cloud's transform to frame_id at the cloud's stamp (up to
-// tf_tolerance of wall time; then the cloud is dropped and counted), converts the cloud and
-// inserts it (the map filters it by height in the map frame), taking the map's write lock for
-// that one scan, so the subscriber thread never does more than enqueue.
+// thread converts each cloud, waits for its transform to frame_id at the cloud's stamp (up to
+// tf_tolerance of wall time, none for a stamp older than the tf buffer; then the cloud is
+// dropped and counted) and inserts it (the map filters it by height in the map frame), taking
+// the map's write lock for that one scan, so the subscriber thread never does more than
+// enqueue. The steps and their faults: cloud_inserter.h.
 //
 // Why not tf2_ros::MessageFilter: Debian's MessageFilter has no per-message timeout (a cloud
 // whose tf never comes waits until its queue overflows), and it would run the callback on the
@@ -18,6 +19,7 @@
 #include <functional>
 #include <thread>
 
+#include "cloud_inserter.h"
 #include "fragg_map/ros/drop_oldest_queue.h"
 #include "fragg_map/ros/server_params.h"
 #include "server_stats.h"
@@ -46,8 +48,8 @@ class CloudInput {
 
   const ServerParams params_;
   const tf2_ros::Buffer& tf_;
-  SharedMap* shared_;
   ServerStats* stats_;
+  CloudInserter inserter_;
   InsertedFn on_inserted_;
   DropOldestQueue<sensor_msgs::PointCloud2::ConstPtr> queue_;
   std::atomic<bool> stopping_{false};
