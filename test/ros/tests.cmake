@@ -36,6 +36,12 @@ if(FRAGG_HAVE_ROS)
       SOURCES ${CMAKE_CURRENT_LIST_DIR}/map_file_loader_test.cpp
       LIBS fragg_map_nodelet fragg_map_octomap
       LABELS ros)
+    # Corrupt and foreign map files; saves that run out of space (a 64 KiB tmpfs when root may
+    # mount, else skipped with the reason; a file size limit always).
+    fragg_add_test(ros_map_file_faults_test
+      SOURCES ${CMAKE_CURRENT_LIST_DIR}/map_file_faults_test.cpp
+      LIBS fragg_map_nodelet fragg_map_octomap
+      LABELS ros)
   endif()
   # The input path's faults (cloud_inserter): malformed clouds, huge points, bad transforms,
   # tf missing / from the future / too old, a cloud the map refuses; the map unchanged.
