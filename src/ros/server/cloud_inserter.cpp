@@ -6,11 +6,14 @@
 #include <tf2/exceptions.h>
 #include <tf2_eigen/tf2_eigen.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <thread>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/rigid_pose.h"
 #include "fragg_map/ros/cloud_from_msg.h"
 
 namespace fragg::ros {
@@ -19,6 +22,8 @@ namespace {
 // Half the int32 voxel key range: a sensor within it and a point within it of the sensor keep
 // the ray's end inside the range (the ray preparation refuses ends beyond ~2^31).
 constexpr double kHalfKeyRangeVox = 1073741824.0;  // 2^30
+// The tolerance Map::insert checks sensor poses with (map.cpp, validatePose).
+constexpr double kRigidTolerance = 1e-4;
 
 bool hasUsablePoint(const fragg::PointCloud& cloud) {
   for (const Eigen::Vector3f& p : cloud.points_S)
@@ -78,12 +83,11 @@ size_t dropBeyondKeyRange(fragg::PointCloud* cloud, double resolution_m) {
 
 std::optional<std::string> transformProblem(const Eigen::Isometry3d& T_map_sensor,
                                             double resolution_m) {
-  if (!T_map_sensor.matrix().allFinite()) return std::string("the transform is not finite");
-  const Eigen::Matrix3d R = T_map_sensor.linear();
-  const double off = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (off > 1e-6 || R.determinant() < 0.0)
-    return std::string("the transform's rotation is not a rotation (R^T R off identity by ") +
-           std::to_string(off) + ")";
+  try {
+    fragg::requireRigidPose(T_map_sensor, "the transform to the map frame", kRigidTolerance);
+  } catch (const fragg::InvalidArgument& e) {
+    return std::string(e.what());
+  }
   const double reach_m = kHalfKeyRangeVox * resolution_m;
   if (T_map_sensor.translation().cwiseAbs().maxCoeff() > reach_m)
     return "the sensor is " + std::to_string(T_map_sensor.translation().norm()) +

@@ -44,8 +44,9 @@ TfWait waitForTransform(const tf2::BufferCore& tf, const std::string& target,
 /// stretched to them). Returns how many.
 size_t dropBeyondKeyRange(fragg::PointCloud* cloud, double resolution_m);
 
-/// Null when `T_map_sensor` is usable: finite, rotation orthonormal within 1e-6, sensor inside
-/// the map's key range; else the reason.
+/// Null when `T_map_sensor` is usable: finite and rigid (as Map::insert checks it: rotation
+/// orthonormal within 1e-4, determinant +1), sensor within half the map's key range of the
+/// origin; else the reason.
 std::optional<std::string> transformProblem(const Eigen::Isometry3d& T_map_sensor,
                                             double resolution_m);
 
