@@ -219,8 +219,9 @@ TEST_F(CloudFaultsTest, AllNaNAndOnlyHugePointsAreDroppedAsNoUsablePoint) {
 void expectBlocksWithin(const fragg::Map& map, double reach_m) {
   const double block_m = 8 * map.resolution();
   map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block&) {
+    const int32_t k[3] = {key.x, key.y, key.z};
     for (int a = 0; a < 3; ++a) {
-      const double lo = key[a] * block_m, hi = lo + block_m;
+      const double lo = k[a] * block_m, hi = lo + block_m;
       EXPECT_LE(std::max(std::abs(lo), std::abs(hi)), reach_m + block_m) << "axis " << a;
     }
   });

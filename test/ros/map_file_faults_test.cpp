@@ -48,7 +48,7 @@ fragg::MapParams params() {
   return p;
 }
 
-// A map of a few walls: its .fgm is well over 64 KiB.
+// A map of a few walls: its .fgm and .bt are over 16 KiB (checked where it matters).
 fragg::Map bigMap() {
   fragg::Map map(params());
   for (double x = -3.0; x <= 3.0; x += 1.5)
@@ -140,11 +140,17 @@ fragg::Map smallMap() {
 TEST(MapFileFaults, SaveOnAFullTmpfsFailsAndKeepsThePreviousFile) {
   if (geteuid() != 0) GTEST_SKIP() << "not root: cannot mount a small tmpfs here";
   const fs::path dir = tmpDir("map_file_faults_tmpfs");
-  if (mount("tmpfs", dir.c_str(), "tmpfs", 0, "size=64k") != 0)
-    GTEST_SKIP() << "mounting a 64 KiB tmpfs is not permitted here (" << std::strerror(errno)
-                 << "); the file size limit test covers the same path";
   const fragg::Map big = bigMap();
   const fragg::Map small = smallMap();
+  // Both small files fit in the 4 pages; the big map's files do not.
+  const fs::path probe = tmpDir("map_file_faults_sizes");
+  big.save((probe / "big.fgm").string());
+  fragg::exportOctomap(big, (probe / "big.bt").string());
+  ASSERT_GT(fs::file_size(probe / "big.fgm"), 16384u);
+  ASSERT_GT(fs::file_size(probe / "big.bt"), 16384u);
+  if (mount("tmpfs", dir.c_str(), "tmpfs", 0, "size=16k") != 0)
+    GTEST_SKIP() << "mounting a 16 KiB tmpfs is not permitted here (" << std::strerror(errno)
+                 << "); the file size limit test covers the same path";
   {
     small.save((dir / "map.fgm").string());
     fragg::exportOctomap(small, (dir / "map.bt").string());
@@ -160,8 +166,15 @@ TEST(MapFileFaults, SaveBeyondTheFileSizeLimitFailsAndKeepsThePreviousFile) {
   const fragg::Map small = smallMap();
   small.save((dir / "map.fgm").string());
   fragg::exportOctomap(small, (dir / "map.bt").string());
-  ASSERT_LT(fs::file_size(dir / "map.fgm"), 32768u);
-  // Writes past 32 KiB fail with EFBIG (SIGXFSZ ignored), as a full disk fails with ENOSPC.
+  ASSERT_LT(fs::file_size(dir / "map.fgm"), 8192u);
+  ASSERT_LT(fs::file_size(dir / "map.bt"), 8192u);
+  big.save((dir / "big.fgm").string());
+  fragg::exportOctomap(big, (dir / "big.bt").string());
+  ASSERT_GT(fs::file_size(dir / "big.fgm"), 8192u);
+  ASSERT_GT(fs::file_size(dir / "big.bt"), 8192u);
+  fs::remove(dir / "big.fgm");
+  fs::remove(dir / "big.bt");
+  // Writes past 8 KiB fail with EFBIG (SIGXFSZ ignored), as a full disk fails with ENOSPC.
   struct sigaction ignore {
   }, old_action{};
   ignore.sa_handler = SIG_IGN;
@@ -169,7 +182,7 @@ TEST(MapFileFaults, SaveBeyondTheFileSizeLimitFailsAndKeepsThePreviousFile) {
   rlimit old_limit{};
   ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
   rlimit limit = old_limit;
-  limit.rlim_cur = 32768;
+  limit.rlim_cur = 8192;
   ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &limit), 0);
   expectFailedSaveKeepsTheOldFile(big, dir / "map.fgm", small, false);
   expectFailedSaveKeepsTheOldFile(big, dir / "map.bt", small, true);
