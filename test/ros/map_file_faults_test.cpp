@@ -51,8 +51,9 @@ fragg::MapParams params() {
 // A map of a few walls: its .fgm and .bt are over 16 KiB (checked where it matters).
 fragg::Map bigMap() {
   fragg::Map map(params());
-  for (double x = -3.0; x <= 3.0; x += 1.5)
-    fragg::ros::test::insertWall(map, Eigen::Vector3d(x, 0.0, 0.5), 4.0);
+  for (double x = -6.0; x <= 6.0; x += 1.5)
+    for (double y = -6.0; y <= 6.0; y += 6.0)
+      fragg::ros::test::insertWall(map, Eigen::Vector3d(x, y, 0.5), 4.0);
   return map;
 }
 
