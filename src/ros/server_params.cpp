@@ -149,7 +149,7 @@ void asParameters(Fn&& fn) {
 
 void readSensor(const XmlRpcValue& root, ServerParams& p) {
   std::string type = "auto", axis = "z";
-  double hfov = 0.0, vfov = 0.0, min_range = 0.0, max_range = -1.0;
+  double hfov = 0.0, vfov = 0.0, min_range = 0.0, max_range = ServerParams::kDefaultMaxRangeM;
   double elevation_min = -M_PI / 2, elevation_max = M_PI / 2;
   double noise_m = 0.0, noise_quadratic = 0.0;
   readString(root, "sensor/type", &type);
@@ -425,6 +425,7 @@ ServerParams parseKnown(const XmlRpcValue& root) {
   readDouble(root, "resolution", &m.resolution_m);
   readString(root, "frame_id", &p.frame_id);
   if (p.frame_id.empty()) badParam("frame_id", "must not be empty");
+  readString(root, "file_root", &p.file_root);
 
   readDouble(root, "sensor_model/hit", &m.occupancy.prob_hit);
   readDouble(root, "sensor_model/miss", &m.occupancy.prob_miss);

@@ -62,7 +62,9 @@ TEST(ServerParams, EmptyNamespaceGivesTheCoreDefaults) {
   EXPECT_EQ(p.map.backend, core.backend);
   EXPECT_EQ(p.frame_id, "map");
   EXPECT_EQ(p.sensor.type, fragg::SensorType::kAuto);
-  EXPECT_LT(p.sensor.max_range_m, 0.0);
+  // The server's own default (the core's is -1, no limit): far outliers cannot stretch the map.
+  EXPECT_EQ(p.sensor.max_range_m, fragg::ros::ServerParams::kDefaultMaxRangeM);
+  EXPECT_GT(p.sensor.max_range_m, 0.0);
   EXPECT_EQ(p.queue_size, 5);
   EXPECT_TRUE(p.latch);  // octomap_server's default
   EXPECT_TRUE(std::isinf(p.map.height_filter.min_z_m));
@@ -406,6 +408,7 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.collision.mesh, d.collision.mesh);
   EXPECT_EQ(p.collision.mesh_scale, d.collision.mesh_scale);
   EXPECT_EQ(p.collision.max_markers, d.collision.max_markers);
+  EXPECT_EQ(p.file_root, d.file_root);
 }
 
 TEST(ServerParamsConfig, ShippedYamlsHoldNoUnknownName) {

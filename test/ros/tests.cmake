@@ -42,10 +42,27 @@ if(FRAGG_HAVE_ROS)
       SOURCES ${CMAKE_CURRENT_LIST_DIR}/map_file_loader_test.cpp
       LIBS fragg_map_nodelet fragg_map_octomap
       LABELS ros)
+    # Corrupt and foreign map files; saves that run out of space (a 64 KiB tmpfs when root may
+    # mount, else skipped with the reason; a file size limit always).
+    fragg_add_test(ros_map_file_faults_test
+      SOURCES ${CMAKE_CURRENT_LIST_DIR}/map_file_faults_test.cpp
+      LIBS fragg_map_nodelet fragg_map_octomap
+      LABELS ros)
   endif()
   # autosave/* and file_root, the Autosaver and loading an autosave (no master needed).
   fragg_add_test(ros_autosave_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/autosave_test.cpp
+    LIBS fragg_map_nodelet fragg_map_ros
+    LABELS ros)
+  # The input path's faults (cloud_inserter): malformed clouds, huge points, bad transforms,
+  # tf missing / from the future / too old, a cloud the map refuses; the map unchanged.
+  fragg_add_test(ros_cloud_faults_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/cloud_faults_test.cpp
+    LIBS fragg_map_nodelet
+    LABELS ros)
+  # file_root: the folder the server's file services are confined to (paths, .., symlinks).
+  fragg_add_test(ros_file_root_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/file_root_test.cpp
     LIBS fragg_map_nodelet fragg_map_ros
     LABELS ros)
   # paging/* and the server's map on a page store (needs the page stores).

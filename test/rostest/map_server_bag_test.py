@@ -23,7 +23,7 @@ class MapServerBagTest(MapServerBagChecks):
         if least <= 0.0:
             self.skipTest("no octomap_agreement asked for on this bag")
         bt = os.path.join(self.tmp, "octomap.bt")
-        max_range = float(rospy.get_param(NS + "sensor_model/max_range", -1.0))
+        max_range = float(rospy.get_param(NS + "sensor_model/max_range", 100.0))  # the server's default
         subprocess.run([self.cli, "octomap-build", rospy.get_param("~bag"), "-o", bt,
                         "--topic", rospy.get_param("~topic"),
                         "--frame", rospy.get_param("~frame", "map"),

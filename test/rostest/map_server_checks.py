@@ -107,8 +107,13 @@ class MapServerBagChecks(unittest.TestCase):
         step = float(rospy.get_param(NS + "scan_store/point_step", 0.0))
         if rospy.get_param(NS + "keep_scans", True) and step > 0.0:
             keep = ["--keep-scans", "--scan-step", repr(step)]
+        cli_args = rospy.get_param("~cli_args", "").split()
+        # The node's max_range (the server's default is 100 m, the CLI's none) unless the
+        # test gives its own.
+        if "--max-range" not in cli_args + list(options) and rospy.has_param(NS + "sensor_model/max_range"):
+            keep += ["--max-range", repr(float(rospy.get_param(NS + "sensor_model/max_range")))]
         subprocess.run([self.cli, "build", source, "-o", out, "--backend", "cpu"] + keep +
-                       rospy.get_param("~cli_args", "").split() + list(options),
+                       cli_args + list(options),
                        check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
     def compare(self, a, b):

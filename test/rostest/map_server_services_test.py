@@ -361,10 +361,11 @@ class MapServerServicesTest(MapServerBagChecks):
 
         # Bad requests: nothing changes, no file appears.
         for kw, why in [
-            (dict(box, path="far_half.fgm"), "a relative path"),
+            (dict(box, path="../far_half.fgm"), "'..' out of file_root"),
+            (dict(box, path="/var/far_half.fgm"), "an absolute path outside file_root"),
             (dict(box, path=os.path.join(self.tmp, "far_half.bt")), "a .bt path"),
             (dict(box, path=""), "no path"),
-            (dict(box, path="/nonexistent_fragg_dir/far.fgm"), "a missing folder"),
+            (dict(box, path=os.path.join(self.tmp, "no_such_dir", "far.fgm")), "a missing folder"),
             (dict(region=TruncateRequest.BOX, min=Point(1, 0, 0), max=Point(0, 1, 1),
                   path=sub_path), "an inverted box"),
             (dict(region=TruncateRequest.BOX, min=Point(math.nan, 0, 0), max=Point(1, 1, 1),
@@ -376,7 +377,11 @@ class MapServerServicesTest(MapServerBagChecks):
             res = self.truncate(**kw)
             self.assertFalse(res.success, why)
             self.assertTrue(res.message, why)
+            if "file_root" in why:
+                self.assertIn("file_root", res.message)
         self.assertFalse(os.path.exists(sub_path))
+        self.assertFalse(os.path.exists("/far_half.fgm"))
+        self.assertFalse(os.path.exists("/var/far_half.fgm"))
         self.assertFalse(os.path.exists(os.path.join(self.tmp, "far_half.bt")))
         self.assertEqual(self.stats().known_voxels, known)
 
@@ -384,8 +389,10 @@ class MapServerServicesTest(MapServerBagChecks):
         # cuts from the saved map, and the map keeps them.
         ball_path = os.path.join(self.tmp, "outside.fgm")
         c = self.sensor[0][0]
+        # (A path relative to file_root.)
+        file_root = rospy.get_param(NS + "file_root")
         res = self.truncate(region=TruncateRequest.OUTSIDE_SPHERE, center=Point(*c), radius=6.0,
-                            path=ball_path, keep=True)
+                            path=os.path.relpath(ball_path, file_root), keep=True)
         self.assertTrue(res.success, res.message)
         cli_ball = os.path.join(self.tmp, "cli_outside.fgm")
         subprocess.run([self.cli, "truncate", before_path, "--center"] + [repr(v) for v in c] +
@@ -420,7 +427,8 @@ class MapServerServicesTest(MapServerBagChecks):
 
         # Bad merges change nothing.
         for kw, why in [
-            (dict(path="far_half.fgm", mode="overwrite"), "a relative path"),
+            (dict(path="../far_half.fgm", mode="overwrite"), "'..' out of file_root"),
+            (dict(path="/etc/far_half.fgm", mode="overwrite"), "an absolute path outside"),
             (dict(path=os.path.join(self.tmp, "missing.fgm"), mode="overwrite"), "no file"),
             (dict(path=sub_path, mode="sum"), "an unknown mode"),
             (dict(path=sub_path, mode="overwrite", use_transform=True, T_map_sub=Pose()),

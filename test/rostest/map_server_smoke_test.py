@@ -22,7 +22,7 @@ def xyz_fields(datatype=PointField.FLOAT32, size=4, names=("x", "y", "z")):
             for i, n in enumerate(names)]
 
 
-def cloud(fields, point_step, width, height, data, frame="lidar"):
+def cloud(fields, point_step, width, height, data, frame="lidar", row_step=None):
     msg = PointCloud2()
     msg.header.frame_id = frame
     msg.header.stamp = rospy.Time.now()
@@ -30,7 +30,7 @@ def cloud(fields, point_step, width, height, data, frame="lidar"):
     msg.point_step = point_step
     msg.width = width
     msg.height = height
-    msg.row_step = point_step * width
+    msg.row_step = point_step * width if row_step is None else row_step
     msg.data = data
     msg.is_bigendian = False
     return msg
@@ -53,22 +53,33 @@ class MapServerSmokeTest(MapServerBagChecks):
         before = self.stats()
         good = struct.pack("<3f", 1.0, 2.0, 3.0) * 4
         nan = struct.pack("<3f", math.nan, math.nan, math.nan) * 4
+        huge = struct.pack("<12f", 1e30, 0, 0, 0, 1e30, 0, 0, 0, -1e38, -1e38, 1e30, 0)
         bad = [
             cloud(xyz_fields(names=("x", "y")), 12, 4, 1, good),          # no z
             cloud(xyz_fields(), 8, 4, 1, good),                            # point_step too small
             cloud(xyz_fields(), 12, 4, 1, good[:40]),                      # data too short
             cloud(xyz_fields(PointField.INT16, 2), 6, 4, 1, b"\0" * 24),   # int16 fields
             cloud(xyz_fields(), 12, 0, 1, b""),                            # 0 points
+            cloud(xyz_fields(), 12, 1 << 20, 1 << 16, good),               # 2^36 points
+            cloud(xyz_fields(), 12, 4, 1, good, row_step=40),              # row_step < a row
+        ]
+        no_point = [
             cloud(xyz_fields(), 12, 4, 1, nan),                            # all NaN
+            cloud(xyz_fields(), 12, 4, 1, huge),                           # only 1e30 / -1e38
         ]
         wait_for(lambda: self.pub.get_num_connections() > 0, 10, "the server to subscribe")
-        for msg in bad:
+        for msg in bad + no_point:
             self.pub.publish(msg)
             time.sleep(0.1)
-        wait_for(lambda: self.stats().rejected_clouds >= before.rejected_clouds + len(bad), 10,
+        n = len(bad) + len(no_point)
+        wait_for(lambda: self.stats().rejected_clouds >= before.rejected_clouds + n, 10,
                  "the malformed clouds to be rejected")
         after = self.stats()
-        self.assertEqual(after.rejected_clouds, before.rejected_clouds + len(bad))
+        self.assertEqual(after.rejected_clouds, before.rejected_clouds + n)
+        self.assertEqual(after.rejected_malformed, before.rejected_malformed + len(bad))
+        self.assertEqual(after.rejected_no_finite_point,
+                         before.rejected_no_finite_point + len(no_point))
+        self.assertEqual(after.points_invalid, before.points_invalid + 4)
         self.assertEqual(after.scans, before.scans)
         self.assertEqual(after.known_voxels, before.known_voxels)
 
@@ -78,6 +89,12 @@ class MapServerSmokeTest(MapServerBagChecks):
         self.pub.publish(cloud(xyz_fields(), 12, 8, 1, pts, frame="nowhere"))
         wait_for(lambda: self.stats().dropped_no_tf == before.dropped_no_tf + 1, 10,
                  "the cloud without tf to be dropped")
+        # A cloud from the future (beyond any tf received): dropped after tf_tolerance.
+        future = cloud(xyz_fields(), 12, 8, 1, pts)
+        future.header.stamp = rospy.Time.now() + rospy.Duration(1000.0)
+        self.pub.publish(future)
+        wait_for(lambda: self.stats().dropped_no_tf == before.dropped_no_tf + 2, 10,
+                 "the cloud from the future to be dropped")
         after = self.stats()
         self.assertEqual(after.scans, before.scans)
         self.assertEqual(after.known_voxels, before.known_voxels)
@@ -87,8 +104,12 @@ class MapServerSmokeTest(MapServerBagChecks):
         p = Point
         for res in [
             self.save(os.path.join(self.tmp, "map.xyz")),
-            self.save("/nonexistent-dir/map.fgm"),
+            self.save("/nonexistent-dir/map.fgm"),  # outside file_root (/tmp)
+            self.save(os.path.join(self.tmp, "no-such-dir", "map.fgm")),
+            self.save("../escape.fgm"),
             self.save(""),
+            self.load("/etc/passwd.fgm"),
+            self.load("../" + os.path.basename(self.tmp) + "/../../etc/x.fgm"),
             self.load(os.path.join(self.tmp, "missing.fgm")),
             self.load(os.path.join(self.tmp, "map.bt")),
             self.clear(p(1, 1, 1), p(0, 0, 0)),
@@ -97,6 +118,7 @@ class MapServerSmokeTest(MapServerBagChecks):
             self.assertFalse(res.success)
             self.assertTrue(res.message)
         self.assertEqual(self.stats().known_voxels, before)
+        self.assertFalse(os.path.exists("/escape.fgm"))
 
     def test_7_good_service_arguments(self):
         saved = os.path.join(self.tmp, "before_reset.fgm")
@@ -116,7 +138,8 @@ class MapServerSmokeTest(MapServerBagChecks):
         wait_for(lambda: any(m.action == Marker.DELETEALL
                              for a in self.arrays[n:] for m in a.markers), 10,
                  "a full marker republish after reset")
-        res = self.load(saved)
+        # A path relative to file_root (/tmp here) names the same file.
+        res = self.load(os.path.relpath(saved, rospy.get_param(NS + "file_root")))
         self.assertTrue(res.success, res.message)
         self.assertEqual(self.stats().known_voxels, known)
 

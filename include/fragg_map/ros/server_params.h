@@ -82,12 +82,20 @@ struct OctomapCompatParams {
 };
 
 struct ServerParams {
+  static constexpr double kDefaultMaxRangeM = 100.0;  ///< sensor_model/max_range's default
   /// resolution, sensor_model/hit|miss|min|max, backend, raycast; keep_scans and scan_store/*
   /// (map.scans: the server keeps scans by default, the core does not); pointcloud_min_z|max_z
   /// (map.height_filter: points outside [min, max] map-frame z are not inserted).
   fragg::MapParams map = withKeptScans();
-  fragg::SensorModel sensor;  ///< sensor/type|hfov|vfov, sensor_model/min_range|max_range
+  /// sensor/type|hfov|vfov, sensor_model/min_range|max_range. The server's max_range defaults
+  /// to kDefaultMaxRangeM (the core's and octomap_server's: -1, no limit; <= 0 still means no
+  /// limit when given), so that a few far outliers cannot stretch the map.
+  fragg::SensorModel sensor = fragg::SensorModel::autoFromCloud(0.0, kDefaultMaxRangeM);
   std::string frame_id = "map";
+  /// file_root: the folder ~save_map, ~load_map, ~truncate and ~merge read and write in
+  /// (server/file_root.h); "": $ROS_HOME/fragg_map, else ~/.ros/fragg_map. Created at start-up.
+  /// map_file (the operator's start-up map) is not restricted to it.
+  std::string file_root;
   /// Heights projected into projected_map.
   double occupancy_min_z_m = -std::numeric_limits<double>::infinity();
   double occupancy_max_z_m = std::numeric_limits<double>::infinity();

@@ -2,14 +2,9 @@
 #include "cloud_input.h"
 
 #include <ros/console.h>
-#include <tf2/exceptions.h>
-#include <tf2_eigen/tf2_eigen.h>
 
-#include <chrono>
 #include <string>
 
-#include "fragg_map/errors.h"
-#include "fragg_map/ros/cloud_from_msg.h"
 #include "fragg_map/ros/ground_filter.h"
 
 namespace fragg::ros {
@@ -33,8 +28,8 @@ CloudInput::CloudInput(::ros::NodeHandle& nh, const ServerParams& params, const 
                        SharedMap* shared, ServerStats* stats, InsertedFn on_inserted)
     : params_(params),
       tf_(tf),
-      shared_(shared),
       stats_(stats),
+      inserter_(params, shared, stats),
       on_inserted_(std::move(on_inserted)),
       queue_(static_cast<size_t>(params.queue_size)) {
   worker_ = std::thread([this] { run(); });
@@ -64,12 +59,8 @@ void CloudInput::run() {
   while (queue_.pop(&msg)) {
     try {
       process(*msg);
-    } catch (const fragg::InvalidArgument& e) {
-      stats_->addRejected();
-      ROS_ERROR_THROTTLE(5.0, "fragg_map: rejected cloud from '%s': %s",
-                         msg->header.frame_id.c_str(), e.what());
-    } catch (const std::exception& e) {
-      stats_->addRejected();
+    } catch (const std::exception& e) {  // the inserter counts its faults; this is a last guard
+      stats_->addFault(CloudFault::kInsertFailed);
       ROS_ERROR_THROTTLE(5.0, "fragg_map: cloud from '%s' not inserted: %s",
                          msg->header.frame_id.c_str(), e.what());
     }
@@ -80,40 +71,41 @@ bool CloudInput::waitForTransform(const std::string& target_frame,
                                   const sensor_msgs::PointCloud2& msg,
                                   Eigen::Isometry3d* T_target_sensor) {
   const std::string source = withoutLeadingSlash(msg.header.frame_id);
-  const auto deadline =
-      std::chrono::steady_clock::now() + std::chrono::duration<double>(params_.tf_tolerance_s);
   std::string error;
-  while (!stopping_) {
-    error.clear();  // canTransform appends its reason
-    if (tf_.canTransform(target_frame, source, msg.header.stamp, &error)) {
-      *T_target_sensor =
-          tf2::transformToEigen(tf_.lookupTransform(target_frame, source, msg.header.stamp));
-      return true;
-    }
-    if (std::chrono::steady_clock::now() >= deadline) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const TfWait got =
+      fragg::ros::waitForTransform(tf_, target_frame, source, msg.header.stamp,
+                                   params_.tf_tolerance_s, stopping_, T_target_sensor, &error);
+  if (got == TfWait::kFound) return true;
+  if (got == TfWait::kTooOld) {
+    stats_->addFault(CloudFault::kTfTooOld);
+    ROS_WARN_THROTTLE(5.0,
+                      "fragg_map: cloud from '%s' at %.3f is older than the tf buffer holds; "
+                      "dropped (%lu so far): %s",
+                      source.c_str(), msg.header.stamp.toSec(),
+                      static_cast<unsigned long>(stats_->faults(CloudFault::kTfTooOld)),
+                      error.c_str());
+  } else if (got == TfWait::kTimedOut) {
+    stats_->addDroppedNoTf();
+    ROS_WARN_THROTTLE(5.0,
+                      "fragg_map: no transform %s <- %s at %.3f within tf_tolerance %.2f s; "
+                      "cloud dropped (%lu so far): %s",
+                      target_frame.c_str(), source.c_str(), msg.header.stamp.toSec(),
+                      params_.tf_tolerance_s, static_cast<unsigned long>(stats_->droppedNoTf()),
+                      error.c_str());
   }
-  if (stopping_) return false;
-  stats_->addDroppedNoTf();
-  ROS_WARN_THROTTLE(5.0,
-                    "fragg_map: no transform %s <- %s at %.3f within tf_tolerance %.2f s; "
-                    "cloud dropped (%lu so far): %s",
-                    target_frame.c_str(), source.c_str(), msg.header.stamp.toSec(),
-                    params_.tf_tolerance_s, static_cast<unsigned long>(stats_->droppedNoTf()),
-                    error.c_str());
   return false;
 }
 
 void CloudInput::process(const sensor_msgs::PointCloud2& msg) {
-  if (msg.header.frame_id.empty()) throw fragg::InvalidArgument("cloud has no frame_id");
-  fragg::PointCloud cloud = cloudFromMsg(msg);  // validate before waiting for tf
+  std::optional<fragg::PointCloud> cloud = inserter_.convert(msg);  // before the tf wait
+  if (!cloud) return;
   Eigen::Isometry3d T_map_sensor;
   if (!waitForTransform(params_.frame_id, msg, &T_map_sensor)) return;
   if (params_.octomap.filter_ground) {
     Eigen::Isometry3d T_base_sensor;
     if (!waitForTransform(params_.octomap.base_frame_id, msg, &T_base_sensor)) return;
     const GroundSplit split =
-        markGroundPoints(T_base_sensor, groundFilterParamsOf(params_.octomap), &cloud);
+        markGroundPoints(T_base_sensor, groundFilterParamsOf(params_.octomap), &*cloud);
     ROS_DEBUG("fragg_map: %zu of %zu points are ground (%s)", split.ground, split.points,
               split.plane_found ? "plane" : "no plane: height band around z = 0");
     if (!split.plane_found && split.points >= 50)
@@ -123,21 +115,10 @@ void CloudInput::process(const sensor_msgs::PointCloud2& msg) {
                         params_.octomap.ground_plane_distance_m,
                         params_.octomap.base_frame_id.c_str());
   }
-  const int64_t stamp_ns = static_cast<int64_t>(msg.header.stamp.toNSec());
-  const std::string frame = withoutLeadingSlash(msg.header.frame_id);
-  const auto start = std::chrono::steady_clock::now();
   fragg::InsertStats inserted;
-  {
-    // One scan per lock: a query waits for this scan at most. The map drops points outside
-    // the height band (pointcloud_min_z/max_z) and resolves an `auto` sensor, as for the CLI.
-    const SharedMap::WriteGuard state = shared_->write();
-    inserted = state->map.insert(cloud, T_map_sensor, params_.sensor, stamp_ns, frame);
-    if (state->map.scanStore().contains(inserted.scan_id))
-      state->stamps.add(stamp_ns, inserted.scan_id, frame);
-  }
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  stats_->addInsertion(cloud.size(), ms);
+  if (!inserter_.insert(*cloud, T_map_sensor, static_cast<int64_t>(msg.header.stamp.toNSec()),
+                        withoutLeadingSlash(msg.header.frame_id), &inserted))
+    return;
   if (on_inserted_) on_inserted_(msg, inserted.sensor, T_map_sensor);
 }
 

@@ -1,10 +1,11 @@
 // Input of the map server: cloud_in -> bounded drop-oldest queue -> insertion thread. The
-// thread waits for each cloud's transform to frame_id at the cloud's stamp (up to
-// tf_tolerance of wall time; then the cloud is dropped and counted), converts the cloud and
-// inserts it (the map filters it by height in the map frame), taking the map's write lock for
-// that one scan, so the subscriber thread never does more than enqueue. With filter_ground the
-// cloud's ground points (sought in base_frame_id, which then needs a transform too) are marked
-// free-only before insertion (fragg_map/ros/ground_filter.h).
+// thread converts each cloud, waits for its transform to frame_id at the cloud's stamp (up to
+// tf_tolerance of wall time, none for a stamp older than the tf buffer; then the cloud is
+// dropped and counted) and inserts it (the map filters it by height in the map frame), taking
+// the map's write lock for that one scan, so the subscriber thread never does more than
+// enqueue. The steps and their faults: cloud_inserter.h. With filter_ground the cloud's ground
+// points (sought in base_frame_id, which then needs a transform too) are marked free-only
+// before insertion (fragg_map/ros/ground_filter.h).
 //
 // Why not tf2_ros::MessageFilter: Debian's MessageFilter has no per-message timeout (a cloud
 // whose tf never comes waits until its queue overflows), and it would run the callback on the
@@ -20,6 +21,7 @@
 #include <functional>
 #include <thread>
 
+#include "cloud_inserter.h"
 #include "fragg_map/ros/drop_oldest_queue.h"
 #include "fragg_map/ros/server_params.h"
 #include "server_stats.h"
@@ -46,15 +48,16 @@ class CloudInput {
   void onCloud(const sensor_msgs::PointCloud2::ConstPtr& msg);
   void run();
   void process(const sensor_msgs::PointCloud2& msg);
-  /// T_target_sensor at the cloud's stamp, waiting up to tf_tolerance; false (the cloud
-  /// counted as dropped and a warning logged) when it does not come.
+  /// T_target_sensor at the cloud's stamp, waiting up to tf_tolerance (not at all for a stamp
+  /// older than the buffer); false (the cloud counted as dropped by cause and a warning
+  /// logged) when it does not come.
   bool waitForTransform(const std::string& target_frame, const sensor_msgs::PointCloud2& msg,
                         Eigen::Isometry3d* T_target_sensor);
 
   const ServerParams params_;
   const tf2_ros::Buffer& tf_;
-  SharedMap* shared_;
   ServerStats* stats_;
+  CloudInserter inserter_;
   InsertedFn on_inserted_;
   DropOldestQueue<sensor_msgs::PointCloud2::ConstPtr> queue_;
   std::atomic<bool> stopping_{false};

@@ -3,6 +3,8 @@
 #include "map_file_loader.h"
 
 #include <cmath>
+#include <filesystem>
+#include <system_error>
 
 #include "fragg_map/errors.h"
 #if FRAGG_HAVE_OCTOMAP
@@ -29,6 +31,10 @@ void requireResolution(const fragg::Map& loaded, const fragg::MapParams& runtime
 }  // namespace
 
 fragg::Map loadMapFile(const std::string& path, const fragg::MapParams& runtime) {
+  // (A folder would open as a stream of undefined size: the readers are given files only.)
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    throw fragg::IoError(path + ": not a regular file");
   if (endsWith(path, ".fgm")) {
     fragg::Map loaded = fragg::Map::load(path, runtime);
     requireResolution(loaded, runtime, path);

@@ -7,6 +7,7 @@
 #include <string>
 #include <utility>
 
+#include "file_root.h"
 #include "fragg_map/log.h"
 #include "octomap_compat_notes.h"
 
@@ -17,6 +18,10 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
     : params_(readParameters(private_nh)), tf_listener_(tf_buffer_, nh) {
   if (!map_file_arg.empty()) params_.octomap.map_file = map_file_arg;
   logOctomapCompatNotes(params_);
+  // Throws (the node does not start) when the folder cannot be created.
+  params_.file_root =
+      prepareFileRoot(params_.file_root.empty() ? defaultFileRoot() : params_.file_root);
+  ROS_INFO("fragg_map: file services read and write under file_root %s", params_.file_root.c_str());
   fragg::setLogSink([](fragg::LogLevel level, const std::string& line) {
     if (level == fragg::LogLevel::kWarning)
       ROS_WARN("fragg_map: %s", line.c_str());

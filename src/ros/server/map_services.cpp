@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "file_root.h"
 #include "fragg_map/errors.h"
 #include "map_file_loader.h"
 #include "process_memory.h"
@@ -55,8 +56,7 @@ MapServices::MapServices(::ros::NodeHandle& private_nh, const ServerParams& para
 
 bool MapServices::saveMap(fragg_map::SaveMap::Request& req, fragg_map::SaveMap::Response& res) {
   return answer("save_map", res, [&] {
-    const std::string& path = req.path;
-    if (path.empty()) throw fragg::InvalidArgument("empty path");
+    const std::string path = resolveUnderRoot(params_.file_root, req.path);
     const SharedMap::ReadGuard state = shared_->read();  // saving only reads the map
     if (endsWith(path, ".fgm")) {
       state->map.save(path);
@@ -123,7 +123,8 @@ std::string MapServices::clearBox(const Eigen::Vector3d& min_m, const Eigen::Vec
 }
 
 bool MapServices::loadMap(fragg_map::LoadMap::Request& req, fragg_map::LoadMap::Response& res) {
-  return answer("load_map", res, [&] { return loadMap(req.path); });
+  return answer("load_map", res,
+                [&] { return loadMap(resolveUnderRoot(params_.file_root, req.path)); });
 }
 
 bool MapServices::reset(fragg_map::Reset::Request&, fragg_map::Reset::Response& res) {

@@ -3,6 +3,8 @@
 // ~clear_bbx: octomap_compat_services.h, through resetMap() and clearBox()). Each answers success +
 // message; a bad request (unknown extension, unwritable path, missing file, inverted or NaN box)
 // answers success=false with the reason and leaves the map unchanged. Nothing escapes a callback.
+// ~save_map and ~load_map paths are confined to params.file_root (file_root.h); loadMap(path),
+// the start-up map_file's way in, is not.
 #pragma once
 
 #include <ros/node_handle.h>

@@ -3,11 +3,16 @@
 
 namespace fragg::ros {
 
-void ServerStats::addInsertion(uint64_t points, double ms) {
+void ServerStats::addInsertion(uint64_t points, double ms, const fragg::InsertStats& inserted) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++scans_;
   points_ += points;
   insertion_ms_.add(ms);
+  points_invalid_ += inserted.dropped_invalid;
+  points_beyond_range_ += inserted.rays_free_only;
+  points_below_min_range_ += inserted.dropped_min_range;
+  points_outside_height_ += inserted.dropped_height;
+  points_outside_frustum_ += inserted.dropped_outside_frustum;
 }
 
 void ServerStats::addDroppedNoTf() {
@@ -20,9 +25,24 @@ void ServerStats::addDroppedQueueFull() {
   ++dropped_queue_full_;
 }
 
-void ServerStats::addRejected() {
+void ServerStats::addFault(CloudFault fault) {
   std::lock_guard<std::mutex> lock(mutex_);
-  ++rejected_;
+  ++faults_[static_cast<int>(fault)];
+}
+
+void ServerStats::addPointsInvalid(uint64_t points) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  points_invalid_ += points;
+}
+
+void ServerStats::addBackendFallback() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++backend_fallbacks_;
+}
+
+uint64_t ServerStats::faults(CloudFault fault) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return faults_[static_cast<int>(fault)];
 }
 
 void ServerStats::addCorrection(uint64_t scans, double ms) {
@@ -71,7 +91,12 @@ void ServerStats::restart(uint64_t scans) {
   scans_ = scans;
   dropped_no_tf_ = 0;
   dropped_queue_full_ = 0;
-  rejected_ = 0;
+  for (uint64_t& n : faults_) n = 0;
+  points_invalid_ = 0;
+  points_beyond_range_ = 0;
+  points_below_min_range_ = 0;
+  points_outside_height_ = 0;
+  points_outside_frustum_ = 0;
 }
 
 uint64_t ServerStats::droppedNoTf() const {
@@ -100,8 +125,22 @@ fragg_map::MapStats ServerStats::toMsg(const fragg::Map& map, const std::string&
   msg.points = points_;
   msg.dropped_no_tf = dropped_no_tf_;
   msg.dropped_queue_full = dropped_queue_full_;
-  msg.rejected_clouds = rejected_;
-  msg.dropped_clouds = dropped_no_tf_ + dropped_queue_full_ + rejected_;
+  auto fault = [this](CloudFault f) { return faults_[static_cast<int>(f)]; };
+  msg.rejected_malformed = fault(CloudFault::kMalformed);
+  msg.rejected_no_finite_point = fault(CloudFault::kNoFinitePoint);
+  msg.rejected_bad_transform = fault(CloudFault::kBadTransform);
+  msg.insertion_failures = fault(CloudFault::kInsertFailed);
+  msg.dropped_tf_too_old = fault(CloudFault::kTfTooOld);
+  msg.rejected_clouds = msg.rejected_malformed + msg.rejected_no_finite_point +
+                        msg.rejected_bad_transform + msg.insertion_failures;
+  msg.dropped_clouds =
+      dropped_no_tf_ + msg.dropped_tf_too_old + dropped_queue_full_ + msg.rejected_clouds;
+  msg.backend_fallbacks = backend_fallbacks_;
+  msg.points_invalid = points_invalid_;
+  msg.points_beyond_range = points_beyond_range_;
+  msg.points_below_min_range = points_below_min_range_;
+  msg.points_outside_height = points_outside_height_;
+  msg.points_outside_frustum = points_outside_frustum_;
   msg.insertion_ms_last = static_cast<float>(insertion_ms_.lastMs());
   msg.insertion_ms_mean = static_cast<float>(insertion_ms_.meanMs());
   msg.insertion_ms_p99 = static_cast<float>(insertion_ms_.percentileMs(0.99));

@@ -1,4 +1,5 @@
-// Counters of the map server (clouds inserted, dropped and why, insertion, correction and
+// Counters of the map server (clouds inserted, dropped and why (CloudFault), points left out
+// and why, insertion, correction and
 // collision-check times, frontier queries and topic updates), safe to update from the insertion
 // thread and read from service and publisher threads.
 #pragma once
@@ -8,17 +9,32 @@
 #include <string>
 
 #include "fragg_map/MapStats.h"
+#include "fragg_map/insert_stats.h"
 #include "fragg_map/map.h"
 #include "fragg_map/ros/timing_stats.h"
 
 namespace fragg::ros {
 
+/// Why a cloud did not reach the map (one counter each in ~stats).
+enum class CloudFault {
+  kMalformed,      ///< PointCloud2 layout: fields, sizes, 0 points
+  kNoFinitePoint,  ///< every point NaN / Inf or beyond the map's key range
+  kBadTransform,   ///< the transform to the map frame not finite, not rigid or out of range
+  kInsertFailed,   ///< the map threw while inserting (the scan is not in the map)
+  kTfTooOld,       ///< stamp older than the tf buffer holds: dropped without waiting
+};
+
 class ServerStats {
  public:
-  void addInsertion(uint64_t points, double ms);
+  /// A scan inserted: its points, wall time and the map's per-point counts.
+  void addInsertion(uint64_t points, double ms, const fragg::InsertStats& inserted = {});
   void addDroppedNoTf();
   void addDroppedQueueFull();
-  void addRejected();
+  void addFault(CloudFault fault);
+  /// Points left out before insertion (beyond the map's key range): added to points_invalid.
+  void addPointsInvalid(uint64_t points);
+  /// The CUDA backend ran out of device memory and the map went on with the CPU backend.
+  void addBackendFallback();
   /// A pose correction that moved `scans` kept scans in `ms`.
   void addCorrection(uint64_t scans, double ms);
   /// A ~check_collision call that checked `poses` poses in `ms`.
@@ -38,6 +54,7 @@ class ServerStats {
   fragg_map::MapStats toMsg(const fragg::Map& map, const std::string& frame_id,
                             const ::ros::Time& stamp) const;
   uint64_t droppedNoTf() const;
+  uint64_t faults(CloudFault fault) const;
 
  private:
   mutable std::mutex mutex_;
@@ -45,7 +62,13 @@ class ServerStats {
   uint64_t points_ = 0;
   uint64_t dropped_no_tf_ = 0;
   uint64_t dropped_queue_full_ = 0;
-  uint64_t rejected_ = 0;
+  uint64_t faults_[5] = {0, 0, 0, 0, 0};  // by CloudFault
+  uint64_t backend_fallbacks_ = 0;
+  uint64_t points_invalid_ = 0;
+  uint64_t points_beyond_range_ = 0;
+  uint64_t points_below_min_range_ = 0;
+  uint64_t points_outside_height_ = 0;
+  uint64_t points_outside_frustum_ = 0;
   TimingStats insertion_ms_;
   uint64_t corrections_ = 0;
   uint64_t corrected_scans_ = 0;

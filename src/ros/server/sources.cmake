@@ -5,6 +5,7 @@ set(FRAGG_ROS_SERVER_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/map_services.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_file_loader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/autosave.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/file_root.cpp
   ${CMAKE_CURRENT_LIST_DIR}/process_memory.cpp
   ${CMAKE_CURRENT_LIST_DIR}/octomap_compat_services.cpp
   ${CMAKE_CURRENT_LIST_DIR}/octomap_compat_notes.cpp
@@ -14,6 +15,7 @@ set(FRAGG_ROS_SERVER_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/frontier_service.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frontier_publisher.cpp
   ${CMAKE_CURRENT_LIST_DIR}/path_corrector.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/cloud_inserter.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cloud_input.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_server.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_server_nodelet.cpp

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "file_root.h"
 #include "fragg_map/atomic_file.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/map.h"
@@ -23,14 +24,15 @@ double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-// An absolute path ending in .fgm; throws fragg::InvalidArgument otherwise.
-void requireAbsoluteFgm(const std::string& path) {
-  if (path.empty()) throw fragg::InvalidArgument("empty path");
-  if (path[0] != '/')
-    throw fragg::InvalidArgument("'" + path + "' is relative: give an absolute path");
+// `requested` ending in .fgm, resolved under file_root (file_root.h); throws
+// fragg::InvalidArgument otherwise.
+std::string fgmUnderRoot(const std::string& root, const std::string& requested) {
   const std::string ext = ".fgm";
-  if (path.size() <= ext.size() || path.compare(path.size() - ext.size(), ext.size(), ext) != 0)
-    throw fragg::InvalidArgument("unknown extension of '" + path + "': sub-maps are .fgm files");
+  if (requested.size() <= ext.size() ||
+      requested.compare(requested.size() - ext.size(), ext.size(), ext) != 0)
+    throw fragg::InvalidArgument("unknown extension of '" + requested +
+                                 "': sub-maps are .fgm files");
+  return resolveUnderRoot(root, requested);
 }
 
 fragg::SubmapRegion regionOf(const fragg_map::Truncate::Request& req) {
@@ -80,24 +82,24 @@ SubmapServices::SubmapServices(::ros::NodeHandle& private_nh, const ServerParams
 bool SubmapServices::truncate(fragg_map::Truncate::Request& req,
                               fragg_map::Truncate::Response& res) {
   answer("truncate", res, [&] {
-    requireAbsoluteFgm(req.path);
+    const std::string path = fgmUnderRoot(params_.file_root, req.path);
     fragg::SubmapRegion region = regionOf(req);
     region.frame_id = params_.frame_id;
-    { fragg::AtomicFile probe(req.path); }  // an unwritable folder fails here, map untouched
+    { fragg::AtomicFile probe(path); }  // an unwritable folder fails here, map untouched
     const auto t0 = Clock::now();
     fragg::SubmapStats st;
     if (req.keep) {
       const SharedMap::ReadGuard state = shared_->read();
       fragg::Map sub = copyOf(state->map, region, &st);
       sub.setRegion(region);
-      sub.save(req.path);
+      sub.save(path);
       res.known_voxels = state->map.knownVoxelCount();
     } else {
       // The copy is written first: a failed write leaves the map as it was.
       const SharedMap::WriteGuard state = shared_->write();
       fragg::Map sub = copyOf(state->map, region, &st);
       sub.setRegion(region);
-      sub.save(req.path);
+      sub.save(path);
       fragg::SubmapStats moved;
       if (region.kind == fragg::SubmapRegion::Kind::kBox)
         state->map.truncate(region.min_map, region.max_map, fragg::Backend::kCpu, &moved);
@@ -112,7 +114,7 @@ bool SubmapServices::truncate(fragg_map::Truncate::Request& req,
     res.blocks = st.blocks;
     res.blocks_erased = st.blocks_erased;
     return std::string(req.keep ? "copied " : "moved ") + std::to_string(st.cells) + " cells in " +
-           std::to_string(st.blocks) + " blocks to " + req.path + "; " +
+           std::to_string(st.blocks) + " blocks to " + path + "; " +
            std::to_string(res.known_voxels) + " cells left in the map";
   });
   if (res.success && !req.keep && res.cells > 0 && on_map_changed_) on_map_changed_();
@@ -121,7 +123,7 @@ bool SubmapServices::truncate(fragg_map::Truncate::Request& req,
 
 bool SubmapServices::merge(fragg_map::Merge::Request& req, fragg_map::Merge::Response& res) {
   answer("merge", res, [&] {
-    requireAbsoluteFgm(req.path);
+    const std::string path = fgmUnderRoot(params_.file_root, req.path);
     const fragg::MergeMode mode = fragg::mergeModeFromString(req.mode);
     std::optional<Eigen::Isometry3d> T_map_sub;
     if (req.use_transform) {
@@ -133,20 +135,20 @@ bool SubmapServices::merge(fragg_map::Merge::Request& req, fragg_map::Merge::Res
     }
     fragg::MapParams runtime;  // only read: CPU, no kept scans
     runtime.backend = fragg::Backend::kCpu;
-    const fragg::Map sub = fragg::Map::load(req.path, runtime);  // validates the file
+    const fragg::Map sub = fragg::Map::load(path, runtime);  // validates the file
     const auto t0 = Clock::now();
     const SharedMap::WriteGuard state = shared_->write();
     fragg::SubmapStats st;
     try {
       st = state->map.merge(sub, mode, T_map_sub);  // checks resolution and model first
     } catch (const fragg::InvalidArgument& e) {
-      throw fragg::InvalidArgument(req.path + ": " + e.what());
+      throw fragg::InvalidArgument(path + ": " + e.what());
     }
     res.ms = msSince(t0);
     res.cells = st.cells;
     res.blocks = st.blocks;
     res.known_voxels = state->map.knownVoxelCount();
-    return "merged " + std::to_string(st.cells) + " cells of " + req.path + " (" +
+    return "merged " + std::to_string(st.cells) + " cells of " + path + " (" +
            fragg::toString(mode) + "), " + std::to_string(st.blocks) + " blocks written; " +
            std::to_string(res.known_voxels) + " cells in the map";
   });

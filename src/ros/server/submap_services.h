@@ -1,7 +1,8 @@
 // ~truncate and ~merge: sub-maps cut out of the map into a .fgm file, and .fgm sub-maps (or
 // maps of another robot) merged back in (fragg_map/submap.h). Both take the map's write lock
 // for their edit (~truncate with keep only reads); the changed blocks' markers and
-// projected_map are republished after an edit. Paths must be absolute .fgm files. Bad
+// projected_map are republished after an edit. Paths are .fgm files under params.file_root
+// (file_root.h: relative paths resolve there, paths leading out are refused). Bad
 // arguments answer success=false with the reason and leave the map (and the file system)
 // untouched.
 #pragma once
