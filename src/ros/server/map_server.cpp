@@ -39,8 +39,14 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
 #if FRAGG_HAVE_OCTOMAP_MSGS
   octomap_outputs_ = std::make_unique<OctomapOutputs>(nh, params_, shared_.get());
 #endif
+  // Without octomap_msgs there is no OctomapOutputs to call (nor its code to link).
   auto publish_octomaps = [this](const ::ros::Time& stamp) {
+#if FRAGG_HAVE_OCTOMAP_MSGS
     if (octomap_outputs_) octomap_outputs_->publish(stamp);
+#else
+    (void)this;
+    (void)stamp;
+#endif
   };
   services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_,
                                             [this, publish_octomaps] {
