@@ -70,9 +70,11 @@ AutosaveParams parseAutosaveParameters(const XmlRpcValue& root) {
   AutosaveParams p;
   p.file_root = defaultFileRoot();
   if (const XmlRpcValue* v = member(root, "", "file_root")) {
-    p.file_root = readString(v, "file_root");
-    if (p.file_root.empty() || !fs::path(p.file_root).is_absolute())
-      badParam("file_root", "expected an absolute folder");
+    const std::string given = readString(v, "file_root");
+    if (!given.empty()) {  // "" keeps the default, as for the file services
+      if (!fs::path(given).is_absolute()) badParam("file_root", "expected an absolute folder");
+      p.file_root = given;
+    }
   }
   if (const XmlRpcValue* v = member(root, "autosave", "period_s")) {
     XmlRpcValue copy = *v;

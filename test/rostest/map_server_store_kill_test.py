@@ -88,7 +88,7 @@ class StoreKillTest(unittest.TestCase):
         for name, value in [("frame_id", "map"), ("backend", "cpu"),
                             ("resolution", RESOLUTION), ("queue_size", 100),
                             ("paging/store", cls.store), ("paging/commit_every_scans", 1),
-                            ("paging/commit_every_s", 0.0)]:
+                            ("paging/commit_every_s", 0.0), ("file_root", cls.tmp)]:
             rospy.set_param(NS + name, value)
         cls.log = open(os.path.join(cls.tmp, "node.log"), "ab")
         cls.node = subprocess.Popen(

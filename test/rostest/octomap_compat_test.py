@@ -314,8 +314,10 @@ class OctomapCompatTest(unittest.TestCase):
         for one, must not replace the main server's); its private namespace is
         /NAME/NAME/."""
         private = "/%s/%s/" % (name, name)
-        if params:
-            rosparam.upload_params(private, params)
+        # Its maps are saved under the test's folder: the file services' root (file_root).
+        params = dict(params or {})
+        params.setdefault("file_root", self.tmp)
+        rosparam.upload_params(private, params)
         exe = find_in_workspaces(["libexec"], project="fragg_map", path="fragg_map_server",
                                  first_match_only=True)
         self.assertTrue(exe, "fragg_map_server is not in the workspace")
