@@ -8,16 +8,13 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/occupied_cloud.h"
+#include "fragg_map/ros/projected_map.h"
 #include "fragg_map/ros/speckles.h"
 
 namespace fragg::ros {
-namespace {
-
-constexpr int8_t kUnknown = -1;
-constexpr int8_t kFree = 0;
-constexpr int8_t kOccupied = 100;
-
-}  // namespace
+using grid_value::kFree;
+using grid_value::kOccupied;
+using grid_value::kUnknown;
 
 MapOutputCache::MapOutputCache(const OutputCacheOptions& options) : options_(options) {
   if (std::isnan(options.occupancy_min_z_m) || std::isnan(options.occupancy_max_z_m))

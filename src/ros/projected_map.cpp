@@ -8,13 +8,9 @@
 #include "fragg_map/ros/speckles.h"
 
 namespace fragg::ros {
-namespace {
-
-constexpr int8_t kUnknown = -1;
-constexpr int8_t kFree = 0;
-constexpr int8_t kOccupied = 100;
-
-}  // namespace
+using grid_value::kFree;
+using grid_value::kOccupied;
+using grid_value::kUnknown;
 
 nav_msgs::OccupancyGrid projectedMap(const fragg::Map& map, double min_z_m, double max_z_m,
                                      const std::string& frame_id, const ::ros::Time& stamp,

@@ -5,11 +5,19 @@
 #include <nav_msgs/OccupancyGrid.h>
 #include <ros/time.h>
 
+#include <cstdint>
 #include <string>
 
 #include "fragg_map/map.h"
 
 namespace fragg::ros {
+
+/// OccupancyGrid cell values of projected_map (nav_msgs' convention).
+namespace grid_value {
+constexpr int8_t kUnknown = -1;
+constexpr int8_t kFree = 0;
+constexpr int8_t kOccupied = 100;
+}  // namespace grid_value
 
 /// With `hide_speckles` (filter_speckles) an occupied cell without an occupied neighbour
 /// counts neither as occupied nor as free.

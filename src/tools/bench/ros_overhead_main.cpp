@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "bench/synthetic_lidar.h"
+#include "bench/velodyne_msg.h"
 #include "fragg_map/map.h"
 #include "fragg_map/ros/block_markers.h"
 #include "fragg_map/ros/cloud_from_msg.h"
@@ -30,28 +31,6 @@
 #include "percentile.h"
 
 namespace {
-
-sensor_msgs::PointCloud2 toMsg(const fragg::PointCloud& cloud) {
-  sensor_msgs::PointCloud2 msg;
-  msg.header.frame_id = "lidar";
-  msg.width = cloud.organised() ? cloud.width : static_cast<uint32_t>(cloud.size());
-  msg.height = cloud.organised() ? cloud.height : 1;
-  const char* names[4] = {"x", "y", "z", "intensity"};
-  for (uint32_t i = 0; i < 4; ++i) {
-    sensor_msgs::PointField f;
-    f.name = names[i];
-    f.offset = 4 * i;
-    f.datatype = sensor_msgs::PointField::FLOAT32;
-    f.count = 1;
-    msg.fields.push_back(f);
-  }
-  msg.point_step = 16;
-  msg.row_step = 16 * msg.width;
-  msg.data.assign(size_t{msg.row_step} * msg.height, 0);
-  for (size_t i = 0; i < cloud.size(); ++i)
-    std::memcpy(&msg.data[16 * i], cloud.points_S[i].data(), 12);
-  return msg;
-}
 
 /// User + system CPU time of the process so far [s].
 double processCpuSeconds() {
@@ -113,7 +92,7 @@ int main(int argc, char** argv) {
   double path_wall_ms = 0.0, path_cpu_s = 0.0;  // conversion + insertion (+ markers)
   for (int i = 0; i < scans; ++i) {
     const fragg::Scan scan = lidar.scan(i);
-    const sensor_msgs::PointCloud2 msg = toMsg(scan.cloud);
+    const sensor_msgs::PointCloud2 msg = fragg::bench::velodyneLikeMsg(scan.cloud);
     const double cpu0_s = processCpuSeconds();
     auto t0 = std::chrono::steady_clock::now();
     const fragg::PointCloud cloud = fragg::ros::cloudFromMsg(msg);

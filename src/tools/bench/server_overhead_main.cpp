@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/velodyne_msg.h"
 #include "bench/workloads.h"
 #include "fragg_map/map.h"
 #include "fragg_map/ros/block_markers.h"
@@ -47,29 +48,6 @@ struct Clock {
 };
 
 double msSince(double start_ms) { return Clock::now() - start_ms; }
-
-/// A Velodyne-like message: x y z intensity float32, point_step 16.
-sensor_msgs::PointCloud2 toMsg(const fragg::PointCloud& cloud) {
-  sensor_msgs::PointCloud2 msg;
-  msg.header.frame_id = "lidar";
-  msg.width = cloud.organised() ? cloud.width : static_cast<uint32_t>(cloud.size());
-  msg.height = cloud.organised() ? cloud.height : 1;
-  const char* names[4] = {"x", "y", "z", "intensity"};
-  for (uint32_t i = 0; i < 4; ++i) {
-    sensor_msgs::PointField f;
-    f.name = names[i];
-    f.offset = 4 * i;
-    f.datatype = sensor_msgs::PointField::FLOAT32;
-    f.count = 1;
-    msg.fields.push_back(f);
-  }
-  msg.point_step = 16;
-  msg.row_step = 16 * msg.width;
-  msg.data.assign(size_t{msg.row_step} * msg.height, 0);
-  for (size_t i = 0; i < cloud.size(); ++i)
-    std::memcpy(&msg.data[16 * i], cloud.points_S[i].data(), 12);
-  return msg;
-}
 
 /// One subscriber in another process: the message serialised once.
 template <typename M>
@@ -156,7 +134,7 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
   after.publish(map);
   std::vector<double> total_before, total_after;
   for (size_t i = 0; i < scans.size(); ++i) {
-    const sensor_msgs::PointCloud2 msg = toMsg(scans[i].cloud);
+    const sensor_msgs::PointCloud2 msg = fragg::bench::velodyneLikeMsg(scans[i].cloud);
     auto t0 = Clock::now();
     const fragg::PointCloud cloud = fragg::ros::cloudFromMsg(msg);
     const double convert_ms = msSince(t0);
