@@ -61,6 +61,21 @@ CellMask cellMask(const fragg::Map& map, const fragg::Block& block, fragg::CellS
   return mask;
 }
 
+CellMask drawnCells(const fragg::Map& map, const fragg::BlockView& blocks,
+                    const fragg::BlockKey& key, const fragg::Block& block,
+                    const MarkerStyle& style) {
+  CellMask cells = cellMask(map, block, style.state);
+  if (!style.heights.unbounded()) {
+    const uint8_t layers = style.heights.blockLayers(key.z, map.resolution());
+    CellMask shown;
+    for (int z = 0; z < fragg::kBlockSize; ++z)
+      if (layers >> z & 1) shown |= CellMask(~uint64_t{0}) << (64 * z);
+    cells &= shown;
+  }
+  if (style.hide_speckles && cells.any()) cells = withoutSpeckles(map, blocks, key, cells);
+  return cells;
+}
+
 visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::BlockKey& key,
                                        const CellMask& cells, const MarkerStyle& style,
                                        const ::ros::Time& stamp, int32_t id) {
@@ -137,8 +152,7 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
   const int64_t n = static_cast<int64_t>(changed.size());
 #pragma omp parallel for schedule(static) if (n > 256)
   for (int64_t j = 0; j < n; ++j) {
-    masks[j] = cellMask(map, *blocks.findBlock(changed[j]), style.state);
-    if (style.hide_speckles) masks[j] = withoutSpeckles(map, blocks, changed[j], masks[j]);
+    masks[j] = drawnCells(map, blocks, changed[j], *blocks.findBlock(changed[j]), style);
   }
   for (size_t j = 0; j < changed.size(); ++j) {
     const fragg::BlockKey& key = changed[j];
@@ -171,8 +185,7 @@ visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const Mar
   ledger->next_id_ = 0;
   const fragg::BlockView blocks = map.blockView();
   map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& block) {
-    CellMask cells = cellMask(map, block, style.state);
-    if (style.hide_speckles) cells = withoutSpeckles(map, blocks, key, cells);
+    const CellMask cells = drawnCells(map, blocks, key, block, style);
     if (cells.none()) return;
     const int32_t id = ledger->next_id_++;
     ledger->ids_.emplace(key, MarkerLedger::Shown{id, cells});

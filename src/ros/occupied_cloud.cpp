@@ -36,13 +36,16 @@ sensor_msgs::PointCloud2 packedXyzCloud(const std::vector<float>& xyz, const std
 }
 
 sensor_msgs::PointCloud2 occupiedCloud(const fragg::Map& map, const std::string& frame_id,
-                                       const ::ros::Time& stamp, bool hide_speckles) {
+                                       const ::ros::Time& stamp, bool hide_speckles,
+                                       const HeightBand& heights) {
+  heights.validate();
   std::vector<float> xyz;
   const fragg::BlockView blocks = map.blockView();
   map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& b) {
     for (int c = 0; c < fragg::kCellsPerBlock; ++c) {
       if (map.state(b.cells[c]) != fragg::CellState::kOccupied) continue;
       const fragg::VoxelKey v = fragg::voxelKeyOf(key, c);
+      if (!heights.showsLayer(v.z, map.resolution())) continue;
       if (hide_speckles && isSpeckle(map, blocks, v)) continue;
       const Eigen::Vector3d p_map = map.centerOf(v);
       xyz.insert(xyz.end(), {static_cast<float>(p_map.x()), static_cast<float>(p_map.y()),

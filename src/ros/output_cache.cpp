@@ -17,10 +17,7 @@ using grid_value::kOccupied;
 using grid_value::kUnknown;
 
 MapOutputCache::MapOutputCache(const OutputCacheOptions& options) : options_(options) {
-  if (std::isnan(options.occupancy_min_z_m) || std::isnan(options.occupancy_max_z_m))
-    throw fragg::InvalidArgument("projected map heights must not be NaN");
-  if (options.occupancy_min_z_m > options.occupancy_max_z_m)
-    throw fragg::InvalidArgument("projected map: occupancy_min_z exceeds occupancy_max_z");
+  heights().validate();
 }
 
 void MapOutputCache::computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
@@ -59,8 +56,10 @@ void MapOutputCache::computePiece(const fragg::Map& map, const fragg::BlockView&
     piece->max_y = std::max(piece->max_y, ly);
   }
   const double res_m = map.resolution();
+  const uint8_t shown_layers = heights().blockLayers(key.z, res_m);
   uint64_t band_occupied = 0, band_free = 0;
   for (int z = 0; z < fragg::kBlockSize; ++z) {
+    if (!(shown_layers >> z & 1)) continue;  // outside occupancy_min_z / max_z: not shown
     uint64_t o = occupied[z];
     if (options_.hide_speckles) {
       for (uint64_t m = occupied[z]; m; m &= m - 1) {
@@ -75,8 +74,6 @@ void MapOutputCache::computePiece(const fragg::Map& map, const fragg::BlockView&
                         {static_cast<float>(p_map.x()), static_cast<float>(p_map.y()),
                          static_cast<float>(p_map.z())});
     }
-    const double z_m = (int64_t{key.z} * fragg::kBlockSize + z + 0.5) * res_m;
-    if (z_m < options_.occupancy_min_z_m || z_m > options_.occupancy_max_z_m) continue;
     band_occupied |= o;  // a speckle counts neither as occupied nor as free
     band_free |= free[z];
   }

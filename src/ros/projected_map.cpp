@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/ros/height_band.h"
 #include "fragg_map/ros/speckles.h"
 
 namespace fragg::ros {
@@ -15,10 +16,8 @@ using grid_value::kUnknown;
 nav_msgs::OccupancyGrid projectedMap(const fragg::Map& map, double min_z_m, double max_z_m,
                                      const std::string& frame_id, const ::ros::Time& stamp,
                                      bool hide_speckles) {
-  if (std::isnan(min_z_m) || std::isnan(max_z_m))
-    throw fragg::InvalidArgument("projected map heights must not be NaN");
-  if (min_z_m > max_z_m)
-    throw fragg::InvalidArgument("projected map: occupancy_min_z exceeds occupancy_max_z");
+  const HeightBand heights{min_z_m, max_z_m};
+  heights.validate();
   nav_msgs::OccupancyGrid grid;
   grid.header.frame_id = frame_id;
   grid.header.stamp = stamp;
@@ -42,8 +41,7 @@ nav_msgs::OccupancyGrid projectedMap(const fragg::Map& map, double min_z_m, doub
       const fragg::CellState s = map.state(b.cells[c]);
       if (s == fragg::CellState::kUnknown) continue;
       const fragg::VoxelKey v = fragg::voxelKeyOf(key, c);
-      const double z_m = (v.z + 0.5) * res_m;
-      if (z_m < min_z_m || z_m > max_z_m) continue;
+      if (!heights.showsLayer(v.z, res_m)) continue;
       if (hide_speckles && s == fragg::CellState::kOccupied && isSpeckle(map, blocks, v)) continue;
       int8_t& cell = grid.data[static_cast<size_t>((int64_t{v.y} - bounds.min.y) * width +
                                                    (int64_t{v.x} - bounds.min.x))];

@@ -39,7 +39,8 @@ void expectSameAsRebuild(const fragg::Map& map, const MapOutputCache& cache,
   SCOPED_TRACE(step);
   const ::ros::Time stamp(7.0);
   const Triples got = pointsOf(cache.occupiedCloud("map", stamp));
-  const Triples want = pointsOf(occupiedCloud(map, "map", stamp, o.hide_speckles));
+  const Triples want = pointsOf(occupiedCloud(map, "map", stamp, o.hide_speckles,
+                                              {o.occupancy_min_z_m, o.occupancy_max_z_m}));
   EXPECT_EQ(got.size(), want.size());
   EXPECT_TRUE(got == want);
   EXPECT_EQ(cache.occupiedCells(), want.size());

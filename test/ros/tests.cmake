@@ -10,6 +10,7 @@ if(FRAGG_HAVE_ROS)
             ${CMAKE_CURRENT_LIST_DIR}/speckles_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/output_cache_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/cell_colors_test.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/height_band_test.cpp
     LIBS fragg_map_ros
     LABELS ros)
   fragg_add_test(ros_ground_filter_test

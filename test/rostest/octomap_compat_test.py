@@ -13,7 +13,8 @@ README row -> test:
   occupied_cells_vis_array, frame_id, resolution, height_map/color  test_01
   free_cells_vis_array, publish_free_space                      test_02
   octomap_point_cloud_centers                                   test_04
-  projected_map, latch, occupancy_min_z/max_z                   test_05
+  projected_map, latch                                          test_05
+  occupancy_min_z/max_z (markers, clouds, projected_map)        test_03, test_05
   sensor_model/hit, miss, min, max                              test_05a
   ~clear_bbx                                                    test_06
   ~reset                                                        test_07
@@ -207,14 +208,27 @@ class OctomapCompatTest(unittest.TestCase):
         wait_for(lambda: "free_cells_vis_array" in self.last, 10, "free_cells_vis_array")
         self.assertTrue(any(m.points for m in self.last["free_cells_vis_array"].markers))
 
-    def test_03_max_range_and_pointcloud_height_band(self):
-        occupied = occupied_keys(self.last["occupied_cells"])
+    def test_03_max_range_and_height_bands(self):
+        """max_range and pointcloud_min_z/max_z decide what is inserted (the saved map holds
+        the wall and the high and low points as hits, nothing of the others);
+        occupancy_min_z/max_z what is shown, as octomap_server: the high and low cells are in
+        neither the occupied cloud, its alias nor the occupied markers."""
+        path = os.path.join(self.tmp, "height_bands.fgm")
+        self.assertTrue(rospy.ServiceProxy(NS + "save_map", SaveMap)(path).success)
+        in_map = cell_log_odds(path)
         wall, beyond, not_inserted, outside_band = scene_points()
         for x, y, z in wall + outside_band:
-            self.assertIn(key(x, y, z + SENSOR_Z), occupied)
+            self.assertGreater(in_map.get(key(x, y, z + SENSOR_Z), -1), 0)
         for x, y, z in beyond + not_inserted:
-            self.assertNotIn(key(x, y, z + SENSOR_Z), occupied)
-        self.assertEqual(len(occupied), len(wall) + len(outside_band))
+            self.assertNotIn(key(x, y, z + SENSOR_Z), in_map)
+        shown = [occupied_keys(self.last[t])
+                 for t in ("occupied_cells", "octomap_point_cloud_centers")]
+        shown.append({key(p.x, p.y, p.z) for m in self.last["occupied_cells_vis_array"].markers
+                      if m.action == Marker.ADD for p in m.points})
+        for occupied in shown:
+            for x, y, z in wall:
+                self.assertIn(key(x, y, z + SENSOR_Z), occupied)
+            self.assertEqual(len(occupied), len(wall))
 
     def test_04_point_cloud_centers_alias_of_occupied_cells(self):
         centers = self.last["octomap_point_cloud_centers"]

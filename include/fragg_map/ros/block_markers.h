@@ -15,6 +15,7 @@
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
 #include "fragg_map/ros/cell_colors.h"
+#include "fragg_map/ros/height_band.h"
 
 namespace fragg::ros {
 
@@ -32,6 +33,9 @@ struct MarkerStyle {
   /// their block is drawn: a neighbour appearing in another block shows them at their block's
   /// next change or full republish).
   bool hide_speckles = false;
+  /// occupancy_min_z / occupancy_max_z: cells whose cube lies outside are not drawn (as
+  /// octomap_server draws its occupied and free markers).
+  HeightBand heights;
   /// colored_map: cells with a colour in this table are drawn in it (others as above), and
   /// blocks recoloured since the last update are redrawn. Not owned; nullptr: no colours.
   const CellColors* colors = nullptr;
@@ -42,6 +46,12 @@ using CellMask = std::bitset<fragg::kCellsPerBlock>;
 
 /// The cells of `block` in `state` (the map's occupancy model).
 CellMask cellMask(const fragg::Map& map, const fragg::Block& block, fragg::CellState state);
+
+/// The cells of block `key` that `style` draws: in its state, inside its heights, speckles
+/// left out when it hides them.
+CellMask drawnCells(const fragg::Map& map, const fragg::BlockView& blocks,
+                    const fragg::BlockKey& key, const fragg::Block& block,
+                    const MarkerStyle& style);
 
 /// Which blocks a marker topic shows, with the marker id each block got and the cells drawn,
 /// and the map revision published last. Owned by the publisher; the converters below read and

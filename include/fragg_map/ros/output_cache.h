@@ -24,11 +24,13 @@
 
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
+#include "fragg_map/ros/height_band.h"
 
 namespace fragg::ros {
 
 struct OutputCacheOptions {
-  /// Heights projected into the projected map (the cell centre's z), as projectedMap().
+  /// occupancy_min_z / occupancy_max_z: cells whose cube lies outside the band are left out
+  /// of both the occupied cloud and the projected map (height_band.h, as octomap_server).
   double occupancy_min_z_m = -std::numeric_limits<double>::infinity();
   double occupancy_max_z_m = std::numeric_limits<double>::infinity();
   /// filter_speckles: occupied cells without an occupied neighbour are left out of both.
@@ -61,6 +63,8 @@ class MapOutputCache {
   uint64_t revision() const { return revision_; }
 
  private:
+  HeightBand heights() const { return {options_.occupancy_min_z_m, options_.occupancy_max_z_m}; }
+
   struct Piece {
     std::vector<float> xyz;  ///< occupied cell centres (speckles left out when hidden)
     /// The block's columns in the height band (-1 unknown, 0 free, 100 occupied), x fastest.

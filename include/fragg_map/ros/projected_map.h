@@ -22,9 +22,10 @@ constexpr int8_t kOccupied = 100;
 /// With `hide_speckles` (filter_speckles) an occupied cell without an occupied neighbour
 /// counts neither as occupied nor as free.
 /// One grid cell per voxel column (the map's resolution), covering the xy bounds of the
-/// observed map. A column is 100 (occupied) when a voxel with its centre in
-/// [min_z_m, max_z_m] is occupied, 0 (free) when such a voxel is free and none is occupied,
-/// -1 (unknown) otherwise; infinite limits leave that side open. An empty map gives a 0 x 0
+/// observed map. A column is 100 (occupied) when a voxel whose cube overlaps the open band
+/// (min_z_m, max_z_m) is occupied (octomap_server's rule, height_band.h), 0 (free) when such a
+/// voxel is free and none is occupied, -1 (unknown) otherwise; infinite limits leave that side
+/// open. An empty map gives a 0 x 0
 /// grid. Throws fragg::InvalidArgument for NaN heights or min_z_m > max_z_m.
 nav_msgs::OccupancyGrid projectedMap(const fragg::Map& map, double min_z_m, double max_z_m,
                                      const std::string& frame_id, const ::ros::Time& stamp,

@@ -29,6 +29,7 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
     topic->style.frame_id = params_.frame_id;
     topic->style.color_min_z_m = params_.color_min_z_m;
     topic->style.color_max_z_m = params_.color_max_z_m;
+    topic->style.heights = {params_.occupancy_min_z_m, params_.occupancy_max_z_m};
   }
   occupied_markers_.style.height_colors = params_.octomap.height_map;
   occupied_markers_.style.hide_speckles = params_.octomap.filter_speckles;
