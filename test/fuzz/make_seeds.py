@@ -13,6 +13,7 @@ import bz2
 import io
 import math
 import os
+import shutil
 import struct
 import subprocess
 import tempfile
@@ -260,10 +261,23 @@ def cloud_msg_seeds(out, points):
 
 
 # ---------------------------------------------------------------- .fgm and kept scans
+def fgm_version(data):
+    return struct.unpack_from("<I", data, 8)[0]
+
+
 def fgm_blocks_end(data):
-    """Offset of the byte after the block section of an .fgm (header is 88 bytes)."""
+    """Offset of the byte after the block section of an .fgm (header is 88 bytes): per-block
+    records up to version 4; version 5: u32 codec, u32 blocks per chunk, then per chunk a u32
+    size and the packed chunk (block_chunks.h)."""
     (count,) = struct.unpack_from("<Q", data, 72)
     pos = 88
+    if fgm_version(data) >= 5:
+        _, per_chunk = struct.unpack_from("<II", data, pos)
+        pos += 8
+        for _ in range((count + per_chunk - 1) // per_chunk):
+            (size,) = struct.unpack_from("<I", data, pos)
+            pos += 4 + size
+        return pos
     for _ in range(count):
         (size,) = struct.unpack_from("<I", data, pos + 12)
         pos += 16 + size
@@ -315,6 +329,53 @@ def fgm_seeds(out, fragg_map, points, tmp):
     def body(data, version):  # without the CRC footer (the fuzz target appends it)
         return data[:8] + struct.pack("<I", version) + data[12:-4]
 
+    native = fgm_version(maps["plain"])
+    for name, data in maps.items():
+        write(out, "fgm", "%s_v%d.fgm" % (name, native), data[:-4])
+    if native >= 5:
+        zlib_seed = v5_with_zlib_chunks(maps["scans"])
+        if zlib_seed:
+            write(out, "fgm", "scans_v5_zlib.fgm", zlib_seed[:-4])
+        # The older versions are derived from a per-block (version <= 4) writer's output: a
+        # version 5 writer's chunks cannot be relabelled, so the committed v1-v4 seeds stay.
+        print("make_seeds: fragg_map writes version %d: v1-v4 .fgm seeds left as they are"
+              % native)
+    else:
+        derive_old_fgm_seeds(out, maps, body)
+    # Kept-scan records (target `scan`: byte 0 = version - 2, bit 7 = spill file); the record
+    # layout is the same in versions 4 and 5.
+    for name in ("scans", "scans_step"):
+        data = maps[name]
+        pos = fgm_blocks_end(data) + 16
+        rec = data[pos:scan_record_end(data, pos, 4)]
+        write(out, "scan", name + "_v4", bytes([2]) + rec)
+        write(out, "scan", name + "_v3", bytes([1]) + rec)
+        write(out, "scan", name + "_v2", bytes([0]) + scan_v4_to_v2(rec))
+        write(out, "scan", name + "_spill", bytes([0x82]) + b"FRAGGSCN" + rec)
+    return os.path.join(tmp, "scans.fgm")
+
+
+def v5_with_zlib_chunks(data):
+    """A version 5 map whose zstd chunks (codec 2) are re-packed with zlib (codec 1), so that
+    both chunk codecs are fuzzed; None without the `zstd` tool or for another codec."""
+    (count,) = struct.unpack_from("<Q", data, 72)
+    codec, per_chunk = struct.unpack_from("<II", data, 88)
+    if codec != 2 or not shutil.which("zstd"):
+        return None
+    out, pos = bytearray(data[:88]) + struct.pack("<II", 1, per_chunk), 96
+    for _ in range((count + per_chunk - 1) // per_chunk):
+        (size,) = struct.unpack_from("<I", data, pos)
+        raw = subprocess.run(["zstd", "-d", "-c"], input=data[pos + 4:pos + 4 + size],
+                             capture_output=True, check=True).stdout
+        packed = zlib.compress(raw, 6)
+        out += struct.pack("<I", len(packed)) + packed
+        pos += 4 + size
+    body = bytes(out) + data[pos:-4]
+    return body + struct.pack("<I", zlib.crc32(body))
+
+
+def derive_old_fgm_seeds(out, maps, body):
+    """Versions 1 to 4 of the maps of a version 4 writer (same block records)."""
     for name, data in maps.items():
         write(out, "fgm", name + "_v4.fgm", body(data, 4))
     write(out, "fgm", "plain_v1.fgm", body(maps["plain"], 1))
@@ -329,16 +390,6 @@ def fgm_seeds(out, fragg_map, points, tmp):
         v2 += scan_v4_to_v2(data[pos:end])
         pos = end
     write(out, "fgm", "scans_v2.fgm", body(bytes(v2) + b"\0\0\0\0", 2))
-    # Kept-scan records (target `scan`: byte 0 = version - 2, bit 7 = spill file).
-    for name in ("scans", "scans_step"):
-        data = maps[name]
-        pos = fgm_blocks_end(data) + 16
-        rec = data[pos:scan_record_end(data, pos, 4)]
-        write(out, "scan", name + "_v4", bytes([2]) + rec)
-        write(out, "scan", name + "_v3", bytes([1]) + rec)
-        write(out, "scan", name + "_v2", bytes([0]) + scan_v4_to_v2(rec))
-        write(out, "scan", name + "_spill", bytes([0x82]) + b"FRAGGSCN" + rec)
-    return os.path.join(tmp, "scans.fgm")
 
 
 def main():
