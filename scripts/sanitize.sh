@@ -10,7 +10,9 @@
 # Usage: bash scripts/sanitize.sh [asan] [tsan]   (both when none is named)
 # Environment: CXX (compiler, default clang++ when found, else g++), FRAGG_ASAN_BUILD and
 # FRAGG_TSAN_BUILD (build folders, default build-asan, build-tsan; a FRAGG_FUZZ=ON build folder
-# may serve as the asan one: its libraries carry ASan + UBSan too), FRAGG_SANITIZE_JOBS (2).
+# may serve as the asan one: its libraries carry ASan + UBSan too), FRAGG_SANITIZE_JOBS (2),
+# FRAGG_SANITIZE_CMAKE_ARGS (more configure arguments, e.g. on the GPU machine's host:
+# "-DFRAGG_REAL_DATA=$PWD/.device/real -DOCTOMAP_ROOT=$PWD/.device/octomap").
 # The GPU tests under compute-sanitizer: scripts/device_check.sh sanitize (GPU machine).
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -35,7 +37,8 @@ configure() {
   mkdir -p "$build"
   cmake -S "$root" -B "$build" -DCMAKE_CXX_COMPILER="$cxx" -DFRAGG_SANITIZE="$sanitizer" \
     -DFRAGG_WITH_ROS=OFF -DFRAGG_WITH_CUDA=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 >"$build/sanitize-cmake.log" 2>&1 ||
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 ${FRAGG_SANITIZE_CMAKE_ARGS:-} \
+    >"$build/sanitize-cmake.log" 2>&1 ||
     { tail -20 "$build/sanitize-cmake.log"; return 1; }
 }
 
