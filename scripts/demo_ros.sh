@@ -50,9 +50,10 @@ trap stop EXIT
 fragg_step "ROS map server on the smoke bag (master on 127.0.0.1:$port)"
 log="$out/demo_ros.log"
 # Played at a quarter of its speed with a deep queue, so every scan is inserted (with the
-# default queue the oldest clouds are dropped, and counted, when insertion falls behind).
+# default queue the oldest clouds are dropped, and counted, when insertion falls behind). The
+# file services write under file_root: out/demo here.
 roslaunch "$FRAGG_REPO/launch/demo.launch" bag:="$bag" cloud:=/points rate:=0.25 queue_size:=20 \
-  config:="$FRAGG_REPO/config/default.yaml" >"$log" 2>&1 &
+  config:="$FRAGG_REPO/config/default.yaml" file_root:="$out" >"$log" 2>&1 &
 launch_pid=$!
 echo "roslaunch (pid $launch_pid), log: $log"
 
@@ -67,7 +68,7 @@ until stats | grep -Eq '^  scans: 10$'; do
   sleep 1
 done
 stats | grep -E '^  (backend|scans|points|dropped_clouds|insertion_ms_mean|known_voxels|host_bytes):'
-rosservice call /fragg_map/save_map "path: '$out/node_smoke.fgm'"
+rosservice call /fragg_map/save_map "path: 'node_smoke.fgm'"  # relative: under file_root
 stop
 
 fragg_step "the node's map"
