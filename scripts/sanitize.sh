@@ -66,7 +66,7 @@ for step in "${steps[@]}"; do
       build="${FRAGG_ASAN_BUILD:-$root/build-asan}"
       configure "$build" address || { status=1; continue; }
       # Targets this configuration has (some need liboctomap).
-      targets=(fragg_map)
+      targets=(fragg_map_cli)  # the CLI (output name fragg_map) the cli tests run
       for t in "${asan_tests[@]}"; do
         grep -q "^$t:" <(cmake --build "$build" --target help 2>/dev/null | sed 's/^\.\.\. //;s/$/:/') &&
           targets+=("$t")
