@@ -19,7 +19,7 @@ cxx="$(command -v clang++-14 || command -v clang++ || true)"
 [ -n "$cxx" ] || { echo "fuzz.sh: clang++ not found (install clang-14 libfuzzer-14-dev)" >&2; exit 1; }
 
 cmake -S "$root" -B "$build" -DCMAKE_CXX_COMPILER="$cxx" -DFRAGG_FUZZ=ON -DFRAGG_WITH_ROS=OFF \
-  -DFRAGG_WITH_CUDA=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 \
+  -DFRAGG_WITH_CUDA=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -DNDEBUG" \
   >"$build.cmake.log" 2>&1 || { tail -20 "$build.cmake.log"; exit 1; }
 # The targets this configuration builds (cloud_msg only where the ROS headers are found).
 mapfile -t all < <(cmake --build "$build" --target help | sed -n 's/^\.\.\. fragg_fuzz_\([a-z_]*\)$/\1/p' |

@@ -37,11 +37,12 @@ FRAGG_HD int cellIndexOf(const VoxelKey& v) {
          ((v.z & kBlockMask) << (2 * kBlockBits));
 }
 
-/// Voxel key of cell `cell_index` in block `b`.
+/// Voxel key of cell `cell_index` in block `b`. (A multiplication, not `b.x << kBlockBits`:
+/// shifting a negative value left is undefined in C++17, UBSan reports it; same code.)
 FRAGG_HD VoxelKey voxelKeyOf(const BlockKey& b, int cell_index) {
-  return {(b.x << kBlockBits) | (cell_index & kBlockMask),
-          (b.y << kBlockBits) | ((cell_index >> kBlockBits) & kBlockMask),
-          (b.z << kBlockBits) | ((cell_index >> (2 * kBlockBits)) & kBlockMask)};
+  return {b.x * kBlockSize + (cell_index & kBlockMask),
+          b.y * kBlockSize + ((cell_index >> kBlockBits) & kBlockMask),
+          b.z * kBlockSize + ((cell_index >> (2 * kBlockBits)) & kBlockMask)};
 }
 
 struct BlockKeyHash {

@@ -116,10 +116,9 @@ class Pager {
                                ((b.z & m) << (2 * kBlockBits)));
   }
   static BlockKey keyOfBit(const BlockKey& region, size_t bit) {
-    constexpr int32_t m = (1 << kBlockBits) - 1;
-    const auto v = static_cast<int32_t>(bit);
-    return {(region.x << kBlockBits) | (v & m), (region.y << kBlockBits) | ((v >> kBlockBits) & m),
-            (region.z << kBlockBits) | ((v >> (2 * kBlockBits)) & m)};
+    // A region is to its blocks what a block is to its cells.
+    const VoxelKey k = voxelKeyOf(region, static_cast<int>(bit));
+    return {k.x, k.y, k.z};
   }
   template <class Fn>
   void forEachPagedOutIn(const BlockKey& lo, const BlockKey& hi, Fn&& fn) const;
