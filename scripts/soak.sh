@@ -5,18 +5,22 @@
 # its resident memory every 2 s and checks, at the end (scripts/soak.py does the driving):
 #   - RSS bounded: after the warm-up (20% of the run, >= 20 s) the peak of the last third of
 #     the samples is at most 1.1 x the peak of the first third;
-#   - clouds dropped by the queue policy only (~get_stats: dropped_no_tf = rejected = 0);
+#   - clouds dropped by the queue policy only (~get_stats: dropped_no_tf = rejected = 0; a
+#     cloud that waited in the queue longer than the tf buffer, dropped_tf_too_old, counts as
+#     dropped by the queue);
 #   - no service call failed, markers were received, no ERROR / FATAL line in the node's log;
 #   - the final map equals `fragg_map build` on the bag: a final phase with no map-changing
 #     service (~reset_map, the bag's clouds once, each sent when the previous one is inserted,
 #     ~save_map), compared only when the stats say none of its clouds was dropped.
-# Writes to --out: node.log, rss.tsv, calls.tsv, summary.json and soak_rss.png (gnuplot).
+# Writes to --out: node.log, rss.tsv, map.tsv, resets.tsv, calls.tsv, summary.json and
+# soak_rss.png (gnuplot).
 # Usage: bash scripts/soak.sh [--minutes N | --seconds S] [--out DIR] [--bag BAG]
 #          [--use-master] [common options: --ws DIR ...]
 #   --use-master: use the running ROS master of ROS_MASTER_URI (a rostest's) instead of
 #                 starting one on a free loopback port.
 # The workspace must be built (scripts/build.sh; this script builds nothing).
 set -euo pipefail
+caller_master="${ROS_MASTER_URI:-}"  # common.sh sets its own; --use-master needs the caller's
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 seconds=600
@@ -75,8 +79,19 @@ if [ "$use_master" -eq 0 ]; then
   export ROS_MASTER_URI="http://127.0.0.1:$port" ROS_IP=127.0.0.1
   rosmaster --core -p "$port" >"$out/master.log" 2>&1 &
   master_pid=$!
-  for _ in $(seq 300); do (exec 3<>"/dev/tcp/127.0.0.1/$port") 2>/dev/null && break; sleep 0.2; done
+  host=127.0.0.1
+else
+  [ -n "$caller_master" ] || { echo "soak: --use-master without ROS_MASTER_URI" >&2; exit 2; }
+  export ROS_MASTER_URI="$caller_master"  # a rostest's master is on a port of its own
+  hostport="${caller_master#*://}"
+  hostport="${hostport%%/*}"
+  host="${hostport%:*}"
+  port="${hostport##*:}"
 fi
+# The master must answer (a wrong one would leave every ROS client waiting for ever).
+for _ in $(seq 150); do (exec 3<>"/dev/tcp/$host/$port") 2>/dev/null && break; sleep 0.2; done
+(exec 3<>"/dev/tcp/$host/$port") 2>/dev/null ||
+  { echo "soak: no ROS master answers at $ROS_MASTER_URI" >&2; exit 2; }
 
 fragg_step "map server soak: $seconds s on $bag (master $ROS_MASTER_URI, output $out)"
 # The node's parameters: the default config (queue of 5 clouds), the CPU backend, a 16 MiB
@@ -118,7 +133,10 @@ set xlabel "time [s]"
 set ylabel "RSS [MiB]"
 set yrange [0:*]
 set grid
-plot "$out/rss.tsv" using 1:2 with lines lw 2 title "VmRSS"
+set key bottom right
+plot "$out/rss.tsv" using 1:2 with lines lw 2 title "VmRSS (every 2 s)", \
+     "$out/map.tsv" using 1:2 with lines lw 1 title "the map's host memory (~stats)", \
+     "$out/resets.tsv" using 1:3 with points pt 7 ps 0.8 title "just after a map reset (empty map, heap trimmed)"
 EOT
   echo "RSS curve: $out/soak_rss.png"
 fi

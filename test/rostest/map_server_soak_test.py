@@ -26,10 +26,17 @@ class Soak(unittest.TestCase):
         script = os.path.join(rospkg.RosPack().get_path("fragg_map"), "scripts", "soak.sh")
         out = tempfile.mkdtemp(prefix="fragg_map_soak_")
         try:
-            run = subprocess.run(
-                ["bash", script, "--seconds", str(rospy.get_param("~seconds")), "--out", out,
-                 "--bag", rospy.get_param("~bag"), "--use-master", "--ws", ws, "--no-deps"],
-                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
+            seconds = rospy.get_param("~seconds")
+            try:
+                # The bound leaves room for the script's progress-bound waits (queue drain,
+                # final phase) within the rostest's time-limit.
+                run = subprocess.run(
+                    ["bash", script, "--seconds", str(seconds), "--out", out,
+                     "--bag", rospy.get_param("~bag"), "--use-master", "--ws", ws, "--no-deps"],
+                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True,
+                    timeout=seconds + 330)
+            except subprocess.TimeoutExpired as e:
+                self.fail("soak.sh ran past %d s: %s" % (seconds + 330, (e.stdout or "")[-6000:]))
             summary = {}
             if os.path.exists(os.path.join(out, "summary.json")):
                 with open(os.path.join(out, "summary.json")) as f:
