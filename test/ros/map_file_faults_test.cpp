@@ -19,6 +19,7 @@
 #include "../../src/ros/server/map_file_loader.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/interop/octomap_io.h"
+#include "fragg_map/map_image.h"
 #include "map_fixtures.h"
 
 namespace {
@@ -112,17 +113,21 @@ TEST(MapFileFaults, CorruptAndForeignFilesAreRefused) {
             map.knownVoxelCount());
 }
 
-// Saves `map` over `path` (which holds `previous`, a valid smaller map) where space runs out:
+// Saves `map` over `path` (which holds `previous`, a valid smaller map) where space runs out
+// (.fgm: both Map::save and writeMapImage of Map::image, ~save_map's way):
 // IoError, the old file intact and loadable, no temporary file, the map unchanged.
 void expectFailedSaveKeepsTheOldFile(const fragg::Map& map, const fs::path& path,
                                      const fragg::Map& previous, bool bt) {
   const std::string before = readAll(path);
   const size_t known = map.knownVoxelCount();
   const uint64_t revision = map.revision();
-  if (bt)
+  if (bt) {
     EXPECT_THROW(fragg::exportOctomap(map, path.string()), fragg::IoError);
-  else
+  } else {
     EXPECT_THROW(map.save(path.string()), fragg::IoError);
+    // ~save_map's and the autosave's way: the image taken, then written without the map.
+    EXPECT_THROW(fragg::writeMapImage(map.image(), path.string()), fragg::IoError);
+  }
   EXPECT_EQ(readAll(path), before);
   for (const auto& entry : fs::directory_iterator(path.parent_path()))
     EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos)

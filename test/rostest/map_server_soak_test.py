@@ -15,6 +15,13 @@ import rostest
 from catkin.find_in_workspaces import find_in_workspaces
 
 
+# 75 s hold two or three reset cycles of a ~220 MiB map with transient copies of it on top
+# (a run here without any leak: peaks of 839 and 1007 MiB in its first and last thirds): a
+# third of 15 s is too short for a 1.1 x bound. 1.5 x on the medians still fails a node that
+# keeps a map (or a copy) per cycle; the 30-minute run checks 1.1 x (docs/reliability.md).
+RSS_RATIO = 1.5
+
+
 class Soak(unittest.TestCase):
     def test_short_soak(self):
         rospy.init_node("map_server_soak_test")
@@ -26,10 +33,18 @@ class Soak(unittest.TestCase):
         script = os.path.join(rospkg.RosPack().get_path("fragg_map"), "scripts", "soak.sh")
         out = tempfile.mkdtemp(prefix="fragg_map_soak_")
         try:
-            run = subprocess.run(
-                ["bash", script, "--seconds", str(rospy.get_param("~seconds")), "--out", out,
-                 "--bag", rospy.get_param("~bag"), "--use-master", "--ws", ws, "--no-deps"],
-                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
+            seconds = rospy.get_param("~seconds")
+            try:
+                # The bound leaves room for the script's progress-bound waits (queue drain,
+                # final phase) within the rostest's time-limit.
+                run = subprocess.run(
+                    ["bash", script, "--seconds", str(seconds), "--out", out,
+                     "--bag", rospy.get_param("~bag"), "--rss-ratio", str(RSS_RATIO),
+                     "--use-master", "--ws", ws, "--no-deps"],
+                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True,
+                    timeout=seconds + 330)
+            except subprocess.TimeoutExpired as e:
+                self.fail("soak.sh ran past %d s: %s" % (seconds + 330, (e.stdout or "")[-6000:]))
             summary = {}
             if os.path.exists(os.path.join(out, "summary.json")):
                 with open(os.path.join(out, "summary.json")) as f:

@@ -1,5 +1,5 @@
 # rostests that need no recorded bag: roslaunch by package name, the node killed on a page store,
-# and fragg_map as a drop-in for
+# service calls during long insertions, and fragg_map as a drop-in for
 # octomap_server (an octomap_server YAML through launch/octomap_compat.launch, every row of
 # README's compatibility table).
 if(FRAGG_HAVE_ROS)
@@ -8,4 +8,6 @@ if(FRAGG_HAVE_ROS)
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/octomap_compat.test)
   # kill -9 of the node on a page store, restarted on it (issue 13's durability in the node).
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/map_server_store_kill.test)
+  # ~get_stats, ~save_map and ~clear_bbox called while big clouds are inserted (issue 18).
+  add_rostest(${CMAKE_CURRENT_LIST_DIR}/map_server_busy.test)
 endif()

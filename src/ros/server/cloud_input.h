@@ -3,22 +3,28 @@
 // tf_tolerance of wall time, none for a stamp older than the tf buffer; then the cloud is
 // dropped and counted) and inserts it (the map filters it by height in the map frame), taking
 // the map's write lock for that one scan, so the subscriber thread never does more than
-// enqueue. The steps and their faults: cloud_inserter.h. With filter_ground the cloud's ground
-// points (sought in base_frame_id, which then needs a transform too) are marked free-only
-// before insertion (fragg_map/ros/ground_filter.h).
+// enqueue. The subscription has a callback queue and a thread of its own: a service waiting for
+// the map lock on the node's threads cannot hold clouds back in roscpp's subscription queue,
+// which would drop them uncounted; every drop is the drop-oldest queue's, in ~stats. The steps and
+// their faults: cloud_inserter.h. With filter_ground the cloud's ground points (sought in
+// base_frame_id, which then needs a transform too) are marked free-only before insertion
+// (fragg_map/ros/ground_filter.h).
 //
 // Why not tf2_ros::MessageFilter: Debian's MessageFilter has no per-message timeout (a cloud
 // whose tf never comes waits until its queue overflows), and it would run the callback on the
 // subscriber's queue; waiting in the insertion thread gives both the bound and the threading.
 #pragma once
 
+#include <ros/callback_queue.h>
 #include <ros/node_handle.h>
+#include <ros/spinner.h>
 #include <ros/subscriber.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
 
 #include <atomic>
 #include <functional>
+#include <memory>
 #include <thread>
 
 #include "cloud_inserter.h"
@@ -61,7 +67,9 @@ class CloudInput {
   InsertedFn on_inserted_;
   DropOldestQueue<sensor_msgs::PointCloud2::ConstPtr> queue_;
   std::atomic<bool> stopping_{false};
+  ::ros::CallbackQueue callbacks_;  ///< cloud_in's only (onCloud), before sub_ and spinner_
   ::ros::Subscriber sub_;
+  std::unique_ptr<::ros::AsyncSpinner> spinner_;  ///< one thread on callbacks_
   std::thread worker_;
 };
 

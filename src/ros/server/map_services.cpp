@@ -8,6 +8,7 @@
 
 #include "file_root.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/map_image.h"
 #include "map_file_loader.h"
 #include "process_memory.h"
 #if FRAGG_HAVE_OCTOMAP
@@ -57,19 +58,33 @@ MapServices::MapServices(::ros::NodeHandle& private_nh, const ServerParams& para
 bool MapServices::saveMap(fragg_map::SaveMap::Request& req, fragg_map::SaveMap::Response& res) {
   return answer("save_map", res, [&] {
     const std::string path = resolveUnderRoot(params_.file_root, req.path);
-    const SharedMap::ReadGuard state = shared_->read();  // saving only reads the map
     if (endsWith(path, ".fgm")) {
-      state->map.save(path);
-    } else if (endsWith(path, ".bt")) {
-#if FRAGG_HAVE_OCTOMAP
-      fragg::exportOctomap(state->map, path);
-#else
-      throw fragg::InvalidArgument("this build has no liboctomap: .bt is not available");
-#endif
-    } else {
-      throw fragg::InvalidArgument("unknown extension of '" + path + "': use .fgm or .bt");
+      // As the autosave: a memory copy under the read lock, compression and disk without it
+      // (insertion waits for the copy only). A paged map has no image: its save reads the
+      // paged-out blocks from the store, under the lock.
+      fragg::MapImage image;
+      size_t known = 0;
+      {
+        const SharedMap::ReadGuard state = shared_->read();
+        known = state->map.knownVoxelCount();
+        if (state->map.paging()) {
+          state->map.save(path);
+          return "saved " + std::to_string(known) + " known voxels to " + path;
+        }
+        image = state->map.image();
+      }
+      fragg::writeMapImage(image, path);
+      return "saved " + std::to_string(known) + " known voxels to " + path;
     }
+    if (!endsWith(path, ".bt"))
+      throw fragg::InvalidArgument("unknown extension of '" + path + "': use .fgm or .bt");
+#if FRAGG_HAVE_OCTOMAP
+    const SharedMap::ReadGuard state = shared_->read();  // the export reads the map
+    fragg::exportOctomap(state->map, path);
     return "saved " + std::to_string(state->map.knownVoxelCount()) + " known voxels to " + path;
+#else
+    throw fragg::InvalidArgument("this build has no liboctomap: .bt is not available");
+#endif
   });
 }
 

@@ -4,7 +4,9 @@
 // message; a bad request (unknown extension, unwritable path, missing file, inverted or NaN box)
 // answers success=false with the reason and leaves the map unchanged. Nothing escapes a callback.
 // ~save_map and ~load_map paths are confined to params.file_root (file_root.h); loadMap(path),
-// the start-up map_file's way in, is not.
+// the start-up map_file's way in, is not. ~save_map of a .fgm holds the read lock only for the
+// map's copy (Map::image) and compresses and writes it (writeMapImage) without the lock, as the
+// autosave does; a paged map (no image) and a .bt are written under the read lock.
 #pragma once
 
 #include <ros/node_handle.h>

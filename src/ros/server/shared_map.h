@@ -2,9 +2,10 @@
 // the insertion thread, publishers, services and corrected_path. The index changes only with
 // the map, under the write lock: insertion adds, ~load_map rebuilds, ~reset clears.
 //
-// Who takes which side: publishers, ~save_map, ~get_stats, ~check_collision and ~truncate with
-// keep read; insertion (one scan per lock), ~clear_bbox, ~reset, ~load_map, the pose
-// corrections, ~truncate (removing) and ~merge write.
+// Who takes which side: publishers, ~save_map (a .fgm: for the copy only, Map::image, as the
+// autosave; a .bt: the whole export), ~get_stats, ~check_collision and ~truncate with keep
+// read; insertion (one scan per lock), ~clear_bbox, ~reset, ~load_map, the pose corrections,
+// ~truncate (removing) and ~merge write.
 #pragma once
 
 #include <utility>
