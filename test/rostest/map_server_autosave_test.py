@@ -29,6 +29,7 @@ from sensor_msgs.msg import PointCloud2
 from tf2_msgs.msg import TFMessage
 
 import fgm_cells
+from map_server_checks import wait_for
 from fragg_map.msg import MapStats
 from fragg_map.srv import GetStats, SaveMap
 
@@ -39,15 +40,6 @@ IN_FLIGHT = 3        # clouds sent and not yet inserted, at most (the node's que
 MIN_SCANS = 10       # inserted before the kill, at least
 MIN_SAVES = 4        # autosaves seen before the kill, at least
 FEED_LIMIT_S = 180   # bound on the loaded phase (a fast machine needs ~5 s)
-
-
-def wait_for(predicate, timeout_s, what):
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if predicate():
-            return
-        time.sleep(0.1)
-    raise AssertionError("timed out waiting for " + what)
 
 
 def scans_in(path):

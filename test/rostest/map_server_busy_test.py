@@ -31,6 +31,7 @@ from geometry_msgs.msg import Point
 from sensor_msgs.msg import PointCloud2, PointField
 
 from fgm_cells import BLOCK_EDGE, read_blocks
+from map_server_checks import wait_for
 from fragg_map.srv import ClearBox, GetStats, SaveMap
 
 NS = "/fragg_map/"
@@ -38,15 +39,6 @@ TOPIC = "/busy_points"
 BIG_POINTS = 600000
 BOX_MIN = (-4.8, -1.6, -1.6)  # block-aligned at 5 or 10 cm; A's shell passes through it
 BOX_MAX = (-2.4, 1.6, 1.6)
-
-
-def wait_for(predicate, timeout_s, what):
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if predicate():
-            return
-        time.sleep(0.05)
-    raise AssertionError("timed out waiting for " + what)
 
 
 def cloud(points_xyz, stamp):

@@ -59,19 +59,11 @@ from visualization_msgs.msg import Marker, MarkerArray
 from fragg_map.srv import BoundingBoxQuery, GetStats, LoadMap, Reset, SaveMap
 
 import fgm_cells
+from map_server_checks import wait_for
 
 NS = "/octomap_server/"
 RES = 0.1
 SENSOR_Z = 1.0  # the sensor frame's height in the map frame
-
-
-def wait_for(predicate, timeout_s, what):
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if predicate():
-            return
-        time.sleep(0.05)
-    raise AssertionError("timed out waiting for " + what)
 
 
 def key(x, y, z):
