@@ -26,7 +26,10 @@ cmake -S "$root" -B "$build" -DFRAGG_WITH_ROS=OFF -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_CUDA_ARCHITECTURES=90 -DFRAGG_REAL_DATA="$root/.device/real" \
   -DOCTOMAP_ROOT="$root/.device/octomap" "${store_args[@]}" >"$out/cmake.log" 2>&1 || { tail -30 "$out/cmake.log"; exit 1; }
 grep -E "page store|SQLite3 or zstd" "$out/cmake.log"
-cmake --build "$build" -j "$(nproc)" >"$out/build.log" 2>&1 || { grep -E "error" "$out/build.log" | head -30; exit 1; }
+# FRAGG_BUILD_TARGETS (space-separated) builds only those targets, e.g. the gpu tests.
+targets=()
+[ -n "${FRAGG_BUILD_TARGETS:-}" ] && read -r -a targets <<<"--target $FRAGG_BUILD_TARGETS"
+cmake --build "$build" -j "$(nproc)" "${targets[@]}" >"$out/build.log" 2>&1 || { grep -E "error" "$out/build.log" | head -30; exit 1; }
 echo "build ok"
 export LD_LIBRARY_PATH="$root/.device/octomap/lib:${LD_LIBRARY_PATH:-}"
 status=0
@@ -39,31 +42,68 @@ while [ $# -gt 0 ]; do
       grep -E "^\[gpu\]|PASSED|FAILED|Failure|Expected|Which is|actual" "$out/gpu_test_verbose.log" | head -60
       shift ;;
     sanitize)
-      # memcheck (with leak check): every gpu test binary, whole. racecheck (slower): the ray
-      # kernels (insertion, prepare, host readers, removal on real scans) and the device block
-      # cache's tests. A finding or a failed test sets the exit status.
+      # Every test case of every gpu test binary, each in its own compute-sanitizer process:
+      # memcheck (with leak check) and racecheck, FRAGG_SANITIZE_JOBS at a time (default 12, slow cases first),
+      # each stopped after FRAGG_SANITIZE_TIMEOUT s (default 420). A finding, a failed test or
+      # a timeout sets the exit status. One line per case in sanitizer_summary.txt, the logs in
+      # sanitizer_logs.tar.gz.
+      sdir="$(mktemp -d)"
+      : >"$sdir/jobs"
       for bin in fragg_gpu_test fragg_gpu_cache_test fragg_gpu_paging_test \
         fragg_gpu_collision_test fragg_gpu_frontier_test fragg_gpu_submap_test; do
         if [ ! -x "$build/test/$bin" ]; then echo "compute-sanitizer: $bin not built: skipped"; continue; fi
-        compute-sanitizer --tool memcheck --leak-check full --error-exitcode 9 \
-          "$build/test/$bin" >"$out/sanitizer_memcheck_$bin.log" 2>&1
-        rc=$?
-        echo "compute-sanitizer memcheck $bin: exit $rc"; tail -3 "$out/sanitizer_memcheck_$bin.log"
-        [ "$rc" -eq 0 ] || status=1
+        "$build/test/$bin" --gtest_list_tests | awk '
+          /^[^ ]/ { suite = $1; next }
+          /^  / { print suite $1 }' | while read -r case_name; do
+          for tool in memcheck racecheck; do echo "$tool $bin $case_name" >>"$sdir/jobs"; done
+        done
       done
-      compute-sanitizer --tool racecheck --error-exitcode 9 \
-        "$build/test/fragg_gpu_test" \
-        --gtest_filter='*PrepareKernel*:*HostReaders*:*TinyPool*:*VelodynePair*:*PoseCorrectionIsByteIdenticalOnRealScans*:*RangeNoise*' \
-        >"$out/sanitizer_racecheck.log" 2>&1
-      rc=$?
-      echo "compute-sanitizer racecheck (ray kernels): exit $rc"; tail -3 "$out/sanitizer_racecheck.log"
-      [ "$rc" -eq 0 ] || status=1
-      compute-sanitizer --tool racecheck --error-exitcode 9 "$build/test/fragg_gpu_cache_test" \
-        >"$out/sanitizer_racecheck_cache.log" 2>&1
-      rc=$?
-      echo "compute-sanitizer racecheck (cache tests): exit $rc"
-      tail -3 "$out/sanitizer_racecheck_cache.log"
-      [ "$rc" -eq 0 ] || status=1
+      # The slow cases first, so that they do not start last.
+      slow='SimulatedW1|RangeNoise|SaturatedBlock|EveryShape|CudaTrackerEqualsCpu|Synthetic|Paging\.|PathsMatch'
+      export build sdir slow
+      sanitize_one() {
+        local tool="$1" bin="$2" case_name="$3" extra=() start rc note=""
+        [ "$tool" = memcheck ] && extra=(--leak-check full)
+        # racecheck of the slow cases: only their first FRAGG_RACECHECK_SLOW_LAUNCHES kernel
+        # launches (0: all); their kernels are the ones the smaller cases check whole.
+        if [ "$tool" = racecheck ] && [ "${FRAGG_RACECHECK_SLOW_LAUNCHES:-0}" != 0 ] &&
+          [[ "$case_name" =~ $slow ]]; then
+          extra=(--launch-count "$FRAGG_RACECHECK_SLOW_LAUNCHES")
+          note="first $FRAGG_RACECHECK_SLOW_LAUNCHES launches"
+        fi
+        local tag="${tool}_${bin}_${case_name//[^A-Za-z0-9_.-]/_}"
+        local log="$sdir/$tag.log"
+        mkdir -p "$sdir/tmp/$tag"
+        start=$(date +%s)
+        FRAGG_TEST_TMP="$sdir/tmp/$tag" timeout "${FRAGG_SANITIZE_TIMEOUT:-420}" \
+          compute-sanitizer --tool "$tool" "${extra[@]}" --error-exitcode 9 \
+          "$build/test/$bin" --gtest_filter="$case_name" >"$log" 2>&1
+        rc=$?
+        rm -rf "$sdir/tmp/$tag"
+        local verdict=clean
+        [ "$rc" -eq 124 ] && verdict=timeout
+        [ "$rc" -ne 0 ] && [ "$rc" -ne 124 ] && verdict="exit $rc"
+        grep -q "\[  SKIPPED \]" "$log" && [ "$rc" -eq 0 ] && verdict="clean (skipped)"
+        printf '%s %s %s %ss %s%s | %s\n' "$tool" "$bin" "$case_name" "$(( $(date +%s) - start ))" \
+          "$verdict" "${note:+ ($note)}" "$(grep -E "ERROR SUMMARY|RACECHECK SUMMARY|LEAK SUMMARY" "$log" | tr '\n' ' ')"
+      }
+      export -f sanitize_one
+      # FRAGG_SANITIZE_FILTER (a regex over "TOOL BINARY CASE") runs a subset.
+      grep -E "${FRAGG_SANITIZE_FILTER:-.}" "$sdir/jobs" >"$sdir/jobs.kept"
+      mv "$sdir/jobs.kept" "$sdir/jobs"
+      { grep -E "$slow" "$sdir/jobs"; grep -vE "$slow" "$sdir/jobs"; } >"$sdir/jobs.ordered"
+      njobs=$(wc -l <"$sdir/jobs")
+      echo "compute-sanitizer: $njobs runs ($(grep -c ^memcheck "$sdir/jobs") cases x memcheck, racecheck)"
+      # Each line is appended as its run ends, so that a cut-off call still brings them back.
+      : >"$out/sanitizer_summary.txt"
+      xargs -P "${FRAGG_SANITIZE_JOBS:-12}" -L 1 bash -c 'sanitize_one "$@" >>"$0"' \
+        "$out/sanitizer_summary.txt" <"$sdir/jobs.ordered"
+      sort -o "$out/sanitizer_summary.txt" "$out/sanitizer_summary.txt"
+      tar -czf "$out/sanitizer_logs.tar.gz" -C "$sdir" . 2>/dev/null
+      grep -qv " clean" "$out/sanitizer_summary.txt" &&
+        { echo "compute-sanitizer: NOT clean:"; grep -v " clean" "$out/sanitizer_summary.txt"; status=1; }
+      echo "compute-sanitizer: $(grep -c " clean" "$out/sanitizer_summary.txt") of $njobs runs clean" \
+        "($(grep -c "clean (skipped)" "$out/sanitizer_summary.txt") of them skipped by the test)"
       shift ;;
     workloads)
       bash "$root/scripts/make_workloads.sh" --out "$root/.device/workloads" --only "$2" \

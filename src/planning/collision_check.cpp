@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <exception>
 #include <mutex>
 
@@ -73,6 +74,16 @@ CollisionResult resultOf(const CollisionAnswer& a) {
 std::mutex cuda_mutex;
 std::unique_ptr<CudaCollision> cuda_checker;
 
+// Frees the checker's device buffers at exit, before the CUDA runtime's own teardown: a static
+// destructor would run after it (the runtime registers its exit handler when first used, after
+// this file's statics were made), its frees would fail and the buffers count as leaked
+// (compute-sanitizer's leak check found them). Handlers run in reverse order of registration,
+// so this one, registered after the checker's first CUDA call, runs first.
+void releaseCudaCheckerAtExit() {
+  std::lock_guard<std::mutex> lock(cuda_mutex);
+  cuda_checker.reset();
+}
+
 std::vector<CollisionResult> checkOnCuda(const Map& map, const ObstacleIndex& index,
                                          const CollisionShape& shape,
                                          const std::vector<Eigen::Isometry3d>& T_map_shape,
@@ -85,7 +96,11 @@ std::vector<CollisionResult> checkOnCuda(const Map& map, const ObstacleIndex& in
   std::vector<CollisionAnswer> answers;
   {
     std::lock_guard<std::mutex> lock(cuda_mutex);
-    if (!cuda_checker) cuda_checker = makeCudaCollision(0);
+    if (!cuda_checker) {
+      cuda_checker = makeCudaCollision(0);
+      static const bool registered = std::atexit(releaseCudaCheckerAtExit) == 0;
+      (void)registered;
+    }
     if (shape.kind() == ShapeKind::kMesh) {
       answers =
           cuda_checker->checkMesh(masks, meshPoses(T_map_shape), meshCheck(map, shape, options));
