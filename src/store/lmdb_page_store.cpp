@@ -102,6 +102,10 @@ class LmdbPageStore final : public PageStore {
       to.push_back(outs[j]);
     }
     decodeBlocks(records, to, path_);
+    // A page-in batch reads records all over the store: without this, the file pages it
+    // touched stay in the process's resident memory until the next commit drops them (the
+    // paged W4 build peaked 365 MiB above the same build on SQLite).
+    dropMappedPages();
     return found;
   }
 

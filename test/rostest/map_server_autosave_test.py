@@ -97,21 +97,27 @@ class AutosaveRecovery(unittest.TestCase):
     def start_node(cls):
         cls.starts += 1
         log = open(os.path.join(cls.tmp, "node%d.log" % cls.starts), "w")
+        # Each start reads its clouds and tf from topics of its own (remapped), published by
+        # fresh publishers: a connection to them can only be the new node's, and no topic is
+        # unregistered and registered again by this process. (Re-creating publishers on the same
+        # topics raced: roscpp kept retrying its dropped link to the old publisher, ignored the
+        # master's update for the new one, and 1 run in 6 never connected after the restart.)
+        points_topic = "/autosave_points_%d" % cls.starts
+        tf_topic = "/autosave_tf_%d" % cls.starts
         cls.node = subprocess.Popen(
             ["/usr/lib/nodelet/nodelet", "standalone", "fragg_map/MapServerNodelet",
-             "__name:=" + NODE, "cloud_in:=/autosave_points"], stdout=log,
+             "__name:=" + NODE, "cloud_in:=" + points_topic, "/tf:=" + tf_topic], stdout=log,
             stderr=subprocess.STDOUT, env=dict(os.environ, ROSCONSOLE_STDOUT_LINE_BUFFERED="1"))
         rospy.wait_for_service(NS + "get_stats", timeout=120)
         cls.get_stats = rospy.ServiceProxy(NS + "get_stats", GetStats, persistent=False)
         # The old node's service may still be registered: wait for the new one to answer.
         wait_for(lambda: cls.stats_or_none() is not None, 60, "the node's get_stats")
-        # Fresh publishers: only the new node can connect to them, so that a connection means
-        # it receives what is published next (a killed node's connection lingers in rospy).
+        # The last start's topics are done with (their subscriber is gone).
         for pub in (cls.pub, cls.tf_pub):
             if pub is not None:
                 pub.unregister()
-        cls.pub = rospy.Publisher("/autosave_points", PointCloud2, queue_size=50)
-        cls.tf_pub = rospy.Publisher("/tf", TFMessage, queue_size=50)
+        cls.pub = rospy.Publisher(points_topic, PointCloud2, queue_size=50)
+        cls.tf_pub = rospy.Publisher(tf_topic, TFMessage, queue_size=50)
         wait_for(lambda: cls.pub.get_num_connections() > 0 and
                  cls.tf_pub.get_num_connections() > 0, 60, "the node to subscribe")
 
