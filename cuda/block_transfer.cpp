@@ -72,6 +72,9 @@ void BlockTransfer::writeBack(
       BlockMeta& m = blocks.meta(target[j]);
       m.changed_at = std::max(m.changed_at, stamps_[j]);
       m.occupied_at = std::max(m.occupied_at, stamps_[n + j]);
+      // The device keeps no state stamp: any change may have changed a state (never missed,
+      // sometimes more than needed).
+      m.state_at = std::max(m.state_at, stamps_[j]);
     }
   }
 }

@@ -39,6 +39,13 @@ struct BlockMeta {
   /// crossed the occupied threshold either way); <= changed_at. Occupied-cell markers need
   /// only the blocks with this newer than their last update.
   uint64_t occupied_at = 0;
+  /// Map revision of the last change that may have changed a cell's state as readers see it:
+  /// observed or not, and free / occupied / in the unknown band (OccupancyModel::state);
+  /// occupied_at <= state_at <= changed_at. Outputs drawn from states alone (occupied cloud,
+  /// projected map, free markers) need only these blocks: most of a scan's changes are free
+  /// cells getting freer, which change changed_at only. Backends may set it more often than
+  /// needed (the CUDA backend sets it with changed_at), never less.
+  uint64_t state_at = 0;
   /// Equal to changed_at while every cell of the block sits at the occupancy model's lower
   /// clamp (set by the CPU backend's update; any other value means "not known"). A miss changes
   /// nothing in such a block, so the ray pass skips its free cells (see freeSaturated()).

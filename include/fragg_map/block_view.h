@@ -15,6 +15,7 @@ namespace fragg {
 enum class BlockChange {
   kAny,       ///< any cell's value
   kOccupied,  ///< which cells are occupied (a cell crossed the occupied threshold either way)
+  kState,     ///< any cell's state: observed or not, free / occupied / unknown band
 };
 
 /// A block as readers see it: its key and cells.
@@ -29,6 +30,7 @@ struct BlockRef {
 struct BlockStamps {
   uint64_t changed_at = 0;   ///< any cell's value
   uint64_t occupied_at = 0;  ///< which cells are occupied
+  uint64_t state_at = 0;     ///< any cell's state (BlockChange::kState)
 };
 
 class BlockView {

@@ -30,15 +30,18 @@ std::vector<BlockRef> BlockView::in(const BlockKey& lo, const BlockKey& hi) cons
 BlockStamps BlockView::stamps(const BlockKey& key) const {
   const BlockIndex i = blocks_->find(key);
   if (i == kNoBlock) return {};
-  return {blocks_->meta(i).changed_at, blocks_->meta(i).occupied_at};
+  const BlockMeta& m = blocks_->meta(i);
+  return {m.changed_at, m.occupied_at, m.state_at};
 }
 
 std::vector<BlockKey> BlockView::changedSince(uint64_t revision, BlockChange what) const {
   std::vector<BlockKey> out;
   blocks_->forEach([&](BlockIndex i) {
     const BlockMeta& m = blocks_->meta(i);
-    if ((what == BlockChange::kOccupied ? m.occupied_at : m.changed_at) > revision)
-      out.push_back(m.key);
+    const uint64_t at = what == BlockChange::kOccupied ? m.occupied_at
+                        : what == BlockChange::kState  ? m.state_at
+                                                       : m.changed_at;
+    if (at > revision) out.push_back(m.key);
   });
   return out;
 }

@@ -11,10 +11,13 @@ void CellWriter::setInBlock(BlockIndex i, int cell, const Cell& value) {
   Cell& c = blocks_.block(i).cells[cell];
   const bool was_occupied = c.observed() && model_.state(c) == CellState::kOccupied;
   const bool is_occupied = value.observed() && model_.state(value) == CellState::kOccupied;
+  const bool state_changed =
+      c.observed() != value.observed() || model_.state(c) != model_.state(value);
   c = value;
   BlockMeta& m = blocks_.meta(i);
   m.changed_at = revision_;
   if (was_occupied != is_occupied) m.occupied_at = revision_;
+  if (state_changed) m.state_at = revision_;
   ++written_;
 }
 

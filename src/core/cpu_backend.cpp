@@ -177,7 +177,7 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
     const ScratchBlock& marks = merged.touched(j);
     Block& block = blocks.block(target[j]);
     if (fresh[j]) std::fill(std::begin(block.cells), std::end(block.cells), Cell());
-    bool changed = false, occupancy_changed = false;
+    bool changed = false, occupancy_changed = false, state_changed = false;
     for (int w = 0; w < kCellsPerBlock / 64; ++w) {
       for (uint64_t bits = marks.free[w] | marks.hit[w]; bits != 0; bits &= bits - 1) {
         const int bit = __builtin_ctzll(bits);
@@ -185,14 +185,16 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
         const Cell before = cell;
         model.update(cell, (marks.hit[w] >> bit) & 1, remove);
         changed |= before.log_odds_fx != cell.log_odds_fx || before.hits != cell.hits;
-        occupancy_changed |= (model.state(before) == CellState::kOccupied) !=
-                             (model.state(cell) == CellState::kOccupied);
+        const CellState was = model.state(before), is = model.state(cell);
+        occupancy_changed |= (was == CellState::kOccupied) != (is == CellState::kOccupied);
+        state_changed |= was != is || before.observed() != cell.observed();
         ++updated;
       }
     }
     BlockMeta& meta = blocks.meta(target[j]);
     if (changed) meta.changed_at = revision;
     if (occupancy_changed) meta.occupied_at = revision;
+    if (state_changed) meta.state_at = revision;
     meta.free_saturated_at =
         allAtLowerClamp(block, model) ? meta.changed_at : BlockMeta::kNotSaturated;
   }

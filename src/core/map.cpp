@@ -373,7 +373,10 @@ uint64_t Map::clearCellsWhere(const std::vector<BlockIndex>& blocks,
     }
     if (any_left) {
       // Only blocks that lost a cell are listed by changedBlocksSince.
-      if (any_cleared) blocks_.meta(i).changed_at = blocks_.meta(i).occupied_at = revision_;
+      if (any_cleared) {
+        BlockMeta& m = blocks_.meta(i);
+        m.changed_at = m.occupied_at = m.state_at = revision_;
+      }
     } else {
       blocks_.erase(key);
       if (pager_) pager_->noteErased(key);

@@ -206,7 +206,7 @@ std::vector<BlockIndex> Pager::pageIn(const BlockKey& lo, const BlockKey& hi, Bl
   }
   for (size_t j = 0; j < wanted.size(); ++j) {
     BlockMeta& m = blocks.meta(read[j]);
-    m.changed_at = m.occupied_at = 0;  // clean: equal to its record
+    m.changed_at = m.occupied_at = m.state_at = 0;  // clean: equal to its record
     removePagedOut(wanted[j]);
   }
   counters_.pages_read += wanted.size();

@@ -94,7 +94,8 @@ Map Map::copyRegion(const SubmapRegion& region, Backend backend, SubmapStats* st
       if (!from.cells[c].observed() || !region.contains(centerOf(voxelKeyOf(key, c)))) continue;
       if (to == kNoBlock) {
         to = sub.blocks_.findOrCreate(key);
-        sub.blocks_.meta(to).changed_at = sub.blocks_.meta(to).occupied_at = sub.revision_;
+        BlockMeta& meta = sub.blocks_.meta(to);
+        meta.changed_at = meta.occupied_at = meta.state_at = sub.revision_;
         ++st.blocks;
       }
       sub.blocks_.block(to).cells[c] = from.cells[c];
@@ -240,11 +241,14 @@ SubmapStats Map::merge(const Map& sub, MergeMode mode,
     const Cell value = combined(c, sub_cell, mode, model_);
     ++st.cells;
     if (value.log_odds_fx == c.log_odds_fx && value.hits == c.hits) return;
-    const bool was_occupied = model_.state(c) == CellState::kOccupied;
+    const CellState was = model_.state(c);
+    const bool was_observed = c.observed();
     c = value;
     BlockMeta& meta = blocks_.meta(i);
     meta.changed_at = revision_;
-    if (was_occupied != (model_.state(c) == CellState::kOccupied)) meta.occupied_at = revision_;
+    const CellState is = model_.state(c);
+    if ((was == CellState::kOccupied) != (is == CellState::kOccupied)) meta.occupied_at = revision_;
+    if (was != is || was_observed != c.observed()) meta.state_at = revision_;
     written.insert(i);
   };
 

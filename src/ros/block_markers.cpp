@@ -135,10 +135,10 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
     }
   }
   // Occupied markers: only blocks where a cell crossed the occupied threshold; other states:
-  // every changed block.
+  // the blocks where a cell's state changed.
   std::vector<fragg::BlockKey> changed = blocks.changedSince(
       since, style.state == fragg::CellState::kOccupied ? fragg::BlockChange::kOccupied
-                                                        : fragg::BlockChange::kAny);
+                                                        : fragg::BlockChange::kState);
   // colored_map: blocks whose colours changed are redrawn even with the same cells.
   std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> recolored;
   if (style.colors) {

@@ -18,6 +18,8 @@ using grid_value::kUnknown;
 
 MapOutputCache::MapOutputCache(const OutputCacheOptions& options) : options_(options) {
   heights().validate();
+  if (options_.refresh_on == fragg::BlockChange::kOccupied)
+    throw fragg::InvalidArgument("output cache: refresh_on kOccupied would miss free cells");
 }
 
 void MapOutputCache::computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
@@ -118,7 +120,7 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
     occupied_cells_ = 0;
     todo = blocks.all();
   } else {
-    std::vector<fragg::BlockKey> changed = blocks.changedSince(revision_, fragg::BlockChange::kAny);
+    std::vector<fragg::BlockKey> changed = blocks.changedSince(revision_, options_.refresh_on);
     if (options_.hide_speckles && !changed.empty()) {
       // A cell's speckle state follows its neighbours: the blocks around a change too.
       std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around(changed.begin(),

@@ -185,6 +185,8 @@ TEST(InsertTest, OccupiedAtMovesOnlyWhenACellCrossesTheOccupiedThreshold) {
     bool occupied = false;
     for (const Cell& c : block.cells) occupied |= map.state(c) == CellState::kOccupied;
     EXPECT_EQ(map.blockView().stamps(key).occupied_at, occupied ? first : 0u);
+    // Every block of the first scan got observed cells: their states changed.
+    EXPECT_EQ(map.blockView().stamps(key).state_at, first);
     EXPECT_EQ(listed.count(key), occupied ? 1u : 0u);
     with_hits += occupied;
   });
@@ -195,9 +197,13 @@ TEST(InsertTest, OccupiedAtMovesOnlyWhenACellCrossesTheOccupiedThreshold) {
   map.forEachBlock([&](const BlockKey& key, const Block&) {
     changed += map.blockView().stamps(key).changed_at > first;
     EXPECT_LE(map.blockView().stamps(key).occupied_at, first);
+    // Free cells got freer and occupied ones more occupied: no state changed.
+    EXPECT_LE(map.blockView().stamps(key).state_at, first);
   });
   EXPECT_GT(changed, 0u);
   EXPECT_EQ(map.changedBlocksSince(first, BlockChange::kAny).size(), changed);
+  EXPECT_TRUE(map.changedBlocksSince(first, BlockChange::kState).empty());
+  EXPECT_EQ(map.changedBlocksSince(0, BlockChange::kState).size(), map.blockCount());
   EXPECT_TRUE(map.changedBlocksSince(first, BlockChange::kOccupied).empty());
 }
 

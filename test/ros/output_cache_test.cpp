@@ -143,11 +143,28 @@ TEST(OutputCache, OnlyChangedBlocksAreRead) {
   test::insertWall(map, Eigen::Vector3d(0.0, 0.0, 0.0), 2.0);
   EXPECT_TRUE(cache.update(map).full);
   EXPECT_EQ(cache.update(map).blocks_read, 0u);  // nothing changed
+  // The same wall again: free cells get freer and hit cells more occupied, no cell changes
+  // state, so no block is read though many changed.
+  const uint64_t before_again = map.revision();
+  test::insertWall(map, Eigen::Vector3d(0.0, 0.0, 0.0), 2.0);
+  EXPECT_GT(map.changedBlocksSince(before_again, fragg::BlockChange::kAny).size(), 0u);
+  const OutputCacheUpdate again = cache.update(map);
+  EXPECT_FALSE(again.full);
+  EXPECT_EQ(again.blocks_read, 0u);
+  expectSameAsRebuild(map, cache, OutputCacheOptions(), "the same wall again");
   test::setCell(map, fragg::VoxelKey{100, 100, 0}, fragg::CellState::kOccupied);
   const OutputCacheUpdate u = cache.update(map);
   EXPECT_FALSE(u.full);
   EXPECT_EQ(u.blocks_read, 1u);
   expectSameAsRebuild(map, cache, OutputCacheOptions(), "one cell");
+}
+
+TEST(OutputCache, RefreshingOnOccupiedChangesOnlyIsRefused) {
+  OutputCacheOptions o;
+  o.refresh_on = fragg::BlockChange::kOccupied;  // would miss cells that became free
+  EXPECT_THROW(MapOutputCache cache(o), fragg::InvalidArgument);
+  o.refresh_on = fragg::BlockChange::kAny;
+  EXPECT_NO_THROW(MapOutputCache cache(o));
 }
 
 TEST(OutputCache, BadHeightsAreRefused) {

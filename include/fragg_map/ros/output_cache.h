@@ -1,7 +1,8 @@
 // The map server's whole-map outputs kept incrementally: per-block pieces of the occupied
 // cloud (packed cell centres) and of the projected map (the block's 8 x 8 columns in the
-// height band), refreshed only for the blocks changed since the last update
-// (Map::changedBlocksSince, with the 26 neighbours of each when speckles are hidden), and
+// height band), refreshed only for the blocks where a cell's state changed since the last
+// update (Map::changedBlocksSince with BlockChange::kState: free cells getting freer leave a
+// block alone; with the 26 neighbours of each when speckles are hidden), and
 // rebuilt from scratch when the map's view changed otherwise (Map::viewEpoch: erase,
 // clear_bbx, truncate, reset, load, paging) or the revision went back. The projected grid
 // itself is kept between updates and patched in the changed columns (octomap_server's
@@ -35,6 +36,11 @@ struct OutputCacheOptions {
   double occupancy_max_z_m = std::numeric_limits<double>::infinity();
   /// filter_speckles: occupied cells without an occupied neighbour are left out of both.
   bool hide_speckles = false;
+  /// Which blocks an update recomputes: those where a cell's state changed (kState, what the
+  /// outputs show), or every changed block (kAny: the behaviour before BlockMeta::state_at,
+  /// kept for same-run comparisons in fragg_map_server_overhead). kOccupied would miss free
+  /// cells: refused.
+  fragg::BlockChange refresh_on = fragg::BlockChange::kState;
 };
 
 /// What an update did.

@@ -1,9 +1,10 @@
 // fragg_map_server_overhead: what the map server spends per W1 cloud outside insertion, with
 // one subscriber on every map output, before (main's path: occupied cloud and projected map
-// rebuilt over the whole map after every cloud) and after (MapOutputCache: the changed blocks'
-// pieces refreshed, messages assembled from them). Per cloud: the PointCloud2 conversion
-// (cloudFromMsg), the incremental markers (changedBlockMarkers, as the server publishes them),
-// the occupied cloud (occupied_cells and octomap_point_cloud_centers share one message), the
+// rebuilt over the whole map after every cloud) and after (MapOutputCache: the pieces of the
+// blocks whose cell states changed refreshed, messages assembled from them; "any": the same
+// cache refreshing every changed block, as before BlockMeta::state_at). Per cloud: the PointCloud2
+// conversion (cloudFromMsg), the incremental markers (changedBlockMarkers, as the server publishes
+// them), the occupied cloud (occupied_cells and octomap_point_cloud_centers share one message), the
 // projected map, and each message serialised once as roscpp does for a subscriber in another
 // process (ros::serialization::serializeMessage). No ROS master: the builders are called
 // directly. Markers are the same incremental update on both paths (timed once); the whole-map
@@ -62,13 +63,15 @@ struct Times {
   // The markers' share (the same on both paths).
   double marker_serialise = 0;
   size_t marker_bytes = 0;
+  size_t blocks_read = 0;  ///< blocks the output cache recomputed (after path)
   double total() const { return markers + cloud + grid + serialise; }
 };
 
 /// The outputs after one cloud, one way or the other. `before`: the whole-map rebuilds.
 class Outputs {
  public:
-  explicit Outputs(bool before) : before_(before) {}
+  explicit Outputs(bool before, fragg::BlockChange refresh_on = fragg::BlockChange::kState)
+      : before_(before), cache_(optionsWith(refresh_on)) {}
   Times publish(const fragg::Map& map) {
     Times t;
     auto t0 = Clock::now();
@@ -87,7 +90,7 @@ class Outputs {
       grid = fragg::ros::projectedMap(map, kMinZ, kMaxZ, "map", ros::Time());
       t.grid = msSince(t0);
     } else {
-      cache_.update(map);
+      t.blocks_read = cache_.update(map).blocks_read;
       cloud = cache_.occupiedCloud("map", ros::Time());
       t.cloud = msSince(t0);
       t0 = Clock::now();
@@ -103,6 +106,11 @@ class Outputs {
   }
 
  private:
+  static fragg::ros::OutputCacheOptions optionsWith(fragg::BlockChange refresh_on) {
+    fragg::ros::OutputCacheOptions o;
+    o.refresh_on = refresh_on;
+    return o;
+  }
   static constexpr double kMinZ = -std::numeric_limits<double>::infinity();
   static constexpr double kMaxZ = std::numeric_limits<double>::infinity();
   bool before_;
@@ -112,27 +120,31 @@ class Outputs {
 };
 
 void printHeader() {
-  std::printf("%-8s %-7s %9s %9s %9s %9s %9s %9s %10s %9s\n", "scan", "path", "convert", "markers",
-              "cloud", "grid", "serialise", "total", "MB out", "occupied");
+  std::printf("%-8s %-7s %9s %9s %9s %9s %9s %9s %10s %9s %11s\n", "scan", "path", "convert",
+              "markers", "cloud", "grid", "serialise", "total", "MB out", "occupied",
+              "blocks read");
 }
 
 void printRow(const std::string& scan, const char* path, double convert_ms, const Times& t,
               size_t occupied) {
-  std::printf("%-8s %-7s %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %10.2f %9zu\n", scan.c_str(), path,
-              convert_ms, t.markers, t.cloud, t.grid, t.serialise, convert_ms + t.total(),
-              t.bytes / 1e6, occupied);
+  std::printf("%-8s %-7s %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %10.2f %9zu %11zu\n", scan.c_str(),
+              path, convert_ms, t.markers, t.cloud, t.grid, t.serialise, convert_ms + t.total(),
+              t.bytes / 1e6, occupied, t.blocks_read);
 }
 
 /// Feeds `scans` into `map`, both output paths after each; prints the rows of `shown` scans
 /// (1-based) and the medians.
 void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_range_m,
          const std::vector<size_t>& shown, const std::string& label) {
-  Outputs before(true), after(false);
+  // after: the cache refreshes the blocks whose cell states changed; any: every changed block
+  // (as before BlockMeta::state_at), for the same-run comparison.
+  Outputs before(true), after(false), any(false, fragg::BlockChange::kAny);
   std::printf("\n%s\n", label.c_str());
   printHeader();
   // The first call reads the whole map (a loaded map, or nothing yet): untimed.
   after.publish(map);
-  std::vector<double> total_before, total_after;
+  any.publish(map);
+  std::vector<double> total_before, total_after, total_any;
   for (size_t i = 0; i < scans.size(); ++i) {
     const sensor_msgs::PointCloud2 msg = fragg::bench::velodyneLikeMsg(scans[i].cloud);
     auto t0 = Clock::now();
@@ -141,6 +153,8 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
     map.insert(cloud, scans[i].T_map_sensor, fragg::SensorModel::autoFromCloud(0.0, max_range_m));
     const Times a = after.publish(map);
     total_after.push_back(convert_ms + a.total());
+    const Times y = any.publish(map);
+    total_any.push_back(convert_ms + y.total());
     for (size_t s : shown) {
       if (s != i + 1) continue;
       Times b = before.publish(map);
@@ -154,12 +168,15 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
           occupied += map.state(c) == fragg::CellState::kOccupied;
       });
       printRow(std::to_string(i + 1), "before", convert_ms, b, occupied);
+      printRow(std::to_string(i + 1), "any", convert_ms, y, occupied);
       printRow(std::to_string(i + 1), "after", convert_ms, a, occupied);
     }
   }
   using fragg::tools::percentile;
   std::printf("after: median %.2f ms, max %.2f ms per cloud over %zu clouds\n",
               percentile(total_after, 0.5), percentile(total_after, 1.0), scans.size());
+  std::printf("any:   median %.2f ms, max %.2f ms per cloud over %zu clouds\n",
+              percentile(total_any, 0.5), percentile(total_any, 1.0), scans.size());
 }
 
 }  // namespace
