@@ -43,8 +43,8 @@ while [ $# -gt 0 ]; do
       shift ;;
     sanitize)
       # Every test case of every gpu test binary, each in its own compute-sanitizer process:
-      # memcheck (with leak check) and racecheck, FRAGG_SANITIZE_JOBS at a time (default 12, slow cases first),
-      # each stopped after FRAGG_SANITIZE_TIMEOUT s (default 420). A finding, a failed test or
+      # memcheck (with leak check) and racecheck, FRAGG_SANITIZE_JOBS at a time (default 12,
+      # the slow cases first), each stopped after FRAGG_SANITIZE_TIMEOUT s (default 420). A finding, a failed test or
       # a timeout sets the exit status. One line per case in sanitizer_summary.txt, the logs in
       # sanitizer_logs.tar.gz.
       sdir="$(mktemp -d)"

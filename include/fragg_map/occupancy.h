@@ -92,6 +92,11 @@ struct OccupancyModel {
     if (c.log_odds_fx < free_below_fx) return CellState::kFree;
     return CellState::kUnknown;
   }
+  /// Whether readers see the two values of a cell differently: observed or not, or another
+  /// state (what BlockMeta::state_at records).
+  FRAGG_HD bool stateDiffers(const Cell& a, const Cell& b) const {
+    return a.observed() != b.observed() || state(a) != state(b);
+  }
 };
 
 /// Fixed-point log-odds of probability p, rounded to nearest.

@@ -11,8 +11,7 @@ void CellWriter::setInBlock(BlockIndex i, int cell, const Cell& value) {
   Cell& c = blocks_.block(i).cells[cell];
   const bool was_occupied = c.observed() && model_.state(c) == CellState::kOccupied;
   const bool is_occupied = value.observed() && model_.state(value) == CellState::kOccupied;
-  const bool state_changed =
-      c.observed() != value.observed() || model_.state(c) != model_.state(value);
+  const bool state_changed = model_.stateDiffers(c, value);
   c = value;
   BlockMeta& m = blocks_.meta(i);
   m.changed_at = revision_;

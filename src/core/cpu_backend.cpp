@@ -187,7 +187,7 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
         changed |= before.log_odds_fx != cell.log_odds_fx || before.hits != cell.hits;
         const CellState was = model.state(before), is = model.state(cell);
         occupancy_changed |= (was == CellState::kOccupied) != (is == CellState::kOccupied);
-        state_changed |= was != is || before.observed() != cell.observed();
+        state_changed |= model.stateDiffers(before, cell);
         ++updated;
       }
     }

@@ -241,14 +241,13 @@ SubmapStats Map::merge(const Map& sub, MergeMode mode,
     const Cell value = combined(c, sub_cell, mode, model_);
     ++st.cells;
     if (value.log_odds_fx == c.log_odds_fx && value.hits == c.hits) return;
-    const CellState was = model_.state(c);
-    const bool was_observed = c.observed();
+    const bool was_occupied = model_.state(c) == CellState::kOccupied;
+    const bool state_changed = model_.stateDiffers(c, value);
     c = value;
     BlockMeta& meta = blocks_.meta(i);
     meta.changed_at = revision_;
-    const CellState is = model_.state(c);
-    if ((was == CellState::kOccupied) != (is == CellState::kOccupied)) meta.occupied_at = revision_;
-    if (was != is || was_observed != c.observed()) meta.state_at = revision_;
+    if (was_occupied != (model_.state(c) == CellState::kOccupied)) meta.occupied_at = revision_;
+    if (state_changed) meta.state_at = revision_;
     written.insert(i);
   };
 

@@ -58,6 +58,9 @@ MapServices::MapServices(::ros::NodeHandle& private_nh, const ServerParams& para
 bool MapServices::saveMap(fragg_map::SaveMap::Request& req, fragg_map::SaveMap::Response& res) {
   return answer("save_map", res, [&] {
     const std::string path = resolveUnderRoot(params_.file_root, req.path);
+    const auto saved = [&](size_t known) {
+      return "saved " + std::to_string(known) + " known voxels to " + path;
+    };
     if (endsWith(path, ".fgm")) {
       // As the autosave: a memory copy under the read lock, compression and disk without it
       // (insertion waits for the copy only). A paged map has no image: its save reads the
@@ -69,19 +72,19 @@ bool MapServices::saveMap(fragg_map::SaveMap::Request& req, fragg_map::SaveMap::
         known = state->map.knownVoxelCount();
         if (state->map.paging()) {
           state->map.save(path);
-          return "saved " + std::to_string(known) + " known voxels to " + path;
+          return saved(known);
         }
         image = state->map.image();
       }
       fragg::writeMapImage(image, path);
-      return "saved " + std::to_string(known) + " known voxels to " + path;
+      return saved(known);
     }
     if (!endsWith(path, ".bt"))
       throw fragg::InvalidArgument("unknown extension of '" + path + "': use .fgm or .bt");
 #if FRAGG_HAVE_OCTOMAP
     const SharedMap::ReadGuard state = shared_->read();  // the export reads the map
     fragg::exportOctomap(state->map, path);
-    return "saved " + std::to_string(state->map.knownVoxelCount()) + " known voxels to " + path;
+    return saved(state->map.knownVoxelCount());
 #else
     throw fragg::InvalidArgument("this build has no liboctomap: .bt is not available");
 #endif
