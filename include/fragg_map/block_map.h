@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "fragg_map/block_key_table.h"
 #include "fragg_map/cell.h"
 #include "fragg_map/culling.h"
 #include "fragg_map/key.h"
@@ -132,7 +133,7 @@ class BlockMap {
   std::vector<BlockIndex> free_;
   /// Per memory page of the arena: handed back by releaseFreePages() and not used since.
   std::vector<uint8_t> page_released_;
-  std::unordered_map<BlockKey, BlockIndex, BlockKeyHash> index_;
+  BlockKeyTable index_;
   std::unordered_map<BlockKey, std::vector<BlockIndex>, SuperKeyHash> super_;
 };
 

@@ -262,6 +262,8 @@ class Map {
   /// invalidated first) and marks the box as used now.
   void pageInBlocks(const BlockKey& lo, const BlockKey& hi);
   void pageInAllBlocks();
+  /// Pages in the blocks of `keys` that are paged out (the backend's exact page-in).
+  void pageInKeys(const std::vector<BlockKey>& keys);
   /// Paging after a scan (or removal): commits when due or over budget, then pages out.
   void pageAfterScan(const Eigen::Vector3d& sensor_map);
   /// After paging out: the memory of the blocks that left goes back to the system.

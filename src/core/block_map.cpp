@@ -61,10 +61,9 @@ BlockMap& BlockMap::operator=(BlockMap&& o) noexcept {
   return *this;
 }
 
-BlockIndex BlockMap::find(const BlockKey& key) const {
-  auto it = index_.find(key);
-  return it == index_.end() ? kNoBlock : it->second;
-}
+static_assert(kNoBlock == BlockKeyTable::kNone, "the index's empty value is kNoBlock");
+
+BlockIndex BlockMap::find(const BlockKey& key) const { return index_.find(key); }
 
 const Block* BlockMap::findBlock(const BlockKey& key) const {
   const BlockIndex i = find(key);
@@ -82,28 +81,31 @@ const Cell* BlockMap::findCell(const VoxelKey& key) const {
 }
 
 BlockIndex BlockMap::findOrCreate(const BlockKey& key, bool* created, bool initialise) {
-  auto [it, inserted] = index_.try_emplace(key, kNoBlock);
-  if (created) *created = inserted;
-  if (!inserted) return it->second;
+  const BlockIndex found = index_.find(key);
+  if (created) *created = found == kNoBlock;
+  if (found != kNoBlock) return found;
+  index_.reserve(index_.size() + 1);  // may throw: before anything changes
+  const bool reused = !free_.empty();
   BlockIndex i;
+  if (reused) {
+    i = free_.back();
+  } else {
+    i = static_cast<BlockIndex>(meta_.size());
+    if (i % kBlocksPerChunk == 0)
+      chunks_.push_back(static_cast<Block*>(allocator_->allocate(kBlocksPerChunk * sizeof(Block))));
+    meta_.emplace_back();
+  }
   try {
-    if (!free_.empty()) {
-      i = free_.back();
-      free_.pop_back();
-      if (i / kBlocksPerPage < page_released_.size()) page_released_[i / kBlocksPerPage] = 0;
-    } else {
-      i = static_cast<BlockIndex>(meta_.size());
-      if (i % kBlocksPerChunk == 0)
-        chunks_.push_back(
-            static_cast<Block*>(allocator_->allocate(kBlocksPerChunk * sizeof(Block))));
-      meta_.emplace_back();
-    }
     super_[superKeyOf(key)].push_back(i);
   } catch (...) {
-    index_.erase(it);
+    if (!reused) free_.push_back(i);  // the new slot stays for the next block
     throw;
   }
-  it->second = i;
+  if (reused) {
+    free_.pop_back();
+    if (i / kBlocksPerPage < page_released_.size()) page_released_[i / kBlocksPerPage] = 0;
+  }
+  index_.insert(key, i);
   if (initialise) initBlock(block(i));
   BlockMeta& m = meta_[i];
   m = BlockMeta();
@@ -112,10 +114,9 @@ BlockIndex BlockMap::findOrCreate(const BlockKey& key, bool* created, bool initi
 }
 
 void BlockMap::erase(const BlockKey& key) {
-  auto it = index_.find(key);
-  if (it == index_.end()) return;
-  const BlockIndex i = it->second;
-  index_.erase(it);
+  const BlockIndex i = index_.find(key);
+  if (i == kNoBlock) return;
+  index_.erase(key);
   auto sit = super_.find(superKeyOf(key));
   if (sit != super_.end()) {
     auto& v = sit->second;
@@ -197,12 +198,12 @@ void BlockMap::forEachInBox(const BlockKey& lo, const BlockKey& hi,
 }
 
 void BlockMap::forEach(const std::function<void(BlockIndex)>& fn) const {
-  for (const auto& kv : index_) fn(kv.second);
+  index_.forEach([&](const BlockKey&, BlockIndex i) { fn(i); });
 }
 
 KeyBounds BlockMap::observedBounds() const {
   KeyBounds b;
-  for (const auto& [key, i] : index_) {
+  index_.forEach([&](const BlockKey& key, BlockIndex i) {
     const Block& blk = block(i);
     for (int c = 0; c < kCellsPerBlock; ++c) {
       if (!blk.cells[c].observed()) continue;
@@ -215,15 +216,14 @@ KeyBounds BlockMap::observedBounds() const {
       b.min = {std::min(b.min.x, v.x), std::min(b.min.y, v.y), std::min(b.min.z, v.z)};
       b.max = {std::max(b.max.x, v.x), std::max(b.max.y, v.y), std::max(b.max.z, v.z)};
     }
-  }
+  });
   return b;
 }
 
 size_t BlockMap::hostBytes() const {
-  // Cells in the arena, per-block metadata, and the hash index (node + bucket per entry).
-  const size_t index_entry = sizeof(BlockKey) + sizeof(BlockIndex) + 2 * sizeof(void*);
+  // Cells in the arena, per-block metadata, the index's slots and the coarse index.
   return chunks_.size() * kBlocksPerChunk * sizeof(Block) + meta_.capacity() * sizeof(BlockMeta) +
-         index_.size() * index_entry + index_.bucket_count() * sizeof(void*) +
+         index_.bytes() +
          super_.size() * (sizeof(BlockKey) + 3 * sizeof(void*) + 2 * sizeof(void*));
 }
 

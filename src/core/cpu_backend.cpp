@@ -98,12 +98,13 @@ void CpuBackend::update(const ScanInput& in, ScanUpdate what, const UpdateSettin
               prepared_, stats);
   stats.seconds_prepare += secondsSince(t0);
   updatePrepared(prepared_, what, how.model, how.params.raycast, how.params.skip_saturated_blocks,
-                 how.revision, blocks, stats);
+                 how.revision, how.page_in, blocks, stats);
 }
 
 void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
                                 const OccupancyModel& model, RayCast raycast, bool skip_saturated,
-                                uint64_t revision, BlockMap& blocks, InsertStats& stats) {
+                                uint64_t revision, const PageInKeys* page_in, BlockMap& blocks,
+                                InsertStats& stats) {
   const bool remove = what == ScanUpdate::kRemove;
   const int threads = threads_ > 0 ? threads_ : omp_get_max_threads();
   auto t0 = std::chrono::steady_clock::now();
@@ -157,6 +158,18 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
   for (long j = 0; j < touched; ++j) {
     marked[j] = merged.touched(j).marked();
     target[j] = marked[j] ? blocks.find(merged.touched(j).key) : kNoBlock;
+  }
+  if (page_in && !remove) {
+    // Paging: the marked blocks the map lacks may be in the store; those come back first
+    // (exactly the blocks the rays reach, not the scan's whole box).
+    std::vector<BlockKey> missing;
+    for (long j = 0; j < touched; ++j)
+      if (marked[j] && target[j] == kNoBlock) missing.push_back(merged.touched(j).key);
+    if (!missing.empty()) {
+      (*page_in)(missing);
+      for (long j = 0; j < touched; ++j)
+        if (marked[j] && target[j] == kNoBlock) target[j] = blocks.find(merged.touched(j).key);
+    }
   }
   uint64_t created = 0, touched_marked = 0;
   std::vector<char> fresh(static_cast<size_t>(touched), 0);

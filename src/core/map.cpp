@@ -179,11 +179,19 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   params.raycast = how.raycast;
   params.clear_no_return_rays = how.clear_no_return_rays;
   InsertStats stats;
+  PageInKeys page_in;
   if (pager_) {
-    // Every block the rays can reach is resident before the backend runs.
+    // Every block the rays can reach is resident before the backend creates one: the CPU
+    // backend asks for exactly the blocks its rays mark; any other backend (and a removal,
+    // which creates none) gets the scan's whole box first.
     BlockKey lo, hi;
     rayBlockBounds(cloud, how, params_.resolution_m, &lo, &hi);
-    pageInBlocks(lo, hi);
+    if (!remove && backend_->pagesInMarkedBlocks()) {
+      pager_->touch(lo, hi, scans_ + 1);
+      page_in = [this](const std::vector<BlockKey>& keys) { pageInKeys(keys); };
+    } else {
+      pageInBlocks(lo, hi);
+    }
   }
   const Frustum frustum = buildFrustum(how.model, how.T_map_sensor, params_.resolution_m);
   CullContext cull;
@@ -201,7 +209,7 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   stats.seconds_cull = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 
   const ScanInput scan{cloud, how.T_map_sensor, how.model, frustum, how.explicit_model, cull};
-  const UpdateSettings settings{params, model_, revision_ + 1};
+  const UpdateSettings settings{params, model_, revision_ + 1, page_in ? &page_in : nullptr};
   const ScanUpdate what = remove ? ScanUpdate::kRemove : ScanUpdate::kIntegrate;
   // Readers may be writing the cache back (they share the map): not while the scan runs.
   std::lock_guard<std::mutex> lock(*sync_mutex_);

@@ -133,6 +133,14 @@ void Map::pageInBlocks(const BlockKey& lo, const BlockKey& hi) {
   bumpViewEpoch();
 }
 
+void Map::pageInKeys(const std::vector<BlockKey>& keys) {
+  if (!pager_) return;
+  const std::vector<BlockIndex> read = pager_->pageIn(keys, blocks_);
+  if (read.empty()) return;
+  backend_->cache().added(read, blocks_);
+  bumpViewEpoch();
+}
+
 void Map::pageInAllBlocks() {
   if (!pager_ || pager_->pagedOutCount() == 0) return;
   const std::vector<BlockIndex> read = pager_->pageInAll(blocks_);

@@ -156,13 +156,29 @@ bool Pager::readPagedOut(const BlockKey& key, Block* out) {
 
 std::vector<BlockIndex> Pager::pageIn(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) {
   if (paged_count_ == 0) return {};
-  const auto t0 = Clock::now();
   std::vector<BlockKey> wanted;
   forEachPagedOutIn(lo, hi, [&](const BlockKey& k) {
     wanted.push_back(k);
     return true;
   });
+  return readBack(std::move(wanted), blocks);
+}
+
+std::vector<BlockIndex> Pager::pageIn(const std::vector<BlockKey>& keys, BlockMap& blocks) {
+  if (paged_count_ == 0) return {};
+  std::vector<BlockKey> wanted;
+  for (const BlockKey& k : keys)
+    if (isPagedOut(k)) wanted.push_back(k);
+  std::sort(wanted.begin(), wanted.end(), [](const BlockKey& a, const BlockKey& b) {
+    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+  });
+  wanted.erase(std::unique(wanted.begin(), wanted.end()), wanted.end());
+  return readBack(std::move(wanted), blocks);
+}
+
+std::vector<BlockIndex> Pager::readBack(std::vector<BlockKey> wanted, BlockMap& blocks) {
   if (wanted.empty()) return {};
+  const auto t0 = Clock::now();
   // Key order: the stores keep records sorted, so neighbouring reads share pages.
   std::sort(wanted.begin(), wanted.end(), [](const BlockKey& a, const BlockKey& b) {
     return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);

@@ -7,7 +7,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "block_index_table.h"
+#include "fragg_map/block_key_table.h"
 #include "fragg_map/errors.h"
 #include "frontier_masks.h"
 
@@ -40,7 +40,7 @@ struct FrontierTracker::State {
   uint32_t update_number = 0;
   bool on_device = false;  ///< the last states were read by the map's backend
   std::vector<BlockRecord> records;
-  BlockIndexTable index;  ///< key -> records index
+  BlockKeyTable index;  ///< key -> records index
 
   int threadCount() const { return threads > 0 ? threads : omp_get_max_threads(); }
 
@@ -75,7 +75,7 @@ struct FrontierTracker::State {
         for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx, ++j) {
             const uint32_t k = index.find({r.key.x + dx, r.key.y + dy, r.key.z + dz});
-            around[j] = k == BlockIndexTable::kNone ? nullptr : &records[k].state;
+            around[j] = k == BlockKeyTable::kNone ? nullptr : &records[k].state;
           }
       r.frontier = frontierBitsOf(around);
       if (filter.any()) applyFilter(map, view, r);
@@ -154,13 +154,13 @@ struct FrontierTracker::State {
     for (int64_t i = 0; i < n; ++i) {
       const uint32_t k = index.find(changed[i]);
       found[i] = k;
-      moved_flag[i] = k == BlockIndexTable::kNone || !(records[k].state == fresh[i]);
-      if (k != BlockIndexTable::kNone && moved_flag[i]) records[k].state = fresh[i];
+      moved_flag[i] = k == BlockKeyTable::kNone || !(records[k].state == fresh[i]);
+      if (k != BlockKeyTable::kNone && moved_flag[i]) records[k].state = fresh[i];
     }
     std::vector<BlockKey> moved;  // blocks whose cell states changed
     for (int64_t i = 0; i < n; ++i) {
       if (!moved_flag[i]) continue;
-      if (found[i] == BlockIndexTable::kNone) {
+      if (found[i] == BlockKeyTable::kNone) {
         index.insert(changed[i], static_cast<uint32_t>(records.size()));
         records.push_back(BlockRecord{changed[i], fresh[i], FrontierBits{}, 0, 0});
       }
@@ -189,7 +189,7 @@ struct FrontierTracker::State {
             for (int dx = -reach; dx <= reach; ++dx) {
               const BlockKey nb{b.x + dx, b.y + dy, b.z + dz};
               const uint32_t k = index.find(nb);
-              if (k == BlockIndexTable::kNone) continue;
+              if (k == BlockKeyTable::kNone) continue;
               if (__atomic_exchange_n(&records[k].mark, update_number, __ATOMIC_RELAXED) ==
                   update_number)
                 continue;

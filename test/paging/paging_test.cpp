@@ -136,6 +136,43 @@ TEST_P(Paging, TheBudgetWinsOverTheRadiusAndUnchangedBlocksAreNotWrittenAgain) {
   EXPECT_TRUE(sameBlocks(from_store, fullInMemory(), &why)) << why;
 }
 
+TEST_P(Paging, AScanReadsBackOnlyTheBlocksItsRaysReach) {
+  // The CPU backend asks for the blocks its rays mark, not for every paged-out block of the
+  // scan's box: a few rays across the corridor, diagonally up to the ceiling, leave the
+  // paged-out blocks of their box that they do not cross where they are.
+  const std::string dir = testDir();
+  Map paged(corridorParams());
+  paged.attachPageStore(openPageStore(storePath(dir), false), smallBudget());
+  insertScans(paged, 0, kScans);  // ends back at x = 0.37: the far part is paged out
+  const Eigen::Isometry3d T = corridorPose(kScans - 1, kScans);
+  PointCloud rays;
+  for (const Eigen::Vector3d& p_map :
+       {Eigen::Vector3d(12.0, 3.0, 2.8), Eigen::Vector3d(12.0, 2.9, 2.7),
+        Eigen::Vector3d(11.9, 3.0, 2.6)})
+    rays.points_S.push_back((T.inverse() * p_map).cast<float>());
+  rays.width = 3;
+  rays.height = 1;
+  const uint64_t read_before = paged.pagingStats().pages_read;
+  const InsertStats st = paged.insert(rays, T, corridorSensor());
+  const uint64_t read_by_scan = paged.pagingStats().pages_read - read_before;
+  EXPECT_GT(read_by_scan, 0u);
+  EXPECT_LE(read_by_scan, st.blocks_touched);
+  // The box of those rays (sensor to the farthest end, a cell's margin) still holds
+  // paged-out blocks: bringing it in reads them.
+  const uint64_t read_after_scan = paged.pagingStats().pages_read;
+  paged.ensureResident(
+      T.translation().cwiseMin(Eigen::Vector3d(11.9, 2.9, 2.6)) - Eigen::Vector3d::Constant(0.2),
+      Eigen::Vector3d(12.2, 3.2, 3.0));
+  EXPECT_GT(paged.pagingStats().pages_read - read_after_scan, 0u);
+
+  // And the map is the one built in memory with the same scans.
+  Map memory = inMemory(kScans);
+  memory.insert(rays, T, corridorSensor());
+  paged.ensureAllResident();
+  std::string why;
+  EXPECT_TRUE(sameBlocks(paged, memory, &why)) << why;
+}
+
 TEST_P(Paging, QueriesAndEditsPageInWhatTheyReach) {
   const std::string dir = testDir();
   Map paged(corridorParams());
@@ -320,14 +357,23 @@ TEST(SqlitePageStore, ACorruptRecordIsRefusedWhenRead) {
     insertScans(map, 0, 2);
   }
   ASSERT_GT(Map::loadPageStore(*openPageStore(path, true)).blockCount(), 0u);
-  // One record's value overwritten behind the store's back (as a disk error would).
+  // One record's value overwritten behind the store's back (as a disk error would): the
+  // record of the block that holds the first scan's sensor, which every ray of a scan from
+  // there crosses. The record key is z, y, x, each big-endian with the sign bit flipped.
+  const Eigen::Isometry3d T = corridorPose(0, kScans);
+  const BlockKey bad = blockKeyOf(Map(corridorParams()).keyOf(T.translation()));
+  std::string hex;
+  for (int32_t v : {bad.z, bad.y, bad.x}) {
+    char word[9];
+    std::snprintf(word, sizeof(word), "%08X", static_cast<uint32_t>(v) ^ 0x80000000u);
+    hex += word;
+  }
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(db,
-                         "UPDATE blocks SET v = substr(v, 1, length(v) - 3) || x'000000' WHERE k "
-                         "= (SELECT k FROM blocks LIMIT 1)",
-                         nullptr, nullptr, nullptr),
-            SQLITE_OK);
+  const std::string corrupt =
+      "UPDATE blocks SET v = substr(v, 1, length(v) - 3) || x'000000' WHERE k = x'" + hex + "'";
+  ASSERT_EQ(sqlite3_exec(db, corrupt.c_str(), nullptr, nullptr, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_changes(db), 1) << "no record of block " << hex;
   sqlite3_close(db);
   try {
     Map::loadPageStore(*openPageStore(path, true));
@@ -337,7 +383,6 @@ TEST(SqlitePageStore, ACorruptRecordIsRefusedWhenRead) {
   }
   // Continuing the map reads that block when a scan reaches it: refused the same way.
   Map again = Map::openPageStore(openPageStore(path, false), corridorParams(), smallBudget());
-  const Eigen::Isometry3d T = corridorPose(0, kScans);
   const size_t resident = again.pagingStats().resident_blocks;
   EXPECT_THROW(again.insert(corridorScan(T), T, corridorSensor()), IoError);
   EXPECT_EQ(again.scanCount(), 2u);

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -82,11 +83,19 @@ class HostBlockCache final : public BlockCache {
   size_t deviceBytes() const override { return 0; }
 };
 
+/// Out-of-core paging, for a backend that asks for the blocks its rays reach
+/// (MapBackend::pagesInMarkedBlocks): the blocks of `keys` that are paged out are read back
+/// into the host map (others are left alone); throws IoError with the map as before.
+using PageInKeys = std::function<void(const std::vector<BlockKey>& keys)>;
+
 /// The map's settings a scan update needs.
 struct UpdateSettings {
   const MapParams& params;  ///< ray cast mode and no-return setting are the scan's own
   const OccupancyModel& model;
   uint64_t revision;  ///< stamped on the blocks the scan changes
+  /// Paging: called with the blocks the scan's rays mark that the host map lacks, before any
+  /// is created (null: no paging, or the map paged in the scan's whole box first).
+  const PageInKeys* page_in = nullptr;
 };
 
 class MapBackend {
@@ -110,6 +119,9 @@ class MapBackend {
   virtual BlockCache& cache() = 0;
   const BlockCache& cache() const { return const_cast<MapBackend*>(this)->cache(); }
 
+  /// Whether the backend pages in exactly the blocks its rays mark (UpdateSettings::page_in),
+  /// so that the map need not page in the scan's whole box first.
+  virtual bool pagesInMarkedBlocks() const { return false; }
   /// Whether the backend culls the blocks it needs itself (else the map's host culler runs
   /// over the host blocks in the frustum's box).
   virtual bool cullsOnItsOwn() const { return false; }

@@ -17,6 +17,7 @@ class CpuBackend : public MapBackend {
   explicit CpuBackend(int threads) : threads_(threads) {}
   const char* name() const override { return "cpu"; }
   BlockCache& cache() override { return cache_; }
+  bool pagesInMarkedBlocks() const override { return true; }
 
  protected:
   void update(const ScanInput& scan, ScanUpdate what, const UpdateSettings& how, BlockMap& blocks,
@@ -25,9 +26,10 @@ class CpuBackend : public MapBackend {
  private:
   /// The ray cast and update of a prepared scan.
   /// `skip_saturated`: see MapParams::skip_saturated_blocks (never used when removing).
+  /// `page_in`: see UpdateSettings::page_in (null: none).
   void updatePrepared(const PreparedScan& scan, ScanUpdate what, const OccupancyModel& model,
-                      RayCast raycast, bool skip_saturated, uint64_t revision, BlockMap& blocks,
-                      InsertStats& stats);
+                      RayCast raycast, bool skip_saturated, uint64_t revision,
+                      const PageInKeys* page_in, BlockMap& blocks, InsertStats& stats);
 
   int threads_;
   HostBlockCache cache_;

@@ -48,6 +48,8 @@ class Pager {
   /// Reads the paged-out blocks of [lo, hi] back into `blocks` (clean: stamped 0); returns
   /// their indices in `blocks`.
   std::vector<BlockIndex> pageIn(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks);
+  /// The same for the blocks of `keys` that are paged out (the others are skipped).
+  std::vector<BlockIndex> pageIn(const std::vector<BlockKey>& keys, BlockMap& blocks);
   /// Every paged-out block.
   std::vector<BlockIndex> pageInAll(BlockMap& blocks);
   /// A paged-out block's cells (from a commit not yet written, else the store); false when
@@ -98,6 +100,8 @@ class Pager {
   static BlockKey superOf(const BlockKey& b) {
     return {b.x >> kBlockBits, b.y >> kBlockBits, b.z >> kBlockBits};
   }
+  /// Reads `wanted` (paged out, no duplicates) back into `blocks`.
+  std::vector<BlockIndex> readBack(std::vector<BlockKey> wanted, BlockMap& blocks);
   void addPagedOut(const BlockKey& key);
   void removePagedOut(const BlockKey& key);
   size_t budgetBlocks() const;
