@@ -100,6 +100,10 @@ class BlockMap {
   const BlockMeta& meta(BlockIndex i) const { return meta_[i]; }
 
   size_t size() const { return index_.size(); }
+  /// Block slots of the arena, and how many of them are free (left by erased blocks; new
+  /// blocks take those first).
+  size_t slots() const { return meta_.size(); }
+  size_t freeSlots() const { return free_.size(); }
   bool empty() const { return index_.empty(); }
 
   /// Calls `fn(index)` for every live block whose key lies in [lo, hi] (inclusive), using the

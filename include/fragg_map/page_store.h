@@ -63,7 +63,8 @@ class PageStore {
   /// The store's size on disk (its files).
   virtual uint64_t diskBytes() const = 0;
   /// Drops the store's file pages from this process's resident memory where the store maps
-  /// its file (they stay in the system's page cache); the map calls it after paging out.
+  /// its file (they stay in the system's page cache), once they pass a bound; the map calls
+  /// it after paging out.
   virtual void releaseMappedPages() {}
 };
 

@@ -212,11 +212,14 @@ void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
 }
 
 void Map::releasePagedOutMemory() {
-  // The arena's pages that hold only free blocks, the store's mapped file pages, then the
-  // allocator's free memory (the index nodes of the blocks that left): without it the
-  // process keeps its peak.
-  blocks_.releaseFreePages();
   pager_->store().releaseMappedPages();
+  // A paging round leaves the arena with holes the size of the blocks that left, which the
+  // next scans' blocks fill (new blocks take free slots first: the arena never outgrows its
+  // peak). Its pages go back to the system, with the allocator's free memory, only when most
+  // of the arena is free (the map shrank): at every round (W4) that cost page faults and TLB
+  // shootdowns for the same peak.
+  if (blocks_.freeSlots() * 2 <= blocks_.slots()) return;
+  blocks_.releaseFreePages();
 #ifdef __GLIBC__
   malloc_trim(0);
 #endif

@@ -1,6 +1,8 @@
 #include "block_codec.h"
 
+#include <algorithm>
 #include <cstring>
+#include <iterator>
 #include <memory>
 
 #include "fragg_map/errors.h"
@@ -12,6 +14,21 @@ namespace {
 // 14 % larger (docs/benchmarks.md); lower levels are no faster. Records stay plain zstd frames:
 // stores written at any level read the same.
 constexpr int kLevel = -1;
+
+/// A uniform block's record: tag, the cell, its complement.
+constexpr uint8_t kUniformTag = 'U';
+constexpr size_t kUniformBytes = 1 + 2 * sizeof(Cell);
+static_assert(sizeof(Cell) == sizeof(uint32_t), "a cell is one 32-bit word");
+
+/// Whether every cell equals the first; `cell` gets its bits.
+bool uniform(const Block& block, uint32_t* cell) {
+  uint32_t words[kCellsPerBlock];
+  std::memcpy(words, block.cells, sizeof(words));
+  uint32_t differ = 0;
+  for (int c = 1; c < kCellsPerBlock; ++c) differ |= words[c] ^ words[0];
+  *cell = words[0];
+  return differ == 0;
+}
 }  // namespace
 
 BlockCodec::BlockCodec() : cctx_(ZSTD_createCCtx()), dctx_(ZSTD_createDCtx()) {
@@ -27,6 +44,15 @@ BlockCodec::~BlockCodec() {
 }
 
 const std::vector<uint8_t>& BlockCodec::encode(const Block& block) {
+  uint32_t cell = 0;
+  if (uniform(block, &cell)) {
+    const uint32_t check = ~cell;
+    buffer_.resize(kUniformBytes);
+    buffer_[0] = kUniformTag;
+    std::memcpy(&buffer_[1], &cell, sizeof(cell));
+    std::memcpy(&buffer_[1 + sizeof(cell)], &check, sizeof(check));
+    return buffer_;
+  }
   buffer_.resize(ZSTD_compressBound(sizeof(Block)));
   const size_t n = ZSTD_compress2(cctx_, buffer_.data(), buffer_.size(), &block, sizeof(Block));
   if (ZSTD_isError(n)) throw IoError(std::string("zstd: ") + ZSTD_getErrorName(n));
@@ -35,6 +61,17 @@ const std::vector<uint8_t>& BlockCodec::encode(const Block& block) {
 }
 
 void BlockCodec::decode(const void* data, size_t size, Block* out, const std::string& where) {
+  const auto* bytes = static_cast<const uint8_t*>(data);
+  if (size == kUniformBytes && bytes[0] == kUniformTag) {
+    uint32_t cell = 0, check = 0;
+    std::memcpy(&cell, bytes + 1, sizeof(cell));
+    std::memcpy(&check, bytes + 1 + sizeof(cell), sizeof(check));
+    if (check != ~cell) throw IoError(where + ": uniform block record fails its check");
+    uint32_t words[kCellsPerBlock];
+    std::fill(std::begin(words), std::end(words), cell);
+    std::memcpy(out->cells, words, sizeof(words));
+    return;
+  }
   const unsigned long long content = ZSTD_getFrameContentSize(data, size);
   if (content != sizeof(Block))
     throw IoError(where + ": block record does not hold a " + std::to_string(sizeof(Block)) +

@@ -1,5 +1,7 @@
 // A block record's value: the block's 2048 bytes of cells, zstd-compressed (fast level -1) with
-// a checksum.
+// a checksum; a block whose 512 cells are all equal (44 % of W4's records, free space at the
+// lower clamp) is 9 bytes instead: 'U', the cell, and the cell's bitwise complement (a check),
+// which no zstd frame begins with. Stores written before uniform records existed read the same.
 #pragma once
 
 #include <zstd.h>

@@ -8,6 +8,7 @@
 #if FRAGG_HAVE_LMDB
 #include <lmdb.h>
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -25,6 +26,9 @@ namespace fragg {
 namespace {
 /// Address space reserved for the map file (the file grows only as records are written).
 constexpr size_t kMapSizeBytes = size_t{1} << 40;
+/// Resident shared pages (the store's map and the libraries) above which the store's mapped
+/// pages are dropped.
+constexpr size_t kDropAboveBytes = size_t{64} << 20;
 
 class LmdbPageStore final : public PageStore {
  public:
@@ -191,11 +195,23 @@ class LmdbPageStore final : public PageStore {
   /// is read-only and shared (pages come back from the page cache when touched), a write
   /// transaction's dirty pages are in its own memory until the commit.
   void dropMappedPages() {
+    // Dropping costs the pages touched again (faults) and a TLB shootdown on every core the
+    // process runs on: only once the mapped pages pass a bound (W4: a drop at every page-in
+    // and every 8192 puts put the kernel's share of the paged build at 8 %).
+    if (sharedResidentBytes() < kDropAboveBytes) return;
     MDB_envinfo info;
     MDB_stat stat;
     if (!map_addr_ || mdb_env_info(env_, &info) != 0 || mdb_env_stat(env_, &stat) != 0) return;
     const size_t used = (static_cast<size_t>(info.me_last_pgno) + 1) * stat.ms_psize;
     madvise(map_addr_, std::min(used, map_bytes_), MADV_DONTNEED);
+  }
+  /// The process's resident shared pages (file-backed: the store's map, the libraries),
+  /// from /proc/self/statm; the bound when it cannot be read (pages are then dropped).
+  static size_t sharedResidentBytes() {
+    std::ifstream statm("/proc/self/statm");
+    size_t size = 0, resident = 0, shared = 0;
+    if (!(statm >> size >> resident >> shared)) return kDropAboveBytes;
+    return shared * static_cast<size_t>(sysconf(_SC_PAGESIZE));
   }
   /// Where LMDB mapped the file (mdb_env_info gives the address only with MDB_FIXEDMAP): the
   /// largest mapping of the file in /proc/self/maps. None found: pages are not dropped.
