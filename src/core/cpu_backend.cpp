@@ -29,6 +29,8 @@ struct MarkCells {
   };
   ScanScratch* scratch = nullptr;
   const BlockMap* map = nullptr;  ///< null: no block is skipped (removal)
+  /// Paging: a block the map lacks may be paged out saturated (null: none is).
+  const PagedOutSaturated* paged_out_saturated = nullptr;
   ScratchBlock* current = nullptr;
   bool skip_block = false;  ///< the last free cell's block is skipped
   CacheEntry cache[kCacheSize];
@@ -45,7 +47,10 @@ struct MarkCells {
       e.key = b;
       if (e.block->skip_free < 0) {
         const BlockIndex i = map ? map->find(b) : kNoBlock;
-        e.block->skip_free = i != kNoBlock && map->meta(i).freeSaturated() ? 1 : 0;
+        if (i != kNoBlock)
+          e.block->skip_free = map->meta(i).freeSaturated() ? 1 : 0;
+        else
+          e.block->skip_free = map && paged_out_saturated && (*paged_out_saturated)(b) ? 1 : 0;
       }
     }
     return e.block;
@@ -98,14 +103,15 @@ void CpuBackend::update(const ScanInput& in, ScanUpdate what, const UpdateSettin
               prepared_, stats);
   stats.seconds_prepare += secondsSince(t0);
   updatePrepared(prepared_, what, how.model, how.params.raycast, how.params.skip_saturated_blocks,
-                 how.revision, how.page_in, blocks, stats);
+                 how, blocks, stats);
 }
 
 void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
                                 const OccupancyModel& model, RayCast raycast, bool skip_saturated,
-                                uint64_t revision, const PageInKeys* page_in, BlockMap& blocks,
-                                InsertStats& stats) {
+                                const UpdateSettings& how, BlockMap& blocks, InsertStats& stats) {
   const bool remove = what == ScanUpdate::kRemove;
+  const uint64_t revision = how.revision;
+  const PageInKeys* page_in = remove ? nullptr : how.page_in;
   const int threads = threads_ > 0 ? threads_ : omp_get_max_threads();
   auto t0 = std::chrono::steady_clock::now();
   BlockKey lo, hi;
@@ -129,6 +135,7 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
     mark.scratch = scratch_[omp_get_thread_num()].get();
     // An undone miss does change a clamped cell: a removal visits every cell.
     mark.map = remove || !skip_saturated ? nullptr : &blocks;
+    mark.paged_out_saturated = page_in ? how.paged_out_saturated : nullptr;
 #pragma omp for schedule(dynamic, 512)
     for (long i = 0; i < n; ++i) {
       const RayVox ray = scan.ray(static_cast<size_t>(i));
@@ -159,7 +166,7 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
     marked[j] = merged.touched(j).marked();
     target[j] = marked[j] ? blocks.find(merged.touched(j).key) : kNoBlock;
   }
-  if (page_in && !remove) {
+  if (page_in) {
     // Paging: the marked blocks the map lacks may be in the store; those come back first
     // (exactly the blocks the rays reach, not the scan's whole box).
     std::vector<BlockKey> missing;

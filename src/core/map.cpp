@@ -180,6 +180,7 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   params.clear_no_return_rays = how.clear_no_return_rays;
   InsertStats stats;
   PageInKeys page_in;
+  PagedOutSaturated paged_out_saturated;
   if (pager_) {
     // Every block the rays can reach is resident before the backend creates one: the CPU
     // backend asks for exactly the blocks its rays mark; any other backend (and a removal,
@@ -189,6 +190,10 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
     if (!remove && backend_->pagesInMarkedBlocks()) {
       pager_->touch(lo, hi, scans_ + 1);
       page_in = [this](const std::vector<BlockKey>& keys) { pageInKeys(keys); };
+      const Pager* pager = pager_.get();
+      paged_out_saturated = [pager](const BlockKey& key) {
+        return pager->isPagedOutSaturated(key);
+      };
     } else {
       pageInBlocks(lo, hi);
     }
@@ -209,7 +214,8 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   stats.seconds_cull = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 
   const ScanInput scan{cloud, how.T_map_sensor, how.model, frustum, how.explicit_model, cull};
-  const UpdateSettings settings{params, model_, revision_ + 1, page_in ? &page_in : nullptr};
+  const UpdateSettings settings{params, model_, revision_ + 1, page_in ? &page_in : nullptr,
+                                page_in ? &paged_out_saturated : nullptr};
   const ScanUpdate what = remove ? ScanUpdate::kRemove : ScanUpdate::kIntegrate;
   // Readers may be writing the cache back (they share the map): not while the scan runs.
   std::lock_guard<std::mutex> lock(*sync_mutex_);

@@ -99,6 +99,16 @@ void Pager::removePagedOut(const BlockKey& key) {
   it->second.reset(bitOf(key));
   --paged_count_;
   if (it->second.none()) paged_super_.erase(it);
+  auto sat = saturated_super_.find(superOf(key));
+  if (sat != saturated_super_.end()) {
+    sat->second.reset(bitOf(key));
+    if (sat->second.none()) saturated_super_.erase(sat);
+  }
+}
+
+bool Pager::isPagedOutSaturated(const BlockKey& key) const {
+  auto it = saturated_super_.find(superOf(key));
+  return it != saturated_super_.end() && it->second.test(bitOf(key));
 }
 
 bool Pager::isPagedOut(const BlockKey& key) const {
@@ -223,6 +233,8 @@ std::vector<BlockIndex> Pager::readBack(std::vector<BlockKey> wanted, BlockMap& 
   for (size_t j = 0; j < wanted.size(); ++j) {
     BlockMeta& m = blocks.meta(read[j]);
     m.changed_at = m.occupied_at = m.state_at = 0;  // clean: equal to its record
+    // Saturated when it left and unchanged since: the rays' misses may skip it again.
+    m.free_saturated_at = isPagedOutSaturated(wanted[j]) ? m.changed_at : BlockMeta::kNotSaturated;
     removePagedOut(wanted[j]);
   }
   counters_.pages_read += wanted.size();
@@ -250,6 +262,7 @@ void Pager::forgetAll(const BlockMap& blocks) {
   for (const BlockKey& k : pagedOutKeys()) erased_.push_back(k);
   blocks.forEach([&](BlockIndex i) { erased_.push_back(blocks.meta(i).key); });
   paged_super_.clear();
+  saturated_super_.clear();
   paged_count_ = 0;
   last_used_.clear();
 }
@@ -378,9 +391,11 @@ void Pager::pageOut(const std::vector<BlockIndex>& victims, BlockMap& blocks) {
           "(internal error)");
     keys.push_back(blocks.meta(i).key);
   }
-  for (const BlockKey& k : keys) {
-    blocks.erase(k);
-    addPagedOut(k);
+  for (size_t j = 0; j < keys.size(); ++j) {
+    const bool saturated = blocks.meta(victims[j]).freeSaturated();
+    blocks.erase(keys[j]);
+    addPagedOut(keys[j]);
+    if (saturated) saturated_super_[superOf(keys[j])].set(bitOf(keys[j]));
   }
   counters_.pages_evicted += keys.size();
 }

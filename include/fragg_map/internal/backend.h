@@ -87,6 +87,10 @@ class HostBlockCache final : public BlockCache {
 /// (MapBackend::pagesInMarkedBlocks): the blocks of `keys` that are paged out are read back
 /// into the host map (others are left alone); throws IoError with the map as before.
 using PageInKeys = std::function<void(const std::vector<BlockKey>& keys)>;
+/// Paging: whether a block the host map lacks is paged out with every cell at the lower clamp
+/// (BlockMeta::freeSaturated when it left), so that the rays' misses may skip it as they skip
+/// such a resident block. Called from every ray-casting thread at once.
+using PagedOutSaturated = std::function<bool(const BlockKey& key)>;
 
 /// The map's settings a scan update needs.
 struct UpdateSettings {
@@ -96,6 +100,8 @@ struct UpdateSettings {
   /// Paging: called with the blocks the scan's rays mark that the host map lacks, before any
   /// is created (null: no paging, or the map paged in the scan's whole box first).
   const PageInKeys* page_in = nullptr;
+  /// With page_in: see PagedOutSaturated (null: no such block is known).
+  const PagedOutSaturated* paged_out_saturated = nullptr;
 };
 
 class MapBackend {

@@ -26,10 +26,10 @@ class CpuBackend : public MapBackend {
  private:
   /// The ray cast and update of a prepared scan.
   /// `skip_saturated`: see MapParams::skip_saturated_blocks (never used when removing).
-  /// `page_in`: see UpdateSettings::page_in (null: none).
+  /// `how`: the revision and the paging hooks (UpdateSettings).
   void updatePrepared(const PreparedScan& scan, ScanUpdate what, const OccupancyModel& model,
-                      RayCast raycast, bool skip_saturated, uint64_t revision,
-                      const PageInKeys* page_in, BlockMap& blocks, InsertStats& stats);
+                      RayCast raycast, bool skip_saturated, const UpdateSettings& how,
+                      BlockMap& blocks, InsertStats& stats);
 
   int threads_;
   HostBlockCache cache_;

@@ -43,6 +43,10 @@ class Pager {
   /// Whether a block of [lo, hi] is paged out (no store access).
   bool anyPagedOut(const BlockKey& lo, const BlockKey& hi) const;
   bool isPagedOut(const BlockKey& key) const;
+  /// Whether the block is paged out with every cell at the lower clamp (it was
+  /// BlockMeta::freeSaturated when it left this session; unknown, so false, for the blocks of
+  /// a reopened store). Safe on many threads while nothing pages in or out.
+  bool isPagedOutSaturated(const BlockKey& key) const;
   size_t pagedOutCount() const { return paged_count_; }
   std::vector<BlockKey> pagedOutKeys() const;
   /// Reads the paged-out blocks of [lo, hi] back into `blocks` (clean: stamped 0); returns
@@ -127,6 +131,8 @@ class Pager {
   template <class Fn>
   void forEachPagedOutIn(const BlockKey& lo, const BlockKey& hi, Fn&& fn) const;
   std::unordered_map<BlockKey, RegionBits, BlockKeyHash> paged_super_;
+  /// The paged-out blocks that left saturated (a subset of paged_super_'s bits).
+  std::unordered_map<BlockKey, RegionBits, BlockKeyHash> saturated_super_;
   size_t paged_count_ = 0;
   bool radius_yield_warned_ = false;
   /// Last use (scan number) by 8x8x8-block region.
