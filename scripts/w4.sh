@@ -18,10 +18,16 @@
 #   --radius M       paged build's --page-radius (default 40: a 30 m scan's reach and more)
 #   --scans N        only the first N scans (default: all)
 #   --keep-maps      keep the map file and the page store (several GB each) after the run
+#   --compare        `fragg_map compare` of the in-memory map with the page store (cell states)
+#   --cmp            the paged build also writes its map with -o (read back whole: its peak RSS
+#                    then includes the whole map), compared byte for byte with the in-memory one
+#   --disk           also writes 2 GiB with dd conv=fdatasync into OUT: the disk's bandwidth
+# The last line gives the paged build's throughput against the in-memory one (build loops).
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
 workloads="${FRAGG_WORKLOADS:-$HOME/.cache/fragg_map/workloads}"
 out="" bin="" budget_mb=512 store_ext=lmdb radius_m=40 backend=auto scans=0 paged=1 keep=0
+compare=0 cmp_files=0 disk=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --workloads) workloads="${2:?}"; shift 2 ;;
@@ -34,7 +40,10 @@ while [ $# -gt 0 ]; do
     --scans) scans="${2:?}"; shift 2 ;;
     --no-paged) paged=0; shift ;;
     --keep-maps) keep=1; shift ;;
-    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
+    --compare) compare=1; shift ;;
+    --cmp) cmp_files=1; shift ;;
+    --disk) disk=1; shift ;;
+    -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
     *) echo "w4: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
@@ -68,19 +77,39 @@ build() {
 
 rm -f "$out/in_memory.fgm"
 build in_memory -o "$out/in_memory.fgm"
-[ "$keep" = 1 ] || rm -f "$out/in_memory.fgm"
 runs=(in_memory)
+checks=()
 if [ "$paged" = 1 ]; then
   if "$fm" build --help | grep -q -- '--page-store'; then
-    # The store is the map: no .fgm is written (that would page every block back in).
-    rm -f "$out/w4_pages.$store_ext"*
+    # The store is the map: no .fgm is written (that would page every block back in) unless
+    # --cmp asks for it.
+    rm -f "$out/w4_pages.$store_ext"* "$out/paged.fgm"
+    paged_out=()
+    [ "$cmp_files" = 1 ] && paged_out=(-o "$out/paged.fgm")
     build paged --page-store "$out/w4_pages.$store_ext" --page-budget-mb "$budget_mb" \
-      --page-radius "$radius_m"
+      --page-radius "$radius_m" "${paged_out[@]}"
+    if [ "$compare" = 1 ]; then
+      "$fm" compare "$out/in_memory.fgm" "$out/w4_pages.$store_ext" >"$out/compare.log" 2>&1
+      checks+=("compare (cell states): $(grep '^known in either' "$out/compare.log")")
+    fi
+    if [ "$cmp_files" = 1 ]; then
+      if cmp -s "$out/in_memory.fgm" "$out/paged.fgm"; then
+        checks+=("cmp: the paged build's map file == the in-memory one")
+      else
+        checks+=("cmp: the paged build's map file DIFFERS from the in-memory one")
+      fi
+      rm -f "$out/paged.fgm"
+    fi
     [ "$keep" = 1 ] || rm -f "$out/w4_pages.$store_ext"*
     runs+=(paged)
   else
     echo "w4: this fragg_map has no --page-store: in-memory build only" >&2
   fi
+fi
+[ "$keep" = 1 ] || rm -f "$out/in_memory.fgm"
+if [ "$disk" = 1 ]; then
+  checks+=("disk: $(dd if=/dev/zero of="$out/dd.bin" bs=1M count=2048 conv=fdatasync 2>&1 | tail -1)")
+  rm -f "$out/dd.bin"
 fi
 
 echo
@@ -96,9 +125,15 @@ for name in runs:
     rss_mib = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", t).group(1)) / 1024
     wall = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): ([\d:.]+)", t).group(1)
     wall_s = sum(float(x) * 60 ** i for i, x in enumerate(reversed(wall.split(":"))))
-    paging = ", ".join(f"{k} {v}" for k, v in sorted(j.items())
-                       if re.search(r"page|resident|budget", k) and not isinstance(v, dict))
+    paging = ", ".join(f"{k} {v}" for k, v in sorted(j.get("paging", {}).items())
+                       if re.search(r"pages_|resident|commits", k))
     print(f"| {name} | {j['scans']} | {wall_s:.1f} | {j['seconds']:.1f} | "
           f"{j['scans'] / j['seconds']:.2f} | {rss_mib:,.0f} | {j['host_bytes'] / 2**20:,.0f} | "
           f"{j['blocks']:,} | {paging or '-'} |")
+if "paged" in runs:
+    mem = json.load(open(f"{out}/in_memory.json"))["seconds"]
+    paged = json.load(open(f"{out}/paged.json"))["seconds"]
+    print(f"paged throughput: {100 * mem / paged:.1f} % of in-memory (build loops {paged:.2f} "
+          f"against {mem:.2f} s)")
 PY
+for line in "${checks[@]}"; do echo "$line"; done
