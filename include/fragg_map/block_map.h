@@ -104,6 +104,11 @@ class BlockMap {
   /// blocks take those first).
   size_t slots() const { return meta_.size(); }
   size_t freeSlots() const { return free_.size(); }
+  /// Orders the free slots so that the next blocks take them lowest first. After many
+  /// erasures in no particular order (a paging round's victims) the blocks one scan creates
+  /// then sit in runs of neighbouring slots, as in a map that only grows, instead of spread
+  /// over the arena (its cells and metadata are read with every ray that enters them).
+  void orderFreeSlots();
   bool empty() const { return index_.empty(); }
 
   /// Calls `fn(index)` for every live block whose key lies in [lo, hi] (inclusive), using the

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <functional>
 #include <new>
 
 namespace fragg {
@@ -124,6 +125,11 @@ void BlockMap::erase(const BlockKey& key) {
     if (v.empty()) super_.erase(sit);
   }
   free_.push_back(i);
+}
+
+void BlockMap::orderFreeSlots() {
+  // findOrCreate takes the back: descending order hands out the lowest slot first.
+  std::sort(free_.begin(), free_.end(), std::greater<BlockIndex>());
 }
 
 size_t BlockMap::releaseFreePages() {

@@ -397,6 +397,7 @@ void Pager::pageOut(const std::vector<BlockIndex>& victims, BlockMap& blocks) {
     addPagedOut(keys[j]);
     if (saturated) saturated_super_[superOf(keys[j])].set(bitOf(keys[j]));
   }
+  blocks.orderFreeSlots();
   counters_.pages_evicted += keys.size();
 }
 

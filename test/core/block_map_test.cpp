@@ -194,6 +194,34 @@ TEST(BlockMapTest, ErasedIndicesAreReusedBeforeTheArenaGrows) {
   EXPECT_EQ(collectInBox(m, {0, -10, 0}, {500, 0, 10}), (std::vector<BlockIndex>{0, 2, 4}));
 }
 
+TEST(BlockMapTest, OrderedFreeSlotsAreTakenLowestFirst) {
+  BlockMap m;
+  std::vector<BlockKey> keys;
+  for (int i = 0; i < 64; ++i) {
+    keys.push_back({i, 7, -i});
+    ASSERT_EQ(m.findOrCreate(keys.back()), BlockIndex(i));
+  }
+  // Erased in a shuffled order, as a paging round's victims leave.
+  std::vector<int> gone;
+  for (int i = 0; i < 64; i += 3) gone.push_back(i);
+  std::mt19937 rng(5);
+  std::shuffle(gone.begin(), gone.end(), rng);
+  for (int i : gone) m.erase(keys[static_cast<size_t>(i)]);
+  m.orderFreeSlots();
+  EXPECT_EQ(m.freeSlots(), gone.size());
+  std::sort(gone.begin(), gone.end());
+  for (size_t j = 0; j < gone.size(); ++j) {
+    const BlockKey k{1000 + static_cast<int>(j), 0, 0};
+    EXPECT_EQ(m.findOrCreate(k), BlockIndex(gone[j])) << "new block " << j;
+    EXPECT_EQ(m.find(k), BlockIndex(gone[j]));
+  }
+  EXPECT_EQ(m.freeSlots(), 0u);
+  EXPECT_EQ(m.findOrCreate({-1, -1, -1}), 64u);  // then the arena grows
+  EXPECT_EQ(m.size(), 65u);
+  for (int i = 0; i < 64; ++i)  // the blocks that stayed kept their slots
+    if (i % 3 != 0) EXPECT_EQ(m.find(keys[static_cast<size_t>(i)]), BlockIndex(i));
+}
+
 TEST(BlockMapTest, ClearEmptiesTheMapAndKeepsTheArena) {
   auto counting = std::make_shared<CountingAllocator>();
   BlockMap m(counting);
