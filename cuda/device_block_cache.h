@@ -26,6 +26,9 @@ class DeviceBlockCache : public BlockCache {
   void ensureResident(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) override;
   void sync(BlockMap& blocks) override;
   bool needsSync() const override { return any_dirty_; }
+  size_t blocksNotInHostMap() const override {
+    return static_cast<size_t>(pool_.table().deviceOnlyCount());
+  }
   void invalidate(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) override;
   void invalidateAll(BlockMap& blocks) override;
   void forget(const std::vector<BlockIndex>& host_blocks, BlockMap& blocks) override;

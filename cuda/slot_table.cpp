@@ -24,6 +24,7 @@ void SlotTable::clear() {
   std::fill(resident_.begin(), resident_.end(), 0);
   std::fill(block_of_slot_.begin(), block_of_slot_.end(), kNoBlock);
   slot_of_block_.clear();
+  device_only_ = 0;
   free_top_ = 0;
   for (int32_t s = n - 1; s >= 0; --s) free_[size_t(free_top_++)] = s;
 }
@@ -54,7 +55,12 @@ void SlotTable::push(const std::vector<int32_t>& slots) {
   free_top_ += static_cast<int32_t>(slots.size());
 }
 
+bool SlotTable::deviceOnly(int32_t slot) const {
+  return resident_[slot] != 0 && block_of_slot_[slot] == kNoBlock;
+}
+
 void SlotTable::bind(int32_t slot, BlockIndex block) {
+  device_only_ += (block == kNoBlock ? 1 : 0) - (deviceOnly(slot) ? 1 : 0);
   resident_[slot] = 1;
   block_of_slot_[slot] = block;
   if (block != kNoBlock) setSlotOf(block, slot);
@@ -62,6 +68,7 @@ void SlotTable::bind(int32_t slot, BlockIndex block) {
 
 BlockIndex SlotTable::unbind(int32_t slot) {
   const BlockIndex block = block_of_slot_[slot];
+  if (deviceOnly(slot)) --device_only_;
   resident_[slot] = 0;
   block_of_slot_[slot] = kNoBlock;
   if (block != kNoBlock) setSlotOf(block, -1);

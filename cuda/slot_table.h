@@ -39,6 +39,9 @@ class SlotTable {
   BlockIndex unbind(int32_t slot);
   /// kNoBlock when the slot is free or its block exists on the device only.
   BlockIndex blockOf(int32_t slot) const { return block_of_slot_[slot]; }
+  /// Resident slots bound to no host block (blocks the device created since they were last
+  /// written back).
+  int32_t deviceOnlyCount() const { return device_only_; }
   /// -1 when the host block has no slot.
   int32_t slotOf(BlockIndex block) const {
     return block < slot_of_block_.size() ? slot_of_block_[block] : -1;
@@ -46,12 +49,14 @@ class SlotTable {
 
  private:
   void setSlotOf(BlockIndex block, int32_t slot);
+  bool deviceOnly(int32_t slot) const;
 
   std::vector<int32_t> free_;
   int32_t free_top_ = 0;
   std::vector<uint8_t> resident_;
   std::vector<BlockIndex> block_of_slot_;
   std::vector<int32_t> slot_of_block_;  ///< by host block index
+  int32_t device_only_ = 0;
 };
 
 /// The `n` resident slots used least recently (smallest `last_used`), never one used in scan

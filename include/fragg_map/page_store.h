@@ -109,7 +109,11 @@ struct PagingStats {
   double seconds_commit = 0;     ///< time in commits on the map's thread
   double seconds_writer = 0;     ///< time the background writer spent writing commits
   double seconds_page_in = 0;    ///< time reading blocks back
-  uint64_t store_bytes = 0;      ///< on disk
+  /// time writing the backend's changes back to the host map after a scan (a device
+  /// backend: before the budget is counted; the CPU backend writes the host map directly)
+  double seconds_sync = 0;
+  double seconds_page_out = 0;  ///< time choosing the blocks that leave and dropping them
+  uint64_t store_bytes = 0;     ///< on disk
 };
 
 }  // namespace fragg

@@ -178,27 +178,40 @@ void Map::commitPages() {
 }
 
 void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
+  using Clock = std::chrono::steady_clock;
+  // The blocks a device backend created count against the budget before they have host
+  // blocks: the device's changes are written back only when a commit or a paging round
+  // needs the host map complete (every scan, that was most of the CUDA path's paging time).
+  const size_t resident = blocks_.size() + backend_->cache().blocksNotInHostMap();
+  pager_->noteResident(resident);
+  const bool due = pager_->commitDue(scans_);
+  if (pager_->excessOverBudget(resident) == 0 && !due) return;
+  auto t0 = Clock::now();
   {
     // The host map is made complete (the device's changes written back, and the blocks the
-    // rays created on the device given host blocks) before it is counted against the budget,
-    // committed or its clean blocks are chosen.
+    // rays created on the device given host blocks) before it is committed or its clean
+    // blocks are chosen.
     std::lock_guard<std::mutex> lock(*sync_mutex_);
     backend_->cache().sync(blocks_);
   }
+  pager_->noteSyncSeconds(std::chrono::duration<double>(Clock::now() - t0).count());
   pager_->noteResident(blocks_.size());
+  // Counted now: a block the device made but never applied gets no host block.
   const bool over = pager_->overBudget(blocks_);
-  const bool due = pager_->commitDue(scans_);
-  if (!over && !due) return;
   const StoreMapMeta meta = metaOf(params_, scans_);
   if (due) pager_->commit(blocks_, revision_, meta);
   if (!over) return;
+  t0 = Clock::now();
+  double seconds_commit = 0;  // counted by the commit itself
   // Blocks unchanged since the last commit leave without a commit; only when they cannot
   // bring the map within its budget is everything committed and any block may leave. The
   // blocks near the sensor change with every scan: committing them at every paging round
   // wrote them many times over.
   std::vector<BlockIndex> out = pager_->victims(blocks_, sensor_map, /*clean_only=*/true);
   if (pager_->excessOverBudget(blocks_.size() - out.size()) > 0) {
+    const auto tc = Clock::now();
     pager_->commit(blocks_, revision_, meta);
+    seconds_commit = std::chrono::duration<double>(Clock::now() - tc).count();
     out = pager_->victims(blocks_, sensor_map, /*clean_only=*/false);
   }
   {
@@ -209,6 +222,8 @@ void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
   pager_->pageOut(out, blocks_);
   releasePagedOutMemory();
   bumpViewEpoch();
+  pager_->notePageOutSeconds(std::chrono::duration<double>(Clock::now() - t0).count() -
+                             seconds_commit);
 }
 
 void Map::releasePagedOutMemory() {

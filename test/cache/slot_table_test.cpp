@@ -80,6 +80,34 @@ TEST(SlotTable, DeviceAllocationsAreResidentAndDeviceOnly) {
   EXPECT_EQ(t.freeCount(), 0);
 }
 
+TEST(SlotTable, CountsTheDeviceOnlySlotsUntilTheyGetHostBlocksOrGo) {
+  SlotTable t;
+  t.grow(12);
+  for (int32_t s : t.pop(2)) t.bind(s, BlockIndex(s + 50));  // host uploads: not counted
+  EXPECT_EQ(t.deviceOnlyCount(), 0);
+  const std::vector<int32_t> taken = t.takenByDevice(6);  // the rays took 4 slots
+  ASSERT_EQ(taken.size(), 4u);
+  EXPECT_EQ(t.deviceOnlyCount(), 4);
+  t.bind(taken[0], BlockIndex(7));  // written back: a host block now
+  EXPECT_EQ(t.deviceOnlyCount(), 3);
+  t.bind(taken[0], BlockIndex(8));  // bound again to another host block: no change
+  EXPECT_EQ(t.deviceOnlyCount(), 3);
+  EXPECT_EQ(t.unbind(taken[1]), kNoBlock);  // released without a host block
+  t.push({taken[1]});
+  EXPECT_EQ(t.deviceOnlyCount(), 2);
+  t.unbind(taken[1]);  // unbinding a free slot again changes nothing
+  EXPECT_EQ(t.deviceOnlyCount(), 2);
+  t.unbind(taken[0]);  // a slot with a host block: not counted before either
+  EXPECT_EQ(t.deviceOnlyCount(), 2);
+  // Brute force over the table agrees.
+  int32_t device_only = 0;
+  for (int32_t s = 0; s < t.capacity(); ++s)
+    device_only += t.resident(s) && t.blockOf(s) == kNoBlock ? 1 : 0;
+  EXPECT_EQ(device_only, 2);
+  t.clear();
+  EXPECT_EQ(t.deviceOnlyCount(), 0);
+}
+
 TEST(SlotTable, PushRefusesMoreSlotsThanTheStackHolds) {
   SlotTable t;
   t.grow(2);

@@ -55,6 +55,10 @@ class BlockCache {
   virtual void sync(BlockMap& blocks) = 0;
   /// Whether sync() has anything to write back.
   virtual bool needsSync() const = 0;
+  /// Blocks the cache holds that the host map lacks (created in the backend's memory since
+  /// the last sync(), which gives them host blocks): paging counts them against its budget
+  /// without a sync after every scan.
+  virtual size_t blocksNotInHostMap() const = 0;
   /// Before the host blocks in [lo, hi] are changed directly (clear box, sub-map edits):
   /// writes back, then forgets every cached copy of a block there.
   virtual void invalidate(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) = 0;
@@ -76,6 +80,7 @@ class HostBlockCache final : public BlockCache {
   void ensureResident(const BlockKey&, const BlockKey&, BlockMap&) override {}
   void sync(BlockMap&) override {}
   bool needsSync() const override { return false; }
+  size_t blocksNotInHostMap() const override { return 0; }
   void invalidate(const BlockKey&, const BlockKey&, BlockMap&) override {}
   void invalidateAll(BlockMap&) override {}
   void forget(const std::vector<BlockIndex>&, BlockMap&) override {}

@@ -98,6 +98,9 @@ class Pager {
   PagingStats stats(const BlockMap& blocks) const;
   /// Resident block count after an edit (for the peak).
   void noteResident(size_t resident);
+  /// Time of the map's steps around paging (PagingStats::seconds_sync, seconds_page_out).
+  void noteSyncSeconds(double s) { counters_.seconds_sync += s; }
+  void notePageOutSeconds(double s) { counters_.seconds_page_out += s; }
 
  private:
   using Clock = std::chrono::steady_clock;

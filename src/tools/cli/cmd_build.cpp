@@ -281,6 +281,8 @@ void runBuild(const BuildOptions& o) {
                      {"seconds_writer", paging.seconds_writer},
                      {"background_writer", o.paging.background_writer},
                      {"seconds_page_in", paging.seconds_page_in},
+                     {"seconds_sync", paging.seconds_sync},
+                     {"seconds_page_out", paging.seconds_page_out},
                      {"store_bytes", paging.store_bytes}};
     std::printf("%s\n", j.dump().c_str());
   } else {
