@@ -90,6 +90,10 @@ class BlockMap {
   /// Makes room for `n` more blocks in the index.
   void reserve(size_t n) { index_.reserve(index_.size() + n); }
   void erase(const BlockKey& key);
+  /// Erases every block of `keys` (missing ones are skipped): the same as erasing them one by
+  /// one, with each coarse-index list rewritten once (a paging round erases tens of
+  /// thousands of blocks, hundreds from the same list).
+  void erase(const std::vector<BlockKey>& keys);
   void clear();
 
   Block& block(BlockIndex i) { return chunks_[i / kBlocksPerChunk][i % kBlocksPerChunk]; }

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <functional>
 #include <new>
+#include <tuple>
 
 namespace fragg {
 
@@ -130,6 +131,32 @@ void BlockMap::erase(const BlockKey& key) {
 void BlockMap::orderFreeSlots() {
   // findOrCreate takes the back: descending order hands out the lowest slot first.
   std::sort(free_.begin(), free_.end(), std::greater<BlockIndex>());
+}
+
+void BlockMap::erase(const std::vector<BlockKey>& keys) {
+  std::vector<char> gone(meta_.size(), 0);
+  std::vector<BlockKey> lists;
+  lists.reserve(keys.size());
+  for (const BlockKey& key : keys) {
+    const BlockIndex i = index_.find(key);
+    if (i == kNoBlock) continue;
+    index_.erase(key);
+    gone[i] = 1;
+    lists.push_back(superKeyOf(key));
+    free_.push_back(i);
+  }
+  std::sort(lists.begin(), lists.end(), [](const BlockKey& a, const BlockKey& b) {
+    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+  });
+  lists.erase(std::unique(lists.begin(), lists.end()), lists.end());
+  for (const BlockKey& s : lists) {
+    auto sit = super_.find(s);
+    if (sit == super_.end()) continue;
+    auto& v = sit->second;
+    v.erase(std::remove_if(v.begin(), v.end(), [&](BlockIndex i) { return gone[i] != 0; }),
+            v.end());
+    if (v.empty()) super_.erase(sit);
+  }
 }
 
 size_t BlockMap::releaseFreePages() {

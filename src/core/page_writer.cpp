@@ -1,5 +1,11 @@
 #include "fragg_map/internal/page_writer.h"
 
+#ifdef __linux__
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
+
 #include <algorithm>
 #include <chrono>
 #include <exception>
@@ -12,6 +18,9 @@
 namespace fragg {
 
 namespace {
+/// Nice value of the writer thread (Linux: per thread), above the map's threads' 0.
+constexpr int kWriterNice = 10;
+
 bool storeOrder(const BlockKey& a, const BlockKey& b) {
   return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
 }
@@ -36,6 +45,12 @@ PageWriter::~PageWriter() {
 }
 
 void PageWriter::run() {
+#ifdef __linux__
+  // A commit has until the next one to reach the store: the writer runs in the time the
+  // map's threads leave (on a machine whose cores the insertion fills, a writer of equal
+  // priority takes a core from a parallel ray cast, whose threads then wait for it).
+  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kWriterNice);
+#endif
   std::unique_lock<std::mutex> lock(mutex_);
   for (;;) {
     cv_.wait(lock, [&] { return stop_ || in_flight_; });

@@ -392,11 +392,11 @@ void Pager::pageOut(const std::vector<BlockIndex>& victims, BlockMap& blocks) {
     keys.push_back(blocks.meta(i).key);
   }
   for (size_t j = 0; j < keys.size(); ++j) {
-    const bool saturated = blocks.meta(victims[j]).freeSaturated();
-    blocks.erase(keys[j]);
     addPagedOut(keys[j]);
-    if (saturated) saturated_super_[superOf(keys[j])].set(bitOf(keys[j]));
+    if (blocks.meta(victims[j]).freeSaturated())
+      saturated_super_[superOf(keys[j])].set(bitOf(keys[j]));
   }
+  blocks.erase(keys);
   blocks.orderFreeSlots();
   counters_.pages_evicted += keys.size();
 }

@@ -218,8 +218,46 @@ TEST(BlockMapTest, OrderedFreeSlotsAreTakenLowestFirst) {
   EXPECT_EQ(m.freeSlots(), 0u);
   EXPECT_EQ(m.findOrCreate({-1, -1, -1}), 64u);  // then the arena grows
   EXPECT_EQ(m.size(), 65u);
-  for (int i = 0; i < 64; ++i)  // the blocks that stayed kept their slots
-    if (i % 3 != 0) EXPECT_EQ(m.find(keys[static_cast<size_t>(i)]), BlockIndex(i));
+  for (int i = 0; i < 64; ++i) {  // the blocks that stayed kept their slots
+    if (i % 3 != 0) {
+      EXPECT_EQ(m.find(keys[static_cast<size_t>(i)]), BlockIndex(i));
+    }
+  }
+}
+
+TEST(BlockMapTest, ErasingManyAtOnceEqualsErasingOneByOne) {
+  BlockMap batch, single;
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> coord(-40, 40);  // many blocks share coarse-index lists
+  std::vector<BlockKey> keys;
+  std::set<BlockKey, KeyLess> seen;
+  while (keys.size() < 3000) {
+    const BlockKey k{coord(rng), coord(rng), coord(rng) / 8};
+    if (!seen.insert(k).second) continue;
+    keys.push_back(k);
+    ASSERT_EQ(batch.findOrCreate(k), single.findOrCreate(k));
+  }
+  std::vector<BlockKey> gone;
+  for (const BlockKey& k : keys)
+    if (rng() % 3 == 0) gone.push_back(k);
+  gone.push_back({1000, 1000, 1000});  // not in the map: skipped
+  gone.push_back(gone.front());        // twice: erased once
+  batch.erase(gone);
+  for (const BlockKey& k : gone) single.erase(k);
+  EXPECT_EQ(batch.size(), single.size());
+  EXPECT_EQ(batch.freeSlots(), single.freeSlots());
+  EXPECT_EQ(batch.freeSlots(), gone.size() - 2);
+  for (const BlockKey& k : keys) EXPECT_EQ(batch.find(k), single.find(k));
+  EXPECT_EQ(collect(batch), collect(single));
+  // The coarse index lost exactly the erased blocks: boxes of every size agree.
+  for (int trial = 0; trial < 200; ++trial) {
+    BlockKey lo{coord(rng), coord(rng), coord(rng) / 8}, hi{coord(rng), coord(rng), coord(rng) / 8};
+    if (lo.x > hi.x) std::swap(lo.x, hi.x);
+    if (lo.y > hi.y) std::swap(lo.y, hi.y);
+    if (lo.z > hi.z) std::swap(lo.z, hi.z);
+    ASSERT_EQ(collectInBox(batch, lo, hi), collectInBox(single, lo, hi)) << "trial " << trial;
+  }
+  EXPECT_EQ(collectInBox(batch, {-64, -64, -64}, {64, 64, 64}), collect(single));
 }
 
 TEST(BlockMapTest, ClearEmptiesTheMapAndKeepsTheArena) {
