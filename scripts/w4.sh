@@ -71,8 +71,8 @@ fi
 build() {
   local name="$1"; shift
   echo "w4: $name build ($*)" >&2
-  # The previous build's map file (GBs) is on disk first: its writeback would otherwise run
-  # during this build, with the disk shared with this build's page store commits.
+  # The previous build's map file (406 MB for W4) is on disk first: its writeback would
+  # otherwise run during this build, sharing the disk with this build's page store commits.
   sync
   /usr/bin/time -v -o "$out/$name.time" "$fm" build "$w4" --resolution 0.05 --max-range 30 \
     --backend "$backend" --scans "$scans" --json "$@" > "$out/$name.json"

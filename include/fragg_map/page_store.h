@@ -109,8 +109,8 @@ struct PagingStats {
   double seconds_commit = 0;     ///< time in commits on the map's thread
   double seconds_writer = 0;     ///< time the background writer spent writing commits
   double seconds_page_in = 0;    ///< time reading blocks back
-  /// time writing the backend's changes back to the host map after a scan (a device
-  /// backend: before the budget is counted; the CPU backend writes the host map directly)
+  /// time writing a device backend's changes back to the host map before a commit or a
+  /// paging round (the CPU backend writes the host map directly: 0)
   double seconds_sync = 0;
   double seconds_page_out = 0;  ///< time choosing the blocks that leave and dropping them
   uint64_t store_bytes = 0;     ///< on disk

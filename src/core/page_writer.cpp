@@ -48,7 +48,8 @@ void PageWriter::run() {
 #ifdef __linux__
   // A commit has until the next one to reach the store: the writer runs in the time the
   // map's threads leave (on a machine whose cores the insertion fills, a writer of equal
-  // priority takes a core from a parallel ray cast, whose threads then wait for it).
+  // priority takes a core from a parallel ray cast, whose threads then wait for it). Should
+  // it fail, the writer keeps the map's priority: slower there, nothing else changes.
   setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kWriterNice);
 #endif
   std::unique_lock<std::mutex> lock(mutex_);
