@@ -54,6 +54,9 @@ class BlockView {
   /// Keys of the blocks whose cells changed (`what`) after map revision `revision`, in
   /// unspecified order. Removed blocks are not listed.
   std::vector<BlockKey> changedSince(uint64_t revision, BlockChange what = BlockChange::kAny) const;
+  /// The same blocks with their cells (no second look-up per key).
+  std::vector<BlockRef> changedRefsSince(uint64_t revision,
+                                         BlockChange what = BlockChange::kAny) const;
   BlockStamps stamps(const BlockKey& key) const;
   /// Exact bounds of observed cells.
   KeyBounds observedBounds() const { return blocks_->observedBounds(); }

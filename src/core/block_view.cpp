@@ -34,14 +34,28 @@ BlockStamps BlockView::stamps(const BlockKey& key) const {
   return {m.changed_at, m.occupied_at, m.state_at};
 }
 
+namespace {
+uint64_t stampOf(const BlockMeta& m, BlockChange what) {
+  return what == BlockChange::kOccupied ? m.occupied_at
+         : what == BlockChange::kState  ? m.state_at
+                                        : m.changed_at;
+}
+}  // namespace
+
 std::vector<BlockKey> BlockView::changedSince(uint64_t revision, BlockChange what) const {
   std::vector<BlockKey> out;
   blocks_->forEach([&](BlockIndex i) {
     const BlockMeta& m = blocks_->meta(i);
-    const uint64_t at = what == BlockChange::kOccupied ? m.occupied_at
-                        : what == BlockChange::kState  ? m.state_at
-                                                       : m.changed_at;
-    if (at > revision) out.push_back(m.key);
+    if (stampOf(m, what) > revision) out.push_back(m.key);
+  });
+  return out;
+}
+
+std::vector<BlockRef> BlockView::changedRefsSince(uint64_t revision, BlockChange what) const {
+  std::vector<BlockRef> out;
+  blocks_->forEach([&](BlockIndex i) {
+    const BlockMeta& m = blocks_->meta(i);
+    if (stampOf(m, what) > revision) out.push_back({m.key, &blocks_->block(i)});
   });
   return out;
 }

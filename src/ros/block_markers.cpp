@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "fragg_map/ros/height_color.h"
+#include "fragg_map/ros/layer_masks.h"
 #include "fragg_map/ros/speckles.h"
 
 namespace fragg::ros {
@@ -33,24 +34,20 @@ int32_t MarkerLedger::idOf(const fragg::BlockKey& key) const {
 }
 
 CellMask cellMask(const fragg::Map& map, const fragg::Block& block, fragg::CellState state) {
-  // Branch-free over 64-cell words (the hot loop of an incremental update: every changed
-  // block is scanned). Unobserved cells hold INT16_MIN, below every threshold.
+  // One 64-cell word at a time (the hot loop of an incremental update: every changed block is
+  // scanned; layer_masks.h). Unobserved cells hold INT16_MIN, below every threshold.
   const fragg::OccupancyModel& model = map.model();
   const fragg::Cell* cells = block.cells;
-  const int16_t above = model.occupied_above_fx, below = model.free_below_fx;
   CellMask mask;
   for (int w = 0; w < fragg::kCellsPerBlock / 64; ++w) {
-    uint64_t word = 0;
     const fragg::Cell* c = cells + 64 * w;
+    uint64_t word = 0;
     switch (state) {
       case fragg::CellState::kOccupied:
-        for (int i = 0; i < 64; ++i) word |= uint64_t{c[i].log_odds_fx > above} << i;
+        word = layerMasks(c, model.occupied_above_fx, model.free_below_fx).occupied;
         break;
       case fragg::CellState::kFree:
-        for (int i = 0; i < 64; ++i)
-          word |=
-              uint64_t{c[i].log_odds_fx < below && c[i].log_odds_fx != fragg::kUnobservedLogOdds}
-              << i;
+        word = layerMasks(c, model.occupied_above_fx, model.free_below_fx).free;
         break;
       default:
         for (int i = 0; i < 64; ++i)
@@ -124,8 +121,10 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
   visualization_msgs::MarkerArray out;
   const fragg::BlockView blocks = map.blockView();
   const uint64_t since = ledger->published_revision_;
-  // Shown blocks that were erased (clearBox, reset) are not listed as changed: look them up.
-  for (auto it = ledger->ids_.begin(); it != ledger->ids_.end();) {
+  // Shown blocks that were erased (clearBox, reset, paged out) are not listed as changed: look
+  // them up, when the map's view changed since the last update (no erase without that).
+  const bool view_moved = map.viewEpoch() != ledger->view_epoch_;
+  for (auto it = ledger->ids_.begin(); view_moved && it != ledger->ids_.end();) {
     if (!blocks.findBlock(it->first)) {
       out.markers.push_back(
           markerHeader(style, stamp, it->second.id, visualization_msgs::Marker::DELETE));
@@ -136,7 +135,7 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
   }
   // Occupied markers: only blocks where a cell crossed the occupied threshold; other states:
   // the blocks where a cell's state changed.
-  std::vector<fragg::BlockKey> changed = blocks.changedSince(
+  std::vector<fragg::BlockRef> changed = blocks.changedRefsSince(
       since, style.state == fragg::CellState::kOccupied ? fragg::BlockChange::kOccupied
                                                         : fragg::BlockChange::kState);
   // colored_map: blocks whose colours changed are redrawn even with the same cells.
@@ -144,18 +143,18 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
   if (style.colors) {
     for (const fragg::BlockKey& k : style.colors->recoloredSince(ledger->colors_drawn_))
       if (blocks.findBlock(k)) recolored.insert(k);
-    for (const fragg::BlockKey& k : changed) recolored.erase(k);
-    changed.insert(changed.end(), recolored.begin(), recolored.end());
+    for (const fragg::BlockRef& r : changed) recolored.erase(r.key);
+    for (const fragg::BlockKey& k : recolored) changed.push_back({k, blocks.findBlock(k)});
   }
   // The masks in parallel (read-only), the ledger and the messages in order.
   std::vector<CellMask> masks(changed.size());
   const int64_t n = static_cast<int64_t>(changed.size());
 #pragma omp parallel for schedule(static) if (n > 256)
-  for (int64_t j = 0; j < n; ++j) {
-    masks[j] = drawnCells(map, blocks, changed[j], *blocks.findBlock(changed[j]), style);
-  }
+  for (int64_t j = 0; j < n; ++j)
+    masks[j] = drawnCells(map, blocks, changed[j].key, *changed[j].block, style);
+  out.markers.reserve(out.markers.size() + changed.size());
   for (size_t j = 0; j < changed.size(); ++j) {
-    const fragg::BlockKey& key = changed[j];
+    const fragg::BlockKey& key = changed[j].key;
     const CellMask& cells = masks[j];
     const auto shown = ledger->ids_.find(key);
     if (shown == ledger->ids_.end()) {
@@ -173,6 +172,7 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
     }
   }
   ledger->published_revision_ = map.revision();
+  ledger->view_epoch_ = map.viewEpoch();
   if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
   return out;
 }
@@ -192,6 +192,7 @@ visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const Mar
     out.markers.push_back(blockMarker(map, key, cells, style, stamp, id));
   });
   ledger->published_revision_ = map.revision();
+  ledger->view_epoch_ = map.viewEpoch();
   if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
   return out;
 }

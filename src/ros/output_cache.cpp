@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/ros/layer_masks.h"
 #include "fragg_map/ros/occupied_cloud.h"
 #include "fragg_map/ros/projected_map.h"
 #include "fragg_map/ros/speckles.h"
@@ -22,87 +23,103 @@ MapOutputCache::MapOutputCache(const OutputCacheOptions& options) : options_(opt
     throw fragg::InvalidArgument("output cache: refresh_on kOccupied would miss free cells");
 }
 
-void MapOutputCache::computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
-                                  const fragg::BlockKey& key, const fragg::Block& block,
-                                  Piece* piece) const {
+MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
+                                                        const fragg::BlockView& blocks,
+                                                        const fragg::BlockKey& key,
+                                                        const fragg::Block& block,
+                                                        Piece* piece) const {
   // One 64-bit word per z layer of the block (cell index x + 8 y + 64 z): occupied, free and
-  // observed masks, branch-free, then the columns and bounds from OR-ed layers.
+  // observed masks (layer_masks.h); the columns and bounds from OR-ed layers; the cell centres
+  // only when the shown occupied cells changed (most state changes are cells seen for the
+  // first time or turning free).
   const fragg::OccupancyModel& model = map.model();
   const int16_t above = model.occupied_above_fx, below = model.free_below_fx;
-  uint64_t occupied[fragg::kBlockSize], free[fragg::kBlockSize], observed_xy = 0;
+  const uint8_t shown_layers = heights().blockLayers(key.z, map.resolution());
+  std::array<uint64_t, fragg::kBlockSize> shown{};
+  uint64_t observed_xy = 0, band_occupied = 0, band_free = 0;
   for (int z = 0; z < fragg::kBlockSize; ++z) {
-    const fragg::Cell* c = block.cells + 64 * z;
-    uint64_t o = 0, f = 0, seen = 0;
-    for (int i = 0; i < 64; ++i) {
-      const int16_t l = c[i].log_odds_fx;
-      const bool known = l != fragg::kUnobservedLogOdds;
-      o |= uint64_t{l > above} << i;
-      f |= uint64_t{known && l < below} << i;
-      seen |= uint64_t{known} << i;
-    }
-    occupied[z] = o;
-    free[z] = f;
-    observed_xy |= seen;
-  }
-  piece->xyz.clear();
-  piece->columns.fill(kUnknown);
-  piece->in_band = false;
-  piece->min_x = piece->min_y = fragg::kBlockSize;
-  piece->max_x = piece->max_y = -1;
-  for (uint64_t m = observed_xy; m; m &= m - 1) {
-    const int i = __builtin_ctzll(m);
-    const int lx = i & fragg::kBlockMask, ly = i >> fragg::kBlockBits;
-    piece->min_x = std::min(piece->min_x, lx);
-    piece->max_x = std::max(piece->max_x, lx);
-    piece->min_y = std::min(piece->min_y, ly);
-    piece->max_y = std::max(piece->max_y, ly);
-  }
-  const double res_m = map.resolution();
-  const uint8_t shown_layers = heights().blockLayers(key.z, res_m);
-  uint64_t band_occupied = 0, band_free = 0;
-  for (int z = 0; z < fragg::kBlockSize; ++z) {
+    const LayerMasks layer = layerMasks(block.cells + 64 * z, above, below);
+    uint64_t o = layer.occupied;
+    const uint64_t f = layer.free;
+    observed_xy |= layer.observed;
     if (!(shown_layers >> z & 1)) continue;  // outside occupancy_min_z / max_z: not shown
-    uint64_t o = occupied[z];
     if (options_.hide_speckles) {
-      for (uint64_t m = occupied[z]; m; m &= m - 1) {
+      for (uint64_t m = o; m; m &= m - 1) {
         const int i = __builtin_ctzll(m);
         if (isSpeckle(map, blocks, fragg::voxelKeyOf(key, 64 * z + i))) o &= ~(uint64_t{1} << i);
       }
     }
-    for (uint64_t m = o; m; m &= m - 1) {
-      const Eigen::Vector3d p_map =
-          map.centerOf(fragg::voxelKeyOf(key, 64 * z + __builtin_ctzll(m)));
-      piece->xyz.insert(piece->xyz.end(),
-                        {static_cast<float>(p_map.x()), static_cast<float>(p_map.y()),
-                         static_cast<float>(p_map.z())});
-    }
+    shown[z] = o;
     band_occupied |= o;  // a speckle counts neither as occupied nor as free
-    band_free |= free[z];
+    band_free |= f;
   }
-  for (int i = 0; i < 64; ++i) {
-    if (band_occupied >> i & 1)
-      piece->columns[i] = kOccupied;
-    else if (band_free >> i & 1)
-      piece->columns[i] = kFree;
+  PieceDelta delta;
+  if (shown != piece->shown) {
+    const int64_t before = static_cast<int64_t>(piece->xyz.size() / 3);
+    piece->shown = shown;
+    piece->xyz.clear();
+    for (int z = 0; z < fragg::kBlockSize; ++z) {
+      for (uint64_t m = shown[z]; m; m &= m - 1) {
+        const Eigen::Vector3d p_map =
+            map.centerOf(fragg::voxelKeyOf(key, 64 * z + __builtin_ctzll(m)));
+        piece->xyz.insert(piece->xyz.end(),
+                          {static_cast<float>(p_map.x()), static_cast<float>(p_map.y()),
+                           static_cast<float>(p_map.z())});
+      }
+    }
+    delta.occupied = static_cast<int64_t>(piece->xyz.size() / 3) - before;
   }
-  piece->in_band = (band_occupied | band_free) != 0;
+  std::array<int8_t, 64> columns;
+  for (int i = 0; i < 64; ++i)
+    columns[i] = (band_occupied >> i & 1) ? kOccupied : (band_free >> i & 1) ? kFree : kUnknown;
+  int32_t min_x = fragg::kBlockSize, min_y = fragg::kBlockSize, max_x = -1, max_y = -1;
+  for (uint64_t m = observed_xy; m; m &= m - 1) {
+    const int i = __builtin_ctzll(m);
+    const int lx = i & fragg::kBlockMask, ly = i >> fragg::kBlockBits;
+    min_x = std::min(min_x, lx);
+    max_x = std::max(max_x, lx);
+    min_y = std::min(min_y, ly);
+    max_y = std::max(max_y, ly);
+  }
+  const bool in_band = (band_occupied | band_free) != 0;
+  if (columns != piece->columns || in_band != piece->in_band || min_x != piece->min_x ||
+      max_x != piece->max_x || min_y != piece->min_y || max_y != piece->max_y) {
+    piece->columns = columns;
+    piece->in_band = in_band;
+    piece->min_x = min_x, piece->max_x = max_x, piece->min_y = min_y, piece->max_y = max_y;
+    delta.column = true;
+  }
+  return delta;
 }
 
-void MapOutputCache::mergeColumn(const ColumnKey& ck, Column* col) const {
+void MapOutputCache::mergeColumn(const ColumnKey&, Column* col) const {
   col->merged.fill(kUnknown);
   col->min_x = col->min_y = fragg::kBlockSize;
   col->max_x = col->max_y = -1;
-  for (const int32_t z : col->zs) {
-    const Piece& p = pieces_.at(fragg::BlockKey{ck.x, ck.y, z});
-    if (p.max_x >= 0) {
-      col->min_x = std::min(col->min_x, p.min_x);
-      col->max_x = std::max(col->max_x, p.max_x);
-      col->min_y = std::min(col->min_y, p.min_y);
-      col->max_y = std::max(col->max_y, p.max_y);
+  for (const auto& [z, p] : col->pieces) {
+    if (p->max_x >= 0) {
+      col->min_x = std::min(col->min_x, p->min_x);
+      col->max_x = std::max(col->max_x, p->max_x);
+      col->min_y = std::min(col->min_y, p->min_y);
+      col->max_y = std::max(col->max_y, p->max_y);
     }
-    if (!p.in_band) continue;
-    for (int i = 0; i < 64; ++i) col->merged[i] = std::max(col->merged[i], p.columns[i]);
+    if (!p->in_band) continue;
+    for (int i = 0; i < 64; ++i) col->merged[i] = std::max(col->merged[i], p->columns[i]);
   }
+}
+
+void MapOutputCache::dropPiece(const fragg::BlockKey& k,
+                               std::unordered_set<ColumnKey, ColumnKeyHash>* dirty) {
+  const auto it = pieces_.find(k);
+  if (it == pieces_.end()) return;
+  occupied_cells_ -= it->second.xyz.size() / 3;
+  const ColumnKey ck{k.x, k.y};
+  auto& list = columns_[ck].pieces;
+  list.erase(std::remove_if(list.begin(), list.end(),
+                            [&](const auto& zp) { return zp.second == &it->second; }),
+             list.end());
+  pieces_.erase(it);
+  dirty->insert(ck);
 }
 
 OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
@@ -119,52 +136,52 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
     columns_.clear();
     occupied_cells_ = 0;
     todo = blocks.all();
+  } else if (!options_.hide_speckles) {
+    todo = blocks.changedRefsSince(revision_, options_.refresh_on);
   } else {
-    std::vector<fragg::BlockKey> changed = blocks.changedSince(revision_, options_.refresh_on);
-    if (options_.hide_speckles && !changed.empty()) {
-      // A cell's speckle state follows its neighbours: the blocks around a change too.
-      std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around(changed.begin(),
-                                                                      changed.end());
-      for (const fragg::BlockKey& k : changed)
-        for (int dz = -1; dz <= 1; ++dz)
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) around.insert({k.x + dx, k.y + dy, k.z + dz});
-      changed.assign(around.begin(), around.end());
-    }
-    todo.reserve(changed.size());
-    for (const fragg::BlockKey& k : changed) {
-      const fragg::Block* b = blocks.findBlock(k);
-      if (b) {
+    // A cell's speckle state follows its neighbours: the blocks around a change too.
+    const std::vector<fragg::BlockKey> changed =
+        blocks.changedSince(revision_, options_.refresh_on);
+    std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around(changed.begin(), changed.end());
+    for (const fragg::BlockKey& k : changed)
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) around.insert({k.x + dx, k.y + dy, k.z + dz});
+    todo.reserve(around.size());
+    for (const fragg::BlockKey& k : around) {
+      if (const fragg::Block* b = blocks.findBlock(k))
         todo.push_back({k, b});
-      } else if (const auto it = pieces_.find(k); it != pieces_.end()) {
-        // Only reachable through the neighbour ring: erased blocks change the view epoch.
-        occupied_cells_ -= it->second.xyz.size() / 3;
-        pieces_.erase(it);
-        const ColumnKey ck{k.x, k.y};
-        columns_[ck].zs.erase(k.z);
-        dirty.insert(ck);
-      }
+      else
+        dropPiece(k, &dirty);  // only through the ring: erased blocks change the view epoch
     }
   }
-  // The pieces in parallel (read-only map), then the bookkeeping in order.
-  std::vector<Piece> fresh(todo.size());
-  const int64_t n = static_cast<int64_t>(todo.size());
-#pragma omp parallel for schedule(dynamic, 64) if (n > 256)
-  for (int64_t j = 0; j < n; ++j) computePiece(map, blocks, todo[j].key, *todo[j].block, &fresh[j]);
+  // Each block's piece (new ones registered in their columns first: stable addresses), then
+  // the pieces in parallel (read-only map, one piece per iteration), then the sums in order.
+  std::vector<Piece*> slots(todo.size());
   for (size_t j = 0; j < todo.size(); ++j) {
     const fragg::BlockKey& k = todo[j].key;
-    Piece& slot = pieces_[k];
-    occupied_cells_ -= slot.xyz.size() / 3;
-    occupied_cells_ += fresh[j].xyz.size() / 3;
-    slot = std::move(fresh[j]);
+    const auto [it, added] = pieces_.try_emplace(k);
+    slots[j] = &it->second;
+    if (!added) continue;
     const ColumnKey ck{k.x, k.y};
-    columns_[ck].zs.insert(k.z);
+    columns_[ck].pieces.emplace_back(k.z, &it->second);
     dirty.insert(ck);
   }
+  std::vector<PieceDelta> deltas(todo.size());
+  const int64_t n = static_cast<int64_t>(todo.size());
+#pragma omp parallel for schedule(dynamic, 64) if (n > 256)
+  for (int64_t j = 0; j < n; ++j)
+    deltas[j] = computePiece(map, blocks, todo[j].key, *todo[j].block, slots[j]);
+  int64_t occupied_delta = 0;
+  for (size_t j = 0; j < todo.size(); ++j) {
+    occupied_delta += deltas[j].occupied;
+    if (deltas[j].column) dirty.insert(ColumnKey{todo[j].key.x, todo[j].key.y});
+  }
+  occupied_cells_ = static_cast<size_t>(static_cast<int64_t>(occupied_cells_) + occupied_delta);
   out.blocks_read = todo.size();
   for (const ColumnKey& ck : dirty) {
     const auto it = columns_.find(ck);
-    if (it->second.zs.empty()) {
+    if (it->second.pieces.empty()) {
       columns_.erase(it);
       continue;
     }

@@ -205,6 +205,19 @@ TEST(InsertTest, OccupiedAtMovesOnlyWhenACellCrossesTheOccupiedThreshold) {
   EXPECT_TRUE(map.changedBlocksSince(first, BlockChange::kState).empty());
   EXPECT_EQ(map.changedBlocksSince(0, BlockChange::kState).size(), map.blockCount());
   EXPECT_TRUE(map.changedBlocksSince(first, BlockChange::kOccupied).empty());
+  // changedRefsSince lists the same blocks as changedSince, each with its own cells.
+  const BlockView view = map.blockView();
+  for (const BlockChange what : {BlockChange::kAny, BlockChange::kOccupied, BlockChange::kState}) {
+    for (const uint64_t since : {uint64_t{0}, first}) {
+      const std::vector<BlockKey> keys = view.changedSince(since, what);
+      const std::vector<BlockRef> refs = view.changedRefsSince(since, what);
+      ASSERT_EQ(refs.size(), keys.size());
+      for (size_t i = 0; i < refs.size(); ++i) {
+        EXPECT_EQ(refs[i].key, keys[i]);
+        EXPECT_EQ(refs[i].block, view.findBlock(keys[i]));
+      }
+    }
+  }
 }
 
 TEST(InsertTest, RangeNoiseKeepsAHitsOwnSurfaceFromBeingCleared) {

@@ -72,16 +72,26 @@ class MapOutputCache {
   HeightBand heights() const { return {options_.occupancy_min_z_m, options_.occupancy_max_z_m}; }
 
   struct Piece {
-    std::vector<float> xyz;  ///< occupied cell centres (speckles left out when hidden)
-    /// The block's columns in the height band (-1 unknown, 0 free, 100 occupied), x fastest.
-    std::array<int8_t, 64> columns;
+    /// The occupied cells shown (in the band, speckles left out when hidden), one word per z
+    /// layer: xyz is rebuilt only when these change.
+    std::array<uint64_t, fragg::kBlockSize> shown{};
+    std::vector<float> xyz;  ///< their cell centres
+    /// The block's columns in the height band (-1 unknown, 0 free, 100 occupied), x fastest;
+    /// set by the first computePiece (a new piece's column is always merged).
+    std::array<int8_t, 64> columns{};
     bool in_band = false;  ///< some cell of the block lies in the band
     /// Observed cells' xy key bounds within the block (lo > hi: none observed).
     int32_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
   };
-  /// A column of blocks (same x, y block key): the merged 8 x 8 grid patch and xy bounds.
+  /// What recomputing a piece changed.
+  struct PieceDelta {
+    int64_t occupied = 0;  ///< shown occupied cells gained (negative: lost)
+    bool column = false;   ///< its columns or bounds changed: the column must be merged
+  };
+  /// A column of blocks (same x, y block key): its pieces, the merged 8 x 8 grid patch and the
+  /// xy bounds. The pieces live in pieces_ (node-based: their addresses never move).
   struct Column {
-    std::unordered_set<int32_t> zs;  ///< block z keys present
+    std::vector<std::pair<int32_t, const Piece*>> pieces;  ///< (block z key, piece)
     std::array<int8_t, 64> merged;
     int32_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
   };
@@ -95,8 +105,12 @@ class MapOutputCache {
     }
   };
 
-  void computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
-                    const fragg::BlockKey& key, const fragg::Block& block, Piece* piece) const;
+  /// Brings `piece` (new: default-constructed) up to date with `block`.
+  PieceDelta computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
+                          const fragg::BlockKey& key, const fragg::Block& block,
+                          Piece* piece) const;
+  /// Drops the piece of a block that left the map; its column becomes dirty.
+  void dropPiece(const fragg::BlockKey& key, std::unordered_set<ColumnKey, ColumnKeyHash>* dirty);
   /// Recomputes `col`'s merged patch and bounds from its blocks' pieces.
   void mergeColumn(const ColumnKey& ck, Column* col) const;
   /// Grid bounds from the columns; reallocates and redraws the grid when they moved, else
