@@ -92,11 +92,11 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
   return delta;
 }
 
-void MapOutputCache::mergeColumn(const ColumnKey&, Column* col) const {
+void MapOutputCache::mergeColumn(Column* col) const {
   col->merged.fill(kUnknown);
   col->min_x = col->min_y = fragg::kBlockSize;
   col->max_x = col->max_y = -1;
-  for (const auto& [z, p] : col->pieces) {
+  for (const Piece* p : col->pieces) {
     if (p->max_x >= 0) {
       col->min_x = std::min(col->min_x, p->min_x);
       col->max_x = std::max(col->max_x, p->max_x);
@@ -115,9 +115,9 @@ void MapOutputCache::dropPiece(const fragg::BlockKey& k,
   occupied_cells_ -= it->second.xyz.size() / 3;
   const ColumnKey ck{k.x, k.y};
   auto& list = columns_[ck].pieces;
-  list.erase(std::remove_if(list.begin(), list.end(),
-                            [&](const auto& zp) { return zp.second == &it->second; }),
-             list.end());
+  list.erase(
+      std::remove_if(list.begin(), list.end(), [&](const Piece* p) { return p == &it->second; }),
+      list.end());
   pieces_.erase(it);
   dirty->insert(ck);
 }
@@ -129,15 +129,15 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
   out.full = !valid_ || map.viewEpoch() != epoch_ || revision < revision_ ||
              map.resolution() != resolution_m_;
   // The blocks to recompute, and those that left the map.
-  std::vector<fragg::BlockRef> todo;
+  std::vector<fragg::BlockRef> refresh;
   std::unordered_set<ColumnKey, ColumnKeyHash> dirty;
   if (out.full) {
     pieces_.clear();
     columns_.clear();
     occupied_cells_ = 0;
-    todo = blocks.all();
+    refresh = blocks.all();
   } else if (!options_.hide_speckles) {
-    todo = blocks.changedRefsSince(revision_, options_.refresh_on);
+    refresh = blocks.changedRefsSince(revision_, options_.refresh_on);
   } else {
     // A cell's speckle state follows its neighbours: the blocks around a change too.
     const std::vector<fragg::BlockKey> changed =
@@ -147,45 +147,45 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
       for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx) around.insert({k.x + dx, k.y + dy, k.z + dz});
-    todo.reserve(around.size());
+    refresh.reserve(around.size());
     for (const fragg::BlockKey& k : around) {
       if (const fragg::Block* b = blocks.findBlock(k))
-        todo.push_back({k, b});
+        refresh.push_back({k, b});
       else
         dropPiece(k, &dirty);  // only through the ring: erased blocks change the view epoch
     }
   }
   // Each block's piece (new ones registered in their columns first: stable addresses), then
   // the pieces in parallel (read-only map, one piece per iteration), then the sums in order.
-  std::vector<Piece*> slots(todo.size());
-  for (size_t j = 0; j < todo.size(); ++j) {
-    const fragg::BlockKey& k = todo[j].key;
+  std::vector<Piece*> slots(refresh.size());
+  for (size_t j = 0; j < refresh.size(); ++j) {
+    const fragg::BlockKey& k = refresh[j].key;
     const auto [it, added] = pieces_.try_emplace(k);
     slots[j] = &it->second;
     if (!added) continue;
     const ColumnKey ck{k.x, k.y};
-    columns_[ck].pieces.emplace_back(k.z, &it->second);
+    columns_[ck].pieces.push_back(&it->second);
     dirty.insert(ck);
   }
-  std::vector<PieceDelta> deltas(todo.size());
-  const int64_t n = static_cast<int64_t>(todo.size());
+  std::vector<PieceDelta> deltas(refresh.size());
+  const int64_t n = static_cast<int64_t>(refresh.size());
 #pragma omp parallel for schedule(dynamic, 64) if (n > 256)
   for (int64_t j = 0; j < n; ++j)
-    deltas[j] = computePiece(map, blocks, todo[j].key, *todo[j].block, slots[j]);
+    deltas[j] = computePiece(map, blocks, refresh[j].key, *refresh[j].block, slots[j]);
   int64_t occupied_delta = 0;
-  for (size_t j = 0; j < todo.size(); ++j) {
+  for (size_t j = 0; j < refresh.size(); ++j) {
     occupied_delta += deltas[j].occupied;
-    if (deltas[j].column) dirty.insert(ColumnKey{todo[j].key.x, todo[j].key.y});
+    if (deltas[j].column) dirty.insert(ColumnKey{refresh[j].key.x, refresh[j].key.y});
   }
   occupied_cells_ = static_cast<size_t>(static_cast<int64_t>(occupied_cells_) + occupied_delta);
-  out.blocks_read = todo.size();
+  out.blocks_read = refresh.size();
   for (const ColumnKey& ck : dirty) {
     const auto it = columns_.find(ck);
     if (it->second.pieces.empty()) {
       columns_.erase(it);
       continue;
     }
-    mergeColumn(ck, &it->second);
+    mergeColumn(&it->second);
   }
   out.columns_merged = dirty.size();
   refreshGrid(dirty, out.full);

@@ -91,7 +91,7 @@ class MapOutputCache {
   /// A column of blocks (same x, y block key): its pieces, the merged 8 x 8 grid patch and the
   /// xy bounds. The pieces live in pieces_ (node-based: their addresses never move).
   struct Column {
-    std::vector<std::pair<int32_t, const Piece*>> pieces;  ///< (block z key, piece)
+    std::vector<const Piece*> pieces;  ///< one per block of the column
     std::array<int8_t, 64> merged;
     int32_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
   };
@@ -112,7 +112,7 @@ class MapOutputCache {
   /// Drops the piece of a block that left the map; its column becomes dirty.
   void dropPiece(const fragg::BlockKey& key, std::unordered_set<ColumnKey, ColumnKeyHash>* dirty);
   /// Recomputes `col`'s merged patch and bounds from its blocks' pieces.
-  void mergeColumn(const ColumnKey& ck, Column* col) const;
+  void mergeColumn(Column* col) const;
   /// Grid bounds from the columns; reallocates and redraws the grid when they moved, else
   /// draws the columns in `dirty`.
   void refreshGrid(const std::unordered_set<ColumnKey, ColumnKeyHash>& dirty, bool all);
