@@ -333,5 +333,105 @@ TEST(RaycastTest, LeavingABlockInOneJumpLandsWhereSteppingDoes) {
   EXPECT_GT(jumped_cells, 20000u);
 }
 
+/// Skips, after a free visit, the rest of every aligned cube of 2^kCubeBits cells per axis whose
+/// key hashes into a chosen third, and otherwise the rest of every block of another third (the
+/// CUDA pass leaves groups of saturated blocks and single blocks alike).
+template <int kCubeBits>
+struct SkipCubesAndBlocks : Collect {
+  static constexpr int kCubeMask = (1 << kCubeBits) - 1;
+  int mask = 0;
+  static bool cubeSkipped(const VoxelKey& k) {
+    return SkipSomeBlocks::skipped(
+               BlockKey{k.x >> kCubeBits, k.y >> kCubeBits, (k.z >> kCubeBits) + 1000}) &&
+           (static_cast<uint32_t>(k.x >> kCubeBits) + static_cast<uint32_t>(k.y >> kCubeBits)) %
+                   2 ==
+               0;
+  }
+  /// The region whose rest a free visit of `k` skips: 0 none, else its mask.
+  static int regionMask(const VoxelKey& k) {
+    if (cubeSkipped(k)) return kCubeMask;
+    return SkipSomeBlocks::skipped(blockKeyOf(k)) ? kBlockMask : 0;
+  }
+  void operator()(const VoxelKey& k, bool hit, int entry) {
+    Collect::operator()(k, hit, entry);
+    mask = hit ? 0 : regionMask(k);
+  }
+  int skippingBlock() const { return mask; }
+};
+
+/// Whether face code `entry` leads from the block of `from` to the block of `to`.
+bool entryNamesTheBlock(const VoxelKey& from, const VoxelKey& to, int entry) {
+  BlockKey b = blockKeyOf(from);
+  const int step = entry % 2 ? 1 : -1;
+  (entry / 2 == 0 ? b.x : entry / 2 == 1 ? b.y : b.z) += step;
+  return b == blockKeyOf(to);
+}
+
+template <int kCubeBits>
+void expectCubeJumpsLandWhereSteppingDoes(unsigned seed) {
+  using Skip = SkipCubesAndBlocks<kCubeBits>;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-120.f, 120.f), frac(0.f, 1.f);
+  size_t jumped_cells = 0, cube_jumps = 0;
+  const auto sameRegion = [](const VoxelKey& a, const VoxelKey& b, int mask) {
+    return (a.x & ~mask) == (b.x & ~mask) && (a.y & ~mask) == (b.y & ~mask) &&
+           (a.z & ~mask) == (b.z & ~mask);
+  };
+  for (int trial = 0; trial < 3000; ++trial) {
+    RayVox ray{VoxelKey{int(rng() % 256) - 128, int(rng() % 256) - 128, -40},
+               {frac(rng), frac(rng), frac(rng)},
+               {u(rng), u(rng), u(rng) / 4},
+               trial % 3 != 0,
+               trial % 5 == 0 ? 1.5f : 0.f};
+    if (trial % 7 == 0) ray.end_v[2] = ray.start_v[2] + 0.25f;  // flat rays: ties and zero steps
+    Collect all;
+    traverseDda(ray, all);
+    // Reference: the full walk, of each run of cells in a skipping region only the first kept
+    // (the hit always). Entering a cell from a region larger than a block gives kUnknownBlock.
+    Collect want;
+    int region = 0;  // mask of the skip region of the last kept free cell, 0: none
+    VoxelKey region_cell{};
+    for (size_t i = 0; i < all.cells.size(); ++i) {
+      if (region != 0 && sameRegion(all.cells[i], region_cell, region)) {
+        if (all.hits[i])
+          want(all.cells[i], true, region == kBlockMask ? kSameBlock : kUnknownBlock);
+        continue;
+      }
+      want(all.cells[i], all.hits[i], region > kBlockMask ? kUnknownBlock : all.entries[i]);
+      region = all.hits[i] ? 0 : Skip::regionMask(all.cells[i]);
+      region_cell = all.cells[i];
+    }
+    Skip got;
+    const int visited = traverseDda(ray, got);
+    ASSERT_EQ(got.cells.size(), want.cells.size()) << "trial " << trial;
+    EXPECT_EQ(visited, static_cast<int>(got.cells.size()));
+    for (size_t i = 0; i < got.cells.size(); ++i) {
+      ASSERT_EQ(tupleOf(got.cells[i]), tupleOf(want.cells[i]))
+          << "trial " << trial << " cell " << i;
+      EXPECT_EQ(got.hits[i], want.hits[i]) << "trial " << trial << " cell " << i;
+      // A hit reached by a jump over a clearing margin may name the face the walk took where
+      // the full walk (which left the margin's cells out) says kUnknownBlock.
+      if (got.hits[i] && want.entries[i] == kUnknownBlock && got.entries[i] >= 0 && i > 0) {
+        EXPECT_TRUE(entryNamesTheBlock(got.cells[i - 1], got.cells[i], got.entries[i]))
+            << "trial " << trial << " cell " << i;
+      } else {
+        EXPECT_EQ(got.entries[i], want.entries[i]) << "trial " << trial << " cell " << i;
+      }
+      cube_jumps += !got.hits[i] && Skip::regionMask(got.cells[i]) == Skip::kCubeMask;
+    }
+    jumped_cells += all.cells.size() - got.cells.size();
+  }
+  EXPECT_GT(jumped_cells, 50000u);
+  EXPECT_GT(cube_jumps, 1000u);  // free visits followed by a jump out of a cube
+}
+
+TEST(RaycastTest, LeavingALargerCubeInOneJumpLandsWhereSteppingDoes) {
+  // Blocks skipped through the int form of skippingBlock() (kBlockMask) and cubes of 16 and
+  // 32 cells (2 x 2 x 2 and 4 x 4 x 4 blocks), mixed on one ray; entry codes included.
+  expectCubeJumpsLandWhereSteppingDoes<kBlockBits>(11);
+  expectCubeJumpsLandWhereSteppingDoes<4>(12);
+  expectCubeJumpsLandWhereSteppingDoes<5>(13);
+}
+
 }  // namespace
 }  // namespace fragg
