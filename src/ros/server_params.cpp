@@ -466,6 +466,9 @@ ServerParams parseKnown(const XmlRpcValue& root) {
   readDouble(root, "marker_rate", &p.marker_rate_hz);
   if (!(p.marker_rate_hz >= 0.0) || !std::isfinite(p.marker_rate_hz))
     badParam("marker_rate", "must be a finite rate in Hz >= 0 (0 = after every cloud)");
+  readDouble(root, "map_rate", &p.map_rate_hz);
+  if (!(p.map_rate_hz >= 0.0) || !std::isfinite(p.map_rate_hz))
+    badParam("map_rate", "must be a finite rate in Hz >= 0 (0 = after every cloud)");
   readDouble(root, "markers/color_min_z", &p.color_min_z_m);
   readDouble(root, "markers/color_max_z", &p.color_max_z_m);
   if (!std::isfinite(p.color_min_z_m) || !std::isfinite(p.color_max_z_m) ||

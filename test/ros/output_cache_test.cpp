@@ -1,7 +1,8 @@
 // MapOutputCache: after every edit (insertions, clear_bbx, erase by writeCells, truncate,
 // merge, removal of a kept scan, load, reset) the incrementally kept occupied cloud and
 // projected map equal a from-scratch build of the same map (occupiedCloud, projectedMap),
-// with and without speckle hiding and a height band; insertions are incremental.
+// with and without speckle hiding and a height band; insertions are incremental. Updates
+// skipped (map_rate) lose nothing.
 #include "fragg_map/ros/output_cache.h"
 
 #include <gtest/gtest.h>
@@ -158,6 +159,63 @@ TEST(OutputCache, OnlyChangedBlocksAreRead) {
   EXPECT_EQ(u.blocks_read, 1u);
   expectSameAsRebuild(map, cache, OutputCacheOptions(), "one cell");
 }
+
+// map_rate: the server skips the cache's update after the clouds that are not due. Skipping
+// loses nothing: one update after many edits (cells that changed and changed back in
+// between, blocks new since the last update) equals a rebuild, incrementally, as does a
+// cache updated after every edit.
+class OutputCacheSkipping : public ::testing::TestWithParam<int> {};
+
+TEST_P(OutputCacheSkipping, OneUpdateAfterManyEditsEqualsARebuild) {
+  OutputCacheOptions o;
+  o.hide_speckles = GetParam() & 1;
+  const int every = GetParam() & 2 ? 7 : 3;  // edits between two updates of `skipping`
+  fragg::Map map(test::cpuParams(0.1));
+  MapOutputCache skipping(o), each(o);
+  std::mt19937 rng(5 + GetParam());
+  skipping.update(map);
+  // Cells away from the scans (which reach ~5 m): only the writes below change them.
+  const fragg::VoxelKey seen{100, -2, 0}, flicker{-80, 60, 1}, back{-81, 60, 1};
+  test::setCell(map, seen, fragg::CellState::kOccupied);
+  int skipped_updates = 0;
+  for (int edit = 1; edit <= 4 * every; ++edit) {
+    Eigen::Isometry3d T_map_sensor = Eigen::Isometry3d::Identity();
+    T_map_sensor.translation() = Eigen::Vector3d(0.25 * edit, 0.1 * (edit % 4), 0.0);
+    T_map_sensor.rotate(Eigen::AngleAxisd(0.3 * edit, Eigen::Vector3d::UnitZ()));
+    map.insert(scatteredScan(&rng, 200), T_map_sensor,
+               fragg::SensorModel::autoFromCloud(0.0, -1.0));
+    // Between two updates: a cell the last update saw occupied goes free and comes back; a
+    // cell in a block new since the last update turns occupied, then free; another turns
+    // occupied and stays.
+    if (edit % every == 1) {
+      test::setCell(map, seen, fragg::CellState::kFree);
+      test::setCell(map, flicker, fragg::CellState::kOccupied);
+    }
+    if (edit % every == 2) {
+      test::setCell(map, seen, fragg::CellState::kOccupied);
+      test::setCell(map, flicker, fragg::CellState::kFree);
+      test::setCell(map, back, fragg::CellState::kOccupied);
+    }
+    each.update(map);
+    expectSameAsRebuild(map, each, o, "every edit, edit " + std::to_string(edit));
+    if (edit % every != 0) {
+      ++skipped_updates;
+      continue;
+    }
+    const uint64_t last_seen = skipping.revision();
+    const OutputCacheUpdate u = skipping.update(map);
+    EXPECT_FALSE(u.full) << edit;
+    EXPECT_EQ(skipping.revision(), map.revision());
+    EXPECT_GT(map.revision(), last_seen);
+    EXPECT_GT(u.blocks_read, 0u);
+    expectSameAsRebuild(map, skipping, o, "after skipping, edit " + std::to_string(edit));
+    EXPECT_EQ(skipping.occupiedCells(), each.occupiedCells());
+    test::setCell(map, back, fragg::CellState::kFree);  // for the next window
+  }
+  EXPECT_EQ(skipped_updates, 4 * (every - 1));
+}
+
+INSTANTIATE_TEST_SUITE_P(Options, OutputCacheSkipping, ::testing::Values(0, 1, 2, 3));
 
 TEST(OutputCache, RefreshingOnOccupiedChangesOnlyIsRefused) {
   OutputCacheOptions o;

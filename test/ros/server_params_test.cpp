@@ -67,6 +67,9 @@ TEST(ServerParams, EmptyNamespaceGivesTheCoreDefaults) {
   EXPECT_GT(p.sensor.max_range_m, 0.0);
   EXPECT_EQ(p.queue_size, 5);
   EXPECT_TRUE(p.latch);  // octomap_server's default
+  // Whole-map outputs and markers after every cloud (octomap_server's behaviour).
+  EXPECT_EQ(p.map_rate_hz, 0.0);
+  EXPECT_EQ(p.marker_rate_hz, 0.0);
   EXPECT_TRUE(std::isinf(p.map.height_filter.min_z_m));
   EXPECT_TRUE(p.unknown_parameters.empty());
 }
@@ -238,6 +241,7 @@ TEST(ServerParams, ReadsEveryName) {
   set(root, "queue_size", 3);
   set(root, "tf_tolerance", 0.25);
   set(root, "marker_rate", 2);  // an int where a double is expected
+  set(root, "map_rate", 0.5);
   const fragg::ros::ServerParams p = fragg::ros::parseParameters(root);
   EXPECT_EQ(p.map.resolution_m, 0.1);
   EXPECT_EQ(p.frame_id, "odom");
@@ -261,6 +265,7 @@ TEST(ServerParams, ReadsEveryName) {
   EXPECT_EQ(p.queue_size, 3);
   EXPECT_EQ(p.tf_tolerance_s, 0.25);
   EXPECT_EQ(p.marker_rate_hz, 2.0);
+  EXPECT_EQ(p.map_rate_hz, 0.5);
 }
 
 TEST(ServerParams, LidarSensor) {
@@ -301,6 +306,10 @@ TEST(ServerParams, InvalidValuesNameTheParameter) {
   expectRejected("tf_tolerance", -0.1);
   expectRejected("marker_rate", -1.0);
   expectRejected("marker_rate", std::numeric_limits<double>::infinity());
+  expectRejected("map_rate", -0.5);
+  expectRejected("map_rate", std::nan(""));
+  expectRejected("map_rate", std::numeric_limits<double>::infinity());
+  expectRejected("map_rate", std::string("1 Hz"));
   expectRejected("latch", 1);
   expectRejected("threads", -1);
   expectRejected("culling/coherence_ttl_scans", 0);
@@ -392,6 +401,7 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.queue_size, d.queue_size);
   EXPECT_EQ(p.tf_tolerance_s, d.tf_tolerance_s);
   EXPECT_EQ(p.marker_rate_hz, d.marker_rate_hz);
+  EXPECT_EQ(p.map_rate_hz, d.map_rate_hz);
   EXPECT_EQ(p.latch, d.latch);
   EXPECT_EQ(p.color_max_z_m, d.color_max_z_m);
   EXPECT_EQ(p.map.scans.keep, d.map.scans.keep);
@@ -426,6 +436,8 @@ TEST(ServerParamsConfig, LidarYaml) {
   EXPECT_EQ(p.sensor.max_range_m, 30.0);
   EXPECT_EQ(p.occupancy_max_z_m, 2.0);
   EXPECT_EQ(p.queue_size, 3);
+  EXPECT_EQ(p.marker_rate_hz, 1.0);
+  EXPECT_EQ(p.map_rate_hz, 1.0);
 }
 
 TEST(ServerParamsConfig, DepthCameraYaml) {

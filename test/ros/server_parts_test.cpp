@@ -1,14 +1,16 @@
-// The map server's ROS-free parts: the drop-oldest cloud queue and the timing statistics.
+// The map server's ROS-free parts: the drop-oldest cloud queue, the timing statistics and the
+// rate throttle of marker_rate and map_rate.
 #include <gtest/gtest.h>
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <thread>
 #include <vector>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/drop_oldest_queue.h"
-#include "fragg_map/ros/marker_throttle.h"
+#include "fragg_map/ros/rate_throttle.h"
 #include "fragg_map/ros/timing_stats.h"
 
 namespace {
@@ -95,16 +97,16 @@ TEST(TimingStats, PercentileFollowsTheWindowMeanFollowsEverything) {
   EXPECT_THROW(fragg::ros::TimingStats(0), fragg::InvalidArgument);
 }
 
-TEST(MarkerThrottle, NoLimitIsAlwaysDue) {
-  fragg::ros::MarkerThrottle t(0.0);
+TEST(RateThrottle, NoLimitIsAlwaysDue) {
+  fragg::ros::RateThrottle t(0.0);
   EXPECT_FALSE(t.limited());
   EXPECT_TRUE(t.due(5.0));
   t.published(5.0);
   EXPECT_TRUE(t.due(5.0));
 }
 
-TEST(MarkerThrottle, AtMostOneUpdatePerPeriod) {
-  fragg::ros::MarkerThrottle t(2.0);  // 2 Hz
+TEST(RateThrottle, AtMostOneUpdatePerPeriod) {
+  fragg::ros::RateThrottle t(2.0);  // 2 Hz
   EXPECT_TRUE(t.limited());
   EXPECT_EQ(t.periodS(), 0.5);
   EXPECT_TRUE(t.due(100.0));  // the first update goes out at once
@@ -115,7 +117,37 @@ TEST(MarkerThrottle, AtMostOneUpdatePerPeriod) {
   t.published(100.7);  // the period counts from the last update
   EXPECT_FALSE(t.due(101.1));
   EXPECT_TRUE(t.due(101.2));
-  EXPECT_THROW(fragg::ros::MarkerThrottle(-1.0), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::RateThrottle(-1.0), fragg::InvalidArgument);
+  EXPECT_THROW(fragg::ros::RateThrottle(std::nan("")), fragg::InvalidArgument);
+}
+
+// map_rate (as marker_rate) on a 10 Hz cloud stream: the clouds after which the whole-map
+// outputs go out, the insertion thread asking after each cloud as MapPublishers does.
+std::vector<int> dueClouds(double rate_hz, int clouds, double cloud_rate_hz) {
+  fragg::ros::RateThrottle t(rate_hz);
+  std::vector<int> out;
+  for (int i = 0; i < clouds; ++i) {
+    const double now_s = 50.0 + i / cloud_rate_hz;
+    if (!t.due(now_s)) continue;
+    t.published(now_s);
+    out.push_back(i);
+  }
+  return out;
+}
+
+TEST(RateThrottle, MapRateOnACloudStream) {
+  EXPECT_EQ(dueClouds(0.0, 5, 10.0), (std::vector<int>{0, 1, 2, 3, 4}));  // every cloud
+  EXPECT_EQ(dueClouds(1.0, 31, 10.0), (std::vector<int>{0, 10, 20, 30}));
+  EXPECT_EQ(dueClouds(0.2, 101, 10.0), (std::vector<int>{0, 50, 100}));
+  EXPECT_EQ(dueClouds(4.0, 10, 10.0), (std::vector<int>{0, 3, 6, 9}));  // 0.3 s apart
+  // Faster than the clouds: every cloud.
+  EXPECT_EQ(dueClouds(20.0, 4, 10.0), (std::vector<int>{0, 1, 2, 3}));
+}
+
+TEST(RateThrottle, FlushTickIsATenthOfASecondAtMost) {
+  EXPECT_EQ(fragg::ros::RateThrottle(1.0).flushTickS(), 0.1);
+  EXPECT_EQ(fragg::ros::RateThrottle(0.2).flushTickS(), 0.1);
+  EXPECT_EQ(fragg::ros::RateThrottle(20.0).flushTickS(), 0.05);
 }
 
 }  // namespace

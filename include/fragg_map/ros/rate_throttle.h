@@ -1,22 +1,30 @@
-// When the map server may publish its next marker update: at most `rate_hz` updates per
-// second (0 = no limit). The caller supplies the time (seconds of a steady clock), so the rule
-// is testable without ROS. What is not published stays pending: the markers of the blocks
-// changed since the last update are built from BlockMeta::changed_at at the next one.
+// When the map server may publish its next update of a throttled output: at most `rate_hz`
+// updates per second (0 = no limit). Used for the marker topics (`marker_rate`) and the
+// whole-map outputs (`map_rate`). The caller supplies the time (seconds of a steady clock), so
+// the rule is testable without ROS. What is not published stays pending: the markers of the
+// blocks changed since the last update are built from BlockMeta::changed_at at the next one,
+// and MapOutputCache catches up from the revision it last saw.
 #pragma once
+
+#include <algorithm>
 
 #include "fragg_map/errors.h"
 
 namespace fragg::ros {
 
-class MarkerThrottle {
+class RateThrottle {
  public:
-  explicit MarkerThrottle(double rate_hz) : period_s_(rate_hz > 0.0 ? 1.0 / rate_hz : 0.0) {
-    if (!(rate_hz >= 0.0)) throw fragg::InvalidArgument("marker rate must be >= 0 Hz");
+  explicit RateThrottle(double rate_hz) : period_s_(rate_hz > 0.0 ? 1.0 / rate_hz : 0.0) {
+    if (!(rate_hz >= 0.0)) throw fragg::InvalidArgument("an output rate must be >= 0 Hz");
   }
 
   /// Seconds between updates; 0 without a limit.
   double periodS() const { return period_s_; }
   bool limited() const { return period_s_ > 0.0; }
+  /// How often a timer looks for pending updates (those held back while the input flowed):
+  /// every 0.1 s, or every period when that is shorter, so that a pending update goes out at
+  /// most that long after it is due (within a period + 0.1 s of the last change).
+  double flushTickS() const { return std::min(period_s_, kMaxFlushTickS); }
 
   /// Whether an update may go out at `now_s`: always without a limit or before the first one,
   /// else once a period has passed since the last.
@@ -29,6 +37,7 @@ class MarkerThrottle {
   }
 
  private:
+  static constexpr double kMaxFlushTickS = 0.1;
   double period_s_;
   double last_s_ = 0.0;
   bool published_ = false;

@@ -107,6 +107,11 @@ struct ServerParams {
   /// Most marker updates per second (steady clock); 0: one after every cloud. Changed blocks
   /// accumulate between updates (BlockMeta::changed_at), so none is lost.
   double marker_rate_hz = 0.0;
+  /// Most updates per second (steady clock) of the whole-map outputs (occupied_cells,
+  /// octomap_point_cloud_centers, projected_map, octomap_binary, octomap_full); 0: after every
+  /// cloud. Skipped clouds cost nothing there (the output cache catches up from the revision
+  /// it last saw); reset, load, clear and corrections publish at once.
+  double map_rate_hz = 0.0;
   double color_min_z_m = -1.0;  ///< marker colour ramp (markers/color_min_z)
   double color_max_z_m = 4.0;   ///< marker colour ramp (markers/color_max_z)
   CorrectionParams correction;

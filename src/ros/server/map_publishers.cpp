@@ -1,4 +1,5 @@
-// Publishing the map: incremental block markers, occupied cloud, projected map, frustum, stats.
+// Publishing the map: incremental block markers, occupied cloud, projected map, frustum, stats;
+// the markers and the whole-map outputs at most at marker_rate / map_rate.
 #include "map_publishers.h"
 
 #include <nav_msgs/OccupancyGrid.h>
@@ -23,7 +24,8 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
       stats_(stats),
       marker_throttle_(params.marker_rate_hz),
       outputs_(OutputCacheOptions{params.occupancy_min_z_m, params.occupancy_max_z_m,
-                                  params.octomap.filter_speckles}) {
+                                  params.octomap.filter_speckles}),
+      map_throttle_(params.map_rate_hz) {
   const bool latch = params_.latch;
   for (MarkerTopic* topic : {&occupied_markers_, &free_markers_}) {
     topic->style.frame_id = params_.frame_id;
@@ -65,8 +67,11 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
   frustum_pub_ = nh.advertise<visualization_msgs::Marker>("frustum", 1, latch);
   stats_pub_ = private_nh.advertise<fragg_map::MapStats>("stats", 1, latch);
   if (marker_throttle_.limited())
-    marker_flush_timer_ = nh.createSteadyTimer(::ros::WallDuration(marker_throttle_.periodS()),
+    marker_flush_timer_ = nh.createSteadyTimer(::ros::WallDuration(marker_throttle_.flushTickS()),
                                                &MapPublishers::flushPendingMarkers, this);
+  if (map_throttle_.limited())
+    map_flush_timer_ = nh.createSteadyTimer(::ros::WallDuration(map_throttle_.flushTickS()),
+                                            &MapPublishers::flushPendingMaps, this);
 }
 
 ::ros::SubscriberStatusCallback MapPublishers::currentMessageTo(const ::ros::Publisher* pub) {
@@ -100,7 +105,7 @@ void MapPublishers::publishAfterInsert(const sensor_msgs::PointCloud2& cloud,
       ROS_WARN_THROTTLE(5.0, "fragg_map: colored_map: no colours from this cloud: %s", e.what());
     }
   }
-  publishMaps(state->map, stamp, false);
+  publishMaps(state->map, stamp, false, true);
   if (wanted(frustum_pub_) && sensor.type != fragg::SensorType::kAuto && sensor.max_range_m > 0.0)
     frustum_pub_.publish(frustumMarker(sensor, T_map_sensor, params_.frame_id, stamp));
 }
@@ -109,29 +114,65 @@ void MapPublishers::publishAfterCorrection(const ::ros::Time& stamp) {
   std::lock_guard<std::mutex> publishing(publish_mutex_);
   const SharedMap::ReadGuard state = shared_->read();
   if (coloredMap()) colors_.prune(state->map);  // truncated cells lose theirs
-  publishMaps(state->map, stamp, false);
+  publishMaps(state->map, stamp, false, false);
 }
 
 void MapPublishers::publishFull(const ::ros::Time& stamp) {
   std::lock_guard<std::mutex> publishing(publish_mutex_);
   const SharedMap::ReadGuard state = shared_->read();
   if (coloredMap()) colors_.prune(state->map);  // reset, load, clear_bbx
-  publishMaps(state->map, stamp, true);
+  publishMaps(state->map, stamp, true, false);
 }
 
-void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
-                                bool full_markers) {
+void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp, bool full_markers,
+                                bool throttle_maps) {
   publishMarkerTopics(map, stamp, full_markers);
+  publishMapOutputs(map, stamp, throttle_maps);
+  if (wanted(stats_pub_)) stats_pub_.publish(stats_->toMsg(map, params_.frame_id, stamp));
+}
+
+void MapPublishers::publishMapOutputs(const fragg::Map& map, const ::ros::Time& stamp,
+                                      bool throttled) {
   const bool cloud_wanted = wanted(occupied_cloud_pub_) || wanted(centers_pub_);
   const bool grid_wanted = wanted(projected_map_pub_);
-  if (cloud_wanted || grid_wanted) outputs_.update(map);  // the changed blocks only
+  // Nobody to send to: a subscriber that connects later gets the current map
+  // (currentMessageTo), so nothing is pending either.
+  if (!cloud_wanted && !grid_wanted) {
+    maps_pending_ = false;
+    return;
+  }
+  const double now_s = ::ros::SteadyTime::now().toSec();
+  if (throttled && !map_throttle_.due(now_s)) {
+    // Not even the cache's update: it reads every block changed since the revision it last
+    // saw when the next publication comes.
+    maps_pending_ = true;
+    pending_stamp_ = stamp;
+    return;
+  }
+  map_throttle_.published(now_s);
+  maps_pending_ = false;  // also when building throws: the next cloud tries again
+  outputs_.update(map);   // the changed blocks only
   if (cloud_wanted) {
     const sensor_msgs::PointCloud2 cloud = outputs_.occupiedCloud(params_.frame_id, stamp);
     if (wanted(occupied_cloud_pub_)) occupied_cloud_pub_.publish(cloud);
     if (wanted(centers_pub_)) centers_pub_.publish(cloud);
   }
   if (grid_wanted) projected_map_pub_.publish(outputs_.projectedMap(params_.frame_id, stamp));
-  if (wanted(stats_pub_)) stats_pub_.publish(stats_->toMsg(map, params_.frame_id, stamp));
+}
+
+void MapPublishers::flushPendingMaps(const ::ros::SteadyTimerEvent&) {
+  // As flushPendingMarkers: never waits; an insertion holding the map publishes them itself
+  // when due.
+  std::unique_lock<std::mutex> publishing(publish_mutex_, std::try_to_lock);
+  if (!publishing.owns_lock() || !maps_pending_) return;
+  if (!map_throttle_.due(::ros::SteadyTime::now().toSec())) return;
+  const std::optional<SharedMap::ReadGuard> state = shared_->tryRead();
+  if (!state) return;
+  try {
+    publishMapOutputs((*state)->map, pending_stamp_, true);
+  } catch (const std::exception& e) {
+    ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
+  }
 }
 
 void MapPublishers::publishMarkerTopics(const fragg::Map& map, const ::ros::Time& stamp,

@@ -5,7 +5,10 @@
 // and projected_map always carry the whole map, assembled from per-block pieces that only the
 // changed blocks refresh (MapOutputCache). With `marker_rate` the marker updates are
 // throttled: the insertion thread publishes them when one is due, and a steady timer sends what
-// is still pending once the clouds stop.
+// is still pending once the clouds stop. `map_rate` throttles the whole-map outputs the same
+// way: after a cloud that is not due the cache is not even updated (it catches up from the
+// revision it last saw at the next publication). Reset, load, clear and corrections publish
+// the whole-map outputs at once; frustum and ~stats go out after every cloud.
 #pragma once
 
 #include <ros/node_handle.h>
@@ -19,8 +22,8 @@
 
 #include "fragg_map/ros/block_markers.h"
 #include "fragg_map/ros/cell_colors.h"
-#include "fragg_map/ros/marker_throttle.h"
 #include "fragg_map/ros/output_cache.h"
+#include "fragg_map/ros/rate_throttle.h"
 #include "fragg_map/ros/server_params.h"
 #include "server_stats.h"
 #include "shared_map.h"
@@ -33,12 +36,13 @@ class MapPublishers {
                 SharedMap* shared, const ServerStats* stats);
 
   /// After an insertion of `cloud` (stamp, and with colored_map its colours): incremental
-  /// markers, occupied cloud, projected map, frustum, stats. Takes the map's read lock itself.
+  /// markers (throttled by marker_rate), occupied cloud and projected map (throttled by
+  /// map_rate), frustum, stats. Takes the map's read lock itself.
   void publishAfterInsert(const sensor_msgs::PointCloud2& cloud, const fragg::SensorModel& sensor,
                           const Eigen::Isometry3d& T_map_sensor);
   /// After a pose correction, a truncation or a merge: the markers of the blocks it changed
   /// (incremental, as after an insertion; throttled by marker_rate), occupied cloud, projected
-  /// map, stats. Takes the read lock.
+  /// map (at once: not throttled), stats. Takes the read lock.
   void publishAfterCorrection(const ::ros::Time& stamp);
   /// After reset, load or clear: a full marker republish and the other map topics.
   void publishFull(const ::ros::Time& stamp);
@@ -50,7 +54,14 @@ class MapPublishers {
     MarkerLedger ledger;
   };
   // Callers hold publish_mutex_ and the map's read lock.
-  void publishMaps(const fragg::Map& map, const ::ros::Time& stamp, bool full_markers);
+  /// Markers (a full set, or the changes when due), whole-map outputs (with `throttle_maps`
+  /// only when map_rate lets them out) and stats.
+  void publishMaps(const fragg::Map& map, const ::ros::Time& stamp, bool full_markers,
+                   bool throttle_maps);
+  /// occupied_cells, octomap_point_cloud_centers and projected_map: the cache brought up to
+  /// date and the messages sent; when `throttled` and not due, nothing but a note that they
+  /// are pending.
+  void publishMapOutputs(const fragg::Map& map, const ::ros::Time& stamp, bool throttled);
   /// Both marker topics: a full set, or the changes when the throttle lets an update out.
   void publishMarkerTopics(const fragg::Map& map, const ::ros::Time& stamp, bool full);
   void publishMarkers(const fragg::Map& map, MarkerTopic& topic, const ::ros::Time& stamp,
@@ -58,6 +69,8 @@ class MapPublishers {
   /// Timer: the changes still pending (never waits for the map: an insertion holding it
   /// publishes them itself when it ends).
   void flushPendingMarkers(const ::ros::SteadyTimerEvent& event);
+  /// Timer: the whole-map outputs held back by map_rate, once due (never waits for the map).
+  void flushPendingMaps(const ::ros::SteadyTimerEvent& event);
   void sendAllMarkersTo(MarkerTopic& topic, const ::ros::SingleSubscriberPublisher& sub);
   bool wanted(const ::ros::Publisher& pub) const;
   /// colored_map in effect: as octomap_server, height_map wins when both are set.
@@ -76,10 +89,15 @@ class MapPublishers {
   CellColors colors_;
   MarkerTopic occupied_markers_;
   MarkerTopic free_markers_;
-  MarkerThrottle marker_throttle_;
+  RateThrottle marker_throttle_;
   ::ros::SteadyTimer marker_flush_timer_;
   /// The occupied cloud's and projected map's pieces (under publish_mutex_).
   MapOutputCache outputs_;
+  RateThrottle map_throttle_;
+  ::ros::SteadyTimer map_flush_timer_;
+  /// Whole-map outputs held back by map_rate, and the stamp of the last cloud in them.
+  bool maps_pending_ = false;
+  ::ros::Time pending_stamp_;
   ::ros::Publisher occupied_cloud_pub_;
   ::ros::Publisher centers_pub_;  ///< octomap_point_cloud_centers: octomap_server's name
   ::ros::Publisher projected_map_pub_;

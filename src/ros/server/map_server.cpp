@@ -39,26 +39,32 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
 #if FRAGG_HAVE_OCTOMAP_MSGS
   octomap_outputs_ = std::make_unique<OctomapOutputs>(nh, params_, shared_.get());
 #endif
-  // Without octomap_msgs there is no OctomapOutputs to call (nor its code to link).
-  auto publish_octomaps = [this](const ::ros::Time& stamp) {
+  // Without octomap_msgs there is no OctomapOutputs to call (nor its code to link). After a
+  // cloud map_rate applies; after reset, load, clear and corrections they go out at once.
+  auto publish_octomaps = [this](const ::ros::Time& stamp, bool after_insert) {
 #if FRAGG_HAVE_OCTOMAP_MSGS
-    if (octomap_outputs_) octomap_outputs_->publish(stamp);
+    if (!octomap_outputs_) return;
+    if (after_insert)
+      octomap_outputs_->publishAfterInsert(stamp);
+    else
+      octomap_outputs_->publish(stamp);
 #else
     (void)this;
     (void)stamp;
+    (void)after_insert;
 #endif
   };
   services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_,
                                             [this, publish_octomaps] {
                                               publishers_->publishFull(::ros::Time::now());
-                                              publish_octomaps(::ros::Time::now());
+                                              publish_octomaps(::ros::Time::now(), false);
                                             });
   octomap_services_ = std::make_unique<OctomapCompatServices>(private_nh, services_.get());
   loadStartMap();  // throws (the node does not start) when a file is unreadable
   auto publish_changed = [this, publish_octomaps] {
     try {
       publishers_->publishAfterCorrection(::ros::Time::now());
-      publish_octomaps(::ros::Time::now());
+      publish_octomaps(::ros::Time::now(), false);
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
     }
@@ -82,7 +88,7 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
                                const Eigen::Isometry3d& T_map_sensor) {
         try {
           publishers_->publishAfterInsert(msg, sensor, T_map_sensor);
-          publish_octomaps(msg.header.stamp);
+          publish_octomaps(msg.header.stamp, true);
         } catch (const std::exception& e) {
           ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
         }

@@ -7,6 +7,7 @@
 #include <ros/single_subscriber_publisher.h>
 
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -41,7 +42,7 @@ octomap_msgs::Octomap octomapMsg(const fragg::Map& map, bool binary, const std::
 }  // namespace
 
 OctomapOutputs::OctomapOutputs(::ros::NodeHandle& nh, const ServerParams& params, SharedMap* shared)
-    : params_(params), shared_(shared) {
+    : params_(params), shared_(shared), throttle_(params.map_rate_hz) {
   auto to_new_subscriber = [this](bool binary) -> ::ros::SubscriberStatusCallback {
     return [this, binary](const ::ros::SingleSubscriberPublisher& sub) {
       std::lock_guard<std::mutex> publishing(publish_mutex_);
@@ -76,16 +77,51 @@ OctomapOutputs::OctomapOutputs(::ros::NodeHandle& nh, const ServerParams& params
   full_srv_ =
       nh.advertiseService<octomap_msgs::GetOctomap::Request, octomap_msgs::GetOctomap::Response>(
           "octomap_full", service(false));
+  if (throttle_.limited())
+    flush_timer_ = nh.createSteadyTimer(::ros::WallDuration(throttle_.flushTickS()),
+                                        &OctomapOutputs::flushPending, this);
 }
 
-void OctomapOutputs::publish(const ::ros::Time& stamp) {
+void OctomapOutputs::publish(const ::ros::Time& stamp) { publishIfDue(stamp, false); }
+
+void OctomapOutputs::publishAfterInsert(const ::ros::Time& stamp) { publishIfDue(stamp, true); }
+
+void OctomapOutputs::publishIfDue(const ::ros::Time& stamp, bool throttled) {
+  // Nobody to send to: a later subscriber gets the current map when it connects.
+  if (binary_pub_.getNumSubscribers() == 0 && full_pub_.getNumSubscribers() == 0) return;
+  std::lock_guard<std::mutex> publishing(publish_mutex_);
+  const double now_s = ::ros::SteadyTime::now().toSec();
+  if (throttled && !throttle_.due(now_s)) {
+    pending_ = true;
+    pending_stamp_ = stamp;
+    return;
+  }
+  const SharedMap::ReadGuard state = shared_->read();
+  publishLocked(state->map, stamp, now_s);
+}
+
+void OctomapOutputs::publishLocked(const fragg::Map& map, const ::ros::Time& stamp, double now_s) {
+  pending_ = false;  // also when building throws: the next cloud tries again
   const bool binary = binary_pub_.getNumSubscribers() > 0;
   const bool full = full_pub_.getNumSubscribers() > 0;
   if (!binary && !full) return;
-  std::lock_guard<std::mutex> publishing(publish_mutex_);
-  const SharedMap::ReadGuard state = shared_->read();
-  if (binary) binary_pub_.publish(octomapMsg(state->map, true, params_.frame_id, stamp));
-  if (full) full_pub_.publish(octomapMsg(state->map, false, params_.frame_id, stamp));
+  throttle_.published(now_s);
+  if (binary) binary_pub_.publish(octomapMsg(map, true, params_.frame_id, stamp));
+  if (full) full_pub_.publish(octomapMsg(map, false, params_.frame_id, stamp));
+}
+
+void OctomapOutputs::flushPending(const ::ros::SteadyTimerEvent&) {
+  std::unique_lock<std::mutex> publishing(publish_mutex_, std::try_to_lock);
+  if (!publishing.owns_lock() || !pending_) return;
+  const double now_s = ::ros::SteadyTime::now().toSec();
+  if (!throttle_.due(now_s)) return;
+  const std::optional<SharedMap::ReadGuard> state = shared_->tryRead();
+  if (!state) return;
+  try {
+    publishLocked((*state)->map, pending_stamp_, now_s);
+  } catch (const std::exception& e) {
+    ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
+  }
 }
 
 }  // namespace fragg::ros

@@ -4,15 +4,19 @@
 // octomap_msgs' conversions hold: an OcTree of the map (interop/octomap_io.h toOcTree) as
 // liboctomap serialises it, binary (maximum likelihood, pruned: the data of a .bt file) or
 // full (every leaf's log-odds, unpruned). Built only for topics with subscribers; a late
-// subscriber gets the current map when it connects (latched or not).
+// subscriber gets the current map when it connects (latched or not). After a cloud they go out
+// at most at `map_rate` (as the other whole-map outputs); a steady timer sends the map held
+// back once the clouds stop.
 #pragma once
 
 #include <ros/node_handle.h>
 #include <ros/publisher.h>
 #include <ros/service_server.h>
+#include <ros/steady_timer.h>
 
 #include <mutex>
 
+#include "fragg_map/ros/rate_throttle.h"
 #include "fragg_map/ros/server_params.h"
 #include "shared_map.h"
 
@@ -21,13 +25,27 @@ namespace fragg::ros {
 class OctomapOutputs {
  public:
   OctomapOutputs(::ros::NodeHandle& nh, const ServerParams& params, SharedMap* shared);
-  /// Both topics, where they have subscribers. Takes the map's read lock.
+  /// Both topics, where they have subscribers, at once (reset, load, clear, corrections).
+  /// Takes the map's read lock.
   void publish(const ::ros::Time& stamp);
+  /// After a cloud: as publish when map_rate lets an update out, else held back (pending).
+  void publishAfterInsert(const ::ros::Time& stamp);
 
  private:
+  void publishIfDue(const ::ros::Time& stamp, bool throttled);
+  /// Callers hold publish_mutex_ and the map's read lock.
+  void publishLocked(const fragg::Map& map, const ::ros::Time& stamp, double now_s);
+  /// Timer: what map_rate held back, once due (never waits for the map).
+  void flushPending(const ::ros::SteadyTimerEvent& event);
+
   const ServerParams params_;
   SharedMap* shared_;
   std::mutex publish_mutex_;
+  // Under publish_mutex_: the throttle, and whether a cloud's map is held back (its stamp).
+  RateThrottle throttle_;
+  bool pending_ = false;
+  ::ros::Time pending_stamp_;
+  ::ros::SteadyTimer flush_timer_;
   ::ros::Publisher binary_pub_, full_pub_;
   ::ros::ServiceServer binary_srv_, full_srv_;
 };

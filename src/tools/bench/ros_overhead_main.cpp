@@ -2,7 +2,7 @@
 // synthetic 128 x 1406 LiDAR (179,968 points): PointCloud2 -> points (a Velodyne-like layout:
 // x y z intensity, point_step 16, organised) and the incremental marker update
 // (changedBlockMarkers) after each insertion, or, with --marker-rate, when the server's
-// MarkerThrottle lets one out for clouds arriving at --cloud-rate (the skipped clouds' changes
+// RateThrottle lets one out for clouds arriving at --cloud-rate (the skipped clouds' changes
 // go out with the next update, and a last update flushes what is pending at the end, as the
 // server's timer does); the insertion itself is timed for reference. The last line is what the
 // server's path (conversion + insertion, + marker updates unless --no-markers) sustains on this
@@ -27,7 +27,7 @@
 #include "fragg_map/map.h"
 #include "fragg_map/ros/block_markers.h"
 #include "fragg_map/ros/cloud_from_msg.h"
-#include "fragg_map/ros/marker_throttle.h"
+#include "fragg_map/ros/rate_throttle.h"
 #include "percentile.h"
 
 namespace {
@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
   fragg::Map map(params);
   fragg::ros::MarkerLedger ledger;
   const fragg::ros::MarkerStyle style;
-  fragg::ros::MarkerThrottle throttle(marker_rate_hz);
+  fragg::ros::RateThrottle throttle(marker_rate_hz);
   std::vector<double> convert_ms, update_ms, insert_ms, overhead_ms;
   double markers_total_ms = 0.0;
   size_t points = 0, markers_sent = 0, blocks_changed = 0;
