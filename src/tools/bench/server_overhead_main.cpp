@@ -10,7 +10,18 @@
 // directly. Markers are the same incremental update on both paths (timed once); the whole-map
 // rebuilds of the old path run only after the scans whose rows are printed. Times are CPU
 // milliseconds of the process (the machine is shared).
+// With --marker-rate / --map-rate (the server's marker_rate and map_rate) the clouds arrive at
+// --cloud-rate of sensor time and the after path runs the marker update, or the cache update +
+// occupied cloud + projected map + their serialisation, only after the clouds where the
+// server's RateThrottle lets one out (the skipped clouds' changes go out with the next); its
+// rows then show 0 in the columns that were not due. Then it prints the after path's cost
+// amortised over all clouds (sum / clouds), the median and max of one update of each kind
+// (what a publication costs when it comes: that latency is not amortised), and what the
+// server's timer would flush after the last cloud (not in the sum). The before and any paths
+// stay unthrottled (any: the markers that the before rows borrow when the after path's were
+// not due).
 //   fragg_map_server_overhead --workloads DIR [--scans N] [--big-map FILE] [--big-scans K]
+//                             [--cloud-rate HZ] [--marker-rate HZ] [--map-rate HZ]
 #include <ros/serialization.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/PointField.h>
@@ -33,6 +44,7 @@
 #include "fragg_map/ros/occupied_cloud.h"
 #include "fragg_map/ros/output_cache.h"
 #include "fragg_map/ros/projected_map.h"
+#include "fragg_map/ros/rate_throttle.h"
 #include "percentile.h"
 
 namespace {
@@ -65,6 +77,16 @@ struct Times {
   size_t marker_bytes = 0;
   size_t blocks_read = 0;  ///< blocks the output cache recomputed (after path)
   double total() const { return markers + cloud + grid + serialise; }
+  /// One marker update: built and serialised.
+  double markerUpdate() const { return markers + marker_serialise; }
+  /// One publication of the whole-map outputs: cache update, messages, serialised.
+  double mapUpdate() const { return cloud + grid + serialise - marker_serialise; }
+};
+
+/// Which outputs of the after path go out after a cloud.
+struct Due {
+  bool markers = true;
+  bool maps = true;
 };
 
 /// The outputs after one cloud, one way or the other. `before`: the whole-map rebuilds.
@@ -72,11 +94,12 @@ class Outputs {
  public:
   explicit Outputs(bool before, fragg::BlockChange refresh_on = fragg::BlockChange::kState)
       : before_(before), cache_(optionsWith(refresh_on)) {}
-  Times publish(const fragg::Map& map) {
+  /// `due`: the after path's throttled outputs (the before path ignores it).
+  Times publish(const fragg::Map& map, Due due = Due()) {
     Times t;
     auto t0 = Clock::now();
     visualization_msgs::MarkerArray markers;
-    if (!before_) {
+    if (!before_ && due.markers) {
       markers = fragg::ros::changedBlockMarkers(map, style_, ros::Time(), &ledger_);
       t.markers = msSince(t0);
     }
@@ -89,7 +112,7 @@ class Outputs {
       t0 = Clock::now();
       grid = fragg::ros::projectedMap(map, kMinZ, kMaxZ, "map", ros::Time());
       t.grid = msSince(t0);
-    } else {
+    } else if (due.maps) {
       t.blocks_read = cache_.update(map).blocks_read;
       cloud = cache_.occupiedCloud("map", ros::Time());
       t.cloud = msSince(t0);
@@ -98,9 +121,10 @@ class Outputs {
       t.grid = msSince(t0);
     }
     t0 = Clock::now();
-    t.marker_bytes = before_ ? 0 : serialised(markers);
+    t.marker_bytes = before_ || !due.markers ? 0 : serialised(markers);
     t.marker_serialise = msSince(t0);
-    t.bytes = t.marker_bytes + serialised(cloud) + serialised(grid);
+    t.bytes = t.marker_bytes;
+    if (before_ || due.maps) t.bytes += serialised(cloud) + serialised(grid);
     t.serialise = msSince(t0);
     return t;
   }
@@ -132,35 +156,102 @@ void printRow(const std::string& scan, const char* path, double convert_ms, cons
               t.bytes / 1e6, occupied, t.blocks_read);
 }
 
+/// The server's marker_rate and map_rate on a cloud stream of `cloud_rate_hz` (sensor time).
+struct Rates {
+  double cloud_hz = 10.0;
+  double marker_hz = 0.0;
+  double map_hz = 0.0;
+  bool limited() const { return marker_hz > 0.0 || map_hz > 0.0; }
+};
+
+/// The after path's cost over a run: per cloud (amortised) and per update of each kind.
+void printAmortised(const Rates& rates, const std::vector<double>& convert_ms,
+                    const std::vector<Times>& after, const std::vector<Due>& due,
+                    const Times& flush) {
+  using fragg::tools::percentile;
+  double sum_convert = 0, sum_markers = 0, sum_maps = 0, sum_bytes = 0;
+  std::vector<double> marker_updates, map_updates;
+  for (size_t i = 0; i < after.size(); ++i) {
+    sum_convert += convert_ms[i];
+    sum_markers += after[i].markerUpdate();
+    sum_maps += after[i].mapUpdate();
+    sum_bytes += static_cast<double>(after[i].bytes);
+    if (due[i].markers) marker_updates.push_back(after[i].markerUpdate());
+    if (due[i].maps) map_updates.push_back(after[i].mapUpdate());
+  }
+  const size_t clouds = after.size();
+  const double n = static_cast<double>(clouds);
+  std::printf(
+      "after, clouds at %.1f Hz, marker_rate %.2f Hz, map_rate %.2f Hz: amortised %.2f ms per "
+      "cloud (sum / %zu clouds: convert %.2f + markers %.2f + whole-map outputs %.2f), %.2f MB "
+      "out per cloud\n",
+      rates.cloud_hz, rates.marker_hz, rates.map_hz, (sum_convert + sum_markers + sum_maps) / n,
+      clouds, sum_convert / n, sum_markers / n, sum_maps / n, sum_bytes / n / 1e6);
+  auto perUpdate = [](const char* what, const std::vector<double>& ms) {
+    if (ms.empty()) {
+      std::printf("  %s: none\n", what);
+      return;
+    }
+    std::printf("  %s: %zu, ms per update median %.2f, max %.2f\n", what, ms.size(),
+                percentile(ms, 0.5), percentile(ms, 1.0));
+  };
+  perUpdate("marker updates (build + serialise)", marker_updates);
+  perUpdate("whole-map publications (cache update + cloud + grid + serialise)", map_updates);
+  if (rates.limited())
+    std::printf(
+        "  pending after the last cloud, flushed by the server's timer (not in the sum): markers "
+        "%.2f ms, whole-map outputs %.2f ms\n",
+        flush.markerUpdate(), flush.mapUpdate());
+}
+
 /// Feeds `scans` into `map`, both output paths after each; prints the rows of `shown` scans
 /// (1-based) and the medians.
 void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_range_m,
-         const std::vector<size_t>& shown, const std::string& label) {
+         const std::vector<size_t>& shown, const std::string& label, const Rates& rates) {
   // after: the cache refreshes the blocks whose cell states changed; any: every changed block
   // (as before BlockMeta::state_at), for the same-run comparison.
   Outputs before(true), after(false), any(false, fragg::BlockChange::kAny);
   std::printf("\n%s\n", label.c_str());
+  if (rates.limited())
+    std::printf(
+        "after rows: 0 in markers, or in cloud and grid, = not due after that cloud "
+        "(throttled)\n");
   printHeader();
   // The first call reads the whole map (a loaded map, or nothing yet): untimed.
   after.publish(map);
   any.publish(map);
-  std::vector<double> total_before, total_after, total_any;
+  std::vector<double> total_before, total_after, total_any, converts;
+  std::vector<Times> after_times;
+  std::vector<Due> dues;
+  fragg::ros::RateThrottle marker_throttle(rates.marker_hz), map_throttle(rates.map_hz);
   for (size_t i = 0; i < scans.size(); ++i) {
     const sensor_msgs::PointCloud2 msg = fragg::bench::velodyneLikeMsg(scans[i].cloud);
     auto t0 = Clock::now();
     const fragg::PointCloud cloud = fragg::ros::cloudFromMsg(msg);
     const double convert_ms = msSince(t0);
     map.insert(cloud, scans[i].T_map_sensor, fragg::SensorModel::autoFromCloud(0.0, max_range_m));
-    const Times a = after.publish(map);
+    // As the server after this cloud: each throttled output goes out when due.
+    const double now_s = static_cast<double>(i) / rates.cloud_hz;
+    Due due;
+    due.markers = marker_throttle.due(now_s);
+    due.maps = map_throttle.due(now_s);
+    if (due.markers) marker_throttle.published(now_s);
+    if (due.maps) map_throttle.published(now_s);
+    const Times a = after.publish(map, due);
     total_after.push_back(convert_ms + a.total());
+    converts.push_back(convert_ms);
+    after_times.push_back(a);
+    dues.push_back(due);
     const Times y = any.publish(map);
     total_any.push_back(convert_ms + y.total());
     for (size_t s : shown) {
       if (s != i + 1) continue;
       Times b = before.publish(map);
-      b.markers = a.markers;  // the same incremental update
-      b.serialise += a.marker_serialise;
-      b.bytes += a.marker_bytes;
+      // The same incremental update (the any path's when the after path's was not due).
+      const Times& m = due.markers ? a : y;
+      b.markers = m.markers;
+      b.serialise += m.marker_serialise;
+      b.bytes += m.marker_bytes;
       total_before.push_back(convert_ms + b.total());
       size_t occupied = 0;
       map.forEachBlock([&](const fragg::BlockKey&, const fragg::Block& blk) {
@@ -177,6 +268,15 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
               percentile(total_after, 0.5), percentile(total_after, 1.0), scans.size());
   std::printf("any:   median %.2f ms, max %.2f ms per cloud over %zu clouds\n",
               percentile(total_any, 0.5), percentile(total_any, 1.0), scans.size());
+  // What the server's timers send once the clouds stop: the outputs not due at the last cloud.
+  Times flush;
+  if (!dues.empty()) {
+    Due pending;  // the last cloud's changes (and those before it since the last update)
+    pending.markers = !dues.back().markers;
+    pending.maps = !dues.back().maps;
+    if (pending.markers || pending.maps) flush = after.publish(map, pending);
+  }
+  printAmortised(rates, converts, after_times, dues, flush);
 }
 
 }  // namespace
@@ -192,6 +292,16 @@ int main(int argc, char** argv) {
   app.add_option("--show", shown, "scans (1-based) whose rows are printed");
   app.add_option("--big-map", big_map, ".fgm to load and feed W1 scans into (e.g. W1's final map)");
   app.add_option("--big-scans", big_scans, "W1 scans fed into the big map");
+  Rates rates;
+  app.add_option("--cloud-rate", rates.cloud_hz, "clouds per second of sensor time")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--marker-rate", rates.marker_hz,
+                 "most marker updates per second, as the server's marker_rate (0: every cloud)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--map-rate", rates.map_hz,
+                 "most whole-map publications per second, as the server's map_rate (0: every "
+                 "cloud)")
+      ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows as they come (long runs)
 
@@ -210,7 +320,8 @@ int main(int argc, char** argv) {
     fragg::Map map(params);
     std::vector<fragg::Scan> first(w1.scans.begin(),
                                    w1.scans.begin() + std::min(scans, w1.scans.size()));
-    run(map, first, w1.max_range_m, shown, "new map, W1 scans 1.." + std::to_string(first.size()));
+    run(map, first, w1.max_range_m, shown, "new map, W1 scans 1.." + std::to_string(first.size()),
+        rates);
   }
   if (!big_map.empty()) {
     fragg::Map map = fragg::Map::load(big_map, params);
@@ -220,7 +331,8 @@ int main(int argc, char** argv) {
     for (size_t i = 1; i <= first.size(); ++i) all.push_back(i);
     run(map, first, w1.max_range_m, all,
         big_map + " (" + std::to_string(map.blockCount()) + " blocks) + W1 scans 1.." +
-            std::to_string(first.size()));
+            std::to_string(first.size()),
+        rates);
   }
   return 0;
 }
