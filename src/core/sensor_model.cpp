@@ -138,17 +138,108 @@ std::string SensorModel::describe() const {
   return s.str();
 }
 
+namespace {
+/// The pyramid's basis for an axis: `right` from a hint that is not parallel to it.
+void pinholeBasis(const Eigen::Vector3d& axis, Eigen::Vector3d* right, Eigen::Vector3d* vertical) {
+  const Eigen::Vector3d hint =
+      std::fabs(axis.z()) < 0.9 ? Eigen::Vector3d(0, 0, 1) : Eigen::Vector3d(0, 1, 0);
+  *right = hint.cross(axis).normalized();
+  *vertical = axis.cross(*right);
+}
+
+const double kMinForward = std::cos(85 * kDeg);  // wider than 170 degrees: a lidar
+
+/// The pinhole fit of a cloud around an axis: every valid point in front of it (by more than
+/// kMinForward of its range) and the largest tangents across `right` and `vertical`.
+struct AxisFit {
+  bool fits = true;
+  double tan_h = 0.0, tan_v = 0.0;
+  void merge(const AxisFit& o) {
+    fits = fits && o.fits;
+    tan_h = std::max(tan_h, o.tan_h);
+    tan_v = std::max(tan_v, o.tan_v);
+  }
+};
+
+/// The six sensor axes (+x, -x, +y, -y, +z, -z), to which a camera cloud's axis snaps: their
+/// bases are sensor axes too, so a point's dot products with them are single coordinates
+/// (exactly: the other terms are products with 0), and the fit around each can be gathered in
+/// the same pass that finds the axis.
+struct SensorAxes {
+  Eigen::Vector3d axis[6];
+  int along[6], across_h[6], across_v[6];  ///< coordinate of the axis, of right, of vertical
+  double sign[6];
+  SensorAxes() {
+    for (int k = 0; k < 6; ++k) {
+      axis[k] = Eigen::Vector3d::Zero();
+      along[k] = k / 2;
+      sign[k] = k % 2 ? -1.0 : 1.0;
+      axis[k][along[k]] = sign[k];
+      Eigen::Vector3d right, vertical;
+      pinholeBasis(axis[k], &right, &vertical);
+      right.cwiseAbs().maxCoeff(&across_h[k]);
+      vertical.cwiseAbs().maxCoeff(&across_v[k]);
+    }
+  }
+  /// One valid point `d` at range `r` into the fits around every axis still fitting.
+  void add(const Eigen::Vector3d& d, double r, AxisFit* fit) const {
+    const double forward_min = kMinForward * r;
+    for (int k = 0; k < 6; ++k) {
+      AxisFit& f = fit[k];
+      if (!f.fits) continue;
+      const double z = sign[k] * d[along[k]];
+      if (z <= forward_min) {
+        f.fits = false;
+        continue;
+      }
+      f.tan_h = std::max(f.tan_h, std::fabs(d[across_h[k]]) / z);
+      f.tan_v = std::max(f.tan_v, std::fabs(d[across_v[k]]) / z);
+    }
+  }
+};
+const SensorAxes kSensorAxes;
+
+/// The fit around any axis: a second pass over the points.
+AxisFit fitAround(const PointCloud& cloud, const Eigen::Vector3d& axis,
+                  const Eigen::Vector3d& right, const Eigen::Vector3d& vertical) {
+  double tan_h = 0.0, tan_v = 0.0;
+  bool fits = true;
+  const long n = static_cast<long>(cloud.points_S.size());
+#pragma omp parallel for schedule(static) reduction(max : tan_h, tan_v) reduction(&& : fits)
+  for (long i = 0; i < n; ++i) {
+    const Eigen::Vector3f& p = cloud.points_S[i];
+    if (!fits || !validPoint(p)) continue;
+    const Eigen::Vector3d d = p.cast<double>();
+    const double z = d.dot(axis);
+    if (z <= kMinForward * d.norm()) {
+      fits = false;
+      continue;
+    }
+    tan_h = std::max(tan_h, std::fabs(d.dot(right)) / z);
+    tan_v = std::max(tan_v, std::fabs(d.dot(vertical)) / z);
+  }
+  AxisFit f;
+  f.fits = fits;
+  f.tan_h = tan_h;
+  f.tan_v = tan_v;
+  return f;
+}
+}  // namespace
+
 SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud) {
-  // Runs once per scan over every point: only products and square roots per point; the
-  // angles come from the extreme ratios at the end (atan and asin are monotonic).
+  // Runs once per scan over every point: only products, one division and a square root per
+  // point; the angles come from the extreme ratios at the end (atan and asin are monotonic).
   // In parallel over a fixed number of chunks, summed in chunk order: the same result for
-  // any thread count. Elevation extremes come along for the LiDAR case.
+  // any thread count. Elevation extremes come along for the LiDAR case, and the pinhole fits
+  // around the six sensor axes for a camera cloud whose axis snaps to one (a second pass over
+  // the points is needed only for an axis that does not).
   SensorModel out = model;
   constexpr int kChunks = 64;
   struct Partial {
     double max_dist = 0.0, sin_min = 1.0, sin_max = -1.0;
     Eigen::Vector3d dir_sum = Eigen::Vector3d::Zero();
     size_t valid = 0;
+    AxisFit fit[6];
   };
   Partial part[kChunks];
   const size_t n = cloud.points_S.size();
@@ -160,23 +251,27 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud)
       if (!validPoint(p)) continue;
       const Eigen::Vector3d d = p.cast<double>();
       const double r = d.norm();
+      const double inv_r = 1.0 / r;
       q.max_dist = std::max(q.max_dist, r);
-      q.dir_sum += d / r;
-      const double s = std::clamp(d.z() / r, -1.0, 1.0);
+      q.dir_sum += d * inv_r;
+      const double s = std::clamp(d.z() * inv_r, -1.0, 1.0);
       q.sin_min = std::min(q.sin_min, s);
       q.sin_max = std::max(q.sin_max, s);
       ++q.valid;
+      kSensorAxes.add(d, r, q.fit);
     }
   }
   double max_dist = 0.0, sin_min = 1.0, sin_max = -1.0;
   Eigen::Vector3d mean_dir = Eigen::Vector3d::Zero();
   size_t valid = 0;
+  AxisFit axis_fit[6];
   for (const Partial& q : part) {
     max_dist = std::max(max_dist, q.max_dist);
     sin_min = std::min(sin_min, q.sin_min);
     sin_max = std::max(sin_max, q.sin_max);
     mean_dir += q.dir_sum;
     valid += q.valid;
+    for (int k = 0; k < 6; ++k) axis_fit[k].merge(q.fit[k]);
   }
   if (out.max_range_m <= 0.0) out.max_range_m = std::max(1.0, std::ceil(max_dist));
   if (valid == 0) {  // nothing to see: a lidar model keeps culling well defined
@@ -191,37 +286,19 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud)
   if (axis.norm() > 0.3) {
     axis.normalize();
     // Snap to a sensor axis when close, so camera clouds keep the same frustum scan to scan.
-    for (int a = 0; a < 3; ++a) {
-      for (double sign : {1.0, -1.0}) {
-        Eigen::Vector3d e = Eigen::Vector3d::Zero();
-        e[a] = sign;
-        if (axis.dot(e) > std::cos(3 * kDeg)) axis = e;
+    int snapped = -1;
+    for (int k = 0; k < 6; ++k)
+      if (axis.dot(kSensorAxes.axis[k]) > std::cos(3 * kDeg)) {
+        axis = kSensorAxes.axis[k];
+        snapped = k;
       }
-    }
-    const Eigen::Vector3d hint =
-        std::fabs(axis.z()) < 0.9 ? Eigen::Vector3d(0, 0, 1) : Eigen::Vector3d(0, 1, 0);
-    const Eigen::Vector3d right = hint.cross(axis).normalized();
-    const Eigen::Vector3d vertical = axis.cross(right);
-    const double kMinForward = std::cos(85 * kDeg);  // wider than 170 degrees: a lidar
-    double tan_h = 0.0, tan_v = 0.0;
-    bool fits = true;
-#pragma omp parallel for schedule(static) reduction(max : tan_h, tan_v) reduction(&& : fits)
-    for (long i = 0; i < static_cast<long>(n); ++i) {
-      const Eigen::Vector3f& p = cloud.points_S[i];
-      if (!fits || !validPoint(p)) continue;
-      const Eigen::Vector3d d = p.cast<double>();
-      const double z = d.dot(axis);
-      if (z <= kMinForward * d.norm()) {
-        fits = false;
-        continue;
-      }
-      tan_h = std::max(tan_h, std::fabs(d.dot(right)) / z);
-      tan_v = std::max(tan_v, std::fabs(d.dot(vertical)) / z);
-    }
+    Eigen::Vector3d right, vertical;
+    pinholeBasis(axis, &right, &vertical);
+    const AxisFit fit = snapped >= 0 ? axis_fit[snapped] : fitAround(cloud, axis, right, vertical);
     // One degree of slack, rounded up to whole degrees.
-    const double hfov = ceilDeg(2 * std::atan(tan_h) + 2 * kDeg);
-    const double vfov = ceilDeg(2 * std::atan(tan_v) + 2 * kDeg);
-    if (fits && hfov < 170 * kDeg && vfov < 170 * kDeg) {
+    const double hfov = ceilDeg(2 * std::atan(fit.tan_h) + 2 * kDeg);
+    const double vfov = ceilDeg(2 * std::atan(fit.tan_v) + 2 * kDeg);
+    if (fit.fits && hfov < 170 * kDeg && vfov < 170 * kDeg) {
       out.type = SensorType::kPinhole;
       out.hfov_rad = hfov;
       out.vfov_rad = vfov;

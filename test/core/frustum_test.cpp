@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <cmath>
+#include <random>
 #include <set>
 #include <vector>
 
@@ -177,6 +180,73 @@ TEST(FrustumTest, AutoSensorFollowsTheCloudsExtent) {
   const SensorModel again = resolveAutoSensor(SensorModel::autoFromCloud(0.0, 8.0), cam);
   EXPECT_EQ(again.hfov_rad, c.hfov_rad);
   EXPECT_EQ(again.vfov_rad, c.vfov_rad);
+}
+
+/// A camera cloud: a 58 x 45 degree view of points at ranges 1-4 m around +z, some invalid,
+/// turned by `R` into the sensor frame.
+PointCloud cameraCloud(const Eigen::Matrix3d& R, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  PointCloud cam;
+  for (int i = 0; i < 5000; ++i) {
+    const double x = std::tan(29 * kDeg) * (2 * u01(rng) - 1);
+    const double y = std::tan(22.5 * kDeg) * (2 * u01(rng) - 1);
+    const double depth = 1.0 + 3.0 * u01(rng);
+    if (i % 97 == 0) {
+      cam.points_S.emplace_back(std::nanf(""), 0.f, 1.f);
+      continue;
+    }
+    cam.points_S.emplace_back((R * Eigen::Vector3d(x, y, 1.0) * depth).cast<float>());
+  }
+  return cam;
+}
+
+/// The pinhole fit around `axis` as a plain second pass over the points (dot products with the
+/// model's basis), the reference for the fits the resolver gathers in its first pass.
+void referenceFov(const PointCloud& cloud, const SensorModel& m, double* hfov, double* vfov) {
+  const Eigen::Vector3d axis = m.forward_S, right = m.right_S, vertical = axis.cross(right);
+  double tan_h = 0, tan_v = 0;
+  for (const Eigen::Vector3f& p : cloud.points_S) {
+    if (!p.allFinite() || p.squaredNorm() == 0.f) continue;
+    const Eigen::Vector3d d = p.cast<double>();
+    const double z = d.dot(axis);
+    ASSERT_GT(z, std::cos(85 * kDeg) * d.norm());
+    tan_h = std::max(tan_h, std::fabs(d.dot(right)) / z);
+    tan_v = std::max(tan_v, std::fabs(d.dot(vertical)) / z);
+  }
+  *hfov = std::ceil((2 * std::atan(tan_h) + 2 * kDeg) / kDeg - 1e-9) * kDeg;
+  *vfov = std::ceil((2 * std::atan(tan_v) + 2 * kDeg) / kDeg - 1e-9) * kDeg;
+}
+
+TEST(FrustumTest, AutoSensorFitsCamerasAlongEverySensorAxisAndBetween) {
+  // Cameras looking along each of the six sensor axes (the resolver's one-pass fits) and along
+  // axes that snap to none (its second pass): the same fields of view as a plain pass of dot
+  // products with the resolved basis, to the bit, and every point inside.
+  const Eigen::Vector3d fwd[] = {Eigen::Vector3d::UnitX(),   -Eigen::Vector3d::UnitX(),
+                                 Eigen::Vector3d::UnitY(),   -Eigen::Vector3d::UnitY(),
+                                 Eigen::Vector3d::UnitZ(),   -Eigen::Vector3d::UnitZ(),
+                                 Eigen::Vector3d(1, 0.2, 0), Eigen::Vector3d(0.1, -0.15, 1)};
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d axis = fwd[k].normalized();
+    const Eigen::Matrix3d R =
+        Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), axis).toRotationMatrix();
+    const PointCloud cam = cameraCloud(R, 100 + k);
+    const SensorModel m = resolveAutoSensor(SensorModel::autoFromCloud(0.0, 8.0), cam);
+    ASSERT_EQ(m.type, SensorType::kPinhole) << k;
+    if (k < 6)
+      EXPECT_EQ(m.forward_S, axis) << k;  // snapped
+    else
+      EXPECT_GT(m.forward_S.dot(axis), std::cos(2 * kDeg)) << k;
+    double hfov, vfov;
+    referenceFov(cam, m, &hfov, &vfov);
+    EXPECT_EQ(m.hfov_rad, hfov) << k;
+    EXPECT_EQ(m.vfov_rad, vfov) << k;
+    // 58 x 45 degrees, or 45 x 58 when the basis turned the image (+ slack and rounding; an
+    // axis that does not snap is the points' mean direction, a few degrees off the camera's).
+    EXPECT_LE(std::max(m.hfov_rad, m.vfov_rad), (k < 6 ? 64 : 72) * kDeg) << k;
+    EXPECT_GE(std::min(m.hfov_rad, m.vfov_rad), 45 * kDeg) << k;
+    expectCloudInside(m, cam);
+  }
 }
 
 TEST(FrustumTest, VoxelEstimateFollowsThePaperFormula) {
