@@ -1,5 +1,5 @@
 # rostests that need no recorded bag: roslaunch by package name, the node killed on a page store,
-# service calls during long insertions, and fragg_map as a drop-in for
+# service calls during long insertions, map_rate on a cloud stream, and fragg_map as a drop-in for
 # octomap_server (an octomap_server YAML through launch/octomap_compat.launch, every row of
 # README's compatibility table).
 if(FRAGG_HAVE_ROS)
@@ -10,4 +10,7 @@ if(FRAGG_HAVE_ROS)
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/map_server_store_kill.test)
   # ~get_stats, ~save_map and ~clear_bbox called while big clouds are inserted (issue 18).
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/map_server_busy.test)
+  # map_rate / marker_rate: the whole-map outputs and markers throttled on a 10 Hz stream, the
+  # held-back clouds flushed by the timer, ~reset_map published at once.
+  add_rostest(${CMAKE_CURRENT_LIST_DIR}/map_server_map_rate.test)
 endif()
