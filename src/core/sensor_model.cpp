@@ -245,7 +245,7 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud)
   const size_t n = cloud.points_S.size();
 #pragma omp parallel for schedule(static)
   for (int c = 0; c < kChunks; ++c) {
-    Partial& q = part[c];
+    Partial q;  // on this thread's stack: no cache line shared with another chunk's
     for (size_t i = n * c / kChunks; i < n * (c + 1) / kChunks; ++i) {
       const Eigen::Vector3f& p = cloud.points_S[i];
       if (!validPoint(p)) continue;
@@ -260,6 +260,7 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud)
       ++q.valid;
       kSensorAxes.add(d, r, q.fit);
     }
+    part[c] = q;
   }
   double max_dist = 0.0, sin_min = 1.0, sin_max = -1.0;
   Eigen::Vector3d mean_dir = Eigen::Vector3d::Zero();
