@@ -65,6 +65,7 @@ Figures runFragg(const Workload& w, const std::string& engine, size_t count, int
           map.insert(s.cloud, s.T_map_sensor, SensorModel::autoFromCloud(0.0, w.max_range_m));
       const double sec = std::chrono::duration<double>(Clock::now() - t0).count();
       f.ms.push_back(sec * 1e3);
+      f.scan_stats.push_back(st);
       f.seconds += sec;
       f.visits += st.voxel_visits;
       if (r + 1 == repeats) f.totals.add(st);

@@ -12,8 +12,9 @@
 namespace fragg::bench {
 
 struct Figures {
-  std::vector<double> ms;  ///< per scan (all repeats)
-  uint64_t visits = 0;     ///< fragg: cell visits of the traversal
+  std::vector<double> ms;               ///< per scan (all repeats)
+  std::vector<InsertStats> scan_stats;  ///< per scan (all repeats), beside `ms`
+  uint64_t visits = 0;                  ///< fragg: cell visits of the traversal
   double seconds = 0;
   size_t known = 0;                                    ///< known voxels of the last run's map
   size_t bytes = 0;                                    ///< host bytes of the last run's map

@@ -29,9 +29,35 @@ struct Options {
   std::vector<std::string> backends = {"cpu"};
   int synthetic_scans = 20, octomap_scans = 3, repeats = 3, threads = 0;
   size_t workload_scans = 0;
+  size_t slowest = 0;  ///< print this many slowest scans of each fragg run
   double synthetic_res = 0.05;
   bool no_real = false;
 };
+
+/// The `n` slowest scans of a run (all repeats): what the p99 is made of.
+void printSlowest(const Workload& w, const std::string& engine, const Figures& f, size_t n) {
+  std::vector<size_t> order(f.ms.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  n = std::min(n, order.size());
+  std::partial_sort(order.begin(), order.begin() + n, order.end(),
+                    [&](size_t a, size_t b) { return f.ms[a] > f.ms[b]; });
+  const size_t per_repeat = w.scans.empty() ? 1 : w.scans.size();
+  for (size_t k = 0; k < n; ++k) {
+    const size_t i = order[k];
+    const InsertStats& s = f.scan_stats.at(i);
+    std::fprintf(stderr,
+                 "[slow scan] %s %s: repeat %zu scan %zu: %.2f ms (cull %.2f prepare %.2f "
+                 "residency %.2f raycast %.2f apply %.2f) blocks created %llu uploaded %llu "
+                 "evicted %llu touched %llu, visits %.1f M\n",
+                 w.name.c_str(), engine.c_str(), i / per_repeat, i % per_repeat, f.ms[i],
+                 s.seconds_cull * 1e3, s.seconds_prepare * 1e3, s.seconds_residency * 1e3,
+                 s.seconds_raycast * 1e3, s.seconds_apply * 1e3,
+                 static_cast<unsigned long long>(s.blocks_created),
+                 static_cast<unsigned long long>(s.blocks_uploaded),
+                 static_cast<unsigned long long>(s.blocks_evicted),
+                 static_cast<unsigned long long>(s.blocks_touched), s.voxel_visits / 1e6);
+  }
+}
 
 WorkloadResult runWorkload(const Workload& w, const Options& o) {
   WorkloadResult r;
@@ -69,6 +95,9 @@ WorkloadResult runWorkload(const Workload& w, const Options& o) {
     for (const auto& [stage, ms] : row.stages_ms) line += fmt::format(" {} {:.3f}", stage, ms);
     std::fprintf(stderr, "[stages ms/scan] %s %s:%s\n", w.name.c_str(), row.engine.c_str(),
                  line.c_str());
+    std::fprintf(stderr, "[traversal per scan] %s %s: %.2f M visits\n", w.name.c_str(),
+                 row.engine.c_str(), t.voxel_visits * per_scan / 1e9);
+    printSlowest(w, row.engine, all, o.slowest);
     row.scans_timed = w.scans.size();
     row.repeats = o.repeats;
     row.ms_median = percentile(all.ms, 0.5);
@@ -143,6 +172,8 @@ int main(int argc, char** argv) {
   app.add_option("--synthetic-resolution", o.synthetic_res, "Resolution of the synthetic runs")
       ->capture_default_str();
   app.add_option("--only", o.only, "Run only workloads whose name contains this");
+  app.add_option("--slowest", o.slowest,
+                 "Print the N slowest scans of each fragg run with their stages and blocks");
   app.add_option("--json", o.json_path, "Write the figures as JSON to this file");
   CLI11_PARSE(app, argc, argv);
 
