@@ -111,6 +111,7 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
     args.miss_capacity = scan_.missCapacity();
     args.scan = cache_.currentScan();
     args.remove = what == ScanUpdate::kRemove;
+    args.coalesce = how.params.cuda.coalesce_ray_marks;
     args.skip_saturated = how.params.skip_saturated_blocks && !args.remove;
     args.counters = scan_.countersOnDevice();
     ray_start_.record(stream_);

@@ -33,6 +33,8 @@ struct RaycastArgs {
   /// A removal: a block without a slot or a host copy was never observed, so there is nothing
   /// to undo in it; no slot is taken for it and its cells are not marked.
   bool remove = false;
+  /// Marks issued per scratch word (CudaParams::coalesce_ray_marks), else per cell.
+  bool coalesce = true;
   /// Misses skip blocks whose cells are all at the lower clamp (never when removing).
   bool skip_saturated = true;
 };

@@ -83,9 +83,32 @@ struct DeviceMarker {
   bool have_block = false;
   bool saturated = false;   ///< the block's misses change nothing (inserting only)
   bool skip_block = false;  ///< the last free cell was in such a block
+  /// Marks of this ray not issued yet: the bits of one scratch word (tag = slot * 32 + word
+  /// index, free words then hit words). Consecutive cells of a ray often share a word (8
+  /// along x, 4 rows along y), so they cost one filter look-up and one atomic together.
+  uint32_t pending_tag = 0;
+  uint32_t pending_bits = 0;
 
   /// Lets traverseDda walk past the rest of a saturated block (raycast.h).
   __device__ bool skippingBlock() const { return skip_block; }
+
+  /// Issues the pending marks (at a new word and at the end of the ray).
+  __device__ void flush() {
+    if (pending_bits == 0) return;
+    const uint32_t tag = pending_tag, bits = pending_bits;
+    pending_bits = 0;
+    unsigned long long* f = filter.entries + (((tag * 2654435761u) >> 23) & (kFilterEntries - 1));
+    const unsigned long long seen = *reinterpret_cast<volatile unsigned long long*>(f);
+    const bool same = (seen >> 32) == tag;
+    if (same && (static_cast<uint32_t>(seen) & bits) == bits) return;
+    uint32_t* word = reinterpret_cast<uint32_t*>(&a.slots.scratch[tag >> 5]) + (tag & 31);
+    atomicOr(word, bits);  // result unused: a fire-and-forget reduction
+    const unsigned long long want =
+        same ? (seen | bits) : ((static_cast<unsigned long long>(tag) << 32) | bits);
+    // Every bit in `seen` was issued by someone, so whichever exchange wins, a set bit still
+    // means an issued atomic; a lost bit only costs a later atomic.
+    atomicExch(f, want);
+  }
 
   __device__ void operator()(const VoxelKey& v, bool hit, int entry) {
     if (entry != kSameBlock || !have_block) {
@@ -99,21 +122,16 @@ struct DeviceMarker {
     if (slot < 0 || skip_block) return;
     const int cell = cellIndexOf(v);
     const uint32_t word_index = (hit ? kScratchWords : 0) + (cell >> 5);
-    const uint32_t bit = 1u << (cell & 31);
     const uint32_t tag = static_cast<uint32_t>(slot) * 32u + word_index;
-    unsigned long long* f = filter.entries + (((tag * 2654435761u) >> 23) & (kFilterEntries - 1));
-    const unsigned long long seen = *reinterpret_cast<volatile unsigned long long*>(f);
-    if ((seen >> 32) == tag && (seen & bit)) return;
-    SlotScratch& s = a.slots.scratch[slot];
-    uint32_t* word = (hit ? s.hit : s.free) + (cell >> 5);
-    atomicOr(word, bit);  // result unused: a fire-and-forget reduction
-    const unsigned long long want =
-        (seen >> 32) == tag ? (seen | bit) : ((static_cast<unsigned long long>(tag) << 32) | bit);
-    // Every bit in `seen` was issued by someone, so whichever exchange wins, a set bit still
-    // means an issued atomic; a lost bit only costs a later atomic.
-    atomicExch(f, want);
+    if (tag != pending_tag) {
+      flush();
+      pending_tag = tag;
+    }
+    pending_bits |= 1u << (cell & 31);
+    if (!a.coalesce) flush();
   }
 };
+static_assert(sizeof(SlotScratch) == 32 * sizeof(uint32_t), "free words, then hit words");
 
 /// A slot is touched when its scratch has a mark: one warp reads a slot's 128 B of scratch.
 /// Touched slots are listed for the apply kernel and stamped, so that an eviction between a
@@ -156,6 +174,7 @@ __global__ void __launch_bounds__(kThreads) raycastKernel(RaycastArgs a) {
                      marginOfHitCode(e.hit)};
     DeviceMarker mark{a, MarkFilter{filter}};
     visits = kBresenham ? traverseBresenham(ray, mark) : traverseDda(ray, mark);
+    mark.flush();
   }
   visits = warpSum(visits);
   if ((threadIdx.x & 31) == 0 && visits) atomicAdd(&a.counters->visits, visits);

@@ -37,6 +37,9 @@ struct CudaParams {
   bool pinned_host_blocks = true;
   /// Rays read through the read-only data cache (off: plain loads, for the ablation).
   bool readonly_ray_loads = true;
+  /// A ray gathers its marks of one scratch word before issuing them (one filter look-up and
+  /// one atomic per word; off: per cell, for the ablation). The map is the same either way.
+  bool coalesce_ray_marks = true;
 };
 
 /// The scan store for loop-closure correction (see scan_store.h).

@@ -39,9 +39,12 @@ MapParams engineParams(const std::string& engine, const MapParams& base) {
       p.raycast = RayCast::kBresenham;
     } else if (token == "no-skip") {
       p.skip_saturated_blocks = false;
+    } else if (token == "no-coalesce") {
+      p.cuda.coalesce_ray_marks = false;
     } else {
       throw InvalidArgument("unknown engine option '" + token + "' in '" + engine +
-                            "' (pageable, plain-loads, no-coherence, bresenham, no-skip)");
+                            "' (pageable, plain-loads, no-coherence, bresenham, no-skip, "
+                            "no-coalesce)");
     }
     begin = end + 1;
   }
