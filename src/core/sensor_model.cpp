@@ -192,9 +192,17 @@ struct SensorAxes {
         f.fits = false;
         continue;
       }
-      f.tan_h = std::max(f.tan_h, std::fabs(d[across_h[k]]) / z);
-      f.tan_v = std::max(f.tan_v, std::fabs(d[across_v[k]]) / z);
+      f.tan_h = raiseTangent(f.tan_h, std::fabs(d[across_h[k]]), z);
+      f.tan_v = raiseTangent(f.tan_v, std::fabs(d[across_v[k]]), z);
     }
+  }
+  /// max(tan, across / z) for z > 0, dividing only when the ratio may exceed `tan`: a ratio
+  /// whose rounded quotient is above `tan` is above it exactly, so across > tan * z, and the
+  /// product's rounding (half an ulp) stays far inside the 1e-12 slack. The same maximum as
+  /// dividing every time, to the bit.
+  static double raiseTangent(double tan, double across, double z) {
+    if (across < tan * z * (1.0 - 1e-12)) return tan;
+    return std::max(tan, across / z);
   }
 };
 const SensorAxes kSensorAxes;
