@@ -96,28 +96,22 @@ struct DdaAxis {
     next_b += k * step;
     t_max = remaining ? boundaryT(next_b) : INFINITY;
   }
-  /// Steps until this axis leaves the aligned cube of `cube_mask + 1` cells (a power of two:
-  /// kBlockMask for the current block) that holds the current cell (meaningful when step != 0).
-  FRAGG_HD int stepsToCubeFace(int cube_mask) const {
-    return step > 0 ? cube_mask - (cur & cube_mask) + 1 : (cur & cube_mask) + 1;
+  /// Steps until this axis leaves the current block (meaningful when step != 0).
+  FRAGG_HD int stepsToBlockFace() const {
+    return step > 0 ? kBlockMask - (cur & kBlockMask) + 1 : (cur & kBlockMask) + 1;
   }
 };
 
-/// A visitor may skip the rest of a block: when it has a member `skippingBlock() const` that
-/// returns true (or a cube mask, below) after a free cell's visit, traverseDda jumps to the
-/// next block (or the endpoint) without visiting the cells in between (ddaLeaveCube). The cells
-/// it lands on are the ones stepping would reach; only the visits are left out. The backends
-/// use it for blocks in which a miss changes nothing (every cell at the lower clamp).
-/// `skippingBlock()` may instead return an int: 0 (no skip) or the mask of a larger aligned
-/// cube to leave, `(1 << k) - 1` with k >= kBlockBits (kBlockMask: the block; the CUDA pass
-/// leaves whole groups of saturated blocks).
+/// A visitor may skip the rest of a block: when it has a member `bool skippingBlock() const`
+/// that returns true after a free cell's visit, traverseDda jumps to the next block (or the
+/// endpoint) without visiting the cells in between (ddaLeaveBlock). The cells it lands on are
+/// the ones stepping would reach; only the visits are left out. The
+/// backends use it for blocks in which a miss changes nothing (every cell at the lower clamp).
 template <class V, class = void>
 struct CanSkipBlock : std::false_type {};
 template <class V>
 struct CanSkipBlock<V, std::void_t<decltype(std::declval<const V&>().skippingBlock())>>
     : std::true_type {};
-FRAGG_HD int skipCubeMask(bool skip) { return skip ? kBlockMask : 0; }
-FRAGG_HD int skipCubeMask(int cube_mask) { return cube_mask; }
 
 /// Exact 3D DDA (Amanatides & Woo). Visits every cell the segment passes through, in order,
 /// 6-connected; the per-axis step counts are fixed up front, so the walk always ends in the
@@ -137,24 +131,21 @@ FRAGG_HD int ddaStep(DdaAxis& x, DdaAxis& y, DdaAxis& z) {
   return z.advance() ? blockFace(2, z.step) : kSameBlock;
 }
 
-/// Walks from the current cell to the first cell of the next aligned cube of `cube_mask + 1`
-/// cells per axis (kBlockMask: the next block), or to the endpoint's cell when the ray ends in
-/// this cube, without visiting anything in between: the same cells and state as calling
-/// ddaStep until it leaves the cube, in O(1) per axis. The steps of the three axes form one
-/// sequence ordered by (t, later axis first on ties); the first step that leaves the cube is
-/// the smallest of the axes' face crossings, and every earlier step of the other axes stays
-/// inside it. Decrements `total` by the steps taken; returns the entry code of the cell reached
-/// relative to the block of the last visit: for a block, the face crossed (or kSameBlock when
-/// the ray ended inside it); for a larger cube kUnknownBlock (the walk may have crossed blocks
-/// of the cube before its face, and the endpoint may lie in another of its blocks).
-FRAGG_HD int ddaLeaveCube(DdaAxis& x, DdaAxis& y, DdaAxis& z, int& total, int cube_mask) {
+/// Walks from the current cell to the first cell of the next block (or to the endpoint's cell
+/// when the ray ends in this block) without visiting anything in between: the same cells and
+/// state as calling ddaStep until it reports a new block, in O(1) per axis. The steps of the
+/// three axes form one sequence ordered by (t, later axis first on ties); the first step that
+/// leaves the block is the smallest of the axes' face crossings, and every earlier step of the
+/// other axes stays inside the block. Decrements `total` by the steps taken; returns the entry
+/// code of the cell reached (kSameBlock when the ray ended inside the block).
+FRAGG_HD int ddaLeaveBlock(DdaAxis& x, DdaAxis& y, DdaAxis& z, int& total) {
   DdaAxis* axis[3] = {&x, &y, &z};
   int exit_axis = -1, exit_steps = 0;
   float exit_t = INFINITY;
   for (int a = 0; a < 3; ++a) {
     const DdaAxis& d = *axis[a];
     if (d.step == 0) continue;
-    const int k = d.stepsToCubeFace(cube_mask);
+    const int k = d.stepsToBlockFace();
     if (k > d.remaining) continue;
     const float t = d.boundaryT(d.next_b + (k - 1) * d.step);
     if (t <= exit_t) {  // ties go to the later axis
@@ -163,12 +154,12 @@ FRAGG_HD int ddaLeaveCube(DdaAxis& x, DdaAxis& y, DdaAxis& z, int& total, int cu
       exit_t = t;
     }
   }
-  if (exit_axis < 0) {  // the ray ends in this cube
+  if (exit_axis < 0) {  // the ray ends in this block
     for (DdaAxis* d : axis) {
       total -= d->remaining;
       d->advanceBy(d->remaining);
     }
-    return cube_mask == kBlockMask ? kSameBlock : kUnknownBlock;
+    return kSameBlock;
   }
   for (int b = 0; b < 3; ++b) {
     if (b == exit_axis) continue;
@@ -181,7 +172,7 @@ FRAGG_HD int ddaLeaveCube(DdaAxis& x, DdaAxis& y, DdaAxis& z, int& total, int cu
   DdaAxis& e = *axis[exit_axis];
   e.advanceBy(exit_steps);
   total -= exit_steps;
-  return cube_mask == kBlockMask ? blockFace(exit_axis, e.step) : kUnknownBlock;
+  return blockFace(exit_axis, e.step);
 }
 
 template <class Visit>
@@ -206,9 +197,8 @@ FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
       visit(VoxelKey{x.cur, y.cur, z.cur}, false, entry);
       ++visited;
       if constexpr (CanSkipBlock<Visit>::value) {
-        const int cube_mask = skipCubeMask(visit.skippingBlock());
-        if (cube_mask != 0) {  // the rest of the block (or larger cube), unvisited
-          entry = ddaLeaveCube(x, y, z, total, cube_mask);
+        if (visit.skippingBlock()) {  // the rest of the block, unvisited
+          entry = ddaLeaveBlock(x, y, z, total);
           continue;
         }
       }
