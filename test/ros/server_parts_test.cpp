@@ -144,6 +144,27 @@ TEST(RateThrottle, MapRateOnACloudStream) {
   EXPECT_EQ(dueClouds(20.0, 4, 10.0), (std::vector<int>{0, 1, 2, 3}));
 }
 
+TEST(HeldBackUpdate, HoldsTheLastStampUntilPublishedOrDropped) {
+  fragg::ros::HeldBackUpdate<int> h(2.0);  // 2 Hz; stamps are cloud numbers here
+  EXPECT_FALSE(h.flushDue(10.0));          // nothing held back yet
+  EXPECT_TRUE(h.letThrough(10.0, 1));      // the first update goes out
+  h.published(10.0);
+  EXPECT_FALSE(h.letThrough(10.1, 2));  // held back ...
+  EXPECT_FALSE(h.letThrough(10.2, 3));  // ... with the last cloud's stamp
+  EXPECT_EQ(h.pendingStamp(), 3);
+  EXPECT_FALSE(h.flushDue(10.4));  // not due before the period is over
+  EXPECT_TRUE(h.flushDue(10.5));
+  h.published(10.5);  // the timer sent it: nothing is held back
+  EXPECT_FALSE(h.flushDue(20.0));
+  EXPECT_FALSE(h.letThrough(10.6, 4));
+  h.drop();  // no subscriber left: nothing to send later
+  EXPECT_FALSE(h.flushDue(20.0));
+  fragg::ros::HeldBackUpdate<int> unlimited(0.0);
+  EXPECT_TRUE(unlimited.letThrough(1.0, 1));
+  unlimited.published(1.0);
+  EXPECT_TRUE(unlimited.letThrough(1.0, 2));
+}
+
 TEST(RateThrottle, FlushTickIsATenthOfASecondAtMost) {
   EXPECT_EQ(fragg::ros::RateThrottle(1.0).flushTickS(), 0.1);
   EXPECT_EQ(fragg::ros::RateThrottle(0.2).flushTickS(), 0.1);

@@ -43,4 +43,37 @@ class RateThrottle {
   bool published_ = false;
 };
 
+/// A whole-map output under a RateThrottle that holds back what is not due: whether an update
+/// is held back, and the stamp it is to carry (that of the last input it covers).
+template <class Stamp>
+class HeldBackUpdate {
+ public:
+  explicit HeldBackUpdate(double rate_hz) : throttle_(rate_hz) {}
+  const RateThrottle& throttle() const { return throttle_; }
+
+  /// After an input stamped `stamp` at `now_s`: true when the update may go out now, else it
+  /// is held back with that stamp.
+  bool letThrough(double now_s, const Stamp& stamp) {
+    if (throttle_.due(now_s)) return true;
+    pending_ = true;
+    stamp_ = stamp;
+    return false;
+  }
+  /// An update went out at `now_s`: nothing is held back.
+  void published(double now_s) {
+    throttle_.published(now_s);
+    pending_ = false;
+  }
+  /// Nothing to hold back (no subscriber: a later one gets the map when it connects).
+  void drop() { pending_ = false; }
+  /// Whether a timer should send the held-back update at `now_s`.
+  bool flushDue(double now_s) const { return pending_ && throttle_.due(now_s); }
+  const Stamp& pendingStamp() const { return stamp_; }
+
+ private:
+  RateThrottle throttle_;
+  bool pending_ = false;
+  Stamp stamp_{};
+};
+
 }  // namespace fragg::ros

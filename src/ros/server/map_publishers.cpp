@@ -9,8 +9,7 @@
 #include <visualization_msgs/Marker.h>
 #include <visualization_msgs/MarkerArray.h>
 
-#include <optional>
-
+#include "flush_without_waiting.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/frustum_marker.h"
 
@@ -25,7 +24,7 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
       marker_throttle_(params.marker_rate_hz),
       outputs_(OutputCacheOptions{params.occupancy_min_z_m, params.occupancy_max_z_m,
                                   params.octomap.filter_speckles}),
-      map_throttle_(params.map_rate_hz) {
+      held_maps_(params.map_rate_hz) {
   const bool latch = params_.latch;
   for (MarkerTopic* topic : {&occupied_markers_, &free_markers_}) {
     topic->style.frame_id = params_.frame_id;
@@ -69,8 +68,8 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
   if (marker_throttle_.limited())
     marker_flush_timer_ = nh.createSteadyTimer(::ros::WallDuration(marker_throttle_.flushTickS()),
                                                &MapPublishers::flushPendingMarkers, this);
-  if (map_throttle_.limited())
-    map_flush_timer_ = nh.createSteadyTimer(::ros::WallDuration(map_throttle_.flushTickS()),
+  if (held_maps_.throttle().limited())
+    map_flush_timer_ = nh.createSteadyTimer(::ros::WallDuration(held_maps_.throttle().flushTickS()),
                                             &MapPublishers::flushPendingMaps, this);
 }
 
@@ -138,20 +137,15 @@ void MapPublishers::publishMapOutputs(const fragg::Map& map, const ::ros::Time& 
   // Nobody to send to: a subscriber that connects later gets the current map
   // (currentMessageTo), so nothing is pending either.
   if (!cloud_wanted && !grid_wanted) {
-    maps_pending_ = false;
+    held_maps_.drop();
     return;
   }
   const double now_s = ::ros::SteadyTime::now().toSec();
-  if (throttled && !map_throttle_.due(now_s)) {
-    // Not even the cache's update: it reads every block changed since the revision it last
-    // saw when the next publication comes.
-    maps_pending_ = true;
-    pending_stamp_ = stamp;
-    return;
-  }
-  map_throttle_.published(now_s);
-  maps_pending_ = false;  // also when building throws: the next cloud tries again
-  outputs_.update(map);   // the changed blocks only
+  // Held back: not even the cache's update; it reads every block changed since the revision
+  // it last saw when the next publication comes.
+  if (throttled && !held_maps_.letThrough(now_s, stamp)) return;
+  held_maps_.published(now_s);  // also when building throws: the next cloud tries again
+  outputs_.update(map);         // the changed blocks only
   if (cloud_wanted) {
     const sensor_msgs::PointCloud2 cloud = outputs_.occupiedCloud(params_.frame_id, stamp);
     if (wanted(occupied_cloud_pub_)) occupied_cloud_pub_.publish(cloud);
@@ -161,18 +155,10 @@ void MapPublishers::publishMapOutputs(const fragg::Map& map, const ::ros::Time& 
 }
 
 void MapPublishers::flushPendingMaps(const ::ros::SteadyTimerEvent&) {
-  // As flushPendingMarkers: never waits; an insertion holding the map publishes them itself
-  // when due.
-  std::unique_lock<std::mutex> publishing(publish_mutex_, std::try_to_lock);
-  if (!publishing.owns_lock() || !maps_pending_) return;
-  if (!map_throttle_.due(::ros::SteadyTime::now().toSec())) return;
-  const std::optional<SharedMap::ReadGuard> state = shared_->tryRead();
-  if (!state) return;
-  try {
-    publishMapOutputs((*state)->map, pending_stamp_, true);
-  } catch (const std::exception& e) {
-    ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
-  }
+  flushWithoutWaiting(
+      publish_mutex_, *shared_,
+      [this] { return held_maps_.flushDue(::ros::SteadyTime::now().toSec()); },
+      [this](const fragg::Map& map) { publishMapOutputs(map, held_maps_.pendingStamp(), true); });
 }
 
 void MapPublishers::publishMarkerTopics(const fragg::Map& map, const ::ros::Time& stamp,
@@ -185,18 +171,16 @@ void MapPublishers::publishMarkerTopics(const fragg::Map& map, const ::ros::Time
 }
 
 void MapPublishers::flushPendingMarkers(const ::ros::SteadyTimerEvent&) {
-  // Never waits: a publisher already at work, or a writer holding the map, publishes the
-  // pending changes itself when it is done.
-  std::unique_lock<std::mutex> publishing(publish_mutex_, std::try_to_lock);
-  if (!publishing.owns_lock()) return;
-  const std::optional<SharedMap::ReadGuard> state = shared_->tryRead();
-  if (!state) return;
-  const fragg::Map& map = (*state)->map;
-  const uint64_t revision = map.revision();
-  const bool pending =
-      occupied_markers_.ledger.publishedRevision() != revision ||
-      (params_.publish_free_space && free_markers_.ledger.publishedRevision() != revision);
-  if (pending) publishMarkerTopics(map, ::ros::Time::now(), false);
+  // What is pending shows in the map: the ledgers lag its revision.
+  flushWithoutWaiting(
+      publish_mutex_, *shared_, [] { return true; },
+      [this](const fragg::Map& map) {
+        const uint64_t revision = map.revision();
+        const bool pending =
+            occupied_markers_.ledger.publishedRevision() != revision ||
+            (params_.publish_free_space && free_markers_.ledger.publishedRevision() != revision);
+        if (pending) publishMarkerTopics(map, ::ros::Time::now(), false);
+      });
 }
 
 void MapPublishers::publishMarkers(const fragg::Map& map, MarkerTopic& topic,

@@ -93,11 +93,9 @@ class MapPublishers {
   ::ros::SteadyTimer marker_flush_timer_;
   /// The occupied cloud's and projected map's pieces (under publish_mutex_).
   MapOutputCache outputs_;
-  RateThrottle map_throttle_;
+  /// map_rate: whether the whole-map outputs are held back, with the last cloud's stamp.
+  HeldBackUpdate<::ros::Time> held_maps_;
   ::ros::SteadyTimer map_flush_timer_;
-  /// Whole-map outputs held back by map_rate, and the stamp of the last cloud in them.
-  bool maps_pending_ = false;
-  ::ros::Time pending_stamp_;
   ::ros::Publisher occupied_cloud_pub_;
   ::ros::Publisher centers_pub_;  ///< octomap_point_cloud_centers: octomap_server's name
   ::ros::Publisher projected_map_pub_;

@@ -7,10 +7,10 @@
 #include <ros/single_subscriber_publisher.h>
 
 #include <memory>
-#include <optional>
 #include <sstream>
 #include <string>
 
+#include "flush_without_waiting.h"
 #include "fragg_map/interop/octomap_io.h"
 
 namespace fragg::ros {
@@ -42,7 +42,7 @@ octomap_msgs::Octomap octomapMsg(const fragg::Map& map, bool binary, const std::
 }  // namespace
 
 OctomapOutputs::OctomapOutputs(::ros::NodeHandle& nh, const ServerParams& params, SharedMap* shared)
-    : params_(params), shared_(shared), throttle_(params.map_rate_hz) {
+    : params_(params), shared_(shared), held_(params.map_rate_hz) {
   auto to_new_subscriber = [this](bool binary) -> ::ros::SubscriberStatusCallback {
     return [this, binary](const ::ros::SingleSubscriberPublisher& sub) {
       std::lock_guard<std::mutex> publishing(publish_mutex_);
@@ -77,8 +77,8 @@ OctomapOutputs::OctomapOutputs(::ros::NodeHandle& nh, const ServerParams& params
   full_srv_ =
       nh.advertiseService<octomap_msgs::GetOctomap::Request, octomap_msgs::GetOctomap::Response>(
           "octomap_full", service(false));
-  if (throttle_.limited())
-    flush_timer_ = nh.createSteadyTimer(::ros::WallDuration(throttle_.flushTickS()),
+  if (held_.throttle().limited())
+    flush_timer_ = nh.createSteadyTimer(::ros::WallDuration(held_.throttle().flushTickS()),
                                         &OctomapOutputs::flushPending, this);
 }
 
@@ -91,37 +91,28 @@ void OctomapOutputs::publishIfDue(const ::ros::Time& stamp, bool throttled) {
   if (binary_pub_.getNumSubscribers() == 0 && full_pub_.getNumSubscribers() == 0) return;
   std::lock_guard<std::mutex> publishing(publish_mutex_);
   const double now_s = ::ros::SteadyTime::now().toSec();
-  if (throttled && !throttle_.due(now_s)) {
-    pending_ = true;
-    pending_stamp_ = stamp;
-    return;
-  }
+  if (throttled && !held_.letThrough(now_s, stamp)) return;
   const SharedMap::ReadGuard state = shared_->read();
   publishLocked(state->map, stamp, now_s);
 }
 
 void OctomapOutputs::publishLocked(const fragg::Map& map, const ::ros::Time& stamp, double now_s) {
-  pending_ = false;  // also when building throws: the next cloud tries again
   const bool binary = binary_pub_.getNumSubscribers() > 0;
   const bool full = full_pub_.getNumSubscribers() > 0;
-  if (!binary && !full) return;
-  throttle_.published(now_s);
+  if (!binary && !full) {
+    held_.drop();
+    return;
+  }
+  held_.published(now_s);  // also when building throws: the next cloud tries again
   if (binary) binary_pub_.publish(octomapMsg(map, true, params_.frame_id, stamp));
   if (full) full_pub_.publish(octomapMsg(map, false, params_.frame_id, stamp));
 }
 
 void OctomapOutputs::flushPending(const ::ros::SteadyTimerEvent&) {
-  std::unique_lock<std::mutex> publishing(publish_mutex_, std::try_to_lock);
-  if (!publishing.owns_lock() || !pending_) return;
   const double now_s = ::ros::SteadyTime::now().toSec();
-  if (!throttle_.due(now_s)) return;
-  const std::optional<SharedMap::ReadGuard> state = shared_->tryRead();
-  if (!state) return;
-  try {
-    publishLocked((*state)->map, pending_stamp_, now_s);
-  } catch (const std::exception& e) {
-    ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
-  }
+  flushWithoutWaiting(
+      publish_mutex_, *shared_, [this, now_s] { return held_.flushDue(now_s); },
+      [this, now_s](const fragg::Map& map) { publishLocked(map, held_.pendingStamp(), now_s); });
 }
 
 }  // namespace fragg::ros

@@ -41,10 +41,8 @@ class OctomapOutputs {
   const ServerParams params_;
   SharedMap* shared_;
   std::mutex publish_mutex_;
-  // Under publish_mutex_: the throttle, and whether a cloud's map is held back (its stamp).
-  RateThrottle throttle_;
-  bool pending_ = false;
-  ::ros::Time pending_stamp_;
+  /// map_rate (under publish_mutex_): whether a cloud's map is held back, with its stamp.
+  HeldBackUpdate<::ros::Time> held_;
   ::ros::SteadyTimer flush_timer_;
   ::ros::Publisher binary_pub_, full_pub_;
   ::ros::ServiceServer binary_srv_, full_srv_;
