@@ -7,6 +7,7 @@ in the workspace; files go to a temporary folder."""
 import json
 import os
 import shutil
+import struct
 import subprocess
 import tempfile
 import time
@@ -15,11 +16,29 @@ import unittest
 from catkin.find_in_workspaces import find_in_workspaces
 
 import rospy
+from sensor_msgs.msg import PointCloud2, PointField
 from visualization_msgs.msg import Marker, MarkerArray
 
 from fragg_map.srv import GetStats, SaveMap
 
 NS = "/fragg_map/"
+
+
+def map_cloud(points):
+    """An unorganised float32 x, y, z cloud in the map frame, stamped now, from (x, y, z)s."""
+    msg = PointCloud2()
+    msg.header.frame_id = "map"
+    msg.header.stamp = rospy.Time.now()
+    msg.fields = [PointField(name=n, offset=4 * k, datatype=PointField.FLOAT32, count=1)
+                  for k, n in enumerate("xyz")]
+    msg.point_step = 12
+    msg.width = len(points)
+    msg.height = 1
+    msg.row_step = 12 * len(points)
+    msg.is_bigendian = False
+    msg.is_dense = True
+    msg.data = b"".join(struct.pack("<3f", *p) for p in points)
+    return msg
 
 
 def wait_for(predicate, timeout_s, what):

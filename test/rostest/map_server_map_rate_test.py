@@ -18,7 +18,6 @@ octomap_binary (when the build has octomap_msgs) and occupied_cells_vis_array:
      occupied_cells (and an empty octomap_binary) within 0.3 s: it does not wait for the
      period."""
 import math
-import struct
 import threading
 import time
 import unittest
@@ -27,11 +26,11 @@ import rospy
 import rostest
 import sensor_msgs.point_cloud2 as pc2
 from nav_msgs.msg import OccupancyGrid
-from sensor_msgs.msg import PointCloud2, PointField
+from sensor_msgs.msg import PointCloud2
 from visualization_msgs.msg import Marker, MarkerArray
 
 from fragg_map.srv import GetStats, Reset
-from map_server_checks import wait_for
+from map_server_checks import map_cloud, wait_for
 
 try:
     from octomap_msgs.msg import Octomap
@@ -57,22 +56,6 @@ def key(x, y, z):
 def column_points(k):
     """Cloud k's points: a column of the wall at x = 3.05, y = -0.95 + 0.1 k (cell centres)."""
     return [(3.05, -0.95 + 0.1 * k, -0.45 + 0.1 * j) for j in range(10)]
-
-
-def cloud(points):
-    msg = PointCloud2()
-    msg.header.frame_id = "map"
-    msg.header.stamp = rospy.Time.now()
-    msg.fields = [PointField(name=n, offset=4 * k, datatype=PointField.FLOAT32, count=1)
-                  for k, n in enumerate("xyz")]
-    msg.point_step = 12
-    msg.width = len(points)
-    msg.height = 1
-    msg.row_step = 12 * len(points)
-    msg.is_bigendian = False
-    msg.is_dense = True
-    msg.data = b"".join(struct.pack("<3f", *p) for p in points)
-    return msg
 
 
 def cloud_cells(msg):
@@ -141,7 +124,7 @@ class MapRateTest(unittest.TestCase):
         for k in range(STREAM_CLOUDS):
             time.sleep(max(0.0, cls.t0 + k * period - time.monotonic()))
             points = column_points(k)
-            cls.pub.publish(cloud(points))
+            cls.pub.publish(map_cloud(points))
             cls.expected |= {key(*p) for p in points}
         cls.t_stream_end = time.monotonic()
         # The message with the 20 clouds' cells is a publication (the last cloud's, or the
@@ -154,7 +137,7 @@ class MapRateTest(unittest.TestCase):
         wait_for(has_every_cell, 5,
                  "occupied_cells with the 20 clouds' cells (held back ones: the flush timer)")
         points = column_points(STREAM_CLOUDS)
-        cls.pub.publish(cloud(points))
+        cls.pub.publish(map_cloud(points))
         cls.t_last_cloud = time.monotonic()
         cls.expected |= {key(*p) for p in points}
         wait_for(lambda: cls.get_stats().stats.scans == STREAM_CLOUDS + 1, 10,
@@ -235,7 +218,7 @@ class MapRateTest(unittest.TestCase):
         occupied = self.topics["occupied_cells"]
         # Right after a publication (a cloud's): the throttle is not due for a period.
         n = occupied.count()
-        self.pub.publish(cloud(column_points(STREAM_CLOUDS + 1)))
+        self.pub.publish(map_cloud(column_points(STREAM_CLOUDS + 1)))
         wait_for(lambda: occupied.count() > n, 5, "occupied_cells after one more cloud")
         t_call = time.monotonic()
         res = rospy.ServiceProxy(NS + "reset_map", Reset)()

@@ -18,11 +18,11 @@ import unittest
 
 import rospy
 import rostest
-from sensor_msgs.msg import PointCloud2, PointField
+from sensor_msgs.msg import PointCloud2
 
 from fragg_map.srv import GetStats, SaveMap
 from fgm_cells import BLOCK_EDGE, read_blocks
-from map_server_checks import wait_for
+from map_server_checks import map_cloud, wait_for
 
 NS = "/fragg_map/"
 RESOLUTION = 0.1
@@ -39,22 +39,6 @@ def sector_points(i):
         for h in range(5):
             pts.append((WALL_M * math.cos(az), WALL_M * math.sin(az), 0.2 + 0.2 * h))
     return pts
-
-
-def cloud(points):
-    msg = PointCloud2()
-    msg.header.frame_id = "map"
-    msg.header.stamp = rospy.Time.now()
-    msg.fields = [PointField(name=n, offset=4 * k, datatype=PointField.FLOAT32, count=1)
-                  for k, n in enumerate("xyz")]
-    msg.point_step = 12
-    msg.width = len(points)
-    msg.height = 1
-    msg.row_step = 12 * len(points)
-    msg.is_bigendian = False
-    msg.is_dense = True
-    msg.data = b"".join(struct.pack("<3f", *p) for p in points)
-    return msg
 
 
 def hits_at(blocks, p):
@@ -126,7 +110,7 @@ class StoreKillTest(unittest.TestCase):
         # clouds still arriving (and each scan's commit written behind the map).
         seen = 0
         for i in range(SECTORS):
-            self.pub.publish(cloud(sector_points(i)))
+            self.pub.publish(map_cloud(sector_points(i)))
             time.sleep(0.1)
             seen = self.scans()
             if seen >= SECTORS // 3:
@@ -153,7 +137,7 @@ class StoreKillTest(unittest.TestCase):
         # It goes on: the clouds after the committed ones insert.
         more = min(4, SECTORS - k) if k < SECTORS else 0
         for i in range(k, k + more):
-            self.pub.publish(cloud(sector_points(i)))
+            self.pub.publish(map_cloud(sector_points(i)))
             time.sleep(0.1)
         wait_for(lambda: self.scans() >= k + more, 60, "the further clouds to insert")
         self.assertEqual(self.scans(), k + more)
