@@ -5,7 +5,11 @@
 # its resident memory every 2 s and checks, at the end (scripts/soak.py does the driving):
 #   - RSS bounded: after the warm-up (20% of the run, >= 20 s) the median of the last third of
 #     the samples is at most --rss-ratio (1.1) x the median of the first third (medians: the
-#     peaks are transient copies of the map, caught at random by the 2 s sampling);
+#     peaks are transient copies of the map, caught at random by the 2 s sampling; 0 leaves
+#     this check out, for runs too short for thirds to hold maps of the same size);
+#   - RSS with an empty map bounded: the RSS just after the last ~reset_map (heap trimmed; the
+#     final phase's) is at most 1.25 x the lowest after an earlier one + 64 MiB (anything the
+#     node keeps across resets shows there, the map's size does not);
 #   - clouds dropped by the queue policy only (~get_stats: dropped_no_tf = rejected = 0; a
 #     cloud that waited in the queue longer than the tf buffer, dropped_tf_too_old, counts as
 #     dropped by the queue);

@@ -15,11 +15,13 @@ import rostest
 from catkin.find_in_workspaces import find_in_workspaces
 
 
-# 75 s hold two or three reset cycles of a ~220 MiB map with transient copies of it on top
-# (a run here without any leak: peaks of 839 and 1007 MiB in its first and last thirds): a
-# third of 15 s is too short for a 1.1 x bound. 1.5 x on the medians still fails a node that
-# keeps a map (or a copy) per cycle; the 30-minute run checks 1.1 x (docs/reliability.md).
-RSS_RATIO = 1.5
+# 75 s hold two or three cycles of a ~220 MiB map with transient copies of it on top: thirds
+# of 20 s sample maps of whatever size the cycle had reached, so their medians moved 1.56-1.78 x
+# without any leak (three clean-clone CI runs, docs/reliability.md). The short soak bounds the
+# RSS just after each ~reset_map instead (soak.py's reset check, on by default: a node that
+# keeps a map, a cloud or a copy per cycle fails it); the 30-minute run also checks the medians
+# at 1.1 x. 0 here: the medians are reported, not checked.
+RSS_RATIO = 0
 
 
 class Soak(unittest.TestCase):
