@@ -72,6 +72,18 @@ void CudaBackend::sizePool(const SensorModel& model, double resolution_m) {
   cache_.reserve(static_cast<int64_t>(std::max(4096.0, blocks * params_.cuda.pool_margin)));
 }
 
+bool CudaBackend::autoSensorStats(const PointCloud& cloud, AutoSensorStats* out) {
+  // Organised clouds with no-return rays are prepared on the host (DeviceScan::prepare).
+  if (!params_.cuda.device_auto_sensor || (params_.clear_no_return_rays && cloud.organised()))
+    return false;
+  try {
+    *out = integrator_.gatherAutoSensorStats(cloud);
+  } catch (const CudaOutOfMemory&) {
+    return false;  // the scan's own upload will meet the same and fall back (Map::integrateScan)
+  }
+  return true;
+}
+
 void CudaBackend::update(const ScanInput& scan, ScanUpdate what, const UpdateSettings& how,
                          BlockMap& blocks, InsertStats& stats) {
   sizePool(scan.model, how.params.resolution_m);

@@ -30,6 +30,10 @@ class CudaBackend : public MapBackend {
     state_bits_.compute(cache_, keys, model, blocks, out);
     return true;
   }
+  /// On the device beside the points' upload, which the scan's prepare then reuses; false
+  /// (the map gathers on the host) for a cloud prepared on the host, and when the device has
+  /// no room for the points.
+  bool autoSensorStats(const PointCloud& cloud, AutoSensorStats* out) override;
   bool viewpointGains(const GainBatch& batch, const OccupancyModel& model, BlockMap& blocks,
                       double* out) override {
     gains_.compute(cache_, batch, model, blocks, out);

@@ -23,6 +23,10 @@ class CudaIntegrator {
   bool update(const ScanInput& scan, ScanUpdate what, const UpdateSettings& how, BlockMap& blocks,
               InsertStats& stats);
   size_t deviceBytes() const { return scan_.deviceBytes() + window_.deviceBytes(); }
+  /// DeviceScan::gatherAutoSensorStats() on the scan's buffers.
+  AutoSensorStats gatherAutoSensorStats(const PointCloud& cloud) {
+    return scan_.gatherAutoSensorStats(cloud);
+  }
 
  private:
   /// Uploads the window's visible host blocks and returns the keys of its other host blocks.

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstring>
 
+#include "fragg_map/internal/auto_sensor.h"
 #include "kernels.h"
 
 namespace fragg::cuda {
@@ -26,6 +27,10 @@ void DeviceScan::prepare(const ScanInput& in, const MapParams& params, int32_t f
     c.hi_v[a] = 0;
   }
   c.free_top = free_top;
+  // The points gatherAutoSensorStats() uploaded, when they are this scan's.
+  const bool staged = in.cloud_staged && staged_points_ == in.cloud.points_S.data() &&
+                      staged_size_ == in.cloud.size();
+  staged_points_ = nullptr;
   if (params.clear_no_return_rays && in.cloud.organised()) {
     prepareOnHost(in, params, stats);
     stats.seconds_prepare += secondsSince(t0);
@@ -34,17 +39,8 @@ void DeviceScan::prepare(const ScanInput& in, const MapParams& params, int32_t f
   const RayPrepParams prep =
       rayPrepParams(in.T_map_sensor, in.model, in.explicit_model, params, prepared_);
   const size_t n = in.cloud.size();
-  points_.reserve(3 * n);
+  if (!staged) uploadPoints(in.cloud);
   rays_.reserve(n);
-  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "packed points");
-  const float* src = reinterpret_cast<const float*>(in.cloud.points_S.data());
-  float* dst = points_.host();
-#pragma omp parallel for schedule(static)
-  for (long chunk = 0; chunk < 64; ++chunk) {
-    const size_t b = 3 * n * size_t(chunk) / 64, e = 3 * n * size_t(chunk + 1) / 64;
-    std::memcpy(dst + b, src + b, (e - b) * sizeof(float));
-  }
-  points_.toDevice(3 * n, stream_);
   const uint8_t* free_only = nullptr;  // the device's flags, when the cloud has any
   if (in.cloud.hasFreeOnly()) {
     free_only_.reserve(n);
@@ -64,6 +60,35 @@ void DeviceScan::prepare(const ScanInput& in, const MapParams& params, int32_t f
   stats.dropped_min_range += c.too_close;
   stats.dropped_outside_frustum += c.outside;
   stats.seconds_prepare += secondsSince(t0);
+}
+
+void DeviceScan::uploadPoints(const PointCloud& cloud) {
+  const size_t n = cloud.size();
+  staged_points_ = nullptr;
+  points_.reserve(3 * n);
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "packed points");
+  const float* src = reinterpret_cast<const float*>(cloud.points_S.data());
+  float* dst = points_.host();
+#pragma omp parallel for schedule(static)
+  for (long chunk = 0; chunk < 64; ++chunk) {
+    const size_t b = 3 * n * size_t(chunk) / 64, e = 3 * n * size_t(chunk + 1) / 64;
+    std::memcpy(dst + b, src + b, (e - b) * sizeof(float));
+  }
+  points_.toDevice(3 * n, stream_);
+}
+
+AutoSensorStats DeviceScan::gatherAutoSensorStats(const PointCloud& cloud) {
+  uploadPoints(cloud);
+  auto_stats_.reserve(1);
+  auto_stats_[0] = AutoStatsAccum::empty();
+  auto_stats_.toDevice(1, stream_);
+  launchAutoSensorStats(points_.device(), uint32_t(cloud.size()), sensorAxisTable(),
+                        auto_stats_.device(), stream_);
+  auto_stats_.toHost(1, stream_);
+  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  staged_points_ = cloud.points_S.data();
+  staged_size_ = cloud.size();
+  return auto_stats_[0].stats();
 }
 
 void DeviceScan::prepareOnHost(const ScanInput& in, const MapParams& params, InsertStats& stats) {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "auto_stats_accum.h"
 #include "cuda_array.h"
 #include "device_types.h"
 #include "fragg_map/internal/backend.h"
@@ -22,6 +23,11 @@ class DeviceScan {
   /// counters start with the pool's free-stack top `free_top`.
   void prepare(const ScanInput& scan, const MapParams& params, int32_t free_top,
                InsertStats& stats);
+
+  /// Uploads the cloud's points and gathers the auto sensor model's statistics on the device
+  /// (the bits of gatherAutoSensorStats()). The upload is kept for this cloud's prepare()
+  /// when the scan says so (ScanInput::cloud_staged).
+  AutoSensorStats gatherAutoSensorStats(const PointCloud& cloud);
 
   ScanCounters& counters() const { return counters_[0]; }
   ScanCounters* countersOnDevice() const { return counters_.device(); }
@@ -47,10 +53,17 @@ class DeviceScan {
  private:
   /// Organised clouds with no-return rays: prepared on the host, rays uploaded.
   void prepareOnHost(const ScanInput& scan, const MapParams& params, InsertStats& stats);
+  /// The cloud's points into points_ (pinned host copy, then the device).
+  void uploadPoints(const PointCloud& cloud);
 
   cudaStream_t stream_;
   PreparedScan prepared_;  ///< ref and start; the rays too when prepared on the host
   MirroredBuffer<float> points_;
+  /// The cloud whose points gatherAutoSensorStats() left in points_ (its point array and
+  /// size); prepare() uses them only for a scan marked cloud_staged, then forgets them.
+  const void* staged_points_ = nullptr;
+  size_t staged_size_ = 0;
+  MirroredBuffer<AutoStatsAccum> auto_stats_;
   MirroredBuffer<uint8_t> free_only_;  ///< PointCloud::free_only, when the cloud has flags
   DeviceArray<RayEnd> rays_;
   MirroredBuffer<ScanCounters> counters_;

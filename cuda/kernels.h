@@ -4,6 +4,7 @@
 
 #include <cuda_runtime.h>
 
+#include "auto_stats_accum.h"
 #include "device_types.h"
 #include "fragg_map/frustum.h"
 #include "fragg_map/internal/ray_prep.h"
@@ -18,6 +19,12 @@ namespace fragg::cuda {
 void launchPrepare(const float* points_S, const uint8_t* free_only, uint32_t n,
                    const RayPrepParams& p, const Frustum& f, RayEnd* rays, ScanCounters* counters,
                    cudaStream_t stream);
+
+/// Merges the statistics of the auto sensor model of points (x, y, z float triples, sensor
+/// frame) into `out` (AutoStatsAccum::empty() for a fresh gather): the bits of
+/// gatherAutoSensorStats() on the host.
+void launchAutoSensorStats(const float* points_S, uint32_t n, const SensorAxisTable& axes,
+                           AutoStatsAccum* out, cudaStream_t stream);
 
 struct RaycastArgs {
   const RayEnd* rays;

@@ -16,6 +16,7 @@ set(FRAGG_CUDA_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/cuda_integrator.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cuda_backend.cpp
   ${CMAKE_CURRENT_LIST_DIR}/prepare_kernel.cu
+  ${CMAKE_CURRENT_LIST_DIR}/auto_sensor_kernel.cu
   ${CMAKE_CURRENT_LIST_DIR}/raycast_kernel.cu
   ${CMAKE_CURRENT_LIST_DIR}/apply_kernel.cu
   ${CMAKE_CURRENT_LIST_DIR}/residency_kernels.cu

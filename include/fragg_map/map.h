@@ -294,9 +294,10 @@ class Map {
   Map moveOut(const SubmapRegion& region, Backend backend, SubmapStats* stats);
   /// Culling and integration of one prepared scan (insert or remove) with its own ray cast
   /// mode and no-return setting. `host_cull`: run the host culler for a backend that does not
-  /// cull on its own (counters only; corrections skip it).
+  /// cull on its own (counters only; corrections skip it). `cloud_staged`: the backend's
+  /// autoSensorStats() saw this cloud just before (ScanInput::cloud_staged).
   InsertStats integrateScan(const PointCloud& cloud, const ScanRecord& how, bool remove,
-                            bool host_cull);
+                            bool host_cull, bool cloud_staged = false);
 
   // Every member is moved by operator=(Map&&) in map.cpp (it commits the paging first): a new
   // member goes there too.

@@ -40,6 +40,9 @@ struct CudaParams {
   /// A ray gathers its marks of one scratch word before issuing them (one filter look-up and
   /// one atomic per word; off: per cell, for the ablation). The map is the same either way.
   bool coalesce_ray_marks = true;
+  /// An `auto` sensor model's statistics are gathered on the device beside the points' upload
+  /// (off: on the host, for the ablation). The model is the same either way.
+  bool device_auto_sensor = true;
 };
 
 /// The scan store for loop-closure correction (see scan_store.h).

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/auto_sensor.h"
 #include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/internal/cpu_backend.h"
 #include "fragg_map/internal/culler.h"
@@ -139,14 +140,22 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   how.sensor_frame = sensor_frame;
   how.T_map_sensor = T_map_sensor;
   how.explicit_model = sensor.type != SensorType::kAuto;
-  how.model = how.explicit_model ? sensor : resolveAutoSensor(sensor, used);
+  bool staged = false;  // the backend gathered the auto model's statistics (and kept the cloud)
+  if (how.explicit_model) {
+    how.model = sensor;
+  } else {
+    AutoSensorStats auto_stats;
+    staged = backend_->autoSensorStats(used, &auto_stats);
+    if (!staged) auto_stats = gatherAutoSensorStats(used);
+    how.model = resolveAutoSensor(sensor, used, auto_stats);
+  }
   if (how.model.max_range_m <= 0.0) how.model.max_range_m = farthestPoint(used);
   how.raycast = params_.raycast;
   how.clear_no_return_rays = params_.clear_no_return_rays;
   const double seconds_model =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  InsertStats stats = integrateScan(used, how, /*remove=*/false, /*host_cull=*/true);
+  InsertStats stats = integrateScan(used, how, /*remove=*/false, /*host_cull=*/true, staged);
   stats.seconds_cull += seconds_model;
   if (keep) {
     // The store keeps points, not free-only flags: such a scan cannot be walked again.
@@ -173,7 +182,7 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
 }
 
 InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, bool remove,
-                               bool host_cull) {
+                               bool host_cull, bool cloud_staged) {
   const auto t = std::chrono::steady_clock::now();  // frustum and culling
   MapParams params = params_;
   params.raycast = how.raycast;
@@ -213,7 +222,8 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   }
   stats.seconds_cull = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 
-  const ScanInput scan{cloud, how.T_map_sensor, how.model, frustum, how.explicit_model, cull};
+  const ScanInput scan{cloud, how.T_map_sensor, how.model, frustum, how.explicit_model,
+                       cull,  cloud_staged};
   const UpdateSettings settings{params, model_, revision_ + 1, page_in ? &page_in : nullptr,
                                 page_in ? &paged_out_saturated : nullptr};
   const ScanUpdate what = remove ? ScanUpdate::kRemove : ScanUpdate::kIntegrate;

@@ -7,6 +7,7 @@ set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/field_names.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_params.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sensor_model.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/auto_sensor.cpp
   ${CMAKE_CURRENT_LIST_DIR}/block_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/block_view.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frustum_builder.cpp

@@ -9,6 +9,7 @@ fragg_add_test(fragg_core_test
           ${CMAKE_CURRENT_LIST_DIR}/saturated_skip_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/free_only_points_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/frustum_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/auto_sensor_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/map_file_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/map_lock_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/height_filter_test.cpp

@@ -15,6 +15,7 @@
 #include "bench/synthetic_lidar.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/geometry/mesh_bvh.h"
+#include "fragg_map/internal/auto_sensor.h"
 #include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/io/dataset.h"
 #include "fragg_map/io/point_file.h"
@@ -259,6 +260,78 @@ TEST(CudaBackendTest, PrepareKernelCountsLikeTheCpu) {
   EXPECT_EQ(a.blocks_touched, b.blocks_touched);
   EXPECT_EQ(a.blocks_created, b.blocks_created);
   expectSameBlocks(cpu, gpu, "random cloud, pinhole");
+}
+
+uint64_t doubleBits(double v) {
+  uint64_t b;
+  std::memcpy(&b, &v, sizeof b);
+  return b;
+}
+
+void expectSameStats(const AutoSensorStats& a, const AutoSensorStats& b, const char* what) {
+  EXPECT_EQ(doubleBits(a.max_dist_m), doubleBits(b.max_dist_m)) << what;
+  EXPECT_EQ(doubleBits(a.sin_min), doubleBits(b.sin_min)) << what;
+  EXPECT_EQ(doubleBits(a.sin_max), doubleBits(b.sin_max)) << what;
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(a.dir_sum_fx[i], b.dir_sum_fx[i]) << what << " " << i;
+  EXPECT_EQ(a.valid, b.valid) << what;
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_EQ(a.fit[k].fits, b.fit[k].fits) << what << " axis " << k;
+    EXPECT_EQ(doubleBits(a.fit[k].tan_h), doubleBits(b.fit[k].tan_h)) << what << " axis " << k;
+    EXPECT_EQ(doubleBits(a.fit[k].tan_v), doubleBits(b.fit[k].tan_v)) << what << " axis " << k;
+  }
+}
+
+/// The auto sensor model's statistics gathered on the device (CudaBackend::autoSensorStats,
+/// beside the points' upload) have the bits of the host's gatherAutoSensorStats(), and a map
+/// inserting through it reports the host's model.
+TEST(CudaBackendTest, AutoSensorStatsOnTheDeviceHaveTheHostsBits) {
+  REQUIRE_DEVICE();
+  BackendChoice choice = makeBackend(paramsFor(Backend::kCuda, 0.05));
+  ASSERT_STREQ(choice.backend->name(), "cuda");
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  PointCloud mixed;  // a camera's points, a LiDAR's, invalid ones, z = -0
+  for (int i = 0; i < 30011; ++i) {
+    const float z = 0.5f + 4.f * std::fabs(u(rng));
+    if (i % 3 == 0)
+      mixed.points_S.emplace_back(u(rng) * 0.6f * z, u(rng) * 0.45f * z, z);
+    else if (i % 3 == 1)
+      mixed.points_S.emplace_back(u(rng) * 20.f, u(rng) * 20.f, u(rng) * 2.f);
+    else
+      mixed.points_S.emplace_back(u(rng) * 20.f, u(rng) * 20.f, -0.f);
+  }
+  mixed.points_S.emplace_back(std::numeric_limits<float>::quiet_NaN(), 1.f, 1.f);
+  mixed.points_S.emplace_back(1.f, -std::numeric_limits<float>::infinity(), 1.f);
+  mixed.points_S.emplace_back(0.f, 0.f, 0.f);
+  const std::vector<std::pair<const char*, PointCloud>> clouds = {
+      {"velodyne", velodynePair()[0].cloud},
+      {"rgbd frame", rgbdFrames()[0].cloud},
+      {"W1 scan", simulatedW1(50)[0].cloud},
+      {"mixed", mixed},
+      {"empty", PointCloud()}};
+  for (const auto& [what, cloud] : clouds) {
+    AutoSensorStats device;
+    ASSERT_TRUE(choice.backend->autoSensorStats(cloud, &device)) << what;
+    const AutoSensorStats host = gatherAutoSensorStats(cloud);
+    expectSameStats(device, host, what);
+    EXPECT_EQ(device.valid > 0, !cloud.empty()) << what;
+  }
+  // Through a map: the model each insertion reports, on the device and on the host.
+  MapParams p = paramsFor(Backend::kCuda, 0.03);
+  Map gpu(p);
+  p.cuda.device_auto_sensor = false;
+  Map host(p);
+  for (const Input& in : rgbdFrames()) {
+    const InsertStats a = gpu.insert(in.cloud, in.T, SensorModel::autoFromCloud());
+    const InsertStats b = host.insert(in.cloud, in.T, SensorModel::autoFromCloud());
+    ASSERT_EQ(a.sensor.type, SensorType::kPinhole);
+    EXPECT_EQ(a.sensor.describe(), b.sensor.describe());
+    EXPECT_EQ(a.sensor.hfov_rad, b.sensor.hfov_rad);
+    EXPECT_EQ(a.sensor.vfov_rad, b.sensor.vfov_rad);
+    EXPECT_EQ(a.sensor.forward_S, b.sensor.forward_S);
+    EXPECT_EQ(a.sensor.max_range_m, b.sensor.max_range_m);
+  }
+  expectSameBlocks(host, gpu, "rgbd 3 cm, auto model on the device and on the host");
 }
 
 /// Free-only points (filter_ground's ground points): the device's prepare kernel reads the

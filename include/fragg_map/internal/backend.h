@@ -14,6 +14,7 @@
 #include "fragg_map/culling.h"
 #include "fragg_map/frustum.h"
 #include "fragg_map/insert_stats.h"
+#include "fragg_map/internal/auto_sensor_stats.h"
 #include "fragg_map/internal/gain_walk.h"
 #include "fragg_map/map_params.h"
 #include "fragg_map/occupancy.h"
@@ -30,6 +31,9 @@ struct ScanInput {
   const Frustum& frustum;
   bool explicit_model;
   const CullContext& cull;  ///< coherence context of this scan
+  /// The backend's autoSensorStats() was called with this very cloud just before (nothing in
+  /// between): what it kept of the cloud (the CUDA backend: its upload) may be used.
+  bool cloud_staged = false;
 };
 
 /// What a scan's updates do to the map.
@@ -155,6 +159,15 @@ class MapBackend {
   virtual bool viewpointGains(const GainBatch& batch, const OccupancyModel& model, BlockMap& blocks,
                               double* out) {
     (void)batch, (void)model, (void)blocks, (void)out;
+    return false;
+  }
+  /// The statistics an `auto` sensor model is resolved from (internal/auto_sensor.h) where the
+  /// backend holds the points (CUDA: a reduction on the device beside the upload the scan needs
+  /// anyway, which the scan's prepare then reuses: ScanInput::cloud_staged), with the same
+  /// bits as gatherAutoSensorStats(). False when the backend has no such path (the map gathers
+  /// them on the host).
+  virtual bool autoSensorStats(const PointCloud& cloud, AutoSensorStats* out) {
+    (void)cloud, (void)out;
     return false;
   }
   /// Where the host map's blocks are allocated (pinned memory for the CUDA backend).

@@ -41,10 +41,12 @@ MapParams engineParams(const std::string& engine, const MapParams& base) {
       p.skip_saturated_blocks = false;
     } else if (token == "no-coalesce") {
       p.cuda.coalesce_ray_marks = false;
+    } else if (token == "host-auto") {
+      p.cuda.device_auto_sensor = false;
     } else {
       throw InvalidArgument("unknown engine option '" + token + "' in '" + engine +
                             "' (pageable, plain-loads, no-coherence, bresenham, no-skip, "
-                            "no-coalesce)");
+                            "no-coalesce, host-auto)");
     }
     begin = end + 1;
   }

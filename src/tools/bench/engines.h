@@ -26,7 +26,8 @@ struct Figures {
 /// blocks in pageable memory), cuda+plain-loads (no read-only cache path for rays),
 /// cuda+no-coherence (frustum coherence off), cuda+bresenham, cpu+no-skip / cuda+no-skip (the
 /// ray pass visits blocks at the lower clamp too), cuda+no-coalesce (a ray's marks issued per
-/// cell, not per scratch word). Throws InvalidArgument.
+/// cell, not per scratch word), cuda+host-auto (the auto sensor model's statistics gathered on
+/// the host). Throws InvalidArgument.
 MapParams engineParams(const std::string& engine, const MapParams& base);
 
 /// Inserts the first `count` scans into an empty map `repeats` times; the last map is moved
