@@ -79,10 +79,11 @@ AutoSensorStats gatherAutoSensorStats(const PointCloud& cloud) {
   // line shared with another chunk's), merged in chunk order; the merge is exact in any order.
   constexpr int kChunks = 64;
   AutoSensorStats part[kChunks];
-  const SensorAxisTable& axes = sensorAxisTable();
   const size_t n = cloud.points_S.size();
 #pragma omp parallel for schedule(static)
   for (int c = 0; c < kChunks; ++c) {
+    // Copies on the stack: the compiler then knows the stores into q cannot change them.
+    const SensorAxisTable axes = sensorAxisTable();
     AutoSensorStats q;
     for (size_t i = n * c / kChunks; i < n * (c + 1) / kChunks; ++i) {
       const Eigen::Vector3f& p = cloud.points_S[i];

@@ -1,6 +1,8 @@
 // The auto sensor model's statistics (internal/auto_sensor.h): the same bits whatever the
 // points' order and the thread count (what lets the CUDA backend gather them on the device),
 // and the values of a plain pass over the points.
+#include "fragg_map/internal/auto_sensor.h"
+
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -10,8 +12,6 @@
 #include <cstring>
 #include <limits>
 #include <random>
-
-#include "fragg_map/internal/auto_sensor.h"
 
 namespace fragg {
 namespace {
@@ -154,8 +154,11 @@ TEST(AutoSensorStats, NegativeZeroElevationReadsAsPositiveZero) {
   EXPECT_EQ(bits(s.sin_min), bits(0.0));
   EXPECT_EQ(bits(s.sin_max), bits(0.0));
   EXPECT_EQ(s.max_dist_m, 5.0);
-  EXPECT_EQ(s.dir_sum_fx[0], std::llrint(0.6 * kAutoDirFixedScale));
-  EXPECT_EQ(s.dir_sum_fx[1], std::llrint(0.8 * kAutoDirFixedScale));
+  // 3 / 5 and 4 / 5 x 2^32, truncated (what float 3 and 4 over double 5 give).
+  EXPECT_EQ(s.dir_sum_fx[0], static_cast<int64_t>(3.0 * (1.0 / 5.0 * kAutoDirFixedScale)));
+  EXPECT_EQ(s.dir_sum_fx[1], static_cast<int64_t>(4.0 * (1.0 / 5.0 * kAutoDirFixedScale)));
+  EXPECT_NEAR(double(s.dir_sum_fx[0]), 0.6 * kAutoDirFixedScale, 1.0);
+  EXPECT_NEAR(double(s.dir_sum_fx[1]), 0.8 * kAutoDirFixedScale, 1.0);
   EXPECT_EQ(s.dir_sum_fx[2], 0);
 }
 

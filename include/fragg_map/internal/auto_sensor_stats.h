@@ -12,7 +12,8 @@
 
 namespace fragg {
 
-/// Unit directions are summed as integers of 2^-32: up to 2^31 points cannot overflow.
+/// Unit directions are summed as integers of 2^-32 (each component truncated): up to 2^31
+/// points cannot overflow.
 constexpr double kAutoDirFixedScale = 4294967296.0;
 /// A point must lie in front of a pinhole axis by more than this fraction of its range
 /// (cos 85 degrees): a wider cloud is a LiDAR's.
@@ -84,13 +85,11 @@ FRAGG_HD void addAutoSensorPoint(float px, float py, float pz, const SensorAxisT
   const double r = sqrt((d[0] * d[0] + d[1] * d[1]) + d[2] * d[2]);
   const double inv_r = 1.0 / r;
   s.max_dist_m = s.max_dist_m < r ? r : s.max_dist_m;
-  for (int a = 0; a < 3; ++a) {
-#if defined(__CUDA_ARCH__)
-    s.dir_sum_fx[a] += __double2ll_rn(d[a] * inv_r * kAutoDirFixedScale);
-#else
-    s.dir_sum_fx[a] += std::llrint(d[a] * inv_r * kAutoDirFixedScale);
-#endif
-  }
+  // Truncated to an integer (toward zero, as C++ and CUDA convert): the same bits on host and
+  // device, one instruction. Scaling inv_r by a power of two first is exact, so each term is
+  // the unit direction's component x 2^32 (|term| <= 2^32), truncated.
+  const double inv_r_fx = inv_r * kAutoDirFixedScale;
+  for (int a = 0; a < 3; ++a) s.dir_sum_fx[a] += static_cast<int64_t>(d[a] * inv_r_fx);
   double sn = d[2] * inv_r;
   sn = (sn < -1.0 ? -1.0 : (sn > 1.0 ? 1.0 : sn)) + 0.0;  // + 0.0: -0 becomes +0
   s.sin_min = sn < s.sin_min ? sn : s.sin_min;
