@@ -70,11 +70,84 @@ __global__ void __launch_bounds__(kThreads)
   if ((threadIdx.x & 31) == 0 && updated) atomicAdd(&c->cells_updated, updated);
   if (blockIdx.x == 0 && threadIdx.x == 0) c->applied = 1;
 }
+
+/// The same update with one warp a slot (16 cells a lane, cell = lane + 32 k, so that a cell's
+/// marks are bit `lane` of scratch word k): warp votes instead of the thread block's barriers,
+/// and four times as many slots in flight per SM, for the latency of each slot's dependent
+/// loads (touched list -> slot -> scratch and cells).
+__global__ void __launch_bounds__(kThreads)
+    applyWarpKernel(SlotArrays s, OccupancyModel model, uint64_t revision, uint32_t scan,
+                    bool remove, ScanCounters* c) {
+  if (c->misses != 0 || c->overflow != 0 || c->outside_window != 0) return;
+  static_assert(kCellsPerBlock == 32 * kScratchWords, "one scratch word a lane-row of cells");
+  const uint32_t touched = c->touched;
+  const unsigned lane = threadIdx.x & 31;
+  const uint32_t warps = gridDim.x * (blockDim.x / 32);
+  unsigned long long updated = 0;
+  for (uint32_t j = blockIdx.x * (blockDim.x / 32) + threadIdx.x / 32; j < touched; j += warps) {
+    const int32_t slot = s.touched_list[j];
+    const bool fresh = s.fresh[slot] != 0;
+    SlotScratch& marks = s.scratch[slot];
+    Block& block = s.cells[slot];
+    // Lanes 0-15 hold the free words, 16-31 the hit words (SlotScratch's order).
+    const uint32_t word = reinterpret_cast<const uint32_t*>(&marks)[lane];
+    const uint32_t bit = 1u << lane;
+    bool changed = false, occupancy_changed = false, at_lower_clamp = true;
+#pragma unroll
+    for (int k = 0; k < kScratchWords; ++k) {
+      const int cell = lane + 32 * k;
+      const uint32_t free_word = __shfl_sync(kFullMask, word, k);
+      const uint32_t hit_word = __shfl_sync(kFullMask, word, kScratchWords + k);
+      const bool hit = hit_word & bit;
+      const bool marked = hit || (free_word & bit);
+      if (!marked && !fresh) {
+        at_lower_clamp &= block.cells[cell].log_odds_fx == model.min_fx;
+        continue;
+      }
+      Cell value = fresh ? Cell() : block.cells[cell];
+      if (marked) {
+        const Cell before = value;
+        model.update(value, hit, remove);
+        changed |= before.log_odds_fx != value.log_odds_fx || before.hits != value.hits;
+        occupancy_changed |= (model.state(before) == CellState::kOccupied) !=
+                             (model.state(value) == CellState::kOccupied);
+        ++updated;
+      }
+      block.cells[cell] = value;
+      at_lower_clamp &= value.log_odds_fx == model.min_fx;
+    }
+    const bool any_changed = __any_sync(kFullMask, changed);
+    const bool occupancy_flipped = __any_sync(kFullMask, occupancy_changed);
+    const bool saturated = __all_sync(kFullMask, at_lower_clamp);
+    reinterpret_cast<uint32_t*>(&marks)[lane] = 0u;  // every lane read its word above
+    if (lane == 0) {
+      s.fresh[slot] = 0;
+      s.free_saturated[slot] = saturated ? 1 : 0;
+      s.last_used[slot] = scan;
+      if (fresh) s.occupied_at[slot] = 0;  // not the slot's previous block's
+      if (any_changed) {
+        s.dirty[slot] = 1;
+        s.changed_at[slot] = revision;
+        if (occupancy_flipped) s.occupied_at[slot] = revision;
+        atomicAdd(&c->changed, 1u);
+      }
+    }
+  }
+  updated = warpSum(updated);
+  if (lane == 0 && updated) atomicAdd(&c->cells_updated, updated);
+  if (blockIdx.x == 0 && threadIdx.x == 0) c->applied = 1;
+}
 }  // namespace
 
 void launchApply(const SlotArrays& slots, const OccupancyModel& model, uint64_t revision,
-                 uint32_t scan, bool remove, ScanCounters* counters, int grid,
+                 uint32_t scan, bool remove, ScanCounters* counters, int grid, bool warp_per_slot,
                  cudaStream_t stream) {
+  if (warp_per_slot) {
+    applyWarpKernel<<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove,
+                                                   counters);
+    FRAGG_CUDA_CHECK_LAUNCH("applyWarpKernel");
+    return;
+  }
   applyKernel<<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, counters);
   FRAGG_CUDA_CHECK_LAUNCH("applyKernel");
 }

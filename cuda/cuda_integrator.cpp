@@ -119,7 +119,7 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
     launchCompactTouched(args.slots, args.scan, args.counters, stream_);
     apply_start_.record(stream_);
     launchApply(args.slots, how.model, how.revision, args.scan, args.remove, args.counters,
-                16 * sm_count_, stream_);
+                16 * sm_count_, how.params.cuda.warp_per_slot_apply, stream_);
     apply_end_.record(stream_);
     scan_.countersToHost();
     FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));

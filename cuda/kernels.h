@@ -54,8 +54,10 @@ void launchCompactTouched(const SlotArrays& slots, uint32_t scan, ScanCounters* 
 
 /// Over the touched slots (only when the ray pass had no miss and no overflow): applies the
 /// marks (or undoes them: `remove`), clears the scratch, sets dirty / changed_at / last_used.
+/// `warp_per_slot`: one warp a slot (CudaParams::warp_per_slot_apply), else a thread block.
 void launchApply(const SlotArrays& slots, const OccupancyModel& model, uint64_t revision,
-                 uint32_t scan, bool remove, ScanCounters* counters, int grid, cudaStream_t stream);
+                 uint32_t scan, bool remove, ScanCounters* counters, int grid, bool warp_per_slot,
+                 cudaStream_t stream);
 
 /// free_saturated[slots[j]] = 0 for j < n.
 void launchClearSaturated(const SlotArrays& s, const int32_t* slots, uint32_t n,

@@ -43,6 +43,9 @@ struct CudaParams {
   /// An `auto` sensor model's statistics are gathered on the device beside the points' upload
   /// (off: on the host, for the ablation). The model is the same either way.
   bool device_auto_sensor = true;
+  /// The apply kernel updates each touched block with one warp (off: one thread block of 128
+  /// threads, for the ablation). The map is the same either way.
+  bool warp_per_slot_apply = true;
 };
 
 /// The scan store for loop-closure correction (see scan_store.h).

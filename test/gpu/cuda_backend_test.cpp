@@ -223,6 +223,11 @@ TEST(CudaBackendTest, OptionsMatchTheCpu) {
   p.clear_no_return_rays = true;
   expectBackendsAgree(scans, p, SensorModel::autoFromCloud(0.0, 30.0), "no-return clearing");
   p = paramsFor(Backend::kCuda, 0.1);
+  p.cuda.warp_per_slot_apply = false;
+  p.cuda.device_auto_sensor = false;
+  expectBackendsAgree(scans, p, SensorModel::autoFromCloud(0.0, 30.0),
+                      "a thread block per slot in apply, auto model on the host");
+  p = paramsFor(Backend::kCuda, 0.1);
   expectBackendsAgree(scans, p,
                       SensorModel::spinningLidar(-20 * M_PI / 180, 10 * M_PI / 180, 1.0, 25.0),
                       "explicit lidar model, min range");

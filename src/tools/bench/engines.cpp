@@ -43,10 +43,12 @@ MapParams engineParams(const std::string& engine, const MapParams& base) {
       p.cuda.coalesce_ray_marks = false;
     } else if (token == "host-auto") {
       p.cuda.device_auto_sensor = false;
+    } else if (token == "block-apply") {
+      p.cuda.warp_per_slot_apply = false;
     } else {
       throw InvalidArgument("unknown engine option '" + token + "' in '" + engine +
                             "' (pageable, plain-loads, no-coherence, bresenham, no-skip, "
-                            "no-coalesce, host-auto)");
+                            "no-coalesce, host-auto, block-apply)");
     }
     begin = end + 1;
   }

@@ -27,7 +27,8 @@ struct Figures {
 /// cuda+no-coherence (frustum coherence off), cuda+bresenham, cpu+no-skip / cuda+no-skip (the
 /// ray pass visits blocks at the lower clamp too), cuda+no-coalesce (a ray's marks issued per
 /// cell, not per scratch word), cuda+host-auto (the auto sensor model's statistics gathered on
-/// the host). Throws InvalidArgument.
+/// the host), cuda+block-apply (the apply kernel updates a block with a thread block, not a
+/// warp). Throws InvalidArgument.
 MapParams engineParams(const std::string& engine, const MapParams& base);
 
 /// Inserts the first `count` scans into an empty map `repeats` times; the last map is moved
