@@ -65,6 +65,7 @@ void DeviceScan::prepare(const ScanInput& in, const MapParams& params, int32_t f
 void DeviceScan::uploadPoints(const PointCloud& cloud) {
   const size_t n = cloud.size();
   staged_points_ = nullptr;
+  if (n == 0) return;
   points_.reserve(3 * n);
   static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "packed points");
   const float* src = reinterpret_cast<const float*>(cloud.points_S.data());
