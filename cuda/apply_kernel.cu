@@ -143,8 +143,7 @@ void launchApply(const SlotArrays& slots, const OccupancyModel& model, uint64_t 
                  uint32_t scan, bool remove, ScanCounters* counters, int grid, bool warp_per_slot,
                  cudaStream_t stream) {
   if (warp_per_slot) {
-    applyWarpKernel<<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove,
-                                                   counters);
+    applyWarpKernel<<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, counters);
     FRAGG_CUDA_CHECK_LAUNCH("applyWarpKernel");
     return;
   }
