@@ -8,6 +8,8 @@ namespace fragg {
 
 namespace {
 constexpr double kDeg = M_PI / 180.0;
+/// A camera cloud's pyramid is around a sensor axis this close to its mean direction.
+constexpr double kSnapDeg = 15.0;
 
 /// Rounds an angle up to whole degrees so that similar clouds resolve to the same model (and
 /// culling can reuse rejections across scans).
@@ -111,35 +113,39 @@ SensorModel resolveAutoSensor(const SensorModel& model, const PointCloud& cloud,
     out.elevation_max_rad = M_PI / 2;
     return out;
   }
-  // A pinhole pyramid around the mean direction when every point lies well in front of the
-  // sensor; otherwise (the points surround it, or the pyramid would be too wide) a LiDAR shell.
+  // A pinhole pyramid when every point lies well in front of the sensor; otherwise (the points
+  // surround it, or the pyramid would be too wide) a LiDAR shell. The pyramid is around the
+  // sensor axis within kSnapDeg of the points' mean direction when they all fit in one around
+  // it (those fits come with the first pass): a cloud in a camera's own frame keeps the
+  // camera's axis, and so the same frustum scan to scan, even where invalid pixels (sky, no
+  // return within range) pull the mean aside by several degrees. Else it is around the mean
+  // direction (a second pass over the points).
+  const auto pinhole = [&out](const Eigen::Vector3d& axis, const AutoAxisFit& fit) {
+    // One degree of slack, rounded up to whole degrees.
+    const double hfov = ceilDeg(2 * std::atan(fit.tan_h) + 2 * kDeg);
+    const double vfov = ceilDeg(2 * std::atan(fit.tan_v) + 2 * kDeg);
+    if (!fit.fits || hfov >= 170 * kDeg || vfov >= 170 * kDeg) return false;
+    Eigen::Vector3d right, vertical;
+    pinholeBasis(axis, &right, &vertical);
+    out.type = SensorType::kPinhole;
+    out.hfov_rad = hfov;
+    out.vfov_rad = vfov;
+    out.forward_S = axis;
+    out.right_S = right;
+    return true;
+  };
   Eigen::Vector3d axis;
   for (int a = 0; a < 3; ++a)
     axis[a] = double(stats.dir_sum_fx[a]) / kAutoDirFixedScale / double(stats.valid);
   if (axis.norm() > 0.3) {
     axis.normalize();
-    // Snap to a sensor axis when close, so camera clouds keep the same frustum scan to scan.
-    int snapped = -1;
     for (int k = 0; k < 6; ++k)
-      if (axis.dot(sensorAxis(k)) > std::cos(3 * kDeg)) {
-        axis = sensorAxis(k);
-        snapped = k;
-      }
+      if (axis.dot(sensorAxis(k)) > std::cos(kSnapDeg * kDeg) &&
+          pinhole(sensorAxis(k), stats.fit[k]))
+        return out;
     Eigen::Vector3d right, vertical;
     pinholeBasis(axis, &right, &vertical);
-    const AutoAxisFit fit =
-        snapped >= 0 ? stats.fit[snapped] : fitAround(cloud, axis, right, vertical);
-    // One degree of slack, rounded up to whole degrees.
-    const double hfov = ceilDeg(2 * std::atan(fit.tan_h) + 2 * kDeg);
-    const double vfov = ceilDeg(2 * std::atan(fit.tan_v) + 2 * kDeg);
-    if (fit.fits && hfov < 170 * kDeg && vfov < 170 * kDeg) {
-      out.type = SensorType::kPinhole;
-      out.hfov_rad = hfov;
-      out.vfov_rad = vfov;
-      out.forward_S = axis;
-      out.right_S = right;
-      return out;
-    }
+    if (pinhole(axis, fitAround(cloud, axis, right, vertical))) return out;
   }
   out.type = SensorType::kSpinningLidar;
   out.elevation_min_rad = std::max(-M_PI / 2, floorDeg(std::asin(stats.sin_min) - kDeg));

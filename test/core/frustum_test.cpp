@@ -220,12 +220,13 @@ void referenceFov(const PointCloud& cloud, const SensorModel& m, double* hfov, d
 
 TEST(FrustumTest, AutoSensorFitsCamerasAlongEverySensorAxisAndBetween) {
   // Cameras looking along each of the six sensor axes (the resolver's one-pass fits) and along
-  // axes that snap to none (its second pass): the same fields of view as a plain pass of dot
-  // products with the resolved basis, to the bit, and every point inside.
-  const Eigen::Vector3d fwd[] = {Eigen::Vector3d::UnitX(),   -Eigen::Vector3d::UnitX(),
-                                 Eigen::Vector3d::UnitY(),   -Eigen::Vector3d::UnitY(),
-                                 Eigen::Vector3d::UnitZ(),   -Eigen::Vector3d::UnitZ(),
-                                 Eigen::Vector3d(1, 0.2, 0), Eigen::Vector3d(0.1, -0.15, 1)};
+  // axes more than 15 degrees from any (its second pass, around the mean direction): the same
+  // fields of view as a plain pass of dot products with the resolved basis, to the bit, and
+  // every point inside.
+  const Eigen::Vector3d fwd[] = {Eigen::Vector3d::UnitX(),    -Eigen::Vector3d::UnitX(),
+                                 Eigen::Vector3d::UnitY(),    -Eigen::Vector3d::UnitY(),
+                                 Eigen::Vector3d::UnitZ(),    -Eigen::Vector3d::UnitZ(),
+                                 Eigen::Vector3d(1, 0.45, 0), Eigen::Vector3d(0.3, -0.35, 1)};
   for (int k = 0; k < 8; ++k) {
     const Eigen::Vector3d axis = fwd[k].normalized();
     const Eigen::Matrix3d R =
@@ -247,6 +248,42 @@ TEST(FrustumTest, AutoSensorFitsCamerasAlongEverySensorAxisAndBetween) {
     EXPECT_GE(std::min(m.hfov_rad, m.vfov_rad), 45 * kDeg) << k;
     expectCloudInside(m, cam);
   }
+}
+
+TEST(FrustumTest, AutoSensorKeepsTheCameraAxisWhenInvalidPixelsPullTheMeanAside) {
+  // A camera cloud in its own frame (+z forward) whose upper 40 % of pixels returned nothing
+  // (sky, beyond range): the mean direction is several degrees below +z, but every point fits
+  // in a pyramid around +z, which is the camera's own (the one-pass fit, no second pass) and
+  // no wider than the view. Turned 30 degrees, the same cloud gets its mean direction.
+  PointCloud cam = cameraCloud(Eigen::Matrix3d::Identity(), 7);
+  for (Eigen::Vector3f& p : cam.points_S)
+    if (p.allFinite() && p.y() < -0.2f * std::tan(22.5 * kDeg) * p.z())
+      p.setConstant(std::nanf(""));
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3f& p : cam.points_S)
+    if (p.allFinite()) mean += p.cast<double>().normalized();
+  const double off_deg = std::acos(mean.normalized().z()) / kDeg;
+  EXPECT_GT(off_deg, 3.0);  // the old 3-degree snap would have missed it
+  EXPECT_LT(off_deg, 15.0);
+  const SensorModel m = resolveAutoSensor(SensorModel::autoFromCloud(0.0, 8.0), cam);
+  ASSERT_EQ(m.type, SensorType::kPinhole);
+  EXPECT_EQ(m.forward_S, Eigen::Vector3d::UnitZ());
+  double hfov, vfov;
+  referenceFov(cam, m, &hfov, &vfov);
+  EXPECT_EQ(m.hfov_rad, hfov);
+  EXPECT_EQ(m.vfov_rad, vfov);
+  EXPECT_LE(m.hfov_rad, 61 * kDeg);  // 58 degrees + slack and rounding
+  EXPECT_LE(m.vfov_rad, 48 * kDeg);  // 45 degrees: the upper part is just empty
+  expectCloudInside(m, cam);
+
+  const Eigen::Matrix3d R(Eigen::AngleAxisd(30 * kDeg, Eigen::Vector3d::UnitY()));
+  PointCloud turned = cam;
+  for (Eigen::Vector3f& p : turned.points_S)
+    if (p.allFinite()) p = (R * p.cast<double>()).cast<float>();
+  const SensorModel t = resolveAutoSensor(SensorModel::autoFromCloud(0.0, 8.0), turned);
+  ASSERT_EQ(t.type, SensorType::kPinhole);
+  EXPECT_LT(t.forward_S.dot(Eigen::Vector3d::UnitZ()), std::cos(15 * kDeg));
+  expectCloudInside(t, turned);
 }
 
 TEST(FrustumTest, VoxelEstimateFollowsThePaperFormula) {
