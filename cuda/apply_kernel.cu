@@ -10,61 +10,86 @@ namespace {
 constexpr int kThreads = 128;
 constexpr int kCellsPerThread = kCellsPerBlock / kThreads;
 
+/// The ray pass left work undone (a missed host block, a full pool): apply nothing, the host
+/// completes the marks and launches the kernel again.
+__device__ __forceinline__ bool passIncomplete(const ScanCounters* c) {
+  return c->misses != 0 || c->overflow != 0 || c->outside_window != 0;
+}
+
+/// What one slot's update found, over the cells one thread updated.
+struct SlotUpdate {
+  bool changed = false, occupancy_changed = false, at_lower_clamp = true;
+  unsigned long long updated = 0;  ///< cells marked (summed over every slot of the thread)
+};
+
+/// One cell of a touched slot: its marks applied (or undone), written back.
+__device__ __forceinline__ void updateCell(Block& block, int cell, bool hit, bool marked,
+                                           bool fresh, const OccupancyModel& model, bool remove,
+                                           SlotUpdate& u) {
+  if (!marked && !fresh) {
+    u.at_lower_clamp &= block.cells[cell].log_odds_fx == model.min_fx;
+    return;
+  }
+  Cell value = fresh ? Cell() : block.cells[cell];
+  if (marked) {
+    const Cell before = value;
+    model.update(value, hit, remove);
+    u.changed |= before.log_odds_fx != value.log_odds_fx || before.hits != value.hits;
+    u.occupancy_changed |= (model.state(before) == CellState::kOccupied) !=
+                           (model.state(value) == CellState::kOccupied);
+    ++u.updated;
+  }
+  block.cells[cell] = value;
+  u.at_lower_clamp &= value.log_odds_fx == model.min_fx;
+}
+
+/// The slot's flags and stamps once its cells are updated (one thread; the flags are the
+/// slot's OR / AND over its threads).
+__device__ __forceinline__ void finishSlot(const SlotArrays& s, int32_t slot, bool fresh,
+                                           bool any_changed, bool occupancy_flipped, bool saturated,
+                                           uint64_t revision, uint32_t scan, ScanCounters* c) {
+  s.fresh[slot] = 0;
+  s.free_saturated[slot] = saturated ? 1 : 0;
+  s.last_used[slot] = scan;
+  if (fresh) s.occupied_at[slot] = 0;  // not the slot's previous block's
+  if (any_changed) {
+    s.dirty[slot] = 1;
+    s.changed_at[slot] = revision;
+    if (occupancy_flipped) s.occupied_at[slot] = revision;
+    atomicAdd(&c->changed, 1u);
+  }
+}
+
+/// A thread block a slot (CudaParams::warp_per_slot_apply off).
 __global__ void __launch_bounds__(kThreads)
     applyKernel(SlotArrays s, OccupancyModel model, uint64_t revision, uint32_t scan, bool remove,
                 ScanCounters* c) {
-  // The ray pass left work undone (a missed host block, a full pool): apply nothing, the host
-  // completes the marks and launches this again.
-  if (c->misses != 0 || c->overflow != 0 || c->outside_window != 0) return;
+  if (passIncomplete(c)) return;
   const uint32_t touched = c->touched;
   unsigned long long updated = 0;
   for (uint32_t j = blockIdx.x; j < touched; j += gridDim.x) {
     const int32_t slot = s.touched_list[j];
     const bool fresh = s.fresh[slot] != 0;
     SlotScratch& marks = s.scratch[slot];
-    Block& block = s.cells[slot];
-    bool changed = false, occupancy_changed = false, at_lower_clamp = true;
+    SlotUpdate u;
 #pragma unroll
     for (int k = 0; k < kCellsPerThread; ++k) {
       const int cell = threadIdx.x + k * kThreads;
       const uint32_t bit = 1u << (cell & 31);
       const bool hit = marks.hit[cell >> 5] & bit;
-      const bool marked = hit || (marks.free[cell >> 5] & bit);
-      if (!marked && !fresh) {
-        at_lower_clamp &= block.cells[cell].log_odds_fx == model.min_fx;
-        continue;
-      }
-      Cell value = fresh ? Cell() : block.cells[cell];
-      if (marked) {
-        const Cell before = value;
-        model.update(value, hit, remove);
-        changed |= before.log_odds_fx != value.log_odds_fx || before.hits != value.hits;
-        occupancy_changed |= (model.state(before) == CellState::kOccupied) !=
-                             (model.state(value) == CellState::kOccupied);
-        ++updated;
-      }
-      block.cells[cell] = value;
-      at_lower_clamp &= value.log_odds_fx == model.min_fx;
+      updateCell(s.cells[slot], cell, hit, hit || (marks.free[cell >> 5] & bit), fresh, model,
+                 remove, u);
     }
-    const bool any_changed = __syncthreads_or(changed);  // also: every read of marks is done
-    const bool occupancy_flipped = __syncthreads_or(occupancy_changed);
-    const bool saturated = __syncthreads_and(at_lower_clamp);
+    updated += u.updated;
+    const bool any_changed = __syncthreads_or(u.changed);  // also: every read of marks is done
+    const bool occupancy_flipped = __syncthreads_or(u.occupancy_changed);
+    const bool saturated = __syncthreads_and(u.at_lower_clamp);
     if (threadIdx.x < 2 * kScratchWords) {
       uint32_t* words = threadIdx.x < kScratchWords ? marks.free : marks.hit;
       words[threadIdx.x % kScratchWords] = 0u;
     }
-    if (threadIdx.x == 0) {
-      s.fresh[slot] = 0;
-      s.free_saturated[slot] = saturated ? 1 : 0;
-      s.last_used[slot] = scan;
-      if (fresh) s.occupied_at[slot] = 0;  // not the slot's previous block's
-      if (any_changed) {
-        s.dirty[slot] = 1;
-        s.changed_at[slot] = revision;
-        if (occupancy_flipped) s.occupied_at[slot] = revision;
-        atomicAdd(&c->changed, 1u);
-      }
-    }
+    if (threadIdx.x == 0)
+      finishSlot(s, slot, fresh, any_changed, occupancy_flipped, saturated, revision, scan, c);
   }
   updated = warpSum(updated);
   if ((threadIdx.x & 31) == 0 && updated) atomicAdd(&c->cells_updated, updated);
@@ -78,7 +103,7 @@ __global__ void __launch_bounds__(kThreads)
 __global__ void __launch_bounds__(kThreads)
     applyWarpKernel(SlotArrays s, OccupancyModel model, uint64_t revision, uint32_t scan,
                     bool remove, ScanCounters* c) {
-  if (c->misses != 0 || c->overflow != 0 || c->outside_window != 0) return;
+  if (passIncomplete(c)) return;
   static_assert(kCellsPerBlock == 32 * kScratchWords, "one scratch word a lane-row of cells");
   const uint32_t touched = c->touched;
   const unsigned lane = threadIdx.x & 31;
@@ -88,50 +113,25 @@ __global__ void __launch_bounds__(kThreads)
     const int32_t slot = s.touched_list[j];
     const bool fresh = s.fresh[slot] != 0;
     SlotScratch& marks = s.scratch[slot];
-    Block& block = s.cells[slot];
     // Lanes 0-15 hold the free words, 16-31 the hit words (SlotScratch's order).
     const uint32_t word = reinterpret_cast<const uint32_t*>(&marks)[lane];
     const uint32_t bit = 1u << lane;
-    bool changed = false, occupancy_changed = false, at_lower_clamp = true;
+    SlotUpdate u;
 #pragma unroll
     for (int k = 0; k < kScratchWords; ++k) {
-      const int cell = lane + 32 * k;
       const uint32_t free_word = __shfl_sync(kFullMask, word, k);
       const uint32_t hit_word = __shfl_sync(kFullMask, word, kScratchWords + k);
       const bool hit = hit_word & bit;
-      const bool marked = hit || (free_word & bit);
-      if (!marked && !fresh) {
-        at_lower_clamp &= block.cells[cell].log_odds_fx == model.min_fx;
-        continue;
-      }
-      Cell value = fresh ? Cell() : block.cells[cell];
-      if (marked) {
-        const Cell before = value;
-        model.update(value, hit, remove);
-        changed |= before.log_odds_fx != value.log_odds_fx || before.hits != value.hits;
-        occupancy_changed |= (model.state(before) == CellState::kOccupied) !=
-                             (model.state(value) == CellState::kOccupied);
-        ++updated;
-      }
-      block.cells[cell] = value;
-      at_lower_clamp &= value.log_odds_fx == model.min_fx;
+      updateCell(s.cells[slot], lane + 32 * k, hit, hit || (free_word & bit), fresh, model, remove,
+                 u);
     }
-    const bool any_changed = __any_sync(kFullMask, changed);
-    const bool occupancy_flipped = __any_sync(kFullMask, occupancy_changed);
-    const bool saturated = __all_sync(kFullMask, at_lower_clamp);
+    updated += u.updated;
+    const bool any_changed = __any_sync(kFullMask, u.changed);
+    const bool occupancy_flipped = __any_sync(kFullMask, u.occupancy_changed);
+    const bool saturated = __all_sync(kFullMask, u.at_lower_clamp);
     reinterpret_cast<uint32_t*>(&marks)[lane] = 0u;  // every lane read its word above
-    if (lane == 0) {
-      s.fresh[slot] = 0;
-      s.free_saturated[slot] = saturated ? 1 : 0;
-      s.last_used[slot] = scan;
-      if (fresh) s.occupied_at[slot] = 0;  // not the slot's previous block's
-      if (any_changed) {
-        s.dirty[slot] = 1;
-        s.changed_at[slot] = revision;
-        if (occupancy_flipped) s.occupied_at[slot] = revision;
-        atomicAdd(&c->changed, 1u);
-      }
-    }
+    if (lane == 0)
+      finishSlot(s, slot, fresh, any_changed, occupancy_flipped, saturated, revision, scan, c);
   }
   updated = warpSum(updated);
   if (lane == 0 && updated) atomicAdd(&c->cells_updated, updated);
