@@ -18,7 +18,6 @@ namespace fragg {
 
 using BlockIndex = uint32_t;
 constexpr BlockIndex kNoBlock = 0xffffffffu;
-struct BlockStates;  // block_states.h
 
 /// Where the arena gets its chunks from: plain aligned memory by default; the CUDA backend
 /// installs a pinned-memory allocator.
@@ -52,17 +51,12 @@ struct BlockMeta {
   /// clamp (set by the CPU backend's update; any other value means "not known"). A miss changes
   /// nothing in such a block, so the ray pass skips its free cells (see freeSaturated()).
   uint64_t free_saturated_at = kNotSaturated;
-  /// Equal to changed_at while BlockMap::knownStates(i) holds the block's cell states (set by
-  /// the CPU update, as free_saturated_at; any other value means "read the cells"). Writers
-  /// other than the CPU update move changed_at on and so end this without knowing about it.
-  uint64_t states_at = kNotSaturated;
   CullMemory cull;
 
   static constexpr uint64_t kNotSaturated = ~uint64_t{0};
   /// Every cell at the lower clamp as of the block's last change. Writers other than the CPU
   /// update move changed_at on and so end this without knowing about it.
   bool freeSaturated() const { return free_saturated_at == changed_at; }
-  bool statesKnown() const { return states_at == changed_at; }
 };
 
 /// Inclusive voxel-key bounds of the observed map.
@@ -108,14 +102,6 @@ class BlockMap {
   }
   BlockMeta& meta(BlockIndex i) { return meta_[i]; }
   const BlockMeta& meta(BlockIndex i) const { return meta_[i]; }
-  /// Block i's cell states when they are known (BlockMeta::statesKnown()), else nullptr:
-  /// 192 bytes to read instead of the 2 KiB of cells.
-  const BlockStates* knownStates(BlockIndex i) const;
-  /// Where block i's states are kept; the writer then sets BlockMeta::states_at. Call
-  /// keepStates() first (not thread-safe; this is, for different blocks).
-  BlockStates& states(BlockIndex i);
-  /// Makes room for the states of every slot (the CPU update, before its parallel apply).
-  void keepStates();
 
   size_t size() const { return index_.size(); }
   /// Block slots of the arena, and how many of them are free (left by erased blocks; new
@@ -157,9 +143,6 @@ class BlockMap {
   std::shared_ptr<ChunkAllocator> allocator_;
   std::vector<Block*> chunks_;
   std::vector<BlockMeta> meta_;
-  /// Indexed like meta_; empty until the first keepStates() (maps only the CUDA backend
-  /// writes never hold any).
-  std::vector<BlockStates> states_;
   std::vector<BlockIndex> free_;
   /// Per memory page of the arena: handed back by releaseFreePages() and not used since.
   std::vector<uint8_t> page_released_;

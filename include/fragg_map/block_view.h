@@ -24,9 +24,6 @@ using BlockVisitor = std::function<void(const BlockKey& key, const Block& block)
 struct BlockRef {
   BlockKey key;
   const Block* block;
-  /// The cells' states when the map keeps them for this block (block_states.h), else nullptr:
-  /// read the cells.
-  const BlockStates* states = nullptr;
 };
 
 /// Map revisions of a block's last changes (0: never changed, or no such block).
@@ -45,8 +42,6 @@ class BlockView {
   /// nullptr when the block does not exist (all its cells unknown).
   const Block* findBlock(const BlockKey& key) const { return blocks_->findBlock(key); }
   const Cell* findCell(const VoxelKey& key) const { return blocks_->findCell(key); }
-  /// The block with its cells and known states; block == nullptr when it does not exist.
-  BlockRef findRef(const BlockKey& key) const;
   /// Calls fn(key, block) for every block, in unspecified order.
   void forEach(const BlockVisitor& fn) const;
   /// Calls fn(key, block) for every block whose key lies in [lo, hi] (inclusive); the cost

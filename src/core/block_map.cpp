@@ -8,8 +8,6 @@
 #include <new>
 #include <tuple>
 
-#include "fragg_map/block_states.h"
-
 namespace fragg {
 
 namespace {
@@ -55,7 +53,6 @@ BlockMap& BlockMap::operator=(BlockMap&& o) noexcept {
   allocator_ = std::move(o.allocator_);
   chunks_ = std::move(o.chunks_);
   meta_ = std::move(o.meta_);
-  states_ = std::move(o.states_);
   free_ = std::move(o.free_);
   page_released_ = std::move(o.page_released_);
   index_ = std::move(o.index_);
@@ -196,16 +193,6 @@ size_t BlockMap::releaseFreePages() {
   return released;
 }
 
-const BlockStates* BlockMap::knownStates(BlockIndex i) const {
-  return i < states_.size() && meta_[i].statesKnown() ? &states_[i] : nullptr;
-}
-
-BlockStates& BlockMap::states(BlockIndex i) { return states_[i]; }
-
-void BlockMap::keepStates() {
-  if (states_.size() < meta_.size()) states_.resize(meta_.size());
-}
-
 void BlockMap::clear() {
   page_released_.clear();  // releasing a page twice is harmless
   index_.clear();
@@ -269,7 +256,7 @@ KeyBounds BlockMap::observedBounds() const {
 size_t BlockMap::hostBytes() const {
   // Cells in the arena, per-block metadata, the index's slots and the coarse index.
   return chunks_.size() * kBlocksPerChunk * sizeof(Block) + meta_.capacity() * sizeof(BlockMeta) +
-         states_.capacity() * sizeof(BlockStates) + index_.bytes() +
+         index_.bytes() +
          super_.size() * (sizeof(BlockKey) + 3 * sizeof(void*) + 2 * sizeof(void*));
 }
 

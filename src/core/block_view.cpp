@@ -14,7 +14,7 @@ std::vector<BlockRef> BlockView::all() const {
   std::vector<BlockRef> out;
   out.reserve(blocks_->size());
   blocks_->forEach([&](BlockIndex i) {
-    out.push_back({blocks_->meta(i).key, &blocks_->block(i), blocks_->knownStates(i)});
+    out.push_back({blocks_->meta(i).key, &blocks_->block(i)});
   });
   return out;
 }
@@ -22,15 +22,9 @@ std::vector<BlockRef> BlockView::all() const {
 std::vector<BlockRef> BlockView::in(const BlockKey& lo, const BlockKey& hi) const {
   std::vector<BlockRef> out;
   blocks_->forEachInBox(lo, hi, [&](BlockIndex i) {
-    out.push_back({blocks_->meta(i).key, &blocks_->block(i), blocks_->knownStates(i)});
+    out.push_back({blocks_->meta(i).key, &blocks_->block(i)});
   });
   return out;
-}
-
-BlockRef BlockView::findRef(const BlockKey& key) const {
-  const BlockIndex i = blocks_->find(key);
-  if (i == kNoBlock) return {key, nullptr, nullptr};
-  return {key, &blocks_->block(i), blocks_->knownStates(i)};
 }
 
 BlockStamps BlockView::stamps(const BlockKey& key) const {
@@ -61,8 +55,7 @@ std::vector<BlockRef> BlockView::changedRefsSince(uint64_t revision, BlockChange
   std::vector<BlockRef> out;
   blocks_->forEach([&](BlockIndex i) {
     const BlockMeta& m = blocks_->meta(i);
-    if (stampOf(m, what) > revision)
-      out.push_back({m.key, &blocks_->block(i), blocks_->knownStates(i)});
+    if (stampOf(m, what) > revision) out.push_back({m.key, &blocks_->block(i)});
   });
   return out;
 }

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <iterator>
 
-#include "fragg_map/block_states.h"
 #include "fragg_map/raycast.h"
 
 namespace fragg {
@@ -192,7 +191,6 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
     fresh[j] = 1;
   }
   uint64_t updated = 0;
-  blocks.keepStates();
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 64) reduction(+ : updated)
   for (long j = 0; j < touched; ++j) {
     if (target[j] == kNoBlock) continue;  // removal only
@@ -214,14 +212,9 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
       }
     }
     BlockMeta& meta = blocks.meta(target[j]);
-    // The states kept beside the cells: unchanged when no cell's state changed and they were
-    // known (the block is still in cache here, so recomputing them is cheap otherwise).
-    const bool states_known = meta.statesKnown();
     if (changed) meta.changed_at = revision;
     if (occupancy_changed) meta.occupied_at = revision;
     if (state_changed) meta.state_at = revision;
-    if (state_changed || !states_known) blocks.states(target[j]) = blockStatesOf(block, model);
-    meta.states_at = meta.changed_at;
     meta.free_saturated_at =
         allAtLowerClamp(block, model) ? meta.changed_at : BlockMeta::kNotSaturated;
   }

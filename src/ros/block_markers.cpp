@@ -6,8 +6,8 @@
 #include <unordered_set>
 #include <vector>
 
-#include "fragg_map/block_states.h"
 #include "fragg_map/ros/height_color.h"
+#include "fragg_map/ros/layer_masks.h"
 #include "fragg_map/ros/speckles.h"
 
 namespace fragg::ros {
@@ -33,24 +33,21 @@ int32_t MarkerLedger::idOf(const fragg::BlockKey& key) const {
   return it == ids_.end() ? -1 : it->second.id;
 }
 
-CellMask cellMask(const fragg::Map& map, const fragg::BlockRef& block, fragg::CellState state) {
+CellMask cellMask(const fragg::Map& map, const fragg::Block& block, fragg::CellState state) {
   // One 64-cell word at a time (the hot loop of an incremental update: every changed block is
-  // read): the kept states where the map has them (192 bytes), else the cells (2 KiB,
-  // layer_masks.h). Unobserved cells hold INT16_MIN, below every threshold.
+  // scanned; layer_masks.h). Unobserved cells hold INT16_MIN, below every threshold.
   const fragg::OccupancyModel& model = map.model();
-  const fragg::Cell* cells = block.block->cells;
+  const fragg::Cell* cells = block.cells;
   CellMask mask;
   for (int w = 0; w < fragg::kCellsPerBlock / 64; ++w) {
     const fragg::Cell* c = cells + 64 * w;
     uint64_t word = 0;
     switch (state) {
       case fragg::CellState::kOccupied:
-        word = block.states ? block.states->occupied[w]
-                            : layerMasks(c, model.occupied_above_fx, model.free_below_fx).occupied;
+        word = layerMasks(c, model.occupied_above_fx, model.free_below_fx).occupied;
         break;
       case fragg::CellState::kFree:
-        word = block.states ? block.states->free[w]
-                            : layerMasks(c, model.occupied_above_fx, model.free_below_fx).free;
+        word = layerMasks(c, model.occupied_above_fx, model.free_below_fx).free;
         break;
       default:
         for (int i = 0; i < 64; ++i)
@@ -62,8 +59,8 @@ CellMask cellMask(const fragg::Map& map, const fragg::BlockRef& block, fragg::Ce
 }
 
 CellMask drawnCells(const fragg::Map& map, const fragg::BlockView& blocks,
-                    const fragg::BlockRef& block, const MarkerStyle& style) {
-  const fragg::BlockKey& key = block.key;
+                    const fragg::BlockKey& key, const fragg::Block& block,
+                    const MarkerStyle& style) {
   CellMask cells = cellMask(map, block, style.state);
   if (!style.heights.unbounded()) {
     const uint8_t layers = style.heights.blockLayers(key.z, map.resolution());
@@ -147,13 +144,14 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
     for (const fragg::BlockKey& k : style.colors->recoloredSince(ledger->colors_drawn_))
       if (blocks.findBlock(k)) recolored.insert(k);
     for (const fragg::BlockRef& r : changed) recolored.erase(r.key);
-    for (const fragg::BlockKey& k : recolored) changed.push_back(blocks.findRef(k));
+    for (const fragg::BlockKey& k : recolored) changed.push_back({k, blocks.findBlock(k)});
   }
   // The masks in parallel (read-only), the ledger and the messages in order.
   std::vector<CellMask> masks(changed.size());
   const int64_t n = static_cast<int64_t>(changed.size());
 #pragma omp parallel for schedule(static) if (n > 256)
-  for (int64_t j = 0; j < n; ++j) masks[j] = drawnCells(map, blocks, changed[j], style);
+  for (int64_t j = 0; j < n; ++j)
+    masks[j] = drawnCells(map, blocks, changed[j].key, *changed[j].block, style);
   out.markers.reserve(out.markers.size() + changed.size());
   for (size_t j = 0; j < changed.size(); ++j) {
     const fragg::BlockKey& key = changed[j].key;
@@ -186,13 +184,13 @@ visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const Mar
   ledger->ids_.clear();
   ledger->next_id_ = 0;
   const fragg::BlockView blocks = map.blockView();
-  for (const fragg::BlockRef& block : blocks.all()) {
-    const CellMask cells = drawnCells(map, blocks, block, style);
-    if (cells.none()) continue;
+  map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& block) {
+    const CellMask cells = drawnCells(map, blocks, key, block, style);
+    if (cells.none()) return;
     const int32_t id = ledger->next_id_++;
-    ledger->ids_.emplace(block.key, MarkerLedger::Shown{id, cells});
-    out.markers.push_back(blockMarker(map, block.key, cells, style, stamp, id));
-  }
+    ledger->ids_.emplace(key, MarkerLedger::Shown{id, cells});
+    out.markers.push_back(blockMarker(map, key, cells, style, stamp, id));
+  });
   ledger->published_revision_ = map.revision();
   ledger->view_epoch_ = map.viewEpoch();
   if (style.colors) ledger->colors_drawn_ = style.colors->sequence();

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <cstring>
 
-#include "fragg_map/block_states.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/ros/layer_masks.h"
 #include "fragg_map/ros/occupied_cloud.h"
 #include "fragg_map/ros/projected_map.h"
 #include "fragg_map/ros/speckles.h"
@@ -25,23 +25,20 @@ MapOutputCache::MapOutputCache(const OutputCacheOptions& options) : options_(opt
 
 MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
                                                         const fragg::BlockView& blocks,
-                                                        const fragg::BlockRef& block,
+                                                        const fragg::BlockKey& key,
+                                                        const fragg::Block& block,
                                                         Piece* piece) const {
   // One 64-bit word per z layer of the block (cell index x + 8 y + 64 z): occupied, free and
-  // observed masks, kept by the map (192 bytes, block_states.h) or computed from the 2 KiB of
-  // cells (layer_masks.h); the columns and bounds from OR-ed layers; the cell centres only
-  // when the shown occupied cells changed (most state changes are cells seen for the first
-  // time or turning free).
-  const fragg::BlockKey& key = block.key;
+  // observed masks (layer_masks.h); the columns and bounds from OR-ed layers; the cell centres
+  // only when the shown occupied cells changed (most state changes are cells seen for the
+  // first time or turning free).
   const fragg::OccupancyModel& model = map.model();
   const int16_t above = model.occupied_above_fx, below = model.free_below_fx;
   const uint8_t shown_layers = heights().blockLayers(key.z, map.resolution());
   std::array<uint64_t, fragg::kBlockSize> shown{};
   uint64_t observed_xy = 0, band_occupied = 0, band_free = 0;
   for (int z = 0; z < fragg::kBlockSize; ++z) {
-    const fragg::LayerMasks layer =
-        block.states ? block.states->layer(z)
-                     : fragg::layerMasks(block.block->cells + 64 * z, above, below);
+    const LayerMasks layer = layerMasks(block.cells + 64 * z, above, below);
     uint64_t o = layer.occupied;
     const uint64_t f = layer.free;
     observed_xy |= layer.observed;
@@ -152,9 +149,8 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
           for (int dx = -1; dx <= 1; ++dx) around.insert({k.x + dx, k.y + dy, k.z + dz});
     refresh.reserve(around.size());
     for (const fragg::BlockKey& k : around) {
-      const fragg::BlockRef ref = blocks.findRef(k);
-      if (ref.block)
-        refresh.push_back(ref);
+      if (const fragg::Block* b = blocks.findBlock(k))
+        refresh.push_back({k, b});
       else
         dropPiece(k, &dirty);  // only through the ring: erased blocks change the view epoch
     }
@@ -174,7 +170,8 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
   std::vector<PieceDelta> deltas(refresh.size());
   const int64_t n = static_cast<int64_t>(refresh.size());
 #pragma omp parallel for schedule(dynamic, 64) if (n > 256)
-  for (int64_t j = 0; j < n; ++j) deltas[j] = computePiece(map, blocks, refresh[j], slots[j]);
+  for (int64_t j = 0; j < n; ++j)
+    deltas[j] = computePiece(map, blocks, refresh[j].key, *refresh[j].block, slots[j]);
   int64_t occupied_delta = 0;
   for (size_t j = 0; j < refresh.size(); ++j) {
     occupied_delta += deltas[j].occupied;

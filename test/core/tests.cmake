@@ -2,8 +2,6 @@
 fragg_add_test(fragg_core_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/key_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/block_map_test.cpp
-          ${CMAKE_CURRENT_LIST_DIR}/layer_masks_test.cpp
-          ${CMAKE_CURRENT_LIST_DIR}/block_states_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/block_key_table_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/occupancy_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/raycast_test.cpp

@@ -44,14 +44,14 @@ struct MarkerStyle {
 /// Which cells of a block are drawn (bit i: cell index i).
 using CellMask = std::bitset<fragg::kCellsPerBlock>;
 
-/// The cells of `block` in `state` (the map's occupancy model), from the block's kept states
-/// where the map has them, else from its cells.
-CellMask cellMask(const fragg::Map& map, const fragg::BlockRef& block, fragg::CellState state);
+/// The cells of `block` in `state` (the map's occupancy model).
+CellMask cellMask(const fragg::Map& map, const fragg::Block& block, fragg::CellState state);
 
-/// The cells of `block` that `style` draws: in its state, inside its heights, speckles left
-/// out when it hides them.
+/// The cells of block `key` that `style` draws: in its state, inside its heights, speckles
+/// left out when it hides them.
 CellMask drawnCells(const fragg::Map& map, const fragg::BlockView& blocks,
-                    const fragg::BlockRef& block, const MarkerStyle& style);
+                    const fragg::BlockKey& key, const fragg::Block& block,
+                    const MarkerStyle& style);
 
 /// Which blocks a marker topic shows, with the marker id each block got and the cells drawn,
 /// and the map revision published last. Owned by the publisher; the converters below read and

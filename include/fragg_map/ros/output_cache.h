@@ -105,10 +105,10 @@ class MapOutputCache {
     }
   };
 
-  /// Brings `piece` (new: default-constructed) up to date with `block` (its kept states where
-  /// the map has them, else its cells).
+  /// Brings `piece` (new: default-constructed) up to date with `block`.
   PieceDelta computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
-                          const fragg::BlockRef& block, Piece* piece) const;
+                          const fragg::BlockKey& key, const fragg::Block& block,
+                          Piece* piece) const;
   /// Drops the piece of a block that left the map; its column becomes dirty.
   void dropPiece(const fragg::BlockKey& key, std::unordered_set<ColumnKey, ColumnKeyHash>* dirty);
   /// Recomputes `col`'s merged patch and bounds from its blocks' pieces.

@@ -1,7 +1,7 @@
 // Occupied / free / observed bit masks of 64 consecutive cells (one z layer of a block: cell
-// index x + 8 y): what the CPU update keeps per block (block_states.h) and what every
-// per-block output (markers, occupied cloud, projected map) reads. SSE2 on x86-64 (16 cells
-// per step), a branch-free scalar loop elsewhere; both give the same bits (layer_masks_test).
+// index x + 8 y), the hot loop of every per-block output (markers, occupied cloud, projected
+// map). SSE2 on x86-64 (16 cells per step), a branch-free scalar loop elsewhere; both give the
+// same bits (layer_masks_test).
 #pragma once
 
 #include <cstddef>
@@ -13,7 +13,7 @@
 #include <emmintrin.h>
 #endif
 
-namespace fragg {
+namespace fragg::ros {
 
 struct LayerMasks {
   uint64_t occupied = 0;  ///< log-odds > occupied_above_fx
@@ -22,12 +22,12 @@ struct LayerMasks {
 };
 
 /// The portable reference.
-inline LayerMasks layerMasksScalar(const Cell* cells, int16_t occupied_above_fx,
+inline LayerMasks layerMasksScalar(const fragg::Cell* cells, int16_t occupied_above_fx,
                                    int16_t free_below_fx) {
   LayerMasks m;
   for (int i = 0; i < 64; ++i) {
     const int16_t l = cells[i].log_odds_fx;
-    const bool known = l != kUnobservedLogOdds;
+    const bool known = l != fragg::kUnobservedLogOdds;
     m.occupied |= uint64_t{l > occupied_above_fx} << i;
     m.free |= uint64_t{known && l < free_below_fx} << i;
     m.observed |= uint64_t{known} << i;
@@ -36,13 +36,14 @@ inline LayerMasks layerMasksScalar(const Cell* cells, int16_t occupied_above_fx,
 }
 
 /// The masks of cells[0..63].
-inline LayerMasks layerMasks(const Cell* cells, int16_t occupied_above_fx, int16_t free_below_fx) {
+inline LayerMasks layerMasks(const fragg::Cell* cells, int16_t occupied_above_fx,
+                             int16_t free_below_fx) {
 #if defined(__SSE2__)
-  static_assert(sizeof(Cell) == 4 && offsetof(Cell, log_odds_fx) == 2,
+  static_assert(sizeof(fragg::Cell) == 4 && offsetof(fragg::Cell, log_odds_fx) == 2,
                 "log-odds are the high half of a little-endian 32-bit cell");
   const __m128i above = _mm_set1_epi16(occupied_above_fx);
   const __m128i below = _mm_set1_epi16(free_below_fx);
-  const __m128i unobserved = _mm_set1_epi16(kUnobservedLogOdds);
+  const __m128i unobserved = _mm_set1_epi16(fragg::kUnobservedLogOdds);
   const __m128i* p = reinterpret_cast<const __m128i*>(cells);
   LayerMasks m;
   uint64_t unknown = 0;
@@ -67,4 +68,4 @@ inline LayerMasks layerMasks(const Cell* cells, int16_t occupied_above_fx, int16
 #endif
 }
 
-}  // namespace fragg
+}  // namespace fragg::ros

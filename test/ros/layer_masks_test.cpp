@@ -1,6 +1,6 @@
 // layerMasks (SSE2 where available) against the scalar reference, and against the cells'
 // states as the occupancy model defines them.
-#include "fragg_map/layer_masks.h"
+#include "fragg_map/ros/layer_masks.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 
 #include "fragg_map/map.h"
 
-namespace fragg {
+namespace fragg::ros {
 namespace {
 
 TEST(LayerMasks, EqualTheScalarLoopAndTheModelsStates) {
@@ -61,4 +61,4 @@ TEST(LayerMasks, EqualTheScalarLoopAndTheModelsStates) {
 }
 
 }  // namespace
-}  // namespace fragg
+}  // namespace fragg::ros
