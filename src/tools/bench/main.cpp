@@ -74,6 +74,23 @@ void printSteadyP99(const Workload& w, const std::string& engine, const Figures&
                "%zu scans\n",
                w.name.c_str(), engine.c_str(), median, p99, median > 0 ? p99 / median : 0.0,
                steady.size());
+  // Each stage over the same scans: which one the slow scans' time comes from.
+  const std::pair<const char*, double InsertStats::*> stages[] = {
+      {"cull", &InsertStats::seconds_cull},
+      {"prepare", &InsertStats::seconds_prepare},
+      {"residency", &InsertStats::seconds_residency},
+      {"raycast", &InsertStats::seconds_raycast},
+      {"apply", &InsertStats::seconds_apply}};
+  std::string line;
+  for (const auto& [name, field] : stages) {
+    std::vector<double> ms;
+    for (size_t i = 0; i < f.scan_stats.size(); ++i)
+      if (i % per_repeat != 0) ms.push_back(f.scan_stats[i].*field * 1e3);
+    line += fmt::format(" {} {:.2f}/{:.2f}/{:.2f}", name, percentile(ms, 0.5), percentile(ms, 0.99),
+                        *std::max_element(ms.begin(), ms.end()));
+  }
+  std::fprintf(stderr, "[stage ms median/p99/max without first scans] %s %s:%s\n", w.name.c_str(),
+               engine.c_str(), line.c_str());
 }
 
 WorkloadResult runWorkload(const Workload& w, const Options& o) {
