@@ -75,7 +75,8 @@ struct Times {
   // The markers' share (the same on both paths).
   double marker_serialise = 0;
   size_t marker_bytes = 0;
-  size_t blocks_read = 0;  ///< blocks the output cache recomputed (after path)
+  size_t blocks_read = 0;   ///< blocks the output cache recomputed (after path)
+  double cache_update = 0;  ///< of `cloud`: MapOutputCache::update alone (after path)
   double total() const { return markers + cloud + grid + serialise; }
   /// One marker update: built and serialised.
   double markerUpdate() const { return markers + marker_serialise; }
@@ -114,6 +115,7 @@ class Outputs {
       t.grid = msSince(t0);
     } else if (due.maps) {
       t.blocks_read = cache_.update(map).blocks_read;
+      t.cache_update = msSince(t0);
       cloud = cache_.occupiedCloud("map", ros::Time());
       t.cloud = msSince(t0);
       t0 = Clock::now();
@@ -209,7 +211,8 @@ void printAmortised(const Rates& rates, const std::vector<double>& convert_ms,
 /// Feeds `scans` into `map`, both output paths after each; prints the rows of `shown` scans
 /// (1-based) and the medians.
 void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_range_m,
-         const std::vector<size_t>& shown, const std::string& label, const Rates& rates) {
+         const std::vector<size_t>& shown, const std::string& label, const Rates& rates,
+         bool after_only) {
   // after: the cache refreshes the blocks whose cell states changed; any: every changed block
   // (as before BlockMeta::state_at), for the same-run comparison.
   Outputs before(true), after(false), any(false, fragg::BlockChange::kAny);
@@ -221,7 +224,7 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
   printHeader();
   // The first call reads the whole map (a loaded map, or nothing yet): untimed.
   after.publish(map);
-  any.publish(map);
+  if (!after_only) any.publish(map);
   std::vector<double> total_before, total_after, total_any, converts;
   std::vector<Times> after_times;
   std::vector<Due> dues;
@@ -244,6 +247,16 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
     converts.push_back(convert_ms);
     after_times.push_back(a);
     dues.push_back(due);
+    for (size_t s : shown) {
+      if (s != i + 1 || !after_only) continue;
+      size_t occupied = 0;
+      map.forEachBlock([&](const fragg::BlockKey&, const fragg::Block& blk) {
+        for (const fragg::Cell& c : blk.cells)
+          occupied += map.state(c) == fragg::CellState::kOccupied;
+      });
+      printRow(std::to_string(i + 1), "after", convert_ms, a, occupied);
+    }
+    if (after_only) continue;
     const Times y = any.publish(map);
     total_any.push_back(convert_ms + y.total());
     for (size_t s : shown) {
@@ -268,8 +281,9 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
   using fragg::tools::percentile;
   std::printf("after: median %.2f ms, max %.2f ms per cloud over %zu clouds\n",
               percentile(total_after, 0.5), percentile(total_after, 1.0), scans.size());
-  std::printf("any:   median %.2f ms, max %.2f ms per cloud over %zu clouds\n",
-              percentile(total_any, 0.5), percentile(total_any, 1.0), scans.size());
+  if (!after_only)
+    std::printf("any:   median %.2f ms, max %.2f ms per cloud over %zu clouds\n",
+                percentile(total_any, 0.5), percentile(total_any, 1.0), scans.size());
   // What the server's timers send once the clouds stop: the outputs not due at the last cloud.
   Times flush;
   if (!dues.empty()) {
@@ -277,6 +291,12 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
     pending.markers = !dues.back().markers;
     pending.maps = !dues.back().maps;
     if (pending.markers || pending.maps) flush = after.publish(map, pending);
+    if (pending.maps)
+      std::printf(
+          "  the flush: markers %.2f (serialised %.2f), cache update %.2f (%zu blocks read), "
+          "occupied cloud message %.2f, grid %.2f, whole-map messages serialised %.2f ms\n",
+          flush.markers, flush.marker_serialise, flush.cache_update, flush.blocks_read,
+          flush.cloud - flush.cache_update, flush.grid, flush.serialise - flush.marker_serialise);
   }
   printAmortised(rates, converts, after_times, dues, flush);
 }
@@ -304,6 +324,10 @@ int main(int argc, char** argv) {
                  "most whole-map publications per second, as the server's map_rate (0: every "
                  "cloud)")
       ->check(CLI::NonNegativeNumber);
+  bool after_only = false;
+  app.add_flag("--after-only", after_only,
+               "only the server's path (no whole-map rebuild, no cache refreshing every changed "
+               "block): for profiles and long runs");
   CLI11_PARSE(app, argc, argv);
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows as they come (long runs)
 
@@ -323,7 +347,7 @@ int main(int argc, char** argv) {
     std::vector<fragg::Scan> first(w1.scans.begin(),
                                    w1.scans.begin() + std::min(scans, w1.scans.size()));
     run(map, first, w1.max_range_m, shown, "new map, W1 scans 1.." + std::to_string(first.size()),
-        rates);
+        rates, after_only);
   }
   if (!big_map.empty()) {
     fragg::Map map = fragg::Map::load(big_map, params);
@@ -334,7 +358,7 @@ int main(int argc, char** argv) {
     run(map, first, w1.max_range_m, all,
         big_map + " (" + std::to_string(map.blockCount()) + " blocks) + W1 scans 1.." +
             std::to_string(first.size()),
-        rates);
+        rates, after_only);
   }
   return 0;
 }
