@@ -22,7 +22,7 @@ void BlockTransfer::upload(const SlotArrays& pool, const std::vector<BlockIndex>
   for (size_t begin = 0; begin < host_blocks.size(); begin += kBatch) {
     const size_t n = std::min(kBatch, host_blocks.size() - begin);
     reserve(n, /*staging=*/!direct_);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(threads_)
     for (long j = 0; j < static_cast<long>(n); ++j) {
       const BlockIndex i = host_blocks[begin + j];
       slots_[j] = slots[begin + j];
@@ -66,7 +66,7 @@ void BlockTransfer::writeBack(
     // Targets first, in order (creating host blocks is not thread-safe), then the copies.
     std::vector<BlockIndex> target(n);
     for (size_t j = 0; j < n; ++j) target[j] = host_block_of(slots_[j], keys_[j]);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(threads_)
     for (long j = 0; j < static_cast<long>(n); ++j) {
       std::memcpy(&blocks.block(target[j]), &staging_[j], sizeof(Block));
       BlockMeta& m = blocks.meta(target[j]);

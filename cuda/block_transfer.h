@@ -8,6 +8,7 @@
 
 #include "device_types.h"
 #include "fragg_map/block_map.h"
+#include "host_threads.h"
 #include "mirrored_buffer.h"
 
 namespace fragg::cuda {
@@ -18,8 +19,9 @@ class BlockTransfer {
   static constexpr size_t kBatch = 16384;
 
   /// `direct`: host blocks are pinned and device-addressable, so the upload kernel reads
-  /// them in place.
-  BlockTransfer(cudaStream_t stream, bool direct) : stream_(stream), direct_(direct) {}
+  /// them in place; `host_threads`: threads of the host-side copies (0: every core).
+  BlockTransfer(cudaStream_t stream, bool direct, int host_threads)
+      : stream_(stream), direct_(direct), threads_(hostThreads(host_threads)) {}
 
   /// Copies host block host_blocks[j] into slot slots[j] (key set, dirty cleared, last_used
   /// = scan).
@@ -37,6 +39,7 @@ class BlockTransfer {
 
   cudaStream_t stream_;
   bool direct_;
+  int threads_;
   MirroredBuffer<Block> staging_;
   MirroredBuffer<Block*> block_ptrs_;  ///< device-visible source / target of each block
   MirroredBuffer<int32_t> slots_;

@@ -44,9 +44,11 @@ CudaBackend::CudaBackend(const MapParams& params)
                                                      : plainChunkAllocator()),
       device_(selectDevice(params.cuda.device)),
       stream_(),
-      cache_(stream_.get(), params.cuda.pool_max_bytes, directUploads(params)),
+      cache_(stream_.get(), params.cuda.pool_max_bytes, directUploads(params),
+             params.cuda.host_threads),
       integrator_(stream_.get(), cache_,
-                  deviceAttribute(cudaDevAttrMultiProcessorCount, params.cuda.device)),
+                  deviceAttribute(cudaDevAttrMultiProcessorCount, params.cuda.device),
+                  params.cuda.host_threads),
       cpu_(params.threads) {}
 
 size_t CudaBackend::deviceEstimateBytes() const {

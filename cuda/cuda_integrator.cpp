@@ -14,8 +14,13 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 }
 }  // namespace
 
-CudaIntegrator::CudaIntegrator(cudaStream_t stream, DeviceBlockCache& cache, int sm_count)
-    : stream_(stream), cache_(cache), sm_count_(sm_count), scan_(stream), window_(stream) {}
+CudaIntegrator::CudaIntegrator(cudaStream_t stream, DeviceBlockCache& cache, int sm_count,
+                               int host_threads)
+    : stream_(stream),
+      cache_(cache),
+      sm_count_(sm_count),
+      scan_(stream, host_threads),
+      window_(stream) {}
 
 bool CudaIntegrator::update(const ScanInput& in, ScanUpdate what, const UpdateSettings& how,
                             BlockMap& blocks, InsertStats& stats) {

@@ -16,7 +16,7 @@ namespace fragg::cuda {
 
 class CudaIntegrator {
  public:
-  CudaIntegrator(cudaStream_t stream, DeviceBlockCache& cache, int sm_count);
+  CudaIntegrator(cudaStream_t stream, DeviceBlockCache& cache, int sm_count, int host_threads);
 
   /// Integrates (or removes) the scan; false, with nothing changed, when its rays span more
   /// blocks than the window table holds (the caller runs it elsewhere).

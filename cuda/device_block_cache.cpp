@@ -14,11 +14,12 @@ bool inBox(const BlockKey& k, const BlockKey& lo, const BlockKey& hi) {
 }
 }  // namespace
 
-DeviceBlockCache::DeviceBlockCache(cudaStream_t stream, size_t pool_max_bytes, bool direct_uploads)
+DeviceBlockCache::DeviceBlockCache(cudaStream_t stream, size_t pool_max_bytes, bool direct_uploads,
+                                   int host_threads)
     : stream_(stream),
       pool_max_bytes_(pool_max_bytes),
       pool_(stream),
-      transfer_(stream, direct_uploads) {}
+      transfer_(stream, direct_uploads, host_threads) {}
 
 int32_t DeviceBlockCache::slotLimit() const {
   size_t bytes = pool_max_bytes_;

@@ -18,8 +18,10 @@ namespace fragg::cuda {
 class DeviceBlockCache : public BlockCache {
  public:
   /// `pool_max_bytes`: the pool's limit (0: half the free device memory); `direct_uploads`:
-  /// host blocks are pinned and device-addressable.
-  DeviceBlockCache(cudaStream_t stream, size_t pool_max_bytes, bool direct_uploads);
+  /// host blocks are pinned and device-addressable; `host_threads`: threads of the host-side
+  /// block copies (0: every core).
+  DeviceBlockCache(cudaStream_t stream, size_t pool_max_bytes, bool direct_uploads,
+                   int host_threads);
 
   // BlockCache.
   void ensureResident(const std::vector<BlockKey>& keys, BlockMap& blocks) override;

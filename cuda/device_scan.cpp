@@ -70,7 +70,7 @@ void DeviceScan::uploadPoints(const PointCloud& cloud) {
   static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "packed points");
   const float* src = reinterpret_cast<const float*>(cloud.points_S.data());
   float* dst = points_.host();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(threads_)
   for (long chunk = 0; chunk < 64; ++chunk) {
     const size_t b = 3 * n * size_t(chunk) / 64, e = 3 * n * size_t(chunk + 1) / 64;
     std::memcpy(dst + b, src + b, (e - b) * sizeof(float));

@@ -11,13 +11,18 @@
 #include "device_types.h"
 #include "fragg_map/internal/backend.h"
 #include "fragg_map/internal/prepared_scan.h"
+#include "host_threads.h"
 #include "mirrored_buffer.h"
 
 namespace fragg::cuda {
 
 class DeviceScan {
  public:
-  explicit DeviceScan(cudaStream_t stream) : stream_(stream) { counters_.reserve(1); }
+  /// `host_threads`: threads of the points' copy into pinned staging (0: every core).
+  DeviceScan(cudaStream_t stream, int host_threads)
+      : stream_(stream), threads_(hostThreads(host_threads)) {
+    counters_.reserve(1);
+  }
 
   /// Prepares the scan's rays on the device and fills the point counters of `stats`; the
   /// counters start with the pool's free-stack top `free_top`.
@@ -57,6 +62,7 @@ class DeviceScan {
   void uploadPoints(const PointCloud& cloud);
 
   cudaStream_t stream_;
+  int threads_;
   PreparedScan prepared_;  ///< ref and start; the rays too when prepared on the host
   MirroredBuffer<float> points_;
   /// The cloud whose points gatherAutoSensorStats() left in points_ (its point array and

@@ -46,6 +46,11 @@ struct CudaParams {
   /// The apply kernel updates each touched block with one warp (off: one thread block of 128
   /// threads, for the ablation). The map is the same either way.
   bool warp_per_slot_apply = true;
+  /// Threads of the backend's host-side copies (a scan's points into pinned staging, blocks
+  /// to and from the device); 0 = every core. A few keep up with the memory bandwidth; with
+  /// every core a scan waits for the last of many threads to wake, and on a 16-core host
+  /// single scans then took 3-7 ms instead of 1-2 (docs/benchmarks.md, p99).
+  int host_threads = 4;
 };
 
 /// The scan store for loop-closure correction (see scan_store.h).

@@ -49,6 +49,9 @@ void MapParams::validate() const {
     throw InvalidArgument("cuda.pool_margin must be in (0, 100], got " +
                           std::to_string(cuda.pool_margin));
   if (cuda.device < 0) throw InvalidArgument("cuda.device must be >= 0");
+  if (cuda.host_threads < 0)
+    throw InvalidArgument("cuda.host_threads must be >= 0 (0 = every core), got " +
+                          std::to_string(cuda.host_threads));
   if (!std::isfinite(scans.point_step_m) || scans.point_step_m < 0.0 || scans.point_step_m > 0.1)
     throw InvalidArgument("scans.point_step_m must be in [0, 0.1] m (0 = float32), got " +
                           std::to_string(scans.point_step_m));

@@ -267,5 +267,14 @@ TEST(InsertTest, RangeNoiseKeepsAHitsOwnSurfaceFromBeingCleared) {
   EXPECT_NE(noisy.describe().find("noise=0.02"), std::string::npos) << noisy.describe();
 }
 
+TEST(MapParamsTest, CudaHostThreadsBelowZeroAreRefused) {
+  MapParams p;
+  p.backend = Backend::kCpu;  // validated whichever backend runs
+  p.cuda.host_threads = -1;
+  EXPECT_THROW(Map{p}, InvalidArgument);
+  p.cuda.host_threads = 0;  // every core
+  EXPECT_NO_THROW(Map{p});
+}
+
 }  // namespace
 }  // namespace fragg

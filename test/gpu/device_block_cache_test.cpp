@@ -68,7 +68,7 @@ TEST_P(DeviceBlockCacheTest, UploadsAndWriteBacksAreByteExact) {
   const std::vector<BlockIndex> all = fillBlocks(blocks, 1);
   std::vector<std::vector<uint8_t>> before;
   for (BlockIndex i : all) before.push_back(bytesOf(blocks, i));
-  DeviceBlockCache cache(stream.get(), 0, direct);
+  DeviceBlockCache cache(stream.get(), 0, direct, 4);
   cache.reserve(256);
   cache.beginScan();
   // By keys: existing ones uploaded once, missing ones skipped.
@@ -97,7 +97,7 @@ TEST(DeviceBlockCache, InvalidateDropsOnlyTheBoxAndWritesBackFirst) {
   CudaStream stream;
   BlockMap blocks;
   const std::vector<BlockIndex> all = fillBlocks(blocks, 2);
-  DeviceBlockCache cache(stream.get(), 0, false);
+  DeviceBlockCache cache(stream.get(), 0, false, 4);
   cache.reserve(256);
   cache.beginScan();
   cache.ensureResident(BlockKey{-10, -10, -10}, BlockKey{10, 10, 10}, blocks);
@@ -128,7 +128,7 @@ TEST(DeviceBlockCache, EvictionTakesTheLeastRecentlyUsedAndKeepsTheCurrentScan) 
   BlockMap blocks;
   const std::vector<BlockIndex> all = fillBlocks(blocks, 3);  // 72 blocks
   // A pool of exactly 40 slots.
-  DeviceBlockCache cache(stream.get(), 40 * SlotPool::bytesPerSlot(), false);
+  DeviceBlockCache cache(stream.get(), 40 * SlotPool::bytesPerSlot(), false, 4);
   cache.reserve(1000);
   ASSERT_EQ(cache.freeSlots(), 40);
   cache.beginScan();  // scan 1: the first 20 blocks

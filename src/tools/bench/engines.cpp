@@ -45,10 +45,12 @@ MapParams engineParams(const std::string& engine, const MapParams& base) {
       p.cuda.device_auto_sensor = false;
     } else if (token == "block-apply") {
       p.cuda.warp_per_slot_apply = false;
+    } else if (token == "all-host-threads") {
+      p.cuda.host_threads = 0;
     } else {
       throw InvalidArgument("unknown engine option '" + token + "' in '" + engine +
                             "' (pageable, plain-loads, no-coherence, bresenham, no-skip, "
-                            "no-coalesce, host-auto, block-apply)");
+                            "no-coalesce, host-auto, block-apply, all-host-threads)");
     }
     begin = end + 1;
   }
