@@ -8,7 +8,7 @@
 
 #include "device_types.h"
 #include "fragg_map/block_map.h"
-#include "host_threads.h"
+#include "fragg_map/internal/thread_count.h"
 #include "mirrored_buffer.h"
 
 namespace fragg::cuda {
@@ -21,7 +21,7 @@ class BlockTransfer {
   /// `direct`: host blocks are pinned and device-addressable, so the upload kernel reads
   /// them in place; `host_threads`: threads of the host-side copies (0: every core).
   BlockTransfer(cudaStream_t stream, bool direct, int host_threads)
-      : stream_(stream), direct_(direct), threads_(hostThreads(host_threads)) {}
+      : stream_(stream), direct_(direct), threads_(threadCount(host_threads)) {}
 
   /// Copies host block host_blocks[j] into slot slots[j] (key set, dirty cleared, last_used
   /// = scan).

@@ -11,7 +11,7 @@
 #include "device_types.h"
 #include "fragg_map/internal/backend.h"
 #include "fragg_map/internal/prepared_scan.h"
-#include "host_threads.h"
+#include "fragg_map/internal/thread_count.h"
 #include "mirrored_buffer.h"
 
 namespace fragg::cuda {
@@ -20,7 +20,7 @@ class DeviceScan {
  public:
   /// `host_threads`: threads of the points' copy into pinned staging (0: every core).
   DeviceScan(cudaStream_t stream, int host_threads)
-      : stream_(stream), threads_(hostThreads(host_threads)) {
+      : stream_(stream), threads_(threadCount(host_threads)) {
     counters_.reserve(1);
   }
 

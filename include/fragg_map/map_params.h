@@ -47,9 +47,9 @@ struct CudaParams {
   /// threads, for the ablation). The map is the same either way.
   bool warp_per_slot_apply = true;
   /// Threads of the backend's host-side copies (a scan's points into pinned staging, blocks
-  /// to and from the device); 0 = every core. A few keep up with the memory bandwidth; with
-  /// every core a scan waits for the last of many threads to wake, and on a 16-core host
-  /// single scans then took 3-7 ms instead of 1-2 (docs/benchmarks.md, p99).
+  /// to and from the device); 0 = every core. With every core, single scans on a 16-core host
+  /// took 3-7 ms instead of 1-2 (most likely waiting for the last thread to wake); 4 threads
+  /// cost 0.03-0.05 ms of median (docs/benchmarks.md, p99).
   int host_threads = 4;
 };
 

@@ -13,6 +13,8 @@
 #include <zstd.h>
 #endif
 
+#include "fragg_map/internal/thread_count.h"
+
 namespace fragg {
 
 namespace {
@@ -26,8 +28,6 @@ constexpr int kZstdLevel = 1;
 constexpr int kChunksPerThreadAndRound = 4;
 
 size_t rawBytes(size_t blocks) { return blocks * (kKeyBytes + kCellBytes); }
-
-int threadCount(int threads) { return threads > 0 ? threads : std::max(1, omp_get_max_threads()); }
 
 void pack(const BlockKey* keys, const Block* const* blocks, size_t n, uint8_t* raw) {
   for (size_t i = 0; i < n; ++i) {

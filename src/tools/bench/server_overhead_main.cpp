@@ -208,6 +208,15 @@ void printAmortised(const Rates& rates, const std::vector<double>& convert_ms,
         (sum_convert + sum_markers + sum_maps + flush.markerUpdate() + flush.mapUpdate()) / n);
 }
 
+/// Occupied cells of the whole map (for the rows; untimed).
+size_t occupiedCells(const fragg::Map& map) {
+  size_t occupied = 0;
+  map.forEachBlock([&](const fragg::BlockKey&, const fragg::Block& blk) {
+    for (const fragg::Cell& c : blk.cells) occupied += map.state(c) == fragg::CellState::kOccupied;
+  });
+  return occupied;
+}
+
 /// Feeds `scans` into `map`, both output paths after each; prints the rows of `shown` scans
 /// (1-based) and the medians.
 void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_range_m,
@@ -247,15 +256,9 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
     converts.push_back(convert_ms);
     after_times.push_back(a);
     dues.push_back(due);
-    for (size_t s : shown) {
-      if (s != i + 1 || !after_only) continue;
-      size_t occupied = 0;
-      map.forEachBlock([&](const fragg::BlockKey&, const fragg::Block& blk) {
-        for (const fragg::Cell& c : blk.cells)
-          occupied += map.state(c) == fragg::CellState::kOccupied;
-      });
-      printRow(std::to_string(i + 1), "after", convert_ms, a, occupied);
-    }
+    for (size_t s : shown)
+      if (s == i + 1 && after_only)
+        printRow(std::to_string(i + 1), "after", convert_ms, a, occupiedCells(map));
     if (after_only) continue;
     const Times y = any.publish(map);
     total_any.push_back(convert_ms + y.total());
@@ -268,11 +271,7 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
       b.serialise += m.marker_serialise;
       b.bytes += m.marker_bytes;
       total_before.push_back(convert_ms + b.total());
-      size_t occupied = 0;
-      map.forEachBlock([&](const fragg::BlockKey&, const fragg::Block& blk) {
-        for (const fragg::Cell& c : blk.cells)
-          occupied += map.state(c) == fragg::CellState::kOccupied;
-      });
+      const size_t occupied = occupiedCells(map);
       printRow(std::to_string(i + 1), "before", convert_ms, b, occupied);
       printRow(std::to_string(i + 1), "any", convert_ms, y, occupied);
       printRow(std::to_string(i + 1), "after", convert_ms, a, occupied);
