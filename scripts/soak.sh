@@ -7,9 +7,10 @@
 #     the samples is at most --rss-ratio (1.1) x the median of the first third (medians: the
 #     peaks are transient copies of the map, caught at random by the 2 s sampling; 0 leaves
 #     this check out, for runs too short for thirds to hold maps of the same size);
-#   - RSS with an empty map bounded: the RSS just after the last ~reset_map (heap trimmed; the
-#     final phase's) is at most 1.25 x the lowest after an earlier one + 64 MiB (anything the
-#     node keeps across resets shows there, the map's size does not);
+#   - RSS with an empty map bounded: the RSS just after a ~reset_map of the final phase (heap
+#     trimmed, queue drained; up to 3 resets 6 s apart, the lowest counts: an autosave's copy
+#     of the map being written is in one reading only) is at most 1.25 x the lowest after a mix
+#     reset + 64 MiB (anything the node keeps across resets shows there, the map's size not);
 #   - clouds dropped by the queue policy only (~get_stats: dropped_no_tf = rejected = 0; a
 #     cloud that waited in the queue longer than the tf buffer, dropped_tf_too_old, counts as
 #     dropped by the queue);

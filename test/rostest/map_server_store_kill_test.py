@@ -59,13 +59,15 @@ class StoreKillTest(unittest.TestCase):
         cls.tmp = tempfile.mkdtemp(prefix="fragg_map_store_kill_")
         # No extension: LMDB where built, else SQLite.
         cls.store = os.path.join(cls.tmp, "map_store")
-        cls.pub = rospy.Publisher("/cloud_in", PointCloud2, queue_size=100)
+        cls.pub = None
         cls.node = None
+        cls.starts = 0
 
     @classmethod
     def tearDownClass(cls):
         cls.stop()
         shutil.rmtree(cls.tmp, ignore_errors=True)
+
 
     @classmethod
     def start(cls):
@@ -74,14 +76,33 @@ class StoreKillTest(unittest.TestCase):
                             ("paging/store", cls.store), ("paging/commit_every_scans", 1),
                             ("paging/commit_every_s", 0.0), ("file_root", cls.tmp)]:
             rospy.set_param(NS + name, value)
+        cls.starts += 1
+        # Each start reads its clouds from a topic of its own, published by a fresh publisher:
+        # a connection to it can only be the new node's. (One publisher for both starts kept
+        # its link to the killed node, so the wait for a subscriber passed at once and the
+        # clouds published after the restart could go to nobody: 1 CI run timed out on them.)
+        topic = "/store_kill_cloud_%d" % cls.starts
         cls.log = open(os.path.join(cls.tmp, "node.log"), "ab")
         cls.node = subprocess.Popen(
             ["rosrun", "nodelet", "nodelet", "standalone", "fragg_map/MapServerNodelet",
-             "__name:=fragg_map"], stdout=cls.log, stderr=subprocess.STDOUT)
+             "__name:=fragg_map", "cloud_in:=" + topic], stdout=cls.log,
+            stderr=subprocess.STDOUT)
         rospy.wait_for_service(NS + "get_stats", timeout=60)
         cls.get_stats = rospy.ServiceProxy(NS + "get_stats", GetStats)
         cls.save = rospy.ServiceProxy(NS + "save_map", SaveMap)
+        # The killed node's services may still be registered: wait for the new one to answer.
+        wait_for(cls.answers, 60, "the node's get_stats")
+        if cls.pub is not None:
+            cls.pub.unregister()  # the last start's topic: its subscriber is gone
+        cls.pub = rospy.Publisher(topic, PointCloud2, queue_size=100)
         wait_for(lambda: cls.pub.get_num_connections() > 0, 30, "the node to subscribe")
+
+    @classmethod
+    def answers(cls):
+        try:
+            return cls.get_stats().success
+        except (rospy.ServiceException, rospy.ROSException):
+            return False
 
     @classmethod
     def stop(cls, sig=signal.SIGTERM):
@@ -139,7 +160,11 @@ class StoreKillTest(unittest.TestCase):
         for i in range(k, k + more):
             self.pub.publish(map_cloud(sector_points(i)))
             time.sleep(0.1)
-        wait_for(lambda: self.scans() >= k + more, 60, "the further clouds to insert")
+        try:
+            wait_for(lambda: self.scans() >= k + more, 60, "the further clouds to insert")
+        except AssertionError as e:  # what the node saw, for the next person
+            raise AssertionError("%s: %d connection(s); the node's stats: %s" % (
+                e, self.pub.get_num_connections(), self.get_stats().stats))
         self.assertEqual(self.scans(), k + more)
         blocks, n = self.saved("continued.fgm")
         self.assertEqual(n, k + more)
