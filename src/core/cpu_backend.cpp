@@ -7,6 +7,7 @@
 #include <cmath>
 #include <iterator>
 
+#include "fragg_map/internal/thread_count.h"
 #include "fragg_map/raycast.h"
 
 namespace fragg {
@@ -112,7 +113,7 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
   const bool remove = what == ScanUpdate::kRemove;
   const uint64_t revision = how.revision;
   const PageInKeys* page_in = remove ? nullptr : how.page_in;
-  const int threads = threads_ > 0 ? threads_ : omp_get_max_threads();
+  const int threads = threadCount(threads_);
   auto t0 = std::chrono::steady_clock::now();
   BlockKey lo, hi;
   scanBlockBounds(scan, &lo, &hi);

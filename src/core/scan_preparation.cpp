@@ -4,6 +4,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/prepared_scan.h"
+#include "fragg_map/internal/thread_count.h"
 
 namespace fragg {
 
@@ -77,7 +78,7 @@ void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
   stats.points_in += n;
   out.rays.clear();
 
-  const int threads = params.threads > 0 ? params.threads : omp_get_max_threads();
+  const int threads = threadCount(params.threads);
   std::vector<std::vector<RayEnd>> per_thread(threads);
   uint64_t invalid = 0, too_close = 0, outside = 0, hits = 0, free_only = 0, no_return = 0;
   const bool clear_no_return = params.clear_no_return_rays && cloud.organised();

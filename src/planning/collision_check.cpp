@@ -12,6 +12,7 @@
 #include "collision_batch.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/backend_factory.h"
+#include "fragg_map/internal/thread_count.h"
 #include "mesh_collision.h"
 #include "obstacle_index.h"
 
@@ -42,7 +43,7 @@ std::vector<CollisionResult> checkOnCpu(const Map& map, const ObstacleIndex& ind
   const ObstacleMasksView masks = index.view();
   std::vector<CollisionResult> results(T_map_shape.size());
   std::exception_ptr error;
-  const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+  const int threads = threadCount(options.threads);
   const int64_t n = static_cast<int64_t>(T_map_shape.size());
   const bool mesh = shape.kind() == ShapeKind::kMesh;
 #pragma omp parallel for schedule(dynamic, 64) num_threads(threads)

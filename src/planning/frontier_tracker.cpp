@@ -9,6 +9,7 @@
 
 #include "fragg_map/block_key_table.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/thread_count.h"
 #include "frontier_masks.h"
 
 namespace fragg::planning {
@@ -42,7 +43,7 @@ struct FrontierTracker::State {
   std::vector<BlockRecord> records;
   BlockKeyTable index;  ///< key -> records index
 
-  int threadCount() const { return threads > 0 ? threads : omp_get_max_threads(); }
+  int threadCount() const { return fragg::threadCount(threads); }
 
   void clear() {
     valid = false;

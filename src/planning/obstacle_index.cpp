@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include "fragg_map/internal/thread_count.h"
+
 namespace fragg::planning {
 
 namespace {
@@ -37,7 +39,7 @@ ObstacleIndex::ObstacleIndex(const Map& map, const BlockView& view, const BlockK
   std::vector<uint8_t> keep(blocks.size(), 0);
   const OccupancyModel& model = map.model();
   const int occupied_above = model.occupied_above_fx, free_below = model.free_below_fx;
-  const int use_threads = threads > 0 ? threads : omp_get_max_threads();
+  const int use_threads = threadCount(threads);
 #pragma omp parallel for schedule(static) num_threads(use_threads)
   for (int64_t b = 0; b < n; ++b) {
     const Cell* cells = blocks[b].block->cells;

@@ -10,6 +10,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/gain_walk.h"
+#include "fragg_map/internal/thread_count.h"
 #include "fragg_map/log.h"
 #include "fragg_map/planning/collision_check.h"
 
@@ -273,7 +274,7 @@ std::vector<double> viewpointGainsBits(const Map& map,
       return gains;
   }
   const BlockView view = map.blockView();
-  const int n_threads = threads > 0 ? threads : omp_get_max_threads();
+  const int n_threads = threadCount(threads);
   const int64_t n = static_cast<int64_t>(positions_m.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(n_threads)
   for (int64_t i = 0; i < n; ++i)

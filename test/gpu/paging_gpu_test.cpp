@@ -65,7 +65,9 @@ void pagedCudaBuildMatchesCpu(const std::string& store_path, size_t pool_max_byt
   // Paging out drops only the leaving blocks' device copies: with a pool that holds the map,
   // a block is uploaded only after it came back from the store (emptying the cache at every
   // paging round uploaded every block of the scans again).
-  if (pool_max_bytes == 0) EXPECT_LE(uploaded, st.pages_read);
+  if (pool_max_bytes == 0) {
+    EXPECT_LE(uploaded, st.pages_read);
+  }
   paged.commitPages();
   std::string why;
   const Map from_store = Map::loadPageStore(*openPageStore(store_path, true));

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/thread_count.h"
 
 namespace fragg::explore {
 namespace {
@@ -40,7 +41,7 @@ ExploredVolume::ExploredVolume(const geometry::MeshBvh& scene, const Eigen::Vect
     throw InvalidArgument("explored volume: the box holds no cell centre");
   const int64_t n = nx_ * ny_ * nz_;
   std::vector<uint8_t> outside(static_cast<size_t>(n), 0);
-  const int n_threads = threads > 0 ? threads : omp_get_max_threads();
+  const int n_threads = threadCount(threads);
 #pragma omp parallel for schedule(dynamic, 4096) num_threads(n_threads)
   for (int64_t i = 0; i < n; ++i) {
     const int64_t x = i % nx_, y = (i / nx_) % ny_, z = i / (nx_ * ny_);
