@@ -78,9 +78,10 @@ class StoreKillTest(unittest.TestCase):
             rospy.set_param(NS + name, value)
         cls.starts += 1
         # Each start reads its clouds from a topic of its own, published by a fresh publisher:
-        # a connection to it can only be the new node's. (One publisher for both starts kept
-        # its link to the killed node, so the wait for a subscriber passed at once and the
-        # clouds published after the restart could go to nobody: 1 CI run timed out on them.)
+        # a connection to it can only be the new node's. (With one publisher for both starts,
+        # 1 CI run timed out on the clouds after the restart; most likely its link to the
+        # killed node still counted, so the wait for a subscriber passed at once and those
+        # clouds went to nobody. Read from rospy's code, not reproduced.)
         topic = "/store_kill_cloud_%d" % cls.starts
         cls.log = open(os.path.join(cls.tmp, "node.log"), "ab")
         cls.node = subprocess.Popen(
