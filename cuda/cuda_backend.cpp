@@ -74,12 +74,16 @@ void CudaBackend::sizePool(const SensorModel& model, double resolution_m) {
   cache_.reserve(static_cast<int64_t>(std::max(4096.0, blocks * params_.cuda.pool_margin)));
 }
 
-bool CudaBackend::autoSensorStats(const PointCloud& cloud, AutoSensorStats* out) {
-  // Organised clouds with no-return rays are prepared on the host (DeviceScan::prepare).
-  if (!params_.cuda.device_auto_sensor || (params_.clear_no_return_rays && cloud.organised()))
-    return false;
+bool CudaBackend::preparedOnHost(const PointCloud& cloud) const {
+  // No-return rays need their row neighbours (DeviceScan::prepare).
+  return params_.clear_no_return_rays && cloud.organised();
+}
+
+bool CudaBackend::autoSensorStats(const PointCloud& cloud, AutoSensorStats* out,
+                                  bool staged_ahead) {
+  if (!params_.cuda.device_auto_sensor || preparedOnHost(cloud)) return false;
   try {
-    *out = integrator_.gatherAutoSensorStats(cloud);
+    *out = integrator_.gatherAutoSensorStats(cloud, staged_ahead);
   } catch (const CudaOutOfMemory&) {
     return false;  // the scan's own upload will meet the same and fall back (Map::integrateScan)
   }
@@ -89,7 +93,13 @@ bool CudaBackend::autoSensorStats(const PointCloud& cloud, AutoSensorStats* out)
 void CudaBackend::update(const ScanInput& scan, ScanUpdate what, const UpdateSettings& how,
                          BlockMap& blocks, InsertStats& stats) {
   sizePool(scan.model, how.params.resolution_m);
-  if (integrator_.update(scan, what, how, blocks, stats)) return;
+  UpdateSettings settings = how;
+  if (!params_.cuda.stage_next_cloud ||
+      (settings.stage_next && preparedOnHost(*settings.stage_next)))
+    settings.stage_next = nullptr;
+  settings.stage_next_auto_stats =
+      settings.stage_next && how.stage_next_auto_stats && params_.cuda.device_auto_sensor;
+  if (integrator_.update(scan, what, settings, blocks, stats)) return;
   static bool said = false;
   if (!said) {
     logMessage(LogLevel::kWarning,

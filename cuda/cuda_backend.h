@@ -33,7 +33,7 @@ class CudaBackend : public MapBackend {
   /// On the device beside the points' upload, which the scan's prepare then reuses; false
   /// (the map gathers on the host) for a cloud prepared on the host, and when the device has
   /// no room for the points.
-  bool autoSensorStats(const PointCloud& cloud, AutoSensorStats* out) override;
+  bool autoSensorStats(const PointCloud& cloud, AutoSensorStats* out, bool staged_ahead) override;
   bool viewpointGains(const GainBatch& batch, const OccupancyModel& model, BlockMap& blocks,
                       double* out) override {
     gains_.compute(cache_, batch, model, blocks, out);
@@ -45,6 +45,8 @@ class CudaBackend : public MapBackend {
               InsertStats& stats) override;
 
  private:
+  /// Whether the cloud's rays are prepared on the host (no staging, no device statistics).
+  bool preparedOnHost(const PointCloud& cloud) const;
   /// Sizes the pool on the first scan from the sensor's visible volume.
   void sizePool(const SensorModel& model, double resolution_m);
 

@@ -127,7 +127,11 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
                 16 * sm_count_, how.params.cuda.warp_per_slot_apply, stream_);
     apply_end_.record(stream_);
     scan_.countersToHost();
-    FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+    pass_done_.record(stream_);
+    // A batch's next cloud goes up while the device works on this pass (its host copy is
+    // what overlaps); a redone pass queues behind that upload.
+    if (attempt == 0 && how.stage_next) stageNext(*how.stage_next, how.stage_next_auto_stats);
+    pass_done_.synchronize();
     if (c.outside_window != 0)
       throw CudaError("ray left the window table (" + std::to_string(c.outside_window) +
                       " cells): residency bug");
@@ -141,6 +145,14 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
     c.overflow = 0;
     c.visits = 0;
     c.touched = 0;  // listed again after the next pass
+  }
+}
+
+void CudaIntegrator::stageNext(const PointCloud& cloud, bool auto_stats) {
+  try {
+    scan_.stageAhead(cloud, auto_stats);
+  } catch (const CudaOutOfMemory&) {
+    // Staging is an optimisation: the next scan uploads its own points (and meets the same).
   }
 }
 

@@ -24,8 +24,8 @@ class CudaIntegrator {
               InsertStats& stats);
   size_t deviceBytes() const { return scan_.deviceBytes() + window_.deviceBytes(); }
   /// DeviceScan::gatherAutoSensorStats() on the scan's buffers.
-  AutoSensorStats gatherAutoSensorStats(const PointCloud& cloud) {
-    return scan_.gatherAutoSensorStats(cloud);
+  AutoSensorStats gatherAutoSensorStats(const PointCloud& cloud, bool staged_ahead) {
+    return scan_.gatherAutoSensorStats(cloud, staged_ahead);
   }
 
  private:
@@ -38,6 +38,8 @@ class CudaIntegrator {
   /// Returns the number of blocks the rays created.
   uint32_t rayAndApply(ScanUpdate what, const UpdateSettings& how, BlockMap& blocks,
                        std::vector<BlockKey> host_only);
+  /// DeviceScan::stageAhead(), skipped when the device has no room for it.
+  void stageNext(const PointCloud& cloud, bool auto_stats);
   /// After a pass that missed host-only blocks or ran out of slots: uploads the missed blocks
   /// and makes room for the others.
   void resolveMissesAndOverflow(BlockMap& blocks);
@@ -51,6 +53,7 @@ class CudaIntegrator {
   DeviceScan scan_;
   WindowTable window_;
   CudaEvent ray_start_, apply_start_, apply_end_;
+  CudaEvent pass_done_;  ///< the pass's counters are back (staging of the next cloud may follow)
   int32_t last_created_ = 0;  ///< blocks the rays created last scan (sizes the room made)
 };
 

@@ -27,10 +27,13 @@ void DeviceScan::prepare(const ScanInput& in, const MapParams& params, int32_t f
     c.hi_v[a] = 0;
   }
   c.free_top = free_top;
-  // The points gatherAutoSensorStats() uploaded, when they are this scan's.
+  // The points gatherAutoSensorStats() or stageAhead() uploaded, when they are this scan's.
   const bool staged = in.cloud_staged && staged_points_ == in.cloud.points_S.data() &&
                       staged_size_ == in.cloud.size();
   staged_points_ = nullptr;
+  stats_ahead_ = false;
+  if (staged && staged_ahead_) stats.scans_staged += 1;
+  staged_ahead_ = false;
   if (params.clear_no_return_rays && in.cloud.organised()) {
     prepareOnHost(in, params, stats);
     stats.seconds_prepare += secondsSince(t0);
@@ -65,6 +68,8 @@ void DeviceScan::prepare(const ScanInput& in, const MapParams& params, int32_t f
 void DeviceScan::uploadPoints(const PointCloud& cloud) {
   const size_t n = cloud.size();
   staged_points_ = nullptr;
+  staged_ahead_ = false;
+  stats_ahead_ = false;
   if (n == 0) return;
   points_.reserve(3 * n);
   static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "packed points");
@@ -79,17 +84,40 @@ void DeviceScan::uploadPoints(const PointCloud& cloud) {
 }
 
 AutoSensorStats DeviceScan::gatherAutoSensorStats(const PointCloud& cloud) {
-  uploadPoints(cloud);
-  auto_stats_.reserve(1);
-  auto_stats_[0] = AutoStatsAccum::empty();
-  auto_stats_.toDevice(1, stream_);
-  launchAutoSensorStats(points_.device(), uint32_t(cloud.size()), sensorAxisTable(),
-                        auto_stats_.device(), stream_);
-  auto_stats_.toHost(1, stream_);
+  return gatherAutoSensorStats(cloud, false);
+}
+
+AutoSensorStats DeviceScan::gatherAutoSensorStats(const PointCloud& cloud, bool staged_ahead) {
+  const bool ready = staged_ahead && stats_ahead_ && staged_points_ == cloud.points_S.data() &&
+                     staged_size_ == cloud.size();
+  if (!ready) {
+    uploadPoints(cloud);
+    launchStats(cloud.size());
+  }
+  stats_ahead_ = false;
   FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
   staged_points_ = cloud.points_S.data();
   staged_size_ = cloud.size();
   return auto_stats_[0].stats();
+}
+
+void DeviceScan::launchStats(size_t n) {
+  auto_stats_.reserve(1);
+  auto_stats_[0] = AutoStatsAccum::empty();
+  auto_stats_.toDevice(1, stream_);
+  launchAutoSensorStats(points_.device(), uint32_t(n), sensorAxisTable(), auto_stats_.device(),
+                        stream_);
+  auto_stats_.toHost(1, stream_);
+}
+
+void DeviceScan::stageAhead(const PointCloud& cloud, bool auto_stats) {
+  uploadPoints(cloud);
+  if (cloud.size() == 0) return;
+  if (auto_stats) launchStats(cloud.size());
+  stats_ahead_ = auto_stats;
+  staged_ahead_ = true;
+  staged_points_ = cloud.points_S.data();
+  staged_size_ = cloud.size();
 }
 
 void DeviceScan::prepareOnHost(const ScanInput& in, const MapParams& params, InsertStats& stats) {

@@ -33,6 +33,15 @@ class DeviceScan {
   /// (the bits of gatherAutoSensorStats()). The upload is kept for this cloud's prepare()
   /// when the scan says so (ScanInput::cloud_staged).
   AutoSensorStats gatherAutoSensorStats(const PointCloud& cloud);
+  /// The same for a cloud stageAhead() staged with its statistics (`staged_ahead`: the caller
+  /// says this is that cloud, unchanged): only waits for them.
+  AutoSensorStats gatherAutoSensorStats(const PointCloud& cloud, bool staged_ahead);
+
+  /// A batch's next cloud, while the device still works on this scan (its rays and prepared
+  /// points are elsewhere): its points are copied into pinned staging on the host now and
+  /// uploaded on the stream behind this scan's work, with the auto model's statistics when
+  /// `auto_stats`. The next scan uses them as if gatherAutoSensorStats() had just run on it.
+  void stageAhead(const PointCloud& cloud, bool auto_stats);
 
   ScanCounters& counters() const { return counters_[0]; }
   ScanCounters* countersOnDevice() const { return counters_.device(); }
@@ -60,6 +69,8 @@ class DeviceScan {
   void prepareOnHost(const ScanInput& scan, const MapParams& params, InsertStats& stats);
   /// The cloud's points into points_ (pinned host copy, then the device).
   void uploadPoints(const PointCloud& cloud);
+  /// The auto model's statistics of the `n` uploaded points, on their way to auto_stats_.
+  void launchStats(size_t n);
 
   cudaStream_t stream_;
   int threads_;
@@ -69,6 +80,10 @@ class DeviceScan {
   /// size); prepare() uses them only for a scan marked cloud_staged, then forgets them.
   const void* staged_points_ = nullptr;
   size_t staged_size_ = 0;
+  /// The staged points came from stageAhead() (InsertStats::scans_staged).
+  bool staged_ahead_ = false;
+  /// stageAhead() left the staged cloud's statistics on their way to auto_stats_.
+  bool stats_ahead_ = false;
   MirroredBuffer<AutoStatsAccum> auto_stats_;
   MirroredBuffer<uint8_t> free_only_;  ///< PointCloud::free_only, when the cloud has flags
   DeviceArray<RayEnd> rays_;

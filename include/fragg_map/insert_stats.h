@@ -27,6 +27,9 @@ struct InsertStats {
   uint64_t blocks_created = 0;
   uint64_t blocks_uploaded = 0;  ///< CUDA: host blocks copied to the device for this scan
   uint64_t blocks_evicted = 0;   ///< CUDA: device slots given back to make room
+  /// CUDA: 1 when the scan's points went up while the device worked on the update before
+  /// (UpdateSettings::stage_next: Map::insertSequence, Map::correctPoses).
+  uint64_t scans_staged = 0;
   CullCounters culling;
   double seconds_total = 0;
   double seconds_prepare = 0;    ///< transform + filter

@@ -44,6 +44,16 @@ class Pager;
 struct ScanRecord;
 struct MapImage;
 
+/// One scan of a batch (Map::insertSequence): Map::insert's arguments. The cloud is not
+/// copied; it must stay alive and unchanged during the call.
+struct ScanToInsert {
+  const PointCloud* cloud = nullptr;  ///< sensor frame
+  Eigen::Isometry3d T_map_sensor = Eigen::Isometry3d::Identity();
+  SensorModel sensor;
+  int64_t stamp_ns = 0;
+  std::string sensor_frame;
+};
+
 /// What a pose correction did (Map::correctPoses).
 struct CorrectionStats {
   size_t scans = 0;
@@ -84,6 +94,15 @@ class Map {
   InsertStats insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                      const SensorModel& sensor, int64_t stamp_ns = 0,
                      const std::string& sensor_frame = std::string());
+  /// Inserts the scans in order, each as insert() would (the same cells, kept scans and
+  /// statistics: one InsertStats per scan), while the backend overlaps a scan's host work with
+  /// the device's work on the scan before: the CUDA backend copies the next cloud into pinned
+  /// memory while the device ray casts, and uploads it (with the auto model's statistics)
+  /// behind that scan. For a batch the caller already holds (a bag, a dataset, a replay); a
+  /// height filter or quantised kept points (whose cloud is made during the insertion) run it
+  /// without the overlap. Every scan's arguments are checked first (InvalidArgument, map
+  /// untouched); a later failure (I/O while paging) leaves the scans before it inserted.
+  std::vector<InsertStats> insertSequence(const std::vector<ScanToInsert>& scans);
 
   /// Loop closure: takes a kept scan out of the map, walking its rays again and undoing its
   /// updates (OccupancyModel::unapply says where that is exact). Throws InvalidArgument for an
@@ -296,8 +315,17 @@ class Map {
   /// mode and no-return setting. `host_cull`: run the host culler for a backend that does not
   /// cull on its own (counters only; corrections skip it). `cloud_staged`: the backend's
   /// autoSensorStats() saw this cloud just before (ScanInput::cloud_staged).
+  /// `stage_next`, `stage_next_auto_stats`: UpdateSettings' (the batch's next cloud).
   InsertStats integrateScan(const PointCloud& cloud, const ScanRecord& how, bool remove,
-                            bool host_cull, bool cloud_staged = false);
+                            bool host_cull, bool cloud_staged = false,
+                            const PointCloud* stage_next = nullptr,
+                            bool stage_next_auto_stats = false);
+  /// insert() after its arguments were checked. `staged_ahead`: the update just before staged
+  /// this cloud (UpdateSettings::stage_next); `next`: the batch's next scan, or null.
+  InsertStats insertChecked(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
+                            const SensorModel& sensor, int64_t stamp_ns,
+                            const std::string& sensor_frame, bool staged_ahead,
+                            const ScanToInsert* next);
 
   // Every member is moved by operator=(Map&&) in map.cpp (it commits the paging first): a new
   // member goes there too.

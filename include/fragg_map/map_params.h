@@ -46,6 +46,10 @@ struct CudaParams {
   /// The apply kernel updates each touched block with one warp (off: one thread block of 128
   /// threads, for the ablation). The map is the same either way.
   bool warp_per_slot_apply = true;
+  /// In a batch (Map::insertSequence, Map::correctPoses) the next cloud is copied into pinned
+  /// memory while the device ray casts the current one, then uploaded behind it (off: each
+  /// scan uploads its own, for the ablation). The map is the same either way.
+  bool stage_next_cloud = true;
   /// Threads of the backend's host-side copies (a scan's points into pinned staging, blocks
   /// to and from the device); 0 = every core. With every core, single scans on a 16-core host
   /// took 3-7 ms instead of 1-2 (most likely waiting for the last thread to wake); 4 threads

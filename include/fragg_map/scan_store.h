@@ -49,6 +49,8 @@ struct EncodedPoints {
 /// given, receives decodePoints() of the result from the same pass.
 EncodedPoints encodePoints(const PointCloud& cloud, double step_m, PointCloud* decoded = nullptr);
 PointCloud decodePoints(const EncodedPoints& points);
+/// The same into `out`, reusing its buffers (its free-only flags are cleared).
+void decodePoints(const EncodedPoints& points, PointCloud* out);
 
 /// How the scan was integrated: what a removal or a re-insertion must repeat exactly.
 struct ScanRecord {

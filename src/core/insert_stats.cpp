@@ -17,6 +17,7 @@ void InsertStats::add(const InsertStats& o) {
   blocks_created += o.blocks_created;
   blocks_uploaded += o.blocks_uploaded;
   blocks_evicted += o.blocks_evicted;
+  scans_staged += o.scans_staged;
   culling.add(o.culling);
   seconds_total += o.seconds_total;
   seconds_prepare += o.seconds_prepare;

@@ -27,6 +27,20 @@ const MapParams& validated(const MapParams& p) {
 
 void validatePose(const Eigen::Isometry3d& T) { requireRigidPose(T, "sensor pose", 1e-4); }
 
+/// Map::insert's argument checks (InvalidArgument).
+void validateInsert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
+                    const SensorModel& sensor, const std::string& sensor_frame) {
+  validatePose(T_map_sensor);
+  sensor.validate();
+  if (sensor_frame.size() > kMaxSensorFrameChars)
+    throw InvalidArgument("sensor frame id longer than " + std::to_string(kMaxSensorFrameChars) +
+                          " characters");
+  if (cloud.empty()) throw InvalidArgument("point cloud is empty");
+  if (cloud.hasFreeOnly() && cloud.free_only.size() != cloud.size())
+    throw InvalidArgument("point cloud has " + std::to_string(cloud.free_only.size()) +
+                          " free-only flags for " + std::to_string(cloud.size()) + " points");
+}
+
 /// Blocks the scan's rays can reach: its points and sensor, within its max range of the sensor
 /// (the whole range ball with no-return rays), widened by two cells.
 void rayBlockBounds(const PointCloud& cloud, const ScanRecord& how, double resolution_m,
@@ -107,16 +121,39 @@ Map& Map::operator=(Map&& other) noexcept {
 InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                         const SensorModel& sensor, int64_t stamp_ns,
                         const std::string& sensor_frame) {
+  validateInsert(cloud, T_map_sensor, sensor, sensor_frame);
+  return insertChecked(cloud, T_map_sensor, sensor, stamp_ns, sensor_frame, false, nullptr);
+}
+
+std::vector<InsertStats> Map::insertSequence(const std::vector<ScanToInsert>& scans) {
+  for (size_t i = 0; i < scans.size(); ++i) {
+    const ScanToInsert& s = scans[i];
+    try {
+      if (!s.cloud) throw InvalidArgument("no point cloud");
+      validateInsert(*s.cloud, s.T_map_sensor, s.sensor, s.sensor_frame);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument("scan " + std::to_string(i) + " of the sequence: " + e.what());
+    }
+  }
+  // The next cloud can be staged only when it is the cloud the map integrates.
+  const bool stageable =
+      !params_.height_filter.active() && !(params_.scans.keep && params_.scans.point_step_m > 0.0);
+  std::vector<InsertStats> out;
+  out.reserve(scans.size());
+  for (size_t i = 0; i < scans.size(); ++i) {
+    const ScanToInsert& s = scans[i];
+    const ScanToInsert* next = stageable && i + 1 < scans.size() ? &scans[i + 1] : nullptr;
+    out.push_back(insertChecked(*s.cloud, s.T_map_sensor, s.sensor, s.stamp_ns, s.sensor_frame,
+                                stageable && i > 0, next));
+  }
+  return out;
+}
+
+InsertStats Map::insertChecked(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
+                               const SensorModel& sensor, int64_t stamp_ns,
+                               const std::string& sensor_frame, bool staged_ahead,
+                               const ScanToInsert* next) {
   const auto t0 = std::chrono::steady_clock::now();
-  validatePose(T_map_sensor);
-  sensor.validate();
-  if (sensor_frame.size() > kMaxSensorFrameChars)
-    throw InvalidArgument("sensor frame id longer than " + std::to_string(kMaxSensorFrameChars) +
-                          " characters");
-  if (cloud.empty()) throw InvalidArgument("point cloud is empty");
-  if (cloud.hasFreeOnly() && cloud.free_only.size() != cloud.size())
-    throw InvalidArgument("point cloud has " + std::to_string(cloud.free_only.size()) +
-                          " free-only flags for " + std::to_string(cloud.size()) + " points");
   // The height band first: a kept scan holds the points that were integrated.
   const bool by_height = params_.height_filter.active();
   PointCloud in_band;
@@ -145,7 +182,7 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
     how.model = sensor;
   } else {
     AutoSensorStats auto_stats;
-    staged = backend_->autoSensorStats(used, &auto_stats);
+    staged = backend_->autoSensorStats(used, &auto_stats, staged_ahead);
     if (!staged) auto_stats = gatherAutoSensorStats(used);
     how.model = resolveAutoSensor(sensor, used, auto_stats);
   }
@@ -155,7 +192,10 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   const double seconds_model =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  InsertStats stats = integrateScan(used, how, /*remove=*/false, /*host_cull=*/true, staged);
+  const PointCloud* stage_next = next && &used == &cloud ? next->cloud : nullptr;
+  InsertStats stats =
+      integrateScan(used, how, /*remove=*/false, /*host_cull=*/true, staged || staged_ahead,
+                    stage_next, stage_next && next->sensor.type == SensorType::kAuto);
   stats.seconds_cull += seconds_model;
   if (keep) {
     // The store keeps points, not free-only flags: such a scan cannot be walked again.
@@ -182,7 +222,8 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
 }
 
 InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, bool remove,
-                               bool host_cull, bool cloud_staged) {
+                               bool host_cull, bool cloud_staged, const PointCloud* stage_next,
+                               bool stage_next_auto_stats) {
   const auto t = std::chrono::steady_clock::now();  // frustum and culling
   MapParams params = params_;
   params.raycast = how.raycast;
@@ -224,8 +265,10 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
 
   const ScanInput scan{cloud, how.T_map_sensor, how.model, frustum, how.explicit_model,
                        cull,  cloud_staged};
-  const UpdateSettings settings{params, model_, revision_ + 1, page_in ? &page_in : nullptr,
-                                page_in ? &paged_out_saturated : nullptr};
+  UpdateSettings settings{params, model_, revision_ + 1, page_in ? &page_in : nullptr,
+                          page_in ? &paged_out_saturated : nullptr};
+  settings.stage_next = stage_next;
+  settings.stage_next_auto_stats = stage_next && stage_next_auto_stats;
   const ScanUpdate what = remove ? ScanUpdate::kRemove : ScanUpdate::kIntegrate;
   // Readers may be writing the cache back (they share the map): not while the scan runs.
   std::lock_guard<std::mutex> lock(*sync_mutex_);
@@ -310,14 +353,26 @@ CorrectionStats Map::correctPoses(const std::map<ScanId, Eigen::Isometry3d>& T_m
   }
   CorrectionStats out;
   out.scans = T_map_sensor_new.size();
-  size_t k = 0;
-  for (const auto& [id, T] : T_map_sensor_new)
-    out.removal.add(integrateScan(decodePoints(points[k++]), scan_store_->record(id), true, false));
-  k = 0;
-  for (const auto& [id, T] : T_map_sensor_new) {
-    scan_store_->setPose(id, T);
-    out.insertion.add(
-        integrateScan(decodePoints(points[k++]), scan_store_->record(id), false, false));
+  std::vector<std::pair<ScanId, Eigen::Isometry3d>> moves(T_map_sensor_new.begin(),
+                                                          T_map_sensor_new.end());
+  // Every removal, then every insertion: 2n steps, each scan's points decoded once per pass
+  // (once in all for a single scan). The backend stages the next step's cloud while it works
+  // on the current one (UpdateSettings::stage_next).
+  const size_t n = moves.size(), steps = 2 * n;
+  PointCloud cloud, following;
+  if (n > 0) decodePoints(points[0], &cloud);
+  for (size_t step = 0; step < steps; ++step) {
+    const size_t k = step % n;
+    const bool last = step + 1 == steps;
+    const bool same_next = !last && (step + 1) % n == k;  // one scan: its insertion follows
+    if (!last && !same_next) decodePoints(points[(step + 1) % n], &following);
+    const PointCloud* stage = last ? nullptr : same_next ? &cloud : &following;
+    const bool removal = step < n;
+    if (!removal) scan_store_->setPose(moves[k].first, moves[k].second);
+    const InsertStats s = integrateScan(cloud, scan_store_->record(moves[k].first), removal, false,
+                                        /*cloud_staged=*/step > 0, stage);
+    (removal ? out.removal : out.insertion).add(s);
+    if (!last && !same_next) std::swap(cloud, following);
   }
   out.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;

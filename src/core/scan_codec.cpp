@@ -77,14 +77,21 @@ EncodedPoints encodePoints(const PointCloud& cloud, double step_m, PointCloud* d
 
 PointCloud decodePoints(const EncodedPoints& points) {
   PointCloud cloud;
+  decodePoints(points, &cloud);
+  return cloud;
+}
+
+void decodePoints(const EncodedPoints& points, PointCloud* out) {
+  PointCloud& cloud = *out;
   cloud.width = points.width;
   cloud.height = points.height;
+  cloud.free_only.clear();
   cloud.points_S.resize(points.count);
   if (points.step_m <= 0.0) {
     if (points.count)
       std::memcpy(static_cast<void*>(cloud.points_S.data()), points.data.data(),
                   points.dataBytes());
-    return cloud;
+    return;
   }
   const auto* q_all = reinterpret_cast<const int16_t*>(points.data.data());
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -99,7 +106,6 @@ PointCloud decodePoints(const EncodedPoints& points) {
     for (int a = 0; a < 3; ++a)
       cloud.points_S[i][a] = static_cast<float>(static_cast<double>(q[a]) * points.step_m);
   }
-  return cloud;
 }
 
 void writeScan(ByteWriter& w, const ScanRecord& r, const EncodedPoints& p) {

@@ -5,14 +5,16 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <cstring>
 #include <map>
 
 #include "fragg_map/map.h"
+#include "same_map.h"
 #include "test_scenes.h"
 
 namespace fragg {
 namespace {
+
+using test::expectSameMap;
 
 MapParams paramsWithSkip(bool skip) {
   MapParams p;
@@ -20,23 +22,6 @@ MapParams paramsWithSkip(bool skip) {
   p.skip_saturated_blocks = skip;
   p.scans.keep = true;  // removal and correction need the scans
   return p;
-}
-
-/// Same blocks with the same 2 KiB of cells and the same change stamps.
-void expectSameMap(const Map& a, const Map& b, const char* what) {
-  ASSERT_EQ(a.blockCount(), b.blockCount()) << what;
-  size_t differing = 0, missing = 0;
-  a.forEachBlock([&](const BlockKey& k, const Block& block) {
-    const Block* other = b.findBlock(k);
-    if (!other) {
-      ++missing;
-      return;
-    }
-    if (std::memcmp(&block, other, sizeof(Block)) != 0) ++differing;
-  });
-  EXPECT_EQ(missing, 0u) << what;
-  EXPECT_EQ(differing, 0u) << what;
-  EXPECT_EQ(a.changedBlocksSince(0).size(), b.changedBlocksSince(0).size()) << what;
 }
 
 /// Blocks whose every cell is at the model's lower clamp.

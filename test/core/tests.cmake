@@ -7,6 +7,7 @@ fragg_add_test(fragg_core_test
           ${CMAKE_CURRENT_LIST_DIR}/raycast_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/insert_semantics_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/saturated_skip_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/insert_sequence_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/free_only_points_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/frustum_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/auto_sensor_test.cpp

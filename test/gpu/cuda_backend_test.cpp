@@ -157,6 +157,40 @@ void expectBackendsAgree(const std::vector<Input>& in, MapParams p, const Sensor
   expectSameBlocks(cpu, gpu, what);
 }
 
+/// The CUDA map inserts `order` (indices into `in`, an index may repeat: the same cloud object
+/// again) with one Map::insertSequence call, sensors taken in turn; the CPU map one insert()
+/// at a time. Returns the CUDA map's scans whose points were staged during the scan before.
+uint64_t expectSequenceAgrees(const std::vector<Input>& in, const std::vector<size_t>& order,
+                              MapParams p, const std::vector<SensorModel>& sensors,
+                              const char* what) {
+  p.backend = Backend::kCpu;
+  Map cpu(p);
+  p.backend = Backend::kCuda;
+  Map gpu(p);
+  std::vector<ScanToInsert> batch;
+  for (size_t k = 0; k < order.size(); ++k) {
+    ScanToInsert s;
+    s.cloud = &in[order[k]].cloud;
+    s.T_map_sensor = in[order[k]].T;
+    s.sensor = sensors[k % sensors.size()];
+    cpu.insert(*s.cloud, s.T_map_sensor, s.sensor);
+    batch.push_back(s);
+  }
+  InsertStats total;
+  for (const InsertStats& st : gpu.insertSequence(batch)) total.add(st);
+  EXPECT_STREQ(gpu.backendName(), "cuda") << gpu.backendReason();
+  std::printf("[gpu] %s: %llu of %zu scans staged during the scan before\n", what,
+              static_cast<unsigned long long>(total.scans_staged), order.size());
+  expectSameBlocks(cpu, gpu, what);
+  return total.scans_staged;
+}
+
+std::vector<size_t> firstN(size_t n) {
+  std::vector<size_t> out(n);
+  for (size_t i = 0; i < n; ++i) out[i] = i;
+  return out;
+}
+
 TEST(CudaBackendTest, AutoPicksCudaWithADeviceAndTheCpuOtherwise) {
   Map m(paramsFor(Backend::kAuto, 0.05));
   if (builtWithCuda() && !deviceName().empty()) {
@@ -231,6 +265,42 @@ TEST(CudaBackendTest, OptionsMatchTheCpu) {
   expectBackendsAgree(scans, p,
                       SensorModel::spinningLidar(-20 * M_PI / 180, 10 * M_PI / 180, 1.0, 25.0),
                       "explicit lidar model, min range");
+}
+
+TEST(CudaBackendTest, InsertSequenceStagesTheNextCloudAndIsByteIdentical) {
+  REQUIRE_DEVICE();
+  const SensorModel auto30 = SensorModel::autoFromCloud(0.0, 30.0);
+  const auto w1 = simulatedW1(5);
+  EXPECT_EQ(expectSequenceAgrees(w1, firstN(w1.size()), paramsFor(Backend::kCuda, 0.05), {auto30},
+                                 "W1 (20 scans) 30 m, one sequence"),
+            w1.size() - 1);
+  // Auto and explicit models in turn (statistics staged or not), the same cloud object twice
+  // in a row, the auto model on the host.
+  const auto synth = syntheticLidar(4, 2.0);
+  const std::vector<size_t> repeats = {0, 1, 1, 2, 3, 3, 2};
+  const SensorModel lidar =
+      SensorModel::spinningLidar(-20 * M_PI / 180, 10 * M_PI / 180, 1.0, 25.0);
+  EXPECT_EQ(expectSequenceAgrees(synth, repeats, paramsFor(Backend::kCuda, 0.1), {auto30, lidar},
+                                 "models in turn, a cloud twice"),
+            repeats.size() - 1);
+  MapParams host_auto = paramsFor(Backend::kCuda, 0.1);
+  host_auto.cuda.device_auto_sensor = false;
+  expectSequenceAgrees(synth, repeats, host_auto, {auto30}, "auto model on the host");
+  // A tiny pool: evictions, and passes redone behind a staged upload.
+  MapParams small = paramsFor(Backend::kCuda, 0.1);
+  small.cuda.pool_max_bytes = size_t(12000) * 2300;
+  const auto drive = outAndBack(syntheticLidar(8, 4.0));
+  expectSequenceAgrees(drive, firstN(drive.size()), small, {SensorModel::autoFromCloud(0.0, 20.0)},
+                       "tiny pool out and back");
+  // Organised frames with no-return clearing are prepared on the host: nothing is staged.
+  MapParams no_return = paramsFor(Backend::kCuda, 0.03);
+  no_return.clear_no_return_rays = true;
+  const auto frames = rgbdFrames();
+  EXPECT_EQ(expectSequenceAgrees(frames, firstN(frames.size()), no_return,
+                                 {SensorModel::autoFromCloud()}, "rgbd, no-return clearing"),
+            0u);
+  expectSequenceAgrees(frames, firstN(frames.size()), paramsFor(Backend::kCuda, 0.03),
+                       {SensorModel::autoFromCloud()}, "rgbd");
 }
 
 TEST(CudaBackendTest, PrepareKernelCountsLikeTheCpu) {
@@ -316,7 +386,7 @@ TEST(CudaBackendTest, AutoSensorStatsOnTheDeviceHaveTheHostsBits) {
       {"empty", PointCloud()}};
   for (const auto& [what, cloud] : clouds) {
     AutoSensorStats device;
-    ASSERT_TRUE(choice.backend->autoSensorStats(cloud, &device)) << what;
+    ASSERT_TRUE(choice.backend->autoSensorStats(cloud, &device, false)) << what;
     const AutoSensorStats host = gatherAutoSensorStats(cloud);
     expectSameStats(device, host, what);
     EXPECT_EQ(device.valid > 0, !cloud.empty()) << what;
@@ -511,6 +581,8 @@ CorrectionStats expectCorrectionAgrees(const std::vector<Input>& in, MapParams p
   EXPECT_STREQ(gpu.backendName(), "cuda") << gpu.backendReason();
   EXPECT_EQ(a.removal.cells_updated, b.removal.cells_updated) << what;
   EXPECT_EQ(a.insertion.cells_updated, b.insertion.cells_updated) << what;
+  // Each removal and re-insertion after the first had its points staged during the one before.
+  EXPECT_EQ(b.removal.scans_staged + b.insertion.scans_staged, 2 * fix.size() - 1) << what;
   std::printf(
       "[gpu] %s: %zu scans corrected, CPU %.1f ms, CUDA %.1f ms (uploaded %llu)\n", what,
       fix.size(), a.seconds_total * 1e3, b.seconds_total * 1e3,

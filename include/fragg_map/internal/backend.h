@@ -32,7 +32,8 @@ struct ScanInput {
   bool explicit_model;
   const CullContext& cull;  ///< coherence context of this scan
   /// The backend's autoSensorStats() was called with this very cloud just before (nothing in
-  /// between): what it kept of the cloud (the CUDA backend: its upload) may be used.
+  /// between), or the update just before staged it (UpdateSettings::stage_next): what the
+  /// backend kept of the cloud (the CUDA backend: its upload) may be used.
   bool cloud_staged = false;
 };
 
@@ -111,6 +112,14 @@ struct UpdateSettings {
   const PageInKeys* page_in = nullptr;
   /// With page_in: see PagedOutSaturated (null: no such block is known).
   const PagedOutSaturated* paged_out_saturated = nullptr;
+  /// A batch's next cloud (Map::insertSequence, Map::correctPoses): the backend may stage it
+  /// while it works on this scan (the CUDA backend copies it into pinned memory while the
+  /// device ray casts, then uploads it), for the next update, which gets that very cloud
+  /// unchanged and marked ScanInput::cloud_staged. Null: nothing to stage.
+  const PointCloud* stage_next = nullptr;
+  /// With stage_next: the next scan's model is auto; its statistics may be gathered too
+  /// (autoSensorStats() with `staged_ahead` then returns them).
+  bool stage_next_auto_stats = false;
 };
 
 class MapBackend {
@@ -165,9 +174,10 @@ class MapBackend {
   /// backend holds the points (CUDA: a reduction on the device beside the upload the scan needs
   /// anyway, which the scan's prepare then reuses: ScanInput::cloud_staged), with the same
   /// bits as gatherAutoSensorStats(). False when the backend has no such path (the map gathers
-  /// them on the host).
-  virtual bool autoSensorStats(const PointCloud& cloud, AutoSensorStats* out) {
-    (void)cloud, (void)out;
+  /// them on the host). `staged_ahead`: the update just before staged this very cloud
+  /// (UpdateSettings::stage_next); the statistics may come from that staging.
+  virtual bool autoSensorStats(const PointCloud& cloud, AutoSensorStats* out, bool staged_ahead) {
+    (void)cloud, (void)out, (void)staged_ahead;
     return false;
   }
   /// Where the host map's blocks are allocated (pinned memory for the CUDA backend).

@@ -17,6 +17,22 @@ namespace fragg::bench {
 
 using Clock = std::chrono::steady_clock;
 
+namespace {
+constexpr const char* kSequenceOption = "sequence";
+
+/// Whether the engine name carries `option` (a '+'-joined token after the backend).
+bool hasOption(const std::string& engine, const std::string& option) {
+  size_t begin = engine.find('+');
+  while (begin != std::string::npos) {
+    const size_t end = engine.find('+', begin + 1);
+    if (engine.substr(begin + 1, end == std::string::npos ? end : end - begin - 1) == option)
+      return true;
+    begin = end;
+  }
+  return false;
+}
+}  // namespace
+
 MapParams engineParams(const std::string& engine, const MapParams& base) {
   MapParams p = base;
   size_t begin = 0;
@@ -47,10 +63,15 @@ MapParams engineParams(const std::string& engine, const MapParams& base) {
       p.cuda.warp_per_slot_apply = false;
     } else if (token == "all-host-threads") {
       p.cuda.host_threads = 0;
+    } else if (token == "no-staging") {
+      p.cuda.stage_next_cloud = false;
+    } else if (token == kSequenceOption) {
+      // runFragg's: the scans go through Map::insertSequence; the params are the same.
     } else {
-      throw InvalidArgument("unknown engine option '" + token + "' in '" + engine +
-                            "' (pageable, plain-loads, no-coherence, bresenham, no-skip, "
-                            "no-coalesce, host-auto, block-apply, all-host-threads)");
+      throw InvalidArgument(
+          "unknown engine option '" + token + "' in '" + engine +
+          "' (pageable, plain-loads, no-coherence, bresenham, no-skip, "
+          "no-coalesce, host-auto, block-apply, all-host-threads, no-staging, sequence)");
     }
     begin = end + 1;
   }
@@ -65,13 +86,33 @@ Figures runFragg(const Workload& w, const std::string& engine, size_t count, int
   base.occupancy.unknown_band = 0.0;  // OctoMap's rule, for the agreement figures
   base.threads = threads;
   const MapParams p = engineParams(engine, base);
+  const bool sequence = hasOption(engine, kSequenceOption);
+  const SensorModel sensor = SensorModel::autoFromCloud(0.0, w.max_range_m);
   for (int r = 0; r < repeats; ++r) {
     Map map(p);
-    for (size_t i = 0; i < count; ++i) {
+    if (sequence) {
+      // One call over every scan; a scan's time is its own InsertStats::seconds_total (what
+      // it waited for: the scan before's staging of it ran while the device was busy).
+      std::vector<ScanToInsert> batch(count);
+      for (size_t i = 0; i < count; ++i) {
+        batch[i].cloud = &w.scans[i].cloud;
+        batch[i].T_map_sensor = w.scans[i].T_map_sensor;
+        batch[i].sensor = sensor;
+      }
+      const auto t0 = Clock::now();
+      const std::vector<InsertStats> all = map.insertSequence(batch);
+      f.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+      for (const InsertStats& st : all) {
+        f.ms.push_back(st.seconds_total * 1e3);
+        f.scan_stats.push_back(st);
+        f.visits += st.voxel_visits;
+        if (r + 1 == repeats) f.totals.add(st);
+      }
+    }
+    for (size_t i = 0; i < count && !sequence; ++i) {
       const Scan& s = w.scans[i];
       const auto t0 = Clock::now();
-      const InsertStats st =
-          map.insert(s.cloud, s.T_map_sensor, SensorModel::autoFromCloud(0.0, w.max_range_m));
+      const InsertStats st = map.insert(s.cloud, s.T_map_sensor, sensor);
       const double sec = std::chrono::duration<double>(Clock::now() - t0).count();
       f.ms.push_back(sec * 1e3);
       f.scan_stats.push_back(st);

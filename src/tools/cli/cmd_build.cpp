@@ -177,29 +177,52 @@ void runBuild(const BuildOptions& o) {
   Progress progress(source->size());
   InsertStats total;
   std::vector<double> ms_per_scan;
-  Scan scan, ahead;
-  size_t skipped_resumed = 0;
-  // The next scan is read on another thread while this one is integrated.
-  std::future<bool> ahead_read;
-  const auto readAhead = [&] {
-    ahead_read = std::async(std::launch::async, [&] { return source->next(ahead); });
-  };
-  const auto wanted = [&](size_t more) {
-    return o.max_scans == 0 || skipped_resumed + ms_per_scan.size() + more < o.max_scans;
-  };
-  const auto t0 = std::chrono::steady_clock::now();
-  if (wanted(0)) readAhead();
-  while (ahead_read.valid() && ahead_read.get()) {
-    std::swap(scan, ahead);
-    if (wanted(scan.cloud.empty() ? 0 : 1)) readAhead();
-    if (scan.cloud.empty()) continue;  // an empty message carries nothing to integrate
-    if (skipped_resumed < resumed) {   // in the store already
-      ++skipped_resumed;
-      continue;
+  // Scans are read a batch at a time on another thread while the batch before is integrated
+  // by one Map::insertSequence call (whose backend stages each next cloud during the scan
+  // before). The reader skips empty messages (nothing to integrate) and the scans a resumed
+  // page store holds already, and stops after --max-scans.
+  constexpr size_t kBatchScans = 16;
+  size_t skipped_resumed = 0, taken = 0;  // the reader's
+  bool input_left = true;                 // the reader's
+  const auto readBatch = [&](std::vector<Scan>& batch) {
+    batch.clear();
+    while (input_left && batch.size() < kBatchScans && (o.max_scans == 0 || taken < o.max_scans)) {
+      Scan scan;
+      if (!source->next(scan)) {
+        input_left = false;
+        break;
+      }
+      if (scan.cloud.empty()) continue;
+      ++taken;
+      if (skipped_resumed < resumed) {
+        ++skipped_resumed;
+        continue;
+      }
+      batch.push_back(std::move(scan));
     }
-    const InsertStats s = map.insert(scan.cloud, scan.T_map_sensor, sensor, scan.stamp_ns);
-    total.add(s);
-    ms_per_scan.push_back(s.seconds_total * 1e3);
+  };
+  std::vector<Scan> batch, ahead;
+  std::vector<ScanToInsert> to_insert;
+  const auto t0 = std::chrono::steady_clock::now();
+  std::future<void> ahead_read = std::async(std::launch::async, [&] { readBatch(ahead); });
+  for (;;) {
+    ahead_read.get();
+    if (ahead.empty()) break;  // input read, or --max-scans reached
+    std::swap(batch, ahead);
+    ahead_read = std::async(std::launch::async, [&] { readBatch(ahead); });
+    to_insert.clear();
+    for (const Scan& scan : batch) {
+      ScanToInsert s;
+      s.cloud = &scan.cloud;
+      s.T_map_sensor = scan.T_map_sensor;
+      s.sensor = sensor;
+      s.stamp_ns = scan.stamp_ns;
+      to_insert.push_back(s);
+    }
+    for (const InsertStats& s : map.insertSequence(to_insert)) {
+      total.add(s);
+      ms_per_scan.push_back(s.seconds_total * 1e3);
+    }
     progress.update(ms_per_scan.size());
   }
   progress.finish();
