@@ -111,8 +111,7 @@ TEST(InsertSequenceTest, EveryScanIsCheckedBeforeTheFirstIsInserted) {
     m.insertSequence(bad);
     FAIL() << "a non-finite pose in scan 6 was accepted";
   } catch (const InvalidArgument& e) {
-    EXPECT_NE(std::string(e.what()).find("scan 6 of the sequence"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("scan 6 of the sequence"), std::string::npos) << e.what();
   }
   bad = batch.scans;
   bad[3].cloud = nullptr;
