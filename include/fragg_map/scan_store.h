@@ -90,6 +90,9 @@ class ScanStore {
   /// The scan's points (read back from the spill folder if needed); throws InvalidArgument
   /// when they were dropped, IoError when a spill file is unreadable.
   EncodedPoints points(ScanId id) const;
+  /// The scan's points where they are held in memory (no copy; valid until the store
+  /// changes: add, erase, clear), else null.
+  const EncodedPoints* pointsInMemory(ScanId id) const;
   void setPose(ScanId id, const Eigen::Isometry3d& T_map_sensor);
   void erase(ScanId id);
   void clear();

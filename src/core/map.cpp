@@ -325,7 +325,11 @@ InsertStats Map::remove(ScanId id) {
   const auto t0 = std::chrono::steady_clock::now();
   requireRemovable(id);
   const ScanRecord how = scan_store_->record(id);
-  const PointCloud cloud = decodePoints(scan_store_->points(id));
+  PointCloud cloud;
+  if (const EncodedPoints* in_memory = scan_store_->pointsInMemory(id))
+    decodePoints(*in_memory, &cloud);
+  else
+    decodePoints(scan_store_->points(id), &cloud);  // spilled: read back
   InsertStats stats = integrateScan(cloud, how, /*remove=*/true, /*host_cull=*/false);
   scan_store_->erase(id);
   if (scans_ > 0) --scans_;
@@ -339,9 +343,11 @@ InsertStats Map::remove(ScanId id) {
 
 CorrectionStats Map::correctPoses(const std::map<ScanId, Eigen::Isometry3d>& T_map_sensor_new) {
   const auto t0 = std::chrono::steady_clock::now();
-  // Everything is checked (and spilled points read) before the map changes.
-  std::vector<EncodedPoints> points;
-  points.reserve(T_map_sensor_new.size());
+  // Everything is checked (and spilled points read) before the map changes; points held in
+  // memory are decoded in place (setPose changes records only).
+  std::vector<EncodedPoints> read_back;
+  read_back.reserve(T_map_sensor_new.size());
+  std::vector<const EncodedPoints*> points;
   for (const auto& [id, T] : T_map_sensor_new) {
     requireRemovable(id);
     try {
@@ -349,7 +355,9 @@ CorrectionStats Map::correctPoses(const std::map<ScanId, Eigen::Isometry3d>& T_m
     } catch (const InvalidArgument& e) {
       throw InvalidArgument("scan " + std::to_string(id) + ": " + e.what());
     }
-    points.push_back(scan_store_->points(id));
+    const EncodedPoints* in_memory = scan_store_->pointsInMemory(id);
+    if (!in_memory) read_back.push_back(scan_store_->points(id));
+    points.push_back(in_memory ? in_memory : &read_back.back());
   }
   CorrectionStats out;
   out.scans = T_map_sensor_new.size();
@@ -360,12 +368,12 @@ CorrectionStats Map::correctPoses(const std::map<ScanId, Eigen::Isometry3d>& T_m
   // on the current one (UpdateSettings::stage_next).
   const size_t n = moves.size(), steps = 2 * n;
   PointCloud cloud, following;
-  if (n > 0) decodePoints(points[0], &cloud);
+  if (n > 0) decodePoints(*points[0], &cloud);
   for (size_t step = 0; step < steps; ++step) {
     const size_t k = step % n;
     const bool last = step + 1 == steps;
     const bool same_next = !last && (step + 1) % n == k;  // one scan: its insertion follows
-    if (!last && !same_next) decodePoints(points[(step + 1) % n], &following);
+    if (!last && !same_next) decodePoints(*points[(step + 1) % n], &following);
     const PointCloud* stage = last ? nullptr : same_next ? &cloud : &following;
     const bool removal = step < n;
     if (!removal) scan_store_->setPose(moves[k].first, moves[k].second);

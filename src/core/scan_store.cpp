@@ -55,6 +55,11 @@ EncodedPoints ScanStore::points(ScanId id) const {
                         " were dropped (scan store over its memory budget, no spill folder)");
 }
 
+const EncodedPoints* ScanStore::pointsInMemory(ScanId id) const {
+  const auto it = scans_.find(id);
+  return it != scans_.end() && it->second.where == Where::kMemory ? &it->second.points : nullptr;
+}
+
 void ScanStore::setPose(ScanId id, const Eigen::Isometry3d& T_map_sensor) {
   const auto it = scans_.find(id);
   if (it == scans_.end()) throw InvalidArgument("no kept scan with index " + std::to_string(id));
