@@ -139,40 +139,48 @@ FRAGG_HD int ddaStep(DdaAxis& x, DdaAxis& y, DdaAxis& z) {
 /// other axes stays inside the block. Decrements `total` by the steps taken; returns the entry
 /// code of the cell reached (kSameBlock when the ray ended inside the block).
 FRAGG_HD int ddaLeaveBlock(DdaAxis& x, DdaAxis& y, DdaAxis& z, int& total) {
-  DdaAxis* axis[3] = {&x, &y, &z};
+  // Every axis is named, never indexed at run time: on the device an array of pointers to
+  // x, y, z would move all three (the whole walk's state) from registers to local memory.
   int exit_axis = -1, exit_steps = 0;
   float exit_t = INFINITY;
-  for (int a = 0; a < 3; ++a) {
-    const DdaAxis& d = *axis[a];
-    if (d.step == 0) continue;
+  const auto consider = [&](const DdaAxis& d, int a) {
+    if (d.step == 0) return;
     const int k = d.stepsToBlockFace();
-    if (k > d.remaining) continue;
+    if (k > d.remaining) return;
     const float t = d.boundaryT(d.next_b + (k - 1) * d.step);
     if (t <= exit_t) {  // ties go to the later axis
       exit_axis = a;
       exit_steps = k;
       exit_t = t;
     }
-  }
+  };
+  consider(x, 0);
+  consider(y, 1);
+  consider(z, 2);
   if (exit_axis < 0) {  // the ray ends in this block
-    for (DdaAxis* d : axis) {
-      total -= d->remaining;
-      d->advanceBy(d->remaining);
-    }
+    total -= x.remaining + y.remaining + z.remaining;
+    x.advanceBy(x.remaining);
+    y.advanceBy(y.remaining);
+    z.advanceBy(z.remaining);
     return kSameBlock;
   }
-  for (int b = 0; b < 3; ++b) {
-    if (b == exit_axis) continue;
-    DdaAxis& d = *axis[b];
+  // The other axes' steps before the exit, then the exit axis's.
+  const auto follow = [&](DdaAxis& d, int b) {
+    if (b == exit_axis) {
+      d.advanceBy(exit_steps);
+      total -= exit_steps;
+      return;
+    }
     while (d.remaining > 0 && (d.t_max < exit_t || (d.t_max == exit_t && b > exit_axis))) {
       d.advance();
       --total;
     }
-  }
-  DdaAxis& e = *axis[exit_axis];
-  e.advanceBy(exit_steps);
-  total -= exit_steps;
-  return blockFace(exit_axis, e.step);
+  };
+  follow(x, 0);
+  follow(y, 1);
+  follow(z, 2);
+  const int exit_step = exit_axis == 0 ? x.step : exit_axis == 1 ? y.step : z.step;
+  return blockFace(exit_axis, exit_step);
 }
 
 template <class Visit>

@@ -178,7 +178,9 @@ TEST(RaycastTest, ClearingMarginSkipsTheFreeCellsItsRayLeavesNearTheHit) {
       EXPECT_FALSE(got.hits[i]);
     }
     // After skipped cells the hit cannot follow a block face from its predecessor.
-    if (free_expected < 10) EXPECT_EQ(got.entries.back(), kUnknownBlock) << keep;
+    if (free_expected < 10) {
+      EXPECT_EQ(got.entries.back(), kUnknownBlock) << keep;
+    }
   }
   // A free-only ray (clipped at max range) has no surface to protect: the margin is ignored.
   ray.end_is_hit = false;
@@ -325,8 +327,9 @@ TEST(RaycastTest, LeavingABlockInOneJumpLandsWhereSteppingDoes) {
           << "trial " << trial << " cell " << i;
       EXPECT_EQ(got.hits[i], want.hits[i]) << "trial " << trial << " cell " << i;
       // After a jump the entry code names the face crossed into the new block.
-      if (i > 0 && blockKeyOf(got.cells[i]) != blockKeyOf(got.cells[i - 1]) && !got.hits[i])
+      if (i > 0 && blockKeyOf(got.cells[i]) != blockKeyOf(got.cells[i - 1]) && !got.hits[i]) {
         EXPECT_EQ(got.entries[i], want.entries[i]) << "trial " << trial << " cell " << i;
+      }
     }
     jumped_cells += all.cells.size() - got.cells.size();
   }
