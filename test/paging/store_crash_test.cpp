@@ -226,6 +226,28 @@ TEST(CliPaging, StoresAreReadWhereMapsAreAndBadFlagsAreRefused) {
   EXPECT_NE(out.find("no such file"), std::string::npos) << out;
 }
 
+TEST(CliPaging, BatchesStopAtTheScanLimitAndAResumedStoreMatchesOneBuild) {
+  // The CLI inserts batches of 16 scans (Map::insertSequence): a limit inside a batch, and a
+  // store continued from a count that is not a multiple of 16, give the one build's map.
+  const std::string dir = testDir();
+  writeKittiSequence(dir);
+  const std::string input = "'" + dir + "' --resolution 0.1 --max-range 15 --backend cpu";
+  const std::string store = "'" + dir + "/r.db'";
+  std::string out;
+  ASSERT_EQ(runCli(dir, "build " + input + " --scans 37 -o '" + dir + "/all.fgm' --json", &out), 0)
+      << out;
+  EXPECT_NE(out.find("\"scans\":37"), std::string::npos) << out;
+  ASSERT_EQ(runCli(dir, "build " + input + " --scans 21 --page-store " + store, &out), 0) << out;
+  ASSERT_EQ(runCli(dir, "build " + input + " --scans 37 --page-store " + store + " --json", &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("\"scans\":16"), std::string::npos) << "the 16 scans after 21: " << out;
+  ASSERT_EQ(runCli(dir, "stats " + store, &out), 0) << out;
+  EXPECT_NE(out.find("scans        37"), std::string::npos) << out;
+  ASSERT_EQ(runCli(dir, "compare " + store + " '" + dir + "/all.fgm' --json", &out), 0) << out;
+  EXPECT_NE(out.find("\"agreement_in_either\":1.0"), std::string::npos) << out;
+}
+
 INSTANTIATE_TEST_SUITE_P(Stores, StoreCrash,
                          ::testing::Values(PageStoreKind::kSqlite, PageStoreKind::kLmdb),
                          [](const auto& info) {
