@@ -83,10 +83,6 @@ void DeviceScan::uploadPoints(const PointCloud& cloud) {
   points_.toDevice(3 * n, stream_);
 }
 
-AutoSensorStats DeviceScan::gatherAutoSensorStats(const PointCloud& cloud) {
-  return gatherAutoSensorStats(cloud, false);
-}
-
 AutoSensorStats DeviceScan::gatherAutoSensorStats(const PointCloud& cloud, bool staged_ahead) {
   const bool ready = staged_ahead && stats_ahead_ && staged_points_ == cloud.points_S.data() &&
                      staged_size_ == cloud.size();

@@ -31,10 +31,8 @@ class DeviceScan {
 
   /// Uploads the cloud's points and gathers the auto sensor model's statistics on the device
   /// (the bits of gatherAutoSensorStats()). The upload is kept for this cloud's prepare()
-  /// when the scan says so (ScanInput::cloud_staged).
-  AutoSensorStats gatherAutoSensorStats(const PointCloud& cloud);
-  /// The same for a cloud stageAhead() staged with its statistics (`staged_ahead`: the caller
-  /// says this is that cloud, unchanged): only waits for them.
+  /// when the scan says so (ScanInput::cloud_staged). `staged_ahead`: the caller says this is
+  /// the cloud stageAhead() staged, unchanged; with its statistics staged too, only waits.
   AutoSensorStats gatherAutoSensorStats(const PointCloud& cloud, bool staged_ahead);
 
   /// A batch's next cloud, while the device still works on this scan (its rays and prepared

@@ -192,7 +192,8 @@ InsertStats Map::insertChecked(const PointCloud& cloud, const Eigen::Isometry3d&
   const double seconds_model =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  const PointCloud* stage_next = next && &used == &cloud ? next->cloud : nullptr;
+  // insertSequence passes `next` only when `used` is the caller's cloud (no band, no quantising).
+  const PointCloud* stage_next = next ? next->cloud : nullptr;
   InsertStats stats =
       integrateScan(used, how, /*remove=*/false, /*host_cull=*/true, staged || staged_ahead,
                     stage_next, stage_next && next->sensor.type == SensorType::kAuto);
@@ -268,7 +269,7 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   UpdateSettings settings{params, model_, revision_ + 1, page_in ? &page_in : nullptr,
                           page_in ? &paged_out_saturated : nullptr};
   settings.stage_next = stage_next;
-  settings.stage_next_auto_stats = stage_next && stage_next_auto_stats;
+  settings.stage_next_auto_stats = stage_next_auto_stats;
   const ScanUpdate what = remove ? ScanUpdate::kRemove : ScanUpdate::kIntegrate;
   // Readers may be writing the cache back (they share the map): not while the scan runs.
   std::lock_guard<std::mutex> lock(*sync_mutex_);

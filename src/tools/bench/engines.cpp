@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <string>
+#include <vector>
 
 #include "fragg_map/errors.h"
 
@@ -20,30 +22,31 @@ using Clock = std::chrono::steady_clock;
 namespace {
 constexpr const char* kSequenceOption = "sequence";
 
-/// Whether the engine name carries `option` (a '+'-joined token after the backend).
-bool hasOption(const std::string& engine, const std::string& option) {
-  size_t begin = engine.find('+');
-  while (begin != std::string::npos) {
-    const size_t end = engine.find('+', begin + 1);
-    if (engine.substr(begin + 1, end == std::string::npos ? end : end - begin - 1) == option)
-      return true;
-    begin = end;
+/// The '+'-joined tokens of an engine name: the backend, then its options.
+std::vector<std::string> engineTokens(const std::string& engine) {
+  std::vector<std::string> tokens;
+  for (size_t begin = 0; begin <= engine.size();) {
+    const size_t end = std::min(engine.find('+', begin), engine.size());
+    tokens.push_back(engine.substr(begin, end - begin));
+    begin = end + 1;
   }
-  return false;
+  return tokens;
+}
+
+/// Whether the engine name carries `option` after its backend.
+bool hasOption(const std::string& engine, const std::string& option) {
+  const std::vector<std::string> tokens = engineTokens(engine);
+  return std::find(tokens.begin() + 1, tokens.end(), option) != tokens.end();
 }
 }  // namespace
 
 MapParams engineParams(const std::string& engine, const MapParams& base) {
   MapParams p = base;
-  size_t begin = 0;
-  bool first = true;
-  while (begin <= engine.size()) {
-    const size_t end = std::min(engine.find('+', begin), engine.size());
-    const std::string token = engine.substr(begin, end - begin);
-    if (first) {
-      p.backend = backendFromString(token);
-      first = false;
-    } else if (token == "pageable") {
+  const std::vector<std::string> tokens = engineTokens(engine);
+  p.backend = backendFromString(tokens.front());
+  for (size_t i = 1; i < tokens.size(); ++i) {
+    const std::string& token = tokens[i];
+    if (token == "pageable") {
       p.cuda.pinned_host_blocks = false;
     } else if (token == "plain-loads") {
       p.cuda.readonly_ray_loads = false;
@@ -73,7 +76,6 @@ MapParams engineParams(const std::string& engine, const MapParams& base) {
           "' (pageable, plain-loads, no-coherence, bresenham, no-skip, "
           "no-coalesce, host-auto, block-apply, all-host-threads, no-staging, sequence)");
     }
-    begin = end + 1;
   }
   return p;
 }
