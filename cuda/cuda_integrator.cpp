@@ -118,6 +118,7 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
     args.remove = what == ScanUpdate::kRemove;
     args.coalesce = how.params.cuda.coalesce_ray_marks;
     args.skip_saturated = how.params.skip_saturated_blocks && !args.remove;
+    args.piece_steps = how.params.cuda.ray_piece_steps;
     args.counters = scan_.countersOnDevice();
     ray_start_.record(stream_);
     launchRaycast(args, how.params.raycast, how.params.cuda.readonly_ray_loads, stream_);

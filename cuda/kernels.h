@@ -44,8 +44,12 @@ struct RaycastArgs {
   bool coalesce = true;
   /// Misses skip blocks whose cells are all at the lower clamp (never when removing).
   bool skip_saturated = true;
+  /// > 0: rays cut into pieces of this many steps of their major axis, shared by the CTA's
+  /// threads (CudaParams::ray_piece_steps); 0: one thread a ray. DDA only.
+  int piece_steps = 0;
 };
-/// One thread a ray: marks FREE / HIT scratch bits, allocating slots for new blocks.
+/// One thread a ray, or pieces of rays (piece_steps): marks FREE / HIT scratch bits, allocating
+/// slots for new blocks.
 void launchRaycast(const RaycastArgs& args, RayCast mode, bool readonly_loads, cudaStream_t stream);
 
 /// Lists (and stamps) the slots the ray pass marked (ScanCounters::touched must be 0 before).

@@ -1,6 +1,7 @@
-// The ray pass: one thread a ray, the same traversal as the CPU backend (raycast.h), marking
-// FREE / HIT bits in the scratch of the block's slot. Blocks without a slot get one from the
-// free stack the first time a ray enters them.
+// The ray pass: one thread a ray, or a CTA's rays cut into pieces that its threads share; the
+// same traversal as the CPU backend (raycast.h), marking FREE / HIT bits in the scratch of the
+// block's slot. Blocks without a slot get one from the free stack the first time a ray enters
+// them.
 #include "cuda_check.h"
 #include "fragg_map/raycast.h"
 #include "kernels.h"
@@ -149,35 +150,138 @@ __global__ void compactTouchedKernel(SlotArrays s, uint32_t scan, ScanCounters* 
   }
 }
 
+static_assert(sizeof(RayEnd) == sizeof(float4), "a ray end is read as one float4");
+
+template <bool kReadOnly>
+__device__ float4 loadRay(const RaycastArgs& a, uint32_t i) {
+  const float4* rays = reinterpret_cast<const float4*>(a.rays);
+  return kReadOnly ? __ldg(rays + i) : rays[i];
+}
+
+__device__ RayVox rayOf(const RaycastArgs& a, const float4& end) {
+  const uint32_t hit = __float_as_uint(end.w);
+  return RayVox{a.ref,
+                {a.start_v[0], a.start_v[1], a.start_v[2]},
+                {end.x, end.y, end.z},
+                hit != 0,
+                marginOfHitCode(hit)};
+}
+
+__device__ void clearFilter(unsigned long long* filter) {
+  for (int k = threadIdx.x; k < kFilterEntries; k += blockDim.x) filter[k] = ~0ull << 32;
+}
+
+__device__ void addVisits(const RaycastArgs& a, unsigned long long visits) {
+  visits = warpSum(visits);
+  if ((threadIdx.x & 31) == 0 && visits) atomicAdd(&a.counters->visits, visits);
+}
+
+/// One thread a ray.
 template <bool kReadOnly, bool kBresenham>
 __global__ void __launch_bounds__(kThreads) raycastKernel(RaycastArgs a) {
   __shared__ unsigned long long filter[kFilterEntries];
-  for (int k = threadIdx.x; k < kFilterEntries; k += blockDim.x) filter[k] = ~0ull << 32;
+  clearFilter(filter);
   __syncthreads();
   const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   unsigned long long visits = 0;
   if (i < a.num_rays) {
-    RayEnd e;
-    if (kReadOnly) {
-      const float4 raw = __ldg(reinterpret_cast<const float4*>(a.rays) + i);
-      e.end_v[0] = raw.x;
-      e.end_v[1] = raw.y;
-      e.end_v[2] = raw.z;
-      e.hit = __float_as_uint(raw.w);
-    } else {
-      e = a.rays[i];
-    }
-    const RayVox ray{a.ref,
-                     {a.start_v[0], a.start_v[1], a.start_v[2]},
-                     {e.end_v[0], e.end_v[1], e.end_v[2]},
-                     e.hit != 0,
-                     marginOfHitCode(e.hit)};
+    const RayVox ray = rayOf(a, loadRay<kReadOnly>(a, i));
     DeviceMarker mark{a, MarkFilter{filter}};
     visits = kBresenham ? traverseBresenham(ray, mark) : traverseDda(ray, mark);
     mark.flush();
   }
-  visits = warpSum(visits);
-  if ((threadIdx.x & 31) == 0 && visits) atomicAdd(&a.counters->visits, visits);
+  addVisits(a, visits);
+}
+
+/// A CTA's rays cut into pieces (DdaPiece) of `a.piece_steps` steps of their major axis, so
+/// that its threads share the walks evenly instead of each warp waiting for its longest ray.
+/// At most kMaxPieces a ray (a longer ray gets longer pieces).
+constexpr int kMaxPieces = 64;
+constexpr int kWarps = kThreads / 32;
+
+/// The CTA's work list, piece by piece: every ray's first piece, then the second pieces of the
+/// rays that have one, and so on, rays in order within each layer. A warp's consecutive items
+/// are then the same piece of neighbouring rays (nearby cells: the mark filter and L1 keep
+/// their locality), and the threads stride through the list, so none waits for a long ray.
+struct PieceList {
+  uint8_t ray[kThreads * kMaxPieces];  ///< the CTA's ray of each item
+  uint16_t layer_start[kMaxPieces + 1];
+  uint16_t warp_count[kWarps][kMaxPieces];  ///< a warp's rays with a piece in each layer
+};
+
+/// Fills `list` from each thread's piece count (0 without a ray). Every thread of the CTA
+/// calls it; warp_count must be zero and visible to all threads on entry.
+__device__ void buildPieceList(PieceList& list, int pieces) {
+  const unsigned lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
+  for (int k = 0; __any_sync(kFullMask, pieces > k); ++k) {
+    const unsigned have = __ballot_sync(kFullMask, pieces > k);
+    if (lane == 0) list.warp_count[warp][k] = static_cast<uint16_t>(__popc(have));
+  }
+  __syncthreads();
+  if (warp == 0) {  // layer sizes, two layers a lane, then a warp-wide scan
+    unsigned size[2];
+    for (int h = 0; h < 2; ++h) {
+      size[h] = 0;
+      for (int w = 0; w < kWarps; ++w) size[h] += list.warp_count[w][2 * lane + h];
+    }
+    const unsigned pair = size[0] + size[1];
+    unsigned sum = pair;
+    for (int d = 1; d < 32; d *= 2) {
+      const unsigned up = __shfl_up_sync(kFullMask, sum, d);
+      if (lane >= d) sum += up;
+    }
+    list.layer_start[2 * lane] = static_cast<uint16_t>(sum - pair);
+    list.layer_start[2 * lane + 1] = static_cast<uint16_t>(sum - pair + size[0]);
+    if (lane == 31) list.layer_start[kMaxPieces] = static_cast<uint16_t>(sum);
+  }
+  __syncthreads();
+  const unsigned below = (1u << lane) - 1u;
+  for (int k = 0; __any_sync(kFullMask, pieces > k); ++k) {
+    const unsigned have = __ballot_sync(kFullMask, pieces > k);
+    if (pieces <= k) continue;
+    unsigned pos = list.layer_start[k] + __popc(have & below);
+    for (int w = 0; w < static_cast<int>(warp); ++w) pos += list.warp_count[w][k];
+    list.ray[pos] = static_cast<uint8_t>(threadIdx.x);
+  }
+  __syncthreads();
+}
+
+template <bool kReadOnly>
+__global__ void __launch_bounds__(kThreads) raycastPiecesKernel(RaycastArgs a) {
+  static_assert(kThreads <= 256 && kThreads * kMaxPieces <= 65535, "item indices fit");
+  __shared__ unsigned long long filter[kFilterEntries];
+  __shared__ float4 ray_end[kThreads];
+  __shared__ int piece_len[kThreads];  ///< major-axis steps a piece of each ray
+  __shared__ PieceList list;
+  clearFilter(filter);
+  for (int k = threadIdx.x; k < kWarps * kMaxPieces; k += blockDim.x)
+    (&list.warp_count[0][0])[k] = 0;
+  const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+  int pieces = 0;
+  if (i < a.num_rays) {
+    const float4 end = loadRay<kReadOnly>(a, i);
+    ray_end[threadIdx.x] = end;
+    const int major = ddaMajorSteps(rayOf(a, end));
+    const int per_piece = a.piece_steps;
+    const int len =
+        major > per_piece * kMaxPieces ? (major + kMaxPieces - 1) / kMaxPieces : per_piece;
+    piece_len[threadIdx.x] = len;
+    pieces = major > 0 ? (major + len - 1) / len : 1;
+  }
+  __syncthreads();
+  buildPieceList(list, pieces);
+  const int items = list.layer_start[kMaxPieces];
+  unsigned long long visits = 0;
+  int k = 0;
+  for (int item = threadIdx.x; item < items; item += kThreads) {
+    while (item >= list.layer_start[k + 1]) ++k;
+    const int r = list.ray[item];
+    const int len = piece_len[r];
+    DeviceMarker mark{a, MarkFilter{filter}};
+    visits += traverseDdaPiece(rayOf(a, ray_end[r]), DdaPiece{k * len, (k + 1) * len}, mark);
+    mark.flush();
+  }
+  addVisits(a, visits);
 }
 }  // namespace
 
@@ -186,7 +290,12 @@ void launchRaycast(const RaycastArgs& args, RayCast mode, bool readonly_loads,
   if (args.num_rays == 0) return;
   const unsigned grid = blocksFor(args.num_rays, kThreads);
   const bool bresenham = mode == RayCast::kBresenham;
-  if (readonly_loads && !bresenham)
+  if (!bresenham && args.piece_steps > 0) {
+    if (readonly_loads)
+      raycastPiecesKernel<true><<<grid, kThreads, 0, stream>>>(args);
+    else
+      raycastPiecesKernel<false><<<grid, kThreads, 0, stream>>>(args);
+  } else if (readonly_loads && !bresenham)
     raycastKernel<true, false><<<grid, kThreads, 0, stream>>>(args);
   else if (readonly_loads)
     raycastKernel<true, true><<<grid, kThreads, 0, stream>>>(args);

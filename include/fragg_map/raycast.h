@@ -113,11 +113,6 @@ template <class V>
 struct CanSkipBlock<V, std::void_t<decltype(std::declval<const V&>().skippingBlock())>>
     : std::true_type {};
 
-/// Exact 3D DDA (Amanatides & Woo). Visits every cell the segment passes through, in order,
-/// 6-connected; the per-axis step counts are fixed up front, so the walk always ends in the
-/// endpoint's cell. `visit(key, is_hit, entry)` is called once per cell (entry: kSameBlock,
-/// kUnknownBlock or the face crossed into a new block) except the free cells inside a hit's
-/// clearing margin (then the hit comes with kUnknownBlock); returns how many cells it visited.
 /// One DDA step: the smallest t_max advances; ties go to the later axis, as in OctoMap's
 /// computeRayKeys. An exhausted axis has an infinite t_max, and an axis with steps left a
 /// finite one, so an exhausted axis is never chosen while steps remain. Returns the entry code
@@ -183,19 +178,97 @@ FRAGG_HD int ddaLeaveBlock(DdaAxis& x, DdaAxis& y, DdaAxis& z, int& total) {
   return blockFace(exit_axis, exit_step);
 }
 
+/// A part of one ray's walk, so that several threads can share a long ray (the CUDA ray pass).
+/// The pieces are cut at the steps of the ray's major axis (the one with the most steps, the
+/// first of equals): a piece holds the cells from the one the major axis's step `first_major`
+/// enters (the ray's first cell when 0) up to, not including, the one its step `end_major`
+/// enters; the piece with `end_major` >= the major axis's step count runs to the endpoint and
+/// visits the hit. Pieces [0, a), [a, b), ..., [z, end) hold every cell of the whole walk once.
+struct DdaPiece {
+  int first_major = 0;
+  int end_major = 0x7fffffff;  ///< the default piece is the whole walk
+};
+
+/// The major axis (0, 1, 2) of a walk whose axes take `sx`, `sy`, `sz` steps.
+FRAGG_HD int ddaMajorAxis(int sx, int sy, int sz) {
+  return sx >= sy ? (sx >= sz ? 0 : 2) : (sy >= sz ? 1 : 2);
+}
+
+/// Steps the major axis of `ray`'s walk takes (0 when the ray starts and ends in one cell).
+FRAGG_HD int ddaMajorSteps(const RayVox& ray) {
+  int most = 0;
+  for (int a = 0; a < 3; ++a) {
+    const int d = floorToInt(ray.end_v[a]) - floorToInt(ray.start_v[a]);
+    most = d > most ? d : (-d > most ? -d : most);
+  }
+  return most;
+}
+
+/// How many steps axis `d` (index `a`, at the ray's start) takes before the major axis (index
+/// `m`) crosses its boundary at ray parameter `t_m`: its boundaries at a smaller parameter, and
+/// those at the same one when a > m (ddaStep: ties go to the later axis). The walk's steps are
+/// the three axes' boundaries merged in that order, so this is exactly where stepping stands.
+FRAGG_HD int ddaStepsBefore(const DdaAxis& d, int a, int m, float t_m) {
+  if (d.step == 0 || d.remaining == 0) return 0;
+  // First guess from where the ray is on this axis at t_m; then the same compares as ddaStep.
+  const float u = d.start_v + t_m / d.inv_d;
+  float guess =
+      ceilf(d.step > 0 ? u - static_cast<float>(d.next_b) : static_cast<float>(d.next_b) - u);
+  guess = guess < 0.f ? 0.f : guess;
+  int i = guess > static_cast<float>(d.remaining) ? d.remaining : static_cast<int>(guess);
+  const auto before = [&](int k) {
+    const float t = d.boundaryT(d.next_b + k * d.step);
+    return t < t_m || (t == t_m && a > m);
+  };
+  while (i > 0 && !before(i - 1)) --i;
+  while (i < d.remaining && before(i)) ++i;
+  return i;
+}
+
+/// The steps each axis (at the ray's start) has taken right after the major axis's step
+/// `j` >= 1, in `c[3]`. The axes are passed by name (see ddaLeaveBlock).
+FRAGG_HD void ddaStepsAtMajorStep(const DdaAxis& x, const DdaAxis& y, const DdaAxis& z, int m,
+                                  int j, int c[3]) {
+  const float t_m = m == 0   ? x.boundaryT(x.next_b + (j - 1) * x.step)
+                    : m == 1 ? y.boundaryT(y.next_b + (j - 1) * y.step)
+                             : z.boundaryT(z.next_b + (j - 1) * z.step);
+  c[0] = m == 0 ? j : ddaStepsBefore(x, 0, m, t_m);
+  c[1] = m == 1 ? j : ddaStepsBefore(y, 1, m, t_m);
+  c[2] = m == 2 ? j : ddaStepsBefore(z, 2, m, t_m);
+}
+
+/// traverseDda over one piece of the walk (DdaPiece); the first cell of a piece that does not
+/// start the ray comes with kUnknownBlock. Returns how many cells it visited.
 template <class Visit>
-FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
+FRAGG_HD int traverseDdaPiece(const RayVox& ray, const DdaPiece& piece, Visit& visit) {
   DdaAxis x, y, z;
   x.init(ray.ref.x, ray.start_v[0], ray.end_v[0]);
   y.init(ray.ref.y, ray.start_v[1], ray.end_v[1]);
   z.init(ray.ref.z, ray.start_v[2], ray.end_v[2]);
   int total = x.remaining + y.remaining + z.remaining;
+  const int m = ddaMajorAxis(x.remaining, y.remaining, z.remaining);
+  const int major_steps = m == 0 ? x.remaining : m == 1 ? y.remaining : z.remaining;
+  const bool last_piece = piece.end_major >= major_steps;
+  int total_end = 0;  // the walk stops when this many steps are left
+  if (!last_piece) {
+    int c[3];
+    ddaStepsAtMajorStep(x, y, z, m, piece.end_major, c);
+    total_end = total - (c[0] + c[1] + c[2]);
+  }
+  if (piece.first_major > 0) {
+    int c[3];
+    ddaStepsAtMajorStep(x, y, z, m, piece.first_major, c);
+    x.advanceBy(c[0]);
+    y.advanceBy(c[1]);
+    z.advanceBy(c[2]);
+    total -= c[0] + c[1] + c[2];
+  }
   const float keep_after_t = keepAfterT(ray);
   const bool has_margin = keep_after_t <= 1.f;  // else no cell is ever inside it
   int visited = 0;
   int entry = kUnknownBlock;
   bool skipped = false;
-  while (total > 0) {
+  while (total > total_end) {
     // The current cell's exit parameter is the smallest t_max (an axis with steps left has a
     // finite one). Exits grow along the ray, so once inside the margin, every later free cell
     // is too: the walk only follows the axes from there.
@@ -214,11 +287,21 @@ FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
     entry = ddaStep(x, y, z);
     --total;
   }
-  if (ray.end_is_hit) {
+  if (last_piece && ray.end_is_hit) {
     visit(VoxelKey{x.cur, y.cur, z.cur}, true, skipped ? kUnknownBlock : entry);
     ++visited;
   }
   return visited;
+}
+
+/// Exact 3D DDA (Amanatides & Woo). Visits every cell the segment passes through, in order,
+/// 6-connected; the per-axis step counts are fixed up front, so the walk always ends in the
+/// endpoint's cell. `visit(key, is_hit, entry)` is called once per cell (entry: kSameBlock,
+/// kUnknownBlock or the face crossed into a new block) except the free cells inside a hit's
+/// clearing margin (then the hit comes with kUnknownBlock); returns how many cells it visited.
+template <class Visit>
+FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
+  return traverseDdaPiece(ray, DdaPiece{}, visit);
 }
 
 FRAGG_HD int absInt(int v) { return v < 0 ? -v : v; }

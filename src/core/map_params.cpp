@@ -52,6 +52,10 @@ void MapParams::validate() const {
   if (cuda.host_threads < 0)
     throw InvalidArgument("cuda.host_threads must be >= 0 (0 = every core), got " +
                           std::to_string(cuda.host_threads));
+  if (cuda.ray_piece_steps < 0 || cuda.ray_piece_steps > 4096)
+    throw InvalidArgument(
+        "cuda.ray_piece_steps must be in [0, 4096] cells (0 = one thread a ray), got " +
+        std::to_string(cuda.ray_piece_steps));
   if (!std::isfinite(scans.point_step_m) || scans.point_step_m < 0.0 || scans.point_step_m > 0.1)
     throw InvalidArgument("scans.point_step_m must be in [0, 0.1] m (0 = float32), got " +
                           std::to_string(scans.point_step_m));

@@ -276,5 +276,18 @@ TEST(MapParamsTest, CudaHostThreadsBelowZeroAreRefused) {
   EXPECT_NO_THROW(Map{p});
 }
 
+TEST(MapParamsTest, CudaRayPieceStepsOutsideTheRangeAreRefused) {
+  MapParams p;
+  p.backend = Backend::kCpu;
+  for (int bad : {-1, 4097}) {
+    p.cuda.ray_piece_steps = bad;
+    EXPECT_THROW(Map{p}, InvalidArgument) << bad;
+  }
+  for (int good : {0, 1, 32, 4096}) {
+    p.cuda.ray_piece_steps = good;
+    EXPECT_NO_THROW(Map{p}) << good;
+  }
+}
+
 }  // namespace
 }  // namespace fragg

@@ -336,5 +336,91 @@ TEST(RaycastTest, LeavingABlockInOneJumpLandsWhereSteppingDoes) {
   EXPECT_GT(jumped_cells, 20000u);
 }
 
+/// A random ray as the jump test draws them: every direction and length, flat rays (ties,
+/// axes without steps), hits and free-only rays, some with a clearing margin.
+RayVox randomRay(std::mt19937& rng, int trial) {
+  std::uniform_real_distribution<float> u(-40.f, 40.f), frac(0.f, 1.f);
+  RayVox ray{VoxelKey{int(rng() % 64) - 32, int(rng() % 64) - 32, -5},
+             {frac(rng), frac(rng), frac(rng)},
+             {u(rng), u(rng), u(rng) / 4},
+             trial % 3 != 0,
+             trial % 5 == 0 ? 1.5f : 0.f};
+  if (trial % 7 == 0) ray.end_v[2] = ray.start_v[2] + 0.25f;
+  if (trial % 11 == 0) ray.end_v[0] = ray.start_v[0] + float(trial % 5) - 2.f;  // exact ties
+  return ray;
+}
+
+TEST(RaycastTest, PiecesOfAWalkAreTheWholeWalkCutAtMajorSteps) {
+  // Pieces of every length laid end to end give the whole walk's cells, hits and entry codes
+  // (a piece's first cell comes with kUnknownBlock), each cell once; only the last piece has
+  // the hit; the visit counts add up.
+  std::mt19937 rng(11);
+  size_t pieces_walked = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const RayVox ray = randomRay(rng, trial);
+    Collect whole;
+    const int whole_visited = traverseDda(ray, whole);
+    const int major = ddaMajorSteps(ray);
+    for (int len : {1, 2, 3, 7, 16, 64}) {
+      Collect joined;
+      int visited = 0;
+      std::vector<size_t> starts;
+      for (int first = 0; first == 0 || first < major; first += len) {
+        starts.push_back(joined.cells.size());
+        visited += traverseDdaPiece(ray, DdaPiece{first, first + len}, joined);
+        ++pieces_walked;
+      }
+      ASSERT_EQ(joined.cells.size(), whole.cells.size()) << "trial " << trial << " len " << len;
+      EXPECT_EQ(visited, whole_visited);
+      for (size_t i = 0; i < whole.cells.size(); ++i) {
+        ASSERT_EQ(tupleOf(joined.cells[i]), tupleOf(whole.cells[i]))
+            << "trial " << trial << " len " << len << " cell " << i;
+        EXPECT_EQ(joined.hits[i], whole.hits[i]);
+        const bool piece_start =
+            i > 0 && std::find(starts.begin(), starts.end(), i) != starts.end();
+        EXPECT_EQ(joined.entries[i], piece_start ? kUnknownBlock : whole.entries[i])
+            << "trial " << trial << " len " << len << " cell " << i;
+      }
+    }
+  }
+  EXPECT_GT(pieces_walked, 100000u);
+}
+
+TEST(RaycastTest, PiecesSkippingBlocksMarkWhatTheWholeWalkMarks) {
+  // With saturated blocks skipped, a piece that starts inside one visits its first cell
+  // (which the whole walk jumped over), so visits may differ; the cells that get a mark (the
+  // free cells of blocks not skipped, and the hit) must be the same, in order.
+  std::mt19937 rng(13);
+  const auto marked = [](const Collect& c) {
+    std::vector<std::tuple<int, int, int, bool>> out;
+    for (size_t i = 0; i < c.cells.size(); ++i)
+      if (c.hits[i] || !SkipSomeBlocks::skipped(blockKeyOf(c.cells[i])))
+        out.emplace_back(c.cells[i].x, c.cells[i].y, c.cells[i].z, c.hits[i]);
+    return out;
+  };
+  size_t marks = 0, piece_starts_in_skipped_blocks = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const RayVox ray = randomRay(rng, trial);
+    SkipSomeBlocks whole;
+    traverseDda(ray, whole);
+    const int major = ddaMajorSteps(ray);
+    for (int len : {1, 5, 8, 33}) {
+      SkipSomeBlocks joined;
+      for (int first = 0; first == 0 || first < major; first += len) {
+        SkipSomeBlocks piece;
+        traverseDdaPiece(ray, DdaPiece{first, first + len}, piece);
+        for (size_t i = 0; i < piece.cells.size(); ++i)
+          joined.Collect::operator()(piece.cells[i], piece.hits[i], piece.entries[i]);
+      }
+      ASSERT_EQ(marked(joined), marked(whole)) << "trial " << trial << " len " << len;
+      ASSERT_LE(whole.cells.size(), joined.cells.size());
+      piece_starts_in_skipped_blocks += joined.cells.size() - whole.cells.size();
+    }
+    marks += marked(whole).size();
+  }
+  EXPECT_GT(marks, 40000u);
+  EXPECT_GT(piece_starts_in_skipped_blocks, 10000u);
+}
+
 }  // namespace
 }  // namespace fragg

@@ -615,6 +615,32 @@ TEST(CudaBackendTest, PoseCorrectionOfEvictedScansIsByteIdentical) {
   EXPECT_GT(st.removal.blocks_uploaded + st.insertion.blocks_uploaded, 0u);
 }
 
+TEST(CudaBackendTest, RaysCutIntoPiecesAreByteIdentical) {
+  REQUIRE_DEVICE();
+  // Pieces of 1 cell: rays longer than 64 cells along their major axis get longer pieces (the
+  // cap); 4096: one piece a ray through the pieces kernel; 0: one thread a ray. With the skip
+  // (pieces that start inside a saturated block) against the CPU without it.
+  const auto w1 = simulatedW1(10);
+  for (int steps : {0, 1, 5, 32, 4096}) {
+    MapParams p = paramsFor(Backend::kCuda, 0.05);
+    p.cuda.ray_piece_steps = steps;
+    const std::string what = "W1 (10 scans) 50 m, pieces of " + std::to_string(steps);
+    expectSkipIsExact(w1, p, SensorModel::autoFromCloud(0.0, 50.0), what.c_str());
+  }
+  // Evictions and passes redone; removal and correction walk pieces too; noise margins.
+  MapParams small = paramsFor(Backend::kCuda, 0.1);
+  small.cuda.pool_max_bytes = size_t(16000) * 2300;
+  small.cuda.ray_piece_steps = 3;
+  expectCorrectionAgrees(outAndBack(syntheticLidar(8, 4.0)), small,
+                         SensorModel::autoFromCloud(0.0, 20.0), {6, 7, 8, 9},
+                         "small pool, out and back, pieces of 3");
+  SensorModel noisy = SensorModel::autoFromCloud(0.0, 30.0);
+  noisy.range_noise_m = 0.02;
+  MapParams p = paramsFor(Backend::kCuda, 0.05);
+  p.cuda.ray_piece_steps = 7;
+  expectCorrectionAgrees(velodynePair(), p, noisy, {1}, "velodyne pair, 2 cm noise, pieces of 7");
+}
+
 TEST(CudaBackendTest, RangeNoiseMarginsAreByteIdentical) {
   REQUIRE_DEVICE();
   // The clearing margin travels in each ray (prepare kernel) and is applied by the shared

@@ -68,13 +68,19 @@ MapParams engineParams(const std::string& engine, const MapParams& base) {
       p.cuda.host_threads = 0;
     } else if (token == "no-staging") {
       p.cuda.stage_next_cloud = false;
+    } else if (token.rfind("pieces=", 0) == 0) {
+      try {
+        p.cuda.ray_piece_steps = std::stoi(token.substr(7));
+      } catch (const std::exception&) {
+        throw InvalidArgument("engine option '" + token + "': N must be an integer");
+      }
     } else if (token == kSequenceOption) {
       // runFragg's: the scans go through Map::insertSequence; the params are the same.
     } else {
       throw InvalidArgument(
           "unknown engine option '" + token + "' in '" + engine +
           "' (pageable, plain-loads, no-coherence, bresenham, no-skip, "
-          "no-coalesce, host-auto, block-apply, all-host-threads, no-staging, sequence)");
+          "no-coalesce, host-auto, block-apply, all-host-threads, no-staging, pieces=N, sequence)");
     }
   }
   return p;
