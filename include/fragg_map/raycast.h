@@ -237,31 +237,35 @@ FRAGG_HD void ddaStepsAtMajorStep(const DdaAxis& x, const DdaAxis& y, const DdaA
   c[2] = m == 2 ? j : ddaStepsBefore(z, 2, m, t_m);
 }
 
-/// traverseDda over one piece of the walk (DdaPiece); the first cell of a piece that does not
-/// start the ray comes with kUnknownBlock. Returns how many cells it visited.
-template <class Visit>
-FRAGG_HD int traverseDdaPiece(const RayVox& ray, const DdaPiece& piece, Visit& visit) {
+namespace detail {
+/// The walk of traverseDda / traverseDdaPiece; `kWhole` compiles the piece logic out (the CPU
+/// backend's and the one-thread-a-ray kernel's walk, whose inner loop must stay as it was).
+template <bool kWhole, class Visit>
+FRAGG_HD int traverseDdaSteps(const RayVox& ray, const DdaPiece& piece, Visit& visit) {
   DdaAxis x, y, z;
   x.init(ray.ref.x, ray.start_v[0], ray.end_v[0]);
   y.init(ray.ref.y, ray.start_v[1], ray.end_v[1]);
   z.init(ray.ref.z, ray.start_v[2], ray.end_v[2]);
   int total = x.remaining + y.remaining + z.remaining;
-  const int m = ddaMajorAxis(x.remaining, y.remaining, z.remaining);
-  const int major_steps = m == 0 ? x.remaining : m == 1 ? y.remaining : z.remaining;
-  const bool last_piece = piece.end_major >= major_steps;
+  bool last_piece = true;
   int total_end = 0;  // the walk stops when this many steps are left
-  if (!last_piece) {
-    int c[3];
-    ddaStepsAtMajorStep(x, y, z, m, piece.end_major, c);
-    total_end = total - (c[0] + c[1] + c[2]);
-  }
-  if (piece.first_major > 0) {
-    int c[3];
-    ddaStepsAtMajorStep(x, y, z, m, piece.first_major, c);
-    x.advanceBy(c[0]);
-    y.advanceBy(c[1]);
-    z.advanceBy(c[2]);
-    total -= c[0] + c[1] + c[2];
+  if constexpr (!kWhole) {
+    const int m = ddaMajorAxis(x.remaining, y.remaining, z.remaining);
+    const int major_steps = m == 0 ? x.remaining : m == 1 ? y.remaining : z.remaining;
+    last_piece = piece.end_major >= major_steps;
+    if (!last_piece) {
+      int c[3];
+      ddaStepsAtMajorStep(x, y, z, m, piece.end_major, c);
+      total_end = total - (c[0] + c[1] + c[2]);
+    }
+    if (piece.first_major > 0) {
+      int c[3];
+      ddaStepsAtMajorStep(x, y, z, m, piece.first_major, c);
+      x.advanceBy(c[0]);
+      y.advanceBy(c[1]);
+      z.advanceBy(c[2]);
+      total -= c[0] + c[1] + c[2];
+    }
   }
   const float keep_after_t = keepAfterT(ray);
   const bool has_margin = keep_after_t <= 1.f;  // else no cell is ever inside it
@@ -293,6 +297,14 @@ FRAGG_HD int traverseDdaPiece(const RayVox& ray, const DdaPiece& piece, Visit& v
   }
   return visited;
 }
+}  // namespace detail
+
+/// traverseDda over one piece of the walk (DdaPiece); the first cell of a piece that does not
+/// start the ray comes with kUnknownBlock. Returns how many cells it visited.
+template <class Visit>
+FRAGG_HD int traverseDdaPiece(const RayVox& ray, const DdaPiece& piece, Visit& visit) {
+  return detail::traverseDdaSteps<false>(ray, piece, visit);
+}
 
 /// Exact 3D DDA (Amanatides & Woo). Visits every cell the segment passes through, in order,
 /// 6-connected; the per-axis step counts are fixed up front, so the walk always ends in the
@@ -301,7 +313,7 @@ FRAGG_HD int traverseDdaPiece(const RayVox& ray, const DdaPiece& piece, Visit& v
 /// clearing margin (then the hit comes with kUnknownBlock); returns how many cells it visited.
 template <class Visit>
 FRAGG_HD int traverseDda(const RayVox& ray, Visit& visit) {
-  return traverseDdaPiece(ray, DdaPiece{}, visit);
+  return detail::traverseDdaSteps<true>(ray, DdaPiece{}, visit);
 }
 
 FRAGG_HD int absInt(int v) { return v < 0 ? -v : v; }
