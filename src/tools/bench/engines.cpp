@@ -98,6 +98,12 @@ Figures runFragg(const Workload& w, const std::string& engine, size_t count, int
   const SensorModel sensor = SensorModel::autoFromCloud(0.0, w.max_range_m);
   for (int r = 0; r < repeats; ++r) {
     Map map(p);
+    const auto record = [&](const InsertStats& st, double ms) {
+      f.ms.push_back(ms);
+      f.scan_stats.push_back(st);
+      f.visits += st.voxel_visits;
+      if (r + 1 == repeats) f.totals.add(st);
+    };
     if (sequence) {
       // One call over every scan; a scan's time is its own InsertStats::seconds_total (what
       // it waited for: the scan before's staging of it ran while the device was busy).
@@ -110,23 +116,16 @@ Figures runFragg(const Workload& w, const std::string& engine, size_t count, int
       const auto t0 = Clock::now();
       const std::vector<InsertStats> all = map.insertSequence(batch);
       f.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
-      for (const InsertStats& st : all) {
-        f.ms.push_back(st.seconds_total * 1e3);
-        f.scan_stats.push_back(st);
-        f.visits += st.voxel_visits;
-        if (r + 1 == repeats) f.totals.add(st);
+      for (const InsertStats& st : all) record(st, st.seconds_total * 1e3);
+    } else {
+      for (size_t i = 0; i < count; ++i) {
+        const Scan& s = w.scans[i];
+        const auto t0 = Clock::now();
+        const InsertStats st = map.insert(s.cloud, s.T_map_sensor, sensor);
+        const double sec = std::chrono::duration<double>(Clock::now() - t0).count();
+        f.seconds += sec;
+        record(st, sec * 1e3);
       }
-    }
-    for (size_t i = 0; i < count && !sequence; ++i) {
-      const Scan& s = w.scans[i];
-      const auto t0 = Clock::now();
-      const InsertStats st = map.insert(s.cloud, s.T_map_sensor, sensor);
-      const double sec = std::chrono::duration<double>(Clock::now() - t0).count();
-      f.ms.push_back(sec * 1e3);
-      f.scan_stats.push_back(st);
-      f.seconds += sec;
-      f.visits += st.voxel_visits;
-      if (r + 1 == repeats) f.totals.add(st);
     }
     if (r + 1 == repeats) {
       const MemoryStats m = map.memory();
