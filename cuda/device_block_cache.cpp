@@ -28,7 +28,8 @@ int32_t DeviceBlockCache::slotLimit() const {
     FRAGG_CUDA_CHECK(cudaMemGetInfo(&free_bytes, &total_bytes));
     bytes = pool_.deviceBytes() + free_bytes / 2;
   }
-  return static_cast<int32_t>(std::min<size_t>(bytes / SlotPool::bytesPerSlot(), INT32_MAX / 2));
+  return static_cast<int32_t>(
+      std::min<size_t>(bytes / SlotPool::bytesPerSlot(), SlotPool::kMaxCapacity));
 }
 
 void DeviceBlockCache::reserve(int64_t slots) {

@@ -10,12 +10,18 @@
 
 namespace fragg::cuda {
 
-// Window entries: a slot index (>= 0) or one of these.
+// Window entries: a slot index (>= 0, with kWindowSaturatedBit) or one of these.
 constexpr int32_t kWindowEmpty = -1;     ///< no block anywhere: a ray allocates a slot
 constexpr int32_t kWindowHostOnly = -2;  ///< the block is on the host only: a ray records a miss
 constexpr int32_t kWindowBusy = -3;      ///< a ray is allocating this block's slot right now
 constexpr int32_t kWindowOverflow = -4;  ///< the pool had no free slot for this block
 constexpr int32_t kWindowMissed = -5;    ///< host-only block a ray needed (listed once)
+/// A resident slot's entry also carries the slot's `free_saturated` flag in this bit, copied
+/// when the window is filled before each ray pass (the flag changes only in the apply kernel,
+/// uploads and releases, never during a pass), so that a ray entering a block reads one word,
+/// not the entry and then the flag. Slot indices stay below it (SlotPool::kMaxCapacity).
+constexpr int32_t kWindowSaturatedBit = int32_t(1) << 30;
+constexpr int32_t kWindowSlotMask = kWindowSaturatedBit - 1;
 
 /// Dense table block -> slot over the scan's box of blocks.
 struct Window {

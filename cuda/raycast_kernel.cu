@@ -25,9 +25,10 @@ struct MarkFilter {
   unsigned long long* entries;  // shared memory
 };
 
-/// The slot of block `b` for this scan, or -1 when the ray must skip its cells (host-only
-/// block not uploaded yet, pool full): the host then fixes that and runs the pass again.
-__device__ int32_t resolveSlot(const RaycastArgs& a, const BlockKey& b) {
+/// The window entry of block `b` for this scan: its slot with kWindowSaturatedBit, or -1
+/// when the ray must skip its cells (host-only block not uploaded yet, pool full): the host
+/// then fixes that and runs the pass again.
+__device__ int32_t resolveEntry(const RaycastArgs& a, const BlockKey& b) {
   const int64_t idx = a.window.indexOf(b);
   if (idx < 0) {
     atomicAdd(&a.counters->outside_window, 1u);
@@ -113,11 +114,12 @@ struct DeviceMarker {
 
   __device__ void operator()(const VoxelKey& v, bool hit, int entry) {
     if (entry != kSameBlock || !have_block) {
-      slot = resolveSlot(a, blockKeyOf(v));
+      const int32_t e = resolveEntry(a, blockKeyOf(v));
       have_block = true;
-      // Written by earlier kernels only (apply, upload, the clear on release): a new slot
-      // taken in this pass comes off the free stack with 0.
-      saturated = slot >= 0 && a.skip_saturated && !a.remove && a.slots.free_saturated[slot] != 0;
+      slot = e < 0 ? -1 : (e & kWindowSlotMask);
+      // The flag as the window fill copied it; a slot taken in this pass comes off the free
+      // stack with 0 and its entry has no flag.
+      saturated = e >= 0 && a.skip_saturated && !a.remove && (e & kWindowSaturatedBit) != 0;
     }
     skip_block = saturated && !hit;
     if (slot < 0 || skip_block) return;

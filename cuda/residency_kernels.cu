@@ -13,7 +13,7 @@ __global__ void windowFillKernel(Window w, SlotArrays s) {
   const int32_t slot = blockIdx.x * blockDim.x + threadIdx.x;
   if (slot >= s.capacity || !s.resident[slot]) return;
   const int64_t idx = w.indexOf(s.keys[slot]);
-  if (idx >= 0) w.entries[idx] = slot;
+  if (idx >= 0) w.entries[idx] = slot | (s.free_saturated[slot] ? kWindowSaturatedBit : 0);
 }
 
 __global__ void windowSetKernel(Window w, const int64_t* index, const int32_t* value, uint32_t n) {

@@ -33,6 +33,9 @@ size_t SlotPool::bytesPerSlot() {
 void SlotPool::grow(int32_t capacity) {
   const int32_t old = this->capacity();
   if (capacity <= old) return;
+  if (capacity > kMaxCapacity)
+    throw CudaOutOfMemory("device block pool cannot grow to " + std::to_string(capacity) +
+                          " slots (at most " + std::to_string(kMaxCapacity) + ")");
   // Check the room first, so that a failure leaves every array as it was.
   size_t free_bytes = 0, total_bytes = 0;
   FRAGG_CUDA_CHECK(cudaMemGetInfo(&free_bytes, &total_bytes));

@@ -15,6 +15,8 @@ class SlotPool {
  public:
   /// Bytes a slot takes on the device, everything included.
   static size_t bytesPerSlot();
+  /// Most slots a pool holds: a slot index must not reach the window entries' flag bit.
+  static constexpr int32_t kMaxCapacity = kWindowSlotMask;
 
   explicit SlotPool(cudaStream_t stream) : stream_(stream) {}
 
