@@ -83,7 +83,8 @@ TEST_P(DeviceBlockCacheTest, UploadsAndWriteBacksAreByteExact) {
   EXPECT_FALSE(cache.needsSync());
   // Spoil the host copies, then write the device copies back: the bytes come home.
   for (BlockIndex i : all)
-    if (cache.slotOf(i) >= 0) std::memset(&blocks.block(i), 0x5a, sizeof(Block));
+    if (cache.slotOf(i) >= 0)
+      std::memset(static_cast<void*>(&blocks.block(i)), 0x5a, sizeof(Block));
   markDirty(cache, all, stream.get());
   cache.sync(blocks);
   EXPECT_FALSE(cache.needsSync());
@@ -103,7 +104,7 @@ TEST(DeviceBlockCache, InvalidateDropsOnlyTheBoxAndWritesBackFirst) {
   cache.ensureResident(BlockKey{-10, -10, -10}, BlockKey{10, 10, 10}, blocks);
   std::vector<std::vector<uint8_t>> before;
   for (BlockIndex i : all) before.push_back(bytesOf(blocks, i));
-  for (BlockIndex i : all) std::memset(&blocks.block(i), 0, sizeof(Block));
+  for (BlockIndex i : all) std::memset(static_cast<void*>(&blocks.block(i)), 0, sizeof(Block));
   markDirty(cache, all, stream.get());
   const int32_t free_before = cache.freeSlots();
   cache.invalidate(BlockKey{0, 0, 0}, BlockKey{2, 2, 1}, blocks);  // 3 x 3 x 2 = 18 blocks
@@ -143,7 +144,8 @@ TEST(DeviceBlockCache, EvictionTakesTheLeastRecentlyUsedAndKeepsTheCurrentScan) 
   std::vector<std::vector<uint8_t>> before;
   for (BlockIndex i : all) before.push_back(bytesOf(blocks, i));
   markDirty(cache, all, stream.get());
-  for (size_t j = 0; j < 20; ++j) std::memset(&blocks.block(all[j]), 0, sizeof(Block));
+  for (size_t j = 0; j < 20; ++j)
+    std::memset(static_cast<void*>(&blocks.block(all[j])), 0, sizeof(Block));
   cache.beginScan();  // scan 3: 20 new blocks push out scan 1's, written back first
   cache.ensureResident(third, blocks);
   EXPECT_EQ(cache.evictedCount(), 20u);
