@@ -108,11 +108,29 @@ void MapOutputCache::mergeColumn(Column* col) const {
   }
 }
 
+void MapOutputCache::relist(Piece* piece) {
+  const bool has_cells = !piece->xyz.empty();
+  if (has_cells == (piece->listed >= 0)) return;
+  if (!has_cells) return unlist(piece);
+  piece->listed = static_cast<int64_t>(with_cells_.size());
+  with_cells_.push_back(piece);
+}
+
+void MapOutputCache::unlist(Piece* piece) {
+  if (piece->listed < 0) return;
+  Piece* last = with_cells_.back();
+  with_cells_[static_cast<size_t>(piece->listed)] = last;
+  last->listed = piece->listed;
+  with_cells_.pop_back();
+  piece->listed = -1;
+}
+
 void MapOutputCache::dropPiece(const fragg::BlockKey& k,
                                std::unordered_set<ColumnKey, ColumnKeyHash>* dirty) {
   const auto it = pieces_.find(k);
   if (it == pieces_.end()) return;
   occupied_cells_ -= it->second.xyz.size() / 3;
+  unlist(&it->second);
   const ColumnKey ck{k.x, k.y};
   auto& list = columns_[ck].pieces;
   list.erase(
@@ -133,6 +151,7 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
   std::unordered_set<ColumnKey, ColumnKeyHash> dirty;
   if (out.full) {
     pieces_.clear();
+    with_cells_.clear();
     columns_.clear();
     occupied_cells_ = 0;
     refresh = blocks.all();
@@ -174,6 +193,7 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
     deltas[j] = computePiece(map, blocks, refresh[j].key, *refresh[j].block, slots[j]);
   int64_t occupied_delta = 0;
   for (size_t j = 0; j < refresh.size(); ++j) {
+    relist(slots[j]);
     occupied_delta += deltas[j].occupied;
     if (deltas[j].column) dirty.insert(ColumnKey{refresh[j].key.x, refresh[j].key.y});
   }
@@ -258,20 +278,30 @@ void MapOutputCache::refreshGrid(const std::unordered_set<ColumnKey, ColumnKeyHa
   }
 }
 
-sensor_msgs::PointCloud2 MapOutputCache::occupiedCloud(const std::string& frame_id,
-                                                       const ::ros::Time& stamp) const {
-  sensor_msgs::PointCloud2 msg = packedXyzCloud(std::vector<float>(), frame_id, stamp);
-  msg.width = static_cast<uint32_t>(occupied_cells_);
-  msg.row_step = msg.point_step * msg.width;
-  msg.data.resize(occupied_cells_ * 3 * sizeof(float));
-  uint8_t* dst = msg.data.data();
-  for (const auto& [key, piece] : pieces_) {
-    const size_t bytes = piece.xyz.size() * sizeof(float);
-    if (bytes == 0) continue;
-    std::memcpy(dst, piece.xyz.data(), bytes);
-    dst += bytes;
+const sensor_msgs::PointCloud2& MapOutputCache::occupiedCloud(const std::string& frame_id,
+                                                              const ::ros::Time& stamp) const {
+  // The buffer outlives the message's other fields: within its capacity resizing writes at
+  // most the new tail, so a publication does not fault in and zero a fresh buffer of the whole
+  // map's size each time. Outgrown, it is replaced (nothing copied) with room for the map to
+  // grow by half.
+  std::vector<uint8_t> data = std::move(cloud_msg_.data);
+  cloud_msg_ = packedXyzCloud(std::vector<float>(), frame_id, stamp);
+  cloud_msg_.width = static_cast<uint32_t>(occupied_cells_);
+  cloud_msg_.row_step = cloud_msg_.point_step * cloud_msg_.width;
+  const size_t bytes = occupied_cells_ * 3 * sizeof(float);
+  if (bytes > data.capacity()) {
+    data = std::vector<uint8_t>();
+    data.reserve(bytes + bytes / 2);
   }
-  return msg;
+  data.resize(bytes);
+  uint8_t* dst = data.data();
+  for (const Piece* piece : with_cells_) {
+    const size_t piece_bytes = piece->xyz.size() * sizeof(float);
+    std::memcpy(dst, piece->xyz.data(), piece_bytes);
+    dst += piece_bytes;
+  }
+  cloud_msg_.data = std::move(data);
+  return cloud_msg_;
 }
 
 nav_msgs::OccupancyGrid MapOutputCache::projectedMap(const std::string& frame_id,

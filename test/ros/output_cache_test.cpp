@@ -138,6 +138,46 @@ TEST_P(OutputCacheSequence, EqualsARebuildAfterEveryEdit) {
 
 INSTANTIATE_TEST_SUITE_P(Options, OutputCacheSequence, ::testing::Values(0, 1, 2, 3));
 
+// The cloud is gathered from a list of the pieces holding cells into a message the cache
+// keeps: pieces leave the list in every order (one leaving moves another into its place) and
+// come back, and each call's header is its own.
+TEST(OutputCache, PiecesThatLoseTheirCellsLeaveTheKeptCloud) {
+  const OutputCacheOptions o;
+  const std::vector<fragg::VoxelKey> keys = {{0, 0, 0}, {20, 0, 0}, {40, 0, 0}};  // 3 blocks
+  std::vector<int> order = {0, 1, 2};
+  do {
+    const std::string trace = "freed in order " + std::to_string(order[0]) +
+                              std::to_string(order[1]) + std::to_string(order[2]);
+    SCOPED_TRACE(trace);
+    fragg::Map map(test::cpuParams(0.1));
+    MapOutputCache cache(o);
+    auto step = [&](const std::string& name, size_t cells) {
+      EXPECT_FALSE(cache.update(map).full) << name;
+      expectSameAsRebuild(map, cache, o, name);
+      const ::ros::Time stamp(3.0 + cells);
+      const sensor_msgs::PointCloud2& msg = cache.occupiedCloud("odom", stamp);
+      EXPECT_EQ(msg.header.frame_id, "odom") << name;
+      EXPECT_EQ(msg.header.stamp, stamp) << name;
+      EXPECT_EQ(msg.width, cells) << name;
+      EXPECT_EQ(msg.data.size(), cells * 12) << name;
+    };
+    test::setCell(map, fragg::VoxelKey{60, 0, 0}, fragg::CellState::kFree);
+    cache.update(map);
+    for (const fragg::VoxelKey& k : keys) test::setCell(map, k, fragg::CellState::kOccupied);
+    step("three blocks", 3);
+    for (size_t j = 0; j < keys.size(); ++j) {
+      test::setCell(map, keys[order[j]], fragg::CellState::kFree);
+      step("freed " + std::to_string(j + 1), keys.size() - j - 1);
+    }
+    test::setCell(map, keys[order[0]], fragg::CellState::kOccupied);
+    step("one back", 1);
+    test::insertWall(map, Eigen::Vector3d(0.0, 0.0, 0.0), 2.0);  // outgrows the kept buffer
+    EXPECT_FALSE(cache.update(map).full);
+    expectSameAsRebuild(map, cache, o, "wall");
+    EXPECT_GT(cache.occupiedCells(), 100u);
+  } while (std::next_permutation(order.begin(), order.end()));
+}
+
 TEST(OutputCache, OnlyChangedBlocksAreRead) {
   fragg::Map map(test::cpuParams(0.1));
   MapOutputCache cache;

@@ -60,9 +60,11 @@ class MapOutputCache {
   /// Forgets everything: the next update rebuilds.
   void invalidate() { valid_ = false; }
 
-  /// The occupied cloud of the last update: packed float32 x, y, z (as occupiedCloud()).
-  sensor_msgs::PointCloud2 occupiedCloud(const std::string& frame_id,
-                                         const ::ros::Time& stamp) const;
+  /// The occupied cloud of the last update: packed float32 x, y, z (as occupiedCloud()),
+  /// gathered from the pieces that hold cells into a message kept by the cache (valid until
+  /// the next call): its buffer is reused, so a publication writes into pages it already has.
+  const sensor_msgs::PointCloud2& occupiedCloud(const std::string& frame_id,
+                                                const ::ros::Time& stamp) const;
   /// The projected map of the last update (as projectedMap()).
   nav_msgs::OccupancyGrid projectedMap(const std::string& frame_id, const ::ros::Time& stamp) const;
   size_t occupiedCells() const { return occupied_cells_; }
@@ -82,6 +84,8 @@ class MapOutputCache {
     bool in_band = false;  ///< some cell of the block lies in the band
     /// Observed cells' xy key bounds within the block (lo > hi: none observed).
     int32_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
+    /// Its place in with_cells_; -1 while xyz is empty.
+    int64_t listed = -1;
   };
   /// What recomputing a piece changed.
   struct PieceDelta {
@@ -109,6 +113,9 @@ class MapOutputCache {
   PieceDelta computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
                           const fragg::BlockKey& key, const fragg::Block& block,
                           Piece* piece) const;
+  /// Lists `piece` in with_cells_ when it holds cells, takes it out when it does not.
+  void relist(Piece* piece);
+  void unlist(Piece* piece);
   /// Drops the piece of a block that left the map; its column becomes dirty.
   void dropPiece(const fragg::BlockKey& key, std::unordered_set<ColumnKey, ColumnKeyHash>* dirty);
   /// Recomputes `col`'s merged patch and bounds from its blocks' pieces.
@@ -124,6 +131,10 @@ class MapOutputCache {
   uint64_t epoch_ = 0;
   double resolution_m_ = 0.0;
   std::unordered_map<fragg::BlockKey, Piece, fragg::BlockKeyHash> pieces_;
+  /// The pieces with occupied cells shown (a small part of pieces_: most blocks hold free
+  /// space only), so that the cloud is gathered without walking the others.
+  std::vector<Piece*> with_cells_;
+  mutable sensor_msgs::PointCloud2 cloud_msg_;  ///< occupiedCloud()'s message and buffer
   std::unordered_map<ColumnKey, Column, ColumnKeyHash> columns_;
   size_t occupied_cells_ = 0;
   // The grid: cells [grid_min_x, +width) x [grid_min_y, +height), row-major (y rows).

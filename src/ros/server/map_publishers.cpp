@@ -147,7 +147,7 @@ void MapPublishers::publishMapOutputs(const fragg::Map& map, const ::ros::Time& 
   held_maps_.published(now_s);  // also when building throws: the next cloud tries again
   outputs_.update(map);         // the changed blocks only
   if (cloud_wanted) {
-    const sensor_msgs::PointCloud2 cloud = outputs_.occupiedCloud(params_.frame_id, stamp);
+    const sensor_msgs::PointCloud2& cloud = outputs_.occupiedCloud(params_.frame_id, stamp);
     if (wanted(occupied_cloud_pub_)) occupied_cloud_pub_.publish(cloud);
     if (wanted(centers_pub_)) centers_pub_.publish(cloud);
   }

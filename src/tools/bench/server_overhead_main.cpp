@@ -105,10 +105,11 @@ class Outputs {
       t.markers = msSince(t0);
     }
     t0 = Clock::now();
-    sensor_msgs::PointCloud2 cloud;
+    sensor_msgs::PointCloud2 rebuilt;
+    const sensor_msgs::PointCloud2* cloud = &rebuilt;  // the after path's is the cache's own
     nav_msgs::OccupancyGrid grid;
     if (before_) {
-      cloud = fragg::ros::occupiedCloud(map, "map", ros::Time());
+      rebuilt = fragg::ros::occupiedCloud(map, "map", ros::Time());
       t.cloud = msSince(t0);
       t0 = Clock::now();
       grid = fragg::ros::projectedMap(map, kMinZ, kMaxZ, "map", ros::Time());
@@ -116,7 +117,7 @@ class Outputs {
     } else if (due.maps) {
       t.blocks_read = cache_.update(map).blocks_read;
       t.cache_update = msSince(t0);
-      cloud = cache_.occupiedCloud("map", ros::Time());
+      cloud = &cache_.occupiedCloud("map", ros::Time());
       t.cloud = msSince(t0);
       t0 = Clock::now();
       grid = cache_.projectedMap("map", ros::Time());
@@ -126,7 +127,7 @@ class Outputs {
     t.marker_bytes = before_ || !due.markers ? 0 : serialised(markers);
     t.marker_serialise = msSince(t0);
     t.bytes = t.marker_bytes;
-    if (before_ || due.maps) t.bytes += serialised(cloud) + serialised(grid);
+    if (before_ || due.maps) t.bytes += serialised(*cloud) + serialised(grid);
     t.serialise = msSince(t0);
     return t;
   }
