@@ -8,6 +8,7 @@
 // keeps full precision anywhere on an int32 map.
 #pragma once
 
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <type_traits>
@@ -72,7 +73,15 @@ struct DdaAxis {
     step = e > s ? 1 : (e < s ? -1 : 0);
     remaining = e > s ? e - s : s - e;
     if (step != 0) {
-      inv_d = 1.f / (end_v - start);
+      // A span far below a cell (|end_v - start| < 1 / FLT_MAX, e.g. a direction component of
+      // 1e-40 voxels that still crosses the boundary the start lies on) has no finite
+      // reciprocal, and a boundary parameter 0 * inf would be NaN, which no compare orders:
+      // the walk would step an exhausted axis and leave the ray's box. The largest finite
+      // reciprocal of the same sign keeps every boundary parameter of such an axis (it has
+      // one boundary, between start and end) finite, in [0, 1] and exact at 0.
+      const float span = end_v - start;
+      inv_d = 1.f / span;
+      if (!(fabsf(inv_d) <= FLT_MAX)) inv_d = span < 0.f ? -FLT_MAX : FLT_MAX;
       next_b = step > 0 ? s + 1 : s;
       t_max = boundaryT(next_b);
     } else {

@@ -14,6 +14,7 @@ std::vector<Target> targets() {
       {"poses", poses},
       {"waypoints", waypoints},
       {"obj", obj},
+      {"insert", insertScan},
 #ifdef FRAGG_FUZZ_HAVE_ROS_MSGS
       {"cloud_msg", cloudMsg},
 #endif

@@ -28,6 +28,9 @@ int poses(const uint8_t* data, size_t size);
 /// `--waypoints` files of `fragg_map collide`.
 int waypoints(const uint8_t* data, size_t size);
 int obj(const uint8_t* data, size_t size);
+/// Map::insert on the CPU backend (and, with kept scans, remove and correctPoses): the layout
+/// is in fuzz_insert.cpp. A broken invariant aborts.
+int insertScan(const uint8_t* data, size_t size);
 #ifdef FRAGG_FUZZ_HAVE_ROS_MSGS
 /// Serialised sensor_msgs/PointCloud2 bytes -> ros::serialization -> cloudFromMsg.
 int cloudMsg(const uint8_t* data, size_t size);

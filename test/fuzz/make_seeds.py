@@ -167,6 +167,42 @@ def kitti_bin_seeds(out, points):
           struct.pack("<4f", 1.0, 2.0, 3.0, 0.0) + b"\0" * 7)
 
 
+# ---------------------------------------------------------------- insertion (fuzz_insert.cpp)
+# The finite points that crashed or broke insertion once (issue 39): a huge coordinate with a
+# tiny non-zero other one, denormals, the float range's ends.
+EXTREME_POINTS = [
+    (3.7e27, -4e-20, -3.7e27), (-3.7e27, 4e-20, 3.7e27), (4e-20, 3.7e27, -3.7e27),
+    (3.4e38, 1e-30, -3.4e38), (1e30, 1e30, 1e30), (1e-45, 1e-45, 1e-45), (1e19, -1e-38, 1e19),
+    (20, 1e-40, -20), (1e15, 1e15, -1e-25), (3e38, 3e38, 3e38)]
+
+
+def insert_input(flags, res_index, max_range, points, pose=(0, 0, 0, 1, 0, 0, 0)):
+    """One input of the insert target: flags, resolution index, max range, pose, points."""
+    return (struct.pack("<BB", flags, res_index) + struct.pack("<f", 0.0) +
+            struct.pack("<f", max_range) + struct.pack("<7f", *pose) +
+            b"".join(struct.pack("<3f", *p) for p in points))
+
+
+def insert_seeds(out, points):
+    real = points[:16]
+    for i, p in enumerate(EXTREME_POINTS):
+        for res_index, res in ((1, "5cm"), (2, "20cm")):
+            for max_range in (20.0, 80.0, -1.0):
+                name = "extreme%d_%s_range%d" % (i, res, max(0, int(max_range)))
+                write(out, "insert", name, insert_input(0, res_index, max_range, [p] + real))
+    # Real points through every option: kept scans (insert, correct, remove), Bresenham, the
+    # explicit models, an organised cloud with no-return clearing, a range noise, a turned and
+    # moved sensor.
+    pose = (1.5, -2.0, 0.7, 0.9238795, 0.0, 0.0, 0.3826834)
+    write(out, "insert", "real_kept", insert_input(0x08, 1, 30.0, points[:N_POINTS], pose))
+    write(out, "insert", "real_bresenham", insert_input(0x01, 2, -1.0, points[:N_POINTS]))
+    write(out, "insert", "real_lidar", insert_input(0x02 | 0x20, 1, 10.0, points[:N_POINTS]))
+    write(out, "insert", "real_pinhole", insert_input(0x04, 0, 5.0, points[:N_POINTS], pose))
+    organised = list(points[:N_POINTS])
+    organised[3] = (float("nan"),) * 3
+    write(out, "insert", "real_organised", insert_input(0x10 | 0x40, 1, 8.0, organised))
+
+
 # ---------------------------------------------------------------- ScanGraph
 def pose6d(t, q):
     return struct.pack("<i3di4d", 3, *t, 4, *q)
@@ -410,6 +446,7 @@ def main():
         scans_fgm = fgm_seeds(a.out, a.fragg_map, finite[:N_POINTS], tmp)
         text_seeds(a.real, a.out, repo, a.fragg_map, scans_fgm)
         cloud_msg_seeds(a.out, finite)
+        insert_seeds(a.out, finite)
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@ set(_fuzz_dir ${CMAKE_CURRENT_LIST_DIR})
 set(_fuzz_table
   "fgm|fgm|map" "scan|scan|readers" "pcd|pcd|readers" "ply|ply|readers" "xyz|xyz|readers"
   "kitti_bin|kittiBin|readers" "scan_graph|scanGraph|readers" "poses|poses|readers"
-  "waypoints|waypoints|readers" "obj|obj|readers")
+  "waypoints|waypoints|readers" "obj|obj|readers" "insert|insertScan|map")
 
 # The PointCloud2 target: with ROS through fragg_map_ros; without catkin when Debian's ROS
 # headers and serialisation libraries are found (the converter compiled in).

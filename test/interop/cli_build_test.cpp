@@ -105,5 +105,35 @@ TEST(CliBuild, BadArgumentsAndInputsFailCleanly) {
   }
 }
 
+TEST(CliBuild, ExtremeFinitePointsNeverEndTheBuildBySignal) {
+  // Issue 39: one finite point (a huge coordinate with a tiny non-zero other one) killed
+  // `fragg_map build` with SIGSEGV. Each of these, beside ordinary points, at 5 and 20 cm with
+  // max range 20, 80 and none: exit 0 and every point counted. (The default backend: the CUDA
+  // one where a device is present.)
+  const char* kPoints[] = {"3.7e27 -4e-20 -3.7e27", "-3.7e27 4e-20 3.7e27", "4e-20 3.7e27 -3.7e27",
+                           "3.4e38 1e-30 -3.4e38",  "1e30 1e30 1e30",       "1e-45 1e-45 1e-45",
+                           "1e19 -1e-38 1e19",      "20 1e-40 -20",         "1e15 1e15 -1e-25",
+                           "3e38 3e38 3e38"};
+  const std::string dir = testDir();
+  const std::string xyz = dir + "/p.xyz", map = dir + "/p.fgm";
+  for (const char* point : kPoints) {
+    writeBytes(xyz, std::string(point) + "\n1.5 0.2 0.1\n-2 1 0.5\n0.3 -4 -0.2\n");
+    for (const char* res : {"0.05", "0.2"}) {
+      for (const char* range : {" --max-range 20", " --max-range 80", ""}) {
+        SCOPED_TRACE(std::string(point) + " at " + res + range);
+        const auto r = runCli(
+            dir, "build '" + xyz + "' -o '" + map + "' --resolution " + res + range + " --json");
+        ASSERT_EQ(r.exit_code, 0) << r.err;
+        const nlohmann::json b = nlohmann::json::parse(r.out);
+        EXPECT_EQ(b["points"], 4);
+        const int counted = b["rays_hit"].get<int>() + b["rays_free_only"].get<int>() +
+                            b["dropped_invalid"].get<int>() + b["dropped_min_range"].get<int>();
+        EXPECT_EQ(counted, 4) << r.out;
+        EXPECT_GE(b["rays_hit"].get<int>(), 3) << r.out;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace fragg

@@ -35,6 +35,11 @@ FRAGG_HD float marginOfHitCode(uint32_t hit) {
 
 /// Keys must stay inside int32 with room for a ray's traversal.
 constexpr double kMaxAbsVoxel = 2147483647.0 - 1048576.0;
+/// The farthest a ray's end may lie from the scan's reference voxel on any axis, voxels (2^24:
+/// beyond it consecutive floats are two voxels apart, so the float traversal could name
+/// neither the end cell nor every cell on the way; 839 km at 5 cm). Such a point is dropped
+/// and counted as invalid, as one beyond the key range is.
+constexpr double kMaxRayV = 16777216.0;
 
 /// What one scan's rays need to know about the pose and the sensor (plain data).
 struct RayPrepParams {
@@ -58,14 +63,16 @@ FRAGG_HD bool finiteFloat(float v) { return v - v == 0.f; }  // false for NaN an
 
 /// Builds the ray (map frame, relative to ref, voxel units) of the ray with sensor-frame
 /// direction and length `s` already clipped, `hit` as in RayEnd::hit; false when it leaves
-/// the key range.
+/// the key range or ends farther than kMaxRayV from the reference voxel (or is not finite).
 FRAGG_HD bool rayEndFromSensor(const RayPrepParams& p, const double s[3], uint32_t hit,
                                RayEnd* ray) {
   for (int a = 0; a < 3; ++a) {
     const double rel = p.R[3 * a] * s[0] + p.R[3 * a + 1] * s[1] + p.R[3 * a + 2] * s[2];
     const double end_v = (p.origin_m[a] + rel) * p.inv_res;
-    if (fabs(end_v) > kMaxAbsVoxel) return false;
-    ray->end_v[a] = static_cast<float>(end_v - p.ref_v[a]);
+    if (!(fabs(end_v) <= kMaxAbsVoxel)) return false;
+    const double rel_v = end_v - p.ref_v[a];
+    if (!(fabs(rel_v) <= kMaxRayV)) return false;
+    ray->end_v[a] = static_cast<float>(rel_v);
   }
   ray->hit = hit;
   return true;
