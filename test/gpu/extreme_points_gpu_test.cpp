@@ -1,16 +1,23 @@
 // Finite points at the ends of the float range (issue 39) through the CUDA backend: the cloud is
 // inserted (never refused with "ray left the window table"), and the map is byte-identical to
 // the CPU backend's, for the issue's points at 5 and 20 cm with max range 20 m, 80 m and none,
-// for rays cut into pieces, and for a kept scan corrected and removed again. Skipped without a
-// CUDA device.
+// for rays cut into pieces, for a kept scan corrected and removed again, and for every input of
+// the insertion fuzz target's committed corpus. Skipped without a CUDA device.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "../core/same_map.h"
+#include "../fuzz/insert_input.h"
+#include "fragg_map/errors.h"
 #include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/map.h"
 
@@ -96,6 +103,44 @@ TEST(ExtremePointsGpu, CorrectionAndRemovalAreByteIdentical) {
     m->remove(first.scan_id);
   }
   test::expectSameMap(cpu, gpu, "corrected and removed");
+}
+
+TEST(ExtremePointsGpu, InsertionFuzzCorpusGivesTheCpusMaps) {
+  // Each input of test/fuzz/corpus/insert (seeds and the fuzzer's finds) through both backends:
+  // the same maps, or the same refusal.
+  REQUIRE_DEVICE();
+  namespace fs = std::filesystem;
+  size_t inputs = 0, refused = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(FRAGG_FUZZ_CORPUS) / "insert")) {
+    std::ifstream file(entry.path(), std::ios::binary);
+    const std::vector<uint8_t> bytes(std::istreambuf_iterator<char>(file), {});
+    SCOPED_TRACE(entry.path().filename().string());
+    fuzz::InsertInput in = fuzz::decodeInsertInput(bytes.data(), bytes.size());
+    const MapParams cpu_params = in.params;
+    in.params.backend = Backend::kCuda;
+    in.params.threads = 0;
+    std::string cpu_error = "none", gpu_error = "none";
+    std::unique_ptr<Map> cpu, gpu;
+    try {
+      cpu = std::make_unique<Map>(cpu_params);
+      fuzz::runInsertInput(in, *cpu);
+    } catch (const InvalidArgument& e) {
+      cpu_error = e.what();
+    }
+    try {
+      gpu = std::make_unique<Map>(in.params);
+      fuzz::runInsertInput(in, *gpu);
+    } catch (const InvalidArgument& e) {
+      gpu_error = e.what();
+    }
+    EXPECT_EQ(cpu_error, gpu_error);
+    if (cpu_error == "none" && gpu_error == "none") test::expectSameMap(*cpu, *gpu, "corpus");
+    refused += cpu_error != "none" ? 1 : 0;
+    ++inputs;
+  }
+  EXPECT_GE(inputs, 60u);
+  std::printf("[gpu] insertion corpus: %zu inputs, %zu refused by both backends\n", inputs,
+              refused);
 }
 
 }  // namespace

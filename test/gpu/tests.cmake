@@ -3,11 +3,13 @@
 fragg_add_test(fragg_gpu_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/cuda_backend_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/extreme_points_gpu_test.cpp
+          ${PROJECT_SOURCE_DIR}/test/fuzz/insert_input.cpp
           ${PROJECT_SOURCE_DIR}/src/tools/bench/synthetic_lidar.cpp
   LIBS fragg_map_core fragg_map_sim_lib
   LABELS gpu)
 target_include_directories(fragg_gpu_test PRIVATE ${PROJECT_SOURCE_DIR}/src/tools)
-target_compile_definitions(fragg_gpu_test PRIVATE FRAGG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+target_compile_definitions(fragg_gpu_test PRIVATE FRAGG_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+  FRAGG_FUZZ_CORPUS="${PROJECT_SOURCE_DIR}/test/fuzz/corpus")
 
 # The device block cache on its own (needs the CUDA headers: CUDA builds only).
 if(FRAGG_HAVE_CUDA)
