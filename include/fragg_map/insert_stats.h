@@ -13,11 +13,13 @@ struct InsertStats {
   /// The sensor model the scan was integrated with: an `auto` model resolved for the cloud,
   /// max range set (not summed by add()).
   SensorModel sensor;
-  uint64_t points_in = 0;                ///< points given
-  uint64_t rays_hit = 0;                 ///< rays ending in a hit
-  uint64_t rays_free_only = 0;           ///< beyond max range: clear up to max range, no hit
-  uint64_t rays_no_return = 0;           ///< organised no-return rays cleared (when enabled)
-  uint64_t dropped_invalid = 0;          ///< NaN / Inf / beyond the int32 key range
+  uint64_t points_in = 0;       ///< points given
+  uint64_t rays_hit = 0;        ///< rays ending in a hit
+  uint64_t rays_free_only = 0;  ///< beyond max range: clear up to max range, no hit
+  uint64_t rays_no_return = 0;  ///< organised no-return rays cleared (when enabled)
+  /// NaN / Inf / (0, 0, 0), beyond the int32 key range, or ending more than 2^24 voxels from the
+  /// sensor (kMaxRayV: beyond float precision)
+  uint64_t dropped_invalid = 0;
   uint64_t dropped_min_range = 0;        ///< closer than min range
   uint64_t dropped_outside_frustum = 0;  ///< outside an explicit sensor model's frustum
   uint64_t dropped_height = 0;           ///< map-frame z outside MapParams::height_filter

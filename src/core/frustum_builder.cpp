@@ -20,8 +20,13 @@ void addPlane(Frustum& f, const Eigen::Vector3d& inward_normal) {
 
 void addTest(Frustum& f, FrustumTest t) { f.tests[f.num_tests++] = t; }
 
+/// The block holding `v_m`, clamped to the blocks of the int32 key range: an auto model's range
+/// is the farthest point's, which may lie far beyond what the map can hold (such points give
+/// no ray), and the box then spans the whole key range.
 int32_t blockFloor(double v_m, double block_m) {
-  return static_cast<int32_t>(std::floor(v_m / block_m));
+  constexpr double kLast = 2147483647.0 / kBlockSize;  // 2^28 - 1 (floored below)
+  const double b = std::floor(v_m / block_m);
+  return static_cast<int32_t>(std::clamp(b, -std::floor(kLast) - 1.0, std::floor(kLast)));
 }
 }  // namespace
 

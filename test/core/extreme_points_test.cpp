@@ -11,6 +11,7 @@
 #include <limits>
 #include <vector>
 
+#include "fragg_map/internal/frustum_builder.h"
 #include "fragg_map/internal/ray_prep.h"
 #include "fragg_map/map.h"
 #include "fragg_map/raycast.h"
@@ -234,6 +235,20 @@ TEST(ExtremePoints, RaysBeyondFloatPrecisionAreDroppedAsInvalid) {
       map.insert(cloud, Eigen::Isometry3d::Identity(), SensorModel::autoFromCloud(0.0, -1.0));
   EXPECT_EQ(s.dropped_invalid, 2u);
   EXPECT_EQ(s.rays_hit, 1u);
+}
+
+TEST(ExtremePoints, FrustumOfAnUnlimitedRangeStaysInTheKeyRange) {
+  // Found by the insertion fuzzer (UBSan: float-cast-overflow in buildFrustum): without a max
+  // range the auto model's range is the farthest point's (here 5.2e27 m), whose box in blocks
+  // does not fit int32. The box is the whole key range instead: lo <= the sensor's block <= hi.
+  for (SensorModel model : {SensorModel::spinningLidar(-0.5, 0.5, 0.0, 5.2e27),
+                            SensorModel::pinhole(1.5, 1.0, 0.0, 3.4e38)}) {
+    const Frustum f = buildFrustum(model, Eigen::Isometry3d::Identity(), 0.05);
+    EXPECT_EQ(f.aabb_min.x, -(1 << 28));
+    EXPECT_EQ(f.aabb_max.x, (1 << 28) - 1);
+    EXPECT_LE(f.aabb_min.z, 0);
+    EXPECT_GE(f.aabb_max.z, 0);
+  }
 }
 
 }  // namespace

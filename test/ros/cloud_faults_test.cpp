@@ -315,6 +315,44 @@ TEST_F(CloudFaultsTest, ACloudTheMapRefusesIsAnInsertionFailure) {
   EXPECT_EQ(msg().scans, 2u);
 }
 
+TEST_F(CloudFaultsTest, ExtremeFinitePointsLeaveTheMapAsTheGoodPointsMakeIt) {
+  // Issue 39: one finite point with a huge coordinate and a tiny non-zero other one crashed the
+  // insertion (the server died the same way as `fragg_map build`). These points with the wall:
+  // the cloud is inserted, every point is counted, the wall's hit cells are as the wall alone
+  // makes them, no block lies beyond max range, and ~get_stats (the stats message) answers.
+  const std::vector<Eigen::Vector3f> extreme = {
+      {3.7e27f, -4e-20f, -3.7e27f}, {-3.7e27f, 4e-20f, 3.7e27f}, {4e-20f, 3.7e27f, -3.7e27f},
+      {3.4e38f, 1e-30f, -3.4e38f},  {1e30f, 1e30f, 1e30f},       {1e-45f, 1e-45f, 1e-45f},
+      {1e19f, -1e-38f, 1e19f},      {20.f, 1e-40f, -20.f},       {1e15f, 1e15f, -1e-25f},
+      {3e38f, 3e38f, 3e38f}};
+  std::vector<std::pair<fragg::VoxelKey, fragg::Cell>> wall_hits;
+  {
+    const SharedMap::ReadGuard state = shared_->read();
+    state->map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& block) {
+      for (int c = 0; c < fragg::kCellsPerBlock; ++c)
+        if (block.cells[c].hits > 0)
+          wall_hits.emplace_back(fragg::voxelKeyOf(key, c), block.cells[c]);
+    });
+  }
+  ASSERT_FALSE(wall_hits.empty());
+  const uint64_t points_before = msg().points;
+  auto pts = extreme;
+  const auto m = makeCloud(pts, static_cast<uint32_t>(pts.size()), 1, packedXyz(), 12);
+  ASSERT_TRUE(offer(m, Eigen::Isometry3d::Identity()));
+  const fragg_map::MapStats s = msg();
+  EXPECT_EQ(s.scans, 2u);
+  EXPECT_EQ(s.points - points_before + s.points_invalid, extreme.size())
+      << "points given to the map and points left out before it";
+  const SharedMap::ReadGuard state = shared_->read();
+  for (const auto& [key, cell] : wall_hits) {
+    const fragg::Cell* now = state->map.findCell(key);
+    ASSERT_NE(now, nullptr);
+    EXPECT_EQ(now->log_odds_fx, cell.log_odds_fx);
+    EXPECT_EQ(now->hits, cell.hits);
+  }
+  expectBlocksWithin(state->map, params_.sensor.max_range_m);
+}
+
 // tf: a buffer with map <- sensor at t = 10..20 s (10 s cache, as tf2_ros's default).
 class TfFaultsTest : public ::testing::Test {
  protected:
