@@ -38,6 +38,12 @@ while [ $# -gt 0 ]; do
     tests)
       (cd "$build" && ctest -L gpu --output-on-failure -j1 >"$out/gpu_tests.log" 2>&1) || status=1
       grep -E "^\[gpu\]|tests passed|Failed|FAILED|Skipped" "$out/gpu_tests.log" | head -40
+      # ctest counts a skipped test as passed ("100% tests passed"): the verdict per entry,
+      # passed and skipped apart (a test that skips itself ran nothing on the device).
+      echo "gpu tests: $(grep -cE 'Test +#[0-9]+: .* Passed' "$out/gpu_tests.log") passed," \
+        "$(grep -cE 'Test +#[0-9]+: .*\*\*\*Skipped' "$out/gpu_tests.log") skipped," \
+        "$(grep -cE 'Test +#[0-9]+: .*\*\*\*(Failed|Exception|Timeout|Not Run)' "$out/gpu_tests.log") failed" \
+        "of $(grep -cE 'Test +#[0-9]+: ' "$out/gpu_tests.log") ctest entries"
       "$build/test/fragg_gpu_test" >"$out/gpu_test_verbose.log" 2>&1 || status=1
       grep -E "^\[gpu\]|PASSED|FAILED|Failure|Expected|Which is|actual" "$out/gpu_test_verbose.log" | head -60
       shift ;;

@@ -3,11 +3,13 @@
 #   asan: an ASan + UBSan build of the core, io, interop, geometry, planning, loop-closure,
 #         sub-map and CLI tests and the fuzz corpus replay, each test binary run whole
 #         (LeakSanitizer on; a UBSan finding stops the test).
+#   replay: the asan build of the fuzz corpus replay alone (fragg_fuzz_corpus_test: every
+#         committed corpus input through its reader), the short run CI does (scripts/test.sh).
 #   tsan: a TSan build of the concurrency tests: the map lock (readers, writers, a query
 #         answered during a long insertion, no half-inserted scan seen) and the server's
 #         ROS-free parts (the drop-oldest cloud queue between subscriber and insertion thread,
 #         the marker throttle, the timing statistics).
-# Usage: bash scripts/sanitize.sh [asan] [tsan]   (both when none is named)
+# Usage: bash scripts/sanitize.sh [asan] [replay] [tsan]   (asan and tsan when none is named)
 # Environment: CXX (compiler, default clang++ when found, else g++), FRAGG_ASAN_BUILD and
 # FRAGG_TSAN_BUILD (build folders, default build-asan, build-tsan; a FRAGG_FUZZ=ON build folder
 # may serve as the asan one: its libraries carry ASan + UBSan too), FRAGG_SANITIZE_JOBS (2),
@@ -82,6 +84,20 @@ for step in "${steps[@]}"; do
         run_test "$build/$t.sanitize.log" "$build/test/$t" || status=1
       done
       ;;
+    replay)
+      build="${FRAGG_ASAN_BUILD:-$root/build-asan}"
+      configure "$build" address || { status=1; continue; }
+      echo "sanitize: asan build of the fuzz corpus replay ($build)"
+      cmake --build "$build" -j "$jobs" --target fragg_fuzz_corpus_test \
+        >"$build/sanitize-build.log" 2>&1 ||
+        { grep -E "error" "$build/sanitize-build.log" | head -20; status=1; continue; }
+      export ASAN_OPTIONS="detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1"
+      export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+      # Missing is a failure here (run_test would skip a binary that was not built).
+      [ -x "$build/test/fragg_fuzz_corpus_test" ] ||
+        { echo "  fragg_fuzz_corpus_test: not built"; status=1; continue; }
+      run_test "$build/fuzz_replay.sanitize.log" "$build/test/fragg_fuzz_corpus_test" || status=1
+      ;;
     tsan)
       build="${FRAGG_TSAN_BUILD:-$root/build-tsan}"
       configure "$build" thread || { status=1; continue; }
@@ -103,7 +119,7 @@ for step in "${steps[@]}"; do
         grep -E "error" "$build/sanitize-build.log" | head -20; status=1
       fi
       ;;
-    *) echo "sanitize: unknown step $step (asan | tsan)" >&2; exit 2 ;;
+    *) echo "sanitize: unknown step $step (asan | replay | tsan)" >&2; exit 2 ;;
   esac
 done
 [ "$status" -eq 0 ] && echo "sanitize: clean" || echo "sanitize: findings above"

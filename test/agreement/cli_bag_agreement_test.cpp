@@ -54,8 +54,11 @@ TEST(CliBagAgreementTest, ExportedBtAgreesWithOctomap) {
       "both-known %llu cells, same state %.4f %%; either-known %.4f %%\n",
       scans, static_cast<unsigned long long>(a.both), 100 * a.bothRatio(), 100 * a.eitherRatio());
   EXPECT_GT(a.both, 100000u);
-  EXPECT_GE(a.bothRatio(), 0.995);
-  EXPECT_GE(a.eitherRatio(), 0.99);
+  // Just below the measured level (issue 40): 100.0000 % of the 3,621,318 cells both know,
+  // 99.9994 % of the cells either knows (a .bt keeps states only: the log-odds are compared in
+  // octomap_agreement_test.cpp).
+  EXPECT_GE(a.bothRatio(), 0.99999);
+  EXPECT_GE(a.eitherRatio(), 0.99998);
 }
 
 }  // namespace

@@ -1,9 +1,12 @@
 // OctoMap as the reference: the same scans through octomap::OcTree::insertPointCloud, and a
-// cell-by-cell comparison with a fragg map (OctoMap's rule: observed, occupied iff p > 0.5).
+// cell-by-cell comparison with a fragg map (OctoMap's rule: observed, occupied iff p > 0.5), of
+// the states and of the log-odds values.
 #pragma once
 
 #include <octomap/octomap.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
@@ -13,10 +16,19 @@
 
 namespace fragg::test {
 
+/// Log-odds of a cell in both maps agree within this: fragg keeps them in 1/1024 units, each
+/// update rounded to them (at most 1/2048 off), and a cell takes at most one update a scan.
+constexpr double kLogOddsTolerance = 0.01;
+
 struct Agreement {
   uint64_t both = 0, both_same = 0;  ///< cells known to both maps, and of those the same state
   uint64_t only_fragg = 0, only_octomap = 0;
+  /// Cells known to both whose log-odds agree within kLogOddsTolerance, and the largest
+  /// difference seen (compareWithOctomap only: a .bt file keeps no log-odds worth comparing).
+  uint64_t both_same_log_odds = 0;
+  double max_log_odds_diff = 0.0;
   double bothRatio() const { return both ? double(both_same) / both : 0.0; }
+  double logOddsRatio() const { return both ? double(both_same_log_odds) / both : 0.0; }
   double eitherRatio() const {
     const uint64_t either = both + only_fragg + only_octomap;
     return either ? double(both_same) / either : 0.0;
@@ -74,7 +86,11 @@ inline octomap::OcTree octomapWithParamsOf(const MapParams& p) {
 struct VoxelKeyHasher {
   size_t operator()(const VoxelKey& k) const { return VoxelKeyHash()(k); }
 };
-using LeafStates = std::unordered_map<VoxelKey, bool, VoxelKeyHasher>;  // voxel -> occupied
+struct OctoLeaf {
+  bool occupied;  ///< OctoMap's own occupancy test
+  float log_odds;
+};
+using LeafStates = std::unordered_map<VoxelKey, OctoLeaf, VoxelKeyHasher>;
 
 /// Every voxel an OcTree knows (coarser leaves expanded), with OctoMap's own occupancy test.
 inline LeafStates leafStates(const octomap::OcTree& tree) {
@@ -83,12 +99,12 @@ inline LeafStates leafStates(const octomap::OcTree& tree) {
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
     const int span = 1 << (depth - static_cast<int>(it.getDepth()));
     const octomap::OcTreeKey k = it.getIndexKey();  // smallest key of the leaf's cube
-    const bool occupied = tree.isNodeOccupied(*it);
+    const OctoLeaf leaf{tree.isNodeOccupied(*it), it->getLogOdds()};
     for (int dx = 0; dx < span; ++dx)
       for (int dy = 0; dy < span; ++dy)
         for (int dz = 0; dz < span; ++dz)
           states[VoxelKey{int(k[0]) - 32768 + dx, int(k[1]) - 32768 + dy, int(k[2]) - 32768 + dz}] =
-              occupied;
+              leaf;
   }
   return states;
 }
@@ -107,7 +123,11 @@ inline Agreement compareWithOctomap(const Map& map, const octomap::OcTree& tree)
         continue;
       }
       ++a.both;
-      a.both_same += it->second == occupied ? 1 : 0;
+      a.both_same += it->second.occupied == occupied ? 1 : 0;
+      const double diff =
+          std::abs(double(b.cells[c].log_odds_fx) / kLogOddsScale - double(it->second.log_odds));
+      a.both_same_log_odds += diff <= kLogOddsTolerance ? 1 : 0;
+      a.max_log_odds_diff = std::max(a.max_log_odds_diff, diff);
       octo.erase(it);
     }
   });
@@ -115,18 +135,18 @@ inline Agreement compareWithOctomap(const Map& map, const octomap::OcTree& tree)
   return a;
 }
 
-/// The same comparison between two OcTrees (`ours` plays fragg's part).
+/// The same comparison of states between two OcTrees (`ours` plays fragg's part).
 inline Agreement compareTrees(const octomap::OcTree& ours, const octomap::OcTree& reference) {
   LeafStates ref = leafStates(reference);
   Agreement a;
-  for (const auto& [key, occupied] : leafStates(ours)) {
+  for (const auto& [key, leaf] : leafStates(ours)) {
     auto it = ref.find(key);
     if (it == ref.end()) {
       ++a.only_fragg;
       continue;
     }
     ++a.both;
-    a.both_same += it->second == occupied ? 1 : 0;
+    a.both_same += it->second.occupied == leaf.occupied ? 1 : 0;
     ref.erase(it);
   }
   a.only_octomap = ref.size();

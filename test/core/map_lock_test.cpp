@@ -1,6 +1,8 @@
 // fragg::Locked / LockedMap: readers share the lock, a writer holds it alone, and a query is
-// answered between two scans of a long insertion. Ordering is checked through counters and
-// handshakes, never through wall-clock durations.
+// answered between two scans of a long insertion when the writer takes the lock per scan (the
+// writer here is the test's own loop: the lock itself is under test; that the map server's
+// insertion path takes it per scan is checked by test/ros/cloud_input_lock_test.cpp). Ordering is
+// checked through counters and handshakes, never through wall-clock durations.
 #include "fragg_map/map_lock.h"
 
 #include <gtest/gtest.h>

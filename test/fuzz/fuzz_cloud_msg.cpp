@@ -45,18 +45,19 @@ bool deserialise(const uint8_t* data, size_t size, sensor_msgs::PointCloud2& msg
 
 }  // namespace
 
-int cloudMsg(const uint8_t* data, size_t size) {
-  if (size > UINT32_MAX) return 0;
+bool cloudMsg(const uint8_t* data, size_t size) {
+  if (size > UINT32_MAX) return false;
   sensor_msgs::PointCloud2 msg;
-  if (!deserialise(data, size, msg)) return 0;
+  if (!deserialise(data, size, msg)) return false;
   try {
     ros::CloudLayout layout;
     const PointCloud cloud = ros::cloudFromMsg(msg, &layout);
     ros::finitePointCount(cloud);
+    return true;
   } catch (const IoError&) {
   } catch (const InvalidArgument&) {
   }
-  return 0;
+  return false;
 }
 
 }  // namespace fragg::fuzz

@@ -8,15 +8,16 @@
 
 namespace fragg::fuzz {
 
-int fgm(const uint8_t* data, size_t size) {
+bool fgm(const uint8_t* data, size_t size) {
   const std::string path = writeInputFile(data, size, ".fgm", /*append_crc=*/true);
   try {
     const Map map = Map::load(path, Backend::kCpu);
     for (const ScanId id : map.scanStore().ids()) decodePoints(map.scanStore().points(id));
+    return true;
   } catch (const IoError&) {
   } catch (const InvalidArgument&) {
   }
-  return 0;
+  return false;
 }
 
 }  // namespace fragg::fuzz

@@ -42,7 +42,7 @@ void checkBlocksWithinRange(const Map& map, const Eigen::Vector3d& sensor_m, dou
 
 }  // namespace
 
-int insertScan(const uint8_t* data, size_t size) {
+bool insertScan(const uint8_t* data, size_t size) {
   const InsertInput in = decodeInsertInput(data, size);
   try {
     Map map(in.params);
@@ -51,8 +51,9 @@ int insertScan(const uint8_t* data, size_t size) {
     checkBlocksWithinRange(map, in.T_map_sensor.translation(), first.sensor.max_range_m);
     correctAndRemove(in, first.scan_id, map);
   } catch (const InvalidArgument&) {
+    return false;
   }
-  return 0;
+  return true;
 }
 
 }  // namespace fragg::fuzz

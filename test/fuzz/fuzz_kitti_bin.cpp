@@ -6,14 +6,15 @@
 
 namespace fragg::fuzz {
 
-int kittiBin(const uint8_t* data, size_t size) {
+bool kittiBin(const uint8_t* data, size_t size) {
   const std::string path = writeInputFile(data, size, ".bin");
   try {
     readKittiBin(path);
+    return true;
   } catch (const IoError&) {
   } catch (const InvalidArgument&) {
   }
-  return 0;
+  return false;
 }
 
 }  // namespace fragg::fuzz

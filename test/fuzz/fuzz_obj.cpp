@@ -7,16 +7,17 @@
 
 namespace fragg::fuzz {
 
-int obj(const uint8_t* data, size_t size) {
+bool obj(const uint8_t* data, size_t size) {
   const std::string path = writeInputFile(data, size, ".obj");
   try {
     const geometry::TriangleMesh mesh = geometry::readObj(path);
     // As `collide --mesh` and the server's robot mesh use it: the mesh's BVH is built.
     planning::CollisionShape::mesh(mesh, 1.0);
+    return true;
   } catch (const IoError&) {
   } catch (const InvalidArgument&) {
   }
-  return 0;
+  return false;
 }
 
 }  // namespace fragg::fuzz

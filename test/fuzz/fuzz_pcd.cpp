@@ -6,15 +6,16 @@
 
 namespace fragg::fuzz {
 
-int pcd(const uint8_t* data, size_t size) {
+bool pcd(const uint8_t* data, size_t size) {
   const std::string path = writeInputFile(data, size, ".pcd");
   try {
     Eigen::Isometry3d T_file_sensor;
     readPcd(path, &T_file_sensor);
+    return true;
   } catch (const IoError&) {
   } catch (const InvalidArgument&) {
   }
-  return 0;
+  return false;
 }
 
 }  // namespace fragg::fuzz

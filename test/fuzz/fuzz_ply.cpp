@@ -6,14 +6,15 @@
 
 namespace fragg::fuzz {
 
-int ply(const uint8_t* data, size_t size) {
+bool ply(const uint8_t* data, size_t size) {
   const std::string path = writeInputFile(data, size, ".ply");
   try {
     readPly(path);
+    return true;
   } catch (const IoError&) {
   } catch (const InvalidArgument&) {
   }
-  return 0;
+  return false;
 }
 
 }  // namespace fragg::fuzz

@@ -8,26 +8,31 @@
 namespace fragg::fuzz {
 namespace {
 
+// True when `read` returns, false when it refuses the file with a project error.
 template <class Read>
-void readCatching(Read read) {
+bool readCatching(Read read) {
   try {
     read();
+    return true;
   } catch (const IoError&) {
   } catch (const InvalidArgument&) {
   }
+  return false;
 }
 
 }  // namespace
 
-int poses(const uint8_t* data, size_t size) {
+// Parsed when at least one of the pose readers reads the file (every reader is run).
+bool poses(const uint8_t* data, size_t size) {
   const std::string path = writeInputFile(data, size, ".txt");
-  readCatching([&] { readTumPoses(path); });
-  readCatching([&] { readScanPoses(path); });
-  readCatching([&] { readKittiPoses(path); });
-  readCatching([&] { readKittiCalibTr(path); });
-  readCatching([&] { readMatrix4(path); });
-  readCatching([&] { readKittiTimes(path); });
-  return 0;
+  bool parsed = false;
+  parsed |= readCatching([&] { readTumPoses(path); });
+  parsed |= readCatching([&] { readScanPoses(path); });
+  parsed |= readCatching([&] { readKittiPoses(path); });
+  parsed |= readCatching([&] { readKittiCalibTr(path); });
+  parsed |= readCatching([&] { readMatrix4(path); });
+  parsed |= readCatching([&] { readKittiTimes(path); });
+  return parsed;
 }
 
 }  // namespace fragg::fuzz

@@ -12,8 +12,8 @@
 
 namespace fragg::fuzz {
 
-int scan(const uint8_t* data, size_t size) {
-  if (size < 1) return 0;
+bool scan(const uint8_t* data, size_t size) {
+  if (size < 1) return false;
   const uint32_t version = 2 + data[0] % 3;
   const bool spill_file = (data[0] & 0x80) != 0;
   try {
@@ -29,10 +29,11 @@ int scan(const uint8_t* data, size_t size) {
       readScan(reader, record, points, version);
       decodePoints(points);
     }
+    return true;
   } catch (const IoError&) {
   } catch (const InvalidArgument&) {
   }
-  return 0;
+  return false;
 }
 
 }  // namespace fragg::fuzz

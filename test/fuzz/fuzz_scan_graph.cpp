@@ -6,17 +6,18 @@
 
 namespace fragg::fuzz {
 
-int scanGraph(const uint8_t* data, size_t size) {
+bool scanGraph(const uint8_t* data, size_t size) {
   const std::string path = writeInputFile(data, size, ".graph");
   try {
     const auto source = openDataset(path);
     Scan scan;
     while (source->next(scan)) {
     }
+    return true;
   } catch (const IoError&) {
   } catch (const InvalidArgument&) {
   }
-  return 0;
+  return false;
 }
 
 }  // namespace fragg::fuzz

@@ -6,14 +6,15 @@
 
 namespace fragg::fuzz {
 
-int waypoints(const uint8_t* data, size_t size) {
+bool waypoints(const uint8_t* data, size_t size) {
   const std::string path = writeInputFile(data, size, ".txt");
   try {
     planning::readWaypoints(path);
+    return true;
   } catch (const IoError&) {
   } catch (const InvalidArgument&) {
   }
-  return 0;
+  return false;
 }
 
 }  // namespace fragg::fuzz

@@ -6,14 +6,15 @@
 
 namespace fragg::fuzz {
 
-int xyz(const uint8_t* data, size_t size) {
+bool xyz(const uint8_t* data, size_t size) {
   const std::string path = writeInputFile(data, size, ".xyz");
   try {
     readXyz(path);
+    return true;
   } catch (const IoError&) {
   } catch (const InvalidArgument&) {
   }
-  return 0;
+  return false;
 }
 
 }  // namespace fragg::fuzz

@@ -22,9 +22,12 @@ import zlib
 N_POINTS = 48  # points kept of each real scan
 
 
-def write(out, target, name, data):
+def write(out, target, name, data, prefix="seed_"):
+    """Writes test/fuzz/corpus/<target>/<prefix><name>. The corpus replay asserts that every
+    seed_* input parses and every invalid_* input (a hand-made file the reader must refuse) is
+    refused."""
     os.makedirs(os.path.join(out, target), exist_ok=True)
-    with open(os.path.join(out, target, "seed_" + name), "wb") as f:
+    with open(os.path.join(out, target, prefix + name), "wb") as f:
         f.write(data)
 
 
@@ -156,7 +159,8 @@ def xyz_seeds(real, out, points):
     text = "# x y z\n" + "".join("%.4f %.4f %.4f\n" % p for p in points[:20])
     write(out, "xyz", "real_points.xyz", text.encode())
     write(out, "xyz", "commas_and_blank.xyz",
-          ("\n".join("%g,%g,%g" % p for p in points[20:26]) + "\n\n1 2\n").encode())
+          ("\n".join("%g,%g,%g" % p for p in points[20:26]) + "\n\n1 2\n").encode(),
+          prefix="invalid_")
 
 
 def kitti_bin_seeds(out, points):
@@ -164,7 +168,7 @@ def kitti_bin_seeds(out, points):
           b"".join(struct.pack("<4f", *p, 0.5) for p in points[:N_POINTS]))
     write(out, "kitti_bin", "one_point.bin", struct.pack("<4f", 1.0, 2.0, 3.0, 0.0))
     write(out, "kitti_bin", "partial_record.bin",
-          struct.pack("<4f", 1.0, 2.0, 3.0, 0.0) + b"\0" * 7)
+          struct.pack("<4f", 1.0, 2.0, 3.0, 0.0) + b"\0" * 7, prefix="invalid_")
 
 
 # ---------------------------------------------------------------- insertion (fuzz_insert.cpp)
@@ -248,7 +252,7 @@ def text_seeds(real, out, repo, fragg_map, scans_fgm):
           b"# x y z qx qy qz qw\n0 0 1 0 0 0 1\n\n1.5 0 1 0 0 0.7071068 0.7071068\n"
           b"3 -0.5 1.2 0 0 1 0\n")
     write(out, "waypoints", "one.txt", b"0.25 0.5 0.75 0 0 0 1")
-    write(out, "waypoints", "bad_quaternion.txt", b"0 0 0 0 0 0 2\n")
+    write(out, "waypoints", "bad_quaternion.txt", b"0 0 0 0 0 0 2\n", prefix="invalid_")
     write(out, "obj", "robot_box.obj", open(os.path.join(
         repo, "test", "rostest", "robot_box.obj"), "rb").read())
     write(out, "obj", "tetra_slashes.obj",

@@ -10,6 +10,13 @@ if(FRAGG_HAVE_ROS)
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/map_server_store_kill.test)
   # ~get_stats, ~save_map and ~clear_bbox called while big clouds are inserted (issue 18).
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/map_server_busy.test)
+  # The server's insertion path (CloudInput: subscriber, queue, insertion thread) leaves the map
+  # unlocked between every two clouds: a query from another thread gets in each time.
+  add_rostest_gtest(cloud_input_lock_test ${CMAKE_CURRENT_LIST_DIR}/cloud_input_lock.test
+    ${CMAKE_CURRENT_LIST_DIR}/../ros/cloud_input_lock_test.cpp)
+  target_link_libraries(cloud_input_lock_test fragg_map_nodelet)
+  target_include_directories(cloud_input_lock_test PRIVATE ${CMAKE_CURRENT_LIST_DIR}/../ros)
+  fragg_target_flags(cloud_input_lock_test)
   # map_rate / marker_rate: the whole-map outputs and markers throttled on a 10 Hz stream, the
   # held-back clouds flushed by the timer, ~reset_map published at once.
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/map_server_map_rate.test)
