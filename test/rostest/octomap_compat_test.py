@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """rostest of fragg_map as a drop-in for octomap_server (launch/octomap_compat.launch, node
-named octomap_server, parameters from an octomap_server YAML): every row of README's
+named octomap_server, parameters from an octomap_server YAML): every row of docs/ros.md's
 "octomap_server -> fragg_map" table. One synthetic cloud from a sensor 1 m above the map
 origin: a wall at x = 3 m, a point beyond sensor_model/max_range, points below
 pointcloud_min_z and above pointcloud_max_z, one above occupancy_max_z and one below
@@ -8,7 +8,7 @@ occupancy_min_z. Further server processes (the node's executable, started here, 
 namespace of its own: ExtraServer) check the start-up map (map_file, first argument), the
 warning that names unknown parameters, filter_ground and filter_speckles.
 
-README row -> test:
+docs/ros.md row -> test:
   cloud_in, pointcloud_min_z/max_z, max_range                  test_03
   occupied_cells_vis_array, frame_id, resolution, height_map/color  test_01
   free_cells_vis_array, publish_free_space                      test_02

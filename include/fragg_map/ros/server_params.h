@@ -60,7 +60,7 @@ struct FrontierParams {
   int max_marker_cells = 200000;
 };
 
-/// octomap_server's parameters of the same name and meaning (README: "octomap_server ->
+/// octomap_server's parameters of the same name and meaning (docs/ros.md: "octomap_server ->
 /// fragg_map"; launch/octomap_compat.launch loads an octomap_server YAML unchanged).
 struct OctomapCompatParams {
   /// The robot's base frame: the ground plane is sought in it (filter_ground).

@@ -132,7 +132,7 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
 }
 
 void MapServer::loadStartMap() {
-  // What the map starts from: a page store > an autosave > map_file (README, ROS section).
+  // What the map starts from: a page store > an autosave > map_file (docs/ros.md).
   const std::string& map_file = params_.octomap.map_file;
   if (!paging_.store.empty()) {
     if (autosave_params_.enabled())
