@@ -16,7 +16,7 @@ docs/ros.md row -> test:
   projected_map, latch                                          test_05
   occupancy_min_z/max_z (markers, clouds, projected_map)        test_03, test_05
   sensor_model/hit, miss, min, max                              test_05a
-  ~clear_bbx                                                    test_06
+  ~clear_bbx (known cells in the box set free, clear_bbx_free)  test_06
   ~reset                                                        test_07
   ~load_map (.bt, .fgm)                                         test_08
   map_file / first argument                                     test_09
@@ -282,7 +282,26 @@ class OctomapCompatTest(unittest.TestCase):
             os.path.join(self.tmp, "before_clear.bt")).success)
         before = self.stats().known_voxels
         rospy.ServiceProxy(NS + "clear_bbx", BoundingBoxQuery)(Point(2.9, -1, 0), Point(3.2, 1, 2))
-        self.assertLess(self.stats().known_voxels, before)
+        # octomap_server's rule (clear_bbx_free, the default): the known cells in the box become
+        # free at the clamping minimum (sensor_model/min); none becomes unknown, none outside
+        # changes. Cells within one of the box's faces are not judged (float rounding of key()).
+        self.assertEqual(self.stats().known_voxels, before)
+        after = os.path.join(self.tmp, "after_clear.fgm")
+        self.assertTrue(rospy.ServiceProxy(NS + "save_map", SaveMap)(after).success)
+        old, new = cell_log_odds(saved), cell_log_odds(after)
+        self.assertEqual(set(old), set(new))
+        lo, hi = key(2.9, -1, 0), key(3.2, 1, 2)
+        free_fx = fixed_log_odds(yaml_params()["sensor_model"]["min"])
+        inside = outside = 0
+        for k, v in old.items():
+            if all(lo[i] + 1 <= k[i] <= hi[i] - 1 for i in range(3)):
+                inside += 1
+                self.assertEqual(new[k], free_fx, "cell %s in the box" % (k,))
+            elif any(k[i] < lo[i] - 1 or k[i] > hi[i] + 1 for i in range(3)):
+                outside += 1
+                self.assertEqual(new[k], v, "cell %s outside the box" % (k,))
+        self.assertGreater(inside, 20)  # the wall's cells (x 3.0-3.1) and free cells before it
+        self.assertGreater(outside, 100)
         wait_for(lambda: key(3.05, 0.05, 1.05) not in occupied_keys(self.last["occupied_cells"]),
                  10, "the wall gone from occupied_cells")
         with self.assertRaises(rospy.ServiceException):  # an inverted box: a failed call
@@ -410,6 +429,22 @@ class OctomapCompatTest(unittest.TestCase):
         self.assertFalse(full.binary)
         self.assertEqual(full.id, "OcTree")
         self.assertGreater(len(full.data), len(file_data))
+        # compress_map (true in the YAML, octomap_server's default): octomap_full is the pruned
+        # full tree, the data of `fragg_map export MAP -o X.ot`; with --no-prune it is larger.
+        found = find_in_workspaces(["libexec"], project="fragg_map", path="fragg_map",
+                                   first_match_only=True)
+        self.assertTrue(found, "the fragg_map executable is not in the workspace")
+        fgm = os.path.join(self.tmp, "now.fgm")
+        self.assertTrue(rospy.ServiceProxy(NS + "save_map", SaveMap)(fgm).success)
+        ot_data = {}
+        for name, extra in (("pruned", []), ("unpruned", ["--no-prune"])):
+            ot = os.path.join(self.tmp, name + ".ot")
+            subprocess.run([found[0], "export", fgm, "-o", ot] + extra, check=True,
+                           stdout=subprocess.DEVNULL)
+            with open(ot, "rb") as f:
+                ot_data[name] = f.read().split(b"\ndata\n", 1)[1]
+        self.assertEqual(bytes(b & 0xFF for b in full.data), ot_data["pruned"])
+        self.assertLess(len(ot_data["pruned"]), len(ot_data["unpruned"]))
 
     # ---- filters, each in a server of its own fed the floor scene ----
     def test_12_filter_ground(self):

@@ -76,7 +76,11 @@ struct OctomapCompatParams {
   bool colored_map = false;
   float color_rgba[4] = {0.0f, 0.0f, 1.0f, 1.0f};  ///< color/r|g|b|a with height_map false
   bool incremental_2D_projection = false;  ///< projected_map patches only the changed columns
-  bool compress_map = true;                ///< (an octree's pruning: nothing to do here)
+  bool compress_map =
+      true;  ///< octomap_full pruned (equal sibling leaves merged), as octomap_server
+  /// ~clear_bbx's rule: true (octomap_server's) sets the observed cells in the box free at the
+  /// lower clamp; false makes them unknown, as ~clear_bbox does.
+  bool clear_bbx_free = true;
   /// Map loaded at start-up (.fgm or .bt); also the node's first argument.
   std::string map_file;
 };

@@ -59,7 +59,8 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
                                               publishers_->publishFull(::ros::Time::now());
                                               publish_octomaps(::ros::Time::now(), false);
                                             });
-  octomap_services_ = std::make_unique<OctomapCompatServices>(private_nh, services_.get());
+  octomap_services_ = std::make_unique<OctomapCompatServices>(private_nh, services_.get(),
+                                                              params_.octomap.clear_bbx_free);
   loadStartMap();  // throws (the node does not start) when a file is unreadable
   auto publish_changed = [this, publish_octomaps] {
     try {
