@@ -13,7 +13,7 @@ docs/ros.md row -> test:
   occupied_cells_vis_array, frame_id, resolution, height_map/color  test_01
   free_cells_vis_array, publish_free_space                      test_02
   octomap_point_cloud_centers                                   test_04
-  projected_map, latch                                          test_05
+  projected_map, latch, octomap_server's grid bounds            test_05
   occupancy_min_z/max_z (markers, clouds, projected_map)        test_03, test_05
   sensor_model/hit, miss, min, max                              test_05a
   ~clear_bbx (known cells in the box set free, clear_bbx_free)  test_06
@@ -110,6 +110,20 @@ def cell_log_odds(path):
                 cells[(bx * edge + i % edge, by * edge + (i // edge) % edge,
                        bz * edge + i // (edge * edge))] = v
     return cells
+
+
+def octomap_server_span(lo, hi, res):
+    """octomap_server's projected_map keys on one axis for observed keys [lo, hi]: the leaves'
+    faces (liboctomap's calcMinMax), widened to the origin (its zero padding), keyed as a
+    float point3d (coordToKeyChecked)."""
+    def f32(v):
+        return struct.unpack("f", struct.pack("f", v))[0]
+    half = res / 2.0
+    min_face = (lo + 0.5) * res - half
+    max_face = ((hi + 0.5) * res - half) + res
+    factor = 1.0 / res
+    return (math.floor(factor * f32(min(min_face, -0.0))),
+            math.floor(factor * f32(max(max_face, 0.0))))
 
 
 def yaml_params():
@@ -247,6 +261,18 @@ class OctomapCompatTest(unittest.TestCase):
         self.assertNotEqual(at(2.05, -1.05), 100)  # above occupancy_max_z
         self.assertNotEqual(at(2.05, 2.05), 100)   # below occupancy_min_z
         self.assertEqual(at(1.55, 0.05), 0)  # the rays' free cells below 2 m
+        # projected_map/octomap_bounds (octomap_compat.launch): octomap_server's grid for the
+        # map's observed cells, as its handlePreNodeTraversal computes it.
+        path = os.path.join(self.tmp, "projected.fgm")
+        self.assertTrue(rospy.ServiceProxy(NS + "save_map", SaveMap)(path).success)
+        keys = list(cell_log_odds(path))
+        x0, x1 = octomap_server_span(min(k[0] for k in keys), max(k[0] for k in keys), RES)
+        y0, y1 = octomap_server_span(min(k[1] for k in keys), max(k[1] for k in keys), RES)
+        self.assertEqual((grid.info.width, grid.info.height), (x1 - x0 + 1, y1 - y0 + 1))
+        self.assertAlmostEqual(grid.info.origin.position.x, x0 * RES, places=6)
+        self.assertAlmostEqual(grid.info.origin.position.y, y0 * RES, places=6)
+        self.assertLessEqual(x0, 0)  # the origin's cell is always inside
+        self.assertGreaterEqual(y1, 0)
 
     def test_05a_sensor_model_probabilities(self):
         """sensor_model/hit, miss, min, max (the YAML's, none of them the default): the saved

@@ -81,6 +81,9 @@ struct OctomapCompatParams {
   /// ~clear_bbx's rule: true (octomap_server's) sets the observed cells in the box free at the
   /// lower clamp; false makes them unknown, as ~clear_bbox does.
   bool clear_bbx_free = true;
+  /// projected_map/octomap_bounds: the grid spans octomap_server's bounds (its upper-face key,
+  /// the origin inside; octomapServerGridSpan) instead of the observed cells' bounds.
+  bool projected_map_octomap_bounds = false;
   /// Map loaded at start-up (.fgm or .bt); also the node's first argument.
   std::string map_file;
 };
