@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Checks that every tracked C++/CUDA source is formatted as .clang-format (Google base) says.
 # Exits non-zero and lists the badly formatted files (fix: clang-format -i FILE...).
+# Then checks that every relative link and anchor in README.md and docs/*.md resolves
+# (scripts/check_links.py; a broken link is listed as FILE:LINE and fails the check too).
 # Usage: bash scripts/check_format.sh
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -32,3 +34,4 @@ if [ "${#bad[@]}" -ne 0 ]; then
   exit 1
 fi
 echo "check_format: ${#files[@]} files OK ($("$CLANG_FORMAT" --version))"
+/usr/bin/python3 scripts/check_links.py

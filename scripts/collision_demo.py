@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""Asks a running fragg_map server for a collision check that rviz can show (the README
-picture; scripts/render_rviz.sh --collision-demo runs it): a robot-sized box (0.6 x 0.4 x
+"""Asks a running fragg_map server for a collision check that rviz can show (the picture in
+docs/ros.md; scripts/render_rviz.sh --collision-demo runs it): a robot-sized box (0.6 x 0.4 x
 0.3 m) at waypoints on a straight path from START towards the nearest occupied cell at the
 start's height that has free space behind it, and 1.5 m beyond, checked pose by pose and as a
 path. The `collisions` topic then shows the free poses green, the colliding ones red, the path

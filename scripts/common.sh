@@ -123,9 +123,11 @@ fragg_catkin_make() {
     "${FRAGG_CUDA_ARGS[@]}")
 }
 
-# CI (test.sh): without an installed octomap_msgs (Debian has none), builds the messages-only
-# stand-in of test/octomap_msgs_standin in a workspace of its own, <ws>/octomap_msgs_standin,
-# and sources it, so that fragg_map is built and tested with its octomap_msgs outputs.
+# build.sh, demo.sh, demo_ros.sh and CI (test.sh): without an installed octomap_msgs (Debian has
+# none), builds the messages-only stand-in of test/octomap_msgs_standin (octomap_msgs' own
+# definitions: the same md5sums) in a workspace of its own, <ws>/octomap_msgs_standin, and
+# sources it, so that fragg_map is built with its octomap_msgs outputs (octomap_binary,
+# octomap_full, GetOctomap) that octomap_msgs' clients can read.
 fragg_octomap_msgs_standin() {
   local p
   for p in /usr ${CMAKE_PREFIX_PATH:+${CMAKE_PREFIX_PATH//:/ }}; do

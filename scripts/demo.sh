@@ -31,6 +31,7 @@ rgbd="$data/slambook2_ch5_rgbd"
 velodyne="$data/small_gicp_pair/target.ply"
 
 fragg_install_deps
+fragg_octomap_msgs_standin  # octomap_binary / octomap_full without a packaged octomap_msgs
 fragg_build_ws
 fragg="$FRAGG_WS/devel/lib/fragg_map/fragg_map"
 out="$FRAGG_REPO/out/demo"

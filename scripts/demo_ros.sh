@@ -24,6 +24,7 @@ fragg_usage() {
 }
 fragg_parse_common "${args[@]+"${args[@]}"}"
 fragg_install_deps
+fragg_octomap_msgs_standin  # octomap_binary / octomap_full without a packaged octomap_msgs
 fragg_build_ws
 mkdir -p "$out"
 out="$(cd "$out" && pwd -P)"

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's frontier picture (docs/frontiers.png): the simulator's pump room
+# The frontier picture of docs/planning.md (docs/frontiers.png): the simulator's pump room
 # (config/scenes/pipes.json) seen by a depth camera (320 x 240, 70 degrees, 8 m, pitched 10
 # degrees down) at 24 poses along the first 12 m of its survey trajectory, mapped at 10 cm with
 # `fragg_map build`, then `fragg_map render --frontiers`: the frontier cells at the camera's

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's sub-map picture (docs/submaps.png): W1's map at 10 cm, cut with
+# The sub-map picture of docs/submaps.md (docs/submaps.png): W1's map at 10 cm, cut with
 # `fragg_map truncate --box` and merged back with `fragg_map merge --mode overwrite`, drawn
 # side by side from the top: the map left after the cut (--rest), the cut-out part, and the
 # merged result (checked equal to the original with `fragg_map compare`). The three panels are

@@ -162,6 +162,12 @@ class Map {
   /// Makes every cell in the box unknown (block-granular memory release where possible).
   /// Kept scans that could reach into the box can no longer be removed or corrected.
   void clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map);
+  /// octomap_server's clear_bbx rule: every observed cell whose key lies in the box (the keys
+  /// of min_map and max_map, inclusive, as clearBox) is set to the lower clamp (free, log-odds
+  /// clamp_min; hit counts kept); unknown cells stay unknown. Returns the cells set. Same
+  /// argument checks as clearBox (InvalidArgument, nothing changed); kept scans that could
+  /// reach into the box can no longer be removed or corrected.
+  uint64_t freeBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map);
   /// Writes cells directly (importers, test fixtures): `edit` gets a CellWriter. Bumps the
   /// revision once; every kept scan can no longer be removed or corrected afterwards.
   void writeCells(const std::function<void(CellWriter&)>& edit);

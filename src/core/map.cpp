@@ -442,6 +442,49 @@ void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_ma
   });
 }
 
+uint64_t Map::freeBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map) {
+  if (!min_map.allFinite() || !max_map.allFinite())
+    throw InvalidArgument("clear box corners must be finite");
+  if ((min_map.array() > max_map.array()).any())
+    throw InvalidArgument("clear box min corner must not exceed the max corner");
+  const VoxelKey lo = keyOf(min_map), hi = keyOf(max_map);
+  const BlockKey blo = blockKeyOf(lo), bhi = blockKeyOf(hi);
+  pageInBlocks(blo, bhi);
+  backend_->cache().invalidate(blo, bhi, blocks_);
+  markScansTouching(min_map, max_map);
+  std::vector<BlockIndex> hit;
+  blocks_.forEachInBox(blo, bhi, [&](BlockIndex i) { hit.push_back(i); });
+  ++revision_;
+  const int16_t free_fx = model_.min_fx;
+  uint64_t set = 0;
+  for (BlockIndex i : hit) {
+    const BlockKey key = blocks_.meta(i).key;
+    Block& b = blocks_.block(i);
+    bool changed = false, occupied_changed = false, state_changed = false;
+    for (int c = 0; c < kCellsPerBlock; ++c) {
+      Cell& cell = b.cells[c];
+      if (!cell.observed()) continue;
+      const VoxelKey v = voxelKeyOf(key, c);
+      if (v.x < lo.x || v.x > hi.x || v.y < lo.y || v.y > hi.y || v.z < lo.z || v.z > hi.z)
+        continue;
+      ++set;
+      if (cell.log_odds_fx == free_fx) continue;
+      Cell freed = cell;
+      freed.log_odds_fx = free_fx;
+      occupied_changed |= model_.state(cell) == CellState::kOccupied;
+      state_changed |= model_.stateDiffers(cell, freed);
+      cell = freed;
+      changed = true;
+    }
+    if (!changed) continue;
+    BlockMeta& m = blocks_.meta(i);
+    m.changed_at = revision_;  // also ends free_saturated_at's claim
+    if (occupied_changed) m.occupied_at = revision_;
+    if (state_changed) m.state_at = revision_;
+  }
+  return set;
+}
+
 uint64_t Map::clearCellsWhere(const std::vector<BlockIndex>& blocks,
                               const std::function<bool(const VoxelKey&)>& inside,
                               uint64_t* blocks_erased) {

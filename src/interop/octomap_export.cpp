@@ -72,4 +72,32 @@ void exportOctomap(const Map& map, const std::string& path_bt) {
   file.commit();
 }
 
+std::string octomapFullData(const Map& map, bool prune) {
+  std::unique_ptr<octomap::OcTree> tree = toOcTree(map);
+  if (prune) tree->prune();
+  std::ostringstream buffer(std::ios::out | std::ios::binary);
+  tree->writeData(buffer);
+  if (!buffer) throw IoError("cannot serialise the map as a full OctoMap tree");
+  return buffer.str();
+}
+
+void exportOctomapFull(const Map& map, const std::string& path_ot, bool prune) {
+  std::unique_ptr<octomap::OcTree> tree = toOcTree(map);
+  if (prune) tree->prune();
+  // What AbstractOcTree::write does, without liboctomap's debug lines on stderr.
+  std::ostringstream buffer(std::ios::out | std::ios::binary);
+  buffer << "# Octomap OcTree file\n"
+         << "# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
+         << "id " << tree->getTreeType() << "\n"
+         << "size " << tree->size() << "\n"
+         << "res " << tree->getResolution() << "\n"
+         << "data\n";
+  tree->writeData(buffer);
+  if (!buffer) throw IoError(fmt::format("cannot write {}: cannot serialise the tree", path_ot));
+  tree.reset();
+  AtomicFile file(path_ot);
+  file.write(buffer.str());
+  file.commit();
+}
+
 }  // namespace fragg

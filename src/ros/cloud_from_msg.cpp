@@ -134,7 +134,11 @@ fragg::PointCloud cloudFromMsg(const sensor_msgs::PointCloud2& msg, CloudLayout*
     cloud.width = msg.width;
     cloud.height = msg.height;
   }
-  if (finitePointCount(cloud) == 0) reject("no finite point among " + std::to_string(cloud.size()));
+  // Not a layout fault: a well-formed cloud whose every point is NaN or Inf (a sensor that saw
+  // nothing in range). Its own message, without "malformed".
+  if (finitePointCount(cloud) == 0)
+    throw fragg::InvalidArgument("PointCloud2 without a usable point: no finite point among " +
+                                 std::to_string(cloud.size()) + " (all NaN or Inf)");
   return cloud;
 }
 

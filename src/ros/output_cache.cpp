@@ -208,6 +208,7 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
     mergeColumn(&it->second);
   }
   out.columns_merged = dirty.size();
+  resolution_m_ = map.resolution();  // refreshGrid's octomap bounds need it
   refreshGrid(dirty, out.full);
   valid_ = true;
   revision_ = revision;
@@ -253,6 +254,11 @@ void MapOutputCache::refreshGrid(const std::unordered_set<ColumnKey, ColumnKeyHa
     grid_.clear();
     grid_width_ = grid_height_ = 0;
     return;
+  }
+  if (options_.octomap_bounds) {
+    const GridSpan x = octomapServerGridSpan(lo_x, hi_x, resolution_m_);
+    const GridSpan y = octomapServerGridSpan(lo_y, hi_y, resolution_m_);
+    lo_x = x.lo, hi_x = x.hi, lo_y = y.lo, hi_y = y.hi;
   }
   const bool moved = grid_empty_ || lo_x != grid_min_x_ || lo_y != grid_min_y_ ||
                      hi_x - lo_x + 1 != grid_width_ || hi_y - lo_y + 1 != grid_height_;

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "fragg_map/errors.h"
 
@@ -31,6 +32,30 @@ bool poseMoved(const Eigen::Isometry3d& T_old, const Eigen::Isometry3d& T_new,
   return moved_m > thresholds.min_translation_m || turned_rad > thresholds.min_rotation_rad;
 }
 
+std::string describeUnknown(const CorrectionPlan& plan) {
+  const size_t n = plan.unknown.size();
+  std::string s = std::to_string(n) + (n == 1 ? " stamp names" : " stamps name") +
+                  " no scan that can be corrected";
+  if (n == 0) return s;
+  std::vector<std::string> parts;
+  auto count = [](size_t k, const char* one, const char* many) {
+    return std::to_string(k) + (k == 1 ? one : many);
+  };
+  if (plan.unknown_no_scan > 0)
+    parts.push_back(count(plan.unknown_no_scan, " matches no scan", " match no scan") +
+                    " within correction/stamp_tolerance");
+  if (plan.unknown_not_kept > 0)
+    parts.push_back(count(plan.unknown_not_kept, " names a scan", " name scans") +
+                    " no longer kept (the scan store's budget dropped the points)");
+  if (plan.unknown_edited > 0)
+    parts.push_back(count(plan.unknown_edited, " names a scan", " name scans") +
+                    " an edit reached (clear_bbox / clear_bbx, truncate, merge: the updates can "
+                    "no longer be undone exactly)");
+  s += ": ";
+  for (size_t i = 0; i < parts.size(); ++i) s += (i > 0 ? "; " : "") + parts[i];
+  return s;
+}
+
 CorrectionPlan planCorrection(const std::vector<PoseRequest>& requests, const ScanStampIndex& index,
                               const fragg::ScanStore& store, int64_t tolerance_ns,
                               const PoseThresholds* thresholds) {
@@ -41,6 +66,12 @@ CorrectionPlan planCorrection(const std::vector<PoseRequest>& requests, const Sc
     const ScanStampIndex::Entry* entry = index.find(r.stamp_ns, tolerance_ns);
     if (!entry || !store.contains(entry->id) || !store.canRemove(entry->id)) {
       plan.unknown.push_back(i);
+      if (!entry)
+        ++plan.unknown_no_scan;
+      else if (!store.contains(entry->id) || !store.hasPoints(entry->id))
+        ++plan.unknown_not_kept;
+      else
+        ++plan.unknown_edited;  // kept, with its points, but an edit reached its cells
       continue;
     }
     const auto [it, fresh] = matched.emplace(entry->id, i);

@@ -352,6 +352,8 @@ void readOctomapCompat(const XmlRpcValue& root, OctomapCompatParams& o) {
   }
   readBool(root, "incremental_2D_projection", &o.incremental_2D_projection);
   readBool(root, "compress_map", &o.compress_map);
+  readBool(root, "clear_bbx_free", &o.clear_bbx_free);
+  readBool(root, "projected_map/octomap_bounds", &o.projected_map_octomap_bounds);
   readString(root, "map_file", &o.map_file);
 }
 

@@ -10,6 +10,7 @@ fragg_add_test(interop_test
 if(TARGET fragg_map_octomap)
   fragg_add_test(interop_octomap_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/octomap_io_test.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/octomap_full_test.cpp
     LIBS fragg_map_octomap fragg_map_interop
     LABELS interop octomap)
 endif()

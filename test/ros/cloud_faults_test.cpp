@@ -5,6 +5,7 @@
 // them is inserted.
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
+#include <ros/console.h>
 #include <ros/time.h>
 
 #include <cmath>
@@ -14,7 +15,9 @@
 
 #include "../../src/ros/server/cloud_inserter.h"
 #include "cloud_msg_builder.h"
+#include "fragg_map/errors.h"
 #include "fragg_map/map.h"
+#include "fragg_map/ros/cloud_from_msg.h"
 
 namespace {
 
@@ -154,18 +157,6 @@ TEST_F(CloudFaultsTest, MalformedCloudsAreCountedAndLeaveTheMap) {
   }
   {
     auto m = goodMsg();
-    m.width = 0;
-    m.row_step = 0;
-    m.data.clear();
-    bad.emplace_back("empty (width 0)", m);
-  }
-  {
-    auto m = goodMsg();
-    m.height = 0;
-    bad.emplace_back("empty (height 0)", m);
-  }
-  {
-    auto m = goodMsg();
     m.header.frame_id = "";
     bad.emplace_back("no frame_id", m);
   }
@@ -180,6 +171,78 @@ TEST_F(CloudFaultsTest, MalformedCloudsAreCountedAndLeaveTheMap) {
   EXPECT_EQ(s.rejected_clouds, bad.size());
   EXPECT_EQ(s.dropped_clouds, bad.size());
   EXPECT_EQ(s.scans, 1u);
+}
+
+// Records every log line rosconsole emits at `min_level` or above while it is registered.
+class LogRecorder : public ::ros::console::LogAppender {
+ public:
+  explicit LogRecorder(::ros::console::Level min_level) : min_level_(min_level) {
+    ::ros::console::register_appender(this);
+  }
+  ~LogRecorder() override { ::ros::console::deregister_appender(this); }
+  void log(::ros::console::Level level, const char* str, const char*, const char*, int) override {
+    if (level >= min_level_) lines.emplace_back(str);
+  }
+  std::vector<std::string> lines;
+
+ private:
+  ::ros::console::Level min_level_;
+};
+
+TEST_F(CloudFaultsTest, EmptyCloudsAreCountedQuietlyNotAsFaults) {
+  // Drivers publish empty clouds: counted in empty_clouds, no WARN or ERROR line, not a drop.
+  std::vector<sensor_msgs::PointCloud2> empty;
+  {
+    auto m = goodMsg();
+    m.width = 0;
+    m.row_step = 0;
+    m.data.clear();
+    empty.push_back(m);
+  }
+  {
+    auto m = goodMsg();
+    m.height = 0;
+    empty.push_back(m);
+  }
+  {
+    auto m = goodMsg();  // fields that would be refused do not matter without points
+    m.fields.clear();
+    m.width = 0;
+    m.data.clear();
+    empty.push_back(m);
+  }
+  LogRecorder warnings(::ros::console::levels::Warn);
+  for (const auto& m : empty) {
+    EXPECT_FALSE(offer(m, Eigen::Isometry3d::Identity()));
+    expectMapUnchanged();
+  }
+  EXPECT_TRUE(warnings.lines.empty()) << warnings.lines.front();
+  const fragg_map::MapStats s = msg();
+  EXPECT_EQ(s.empty_clouds, empty.size());
+  EXPECT_EQ(s.rejected_malformed, 0u);
+  EXPECT_EQ(s.rejected_clouds, 0u);
+  EXPECT_EQ(s.dropped_clouds, 0u);
+  stats_.restart(0);
+  EXPECT_EQ(msg().empty_clouds, 0u);
+}
+
+TEST_F(CloudFaultsTest, AllNaNCloudIsNotCalledMalformed) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<Eigen::Vector3f> pts(6, Eigen::Vector3f::Constant(nan));
+  const auto m = makeCloud(pts, 3, 2, packedXyz(), 12);
+  try {
+    fragg::ros::cloudFromMsg(m);
+    FAIL() << "an all-NaN cloud was accepted";
+  } catch (const fragg::InvalidArgument& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.find("malformed"), std::string::npos) << what;
+    EXPECT_NE(what.find("no finite point among 6"), std::string::npos) << what;
+  }
+  EXPECT_FALSE(offer(m, Eigen::Isometry3d::Identity()));
+  const fragg_map::MapStats s = msg();
+  EXPECT_EQ(s.rejected_no_finite_point, 1u);
+  EXPECT_EQ(s.rejected_malformed, 0u);
+  expectMapUnchanged();
 }
 
 TEST_F(CloudFaultsTest, BigEndianIsReadNotRefused) {

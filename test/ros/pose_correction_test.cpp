@@ -158,6 +158,46 @@ TEST_F(CorrectionPlanTest, MatchesStampsAndReportsTheUnknown) {
   EXPECT_EQ(strict.unknown.size(), 2u);
 }
 
+TEST_F(CorrectionPlanTest, UnknownStampsSayWhy) {
+  // Scan 2 (stamp 3 s, sensor at y 2) reached by an edit: a box clear within its rays' reach
+  // (3.2 m around the sensor) beyond the other scans' (y 4.5-5): no longer correctable, scan 0
+  // untouched.
+  map_->clearBox(Eigen::Vector3d(-1.0, 4.5, -1.0), Eigen::Vector3d(1.0, 5.0, 1.0));
+  ASSERT_FALSE(map_->scanStore().canRemove(2));
+  ASSERT_TRUE(map_->scanStore().canRemove(0));
+  const std::vector<PoseRequest> requests = {
+      {1000 * kMs, pose(0.5, 0, 0)},  // scan 0: corrected
+      {3000 * kMs, pose(0.5, 2, 0)},  // scan 2: edited
+      {7000 * kMs, pose(0, 0, 0)},    // no scan
+      {9000 * kMs, pose(0, 0, 0)},    // no scan
+  };
+  const fragg::ros::CorrectionPlan plan =
+      fragg::ros::planCorrection(requests, index_, map_->scanStore(), 1 * kMs, nullptr);
+  EXPECT_EQ(plan.unknown.size(), 3u);
+  EXPECT_EQ(plan.unknown_no_scan, 2u);
+  EXPECT_EQ(plan.unknown_not_kept, 0u);
+  EXPECT_EQ(plan.unknown_edited, 1u);
+  EXPECT_EQ(fragg::ros::describeUnknown(plan),
+            "3 stamps name no scan that can be corrected: 2 match no scan within "
+            "correction/stamp_tolerance; 1 names a scan an edit reached (clear_bbox / clear_bbx, "
+            "truncate, merge: the updates can no longer be undone exactly)");
+  fragg::ros::CorrectionPlan none;
+  EXPECT_EQ(fragg::ros::describeUnknown(none), "0 stamps name no scan that can be corrected");
+}
+
+TEST_F(CorrectionPlanTest, ScansWhosePointsTheBudgetDroppedAreNamedAsNotKept) {
+  // A budget of one byte and no spill folder: the points of every scan but the newest (scan
+  // 2) are dropped.
+  build(fragg::ScanStoreParams{true, 0.001, 1, ""});
+  const std::vector<PoseRequest> requests = {{1000 * kMs, pose(0.5, 0, 0)}};
+  const fragg::ros::CorrectionPlan plan =
+      fragg::ros::planCorrection(requests, index_, map_->scanStore(), 1 * kMs, nullptr);
+  ASSERT_EQ(plan.unknown.size(), 1u);
+  EXPECT_EQ(plan.unknown_not_kept, 1u);
+  EXPECT_NE(fragg::ros::describeUnknown(plan).find("1 names a scan no longer kept"),
+            std::string::npos);
+}
+
 TEST_F(CorrectionPlanTest, ThresholdsLeaveSmallChangesAlone) {
   const PoseThresholds t{0.05, 0.01};
   const std::vector<PoseRequest> requests = {

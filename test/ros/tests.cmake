@@ -14,6 +14,13 @@ if(FRAGG_HAVE_ROS)
             ${CMAKE_CURRENT_LIST_DIR}/height_band_test.cpp
     LIBS fragg_map_ros
     LABELS ros)
+  if(TARGET fragg_map_octomap)
+    # projected_map on octomap_server's grid, against liboctomap's arithmetic.
+    fragg_add_test(ros_octomap_grid_bounds_test
+      SOURCES ${CMAKE_CURRENT_LIST_DIR}/octomap_grid_bounds_test.cpp
+      LIBS fragg_map_ros fragg_map_octomap
+      LABELS ros octomap)
+  endif()
   fragg_add_test(ros_ground_filter_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/ground_filter_test.cpp
     LIBS fragg_map_ros

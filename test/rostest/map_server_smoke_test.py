@@ -59,7 +59,6 @@ class MapServerSmokeTest(MapServerBagChecks):
             cloud(xyz_fields(), 8, 4, 1, good),                            # point_step too small
             cloud(xyz_fields(), 12, 4, 1, good[:40]),                      # data too short
             cloud(xyz_fields(PointField.INT16, 2), 6, 4, 1, b"\0" * 24),   # int16 fields
-            cloud(xyz_fields(), 12, 0, 1, b""),                            # 0 points
             cloud(xyz_fields(), 12, 1 << 20, 1 << 16, good),               # 2^36 points
             cloud(xyz_fields(), 12, 4, 1, good, row_step=40),              # row_step < a row
         ]
@@ -67,8 +66,10 @@ class MapServerSmokeTest(MapServerBagChecks):
             cloud(xyz_fields(), 12, 4, 1, nan),                            # all NaN
             cloud(xyz_fields(), 12, 4, 1, huge),                           # only 1e30 / -1e38
         ]
+        # An empty cloud (drivers publish them) is neither malformed nor dropped: counted apart.
+        empty = [cloud(xyz_fields(), 12, 0, 1, b""), cloud(xyz_fields(), 12, 5, 0, b"")]
         wait_for(lambda: self.pub.get_num_connections() > 0, 10, "the server to subscribe")
-        for msg in bad + no_point:
+        for msg in empty + bad + no_point:
             self.pub.publish(msg)
             time.sleep(0.1)
         n = len(bad) + len(no_point)
@@ -76,6 +77,8 @@ class MapServerSmokeTest(MapServerBagChecks):
                  "the malformed clouds to be rejected")
         after = self.stats()
         self.assertEqual(after.rejected_clouds, before.rejected_clouds + n)
+        self.assertEqual(after.empty_clouds, before.empty_clouds + len(empty))
+        self.assertEqual(after.dropped_clouds, before.dropped_clouds + n)
         self.assertEqual(after.rejected_malformed, before.rejected_malformed + len(bad))
         self.assertEqual(after.rejected_no_finite_point,
                          before.rejected_no_finite_point + len(no_point))

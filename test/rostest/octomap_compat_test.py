@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """rostest of fragg_map as a drop-in for octomap_server (launch/octomap_compat.launch, node
-named octomap_server, parameters from an octomap_server YAML): every row of README's
+named octomap_server, parameters from an octomap_server YAML): every row of docs/ros.md's
 "octomap_server -> fragg_map" table. One synthetic cloud from a sensor 1 m above the map
 origin: a wall at x = 3 m, a point beyond sensor_model/max_range, points below
 pointcloud_min_z and above pointcloud_max_z, one above occupancy_max_z and one below
@@ -8,15 +8,15 @@ occupancy_min_z. Further server processes (the node's executable, started here, 
 namespace of its own: ExtraServer) check the start-up map (map_file, first argument), the
 warning that names unknown parameters, filter_ground and filter_speckles.
 
-README row -> test:
+docs/ros.md row -> test:
   cloud_in, pointcloud_min_z/max_z, max_range                  test_03
   occupied_cells_vis_array, frame_id, resolution, height_map/color  test_01
   free_cells_vis_array, publish_free_space                      test_02
   octomap_point_cloud_centers                                   test_04
-  projected_map, latch                                          test_05
+  projected_map, latch, octomap_server's grid bounds            test_05
   occupancy_min_z/max_z (markers, clouds, projected_map)        test_03, test_05
   sensor_model/hit, miss, min, max                              test_05a
-  ~clear_bbx                                                    test_06
+  ~clear_bbx (known cells in the box set free, clear_bbx_free)  test_06
   ~reset                                                        test_07
   ~load_map (.bt, .fgm)                                         test_08
   map_file / first argument                                     test_09
@@ -110,6 +110,20 @@ def cell_log_odds(path):
                 cells[(bx * edge + i % edge, by * edge + (i // edge) % edge,
                        bz * edge + i // (edge * edge))] = v
     return cells
+
+
+def octomap_server_span(lo, hi, res):
+    """octomap_server's projected_map keys on one axis for observed keys [lo, hi]: the leaves'
+    faces (liboctomap's calcMinMax), widened to the origin (its zero padding), keyed as a
+    float point3d (coordToKeyChecked)."""
+    def f32(v):
+        return struct.unpack("f", struct.pack("f", v))[0]
+    half = res / 2.0
+    min_face = (lo + 0.5) * res - half
+    max_face = ((hi + 0.5) * res - half) + res
+    factor = 1.0 / res
+    return (math.floor(factor * f32(min(min_face, -0.0))),
+            math.floor(factor * f32(max(max_face, 0.0))))
 
 
 def yaml_params():
@@ -247,6 +261,18 @@ class OctomapCompatTest(unittest.TestCase):
         self.assertNotEqual(at(2.05, -1.05), 100)  # above occupancy_max_z
         self.assertNotEqual(at(2.05, 2.05), 100)   # below occupancy_min_z
         self.assertEqual(at(1.55, 0.05), 0)  # the rays' free cells below 2 m
+        # projected_map/octomap_bounds (octomap_compat.launch): octomap_server's grid for the
+        # map's observed cells, as its handlePreNodeTraversal computes it.
+        path = os.path.join(self.tmp, "projected.fgm")
+        self.assertTrue(rospy.ServiceProxy(NS + "save_map", SaveMap)(path).success)
+        keys = list(cell_log_odds(path))
+        x0, x1 = octomap_server_span(min(k[0] for k in keys), max(k[0] for k in keys), RES)
+        y0, y1 = octomap_server_span(min(k[1] for k in keys), max(k[1] for k in keys), RES)
+        self.assertEqual((grid.info.width, grid.info.height), (x1 - x0 + 1, y1 - y0 + 1))
+        self.assertAlmostEqual(grid.info.origin.position.x, x0 * RES, places=6)
+        self.assertAlmostEqual(grid.info.origin.position.y, y0 * RES, places=6)
+        self.assertLessEqual(x0, 0)  # the origin's cell is always inside
+        self.assertGreaterEqual(y1, 0)
 
     def test_05a_sensor_model_probabilities(self):
         """sensor_model/hit, miss, min, max (the YAML's, none of them the default): the saved
@@ -282,7 +308,26 @@ class OctomapCompatTest(unittest.TestCase):
             os.path.join(self.tmp, "before_clear.bt")).success)
         before = self.stats().known_voxels
         rospy.ServiceProxy(NS + "clear_bbx", BoundingBoxQuery)(Point(2.9, -1, 0), Point(3.2, 1, 2))
-        self.assertLess(self.stats().known_voxels, before)
+        # octomap_server's rule (clear_bbx_free, the default): the known cells in the box become
+        # free at the clamping minimum (sensor_model/min); none becomes unknown, none outside
+        # changes. Cells within one of the box's faces are not judged (float rounding of key()).
+        self.assertEqual(self.stats().known_voxels, before)
+        after = os.path.join(self.tmp, "after_clear.fgm")
+        self.assertTrue(rospy.ServiceProxy(NS + "save_map", SaveMap)(after).success)
+        old, new = cell_log_odds(saved), cell_log_odds(after)
+        self.assertEqual(set(old), set(new))
+        lo, hi = key(2.9, -1, 0), key(3.2, 1, 2)
+        free_fx = fixed_log_odds(yaml_params()["sensor_model"]["min"])
+        inside = outside = 0
+        for k, v in old.items():
+            if all(lo[i] + 1 <= k[i] <= hi[i] - 1 for i in range(3)):
+                inside += 1
+                self.assertEqual(new[k], free_fx, "cell %s in the box" % (k,))
+            elif any(k[i] < lo[i] - 1 or k[i] > hi[i] + 1 for i in range(3)):
+                outside += 1
+                self.assertEqual(new[k], v, "cell %s outside the box" % (k,))
+        self.assertGreater(inside, 20)  # the wall's cells (x 3.0-3.1) and free cells before it
+        self.assertGreater(outside, 100)
         wait_for(lambda: key(3.05, 0.05, 1.05) not in occupied_keys(self.last["occupied_cells"]),
                  10, "the wall gone from occupied_cells")
         with self.assertRaises(rospy.ServiceException):  # an inverted box: a failed call
@@ -410,6 +455,22 @@ class OctomapCompatTest(unittest.TestCase):
         self.assertFalse(full.binary)
         self.assertEqual(full.id, "OcTree")
         self.assertGreater(len(full.data), len(file_data))
+        # compress_map (true in the YAML, octomap_server's default): octomap_full is the pruned
+        # full tree, the data of `fragg_map export MAP -o X.ot`; with --no-prune it is larger.
+        found = find_in_workspaces(["libexec"], project="fragg_map", path="fragg_map",
+                                   first_match_only=True)
+        self.assertTrue(found, "the fragg_map executable is not in the workspace")
+        fgm = os.path.join(self.tmp, "now.fgm")
+        self.assertTrue(rospy.ServiceProxy(NS + "save_map", SaveMap)(fgm).success)
+        ot_data = {}
+        for name, extra in (("pruned", []), ("unpruned", ["--no-prune"])):
+            ot = os.path.join(self.tmp, name + ".ot")
+            subprocess.run([found[0], "export", fgm, "-o", ot] + extra, check=True,
+                           stdout=subprocess.DEVNULL)
+            with open(ot, "rb") as f:
+                ot_data[name] = f.read().split(b"\ndata\n", 1)[1]
+        self.assertEqual(bytes(b & 0xFF for b in full.data), ot_data["pruned"])
+        self.assertLess(len(ot_data["pruned"]), len(ot_data["unpruned"]))
 
     # ---- filters, each in a server of its own fed the floor scene ----
     def test_12_filter_ground(self):

@@ -1,7 +1,7 @@
 # rostests that need no recorded bag: roslaunch by package name, the node killed on a page store,
 # service calls during long insertions, map_rate on a cloud stream, and fragg_map as a drop-in for
 # octomap_server (an octomap_server YAML through launch/octomap_compat.launch, every row of
-# README's compatibility table).
+# the compatibility table of docs/ros.md).
 if(FRAGG_HAVE_ROS)
   find_package(rostest REQUIRED)
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/roslaunch_by_name.test)

@@ -57,6 +57,10 @@ TEST(CliEval, SmokeMapScoresWellAgainstTheSceneAndAsWellAsOctomap) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("precision"), std::string::npos);
   EXPECT_NE(r.out.find("free error"), std::string::npos);
+  // ... and says what each measures (issue 38: a bare "recall 6.8 %" read as a failure).
+  EXPECT_NE(r.out.find("share of the surface voxels in the observed region that are occupied"),
+            std::string::npos)
+      << r.out;
 }
 
 TEST(CliEval, BadArgumentsAndInputs) {

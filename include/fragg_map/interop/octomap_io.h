@@ -32,6 +32,17 @@ std::unique_ptr<octomap::OcTree> toOcTree(const Map& map);
 /// is outside OctoMap's key range or the file cannot be written (nothing is left behind).
 void exportOctomap(const Map& map, const std::string& path_bt);
 
+/// Writes the map as a full OctoMap tree (.ot, id OcTree) at `path_ot`, atomically: every
+/// observed cell with its exact log-odds, as octomap_server's `octomap_full` carries it. With
+/// `prune` (octomap_server's `compress_map`, the default there) eight sibling leaves of equal
+/// value become one (lossless: reading the file back gives the same cells); without it, one
+/// leaf per cell. Throws IoError as exportOctomap does.
+void exportOctomapFull(const Map& map, const std::string& path_ot, bool prune);
+
+/// The data section of a full OctoMap tree of the map (OcTree::writeData of toOcTree(map),
+/// pruned first with `prune`): what octomap_msgs/Octomap's `data` holds for `octomap_full`.
+std::string octomapFullData(const Map& map, bool prune);
+
 /// A map with the tree's resolution and occupancy parameters (the unknown band keeps
 /// MapParams' default) holding every leaf of the tree; leaves at a coarser depth are
 /// expanded into voxels at the tree's resolution. Log-odds are rounded to fixed point and

@@ -21,8 +21,10 @@ enum class CloudLayout { kPackedFloat32, kStrided };
 /// Converts `msg` into a cloud in the message's own frame. Throws fragg::InvalidArgument
 /// naming the problem for a malformed message: a missing x, y or z field, a field that is not
 /// FLOAT32 or FLOAT64 (e.g. INT16), a field ending past point_step, row_step smaller than
-/// width x point_step, data shorter than the points it declares, no points at all, or no
-/// finite point. `layout` (optional) tells which path converted it.
+/// width x point_step, data shorter than the points it declares, no points at all (these
+/// messages start "malformed PointCloud2: "); and for a well-formed cloud without a finite
+/// point ("... no finite point among N (all NaN or Inf)", not called malformed). `layout`
+/// (optional) tells which path converted it.
 fragg::PointCloud cloudFromMsg(const sensor_msgs::PointCloud2& msg, CloudLayout* layout = nullptr);
 
 /// Points of `cloud` with finite coordinates.

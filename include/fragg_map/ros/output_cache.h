@@ -36,6 +36,9 @@ struct OutputCacheOptions {
   double occupancy_max_z_m = std::numeric_limits<double>::infinity();
   /// filter_speckles: occupied cells without an occupied neighbour are left out of both.
   bool hide_speckles = false;
+  /// The projected map spans octomap_server's grid (octomapServerGridSpan of the observed
+  /// cells' bounds) instead of those bounds.
+  bool octomap_bounds = false;
   /// Which blocks an update recomputes: those where a cell's state changed (kState, what the
   /// outputs show), or every changed block (kAny: the behaviour before BlockMeta::state_at,
   /// kept for same-run comparisons in fragg_map_server_overhead). kOccupied would miss free

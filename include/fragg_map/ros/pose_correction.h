@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <map>
+#include <string>
 #include <vector>
 
 #include "fragg_map/ros/scan_stamp_index.h"
@@ -50,8 +51,18 @@ struct CorrectionPlan {
   /// were dropped by the store's budget, or one that can no longer be removed exactly
   /// (ScanStore::canRemove: clear_bbox changed cells it had updated).
   std::vector<size_t> unknown;
+  /// Why, per cause (they add up to unknown.size()): no scan within the tolerance; a scan
+  /// that is no longer kept (the store's budget dropped its points); a kept scan that an edit
+  /// reached (clear_bbox / clear_bbx, truncate, merge), which cannot be removed exactly.
+  size_t unknown_no_scan = 0, unknown_not_kept = 0, unknown_edited = 0;
   size_t unchanged = 0;  ///< matched, but within the thresholds (only with thresholds)
 };
+
+/// One sentence on the plan's unknown requests and why, e.g. "2 stamps name no scan that can be
+/// corrected: 1 matches no scan within correction/stamp_tolerance, 1 names a scan an edit
+/// reached (clear_bbox, truncate, merge: its updates can no longer be undone exactly)"; "0
+/// stamps name no scan that can be corrected" when there are none.
+std::string describeUnknown(const CorrectionPlan& plan);
 
 /// Matches each request to a kept scan (the nearest stamp within tolerance_ns) and, with
 /// `thresholds`, keeps only the scans whose pose moved beyond them. Throws

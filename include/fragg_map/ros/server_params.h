@@ -60,7 +60,7 @@ struct FrontierParams {
   int max_marker_cells = 200000;
 };
 
-/// octomap_server's parameters of the same name and meaning (README: "octomap_server ->
+/// octomap_server's parameters of the same name and meaning (docs/ros.md: "octomap_server ->
 /// fragg_map"; launch/octomap_compat.launch loads an octomap_server YAML unchanged).
 struct OctomapCompatParams {
   /// The robot's base frame: the ground plane is sought in it (filter_ground).
@@ -76,7 +76,14 @@ struct OctomapCompatParams {
   bool colored_map = false;
   float color_rgba[4] = {0.0f, 0.0f, 1.0f, 1.0f};  ///< color/r|g|b|a with height_map false
   bool incremental_2D_projection = false;  ///< projected_map patches only the changed columns
-  bool compress_map = true;                ///< (an octree's pruning: nothing to do here)
+  bool compress_map =
+      true;  ///< octomap_full pruned (equal sibling leaves merged), as octomap_server
+  /// ~clear_bbx's rule: true (octomap_server's) sets the observed cells in the box free at the
+  /// lower clamp; false makes them unknown, as ~clear_bbox does.
+  bool clear_bbx_free = true;
+  /// projected_map/octomap_bounds: the grid spans octomap_server's bounds (its upper-face key,
+  /// the origin inside; octomapServerGridSpan) instead of the observed cells' bounds.
+  bool projected_map_octomap_bounds = false;
   /// Map loaded at start-up (.fgm or .bt); also the node's first argument.
   std::string map_file;
 };

@@ -1,6 +1,6 @@
 // A simulated scene: closed solids (ground slab, buildings, walls, trees, pipes, spheres, OBJ
 // meshes) and named trajectories, read from a JSON scene file (config/scenes/*.json; the format
-// is described in the README, "fragg_map_sim").
+// is described in docs/cli.md, "Simulator").
 #pragma once
 
 #include <map>

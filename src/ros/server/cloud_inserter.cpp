@@ -102,6 +102,14 @@ std::optional<fragg::PointCloud> CloudInserter::convert(const sensor_msgs::Point
   fragg::PointCloud cloud;
   try {
     if (msg.header.frame_id.empty()) throw fragg::InvalidArgument("cloud has no frame_id");
+    if (msg.width == 0 || msg.height == 0) {
+      // Drivers publish empty clouds (a LiDAR between scans, a camera that saw nothing): not a
+      // fault, so counted quietly (~stats empty_clouds) and logged at DEBUG only.
+      stats_->addEmptyCloud();
+      ROS_DEBUG_THROTTLE(5.0, "fragg_map: empty cloud from '%s' skipped (width %u, height %u)",
+                         msg.header.frame_id.c_str(), msg.width, msg.height);
+      return std::nullopt;
+    }
     cloud = cloudFromMsg(msg);
   } catch (const std::exception& e) {
     // cloudFromMsg's last check: no finite point (all NaN) is a cause of its own.

@@ -55,7 +55,8 @@ class CloudInserter {
   CloudInserter(const ServerParams& params, SharedMap* shared, ServerStats* stats);
 
   /// The cloud of `msg`, validated; nullopt (counted, logged) when it is malformed or holds no
-  /// usable point.
+  /// usable point, and nullopt (counted as empty_clouds, logged at DEBUG only) when it has 0
+  /// points.
   std::optional<fragg::PointCloud> convert(const sensor_msgs::PointCloud2& msg) const;
 
   /// Inserts `cloud` (sensor frame `frame`) at `T_map_sensor` under the write lock. False

@@ -49,6 +49,7 @@ bool CorrectionService::correct(fragg_map::CorrectPoses::Request& req,
   try {
     const std::vector<PoseRequest> requests = requestsFrom(req);
     const int64_t tolerance_ns = std::llround(params_.correction.stamp_tolerance_s * 1e9);
+    std::string unknown_reason;
     {
       const SharedMap::WriteGuard state = shared_->write();
       requireKeptScans(state->map);
@@ -58,11 +59,11 @@ bool CorrectionService::correct(fragg_map::CorrectPoses::Request& req,
       res.ms = applyCorrection(plan, &state->map, stats_);
       res.corrected = static_cast<uint32_t>(plan.T_map_sensor_new.size());
       for (size_t i : plan.unknown) res.unknown_stamps.push_back(req.stamps[i]);
+      unknown_reason = describeUnknown(plan);
     }
     res.success = true;
     res.message = "corrected " + std::to_string(res.corrected) + " scans in " +
-                  std::to_string(res.ms) + " ms; " + std::to_string(res.unknown_stamps.size()) +
-                  " stamps name no kept scan";
+                  std::to_string(res.ms) + " ms; " + unknown_reason;
     if (res.corrected > 0) {
       ROS_INFO("fragg_map: ~correct_poses moved %u scans in %.1f ms (%zu unknown stamps)",
                res.corrected, res.ms, res.unknown_stamps.size());

@@ -23,7 +23,8 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
       stats_(stats),
       marker_throttle_(params.marker_rate_hz),
       outputs_(OutputCacheOptions{params.occupancy_min_z_m, params.occupancy_max_z_m,
-                                  params.octomap.filter_speckles}),
+                                  params.octomap.filter_speckles,
+                                  params.octomap.projected_map_octomap_bounds}),
       held_maps_(params.map_rate_hz) {
   const bool latch = params_.latch;
   for (MarkerTopic* topic : {&occupied_markers_, &free_markers_}) {

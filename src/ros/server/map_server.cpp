@@ -59,7 +59,8 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
                                               publishers_->publishFull(::ros::Time::now());
                                               publish_octomaps(::ros::Time::now(), false);
                                             });
-  octomap_services_ = std::make_unique<OctomapCompatServices>(private_nh, services_.get());
+  octomap_services_ = std::make_unique<OctomapCompatServices>(private_nh, services_.get(),
+                                                              params_.octomap.clear_bbx_free);
   loadStartMap();  // throws (the node does not start) when a file is unreadable
   auto publish_changed = [this, publish_octomaps] {
     try {
@@ -132,7 +133,7 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
 }
 
 void MapServer::loadStartMap() {
-  // What the map starts from: a page store > an autosave > map_file (README, ROS section).
+  // What the map starts from: a page store > an autosave > map_file (docs/ros.md).
   const std::string& map_file = params_.octomap.map_file;
   if (!paging_.store.empty()) {
     if (autosave_params_.enabled())

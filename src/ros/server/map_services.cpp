@@ -140,6 +140,16 @@ std::string MapServices::clearBox(const Eigen::Vector3d& min_m, const Eigen::Vec
   return message;
 }
 
+std::string MapServices::freeBox(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m) {
+  uint64_t cells = 0;
+  {
+    const SharedMap::WriteGuard state = shared_->write();
+    cells = state->map.freeBox(min_m, max_m);  // validates the box first
+  }
+  if (on_map_replaced_) on_map_replaced_();
+  return "set " + std::to_string(cells) + " known cells free";
+}
+
 bool MapServices::loadMap(fragg_map::LoadMap::Request& req, fragg_map::LoadMap::Response& res) {
   return answer("load_map", res,
                 [&] { return loadMap(resolveUnderRoot(params_.file_root, req.path)); });

@@ -39,6 +39,10 @@ class MapServices {
   /// Makes the cells in [min, max] unknown (throws fragg::InvalidArgument for a bad box, map
   /// untouched) and republishes. Returns what it did.
   std::string clearBox(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m);
+  /// Sets the observed cells in [min, max] free at the lower clamp, octomap_server's clear_bbx
+  /// rule (throws fragg::InvalidArgument for a bad box, map untouched), and republishes.
+  /// Returns what it did.
+  std::string freeBox(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m);
   /// Replaces the map by the one in `path` (map_file_loader.h), restarts the statistics from
   /// the file's scan count and republishes. Throws as loadMapFile does (map untouched).
   std::string loadMap(const std::string& path);

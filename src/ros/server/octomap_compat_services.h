@@ -1,6 +1,7 @@
 // octomap_server's service names and types on the private handle, for its clients unchanged:
 // ~reset (std_srvs/Empty) and ~clear_bbx (octomap_msgs/BoundingBoxQuery: fragg_map's
-// BoundingBoxQuery.srv has the same fields, hence the same md5sum). Both run MapServices'
+// BoundingBoxQuery.srv has the same fields, hence the same md5sum; by default the known cells in
+// the box become free, as octomap_server's, see clear_bbx_free). Both run MapServices'
 // work; a refused request (a bad box) answers false, which the client sees as a failed call.
 #pragma once
 
@@ -15,7 +16,9 @@ namespace fragg::ros {
 
 class OctomapCompatServices {
  public:
-  OctomapCompatServices(::ros::NodeHandle& private_nh, MapServices* services);
+  /// `clear_bbx_free`: ~clear_bbx sets the known cells in the box free (octomap_server's rule)
+  /// instead of making them unknown.
+  OctomapCompatServices(::ros::NodeHandle& private_nh, MapServices* services, bool clear_bbx_free);
 
  private:
   bool reset(std_srvs::Empty::Request& req, std_srvs::Empty::Response& res);
@@ -23,6 +26,7 @@ class OctomapCompatServices {
                 fragg_map::BoundingBoxQuery::Response& res);
 
   MapServices* services_;
+  bool clear_bbx_free_;
   ::ros::ServiceServer reset_, clear_bbx_;
 };
 

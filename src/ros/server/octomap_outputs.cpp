@@ -17,24 +17,26 @@ namespace fragg::ros {
 namespace {
 
 // As octomap_msgs' binaryMapToMsg / fullMapToMsg fill it, from the map under its read lock.
-octomap_msgs::Octomap octomapMsg(const fragg::Map& map, bool binary, const std::string& frame_id,
-                                 const ::ros::Time& stamp) {
-  const std::unique_ptr<octomap::OcTree> tree = fragg::toOcTree(map);
-  std::stringstream data;
+// The full tree is pruned with `prune_full` (compress_map), as octomap_server's tree is.
+octomap_msgs::Octomap octomapMsg(const fragg::Map& map, bool binary, bool prune_full,
+                                 const std::string& frame_id, const ::ros::Time& stamp) {
+  std::string bytes;
   if (binary) {
+    const std::unique_ptr<octomap::OcTree> tree = fragg::toOcTree(map);
+    std::stringstream data;
     tree->toMaxLikelihood();
     tree->prune();
     tree->writeBinaryData(data);
+    bytes = data.str();
   } else {
-    tree->writeData(data);
+    bytes = fragg::octomapFullData(map, prune_full);
   }
-  const std::string bytes = data.str();
   octomap_msgs::Octomap msg;
   msg.header.frame_id = frame_id;
   msg.header.stamp = stamp;
   msg.binary = binary;
-  msg.id = tree->getTreeType();
-  msg.resolution = tree->getResolution();
+  msg.id = "OcTree";  // toOcTree's tree type
+  msg.resolution = map.resolution();
   msg.data.assign(bytes.begin(), bytes.end());
   return msg;
 }
@@ -47,7 +49,8 @@ OctomapOutputs::OctomapOutputs(::ros::NodeHandle& nh, const ServerParams& params
     return [this, binary](const ::ros::SingleSubscriberPublisher& sub) {
       std::lock_guard<std::mutex> publishing(publish_mutex_);
       try {
-        sub.publish(octomapMsg(shared_->read()->map, binary, params_.frame_id, ::ros::Time::now()));
+        sub.publish(octomapMsg(shared_->read()->map, binary, params_.octomap.compress_map,
+                               params_.frame_id, ::ros::Time::now()));
       } catch (const std::exception& e) {
         ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
       }
@@ -63,7 +66,8 @@ OctomapOutputs::OctomapOutputs(::ros::NodeHandle& nh, const ServerParams& params
     return [this, binary](octomap_msgs::GetOctomap::Request&,
                           octomap_msgs::GetOctomap::Response& res) {
       try {
-        res.map = octomapMsg(shared_->read()->map, binary, params_.frame_id, ::ros::Time::now());
+        res.map = octomapMsg(shared_->read()->map, binary, params_.octomap.compress_map,
+                             params_.frame_id, ::ros::Time::now());
         return true;
       } catch (const std::exception& e) {
         ROS_WARN("fragg_map: %s refused: %s", binary ? "octomap_binary" : "octomap_full", e.what());
@@ -104,8 +108,12 @@ void OctomapOutputs::publishLocked(const fragg::Map& map, const ::ros::Time& sta
     return;
   }
   held_.published(now_s);  // also when building throws: the next cloud tries again
-  if (binary) binary_pub_.publish(octomapMsg(map, true, params_.frame_id, stamp));
-  if (full) full_pub_.publish(octomapMsg(map, false, params_.frame_id, stamp));
+  if (binary)
+    binary_pub_.publish(
+        octomapMsg(map, true, params_.octomap.compress_map, params_.frame_id, stamp));
+  if (full)
+    full_pub_.publish(
+        octomapMsg(map, false, params_.octomap.compress_map, params_.frame_id, stamp));
 }
 
 void OctomapOutputs::flushPending(const ::ros::SteadyTimerEvent&) {

@@ -25,6 +25,11 @@ void ServerStats::addDroppedQueueFull() {
   ++dropped_queue_full_;
 }
 
+void ServerStats::addEmptyCloud() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++empty_clouds_;
+}
+
 void ServerStats::addFault(CloudFault fault) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++faults_[static_cast<int>(fault)];
@@ -91,6 +96,7 @@ void ServerStats::restart(uint64_t scans) {
   scans_ = scans;
   dropped_no_tf_ = 0;
   dropped_queue_full_ = 0;
+  empty_clouds_ = 0;
   for (uint64_t& n : faults_) n = 0;
   points_invalid_ = 0;
   points_beyond_range_ = 0;
@@ -125,6 +131,7 @@ fragg_map::MapStats ServerStats::toMsg(const fragg::Map& map, const std::string&
   msg.points = points_;
   msg.dropped_no_tf = dropped_no_tf_;
   msg.dropped_queue_full = dropped_queue_full_;
+  msg.empty_clouds = empty_clouds_;
   auto fault = [this](CloudFault f) { return faults_[static_cast<int>(f)]; };
   msg.rejected_malformed = fault(CloudFault::kMalformed);
   msg.rejected_no_finite_point = fault(CloudFault::kNoFinitePoint);

@@ -17,7 +17,7 @@ namespace fragg::ros {
 
 /// Why a cloud did not reach the map (one counter each in ~stats).
 enum class CloudFault {
-  kMalformed,      ///< PointCloud2 layout: fields, sizes, 0 points
+  kMalformed,      ///< PointCloud2 layout: fields, sizes (an empty cloud is not a fault)
   kNoFinitePoint,  ///< every point NaN / Inf or beyond the map's key range
   kBadTransform,   ///< the transform to the map frame not finite, not rigid or out of range
   kInsertFailed,   ///< the map threw while inserting (the scan is not in the map)
@@ -30,6 +30,8 @@ class ServerStats {
   void addInsertion(uint64_t points, double ms, const fragg::InsertStats& inserted = {});
   void addDroppedNoTf();
   void addDroppedQueueFull();
+  /// A cloud of 0 points (drivers publish them): skipped, counted, not a fault.
+  void addEmptyCloud();
   void addFault(CloudFault fault);
   /// Points left out before insertion (beyond the map's key range): added to points_invalid.
   void addPointsInvalid(uint64_t points);
@@ -62,6 +64,7 @@ class ServerStats {
   uint64_t points_ = 0;
   uint64_t dropped_no_tf_ = 0;
   uint64_t dropped_queue_full_ = 0;
+  uint64_t empty_clouds_ = 0;
   uint64_t faults_[5] = {0, 0, 0, 0, 0};  // by CloudFault
   uint64_t backend_fallbacks_ = 0;
   uint64_t points_invalid_ = 0;

@@ -40,6 +40,19 @@ constexpr const char* kMetrics =
     "Cell states follow each map's own rule (unknown band; a .bt import keeps fragg's default "
     "band), or OctoMap's with --octomap-threshold (observed: occupied iff p >= 0.5).";
 
+// What each row of the text report measures (a bare "recall 6.8 %" reads as a failure when it
+// is what a sparse sensor gives).
+constexpr const char* kLegend =
+    "what the rows measure (d = half a voxel diagonal; higher is better for precision and "
+    "recall, lower for free error):\n"
+    "  precision   share of the occupied voxels that lie on the scene's surface (within d)\n"
+    "  recall      share of the surface voxels in the observed region that are occupied; a "
+    "sensor with few beams or poses sees a small part of each surface near the known cells, so "
+    "a low recall is expected from sparse scans\n"
+    "  recall, known surface   the same over the surface voxels the map knows\n"
+    "  free error  share of the free voxels whose centre lies inside a solid (the count in "
+    "brackets)\n";
+
 nlohmann::json toJson(const sim::MapQuality& q, const std::string& path, double seconds) {
   return {{"map", path},
           {"resolution_m", q.resolution_m},
@@ -115,6 +128,7 @@ void runEval(const EvalOptions& o) {
     return fmt::format("{:.5f} % ({})", 100 * q.freeErrorDeep(), q.free_inside_deep);
   });
   row("free voxels", [](const sim::MapQuality& q) { return fmt::format("{}", q.free); });
+  out += kLegend;
   std::printf("%s", out.c_str());
 }
 

@@ -1,4 +1,4 @@
-// fragg_map export MAP --format bt|ply|pcd -o FILE
+// fragg_map export MAP --format bt|ot|ply|pcd [--no-prune] -o FILE
 #include <fmt/format.h>
 
 #include <memory>
@@ -18,23 +18,27 @@ namespace {
 struct ExportArgs {
   std::string input;
   std::string output;
-  std::string format;  // "" = from the output's extension
+  std::string format;     // "" = from the output's extension
+  bool no_prune = false;  // ot: one leaf per cell (octomap_server's compress_map false)
 };
 
 std::string formatOf(const ExportArgs& args) {
   if (!args.format.empty()) return args.format;
   const std::string ext = extensionOf(args.output);
-  if (ext == "bt" || ext == "ply" || ext == "pcd") return ext;
+  if (ext == "bt" || ext == "ot" || ext == "ply" || ext == "pcd") return ext;
   throw InvalidArgument(fmt::format(
-      "export: cannot tell the format from '{}'; pass --format bt|ply|pcd", args.output));
+      "export: cannot tell the format from '{}'; pass --format bt|ot|ply|pcd", args.output));
 }
 
 void runExport(const ExportArgs& args) {
   const std::string format = formatOf(args);
 #ifndef FRAGG_HAVE_OCTOMAP
-  if (format == "bt")
-    throw InvalidArgument("export: this fragg_map was built without liboctomap: no .bt export");
+  if (format == "bt" || format == "ot")
+    throw InvalidArgument("export: this fragg_map was built without liboctomap: no ." + format +
+                          " export");
 #endif
+  if (args.no_prune && format != "ot")
+    throw InvalidArgument("export: --no-prune applies to the ot format only");
   checkOutputDirectory(args.output);
   const fragg::Map map = loadMapFile(args.input);
   if (format == "ply" || format == "pcd") {
@@ -44,6 +48,13 @@ void runExport(const ExportArgs& args) {
     return;
   }
 #ifdef FRAGG_HAVE_OCTOMAP
+  if (format == "ot") {
+    exportOctomapFull(map, args.output, !args.no_prune);
+    fmt::print("exported {} observed cells to {} (OctoMap full tree, {}, {} m)\n",
+               map.knownVoxelCount(), args.output, args.no_prune ? "one leaf a cell" : "pruned",
+               map.resolution());
+    return;
+  }
   exportOctomap(map, args.output);
   fmt::print("exported {} observed cells to {} (OctoMap binary tree, {} m)\n",
              map.knownVoxelCount(), args.output, map.resolution());
@@ -55,11 +66,16 @@ void runExport(const ExportArgs& args) {
 void addExportCommand(CLI::App& app) {
   auto args = std::make_shared<ExportArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "export", "Export a map as an OctoMap .bt file, or its occupied voxel centres as PLY/PCD");
+      "export",
+      "Export a map as an OctoMap .bt (free/occupied) or .ot (full log-odds) file, or its "
+      "occupied voxel centres as PLY/PCD");
   cmd->add_option("map", args->input, "Map file (.fgm, or OctoMap .bt / .ot)")->required();
   cmd->add_option("-f,--format", args->format,
-                  "bt | ply | pcd (default: from the output file's extension)")
-      ->check(CLI::IsMember({"bt", "ply", "pcd"}));
+                  "bt | ot | ply | pcd (default: from the output file's extension)")
+      ->check(CLI::IsMember({"bt", "ot", "ply", "pcd"}));
+  cmd->add_flag("--no-prune", args->no_prune,
+                "ot: one leaf per cell; by default eight equal sibling leaves are merged, as "
+                "octomap_server's octomap_full with compress_map (lossless)");
   cmd->add_option("-o,--output", args->output, "Output file (written atomically)")->required();
   cmd->callback([args] { runExport(*args); });
 }
