@@ -35,8 +35,12 @@ InsertInput decodeInsertInput(const uint8_t* data, size_t size) {
   const size_t n = size > kHeaderBytes ? std::min((size - kHeaderBytes) / 12, kMaxInsertPoints) : 0;
   for (size_t i = 0; i < n; ++i) {
     const size_t at = kHeaderBytes + 12 * i;
-    in.cloud.points_S.emplace_back(floatAt(data, size, at), floatAt(data, size, at + 4),
-                                   floatAt(data, size, at + 8));
+    Eigen::Vector3f p(floatAt(data, size, at), floatAt(data, size, at + 4),
+                      floatAt(data, size, at + 8));
+    const double range_v = p.cast<double>().norm() / resolution_m;
+    if (std::isfinite(range_v) && range_v > kMaxInsertRayV && range_v < 67108864.0)
+      p = (p.cast<double>() * (kMaxInsertRayV / range_v)).cast<float>();
+    in.cloud.points_S.push_back(p);
   }
   const bool organised = (flags & 0x10) != 0 && n >= 2;
   if (organised) {
@@ -56,7 +60,8 @@ InsertInput decodeInsertInput(const uint8_t* data, size_t size) {
   in.correct_and_remove = params.scans.keep && !organised;
 
   // <= 0: no limit; NaN and infinities go to the model's own check.
-  const double range_arg = max_range_m > 0.0 || !std::isfinite(max_range_m) ? max_range_m : -1.0;
+  double range_arg = max_range_m > 0.0 || !std::isfinite(max_range_m) ? max_range_m : -1.0;
+  if (range_arg > kMaxInsertRayV * resolution_m) range_arg = kMaxInsertRayV * resolution_m;
   switch ((flags >> 1) & 3) {
     case 1:
       in.sensor = SensorModel::spinningLidar(-0.5, 0.5, 0.0, range_arg);

@@ -12,6 +12,10 @@
 //   bytes 10-37  float32 sensor position x y z, quaternion w x y z (normalised; unusable:
 //                identity rotation)
 //   bytes 38-    float32 points x y z (at most kMaxInsertPoints)
+// A resource bound of the harness, not of the map: the map's memory follows the cells the rays
+// reach (by design, as OctoMap's), so a positive max range is cut to kMaxInsertRayV voxels, and
+// a point between kMaxInsertRayV and 2^26 voxels from the sensor is moved along its direction to
+// kMaxInsertRayV voxels (nearer ones and far ones, which the map drops, stay as they are).
 #pragma once
 
 #include <Eigen/Geometry>
@@ -25,7 +29,8 @@
 
 namespace fragg::fuzz {
 
-constexpr size_t kMaxInsertPoints = 512;
+constexpr size_t kMaxInsertPoints = 256;
+constexpr double kMaxInsertRayV = 2048.0;
 
 struct InsertInput {
   MapParams params;  ///< CPU backend, one thread; the caller may change the backend
