@@ -3,6 +3,7 @@
 fragg_add_test(fragg_gpu_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/cuda_backend_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/extreme_points_gpu_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/free_box_gpu_test.cpp
           ${PROJECT_SOURCE_DIR}/test/fuzz/insert_input.cpp
           ${PROJECT_SOURCE_DIR}/src/tools/bench/synthetic_lidar.cpp
   LIBS fragg_map_core fragg_map_sim_lib
