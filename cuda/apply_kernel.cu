@@ -1,5 +1,7 @@
 // The update over touched slots only: the same OccupancyModel::apply() (unapply() when a scan
-// is removed) as the CPU backend.
+// is removed) as the CPU backend. Each touched slot's state masks are recomputed from the cells
+// the update leaves (every cell is read anyway), next to the slot: a warp's ballot over 32
+// consecutive cells is one 32-bit half of a mask word (little-endian, as the host's).
 #include "cuda_check.h"
 #include "kernels.h"
 #include "warp_reduce.cuh"
@@ -19,16 +21,19 @@ __device__ __forceinline__ bool passIncomplete(const ScanCounters* c) {
 /// What one slot's update found, over the cells one thread updated.
 struct SlotUpdate {
   bool changed = false, occupancy_changed = false, at_lower_clamp = true;
+  bool masks_changed = false;      ///< set by lane 0 of each warp (writeMaskHalf)
   unsigned long long updated = 0;  ///< cells marked (summed over every slot of the thread)
 };
 
-/// One cell of a touched slot: its marks applied (or undone), written back.
-__device__ __forceinline__ void updateCell(Block& block, int cell, bool hit, bool marked,
-                                           bool fresh, const OccupancyModel& model, bool remove,
-                                           SlotUpdate& u) {
+/// One cell of a touched slot: its marks applied (or undone), written back. Returns the cell's
+/// state after the update.
+__device__ __forceinline__ CellState updateCell(Block& block, int cell, bool hit, bool marked,
+                                                bool fresh, const OccupancyModel& model,
+                                                bool remove, SlotUpdate& u) {
   if (!marked && !fresh) {
-    u.at_lower_clamp &= block.cells[cell].log_odds_fx == model.min_fx;
-    return;
+    const Cell value = block.cells[cell];
+    u.at_lower_clamp &= value.log_odds_fx == model.min_fx;
+    return model.state(value);
   }
   Cell value = fresh ? Cell() : block.cells[cell];
   if (marked) {
@@ -41,21 +46,43 @@ __device__ __forceinline__ void updateCell(Block& block, int cell, bool hit, boo
   }
   block.cells[cell] = value;
   u.at_lower_clamp &= value.log_odds_fx == model.min_fx;
+  return model.state(value);
+}
+
+/// Writes the warp's 32 cells' states as the 32-bit half `half` of the slot's masks (every lane
+/// calls it; lane 0 writes and notes in `u` whether the half changed: against all unknown for a
+/// fresh slot, whose masks are its previous block's).
+__device__ __forceinline__ void writeMaskHalf(BlockStateMasks& masks, int half, CellState state,
+                                              unsigned lane, bool fresh, SlotUpdate& u) {
+  const uint32_t occupied = __ballot_sync(kFullMask, state == CellState::kOccupied);
+  const uint32_t free = __ballot_sync(kFullMask, state == CellState::kFree);
+  if (lane == 0) {
+    uint32_t& occupied_half = reinterpret_cast<uint32_t*>(masks.occupied)[half];
+    uint32_t& free_half = reinterpret_cast<uint32_t*>(masks.free)[half];
+    const uint32_t occupied_before = fresh ? 0u : occupied_half;
+    const uint32_t free_before = fresh ? 0u : free_half;
+    u.masks_changed |= occupied != occupied_before || free != free_before;
+    occupied_half = occupied;
+    free_half = free;
+  }
 }
 
 /// The slot's flags and stamps once its cells are updated (one thread; the flags are the
 /// slot's OR / AND over its threads).
 __device__ __forceinline__ void finishSlot(const SlotArrays& s, int32_t slot, bool fresh,
-                                           bool any_changed, bool occupancy_flipped, bool saturated,
-                                           uint64_t revision, uint32_t scan, ScanCounters* c) {
+                                           bool any_changed, bool occupancy_flipped,
+                                           bool masks_flipped, bool saturated, uint64_t revision,
+                                           uint32_t scan, ScanCounters* c) {
   s.fresh[slot] = 0;
   s.free_saturated[slot] = saturated ? 1 : 0;
   s.last_used[slot] = scan;
-  if (fresh) s.occupied_at[slot] = 0;  // not the slot's previous block's
+  if (fresh) s.occupied_at[slot] = s.masks_at[slot] = 0;  // not the slot's previous block's
+  // A state (and with it the masks) changes only with a cell.
   if (any_changed) {
     s.dirty[slot] = 1;
     s.changed_at[slot] = revision;
     if (occupancy_flipped) s.occupied_at[slot] = revision;
+    if (masks_flipped) s.masks_at[slot] = revision;
     atomicAdd(&c->changed, 1u);
   }
 }
@@ -77,19 +104,22 @@ __global__ void __launch_bounds__(kThreads)
       const int cell = threadIdx.x + k * kThreads;
       const uint32_t bit = 1u << (cell & 31);
       const bool hit = marks.hit[cell >> 5] & bit;
-      updateCell(s.cells[slot], cell, hit, hit || (marks.free[cell >> 5] & bit), fresh, model,
-                 remove, u);
+      const CellState state = updateCell(
+          s.cells[slot], cell, hit, hit || (marks.free[cell >> 5] & bit), fresh, model, remove, u);
+      writeMaskHalf(s.masks[slot], cell >> 5, state, threadIdx.x & 31, fresh, u);  // 32 cells
     }
     updated += u.updated;
     const bool any_changed = __syncthreads_or(u.changed);  // also: every read of marks is done
     const bool occupancy_flipped = __syncthreads_or(u.occupancy_changed);
+    const bool masks_flipped = __syncthreads_or(u.masks_changed);
     const bool saturated = __syncthreads_and(u.at_lower_clamp);
     if (threadIdx.x < 2 * kScratchWords) {
       uint32_t* words = threadIdx.x < kScratchWords ? marks.free : marks.hit;
       words[threadIdx.x % kScratchWords] = 0u;
     }
     if (threadIdx.x == 0)
-      finishSlot(s, slot, fresh, any_changed, occupancy_flipped, saturated, revision, scan, c);
+      finishSlot(s, slot, fresh, any_changed, occupancy_flipped, masks_flipped, saturated, revision,
+                 scan, c);
   }
   updated = warpSum(updated);
   if ((threadIdx.x & 31) == 0 && updated) atomicAdd(&c->cells_updated, updated);
@@ -122,16 +152,19 @@ __global__ void __launch_bounds__(kThreads)
       const uint32_t free_word = __shfl_sync(kFullMask, word, k);
       const uint32_t hit_word = __shfl_sync(kFullMask, word, kScratchWords + k);
       const bool hit = hit_word & bit;
-      updateCell(s.cells[slot], lane + 32 * k, hit, hit || (free_word & bit), fresh, model, remove,
-                 u);
+      const CellState state = updateCell(s.cells[slot], lane + 32 * k, hit,
+                                         hit || (free_word & bit), fresh, model, remove, u);
+      writeMaskHalf(s.masks[slot], k, state, lane, fresh, u);  // cells 32 k .. 32 k + 31
     }
     updated += u.updated;
     const bool any_changed = __any_sync(kFullMask, u.changed);
     const bool occupancy_flipped = __any_sync(kFullMask, u.occupancy_changed);
+    const bool masks_flipped = __any_sync(kFullMask, u.masks_changed);
     const bool saturated = __all_sync(kFullMask, u.at_lower_clamp);
     reinterpret_cast<uint32_t*>(&marks)[lane] = 0u;  // every lane read its word above
     if (lane == 0)
-      finishSlot(s, slot, fresh, any_changed, occupancy_flipped, saturated, revision, scan, c);
+      finishSlot(s, slot, fresh, any_changed, occupancy_flipped, masks_flipped, saturated, revision,
+                 scan, c);
   }
   updated = warpSum(updated);
   if (lane == 0 && updated) atomicAdd(&c->cells_updated, updated);

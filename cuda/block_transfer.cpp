@@ -13,6 +13,7 @@ void BlockTransfer::reserve(size_t n, bool staging) {
   block_ptrs_.reserve(n);
   slots_.reserve(n);
   keys_.reserve(n);
+  masks_.reserve(n);  // the host masks are not pinned: staged either way
   if (staging) staging_.reserve(n);
 }
 
@@ -27,6 +28,7 @@ void BlockTransfer::upload(const SlotArrays& pool, const std::vector<BlockIndex>
       const BlockIndex i = host_blocks[begin + j];
       slots_[j] = slots[begin + j];
       keys_[j] = blocks.meta(i).key;
+      masks_[j] = blocks.masks(i);
       if (direct_) {
         block_ptrs_[j] = const_cast<Block*>(&blocks.block(i));
       } else {
@@ -38,8 +40,9 @@ void BlockTransfer::upload(const SlotArrays& pool, const std::vector<BlockIndex>
     block_ptrs_.toDevice(n, stream_);
     slots_.toDevice(n, stream_);
     keys_.toDevice(n, stream_);
-    launchUpload(pool, block_ptrs_.device(), slots_.device(), keys_.device(), uint32_t(n), scan,
-                 stream_);
+    masks_.toDevice(n, stream_);
+    launchUpload(pool, block_ptrs_.device(), masks_.device(), slots_.device(), keys_.device(),
+                 uint32_t(n), scan, stream_);
     FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));  // the pinned lists are reused next batch
   }
 }
@@ -50,18 +53,19 @@ void BlockTransfer::writeBack(
   for (size_t begin = 0; begin < slots.size(); begin += kBatch) {
     const size_t n = std::min(kBatch, slots.size() - begin);
     reserve(n, /*staging=*/true);
-    stamps_.reserve(2 * n);
+    stamps_.reserve(3 * n);
     for (size_t j = 0; j < n; ++j) {
       slots_[j] = slots[begin + j];
       block_ptrs_[j] = staging_.device() + j;
     }
     slots_.toDevice(n, stream_);
     block_ptrs_.toDevice(n, stream_);
-    launchDownload(pool, block_ptrs_.device(), slots_.device(), uint32_t(n), keys_.device(),
-                   stamps_.device(), stream_);
+    launchDownload(pool, block_ptrs_.device(), masks_.device(), slots_.device(), uint32_t(n),
+                   keys_.device(), stamps_.device(), stream_);
     staging_.toHost(n, stream_);
+    masks_.toHost(n, stream_);
     keys_.toHost(n, stream_);
-    stamps_.toHost(2 * n, stream_);
+    stamps_.toHost(3 * n, stream_);
     FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
     // Targets first, in order (creating host blocks is not thread-safe), then the copies.
     std::vector<BlockIndex> target(n);
@@ -69,6 +73,7 @@ void BlockTransfer::writeBack(
 #pragma omp parallel for schedule(static) num_threads(threads_)
     for (long j = 0; j < static_cast<long>(n); ++j) {
       std::memcpy(&blocks.block(target[j]), &staging_[j], sizeof(Block));
+      blocks.masks(target[j]) = masks_[j];
       BlockMeta& m = blocks.meta(target[j]);
       m.changed_at = std::max(m.changed_at, stamps_[j]);
       m.occupied_at = std::max(m.occupied_at, stamps_[n + j]);
@@ -76,6 +81,8 @@ void BlockTransfer::writeBack(
       // sometimes more than needed).
       m.state_at = std::max(m.state_at, stamps_[j]);
     }
+    // The change log appends: one thread.
+    for (size_t j = 0; j < n; ++j) blocks.noteMasksChanged(target[j], stamps_[2 * n + j]);
   }
 }
 

@@ -23,16 +23,17 @@ class BlockTransfer {
   BlockTransfer(cudaStream_t stream, bool direct, int host_threads)
       : stream_(stream), direct_(direct), threads_(threadCount(host_threads)) {}
 
-  /// Copies host block host_blocks[j] into slot slots[j] (key set, dirty cleared, last_used
-  /// = scan).
+  /// Copies host block host_blocks[j] and its state masks into slot slots[j] (key set, dirty
+  /// cleared, last_used = scan).
   void upload(const SlotArrays& pool, const std::vector<BlockIndex>& host_blocks,
               const std::vector<int32_t>& slots, const BlockMap& blocks, uint32_t scan);
   /// Copies each slot back to the host block `host_block_of(slot, key)` names (called in
-  /// order, on this thread: it may create the block), with its changed_at / occupied_at
-  /// merged into the block's metadata; clears the slots' dirty flags.
+  /// order, on this thread: it may create the block), with its state masks, and its
+  /// changed_at / occupied_at merged into the block's metadata (a newer masks_at through
+  /// BlockMap::noteMasksChanged: the change log); clears the slots' dirty flags.
   void writeBack(const SlotArrays& pool, const std::vector<int32_t>& slots, BlockMap& blocks,
                  const std::function<BlockIndex(int32_t slot, const BlockKey& key)>& host_block_of);
-  size_t deviceBytes() const { return staging_.deviceBytes(); }
+  size_t deviceBytes() const { return staging_.deviceBytes() + masks_.deviceBytes(); }
 
  private:
   void reserve(size_t n, bool staging);
@@ -41,10 +42,11 @@ class BlockTransfer {
   bool direct_;
   int threads_;
   MirroredBuffer<Block> staging_;
-  MirroredBuffer<Block*> block_ptrs_;  ///< device-visible source / target of each block
+  MirroredBuffer<BlockStateMasks> masks_;  ///< the staged blocks' masks (both ways)
+  MirroredBuffer<Block*> block_ptrs_;      ///< device-visible source / target of each block
   MirroredBuffer<int32_t> slots_;
   MirroredBuffer<BlockKey> keys_;
-  MirroredBuffer<uint64_t> stamps_;  ///< changed_at of each block, then occupied_at
+  MirroredBuffer<uint64_t> stamps_;  ///< changed_at of each block, then occupied_at, masks_at
 };
 
 }  // namespace fragg::cuda

@@ -7,6 +7,7 @@
 #include "fragg_map/culling.h"
 #include "fragg_map/hd.h"
 #include "fragg_map/key.h"
+#include "fragg_map/state_masks.h"
 
 namespace fragg::cuda {
 
@@ -54,6 +55,9 @@ static_assert(sizeof(SlotScratch) == 128, "128 B of scratch per slot");
 /// The device pool's arrays (capacity slots each).
 struct SlotArrays {
   Block* cells = nullptr;
+  /// Cell-state masks of each slot's cells: uploaded with the block, recomputed by the apply
+  /// kernel from the cells it leaves, written back with the block.
+  BlockStateMasks* masks = nullptr;
   BlockKey* keys = nullptr;
   SlotScratch* scratch = nullptr;
   int32_t* touched_list = nullptr;  ///< slots with marks this scan
@@ -62,6 +66,7 @@ struct SlotArrays {
   uint32_t* last_used = nullptr;    ///< scan index when last visible or touched (LRU)
   uint64_t* changed_at = nullptr;   ///< map revision of the last change
   uint64_t* occupied_at = nullptr;  ///< revision of the last change of the occupied cells
+  uint64_t* masks_at = nullptr;     ///< revision of the last change of the state masks
   CullMemory* cull = nullptr;       ///< plane-rejection memory of the device frustum pass
   int32_t* free_stack = nullptr;    ///< free slots; the top is ScanCounters::free_top
   uint8_t* resident = nullptr;      ///< 1 while the slot holds a block

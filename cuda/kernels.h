@@ -74,14 +74,17 @@ void launchWindowSet(const Window& w, const int64_t* index, const int32_t* value
                      cudaStream_t stream);
 
 /// Copies block j from src[j] (device-visible: device staging or mapped pinned host memory)
-/// into slot slots[j]; sets its key, clears dirty and fresh, stamps last_used.
-void launchUpload(const SlotArrays& s, const Block* const* src, const int32_t* slots,
-                  const BlockKey* keys, uint32_t n, uint32_t scan, cudaStream_t stream);
-/// Copies slot slots[j] to dst[j] and its key / changed_at / occupied_at to keys[j] /
-/// changed_at[j] / changed_at[n + j] (changed_at holds 2n values);
-/// clears dirty.
-void launchDownload(const SlotArrays& s, Block* const* dst, const int32_t* slots, uint32_t n,
-                    BlockKey* keys, uint64_t* changed_at, cudaStream_t stream);
+/// and its state masks from masks[j] (device memory) into slot slots[j]; sets its key, clears
+/// dirty and fresh, stamps last_used.
+void launchUpload(const SlotArrays& s, const Block* const* src, const BlockStateMasks* masks,
+                  const int32_t* slots, const BlockKey* keys, uint32_t n, uint32_t scan,
+                  cudaStream_t stream);
+/// Copies slot slots[j] to dst[j], its state masks to masks[j] and its key / changed_at /
+/// occupied_at / masks_at to keys[j] / changed_at[j] / changed_at[n + j] / changed_at[2n + j]
+/// (changed_at holds 3n values); clears dirty.
+void launchDownload(const SlotArrays& s, Block* const* dst, BlockStateMasks* masks,
+                    const int32_t* slots, uint32_t n, BlockKey* keys, uint64_t* changed_at,
+                    cudaStream_t stream);
 
 /// Device frustum pass over the resident slots (cullBlock, the same test as the host's, with
 /// per-slot plane memory): stamps last_used of visible slots.

@@ -21,14 +21,20 @@ __global__ void windowSetKernel(Window w, const int64_t* index, const int32_t* v
   if (j < n) w.entries[index[j]] = value[j];
 }
 
+constexpr int kMaskInt4s = sizeof(BlockStateMasks) / sizeof(int4);
+static_assert(kMaskInt4s <= kCopyThreads, "a thread a 16-byte piece of the masks");
+
 __global__ void __launch_bounds__(kCopyThreads)
-    uploadKernel(SlotArrays s, const Block* const* src, const int32_t* slots, const BlockKey* keys,
-                 uint32_t scan) {
+    uploadKernel(SlotArrays s, const Block* const* src, const BlockStateMasks* masks,
+                 const int32_t* slots, const BlockKey* keys, uint32_t scan) {
   const uint32_t j = blockIdx.x;
   const int32_t slot = slots[j];
   const int4* from = reinterpret_cast<const int4*>(src[j]);
   int4* to = reinterpret_cast<int4*>(&s.cells[slot]);
   to[threadIdx.x] = from[threadIdx.x];
+  if (threadIdx.x < kMaskInt4s)
+    reinterpret_cast<int4*>(&s.masks[slot])[threadIdx.x] =
+        reinterpret_cast<const int4*>(&masks[j])[threadIdx.x];
   if (threadIdx.x == 0) {
     s.keys[slot] = keys[j];
     s.resident[slot] = 1;
@@ -37,6 +43,7 @@ __global__ void __launch_bounds__(kCopyThreads)
     s.last_used[slot] = scan;
     s.changed_at[slot] = 0;
     s.occupied_at[slot] = 0;
+    s.masks_at[slot] = 0;
     s.free_saturated[slot] = 0;  // known after the slot's first update
     s.cull[slot] = CullMemory();
   }
@@ -48,17 +55,21 @@ __global__ void clearSaturatedKernel(SlotArrays s, const int32_t* slots, uint32_
 }
 
 __global__ void __launch_bounds__(kCopyThreads)
-    downloadKernel(SlotArrays s, Block* const* dst, const int32_t* slots, BlockKey* keys,
-                   uint64_t* changed_at) {
+    downloadKernel(SlotArrays s, Block* const* dst, BlockStateMasks* masks, const int32_t* slots,
+                   BlockKey* keys, uint64_t* changed_at) {
   const uint32_t j = blockIdx.x;
   const int32_t slot = slots[j];
   const int4* from = reinterpret_cast<const int4*>(&s.cells[slot]);
   int4* to = reinterpret_cast<int4*>(dst[j]);
   to[threadIdx.x] = from[threadIdx.x];
+  if (threadIdx.x < kMaskInt4s)
+    reinterpret_cast<int4*>(&masks[j])[threadIdx.x] =
+        reinterpret_cast<const int4*>(&s.masks[slot])[threadIdx.x];
   if (threadIdx.x == 0) {
     keys[j] = s.keys[slot];
     changed_at[j] = s.changed_at[slot];
     changed_at[gridDim.x + j] = s.occupied_at[slot];
+    changed_at[2 * gridDim.x + j] = s.masks_at[slot];
     s.dirty[slot] = 0;
   }
 }
@@ -94,10 +105,11 @@ void launchWindowSet(const Window& w, const int64_t* index, const int32_t* value
   FRAGG_CUDA_CHECK_LAUNCH("windowSetKernel");
 }
 
-void launchUpload(const SlotArrays& s, const Block* const* src, const int32_t* slots,
-                  const BlockKey* keys, uint32_t n, uint32_t scan, cudaStream_t stream) {
+void launchUpload(const SlotArrays& s, const Block* const* src, const BlockStateMasks* masks,
+                  const int32_t* slots, const BlockKey* keys, uint32_t n, uint32_t scan,
+                  cudaStream_t stream) {
   if (n == 0) return;
-  uploadKernel<<<n, kCopyThreads, 0, stream>>>(s, src, slots, keys, scan);
+  uploadKernel<<<n, kCopyThreads, 0, stream>>>(s, src, masks, slots, keys, scan);
   FRAGG_CUDA_CHECK_LAUNCH("uploadKernel");
 }
 
@@ -108,10 +120,11 @@ void launchClearSaturated(const SlotArrays& s, const int32_t* slots, uint32_t n,
   FRAGG_CUDA_CHECK_LAUNCH("clearSaturatedKernel");
 }
 
-void launchDownload(const SlotArrays& s, Block* const* dst, const int32_t* slots, uint32_t n,
-                    BlockKey* keys, uint64_t* changed_at, cudaStream_t stream) {
+void launchDownload(const SlotArrays& s, Block* const* dst, BlockStateMasks* masks,
+                    const int32_t* slots, uint32_t n, BlockKey* keys, uint64_t* changed_at,
+                    cudaStream_t stream) {
   if (n == 0) return;
-  downloadKernel<<<n, kCopyThreads, 0, stream>>>(s, dst, slots, keys, changed_at);
+  downloadKernel<<<n, kCopyThreads, 0, stream>>>(s, dst, masks, slots, keys, changed_at);
   FRAGG_CUDA_CHECK_LAUNCH("downloadKernel");
 }
 

@@ -25,9 +25,9 @@ void regrow(DeviceArray<T>& a, size_t keep, size_t n, cudaStream_t s) {
 }  // namespace
 
 size_t SlotPool::bytesPerSlot() {
-  return sizeof(Block) + sizeof(BlockKey) + sizeof(SlotScratch) + sizeof(int32_t) +
-         2 * sizeof(uint8_t) + sizeof(uint32_t) + 2 * sizeof(uint64_t) + sizeof(CullMemory) +
-         sizeof(int32_t) + 2 * sizeof(uint8_t);
+  return sizeof(Block) + sizeof(BlockStateMasks) + sizeof(BlockKey) + sizeof(SlotScratch) +
+         sizeof(int32_t) + 2 * sizeof(uint8_t) + sizeof(uint32_t) + 3 * sizeof(uint64_t) +
+         sizeof(CullMemory) + sizeof(int32_t) + 2 * sizeof(uint8_t);
 }
 
 void SlotPool::grow(int32_t capacity) {
@@ -46,6 +46,7 @@ void SlotPool::grow(int32_t capacity) {
                           std::to_string(free_bytes >> 20) + " MiB free)");
   const size_t keep = size_t(old), n = size_t(capacity);
   regrow(cells_, keep, n, stream_);
+  regrow(masks_, keep, n, stream_);
   regrow(keys_, keep, n, stream_);
   regrow(scratch_, keep, n, stream_);
   regrow(touched_list_, keep, n, stream_);
@@ -54,6 +55,7 @@ void SlotPool::grow(int32_t capacity) {
   regrow(last_used_, keep, n, stream_);
   regrow(changed_at_, keep, n, stream_);
   regrow(occupied_at_, keep, n, stream_);
+  regrow(masks_at_, keep, n, stream_);
   regrow(cull_, keep, n, stream_);
   regrow(free_stack_, size_t(table_.freeCount()), n, stream_);
   regrow(resident_, keep, n, stream_);
@@ -78,6 +80,7 @@ void SlotPool::clear() {
 SlotArrays SlotPool::arrays() const {
   SlotArrays a;
   a.cells = cells_.get();
+  a.masks = masks_.get();
   a.keys = keys_.get();
   a.scratch = scratch_.get();
   a.touched_list = touched_list_.get();
@@ -86,6 +89,7 @@ SlotArrays SlotPool::arrays() const {
   a.last_used = last_used_.get();
   a.changed_at = changed_at_.get();
   a.occupied_at = occupied_at_.get();
+  a.masks_at = masks_at_.get();
   a.cull = cull_.get();
   a.free_stack = free_stack_.get();
   a.resident = resident_.get();

@@ -49,6 +49,7 @@ class SlotPool {
   cudaStream_t stream_;
   SlotTable table_;
   DeviceArray<Block> cells_;
+  DeviceArray<BlockStateMasks> masks_;
   DeviceArray<BlockKey> keys_;
   DeviceArray<SlotScratch> scratch_;
   DeviceArray<int32_t> touched_list_;
@@ -57,6 +58,7 @@ class SlotPool {
   DeviceArray<uint32_t> last_used_;
   DeviceArray<uint64_t> changed_at_;
   DeviceArray<uint64_t> occupied_at_;
+  DeviceArray<uint64_t> masks_at_;
   DeviceArray<CullMemory> cull_;
   DeviceArray<int32_t> free_stack_;
   DeviceArray<uint8_t> resident_;

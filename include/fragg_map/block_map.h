@@ -11,8 +11,10 @@
 
 #include "fragg_map/block_key_table.h"
 #include "fragg_map/cell.h"
+#include "fragg_map/change_log.h"
 #include "fragg_map/culling.h"
 #include "fragg_map/key.h"
+#include "fragg_map/state_masks.h"
 
 namespace fragg {
 
@@ -47,6 +49,10 @@ struct BlockMeta {
   /// cells getting freer, which change changed_at only. Backends may set it more often than
   /// needed (the CUDA backend sets it with changed_at), never less.
   uint64_t state_at = 0;
+  /// Map revision of the last change of the block's state masks (a cell became or stopped
+  /// being occupied or free); <= state_at. Set with a record in the map's change log
+  /// (BlockMap::noteMasksChanged), so that readers find these blocks without a walk.
+  uint64_t masks_at = 0;
   /// Equal to changed_at while every cell of the block sits at the occupancy model's lower
   /// clamp (set by the CPU backend's update; any other value means "not known"). A miss changes
   /// nothing in such a block, so the ray pass skips its free cells (see freeSaturated()).
@@ -102,6 +108,28 @@ class BlockMap {
   }
   BlockMeta& meta(BlockIndex i) { return meta_[i]; }
   const BlockMeta& meta(BlockIndex i) const { return meta_[i]; }
+  /// The block's cell-state masks (state_masks.h). A new block's are all unknown; whoever
+  /// writes cells keeps them equal to stateMasksOf(block(i), the map's model).
+  BlockStateMasks& masks(BlockIndex i) { return masks_[i]; }
+  const BlockStateMasks& masks(BlockIndex i) const { return masks_[i]; }
+  /// Recomputes the masks of the blocks `indices` from their cells with `model`, in parallel:
+  /// for writers that replace whole blocks (loading, paging in).
+  void recomputeMasks(const std::vector<BlockIndex>& indices, const OccupancyModel& model);
+  /// The same for every live block.
+  void recomputeAllMasks(const OccupancyModel& model);
+  /// The masks of block `i` changed at map revision `revision`: stamps masks_at and records
+  /// the key in the change log (once per block and revision: repeated calls are cheap).
+  void noteMasksChanged(BlockIndex i, uint64_t revision) {
+    BlockMeta& m = meta_[i];
+    if (m.masks_at >= revision) return;
+    m.masks_at = revision;
+    changes_.record(revision, m.key);
+  }
+  /// Keys of the live blocks whose masks changed after map revision `revision`, from the change
+  /// log (no walk over the map); false (nothing written) when the log no longer reaches back
+  /// that far.
+  [[nodiscard]] bool masksChangedSince(uint64_t revision, std::vector<BlockKey>* out) const;
+  [[nodiscard]] const BlockChangeLog& changeLog() const { return changes_; }
 
   size_t size() const { return index_.size(); }
   /// Block slots of the arena, and how many of them are free (left by erased blocks; new
@@ -143,6 +171,8 @@ class BlockMap {
   std::shared_ptr<ChunkAllocator> allocator_;
   std::vector<Block*> chunks_;
   std::vector<BlockMeta> meta_;
+  std::vector<BlockStateMasks> masks_;  ///< parallel to meta_
+  BlockChangeLog changes_;              ///< blocks whose masks changed, by revision
   std::vector<BlockIndex> free_;
   /// Per memory page of the arena: handed back by releaseFreePages() and not used since.
   std::vector<uint8_t> page_released_;

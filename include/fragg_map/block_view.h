@@ -16,6 +16,9 @@ enum class BlockChange {
   kAny,       ///< any cell's value
   kOccupied,  ///< which cells are occupied (a cell crossed the occupied threshold either way)
   kState,     ///< any cell's state: observed or not, free / occupied / unknown band
+  /// the block's state masks (a cell became or stopped being occupied or free): answered from
+  /// the change log the writers keep, without a walk over the blocks while it reaches back
+  kMasks,
 };
 
 /// A block as readers see it: its key and cells.
@@ -31,6 +34,7 @@ struct BlockStamps {
   uint64_t changed_at = 0;   ///< any cell's value
   uint64_t occupied_at = 0;  ///< which cells are occupied
   uint64_t state_at = 0;     ///< any cell's state (BlockChange::kState)
+  uint64_t masks_at = 0;     ///< the state masks (BlockChange::kMasks)
 };
 
 class BlockView {
@@ -42,6 +46,12 @@ class BlockView {
   /// nullptr when the block does not exist (all its cells unknown).
   const Block* findBlock(const BlockKey& key) const { return blocks_->findBlock(key); }
   const Cell* findCell(const VoxelKey& key) const { return blocks_->findCell(key); }
+  /// The block's cell-state masks (state_masks.h), nullptr when the block does not exist (all
+  /// its cells unknown). Kept current by every write: no cell needs to be read for states.
+  [[nodiscard]] const BlockStateMasks* findMasks(const BlockKey& key) const {
+    const BlockIndex i = blocks_->find(key);
+    return i == kNoBlock ? nullptr : &blocks_->masks(i);
+  }
   /// Calls fn(key, block) for every block, in unspecified order.
   void forEach(const BlockVisitor& fn) const;
   /// Calls fn(key, block) for every block whose key lies in [lo, hi] (inclusive); the cost

@@ -137,10 +137,17 @@ class Map {
   }
   /// nullptr when the block does not exist (all its cells unknown).
   const Block* findBlock(const BlockKey& key) const { return blockView().findBlock(key); }
+  /// The block's cell-state masks (occupied / free; unknown = neither), nullptr when the block
+  /// does not exist. Equal to stateMasksOf(*findBlock(key), model()) after every write.
+  [[nodiscard]] const BlockStateMasks* findMasks(const BlockKey& key) const {
+    return blockView().findMasks(key);
+  }
   size_t blockCount() const { return blockView().size(); }
   /// Keys of the blocks whose cells changed (`what`) after map revision `revision` (what
   /// markers, frontiers and incremental outputs use); revision() read with the blocks is where
-  /// the next call starts. Removed blocks are not listed.
+  /// the next call starts. Removed blocks are not listed. BlockChange::kMasks (the blocks whose
+  /// state masks changed) comes from the change log the integrator and the edits keep, not from
+  /// a walk over the blocks, unless the question reaches back past the log's oldest record.
   std::vector<BlockKey> changedBlocksSince(uint64_t revision,
                                            BlockChange what = BlockChange::kAny) const {
     return blockView().changedSince(revision, what);

@@ -53,6 +53,8 @@ BlockMap& BlockMap::operator=(BlockMap&& o) noexcept {
   allocator_ = std::move(o.allocator_);
   chunks_ = std::move(o.chunks_);
   meta_ = std::move(o.meta_);
+  masks_ = std::move(o.masks_);
+  changes_ = std::move(o.changes_);
   free_ = std::move(o.free_);
   page_released_ = std::move(o.page_released_);
   index_ = std::move(o.index_);
@@ -95,6 +97,7 @@ BlockIndex BlockMap::findOrCreate(const BlockKey& key, bool* created, bool initi
     i = static_cast<BlockIndex>(meta_.size());
     if (i % kBlocksPerChunk == 0)
       chunks_.push_back(static_cast<Block*>(allocator_->allocate(kBlocksPerChunk * sizeof(Block))));
+    masks_.emplace_back();  // first: a throw leaves masks_ longer than meta_, never shorter
     meta_.emplace_back();
   }
   try {
@@ -112,6 +115,7 @@ BlockIndex BlockMap::findOrCreate(const BlockKey& key, bool* created, bool initi
   BlockMeta& m = meta_[i];
   m = BlockMeta();
   m.key = key;
+  masks_[i] = BlockStateMasks();
   return i;
 }
 
@@ -195,6 +199,7 @@ size_t BlockMap::releaseFreePages() {
 
 void BlockMap::clear() {
   page_released_.clear();  // releasing a page twice is harmless
+  changes_.clear();
   index_.clear();
   super_.clear();
   free_.clear();
@@ -253,10 +258,31 @@ KeyBounds BlockMap::observedBounds() const {
   return b;
 }
 
+void BlockMap::recomputeMasks(const std::vector<BlockIndex>& indices, const OccupancyModel& model) {
+  const long n = static_cast<long>(indices.size());
+#pragma omp parallel for schedule(static) if (n > 256)
+  for (long j = 0; j < n; ++j) masks_[indices[j]] = stateMasksOf(block(indices[j]), model);
+}
+
+void BlockMap::recomputeAllMasks(const OccupancyModel& model) {
+  std::vector<BlockIndex> live;
+  live.reserve(size());
+  forEach([&](BlockIndex i) { live.push_back(i); });
+  recomputeMasks(live, model);
+}
+
+bool BlockMap::masksChangedSince(uint64_t revision, std::vector<BlockKey>* out) const {
+  if (!changes_.reaches(revision)) return false;
+  out->clear();
+  for (const BlockKey& key : changes_.keysAfter(revision))
+    if (index_.find(key) != kNoBlock) out->push_back(key);
+  return true;
+}
+
 size_t BlockMap::hostBytes() const {
-  // Cells in the arena, per-block metadata, the index's slots and the coarse index.
+  // Cells in the arena, per-block metadata and masks, the index's slots and the coarse index.
   return chunks_.size() * kBlocksPerChunk * sizeof(Block) + meta_.capacity() * sizeof(BlockMeta) +
-         index_.bytes() +
+         masks_.capacity() * sizeof(BlockStateMasks) + changes_.bytes() + index_.bytes() +
          super_.size() * (sizeof(BlockKey) + 3 * sizeof(void*) + 2 * sizeof(void*));
 }
 

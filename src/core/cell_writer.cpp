@@ -12,7 +12,10 @@ void CellWriter::setInBlock(BlockIndex i, int cell, const Cell& value) {
   const bool was_occupied = c.observed() && model_.state(c) == CellState::kOccupied;
   const bool is_occupied = value.observed() && model_.state(value) == CellState::kOccupied;
   const bool state_changed = model_.stateDiffers(c, value);
+  const CellState was = model_.state(c), is = model_.state(value);
   c = value;
+  blocks_.masks(i).set(cell, is);
+  if (was != is) blocks_.noteMasksChanged(i, revision_);
   BlockMeta& m = blocks_.meta(i);
   m.changed_at = revision_;
   if (was_occupied != is_occupied) m.occupied_at = revision_;

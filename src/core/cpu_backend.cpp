@@ -70,8 +70,16 @@ struct MarkCells {
   }
 };
 
-/// Whether a miss would change no cell of the block.
-bool allAtLowerClamp(const Block& block, const OccupancyModel& model) {
+/// Whether a miss would change no cell of the block. `masks`: the block's state masks; when the
+/// lower clamp reads free (any sensible model), a block with a cell that is not free has a cell
+/// above the clamp, which the masks tell without reading the cells.
+bool allAtLowerClamp(const Block& block, const BlockStateMasks& masks,
+                     const OccupancyModel& model) {
+  if (model.min_fx < model.free_below_fx) {
+    uint64_t all_free = ~uint64_t{0};
+    for (uint64_t w : masks.free) all_free &= w;
+    if (all_free != ~uint64_t{0}) return false;
+  }
   bool all = true;
   for (const Cell& c : block.cells) all &= c.log_odds_fx == model.min_fx;
   return all;
@@ -181,6 +189,7 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
   }
   uint64_t created = 0, touched_marked = 0;
   std::vector<char> fresh(static_cast<size_t>(touched), 0);
+  std::vector<char> masks_changed(static_cast<size_t>(touched), 0);
   for (long j = 0; j < touched; ++j) touched_marked += marked[j] ? 1 : 0;
   // A removal has nothing to undo in a block that does not exist: none is created.
   for (long j = 0; j < touched && !remove; ++j)
@@ -198,9 +207,14 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
     const ScratchBlock& marks = merged.touched(j);
     Block& block = blocks.block(target[j]);
     if (fresh[j]) std::fill(std::begin(block.cells), std::end(block.cells), Cell());
+    // The block's state masks follow its cells (a fresh block's are all unknown already).
+    BlockStateMasks& masks = blocks.masks(target[j]);
     bool changed = false, occupancy_changed = false, state_changed = false;
+    uint64_t masks_differ = 0;
     for (int w = 0; w < kCellsPerBlock / 64; ++w) {
-      for (uint64_t bits = marks.free[w] | marks.hit[w]; bits != 0; bits &= bits - 1) {
+      const uint64_t marked_bits = marks.free[w] | marks.hit[w];
+      uint64_t occupied_bits = 0, free_bits = 0;
+      for (uint64_t bits = marked_bits; bits != 0; bits &= bits - 1) {
         const int bit = __builtin_ctzll(bits);
         Cell& cell = block.cells[w * 64 + bit];
         const Cell before = cell;
@@ -209,16 +223,27 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
         const CellState was = model.state(before), is = model.state(cell);
         occupancy_changed |= (was == CellState::kOccupied) != (is == CellState::kOccupied);
         state_changed |= model.stateDiffers(before, cell);
+        occupied_bits |= uint64_t{is == CellState::kOccupied} << bit;
+        free_bits |= uint64_t{is == CellState::kFree} << bit;
         ++updated;
       }
+      const uint64_t occupied_word = (masks.occupied[w] & ~marked_bits) | occupied_bits;
+      const uint64_t free_word = (masks.free[w] & ~marked_bits) | free_bits;
+      masks_differ |= (occupied_word ^ masks.occupied[w]) | (free_word ^ masks.free[w]);
+      masks.occupied[w] = occupied_word;
+      masks.free[w] = free_word;
     }
+    masks_changed[j] = masks_differ != 0;
     BlockMeta& meta = blocks.meta(target[j]);
     if (changed) meta.changed_at = revision;
     if (occupancy_changed) meta.occupied_at = revision;
     if (state_changed) meta.state_at = revision;
     meta.free_saturated_at =
-        allAtLowerClamp(block, model) ? meta.changed_at : BlockMeta::kNotSaturated;
+        allAtLowerClamp(block, masks, model) ? meta.changed_at : BlockMeta::kNotSaturated;
   }
+  // The change log (serial: it appends), for readers of BlockChange::kMasks.
+  for (long j = 0; j < touched; ++j)
+    if (masks_changed[j]) blocks.noteMasksChanged(target[j], revision);
   stats.cells_updated += updated;
   stats.blocks_touched += touched_marked;
   stats.blocks_created += created;

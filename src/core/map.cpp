@@ -492,12 +492,15 @@ uint64_t Map::clearCellsWhere(const std::vector<BlockIndex>& blocks,
   for (BlockIndex i : blocks) {
     const BlockKey key = blocks_.meta(i).key;
     Block& b = blocks_.block(i);
+    BlockStateMasks& masks = blocks_.masks(i);
+    const BlockStateMasks masks_before = masks;
     bool any_left = false, any_cleared = false;
     for (int c = 0; c < kCellsPerBlock; ++c) {
       if (inside(voxelKeyOf(key, c))) {
         any_cleared |= b.cells[c].observed();
         cleared += b.cells[c].observed() ? 1 : 0;
         b.cells[c] = Cell();
+        masks.set(c, CellState::kUnknown);
       } else {
         any_left |= b.cells[c].observed();
       }
@@ -507,6 +510,7 @@ uint64_t Map::clearCellsWhere(const std::vector<BlockIndex>& blocks,
       if (any_cleared) {
         BlockMeta& m = blocks_.meta(i);
         m.changed_at = m.occupied_at = m.state_at = revision_;
+        if (masks != masks_before) blocks_.noteMasksChanged(i, revision_);
       }
     } else {
       blocks_.erase(key);

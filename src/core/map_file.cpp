@@ -310,6 +310,7 @@ Map Map::loadFile(const std::string& path, const MapParams& runtime, bool keep_a
   } else {
     readPerBlockSection(r, count, flags, map.blocks_, cellsValid);
   }
+  map.blocks_.recomputeAllMasks(model);
   if (flags & kMapFileRegion) map.region_ = readRegion(r);
   if (flags & kMapFileScans) {
     map.next_scan_id_ = r.get<uint64_t>("next scan index");

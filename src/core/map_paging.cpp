@@ -114,6 +114,7 @@ Map Map::loadPageStore(PageStore& store, const MapParams& runtime) {
     const BlockIndex i = map.blocks_.findOrCreate(key, &created, /*initialise=*/false);
     if (!created) throw IoError(store.path() + ": duplicate block record");
     map.blocks_.block(i) = block;
+    map.blocks_.masks(i) = stateMasksOf(block, model);
   });
   const StoreMapMeta at_read = decodeStoreMeta(last, store.path());
   map.scans_ = static_cast<size_t>(at_read.scans);
@@ -129,6 +130,7 @@ void Map::pageInBlocks(const BlockKey& lo, const BlockKey& hi) {
   // A paged-out block has no copy in the backend's cache (forget() took it when it left):
   // the blocks read back are new host blocks to the cache, the rest of its copies stay.
   const std::vector<BlockIndex> read = pager_->pageIn(lo, hi, blocks_);
+  blocks_.recomputeMasks(read, model_);  // the store keeps cells only
   backend_->cache().added(read, blocks_);
   bumpViewEpoch();
 }
@@ -136,6 +138,7 @@ void Map::pageInBlocks(const BlockKey& lo, const BlockKey& hi) {
 void Map::pageInKeys(const std::vector<BlockKey>& keys) {
   if (!pager_) return;
   const std::vector<BlockIndex> read = pager_->pageIn(keys, blocks_);
+  blocks_.recomputeMasks(read, model_);  // the store keeps cells only
   if (read.empty()) return;
   backend_->cache().added(read, blocks_);
   bumpViewEpoch();
@@ -144,6 +147,7 @@ void Map::pageInKeys(const std::vector<BlockKey>& keys) {
 void Map::pageInAllBlocks() {
   if (!pager_ || pager_->pagedOutCount() == 0) return;
   const std::vector<BlockIndex> read = pager_->pageInAll(blocks_);
+  blocks_.recomputeMasks(read, model_);  // the store keeps cells only
   backend_->cache().added(read, blocks_);
   bumpViewEpoch();
 }

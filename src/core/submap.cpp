@@ -99,6 +99,9 @@ Map Map::copyRegion(const SubmapRegion& region, Backend backend, SubmapStats* st
         ++st.blocks;
       }
       sub.blocks_.block(to).cells[c] = from.cells[c];
+      const CellState state = sub.model_.state(from.cells[c]);
+      sub.blocks_.masks(to).set(c, state);
+      if (state != CellState::kUnknown) sub.blocks_.noteMasksChanged(to, sub.revision_);
       ++st.cells;
     }
   }
@@ -243,7 +246,10 @@ SubmapStats Map::merge(const Map& sub, MergeMode mode,
     if (value.log_odds_fx == c.log_odds_fx && value.hits == c.hits) return;
     const bool was_occupied = model_.state(c) == CellState::kOccupied;
     const bool state_changed = model_.stateDiffers(c, value);
+    const CellState was = model_.state(c), is = model_.state(value);
     c = value;
+    blocks_.masks(i).set(cellIndexOf(v), is);
+    if (was != is) blocks_.noteMasksChanged(i, revision_);
     BlockMeta& meta = blocks_.meta(i);
     meta.changed_at = revision_;
     if (was_occupied != (model_.state(c) == CellState::kOccupied)) meta.occupied_at = revision_;

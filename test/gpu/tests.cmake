@@ -44,3 +44,16 @@ fragg_add_test(fragg_gpu_frontier_test
   LIBS fragg_map_planning fragg_map_sim_lib
   LABELS gpu)
 target_compile_definitions(fragg_gpu_frontier_test PRIVATE FRAGG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+
+# The state-mask layer on the CUDA backend against the CPU backend (after every scan of a drive,
+# each named edit, paging when the page stores are built); skips without a device.
+fragg_add_test(fragg_gpu_state_masks_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/state_masks_gpu_test.cpp
+          ${PROJECT_SOURCE_DIR}/src/tools/bench/synthetic_lidar.cpp
+  LIBS fragg_map_core fragg_map_sim_lib
+  LABELS gpu)
+target_include_directories(fragg_gpu_state_masks_test PRIVATE ${PROJECT_SOURCE_DIR}/src/tools)
+if(TARGET fragg_map_store AND TARGET fragg_gpu_state_masks_test)
+  target_link_libraries(fragg_gpu_state_masks_test fragg_map_store)
+  target_compile_definitions(fragg_gpu_state_masks_test PRIVATE FRAGG_HAVE_STORE)
+endif()

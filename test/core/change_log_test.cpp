@@ -1,0 +1,150 @@
+// Changed-block lists per revision (issue 34 item 2) on the CPU backend: the change log on its
+// own, and Map::changedBlocksSince(r, BlockChange::kMasks) against the blocks whose masks differ
+// between snapshots taken before and after each scan and each named edit.
+#include "fragg_map/change_log.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <functional>
+#include <map>
+#include <set>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "fragg_map/map.h"
+#include "test_scenes.h"
+
+namespace fragg::test {
+namespace {
+
+struct KeyLess {
+  bool operator()(const BlockKey& a, const BlockKey& b) const {
+    return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+  }
+};
+using KeySet = std::set<BlockKey, KeyLess>;
+using MaskSnapshot = std::map<BlockKey, BlockStateMasks, KeyLess>;
+
+KeySet setOf(const std::vector<BlockKey>& keys) { return KeySet(keys.begin(), keys.end()); }
+
+TEST(BlockChangeLogTest, AnswersWhatItHoldsAndNothingOlder) {
+  BlockChangeLog log(8);
+  for (uint64_t r = 1; r <= 4; ++r) {
+    log.record(r, BlockKey{int32_t(r), 0, 0});
+    log.record(r, BlockKey{0, 0, 0});  // the same block in every revision
+  }
+  EXPECT_TRUE(log.reaches(0));
+  EXPECT_EQ(setOf(log.keysAfter(0)).size(), 5u);  // each key once
+  EXPECT_EQ(setOf(log.keysAfter(2)), (KeySet{{0, 0, 0}, {3, 0, 0}, {4, 0, 0}}));
+  EXPECT_TRUE(log.keysAfter(4).empty());
+  // Full (8 records): the next one drops the older half, revisions 1 and 2.
+  log.record(5, BlockKey{5, 0, 0});
+  EXPECT_FALSE(log.reaches(1));
+  EXPECT_TRUE(log.reaches(2));
+  EXPECT_EQ(setOf(log.keysAfter(2)), (KeySet{{0, 0, 0}, {3, 0, 0}, {4, 0, 0}, {5, 0, 0}}));
+  // A record older than what was dropped is not kept; an out-of-order newer one is.
+  log.record(1, BlockKey{9, 9, 9});
+  log.record(3, BlockKey{7, 7, 7});
+  EXPECT_EQ(setOf(log.keysAfter(2)).count(BlockKey{9, 9, 9}), 0u);
+  EXPECT_EQ(setOf(log.keysAfter(2)).count(BlockKey{7, 7, 7}), 1u);
+  log.clear();
+  EXPECT_TRUE(log.keysAfter(2).empty());
+  EXPECT_TRUE(log.reaches(2));
+}
+
+MaskSnapshot snapshot(const Map& map) {
+  MaskSnapshot out;
+  const BlockView view = map.blockView();
+  view.forEach([&](const BlockKey& key, const Block&) { out[key] = *view.findMasks(key); });
+  return out;
+}
+
+/// Live blocks whose masks differ from `before` (a block new since counts when any of its cells
+/// is known; a block gone is not listed).
+KeySet differing(const MaskSnapshot& before, const MaskSnapshot& after) {
+  KeySet out;
+  for (const auto& [key, masks] : after) {
+    const auto it = before.find(key);
+    if (it == before.end() ? masks != BlockStateMasks() : it->second != masks) out.insert(key);
+  }
+  return out;
+}
+
+/// Runs `step` (one revision) and checks the listed blocks are exactly those whose masks changed.
+void expectListedExactly(Map& map, const std::function<void(Map&)>& step, const std::string& what) {
+  const MaskSnapshot before = snapshot(map);
+  const uint64_t r = map.revision();
+  step(map);
+  ASSERT_EQ(map.revision(), r + 1) << what;
+  const KeySet want = differing(before, snapshot(map));
+  const KeySet got = setOf(map.changedBlocksSince(r, BlockChange::kMasks));
+  EXPECT_EQ(got.size(), map.changedBlocksSince(r, BlockChange::kMasks).size()) << what;
+  EXPECT_EQ(got, want) << what << ": " << got.size() << " listed, " << want.size() << " changed";
+  EXPECT_FALSE(want.empty()) << what << " changed no state: the check is empty";
+}
+
+SensorModel lidar() { return SensorModel::spinningLidar(-0.6, 0.6, 0.0, 10.0); }
+
+Eigen::Isometry3d poseAt(int i) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(0.3 * i, 0.1 * i, 0.02);
+  T.linear() = Eigen::AngleAxisd(0.05 * i, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return T;
+}
+
+TEST(ChangedBlocksTest, MasksListedPerRevisionAreExactlyTheBlocksThatChangedState) {
+  MapParams p;
+  p.resolution_m = 0.05;
+  p.backend = Backend::kCpu;
+  p.scans.keep = true;
+  Map map(p);
+  const PointCloud room = roomScan(4.0, 1.0, 2.0, 16, 360);
+  for (int i = 0; i < 4; ++i)
+    expectListedExactly(
+        map, [&](Map& m) { m.insert(room, poseAt(i), lidar()); }, "scan " + std::to_string(i));
+  expectListedExactly(
+      map, [](Map& m) { m.remove(1); }, "remove");
+  expectListedExactly(
+      map,
+      [](Map& m) {
+        m.clearBox(Eigen::Vector3d(-1.03, -4.2, -1.2), Eigen::Vector3d(0.61, 0.3, 0.4));
+      },
+      "clearBox");
+  expectListedExactly(
+      map,
+      [](Map& m) {
+        m.writeCells([&](CellWriter& w) { w.fillCube(VoxelKey{-10, -10, -10}, 11, 3000); });
+      },
+      "writeCells");
+  Map part = map.extract(Eigen::Vector3d(-4.5, -4.5, -1.5), Eigen::Vector3d(1.0, 4.5, 2.5));
+  Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
+  shift.translation() = Eigen::Vector3d(0.4, 0.0, 0.0);  // a whole number of 5 cm cells
+  expectListedExactly(
+      map, [&](Map& m) { m.merge(part, MergeMode::kAdd, shift); }, "merge");
+  expectListedExactly(
+      map, [&](Map& m) { m.insert(room, poseAt(6), lidar()); }, "scan after the edits");
+
+  // Over several revisions: every block whose masks changed at any of them, each once, and only
+  // live blocks (a block erased and made again may be listed without a change since).
+  const std::vector<BlockKey> listed = map.changedBlocksSince(0, BlockChange::kMasks);
+  const KeySet all = setOf(listed);
+  EXPECT_EQ(all.size(), listed.size());
+  const BlockView view = map.blockView();
+  size_t walked = 0;
+  view.forEach([&](const BlockKey& key, const Block&) {
+    if (view.stamps(key).masks_at == 0) return;
+    ++walked;
+    EXPECT_EQ(all.count(key), 1u);
+  });
+  for (const BlockKey& key : all) EXPECT_NE(view.findBlock(key), nullptr);
+  EXPECT_GE(all.size(), walked);
+  EXPECT_GT(walked, 100u);
+  // The sub-map lists its blocks with known cells at its revision.
+  EXPECT_EQ(setOf(part.changedBlocksSince(0, BlockChange::kMasks)),
+            differing(MaskSnapshot(), snapshot(part)));
+}
+
+}  // namespace
+}  // namespace fragg::test

@@ -1,0 +1,214 @@
+// The state-mask layer (issue 34 items 1 and 2) on the CUDA backend against the CPU backend:
+// after every scan of a drive (both apply kernels, a pool small enough to evict and upload
+// again), after each named edit and after paging, the masks the host reads are byte-identical
+// to the CPU backend's and equal to the masks recomputed from the cells; the blocks listed as
+// changed state per scan (BlockChange::kMasks, from the device's stamps) are the CPU's.
+// Skipped without a device.
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <set>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "../core/state_masks_check.h"
+#include "../test_dir.h"
+#include "bench/synthetic_lidar.h"
+#include "fragg_map/internal/backend_factory.h"
+#include "fragg_map/map.h"
+#ifdef FRAGG_HAVE_STORE
+#include "../paging/paging_scenes.h"
+#include "fragg_map/store/page_stores.h"
+#endif
+
+namespace fragg::test {
+namespace {
+
+#define REQUIRE_DEVICE()                                                     \
+  do {                                                                       \
+    std::string why;                                                         \
+    if (cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "skipped: " << why; \
+  } while (0)
+
+struct Input {
+  PointCloud cloud;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+};
+
+/// `scans` synthetic 180k-point LiDAR scans `step_m` apart, then the same back to the start.
+std::vector<Input> outAndBack(int scans, double step_m) {
+  bench::SyntheticLidarOptions o;
+  o.step_m = step_m;
+  bench::SyntheticLidar lidar(o);
+  std::vector<Input> out;
+  for (int i = 0; i < scans; ++i) {
+    Scan s = lidar.scan(i);
+    out.push_back({s.cloud, s.T_map_sensor});
+  }
+  for (int i = scans - 1; i >= 0; --i) {
+    const Input back = out[static_cast<size_t>(i)];
+    out.push_back(back);
+  }
+  return out;
+}
+
+struct KeyLess {
+  bool operator()(const BlockKey& a, const BlockKey& b) const {
+    return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+  }
+};
+
+/// The blocks `map` lists as changed state after `revision`.
+std::set<BlockKey, KeyLess> changedSince(const Map& map, uint64_t revision) {
+  const std::vector<BlockKey> keys = map.changedBlocksSince(revision, BlockChange::kMasks);
+  return std::set<BlockKey, KeyLess>(keys.begin(), keys.end());
+}
+
+MapParams paramsFor(Backend b, double res) {
+  MapParams p;
+  p.resolution_m = res;
+  p.backend = b;
+  return p;
+}
+
+/// The CUDA map's masks (host view, after its write-back) byte-identical to the CPU map's both
+/// ways, and equal to the reference recomputed from its cells.
+void expectSameMasks(const Map& cpu, const Map& gpu, const std::string& what) {
+  ASSERT_STREQ(gpu.backendName(), "cuda") << gpu.backendReason();
+  std::string first;
+  EXPECT_EQ(cpu.blockCount(), gpu.blockCount()) << what;
+  EXPECT_EQ(blocksWithOtherMasks(gpu, cpu, &first), 0u) << what << ": " << first;
+  EXPECT_EQ(blocksWithOtherMasks(cpu, gpu, &first), 0u) << what << ": " << first;
+  EXPECT_EQ(blocksWithStaleMasks(gpu, &first), 0u) << what << " (cuda): " << first;
+  EXPECT_EQ(blocksWithStaleMasks(cpu, &first), 0u) << what << " (cpu): " << first;
+}
+
+/// Both apply kernels (a warp a slot, a thread block a slot) with a small pool: masks after
+/// every scan.
+void driveAndCompare(bool warp_per_slot) {
+  const std::vector<Input> scans = outAndBack(8, 4.0);
+  MapParams p = paramsFor(Backend::kCuda, 0.1);
+  p.cuda.pool_max_bytes = size_t(12000) * 2300;  // fewer slots than the drive's blocks
+  p.cuda.warp_per_slot_apply = warp_per_slot;
+  Map gpu(p);
+  p.backend = Backend::kCpu;
+  Map cpu(p);
+  const SensorModel sensor = SensorModel::autoFromCloud(0.0, 20.0);
+  InsertStats total;
+  for (size_t i = 0; i < scans.size(); ++i) {
+    const uint64_t revision = gpu.revision();
+    ASSERT_EQ(cpu.revision(), revision);
+    cpu.insert(scans[i].cloud, scans[i].T, sensor);
+    total.add(gpu.insert(scans[i].cloud, scans[i].T, sensor));
+    expectSameMasks(cpu, gpu, "scan " + std::to_string(i));
+    const auto listed = changedSince(gpu, revision);
+    EXPECT_EQ(listed, changedSince(cpu, revision)) << "blocks listed as changed, scan " << i;
+    EXPECT_FALSE(listed.empty()) << "scan " << i;
+  }
+  // Over the whole drive (blocks evicted, written back and uploaded again on the way).
+  EXPECT_EQ(changedSince(gpu, 0), changedSince(cpu, 0));
+  EXPECT_GT(total.blocks_evicted, 1000u) << "the pool never evicted";
+  EXPECT_GT(total.blocks_uploaded, 1000u) << "no block went up again";
+}
+
+TEST(StateMasksGpuTest, DriveWarpPerSlotApplyIsByteIdentical) {
+  REQUIRE_DEVICE();
+  driveAndCompare(true);
+}
+
+TEST(StateMasksGpuTest, DriveBlockPerSlotApplyIsByteIdentical) {
+  REQUIRE_DEVICE();
+  driveAndCompare(false);
+}
+
+TEST(StateMasksGpuTest, NamedEditsAreByteIdentical) {
+  REQUIRE_DEVICE();
+  const std::vector<Input> scans = outAndBack(3, 2.0);
+  MapParams p = paramsFor(Backend::kCuda, 0.1);
+  p.scans.keep = true;
+  Map gpu(p);
+  p.backend = Backend::kCpu;
+  Map cpu(p);
+  const SensorModel sensor = SensorModel::autoFromCloud(0.0, 30.0);
+  auto both = [&](const std::function<void(Map&)>& edit, const std::string& what) {
+    edit(cpu);
+    edit(gpu);
+    expectSameMasks(cpu, gpu, what);
+  };
+  auto insert = [&](size_t i) {
+    return [&, i](Map& m) { m.insert(scans[i].cloud, scans[i].T, sensor); };
+  };
+  both(insert(0), "scan 0");
+  both(insert(1), "scan 1");
+  both([](Map& m) { m.remove(0); }, "remove");
+  both(insert(2), "scan 2");
+  Eigen::Isometry3d moved = scans[2].T;
+  moved.translation() += Eigen::Vector3d(0.13, -0.07, 0.02);
+  both([&](Map& m) { m.correctPoses({{2, moved}}); }, "correctPoses");
+  const Eigen::Vector3d o = scans[1].T.translation();
+  both(
+      [&](Map& m) {
+        m.clearBox(o - Eigen::Vector3d(3.03, 4.1, 1.0), o + Eigen::Vector3d(2, 1, 1));
+      },
+      "clearBox");
+  both(insert(3), "scan 3 after clearBox");  // the edited blocks go up again
+  both(
+      [&](Map& m) {
+        m.writeCells([&](CellWriter& w) {
+          const VoxelKey k = m.keyOf(o + Eigen::Vector3d(0.5, 0.5, 0.0));
+          w.fillCube(k, 12, m.model().max_fx);
+        });
+      },
+      "writeCells");
+  Map cut_cpu = cpu.truncate(o, o + Eigen::Vector3d(20, 20, 5));
+  Map cut_gpu = gpu.truncate(o, o + Eigen::Vector3d(20, 20, 5));
+  expectSameMasks(cpu, gpu, "truncate");
+  std::string first;
+  EXPECT_EQ(blocksWithOtherMasks(cut_cpu, cut_gpu, &first), 0u) << "truncated part: " << first;
+  EXPECT_EQ(blocksWithStaleMasks(cut_gpu, &first), 0u) << "truncated part: " << first;
+  both(
+      [&](Map& m) {
+        (void)m.merge(m.backendName() == std::string("cuda") ? cut_gpu : cut_cpu, MergeMode::kAdd);
+      },
+      "merge");
+  both(insert(4), "scan 4 after merge");
+  const std::string path = std::string(FRAGG_TEST_TMP) + "/state_masks_gpu.fgm";
+  gpu.save(path);
+  Map loaded = Map::load(path, Backend::kCuda);
+  ASSERT_STREQ(loaded.backendName(), "cuda") << loaded.backendReason();
+  EXPECT_EQ(blocksWithOtherMasks(loaded, cpu, &first), 0u) << "load: " << first;
+  loaded.insert(scans[5].cloud, scans[5].T, sensor);
+  cpu.insert(scans[5].cloud, scans[5].T, sensor);
+  expectSameMasks(cpu, loaded, "scan 5 after load");
+  both([](Map& m) { m.reset(); }, "reset");
+  both(insert(0), "scan 0 after reset");
+}
+
+#ifdef FRAGG_HAVE_STORE
+TEST(StateMasksGpuTest, PagedDriveIsByteIdentical) {
+  REQUIRE_DEVICE();
+  const std::string dir = testDir();
+  Map gpu(corridorParams(Backend::kCuda)), cpu(corridorParams(Backend::kCpu));
+  PagingPolicy policy;
+  policy.budget_mb = 2.0;
+  policy.radius_m = 4.0;
+  policy.commit_every_scans = 5;
+  policy.commit_every_s = 0;
+  gpu.attachPageStore(openPageStore(dir + "/map.db", false), policy);
+  constexpr int kScans = 60;
+  for (int i = 0; i < kScans; ++i) {
+    const Eigen::Isometry3d T = corridorPose(i, kScans);
+    gpu.insert(corridorScan(T), T, corridorSensor());
+    cpu.insert(corridorScan(T), T, corridorSensor());
+    std::string first;
+    ASSERT_EQ(blocksWithStaleMasks(gpu, &first), 0u) << "scan " << i << ": " << first;
+  }
+  EXPECT_GT(gpu.pagingStats().pages_read, 50u);
+  gpu.ensureAllResident();
+  expectSameMasks(cpu, gpu, "paged drive, all resident");
+}
+#endif
+
+}  // namespace
+}  // namespace fragg::test
