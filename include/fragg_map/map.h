@@ -307,6 +307,11 @@ class Map {
   const BlockMap& hostBlocks() const;
   /// InvalidArgument unless the map keeps scans, `id` is one of them and it is removable.
   void requireRemovable(ScanId id) const;
+  /// The start of clearBox / freeBox: checks the corners (InvalidArgument), pages the box in,
+  /// drops the device's copies, marks the kept scans it touches, bumps the revision; returns the
+  /// blocks in the box and its corner keys.
+  std::vector<BlockIndex> beginBoxEdit(const Eigen::Vector3d& min_map,
+                                       const Eigen::Vector3d& max_map, VoxelKey* lo, VoxelKey* hi);
   /// Marks the kept scans whose rays could reach into the box as no longer removable.
   void markScansTouching(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map);
   /// Marks the kept scans for which `reaches(sensor origin, reach_m)` holds, reach_m bounding

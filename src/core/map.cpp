@@ -424,37 +424,36 @@ const Cell* Map::findCell(const VoxelKey& key) {
   return hostBlocks().findCell(key);
 }
 
-void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map) {
+std::vector<BlockIndex> Map::beginBoxEdit(const Eigen::Vector3d& min_map,
+                                          const Eigen::Vector3d& max_map, VoxelKey* lo,
+                                          VoxelKey* hi) {
   if (!min_map.allFinite() || !max_map.allFinite())
     throw InvalidArgument("clear box corners must be finite");
   if ((min_map.array() > max_map.array()).any())
     throw InvalidArgument("clear box min corner must not exceed the max corner");
-  const VoxelKey lo = keyOf(min_map), hi = keyOf(max_map);
-  const BlockKey blo = blockKeyOf(lo), bhi = blockKeyOf(hi);
+  *lo = keyOf(min_map);
+  *hi = keyOf(max_map);
+  const BlockKey blo = blockKeyOf(*lo), bhi = blockKeyOf(*hi);
   pageInBlocks(blo, bhi);
   backend_->cache().invalidate(blo, bhi, blocks_);
   markScansTouching(min_map, max_map);
   std::vector<BlockIndex> hit;
   blocks_.forEachInBox(blo, bhi, [&](BlockIndex i) { hit.push_back(i); });
   ++revision_;
+  return hit;
+}
+
+void Map::clearBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map) {
+  VoxelKey lo, hi;
+  const std::vector<BlockIndex> hit = beginBoxEdit(min_map, max_map, &lo, &hi);
   clearCellsWhere(hit, [&](const VoxelKey& v) {
     return v.x >= lo.x && v.x <= hi.x && v.y >= lo.y && v.y <= hi.y && v.z >= lo.z && v.z <= hi.z;
   });
 }
 
 uint64_t Map::freeBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map) {
-  if (!min_map.allFinite() || !max_map.allFinite())
-    throw InvalidArgument("clear box corners must be finite");
-  if ((min_map.array() > max_map.array()).any())
-    throw InvalidArgument("clear box min corner must not exceed the max corner");
-  const VoxelKey lo = keyOf(min_map), hi = keyOf(max_map);
-  const BlockKey blo = blockKeyOf(lo), bhi = blockKeyOf(hi);
-  pageInBlocks(blo, bhi);
-  backend_->cache().invalidate(blo, bhi, blocks_);
-  markScansTouching(min_map, max_map);
-  std::vector<BlockIndex> hit;
-  blocks_.forEachInBox(blo, bhi, [&](BlockIndex i) { hit.push_back(i); });
-  ++revision_;
+  VoxelKey lo, hi;
+  const std::vector<BlockIndex> hit = beginBoxEdit(min_map, max_map, &lo, &hi);
   const int16_t free_fx = model_.min_fx;
   uint64_t set = 0;
   for (BlockIndex i : hit) {

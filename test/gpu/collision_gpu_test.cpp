@@ -17,15 +17,10 @@
 #include "fragg_map/planning/collision_check.h"
 #include "fragg_map/planning/path_check.h"
 #include "geometry/mesh_test_util.h"
+#include "require_device.h"
 
 namespace fragg::planning {
 namespace {
-
-#define REQUIRE_DEVICE()                                                     \
-  do {                                                                       \
-    std::string why;                                                         \
-    if (cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "skipped: " << why; \
-  } while (0)
 
 const std::string kRoomScan = std::string(FRAGG_REAL_DATA) + "/pcl_room_scans/room_scan1.pcd";
 

@@ -24,6 +24,7 @@
 #include "fragg_map/sim/lidar_sensor.h"
 #include "fragg_map/sim/scene.h"
 #include "fragg_map/sim/trajectory.h"
+#include "require_device.h"
 
 namespace fragg {
 namespace {
@@ -34,12 +35,6 @@ std::string deviceName() {
   std::string why;
   return cudaDeviceName(0, &why);
 }
-
-#define REQUIRE_DEVICE()                                                     \
-  do {                                                                       \
-    std::string why;                                                         \
-    if (cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "skipped: " << why; \
-  } while (0)
 
 MapParams paramsFor(Backend b, double res) {
   MapParams p;

@@ -14,15 +14,10 @@
 #include "fragg_map/internal/backend_factory.h"
 #include "kernels.h"
 #include "pinned_allocator.h"
+#include "require_device.h"
 
 namespace fragg::cuda {
 namespace {
-
-#define REQUIRE_DEVICE()                                                     \
-  do {                                                                       \
-    std::string why;                                                         \
-    if (cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "skipped: " << why; \
-  } while (0)
 
 /// Host blocks on a 6 x 6 x 2 grid of keys with random cells.
 std::vector<BlockIndex> fillBlocks(BlockMap& blocks, uint32_t seed) {

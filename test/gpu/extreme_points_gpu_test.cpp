@@ -20,15 +20,10 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/map.h"
+#include "require_device.h"
 
 namespace fragg {
 namespace {
-
-#define REQUIRE_DEVICE()                                                     \
-  do {                                                                       \
-    std::string why;                                                         \
-    if (cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "skipped: " << why; \
-  } while (0)
 
 const std::vector<Eigen::Vector3f> kExtremePoints = {
     {3.7e27f, -4e-20f, -3.7e27f}, {-3.7e27f, 4e-20f, 3.7e27f}, {4e-20f, 3.7e27f, -3.7e27f},

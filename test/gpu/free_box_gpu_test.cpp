@@ -12,6 +12,7 @@
 #include "../core/same_map.h"
 #include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/map.h"
+#include "require_device.h"
 
 namespace fragg {
 namespace {
@@ -29,8 +30,7 @@ PointCloud ringCloud(float radius_m) {
 }
 
 TEST(FreeBoxGpu, FreedBoxesAndLaterScansAreByteIdenticalToTheCpu) {
-  std::string why;
-  if (cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "skipped: " << why;
+  REQUIRE_DEVICE();
   MapParams pc, pg;
   pc.backend = Backend::kCpu;
   pg.backend = Backend::kCuda;

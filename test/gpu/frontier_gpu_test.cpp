@@ -17,15 +17,10 @@
 #include "fragg_map/sim/lidar_sensor.h"
 #include "fragg_map/sim/scene.h"
 #include "fragg_map/sim/trajectory.h"
+#include "require_device.h"
 
 namespace fragg::planning {
 namespace {
-
-#define REQUIRE_DEVICE()                                                     \
-  do {                                                                       \
-    std::string why;                                                         \
-    if (cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "skipped: " << why; \
-  } while (0)
 
 TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
   REQUIRE_DEVICE();

@@ -20,16 +20,11 @@
 #ifdef FRAGG_HAVE_STORE
 #include "../paging/paging_scenes.h"
 #include "fragg_map/store/page_stores.h"
+#include "require_device.h"
 #endif
 
 namespace fragg::test {
 namespace {
-
-#define REQUIRE_DEVICE()                                                     \
-  do {                                                                       \
-    std::string why;                                                         \
-    if (cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "skipped: " << why; \
-  } while (0)
 
 struct Input {
   PointCloud cloud;
