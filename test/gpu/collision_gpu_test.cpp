@@ -17,7 +17,7 @@
 #include "fragg_map/planning/collision_check.h"
 #include "fragg_map/planning/path_check.h"
 #include "geometry/mesh_test_util.h"
-#include "require_device.h"
+#include "gpu_test_util.h"
 
 namespace fragg::planning {
 namespace {

@@ -24,7 +24,7 @@
 #include "fragg_map/sim/lidar_sensor.h"
 #include "fragg_map/sim/scene.h"
 #include "fragg_map/sim/trajectory.h"
-#include "require_device.h"
+#include "gpu_test_util.h"
 
 namespace fragg {
 namespace {
@@ -283,7 +283,7 @@ TEST(CudaBackendTest, InsertSequenceStagesTheNextCloudAndIsByteIdentical) {
   expectSequenceAgrees(synth, repeats, host_auto, {auto30}, "auto model on the host");
   // A tiny pool: evictions, and passes redone behind a staged upload.
   MapParams small = paramsFor(Backend::kCuda, 0.1);
-  small.cuda.pool_max_bytes = size_t(12000) * 2300;
+  small.cuda.pool_max_bytes = size_t(12000) * test::kSlotBytes;
   const auto drive = outAndBack(syntheticLidar(8, 4.0));
   expectSequenceAgrees(drive, firstN(drive.size()), small, {SensorModel::autoFromCloud(0.0, 20.0)},
                        "tiny pool out and back");
@@ -448,7 +448,7 @@ TEST(CudaBackendTest, TinyPoolEvictsWritesBackAndReuploads) {
   // The path goes out and back, so evicted blocks are uploaded again.
   const auto scans = outAndBack(syntheticLidar(8, 4.0));
   MapParams p = paramsFor(Backend::kCuda, 0.1);
-  p.cuda.pool_max_bytes = size_t(12000) * 2300;
+  p.cuda.pool_max_bytes = size_t(12000) * test::kSlotBytes;
   Map gpu(p);
   p.backend = Backend::kCpu;
   Map cpu(p);
@@ -500,7 +500,7 @@ TEST(CudaBackendTest, SaturatedBlockSkipIsExact) {
                     SensorModel::autoFromCloud(0.0, 30.0), "W1 (25 of 100 scans) 30 m, skip");
   // Evictions and uploads: a slot that leaves must not carry its flag to the next block.
   MapParams small = paramsFor(Backend::kCuda, 0.1);
-  small.cuda.pool_max_bytes = size_t(12000) * 2300;
+  small.cuda.pool_max_bytes = size_t(12000) * test::kSlotBytes;
   expectSkipIsExact(outAndBack(syntheticLidar(8, 4.0)), small,
                     SensorModel::autoFromCloud(0.0, 20.0), "tiny pool out and back, skip");
 }
@@ -535,7 +535,7 @@ TEST(CudaBackendTest, PoolTooSmallForOneScanFallsBackToTheCpu) {
   REQUIRE_DEVICE();
   const auto scans = syntheticLidar(3, 2.0);
   MapParams p = paramsFor(Backend::kCuda, 0.05);
-  p.cuda.pool_max_bytes = size_t(200) * 2300;  // far fewer slots than one scan touches
+  p.cuda.pool_max_bytes = size_t(200) * test::kSlotBytes;  // far fewer slots than one scan touches
   Map gpu(p);
   p.backend = Backend::kCpu;
   Map cpu(p);
@@ -604,7 +604,7 @@ TEST(CudaBackendTest, PoseCorrectionOfEvictedScansIsByteIdentical) {
   // others) first. 16,000 slots: fewer than the drive's ~20,000 blocks, more than one scan's.
   const auto scans = outAndBack(syntheticLidar(8, 4.0));
   MapParams p = paramsFor(Backend::kCuda, 0.1);
-  p.cuda.pool_max_bytes = size_t(16000) * 2300;
+  p.cuda.pool_max_bytes = size_t(16000) * test::kSlotBytes;
   const CorrectionStats st = expectCorrectionAgrees(scans, p, SensorModel::autoFromCloud(0.0, 20.0),
                                                     {6, 7, 8, 9}, "small pool, out and back");
   EXPECT_GT(st.removal.blocks_uploaded + st.insertion.blocks_uploaded, 0u);
@@ -624,7 +624,7 @@ TEST(CudaBackendTest, RaysCutIntoPiecesAreByteIdentical) {
   }
   // Evictions and passes redone; removal and correction walk pieces too; noise margins.
   MapParams small = paramsFor(Backend::kCuda, 0.1);
-  small.cuda.pool_max_bytes = size_t(16000) * 2300;
+  small.cuda.pool_max_bytes = size_t(16000) * test::kSlotBytes;
   small.cuda.ray_piece_steps = 3;
   expectCorrectionAgrees(outAndBack(syntheticLidar(8, 4.0)), small,
                          SensorModel::autoFromCloud(0.0, 20.0), {6, 7, 8, 9},

@@ -12,9 +12,9 @@
 
 #include "cuda_stream.h"
 #include "fragg_map/internal/backend_factory.h"
+#include "gpu_test_util.h"
 #include "kernels.h"
 #include "pinned_allocator.h"
-#include "require_device.h"
 
 namespace fragg::cuda {
 namespace {

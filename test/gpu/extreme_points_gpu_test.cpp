@@ -20,7 +20,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/map.h"
-#include "require_device.h"
+#include "gpu_test_util.h"
 
 namespace fragg {
 namespace {

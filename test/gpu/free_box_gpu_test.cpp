@@ -12,7 +12,7 @@
 #include "../core/same_map.h"
 #include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/map.h"
-#include "require_device.h"
+#include "gpu_test_util.h"
 
 namespace fragg {
 namespace {

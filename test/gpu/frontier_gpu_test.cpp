@@ -17,7 +17,7 @@
 #include "fragg_map/sim/lidar_sensor.h"
 #include "fragg_map/sim/scene.h"
 #include "fragg_map/sim/trajectory.h"
-#include "require_device.h"
+#include "gpu_test_util.h"
 
 namespace fragg::planning {
 namespace {

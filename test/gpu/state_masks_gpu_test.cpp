@@ -17,10 +17,10 @@
 #include "bench/synthetic_lidar.h"
 #include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/map.h"
+#include "gpu_test_util.h"
 #ifdef FRAGG_HAVE_STORE
 #include "../paging/paging_scenes.h"
 #include "fragg_map/store/page_stores.h"
-#include "require_device.h"
 #endif
 
 namespace fragg::test {
@@ -84,7 +84,7 @@ void expectSameMasks(const Map& cpu, const Map& gpu, const std::string& what) {
 void driveAndCompare(bool warp_per_slot) {
   const std::vector<Input> scans = outAndBack(8, 4.0);
   MapParams p = paramsFor(Backend::kCuda, 0.1);
-  p.cuda.pool_max_bytes = size_t(12000) * 2300;  // fewer slots than the drive's blocks
+  p.cuda.pool_max_bytes = size_t(12000) * test::kSlotBytes;  // fewer slots than the drive's blocks
   p.cuda.warp_per_slot_apply = warp_per_slot;
   Map gpu(p);
   p.backend = Backend::kCpu;
