@@ -1,4 +1,5 @@
-# Instrumented builds (off by default; CI builds neither):
+# Instrumented builds (off by default; CI builds FRAGG_SANITIZE=address for the fuzz corpus replay
+# alone, scripts/sanitize.sh replay):
 # - FRAGG_FUZZ=ON (clang only): every library with -fsanitize=fuzzer-no-link,address,undefined
 #   and one libFuzzer binary per reader, fragg_fuzz_<target> (test/fuzz/; scripts/fuzz.sh).
 # - FRAGG_SANITIZE=address (ASan + UBSan) or thread (TSan), gcc or clang: the whole build
