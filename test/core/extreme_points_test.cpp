@@ -5,6 +5,8 @@
 // insertion of the points gives a map whose statistics account for every point, whose
 // blocks lie within the max range, and whose other rays' cells are those of the cloud without
 // them.
+#include "extreme_points.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -20,12 +22,7 @@
 namespace fragg {
 namespace {
 
-/// The points (sensor frame, metres).
-const std::vector<Eigen::Vector3f> kExtremePoints = {
-    {3.7e27f, -4e-20f, -3.7e27f}, {-3.7e27f, 4e-20f, 3.7e27f}, {4e-20f, 3.7e27f, -3.7e27f},
-    {3.4e38f, 1e-30f, -3.4e38f},  {1e30f, 1e30f, 1e30f},       {1e-45f, 1e-45f, 1e-45f},
-    {1e19f, -1e-38f, 1e19f},      {20.f, 1e-40f, -20.f},       {1e15f, 1e15f, -1e-25f},
-    {3e38f, 3e38f, 3e38f}};
+const std::vector<Eigen::Vector3f>& kExtremePoints = test::extremePoints();
 
 struct Walk {
   std::vector<VoxelKey> cells;

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "../core/extreme_points.h"
 #include "../core/same_map.h"
 #include "../fuzz/insert_input.h"
 #include "fragg_map/errors.h"
@@ -25,11 +26,7 @@
 namespace fragg {
 namespace {
 
-const std::vector<Eigen::Vector3f> kExtremePoints = {
-    {3.7e27f, -4e-20f, -3.7e27f}, {-3.7e27f, 4e-20f, 3.7e27f}, {4e-20f, 3.7e27f, -3.7e27f},
-    {3.4e38f, 1e-30f, -3.4e38f},  {1e30f, 1e30f, 1e30f},       {1e-45f, 1e-45f, 1e-45f},
-    {1e19f, -1e-38f, 1e19f},      {20.f, 1e-40f, -20.f},       {1e15f, 1e15f, -1e-25f},
-    {3e38f, 3e38f, 3e38f}};
+const std::vector<Eigen::Vector3f>& kExtremePoints = test::extremePoints();
 
 /// A ring of points around the sensor (so the auto model is a LiDAR) and the extreme points.
 PointCloud extremeCloud() {

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "../../src/ros/server/cloud_inserter.h"
+#include "../core/extreme_points.h"
 #include "cloud_msg_builder.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/map.h"
@@ -383,11 +384,7 @@ TEST_F(CloudFaultsTest, ExtremeFinitePointsLeaveTheMapAsTheGoodPointsMakeIt) {
   // insertion (the server died the same way as `fragg_map build`). These points with the wall:
   // the cloud is inserted, every point is counted, the wall's hit cells are as the wall alone
   // makes them, no block lies beyond max range, and ~get_stats (the stats message) answers.
-  const std::vector<Eigen::Vector3f> extreme = {
-      {3.7e27f, -4e-20f, -3.7e27f}, {-3.7e27f, 4e-20f, 3.7e27f}, {4e-20f, 3.7e27f, -3.7e27f},
-      {3.4e38f, 1e-30f, -3.4e38f},  {1e30f, 1e30f, 1e30f},       {1e-45f, 1e-45f, 1e-45f},
-      {1e19f, -1e-38f, 1e19f},      {20.f, 1e-40f, -20.f},       {1e15f, 1e15f, -1e-25f},
-      {3e38f, 3e38f, 3e38f}};
+  const std::vector<Eigen::Vector3f>& extreme = fragg::test::extremePoints();
   std::vector<std::pair<fragg::VoxelKey, fragg::Cell>> wall_hits;
   {
     const SharedMap::ReadGuard state = shared_->read();
