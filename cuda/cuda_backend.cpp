@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "fragg_map/errors.h"
 #include "fragg_map/internal/cuda_backend_factory.h"
 #include "fragg_map/log.h"
 #include "pinned_allocator.h"
@@ -116,3 +117,29 @@ void CudaBackend::update(const ScanInput& scan, ScanUpdate what, const UpdateSet
 
 }  // namespace cuda
 }  // namespace fragg
+
+namespace fragg::cuda {
+
+bool CudaBackend::deviceView(const ViewScope& scope, BlockMap& blocks, uint64_t revision,
+                             DeviceLayerView* out) {
+  try {
+    if (scope.keys) {
+      cache_.ensureResident(*scope.keys, blocks);
+      for (const BlockKey& k : *scope.keys) {
+        const BlockIndex b = blocks.find(k);
+        if (b != kNoBlock && cache_.slotOf(b) < 0) return false;  // evicted again: no room
+      }
+    } else {
+      cache_.ensureResident(scope.lo, scope.hi, blocks);
+      bool host_only = false;
+      cache_.forEachHostOnlyIn(blocks, scope.lo, scope.hi, [&](BlockIndex) { host_only = true; });
+      if (host_only) return false;
+    }
+  } catch (const CudaOutOfMemory&) {
+    return false;  // the pool cannot hold the scope: the reader takes the host view
+  }
+  *out = views_.build(cache_, revision);
+  return true;
+}
+
+}  // namespace fragg::cuda

@@ -10,8 +10,7 @@
 #include "device_block_cache.h"
 #include "fragg_map/internal/backend.h"
 #include "fragg_map/internal/cpu_backend.h"
-#include "state_bits.h"
-#include "viewpoint_gains.h"
+#include "layer_view.h"
 
 namespace fragg::cuda {
 
@@ -22,21 +21,27 @@ class CudaBackend : public MapBackend {
   const char* name() const override { return "cuda"; }
   BlockCache& cache() override { return cache_; }
   bool cullsOnItsOwn() const override { return true; }
-  size_t deviceBytes() const override { return cache_.deviceBytes() + integrator_.deviceBytes(); }
+  size_t deviceBytes() const override {
+    return cache_.deviceBytes() + integrator_.deviceBytes() + views_.deviceBytes() +
+           (scratch_ ? scratch_->deviceBytes() : 0);
+  }
   size_t deviceEstimateBytes() const override;
   std::shared_ptr<ChunkAllocator> hostAllocator() const override { return host_allocator_; }
-  bool cellStateBits(const std::vector<BlockKey>& keys, const OccupancyModel& model,
-                     BlockMap& blocks, uint64_t* out) override {
-    state_bits_.compute(cache_, keys, model, blocks, out);
-    return true;
-  }
   /// On the device beside the points' upload, which the scan's prepare then reuses; false
   /// (the map gathers on the host) for a cloud prepared on the host, and when the device has
   /// no room for the points.
   bool autoSensorStats(const PointCloud& cloud, AutoSensorStats* out, bool staged_ahead) override;
-  bool viewpointGains(const GainBatch& batch, const OccupancyModel& model, BlockMap& blocks,
-                      double* out) override {
-    gains_.compute(cache_, batch, model, blocks, out);
+  /// The view over the device pool once the scope's host blocks are resident; false when the
+  /// pool cannot hold them all at once.
+  bool deviceView(const ViewScope& scope, BlockMap& blocks, uint64_t revision,
+                  DeviceLayerView* out) override;
+  DeviceScratch* deviceScratch() override {
+    if (!scratch_) scratch_ = makeDeviceScratch(device_);
+    return scratch_.get();
+  }
+  bool masksChangedSince(uint64_t revision, std::vector<BlockKey>* keys,
+                         std::vector<BlockStateMasks>* masks) override {
+    views_.masksChangedSince(cache_, revision, keys, masks);
     return true;
   }
 
@@ -57,8 +62,8 @@ class CudaBackend : public MapBackend {
   DeviceBlockCache cache_;
   CudaIntegrator integrator_;
   CpuBackend cpu_;  ///< for scans whose window would not fit
-  CellStateBits state_bits_{stream_.get()};
-  ViewpointGains gains_{stream_.get()};
+  LayerViews views_{stream_.get(), device_};
+  std::unique_ptr<DeviceScratch> scratch_;  ///< readers' buffers (planning), made when asked
   int64_t estimate_blocks_ = 0;
 };
 

@@ -20,14 +20,7 @@ set(FRAGG_CUDA_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/raycast_kernel.cu
   ${CMAKE_CURRENT_LIST_DIR}/apply_kernel.cu
   ${CMAKE_CURRENT_LIST_DIR}/residency_kernels.cu
-  ${CMAKE_CURRENT_LIST_DIR}/cuda_collision.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/collision_kernels.cu
-  ${CMAKE_CURRENT_LIST_DIR}/state_bits.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/state_bits_kernel.cu
-  ${CMAKE_CURRENT_LIST_DIR}/viewpoint_gains.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/gain_kernels.cu
+  ${CMAKE_CURRENT_LIST_DIR}/device_scratch.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/layer_view.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/layer_view_kernels.cu
 )
-# Eigen in device code (collision kernels): its defaulted special members draw warning 20012,
-# its constexpr helpers need relaxed constexpr, its nvcc pragmas are unknown to g++.
-set_source_files_properties(${CMAKE_CURRENT_LIST_DIR}/collision_kernels.cu PROPERTIES
-  COMPILE_OPTIONS "-diag-suppress=20012;--expt-relaxed-constexpr;-Xcompiler=-Wno-unknown-pragmas")

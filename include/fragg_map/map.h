@@ -26,6 +26,8 @@
 #include "fragg_map/block_map.h"
 #include "fragg_map/block_view.h"
 #include "fragg_map/cell_writer.h"
+#include "fragg_map/device_layer_view.h"
+#include "fragg_map/device_scratch.h"
 #include "fragg_map/insert_stats.h"
 #include "fragg_map/map_params.h"
 #include "fragg_map/occupancy.h"
@@ -38,7 +40,7 @@
 namespace fragg {
 
 class MapBackend;
-struct GainBatch;
+struct ViewScope;
 class Culler;
 class Pager;
 struct ScanRecord;
@@ -70,6 +72,26 @@ struct MemoryStats {
   size_t blocks = 0;
   size_t known_voxels = 0;      ///< observed cells
   size_t scan_store_bytes = 0;  ///< kept scans' points in memory
+};
+
+/// A device layer view lent by Map::deviceView (device_layer_view.h): the view and the map's
+/// view lock (one device view of a map at a time; the blocks it shows stay resident while it
+/// lives). Hold the map's read lock as long as the lease.
+class DeviceViewLease {
+ public:
+  DeviceViewLease(std::unique_lock<std::mutex> lock, const DeviceLayerView& view,
+                  DeviceScratch& scratch)
+      : lock_(std::move(lock)), view_(view), scratch_(&scratch) {}
+  /// The view: device pointers, valid while this lease lives and the map is unchanged.
+  [[nodiscard]] const DeviceLayerView& view() const { return view_; }
+  /// The map's device working memory and stream on the view's device, the lease holder's
+  /// alone while the lease lives (a reader's buffers are the map's, kept between calls).
+  [[nodiscard]] DeviceScratch& scratch() const { return *scratch_; }
+
+ private:
+  std::unique_lock<std::mutex> lock_;
+  DeviceLayerView view_;
+  DeviceScratch* scratch_;
 };
 
 class Map {
@@ -153,17 +175,22 @@ class Map {
     return blockView().changedSince(revision, what);
   }
 
-  /// Cell-state bitmaps of the blocks `keys` computed where the backend holds the blocks (CUDA:
-  /// a kernel over the device block cache; the frontier tracker uses it), 16 words per key
-  /// into `out`: 8 of free cells, then 8 of unknown cells (bit i = cell index i); a missing
-  /// block is all unknown. False (nothing written) when the backend has no such path: read
-  /// the host blocks instead.
-  bool cellStateBitsOnBackend(const std::vector<BlockKey>& keys, uint64_t* out) const;
+  /// The changed-block list (DESIGN §12): keys and current state masks of every block whose
+  /// masks changed after map revision `revision`, each once, in unspecified order, without
+  /// reading a cell: from the host change log and, where the backend keeps blocks on a device,
+  /// a compaction over its pool (no write-back). Blocks erased since are not listed. False
+  /// (nothing written) when the log no longer reaches back that far: walk the map instead.
+  [[nodiscard]] bool masksChangedSince(uint64_t revision, std::vector<BlockKey>* keys,
+                                       std::vector<BlockStateMasks>* masks) const;
 
-  /// Viewpoint gains (fragg_map_planning's viewpointGainsBits) computed where the backend holds
-  /// the blocks (CUDA: one thread per ray over the device block cache), one per viewpoint into
-  /// `out`. False (nothing written) when the backend has no such path.
-  bool viewpointGainsOnBackend(const GainBatch& batch, double* out) const;
+  /// The read-only device view of the layers (device_layer_view.h) holding every existing
+  /// block of `keys`, for readers with kernels (planning's CUDA part); nullptr when the backend
+  /// keeps no layers on a device (CPU) or cannot hold those blocks at once: read the host view
+  /// (blockView) instead. Blocks the view lacks have no cell observed. Hold the map's read lock.
+  [[nodiscard]] std::unique_ptr<DeviceViewLease> deviceView(const std::vector<BlockKey>& keys) const;
+  /// The same for every existing block whose key lies in [lo, hi] (inclusive).
+  [[nodiscard]] std::unique_ptr<DeviceViewLease> deviceView(const BlockKey& lo,
+                                                            const BlockKey& hi) const;
 
   // Named edits besides insertion and correction.
   /// Makes every cell in the box unknown (block-granular memory release where possible).
@@ -355,6 +382,10 @@ class Map {
   mutable BlockMap blocks_;
   /// Serialises that write-back between concurrent readers (a pointer: Map is movable).
   std::unique_ptr<std::mutex> sync_mutex_;
+  /// Held by a DeviceViewLease: one device view at a time (its blocks stay resident).
+  std::unique_ptr<std::mutex> view_mutex_;
+  /// deviceView() with its scope.
+  std::unique_ptr<DeviceViewLease> deviceViewOf(const ViewScope& scope) const;
   std::unique_ptr<Culler> culler_;
   uint64_t revision_ = 0;
   uint64_t view_epoch_ = 0;

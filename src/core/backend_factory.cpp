@@ -2,6 +2,7 @@
 
 #include <atomic>
 
+#include "fragg_map/device_scratch.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/cpu_backend.h"
 #include "fragg_map/log.h"
@@ -17,6 +18,10 @@ bool builtWithCuda() { return FRAGG_HAVE_CUDA != 0; }
 std::string cudaDeviceName(int, std::string* why_not) {
   if (why_not) *why_not = "built without CUDA";
   return "";
+}
+
+std::unique_ptr<DeviceScratch> makeDeviceScratch(int) {
+  throw InvalidArgument("device scratch memory: built without CUDA");
 }
 #endif
 

@@ -93,6 +93,7 @@ Map::Map(const MapParams& params)
   backend_reason_ = std::move(choice.reason);
   blocks_ = BlockMap(backend_->hostAllocator());
   sync_mutex_ = std::make_unique<std::mutex>();
+  view_mutex_ = std::make_unique<std::mutex>();
   culler_ = std::make_unique<Culler>(params_.culling);
   scan_store_ = std::make_unique<ScanStore>(params_.scans);
 }
@@ -107,6 +108,7 @@ Map& Map::operator=(Map&& other) noexcept {
   backend_reason_ = std::move(other.backend_reason_);
   blocks_ = std::move(other.blocks_);
   sync_mutex_ = std::move(other.sync_mutex_);
+  view_mutex_ = std::move(other.view_mutex_);
   culler_ = std::move(other.culler_);
   revision_ = other.revision_;
   view_epoch_ = other.view_epoch_;
@@ -550,14 +552,55 @@ const BlockMap& Map::hostBlocks() const {
 
 const char* Map::backendName() const { return backend_->name(); }
 
-bool Map::viewpointGainsOnBackend(const GainBatch& batch, double* out) const {
+bool Map::masksChangedSince(uint64_t revision, std::vector<BlockKey>* keys,
+                            std::vector<BlockStateMasks>* masks) const {
   std::lock_guard<std::mutex> lock(*sync_mutex_);
-  return backend_->viewpointGains(batch, model_, blocks_, out);
+  std::vector<BlockKey> host_keys;
+  if (!blocks_.masksChangedSince(revision, &host_keys)) return false;
+  std::vector<BlockKey> device_keys;
+  std::vector<BlockStateMasks> device_masks;
+  backend_->masksChangedSince(revision, &device_keys, &device_masks);
+  // The backend's copies are the newer ones; the host's serve the blocks it holds no longer.
+  *keys = std::move(device_keys);
+  *masks = std::move(device_masks);
+  BlockKeyTable listed;
+  listed.reserve(keys->size() + host_keys.size());
+  for (uint32_t i = 0; i < keys->size(); ++i) listed.insert((*keys)[i], i);
+  for (const BlockKey& k : host_keys) {
+    if (listed.find(k) != BlockKeyTable::kNone) continue;
+    const BlockIndex b = blocks_.find(k);
+    if (b == kNoBlock) continue;
+    listed.insert(k, static_cast<uint32_t>(keys->size()));
+    keys->push_back(k);
+    masks->push_back(blocks_.masks(b));
+  }
+  return true;
 }
 
-bool Map::cellStateBitsOnBackend(const std::vector<BlockKey>& keys, uint64_t* out) const {
-  std::lock_guard<std::mutex> lock(*sync_mutex_);
-  return backend_->cellStateBits(keys, model_, blocks_, out);
+std::unique_ptr<DeviceViewLease> Map::deviceView(const std::vector<BlockKey>& keys) const {
+  ViewScope scope;
+  scope.keys = &keys;
+  return deviceViewOf(scope);
+}
+
+std::unique_ptr<DeviceViewLease> Map::deviceView(const BlockKey& lo, const BlockKey& hi) const {
+  ViewScope scope;
+  scope.lo = lo;
+  scope.hi = hi;
+  return deviceViewOf(scope);
+}
+
+std::unique_ptr<DeviceViewLease> Map::deviceViewOf(const ViewScope& scope) const {
+  std::unique_lock<std::mutex> view_lock(*view_mutex_);
+  DeviceLayerView view;
+  DeviceScratch* scratch = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(*sync_mutex_);
+    if (!backend_->deviceView(scope, blocks_, revision_, &view)) return nullptr;
+    scratch = backend_->deviceScratch();
+  }
+  if (!scratch) return nullptr;
+  return std::make_unique<DeviceViewLease>(std::move(view_lock), view, *scratch);
 }
 
 size_t Map::knownVoxelCount() const {

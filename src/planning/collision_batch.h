@@ -6,7 +6,7 @@
 #include <Eigen/Geometry>
 #include <vector>
 
-#include "fragg_map/internal/cuda_collision.h"
+#include "cuda_collision.h"
 #include "fragg_map/map.h"
 #include "fragg_map/planning/collision_check.h"
 

@@ -71,66 +71,45 @@ CollisionResult resultOf(const CollisionAnswer& a) {
   return r;
 }
 
-// One device checker per process, its buffers kept between batches; batches take turns.
-std::mutex cuda_mutex;
-std::unique_ptr<CudaCollision> cuda_checker;
-
-// Frees the checker's device buffers at exit, before the CUDA runtime's own teardown: a static
-// destructor would run after it (the runtime registers its exit handler when first used, after
-// this file's statics were made), its frees would fail and the buffers count as leaked
-// (compute-sanitizer's leak check found them). Handlers run in reverse order of registration,
-// so this one, registered after the checker's first CUDA call, runs first.
-void releaseCudaCheckerAtExit() {
-  std::lock_guard<std::mutex> lock(cuda_mutex);
-  cuda_checker.reset();
-}
-
-std::vector<CollisionResult> checkOnCuda(const Map& map, const ObstacleIndex& index,
+// The batch on CUDA over `obstacles`, in `scratch` (its device, stream and buffers).
+std::vector<CollisionResult> checkOnCuda(const Map& map, DeviceScratch& scratch,
+                                         const ObstacleSource& obstacles,
                                          const CollisionShape& shape,
                                          const std::vector<Eigen::Isometry3d>& T_map_shape,
                                          const CollisionOptions& options) {
-  ObstacleMasksHost masks;
-  masks.keys = &index.tableKeys();
-  masks.slots = &index.tableSlots();
-  masks.masks = &index.masks();
-  masks.default_word = index.defaultWord();
+  const std::unique_ptr<CudaCollision> checker = makeCudaCollision(scratch);
   std::vector<CollisionAnswer> answers;
-  {
-    std::lock_guard<std::mutex> lock(cuda_mutex);
-    if (!cuda_checker) {
-      cuda_checker = makeCudaCollision(0);
-      static const bool registered = std::atexit(releaseCudaCheckerAtExit) == 0;
-      (void)registered;
-    }
-    if (shape.kind() == ShapeKind::kMesh) {
-      answers =
-          cuda_checker->checkMesh(masks, meshPoses(T_map_shape), meshCheck(map, shape, options));
-    } else {
-      std::vector<PrimitivePose> poses(T_map_shape.size());
-      for (size_t i = 0; i < poses.size(); ++i)
-        poses[i] = preparePrimitive(map, shape, T_map_shape[i], options);
-      answers = cuda_checker->checkPrimitives(masks, poses, map.resolution(),
-                                              0.5 * map.resolution() - kTouchEpsilon_m,
-                                              options.count_cells);
-    }
+  if (shape.kind() == ShapeKind::kMesh) {
+    answers = checker->checkMesh(obstacles, meshPoses(T_map_shape), meshCheck(map, shape, options));
+  } else {
+    std::vector<PrimitivePose> poses(T_map_shape.size());
+    for (size_t i = 0; i < poses.size(); ++i)
+      poses[i] = preparePrimitive(map, shape, T_map_shape[i], options);
+    answers = checker->checkPrimitives(obstacles, poses, map.resolution(),
+                                       0.5 * map.resolution() - kTouchEpsilon_m,
+                                       options.count_cells);
   }
   std::vector<CollisionResult> results(answers.size());
   for (size_t i = 0; i < answers.size(); ++i) results[i] = resultOf(answers[i]);
   return results;
 }
-#endif
 
-std::vector<CollisionResult> checkWithIndex(const Map& map, const ObstacleIndex& index,
-                                            const CollisionShape& shape,
-                                            const std::vector<Eigen::Isometry3d>& T_map_shape,
-                                            const CollisionOptions& options, Backend use) {
-#if FRAGG_HAVE_CUDA
-  if (use == Backend::kCuda) return checkOnCuda(map, index, shape, T_map_shape, options);
-#else
-  (void)use;  // kCuda cannot be resolved without CUDA
-#endif
-  return checkOnCpu(map, index, shape, T_map_shape, options);
+// A host obstacle index on CUDA: uploaded into `scratch`.
+std::vector<CollisionResult> checkIndexOnCuda(const Map& map, DeviceScratch& scratch,
+                                              const ObstacleIndex& index,
+                                              const CollisionShape& shape,
+                                              const std::vector<Eigen::Isometry3d>& T_map_shape,
+                                              const CollisionOptions& options) {
+  ObstacleMasksHost masks;
+  masks.keys = &index.tableKeys();
+  masks.slots = &index.tableSlots();
+  masks.masks = &index.masks();
+  masks.default_word = index.defaultWord();
+  ObstacleSource source;
+  source.host = &masks;
+  return checkOnCuda(map, scratch, source, shape, T_map_shape, options);
 }
+#endif
 
 std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape& shape,
                                             const std::vector<Eigen::Isometry3d>& T_map_shape,
@@ -139,9 +118,27 @@ std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape
   if (T_map_shape.empty()) return {};
   BlockKey lo, hi;
   batchBlockRange(map, shape, T_map_shape, options, &lo, &hi);
+#if FRAGG_HAVE_CUDA
+  if (use == Backend::kCuda) {
+    // A map keeping its layers on the device: the kernels read its state masks in place, with
+    // the map's own buffers (nothing classified or uploaded but the poses).
+    if (const std::unique_ptr<DeviceViewLease> lease = map.deviceView(lo, hi)) {
+      ObstacleSource source;
+      source.device = layerObstacles(lease->view(), options.unknown_is_occupied);
+      return checkOnCuda(map, lease->scratch(), source, shape, T_map_shape, options);
+    }
+    // Otherwise its host masks, indexed and uploaded to device 0 for this batch.
+    const BlockView view = map.blockView();
+    const ObstacleIndex index(map, view, lo, hi, options.unknown_is_occupied, options.threads);
+    const std::unique_ptr<DeviceScratch> scratch = makeDeviceScratch(0);
+    return checkIndexOnCuda(map, *scratch, index, shape, T_map_shape, options);
+  }
+#else
+  (void)use;  // kCuda cannot be resolved without CUDA
+#endif
   const BlockView view = map.blockView();
   const ObstacleIndex index(map, view, lo, hi, options.unknown_is_occupied, options.threads);
-  return checkWithIndex(map, index, shape, T_map_shape, options, use);
+  return checkOnCpu(map, index, shape, T_map_shape, options);
 }
 
 }  // namespace
@@ -238,7 +235,18 @@ std::vector<CollisionResult> checkPoses(const PreparedMap& prepared, const Colli
     throw InvalidArgument("the map changed since it was prepared for collision checks");
   const Backend use = resolveCollisionBackend(backend);
   if (T_map_shape.empty()) return {};
-  return checkWithIndex(prepared.map(), *prepared.index_, shape, T_map_shape, options, use);
+#if FRAGG_HAVE_CUDA
+  if (use == Backend::kCuda) {
+    // The prepared index is uploaded into the prepared map's own scratch (made once).
+    std::lock_guard<std::mutex> lock(*prepared.scratch_mutex_);
+    if (!prepared.scratch_) prepared.scratch_ = makeDeviceScratch(0);
+    return checkIndexOnCuda(prepared.map(), *prepared.scratch_, *prepared.index_, shape,
+                            T_map_shape, options);
+  }
+#else
+  (void)use;
+#endif
+  return checkOnCpu(prepared.map(), *prepared.index_, shape, T_map_shape, options);
 }
 
 }  // namespace fragg::planning

@@ -12,6 +12,7 @@
 #include "fragg_map/hd.h"
 #include "fragg_map/key.h"
 #include "fragg_map/occupancy.h"
+#include "fragg_map/state_masks.h"
 
 namespace fragg::planning {
 
@@ -54,6 +55,16 @@ FRAGG_HD StateMasks stateMasksOf(const OccupancyModel& model, const Block* block
   return m;
 }
 
+/// The free and unknown masks of a block's state masks (the map's layer, state_masks.h).
+FRAGG_HD StateMasks statesOf(const BlockStateMasks& m) {
+  StateMasks s;
+  for (int w = 0; w < kMaskWords; ++w) {
+    s.free[w] = m.free[w];
+    s.unknown[w] = m.unknownWord(w);
+  }
+  return s;
+}
+
 FRAGG_HD bool operator==(const StateMasks& a, const StateMasks& b) {
   for (int w = 0; w < kMaskWords; ++w)
     if (a.free[w] != b.free[w] || a.unknown[w] != b.unknown[w]) return false;
@@ -84,6 +95,37 @@ FRAGG_HD uint64_t dilateY(uint64_t c, uint64_t below, uint64_t above) {
 }
 
 }  // namespace mask_detail
+
+/// Which of the 27 blocks around a block (bit (dz + 1) * 9 + (dy + 1) * 3 + (dx + 1), 13: the
+/// block itself) may see their frontier cells change when its states go from `old` (nullptr:
+/// no block, all unknown) to `fresh`: the block itself whenever a state changed, a neighbour
+/// only when an unknown cell came or went on the face, edge or corner they share (a frontier
+/// cell looks one cell across a border, at unknown cells only).
+FRAGG_HD uint32_t neighboursReached(const StateMasks* old, const StateMasks& fresh) {
+  using namespace mask_detail;
+  uint64_t diff[kMaskWords], any_diff = 0, any_free = 0;
+  for (int w = 0; w < kMaskWords; ++w) {
+    diff[w] = (old ? old->unknown[w] : ~uint64_t(0)) ^ fresh.unknown[w];
+    any_diff |= diff[w];
+    any_free |= (old ? old->free[w] : 0) ^ fresh.free[w];
+  }
+  if (!any_diff) return any_free ? 1u << 13 : 0u;
+  constexpr uint64_t kRow0 = 0xFFULL, kRow7 = kRow0 << 56;
+  uint32_t bits = 0;
+  for (int dz = -1; dz <= 1; ++dz) {
+    const int w0 = dz > 0 ? kMaskWords - 1 : 0, w1 = dz < 0 ? 0 : kMaskWords - 1;
+    for (int dy = -1; dy <= 1; ++dy) {
+      const uint64_t ym = dy < 0 ? kRow0 : (dy > 0 ? kRow7 : ~uint64_t(0));
+      for (int dx = -1; dx <= 1; ++dx) {
+        const uint64_t xm = dx < 0 ? kColumn0 : (dx > 0 ? kColumn7 : ~uint64_t(0));
+        uint64_t hit = 0;
+        for (int w = w0; w <= w1; ++w) hit |= diff[w] & xm & ym;
+        if (hit) bits |= 1u << ((dz + 1) * 9 + (dy + 1) * 3 + (dx + 1));
+      }
+    }
+  }
+  return bits;
+}
 
 /// Frontier cells of the centre block given the state masks of the 27 blocks around it,
 /// index (dz + 1) * 9 + (dy + 1) * 3 + (dx + 1) (13: the centre); nullptr = missing block

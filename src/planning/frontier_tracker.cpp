@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
+#include <string>
 
 #include "fragg_map/block_key_table.h"
 #include "fragg_map/errors.h"
@@ -39,7 +41,6 @@ struct FrontierTracker::State {
   uint64_t epoch = 0;  ///< Map::viewEpoch() at the last update
   uint64_t total = 0;
   uint32_t update_number = 0;
-  bool on_device = false;  ///< the last states were read by the map's backend
   std::vector<BlockRecord> records;
   BlockKeyTable index;  ///< key -> records index
 
@@ -64,7 +65,7 @@ struct FrontierTracker::State {
   }
 
   /// Recomputes the frontier bits of records `which` (parallel) and the total.
-  void examine(const Map& map, const BlockView& view, const std::vector<uint32_t>& which) {
+  void examine(const Map& map, const BlockView* view, const std::vector<uint32_t>& which) {
     const int64_t n = static_cast<int64_t>(which.size());
     std::vector<uint32_t> old_counts(which.size());
     for (int64_t i = 0; i < n; ++i) old_counts[i] = records[which[i]].count;
@@ -87,28 +88,17 @@ struct FrontierTracker::State {
     for (int64_t i = 0; i < n; ++i) total = total - old_counts[i] + records[which[i]].count;
   }
 
-  void applyFilter(const Map& map, const BlockView& view, BlockRecord& r) const {
+  /// `view`: the host view, needed by the obstacle distance filter only.
+  void applyFilter(const Map& map, const BlockView* view, BlockRecord& r) const {
+    static const BlockMap kNoBlocks;  // the box and height tests read no block
+    const BlockView none(kNoBlocks);
+    const BlockView& cells = view ? *view : none;
     for (int w = 0; w < kMaskWords; ++w)
       for (uint64_t bits = r.frontier.words[w]; bits; bits &= bits - 1) {
         const int b = __builtin_ctzll(bits);
-        if (!filter.keeps(map, view, voxelKeyOf(r.key, w * 64 + b)))
+        if (!filter.keeps(map, cells, voxelKeyOf(r.key, w * 64 + b)))
           r.frontier.words[w] &= ~(uint64_t(1) << b);
       }
-  }
-
-  /// State masks of `keys` into `out` (resized): on the map's backend where it has a path
-  /// (CUDA: over its block cache), else from the host blocks (parallel).
-  void readStates(const Map& map, const BlockView& view, const std::vector<BlockKey>& keys,
-                  std::vector<StateMasks>& out) {
-    out.resize(keys.size());
-    static_assert(sizeof(StateMasks) == 16 * sizeof(uint64_t), "16 words per block");
-    on_device =
-        !keys.empty() && map.cellStateBitsOnBackend(keys, reinterpret_cast<uint64_t*>(out.data()));
-    if (on_device || keys.empty()) return;
-    const int64_t n = static_cast<int64_t>(keys.size());
-    const OccupancyModel& model = map.model();
-#pragma omp parallel for schedule(static) num_threads(threadCount())
-    for (int64_t i = 0; i < n; ++i) out[i] = stateMasksOf(model, view.findBlock(keys[i]));
   }
 
   /// Every block read again; returns the number of records examined.
@@ -117,14 +107,12 @@ struct FrontierTracker::State {
     std::vector<BlockKey> keys;
     keys.reserve(view.size());
     view.forEach([&](const BlockKey& key, const Block&) { keys.push_back(key); });
-    std::vector<StateMasks> states;
-    readStates(map, view, keys, states);
     const int64_t n = static_cast<int64_t>(keys.size());
     records.resize(keys.size());
 #pragma omp parallel for schedule(static) num_threads(threadCount())
     for (int64_t i = 0; i < n; ++i) {
       records[i].key = keys[i];
-      records[i].state = states[i];
+      records[i].state = statesOf(*view.findMasks(keys[i]));
     }
     index.reserve(keys.size());
     std::vector<uint32_t> which;
@@ -133,46 +121,52 @@ struct FrontierTracker::State {
       index.insert(records[i].key, i);
       if (inRange(records[i].key)) which.push_back(i);
     }
-    examine(map, view, which);
+    examine(map, &view, which);
     return which.size();
   }
 
-  /// The changed blocks read again, their neighbourhoods examined where states changed.
-  /// Returns {changed blocks, records examined}.
-  std::pair<uint64_t, uint64_t> incremental(const Map& map, const BlockView& view,
-                                            FrontierUpdateStats& stats) {
+  /// The blocks whose state masks changed (the map's changed-block list: no cell is read), and
+  /// the neighbourhoods their changes reach examined again. False when the list no longer
+  /// reaches back to the last update (the caller recomputes in full).
+  bool incremental(const Map& map, const BlockView* view, FrontierUpdateStats& stats) {
     auto t0 = std::chrono::steady_clock::now();
-    const std::vector<BlockKey> changed = view.changedSince(revision, BlockChange::kAny);
+    std::vector<BlockKey> changed;
+    std::vector<BlockStateMasks> masks;
+    if (!map.masksChangedSince(revision, &changed, &masks)) return false;
     const int64_t n = static_cast<int64_t>(changed.size());
-    std::vector<StateMasks> fresh;
-    readStates(map, view, changed, fresh);
+    stats.blocks_changed = changed.size();
     stats.states_seconds = secondsSince(t0);
     t0 = std::chrono::steady_clock::now();
-    // Compare in parallel (each changed key has its own record), then add the new blocks.
+    // Compare in parallel (each changed key has its own record), then add the new blocks. A
+    // block's unknown cells decide its neighbours' frontier cells across the faces, edges and
+    // corners they share, so only the neighbours whose side saw an unknown cell come or go are
+    // examined again (`reach_bits`, one bit per neighbour); its free cells only its own.
     std::vector<uint32_t> found(changed.size());
-    std::vector<uint8_t> moved_flag(changed.size());
+    std::vector<uint32_t> reach_bits(changed.size());
 #pragma omp parallel for schedule(static) num_threads(threadCount())
     for (int64_t i = 0; i < n; ++i) {
+      const StateMasks fresh = statesOf(masks[i]);
       const uint32_t k = index.find(changed[i]);
       found[i] = k;
-      moved_flag[i] = k == BlockKeyTable::kNone || !(records[k].state == fresh[i]);
-      if (k != BlockKeyTable::kNone && moved_flag[i]) records[k].state = fresh[i];
+      const StateMasks* old = k == BlockKeyTable::kNone ? nullptr : &records[k].state;
+      reach_bits[i] = old && *old == fresh ? 0 : neighboursReached(old, fresh);
+      if (old && reach_bits[i]) records[k].state = fresh;
     }
-    std::vector<BlockKey> moved;  // blocks whose cell states changed
+    std::vector<std::pair<BlockKey, uint32_t>> moved;  // blocks whose cell states changed
     for (int64_t i = 0; i < n; ++i) {
-      if (!moved_flag[i]) continue;
+      if (!reach_bits[i]) continue;
       if (found[i] == BlockKeyTable::kNone) {
         index.insert(changed[i], static_cast<uint32_t>(records.size()));
-        records.push_back(BlockRecord{changed[i], fresh[i], FrontierBits{}, 0, 0});
+        records.push_back(BlockRecord{changed[i], statesOf(masks[i]), FrontierBits{}, 0, 0});
       }
-      moved.push_back(changed[i]);
+      moved.emplace_back(changed[i], reach_bits[i]);
     }
-    // A block's states decide the frontier cells of its own and its neighbours' borders, and
-    // with the obstacle distance filter those of every block within that distance. Marked in
-    // parallel: the first thread to stamp a record lists it.
+    // With the obstacle distance filter a block's occupied cells decide the frontier cells of
+    // every block within that distance. Marked in parallel: the first thread to stamp a record
+    // lists it.
     const int reach_cells =
         static_cast<int>(std::ceil(filter.min_obstacle_distance_m / map.resolution()));
-    const int reach = 1 + (reach_cells + kBlockMask) / kBlockSize;
+    const int reach = reach_cells > 0 ? 1 + (reach_cells + kBlockMask) / kBlockSize : 1;
     if (++update_number == 0) {
       for (BlockRecord& r : records) r.mark = 0;
       update_number = 1;
@@ -184,10 +178,12 @@ struct FrontierTracker::State {
       std::vector<uint32_t> mine;
 #pragma omp for schedule(dynamic, 256) nowait
       for (int64_t i = 0; i < n_moved; ++i) {
-        const BlockKey& b = moved[i];
+        const BlockKey& b = moved[i].first;
+        const uint32_t bits = reach > 1 ? ~0u : moved[i].second;
         for (int dz = -reach; dz <= reach; ++dz)
           for (int dy = -reach; dy <= reach; ++dy)
             for (int dx = -reach; dx <= reach; ++dx) {
+              if (reach == 1 && !(bits >> ((dz + 1) * 9 + (dy + 1) * 3 + (dx + 1)) & 1)) continue;
               const BlockKey nb{b.x + dx, b.y + dy, b.z + dz};
               const uint32_t k = index.find(nb);
               if (k == BlockKeyTable::kNone) continue;
@@ -204,7 +200,8 @@ struct FrontierTracker::State {
     t0 = std::chrono::steady_clock::now();
     examine(map, view, which);
     stats.examine_seconds = secondsSince(t0);
-    return {changed.size(), which.size()};
+    stats.blocks_examined = which.size();
+    return true;
   }
 };
 
@@ -230,20 +227,24 @@ FrontierUpdateStats FrontierTracker::update(const Map& map) {
   const auto t0 = std::chrono::steady_clock::now();
   State& s = *state_;
   FrontierUpdateStats stats;
-  const BlockView view = map.blockView();
-  s.on_device = false;
   if (s.filter.use_box) {
     s.box_lo = blockKeyOf(map.keyOf(s.filter.box_min_m));
     s.box_hi = blockKeyOf(map.keyOf(s.filter.box_max_m));
   }
+  // The host view syncs a device backend's blocks into the host map: taken only for a full
+  // recompute and for the obstacle distance filter, which reads cells.
+  std::optional<BlockView> view;
+  if (s.filter.min_obstacle_distance_m > 0.0) view.emplace(map.blockView());
   stats.full = !s.valid || map.viewEpoch() != s.epoch || map.revision() < s.revision;
-  if (stats.full) {
-    stats.blocks_examined = s.full(map, view);
-    stats.blocks_changed = view.size();
-  } else if (map.revision() != s.revision) {
-    std::tie(stats.blocks_changed, stats.blocks_examined) = s.incremental(map, view, stats);
+  if (!stats.full && map.revision() != s.revision) {
+    stats.full = !s.incremental(map, view ? &*view : nullptr, stats);
+    stats.states_on_device = !stats.full && std::string(map.backendName()) == "cuda";
   }
-  stats.states_on_device = s.on_device;
+  if (stats.full) {
+    if (!view) view.emplace(map.blockView());
+    stats.blocks_examined = s.full(map, *view);
+    stats.blocks_changed = view->size();
+  }
   s.valid = true;
   s.revision = map.revision();
   s.epoch = map.viewEpoch();

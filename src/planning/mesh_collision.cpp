@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "fragg_map/geometry/cube_overlap.h"
-#include "fragg_map/internal/collision_pose.h"
+#include "collision_pose.h"
 
 namespace fragg::planning {
 

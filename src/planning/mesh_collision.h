@@ -4,7 +4,7 @@
 
 #include <Eigen/Geometry>
 
-#include "fragg_map/internal/obstacle_masks.h"
+#include "obstacle_masks.h"
 #include "fragg_map/map.h"
 #include "fragg_map/planning/collision_check.h"
 

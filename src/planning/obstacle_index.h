@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "fragg_map/block_view.h"
-#include "fragg_map/internal/obstacle_masks.h"
+#include "obstacle_masks.h"
 #include "fragg_map/map.h"
 
 namespace fragg::planning {

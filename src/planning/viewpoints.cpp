@@ -9,7 +9,10 @@
 #include <unordered_set>
 
 #include "fragg_map/errors.h"
-#include "fragg_map/internal/gain_walk.h"
+#include "gain_walk.h"
+#if FRAGG_HAVE_CUDA
+#include "cuda/viewpoint_gains.h"
+#endif
 #include "fragg_map/internal/thread_count.h"
 #include "fragg_map/log.h"
 #include "fragg_map/planning/collision_check.h"
@@ -220,9 +223,9 @@ double viewpointGainBits(const Map& map, const BlockView& view, const Eigen::Vec
 
 namespace {
 
-// The gains on the map's backend (CUDA: over its block cache). False: walk the host blocks.
-// Backend::kCuda insists (a CPU map or a device error throws); kAuto falls back with one
-// log line when the device cannot take the batch.
+// The gains on the map's device layer view (a map on the CUDA backend). False: walk the host
+// blocks. Backend::kCuda insists (a CPU map or a device error throws); kAuto falls back with
+// one log line when the device cannot take the batch.
 bool gainsOnBackend(const Map& map, const std::vector<Eigen::Vector3d>& positions_m,
                     const std::vector<double>& yaws_rad, const std::vector<Eigen::Vector3d>& rays,
                     double max_range_m, Backend backend, std::vector<double>& gains) {
@@ -245,7 +248,17 @@ bool gainsOnBackend(const Map& map, const std::vector<Eigen::Vector3d>& position
     for (int a = 0; a < 3; ++a) batch.rays_sensor.push_back(r[a]);
   batch.length_v = max_range_m / res;
   try {
-    return map.viewpointGainsOnBackend(batch, gains.data());
+#if FRAGG_HAVE_CUDA
+    BlockKey lo, hi;
+    gainReach(batch, &lo, &hi);
+    const std::unique_ptr<DeviceViewLease> lease = map.deviceView(lo, hi);
+    if (!lease)
+      throw CudaOutOfMemory("the device cannot hold every block the viewpoints' rays reach");
+    viewpointGainsOnDevice(lease->view(), lease->scratch(), batch, map.model(), gains.data());
+    return true;
+#else
+    throw InvalidArgument("viewpoint gains on CUDA: built without CUDA");
+#endif
   } catch (const std::exception& e) {
     if (backend == Backend::kCuda) throw;
     logMessage(LogLevel::kWarning, fmt::format("viewpoint gains: on the CPU ({})", e.what()));

@@ -1,7 +1,8 @@
 // The backend interface (DESIGN §11): a backend integrates or removes a prepared scan, and
 // keeps a block cache, the memory it works in (the CPU backend works on the host map itself;
 // the CUDA backend keeps a device copy of the blocks it needs, written back on demand).
-// Out-of-core paging sits under the cache; planning kernels (frontiers, collision) call it.
+// Out-of-core paging sits under the cache. Readers reach the layers through views
+// (BlockView on the host, DeviceLayerView on a device), never through per-product calls.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -15,7 +16,8 @@
 #include "fragg_map/frustum.h"
 #include "fragg_map/insert_stats.h"
 #include "fragg_map/internal/auto_sensor_stats.h"
-#include "fragg_map/internal/gain_walk.h"
+#include "fragg_map/device_layer_view.h"
+#include "fragg_map/device_scratch.h"
 #include "fragg_map/map_params.h"
 #include "fragg_map/occupancy.h"
 #include "fragg_map/point_cloud.h"
@@ -122,6 +124,12 @@ struct UpdateSettings {
   bool stage_next_auto_stats = false;
 };
 
+/// Which blocks a device view must hold: those of `keys` when set, else those in [lo, hi].
+struct ViewScope {
+  const std::vector<BlockKey>* keys = nullptr;
+  BlockKey lo, hi;  ///< inclusive
+};
+
 class MapBackend {
  public:
   virtual ~MapBackend() = default;
@@ -153,21 +161,27 @@ class MapBackend {
   virtual size_t deviceBytes() const { return cache().deviceBytes(); }
   /// The paper's formula (1): the sensor's visible volume in blocks, as device bytes.
   virtual size_t deviceEstimateBytes() const { return 0; }
-  /// Cell-state bitmaps of the blocks `keys` where the backend holds them (the CUDA backend: a
-  /// kernel over its block cache), 16 words per key into `out`: 8 words of free cells, then 8
-  /// of unknown cells, bit i of the 512 = cell index i; a missing block is all unknown. False
-  /// when the backend has nothing faster than reading the host blocks (the caller does that).
-  virtual bool cellStateBits(const std::vector<BlockKey>& keys, const OccupancyModel& model,
-                             BlockMap& blocks, uint64_t* out) {
-    (void)keys, (void)model, (void)blocks, (void)out;
+  /// Readers' access to the layers where the backend keeps them on a device (DESIGN §12): the
+  /// read-only view over its device memory (device_layer_view.h), built after every existing
+  /// host block of `scope` was made resident, showing map revision `revision`. False when the
+  /// backend keeps no layers on a device (CPU) or cannot hold those blocks at once: the reader
+  /// uses the host view (BlockView) instead. Not per product: every planning product and output
+  /// reads the same view.
+  virtual bool deviceView(const ViewScope& scope, BlockMap& blocks, uint64_t revision,
+                          DeviceLayerView* out) {
+    (void)scope, (void)blocks, (void)revision, (void)out;
     return false;
   }
-  /// Gains of a batch of viewpoints (internal/gain_walk.h) where the backend holds the blocks
-  /// (CUDA: a kernel over its block cache), one per viewpoint into `out`. False when the
-  /// backend has no such path (the caller walks the host blocks).
-  virtual bool viewpointGains(const GainBatch& batch, const OccupancyModel& model, BlockMap& blocks,
-                              double* out) {
-    (void)batch, (void)model, (void)blocks, (void)out;
+  /// Device working memory lent with the backend's device views (nullptr when it has none):
+  /// readers' buffers kept per map, not per process.
+  virtual DeviceScratch* deviceScratch() { return nullptr; }
+  /// The changed-block list of the backend's own memory: keys and state masks of the blocks it
+  /// holds whose masks changed after `revision` and that the host map may not show yet (CUDA: a
+  /// compaction over the device pool, no write-back of cells). False when its memory is the
+  /// host map (CPU): the host change log then says everything.
+  virtual bool masksChangedSince(uint64_t revision, std::vector<BlockKey>* keys,
+                                 std::vector<BlockStateMasks>* masks) {
+    (void)revision, (void)keys, (void)masks;
     return false;
   }
   /// The statistics an `auto` sensor model is resolved from (internal/auto_sensor.h) where the

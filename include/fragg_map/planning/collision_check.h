@@ -1,8 +1,9 @@
 // Collision checks of a shape against a map: one pose, a batch of poses and a path
 // (planning/path_check.h), on the CPU (OpenMP threads) or the GPU (CUDA builds), with identical
 // answers. A batch classifies the cells of the blocks its poses reach once (obstacle masks);
-// the CUDA checker uploads those masks and runs one thread a pose (box, sphere, capsule) or one
-// thread a candidate cell (mesh).
+// on CUDA the kernels read the map's state masks in place through its device layer view (a map
+// on the CUDA backend) or an uploaded index (a map on the CPU backend, a prepared map), one
+// thread a pose (box, sphere, capsule) or one thread a candidate cell (mesh).
 //
 // Semantics. A pose collides when some occupied cell's cube overlaps the shape with positive
 // volume: the shape must reach more than kTouchEpsilon_m into the cube (the cube shrunk by
@@ -22,10 +23,12 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include "fragg_map/key.h"
+#include "fragg_map/device_scratch.h"
 #include "fragg_map/map.h"
 #include "fragg_map/map_params.h"
 #include "fragg_map/planning/collision_shape.h"
@@ -106,6 +109,9 @@ class PreparedMap {
   uint64_t revision_;
   bool unknown_is_occupied_;
   std::shared_ptr<const ObstacleIndex> index_;
+  /// CUDA checks: the index's device copy and buffers, made on the first such check.
+  mutable std::shared_ptr<DeviceScratch> scratch_;
+  std::shared_ptr<std::mutex> scratch_mutex_ = std::make_shared<std::mutex>();
 };
 
 /// checkPoses over a prepared map (options.unknown_is_occupied must match it).

@@ -1,45 +1,10 @@
-// The block table over the resident pool and the gain walk (one thread per viewpoint and ray).
+// The gain walk over the map's device layer view (one thread per viewpoint and ray).
 #include "cuda_check.h"
 #include "gain_kernels.h"
 
 namespace fragg::cuda {
 
 namespace {
-
-__device__ __forceinline__ unsigned long long packBlockKey(const BlockKey& k) {
-  return (static_cast<unsigned long long>(static_cast<uint32_t>(k.x)) & 0x1fffffULL) |
-         ((static_cast<unsigned long long>(static_cast<uint32_t>(k.y)) & 0x1fffffULL) << 21) |
-         ((static_cast<unsigned long long>(static_cast<uint32_t>(k.z)) & 0x1fffffULL) << 42);
-}
-
-__device__ __forceinline__ uint64_t slotHash(unsigned long long key) {
-  key ^= key >> 31;
-  key *= 0x9e3779b97f4a7c15ULL;
-  return key ^ (key >> 29);
-}
-
-__global__ void blockTableBuildKernel(SlotArrays slots, unsigned long long* keys,
-                                      int32_t* table_slots, uint64_t mask) {
-  const int32_t s = blockIdx.x * blockDim.x + threadIdx.x;
-  if (s >= slots.capacity || !slots.resident[s]) return;
-  const unsigned long long key = packBlockKey(slots.keys[s]);
-  for (uint64_t i = slotHash(key) & mask;; i = (i + 1) & mask) {
-    const unsigned long long prev = atomicCAS(&keys[i], kEmptyBlockKey, key);
-    if (prev == kEmptyBlockKey || prev == key) {
-      table_slots[i] = s;
-      return;
-    }
-  }
-}
-
-__device__ __forceinline__ int32_t findSlot(const GainKernelArgs& a, const BlockKey& b) {
-  const unsigned long long key = packBlockKey(b);
-  for (uint64_t i = slotHash(key) & a.table_mask;; i = (i + 1) & a.table_mask) {
-    const unsigned long long k = a.table_keys[i];
-    if (k == key) return a.table_slots[i];
-    if (k == kEmptyBlockKey) return -1;
-  }
-}
 
 __global__ void viewpointGainsKernel(GainKernelArgs a) {
   const uint64_t idx = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
@@ -62,8 +27,7 @@ __global__ void viewpointGainsKernel(GainKernelArgs a) {
       const VoxelKey k = dda.cell();
       const BlockKey b = blockKeyOf(k);
       if (!(b == last)) {
-        const int32_t slot = findSlot(a, b);
-        block = slot < 0 ? nullptr : &a.slot_cells[slot];
+        block = a.view.findBlock(b);
         last = b;
       }
       const Cell* cell = block ? &block->cells[cellIndexOf(k)] : nullptr;
@@ -92,15 +56,6 @@ __global__ void viewpointGainsKernel(GainKernelArgs a) {
 }
 
 }  // namespace
-
-void launchBlockTableBuild(const SlotArrays& slots, unsigned long long* keys, int32_t* table_slots,
-                           uint64_t mask, cudaStream_t stream) {
-  if (slots.capacity == 0) return;
-  constexpr int kThreads = 256;
-  const int grid = (slots.capacity + kThreads - 1) / kThreads;
-  blockTableBuildKernel<<<grid, kThreads, 0, stream>>>(slots, keys, table_slots, mask);
-  FRAGG_CUDA_CHECK(cudaGetLastError());
-}
 
 void launchViewpointGains(const GainKernelArgs& args, cudaStream_t stream) {
   const uint64_t total = uint64_t(args.viewpoints) * args.rays_per_viewpoint;

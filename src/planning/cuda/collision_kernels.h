@@ -7,9 +7,9 @@
 #include <cstdint>
 
 #include "fragg_map/geometry/mesh_bvh.h"
-#include "fragg_map/internal/collision_pose.h"
-#include "fragg_map/internal/cuda_collision.h"
-#include "fragg_map/internal/obstacle_masks.h"
+#include "../collision_pose.h"
+#include "../cuda_collision.h"
+#include "../obstacle_masks.h"
 
 namespace fragg::cuda {
 

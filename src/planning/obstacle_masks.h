@@ -1,14 +1,16 @@
 // Obstacle masks of a collision batch, shared by the CPU checker and the CUDA collision kernels
-// (FRAGG_HD): per block, 512 bits (8 words, word = local z, bit = x + 8 y), set where the cell
-// counts as an obstacle (occupied, or unknown with unknown_is_occupied). Blocks whose mask
-// equals the default (no block: all clear, or all set with unknown_is_occupied) are not
-// stored. The table is open addressing (linear probing) over block keys; built on the host
-// (src/planning/obstacle_index.cpp) from the map's blocks and read by plain pointers, host or
-// device.
+// (FRAGG_HD): per block, 512 bits (8 words, word = local z, bit = x + 8 y: the layout of the
+// map's state masks), set where the cell counts as an obstacle (occupied, or unknown with
+// unknown_is_occupied). Two sources: an obstacle index built on the host
+// (src/planning/obstacle_index.cpp; blocks whose mask equals the default -- no block: all clear,
+// or all set with unknown_is_occupied -- are not stored; open addressing over block keys), or
+// the map's device layer view, whose state masks are the obstacle masks as they are (occupied)
+// or inverted (not free, with unknown_is_occupied): nothing to build or upload.
 #pragma once
 
 #include <cstdint>
 
+#include "fragg_map/device_layer_view.h"
 #include "fragg_map/hd.h"
 #include "fragg_map/key.h"
 
@@ -18,14 +20,30 @@ constexpr int kMaskWords = kCellsPerBlock / 64;  ///< 8: one word per z layer of
 /// Key of an empty table entry (x can never be INT32_MIN for a block: voxel keys >> 3).
 constexpr int32_t kEmptyMaskKey = INT32_MIN;
 
-/// Plain pointers into an obstacle index (host or device memory).
+/// Plain pointers into an obstacle index (host or device memory), or the device layer view.
 struct ObstacleMasksView {
   const BlockKey* keys = nullptr;   ///< capacity entries; x == kEmptyMaskKey: empty
   const int32_t* slots = nullptr;   ///< capacity entries: which mask a key has
   const uint64_t* masks = nullptr;  ///< kMaskWords per slot
   uint32_t capacity_mask = 0;       ///< capacity - 1 (capacity a power of two)
   uint64_t default_word = 0;        ///< a block without a stored mask: 0 or ~0
+  /// With from_layer: the map's state masks instead of the index (keys, slots, masks unused).
+  bool from_layer = false;
+  DeviceLayerView layer;
+  /// XORed into every stored word: ~0 reads a layer's free mask as "not free".
+  uint64_t invert_word = 0;
 };
+
+/// Obstacles straight from the map's device layer view: occupied cells, or every cell not free
+/// with unknown_is_occupied.
+inline ObstacleMasksView layerObstacles(const DeviceLayerView& layer, bool unknown_is_occupied) {
+  ObstacleMasksView v;
+  v.from_layer = true;
+  v.layer = layer;
+  v.default_word = unknown_is_occupied ? ~uint64_t{0} : 0;
+  v.invert_word = v.default_word;
+  return v;
+}
 
 FRAGG_HD uint32_t maskTableHash(const BlockKey& k) {
   uint64_t h = static_cast<uint64_t>(static_cast<uint32_t>(k.x)) * 73856093ULL;
@@ -38,6 +56,11 @@ FRAGG_HD uint32_t maskTableHash(const BlockKey& k) {
 
 /// The block's 8 mask words, or nullptr when it has none stored (then default_word applies).
 FRAGG_HD const uint64_t* findMasks(const ObstacleMasksView& v, const BlockKey& k) {
+  if (v.from_layer) {
+    const BlockStateMasks* m = v.layer.findMasks(k);
+    if (m == nullptr) return nullptr;
+    return v.invert_word ? m->free : m->occupied;
+  }
   if (v.keys == nullptr) return nullptr;
   for (uint32_t i = maskTableHash(k) & v.capacity_mask;; i = (i + 1) & v.capacity_mask) {
     const BlockKey& e = v.keys[i];
@@ -84,7 +107,7 @@ FRAGG_HD bool forEachObstacleCell(const ObstacleMasksView& v, const VoxelKey& lo
         const int z1 = static_cast<int>(hi.z < oz + kBlockMask ? hi.z - oz : kBlockMask);
         const uint64_t range = layerRangeMask(x0, x1, y0, y1);
         for (int z = z0; z <= z1; ++z) {
-          uint64_t w = (masks ? masks[z] : v.default_word) & range;
+          uint64_t w = (masks ? masks[z] ^ v.invert_word : v.default_word) & range;
           while (w != 0) {
             const int bit = lowestSetBit(w);
             w &= w - 1;

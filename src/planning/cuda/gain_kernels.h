@@ -4,16 +4,14 @@
 
 #include <cuda_runtime.h>
 
-#include "device_types.h"
-#include "fragg_map/internal/gain_walk.h"
+#include "fragg_map/device_layer_view.h"
+#include "fragg_map/occupancy.h"
+#include "../gain_walk.h"
 
 namespace fragg::cuda {
 
 struct GainKernelArgs {
-  const unsigned long long* table_keys;  ///< packed block keys, kEmptyBlockKey = empty
-  const int32_t* table_slots;
-  uint64_t table_mask;
-  const Block* slot_cells;
+  DeviceLayerView view;  ///< the map's blocks on the device
   OccupancyModel model;
   const double* origins_v;  ///< this round's viewpoints
   const double* cos_yaw;
@@ -28,11 +26,7 @@ struct GainKernelArgs {
   double* gains;
 };
 
-constexpr unsigned long long kEmptyBlockKey = ~0ULL;
-
-/// Launchers (gain_kernels.cu).
-void launchBlockTableBuild(const SlotArrays& slots, unsigned long long* keys, int32_t* table_slots,
-                           uint64_t mask, cudaStream_t stream);
+/// Launcher (gain_kernels.cu).
 void launchViewpointGains(const GainKernelArgs& args, cudaStream_t stream);
 
 }  // namespace fragg::cuda

@@ -1,7 +1,10 @@
-// The CUDA collision checker as the planning tier sees it (no CUDA header): batches of poses
-// over obstacle masks uploaded for the batch (internal/obstacle_masks.h). Defined in
-// cuda/cuda_collision.cpp, linked only when built with CUDA (FRAGG_HAVE_CUDA); the planning
-// tier calls makeCudaCollision only then.
+// The CUDA collision checker as the rest of planning sees it (no CUDA header): batches of poses
+// over obstacle masks (obstacle_masks.h), either read in place from the map's device layer view
+// or uploaded for the batch from a host obstacle index. Defined in
+// src/planning/cuda/cuda_collision.cpp (planning's CUDA part), linked only when built with CUDA
+// (FRAGG_HAVE_CUDA); the rest of planning calls makeCudaCollision only then. Its buffers come
+// from a DeviceScratch: the map's (lent with its device view), so the checker's state is the
+// map's, on the map's device.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -9,9 +12,10 @@
 #include <memory>
 #include <vector>
 
+#include "fragg_map/device_scratch.h"
 #include "fragg_map/geometry/mesh_bvh.h"
-#include "fragg_map/internal/collision_pose.h"
-#include "fragg_map/internal/obstacle_masks.h"
+#include "collision_pose.h"
+#include "obstacle_masks.h"
 
 namespace fragg {
 
@@ -21,6 +25,13 @@ struct ObstacleMasksHost {
   const std::vector<int32_t>* slots = nullptr;   ///< per table entry
   const std::vector<uint64_t>* masks = nullptr;  ///< kMaskWords per slot
   uint64_t default_word = 0;
+};
+
+/// A batch's obstacles as the checker gets them: host arrays to upload, or masks already on the
+/// scratch's device (layerObstacles over the map's device layer view).
+struct ObstacleSource {
+  const ObstacleMasksHost* host = nullptr;
+  ObstacleMasksView device;  ///< used when host is null
 };
 
 /// One pose's answer, as CollisionResult has it.
@@ -51,18 +62,19 @@ class CudaCollision {
   virtual ~CudaCollision() = default;
   /// Boxes, spheres, capsules: one answer per pose (half_m: cell half size less the touching
   /// epsilon).
-  virtual std::vector<CollisionAnswer> checkPrimitives(const ObstacleMasksHost& masks,
+  virtual std::vector<CollisionAnswer> checkPrimitives(const ObstacleSource& masks,
                                                        const std::vector<PrimitivePose>& poses,
                                                        double resolution_m, double half_m,
                                                        bool count_cells) = 0;
   /// A triangle mesh at each pose. Throws InvalidArgument when an inside test meets more than
   /// 32 solids above a point.
-  virtual std::vector<CollisionAnswer> checkMesh(const ObstacleMasksHost& masks,
+  virtual std::vector<CollisionAnswer> checkMesh(const ObstacleSource& masks,
                                                  const std::vector<MeshPose>& poses,
                                                  const MeshCheck& mesh) = 0;
 };
 
+/// A checker working in `scratch` (on its device and stream; it must outlive the checker).
 /// Throws CudaError when the device cannot be used.
-std::unique_ptr<CudaCollision> makeCudaCollision(int device);
+std::unique_ptr<CudaCollision> makeCudaCollision(DeviceScratch& scratch);
 
 }  // namespace fragg
