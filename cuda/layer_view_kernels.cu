@@ -15,8 +15,7 @@ __global__ void viewTableKernel(SlotArrays s, int32_t* table, uint32_t mask) {
     if (atomicCAS(&table[i], kNoViewSlot, slot) == kNoViewSlot) return;
 }
 
-__global__ void changedSlotsKernel(SlotArrays s, uint64_t revision, int32_t* out,
-                                   uint32_t* count) {
+__global__ void changedSlotsKernel(SlotArrays s, uint64_t revision, int32_t* out, uint32_t* count) {
   const int32_t slot = blockIdx.x * blockDim.x + threadIdx.x;
   if (slot >= s.capacity || !s.resident[slot] || s.masks_at[slot] <= revision) return;
   out[atomicAdd(count, 1u)] = slot;
@@ -38,7 +37,9 @@ __global__ void gatherMasksKernel(SlotArrays s, const int32_t* which, uint32_t n
   }
 }
 
-uint32_t gridFor(uint64_t threads) { return static_cast<uint32_t>((threads + kThreads - 1) / kThreads); }
+uint32_t gridFor(uint64_t threads) {
+  return static_cast<uint32_t>((threads + kThreads - 1) / kThreads);
+}
 
 }  // namespace
 
@@ -52,8 +53,7 @@ void launchViewTable(const SlotArrays& slots, int32_t* table, uint32_t table_mas
 void launchChangedSlots(const SlotArrays& slots, uint64_t revision, int32_t* out, uint32_t* count,
                         cudaStream_t stream) {
   if (slots.capacity == 0) return;
-  changedSlotsKernel<<<gridFor(slots.capacity), kThreads, 0, stream>>>(slots, revision, out,
-                                                                         count);
+  changedSlotsKernel<<<gridFor(slots.capacity), kThreads, 0, stream>>>(slots, revision, out, count);
   FRAGG_CUDA_CHECK(cudaGetLastError());
 }
 

@@ -2,7 +2,8 @@
 # Checks that every tracked C++/CUDA source is formatted as .clang-format (Google base) says.
 # Exits non-zero and lists the badly formatted files (fix: clang-format -i FILE...).
 # Then checks that every relative link and anchor in README.md and docs/*.md resolves
-# (scripts/check_links.py; a broken link is listed as FILE:LINE and fails the check too).
+# (scripts/check_links.py; a broken link is listed as FILE:LINE and fails the check too), and
+# that no tier includes what it must not (scripts/check_tiers.py: core <- planning <- ros).
 # Usage: bash scripts/check_format.sh
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -35,3 +36,5 @@ if [ "${#bad[@]}" -ne 0 ]; then
 fi
 echo "check_format: ${#files[@]} files OK ($("$CLANG_FORMAT" --version))"
 /usr/bin/python3 scripts/check_links.py
+# The tier check (DESIGN §12): core <- planning <- ros, by includes.
+/usr/bin/python3 scripts/check_tiers.py

@@ -34,11 +34,11 @@ struct DeviceLayerView {
   const int32_t* table = nullptr;  ///< table_mask + 1 entries: a slot, or kNoViewSlot
   uint32_t table_mask = 0;         ///< entries - 1 (a power of two)
   const BlockKey* slot_keys = nullptr;
-  const Block* cells = nullptr;                ///< per slot
-  const BlockStateMasks* masks = nullptr;      ///< per slot, equal to stateMasksOf(cells)
-  int32_t slots = 0;                           ///< slots in the pool (not all hold a block)
-  int device = -1;                             ///< the CUDA device the pointers belong to
-  uint64_t revision = 0;                       ///< Map::revision() the view shows
+  const Block* cells = nullptr;            ///< per slot
+  const BlockStateMasks* masks = nullptr;  ///< per slot, equal to stateMasksOf(cells)
+  int32_t slots = 0;                       ///< slots in the pool (not all hold a block)
+  int device = -1;                         ///< the CUDA device the pointers belong to
+  uint64_t revision = 0;                   ///< Map::revision() the view shows
 
   /// The slot of block `k`, kNoViewSlot when the view has no such block (all its cells
   /// unknown: the lease guarantees that every existing block it was asked for is there).

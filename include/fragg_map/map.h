@@ -187,7 +187,8 @@ class Map {
   /// block of `keys`, for readers with kernels (planning's CUDA part); nullptr when the backend
   /// keeps no layers on a device (CPU) or cannot hold those blocks at once: read the host view
   /// (blockView) instead. Blocks the view lacks have no cell observed. Hold the map's read lock.
-  [[nodiscard]] std::unique_ptr<DeviceViewLease> deviceView(const std::vector<BlockKey>& keys) const;
+  [[nodiscard]] std::unique_ptr<DeviceViewLease> deviceView(
+      const std::vector<BlockKey>& keys) const;
   /// The same for every existing block whose key lies in [lo, hi] (inclusive).
   [[nodiscard]] std::unique_ptr<DeviceViewLease> deviceView(const BlockKey& lo,
                                                             const BlockKey& hi) const;

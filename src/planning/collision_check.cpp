@@ -85,9 +85,9 @@ std::vector<CollisionResult> checkOnCuda(const Map& map, DeviceScratch& scratch,
     std::vector<PrimitivePose> poses(T_map_shape.size());
     for (size_t i = 0; i < poses.size(); ++i)
       poses[i] = preparePrimitive(map, shape, T_map_shape[i], options);
-    answers = checker->checkPrimitives(obstacles, poses, map.resolution(),
-                                       0.5 * map.resolution() - kTouchEpsilon_m,
-                                       options.count_cells);
+    answers =
+        checker->checkPrimitives(obstacles, poses, map.resolution(),
+                                 0.5 * map.resolution() - kTouchEpsilon_m, options.count_cells);
   }
   std::vector<CollisionResult> results(answers.size());
   for (size_t i = 0; i < answers.size(); ++i) results[i] = resultOf(answers[i]);

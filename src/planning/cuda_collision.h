@@ -12,9 +12,9 @@
 #include <memory>
 #include <vector>
 
+#include "collision_pose.h"
 #include "fragg_map/device_scratch.h"
 #include "fragg_map/geometry/mesh_bvh.h"
-#include "collision_pose.h"
 #include "obstacle_masks.h"
 
 namespace fragg {

@@ -79,9 +79,10 @@ std::vector<uint16_t> frontierCellsOfBlock(const Map& map, const BlockView& view
   for (int dz = -1, j = 0; dz <= 1; ++dz)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx, ++j) {
-        const Block* b = view.findBlock({block.x + dx, block.y + dy, block.z + dz});
-        masks[j] = stateMasksOf(map.model(), b);
-        around[j] = b ? &masks[j] : nullptr;
+        // The map's state masks: no cell is read.
+        const BlockStateMasks* m = view.findMasks({block.x + dx, block.y + dy, block.z + dz});
+        if (m) masks[j] = statesOf(*m);
+        around[j] = m ? &masks[j] : nullptr;
       }
   const FrontierBits bits = frontierBitsOf(around);
   for (int w = 0; w < kMaskWords; ++w)

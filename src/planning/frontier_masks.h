@@ -1,9 +1,9 @@
-// Bit-parallel frontier test (internal to fragg_map_planning). A block's cells as 512-bit
-// masks, one 64-bit word per z slab, bit y * 8 + x (so bit i of the mask is cell index i,
-// cellIndexOf). The frontier cells of a block follow from the unknown masks of the 27 blocks
-// around it: the unknown cells are dilated by one cell (x, then y, then z: the 3 x 3 x 3 box is
-// separable) and ANDed with the block's free cells. Shared by the CPU path and the CUDA path
-// (FRAGG_HD), so both give the same bits.
+// Bit-parallel frontier test (internal to fragg_map_planning). A block's free and unknown cells
+// as 512-bit masks (from the map's state masks, state_masks.h), one 64-bit word per z slab, bit
+// y * 8 + x (so bit i of the mask is cell index i, cellIndexOf). The frontier cells of a block
+// follow from the unknown masks of the 27 blocks around it: the unknown cells are dilated by one
+// cell (x, then y, then z: the 3 x 3 x 3 box is separable) and ANDed with the block's free cells.
+// Shared by the CPU path and the CUDA path (FRAGG_HD), so both give the same bits.
 #pragma once
 
 #include <cstdint>
@@ -29,31 +29,6 @@ struct StateMasks {
 struct FrontierBits {
   uint64_t words[kMaskWords];
 };
-
-/// State masks of a block's cells; a missing block (nullptr) is all unknown.
-FRAGG_HD StateMasks stateMasksOf(const OccupancyModel& model, const Block* block) {
-  StateMasks m;
-  for (int w = 0; w < kMaskWords; ++w) {
-    uint64_t free_bits = 0, unknown_bits = 0;
-    if (block) {
-      // OccupancyModel::state without branches (the unobserved value is below every
-      // threshold, so "free" also needs observed), so that the loop vectorises.
-      for (int b = 0; b < 64; ++b) {
-        const int16_t l = block->cells[w * 64 + b].log_odds_fx;
-        const bool observed = l != kUnobservedLogOdds;
-        const bool is_free = observed & (l < model.free_below_fx);
-        const bool occupied = observed & (l > model.occupied_above_fx);
-        free_bits |= uint64_t(is_free) << b;
-        unknown_bits |= uint64_t(!is_free & !occupied) << b;
-      }
-    } else {
-      unknown_bits = ~uint64_t(0);
-    }
-    m.free[w] = free_bits;
-    m.unknown[w] = unknown_bits;
-  }
-  return m;
-}
 
 /// The free and unknown masks of a block's state masks (the map's layer, state_masks.h).
 FRAGG_HD StateMasks statesOf(const BlockStateMasks& m) {

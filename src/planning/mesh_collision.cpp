@@ -5,8 +5,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include "fragg_map/geometry/cube_overlap.h"
 #include "collision_pose.h"
+#include "fragg_map/geometry/cube_overlap.h"
 
 namespace fragg::planning {
 

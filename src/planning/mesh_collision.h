@@ -4,9 +4,9 @@
 
 #include <Eigen/Geometry>
 
-#include "obstacle_masks.h"
 #include "fragg_map/map.h"
 #include "fragg_map/planning/collision_check.h"
+#include "obstacle_masks.h"
 
 namespace fragg::planning {
 

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "fragg_map/block_view.h"
-#include "obstacle_masks.h"
 #include "fragg_map/map.h"
+#include "obstacle_masks.h"
 
 namespace fragg::planning {
 

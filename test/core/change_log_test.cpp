@@ -83,6 +83,20 @@ void expectListedExactly(Map& map, const std::function<void(Map&)>& step, const 
   EXPECT_EQ(got.size(), map.changedBlocksSince(r, BlockChange::kMasks).size()) << what;
   EXPECT_EQ(got, want) << what << ": " << got.size() << " listed, " << want.size() << " changed";
   EXPECT_FALSE(want.empty()) << what << " changed no state: the check is empty";
+  // The list with masks (what frontiers read instead of cells): the same blocks, each once,
+  // each with its current masks.
+  std::vector<BlockKey> keys;
+  std::vector<BlockStateMasks> masks;
+  ASSERT_TRUE(map.masksChangedSince(r, &keys, &masks)) << what;
+  ASSERT_EQ(keys.size(), masks.size()) << what;
+  EXPECT_EQ(setOf(keys), want) << what;
+  EXPECT_EQ(setOf(keys).size(), keys.size()) << what;
+  const MaskSnapshot now = snapshot(map);
+  for (size_t i = 0; i < keys.size(); ++i) {
+    const auto it = now.find(keys[i]);
+    ASSERT_NE(it, now.end()) << what;
+    EXPECT_EQ(masks[i], it->second) << what;
+  }
 }
 
 SensorModel lidar() { return SensorModel::spinningLidar(-0.6, 0.6, 0.0, 10.0); }
@@ -141,6 +155,12 @@ TEST(ChangedBlocksTest, MasksListedPerRevisionAreExactlyTheBlocksThatChangedStat
   for (const BlockKey& key : all) EXPECT_NE(view.findBlock(key), nullptr);
   EXPECT_GE(all.size(), walked);
   EXPECT_GT(walked, 100u);
+  std::vector<BlockKey> keys;
+  std::vector<BlockStateMasks> masks;
+  ASSERT_TRUE(map.masksChangedSince(0, &keys, &masks));
+  EXPECT_EQ(setOf(keys), all);
+  // A map on the CPU backend keeps no layers on a device.
+  EXPECT_EQ(map.deviceView(BlockKey{-100, -100, -100}, BlockKey{100, 100, 100}), nullptr);
   // The sub-map lists its blocks with known cells at its revision.
   EXPECT_EQ(setOf(part.changedBlocksSince(0, BlockChange::kMasks)),
             differing(MaskSnapshot(), snapshot(part)));

@@ -24,6 +24,17 @@ namespace {
 
 const std::string kRoomScan = std::string(FRAGG_REAL_DATA) + "/pcl_room_scans/room_scan1.pcd";
 
+Map buildRoomMap(Backend backend) {
+  MapParams params;
+  params.resolution_m = 0.05;
+  params.backend = backend;
+  Map m(params);
+  auto source = openDataset(kRoomScan);
+  Scan scan;
+  while (source->next(scan)) m.insert(scan.cloud, scan.T_map_sensor, SensorModel::autoFromCloud());
+  return m;
+}
+
 const Map& roomMap() {
   static const Map map = [] {
     MapParams params;
@@ -117,6 +128,41 @@ TEST(CollisionGpu, EveryShapeAndOptionMatchesTheCpu) {
             EXPECT_LT(colliding, static_cast<int>(poses.size()) - 20) << what;
           }
         }
+  }
+}
+
+// A map on the CUDA backend: the kernels read its state masks in place through the device layer
+// view (Map::deviceView, the map's own scratch), nothing classified or uploaded; the answers
+// equal the CPU checker's over the same map's host blocks.
+TEST(CollisionGpu, DeviceLayerViewOfACudaMapMatchesTheCpu) {
+  REQUIRE_DEVICE();
+  const Map map = buildRoomMap(Backend::kCuda);
+  ASSERT_STREQ(map.backendName(), "cuda");
+  const std::vector<Eigen::Isometry3d> poses = randomPoses(map, 3000, 11);
+  BlockKey lo, hi;
+  {
+    const KeyBounds b = map.bounds();
+    lo = blockKeyOf(b.min);
+    hi = blockKeyOf(b.max);
+  }
+  ASSERT_NE(map.deviceView(lo, hi), nullptr) << "the map's blocks fit its device";
+  for (const NamedShape& s : shapes()) {
+    for (const bool unknown : {false, true})
+      for (const bool count : {false, true}) {
+        CollisionOptions o;
+        o.unknown_is_occupied = unknown;
+        o.count_cells = count;
+        o.margin_m = count ? 0.07 : 0.0;
+        const std::string what = s.name + " (layer view)" + (unknown ? " unknown-occupied" : "") +
+                                 (count ? " count margin" : "");
+        const auto gpu = checkPoses(map, s.shape, poses, o, Backend::kCuda);
+        const auto cpu = checkPoses(map, s.shape, poses, o, Backend::kCpu);
+        int colliding = 0;
+        expectSame(cpu, gpu, what, &colliding);
+        std::printf("[gpu] collision %s: %d of %zu poses collide, CPU == CUDA\n", what.c_str(),
+                    colliding, poses.size());
+        EXPECT_GT(colliding, 20) << what;
+      }
   }
 }
 

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <map>
 #include <set>
 #include <string>
 #include <tuple>
@@ -54,6 +55,16 @@ struct KeyLess {
   }
 };
 
+/// The changed-block list with masks (Map::masksChangedSince) as a map from key to masks.
+std::map<BlockKey, BlockStateMasks, KeyLess> changedMasksSince(const Map& map, uint64_t revision) {
+  std::vector<BlockKey> keys;
+  std::vector<BlockStateMasks> masks;
+  EXPECT_TRUE(map.masksChangedSince(revision, &keys, &masks));
+  std::map<BlockKey, BlockStateMasks, KeyLess> out;
+  for (size_t i = 0; i < keys.size(); ++i) EXPECT_TRUE(out.emplace(keys[i], masks[i]).second);
+  return out;
+}
+
 /// The blocks `map` lists as changed state after `revision`.
 std::set<BlockKey, KeyLess> changedSince(const Map& map, uint64_t revision) {
   const std::vector<BlockKey> keys = map.changedBlocksSince(revision, BlockChange::kMasks);
@@ -96,6 +107,12 @@ void driveAndCompare(bool warp_per_slot) {
     ASSERT_EQ(cpu.revision(), revision);
     cpu.insert(scans[i].cloud, scans[i].T, sensor);
     total.add(gpu.insert(scans[i].cloud, scans[i].T, sensor));
+    // Before anything syncs the host map: the CUDA map's list comes from its device pool
+    // (compacted there) and its host log (blocks written back on eviction), and equals the CPU
+    // map's, keys and masks.
+    const auto device_list = changedMasksSince(gpu, revision);
+    EXPECT_EQ(device_list.size(), changedMasksSince(cpu, revision).size()) << "scan " << i;
+    EXPECT_TRUE(device_list == changedMasksSince(cpu, revision)) << "scan " << i;
     expectSameMasks(cpu, gpu, "scan " + std::to_string(i));
     const auto listed = changedSince(gpu, revision);
     EXPECT_EQ(listed, changedSince(cpu, revision)) << "blocks listed as changed, scan " << i;

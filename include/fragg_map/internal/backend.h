@@ -13,11 +13,11 @@
 
 #include "fragg_map/block_map.h"
 #include "fragg_map/culling.h"
+#include "fragg_map/device_layer_view.h"
+#include "fragg_map/device_scratch.h"
 #include "fragg_map/frustum.h"
 #include "fragg_map/insert_stats.h"
 #include "fragg_map/internal/auto_sensor_stats.h"
-#include "fragg_map/device_layer_view.h"
-#include "fragg_map/device_scratch.h"
 #include "fragg_map/map_params.h"
 #include "fragg_map/occupancy.h"
 #include "fragg_map/point_cloud.h"

@@ -27,8 +27,8 @@
 #include <string>
 #include <vector>
 
-#include "fragg_map/key.h"
 #include "fragg_map/device_scratch.h"
+#include "fragg_map/key.h"
 #include "fragg_map/map.h"
 #include "fragg_map/map_params.h"
 #include "fragg_map/planning/collision_shape.h"

@@ -1,7 +1,8 @@
-// Incremental frontier cells: after each scan the blocks changed since the last update
-// (Map::changedBlocksSince) get their cell-state masks recomputed; only the blocks whose masks
-// differ (a cell turned free, unknown or occupied) and their 26 neighbour blocks are examined
-// again (bit-parallel, frontier_masks.h); the set always
+// Incremental frontier cells: after each scan the map's changed-block list (Map::
+// masksChangedSince: the blocks whose state masks changed, with their masks; on a CUDA map
+// compacted on the device) updates the tracker's copy of the masks without reading a cell; a
+// changed block is examined again (bit-parallel, frontier_masks.h), and of its 26 neighbours
+// those whose shared face, edge or corner saw an unknown cell come or go; the set always
 // equals findFrontierCells() on the same map and filter. A map whose blocks left or joined its
 // view since the last update (clearBox, truncate, reset, paging: Map::viewEpoch), or another
 // map, is recomputed in full. On a paged map only resident blocks are seen: page the region of
@@ -22,13 +23,13 @@ struct FrontierUpdateStats {
   uint64_t blocks_changed = 0;   ///< changed blocks whose cell states were read again
   uint64_t blocks_examined = 0;  ///< blocks whose frontier cells were recomputed
   uint64_t cells = 0;            ///< frontier cells after the update
-  /// The cell states were read by the map's backend (CUDA: a kernel over its block cache)
-  /// rather than from the host blocks.
+  /// An incremental update on a map keeping its layers on a device: the changed blocks' masks
+  /// came from the device (compacted there), the host map was not written back.
   bool states_on_device = false;
   double seconds = 0.0;
-  /// Where the time went: listing the changed blocks and reading their cell states (on the
-  /// device or the host), comparing them and listing the neighbourhoods to examine, and
-  /// examining them (the bit-parallel test).
+  /// Where the time went: the changed-block list with masks (on the device or the host),
+  /// comparing them and listing the neighbourhoods to examine, and examining them (the
+  /// bit-parallel test).
   double states_seconds = 0.0, compare_seconds = 0.0, examine_seconds = 0.0;
 };
 

@@ -6,10 +6,10 @@
 
 #include <cstdint>
 
-#include "fragg_map/geometry/mesh_bvh.h"
 #include "../collision_pose.h"
 #include "../cuda_collision.h"
 #include "../obstacle_masks.h"
+#include "fragg_map/geometry/mesh_bvh.h"
 
 namespace fragg::cuda {
 

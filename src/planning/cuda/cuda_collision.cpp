@@ -71,8 +71,8 @@ class CudaCollisionImpl final : public CudaCollision {
     uint64_t* d_offsets = s_.device<uint64_t>(kOffsets, n + 1);
     DeviceAnswer* d_answers = s_.device<DeviceAnswer>(kAnswers, n);
     copyToDevice(d_poses, poses.data(), n, stream_);
-    launchMeshRanges(mesh, d_poses, n, view, check.resolution_m, check.grow_m, d_lo, d_hi,
-                     d_counts, stream_);
+    launchMeshRanges(mesh, d_poses, n, view, check.resolution_m, check.grow_m, d_lo, d_hi, d_counts,
+                     stream_);
     std::vector<uint32_t> counts(n);
     copyToHost(counts.data(), d_counts, n, stream_);
     FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));

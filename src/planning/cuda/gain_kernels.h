@@ -4,9 +4,9 @@
 
 #include <cuda_runtime.h>
 
+#include "../gain_walk.h"
 #include "fragg_map/device_layer_view.h"
 #include "fragg_map/occupancy.h"
-#include "../gain_walk.h"
 
 namespace fragg::cuda {
 

@@ -3,10 +3,10 @@
 // planning calls it (viewpoints.cpp) in CUDA builds only.
 #pragma once
 
+#include "../gain_walk.h"
 #include "fragg_map/device_layer_view.h"
 #include "fragg_map/device_scratch.h"
 #include "fragg_map/occupancy.h"
-#include "../gain_walk.h"
 
 namespace fragg::planning {
 

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <string>
@@ -24,6 +25,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/geometry/mesh_primitives.h"
+#include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/map.h"
 #include "fragg_map/planning/collision_check.h"
 
@@ -134,6 +136,15 @@ void run(const Options& o) {
   fmt::print("map {}: {} blocks, {} m, loaded in {:.0f} ms; {} threads\n", o.map_path,
              map.blockCount(), map.resolution(), msSince(t_load), omp_get_max_threads());
   const std::vector<Eigen::Isometry3d> poses = randomPoses(map, o.poses, o.seed);
+  // The same map on the CUDA backend, where CUDA checks read its state masks in place through
+  // the device layer view (no obstacle index, no upload of masks): loaded when cuda is asked
+  // for and a device is there.
+  std::unique_ptr<Map> cuda_map;
+  if (std::find(o.backends.begin(), o.backends.end(), "cuda") != o.backends.end()) {
+    std::string why_not;
+    if (!cudaDeviceName(0, &why_not).empty())
+      cuda_map = std::make_unique<Map>(Map::load(o.map_path, Backend::kCuda));
+  }
   const std::vector<Eigen::Isometry3d> mesh_poses = randomPoses(map, o.mesh_poses, o.seed + 1);
   const Eigen::Vector3d box_m(o.box[0], o.box[1], o.box[2]);
   const geometry::TriangleMesh mesh =
@@ -203,6 +214,34 @@ void run(const Options& o) {
                            {"ms_min", r.ms_min}});
       if (c.key == "box" && requested == Backend::kCpu) box_cpu = answers;
       per_backend.push_back(std::move(answers));
+      if (requested == Backend::kCuda && cuda_map) {
+        // A map integrating on CUDA: the first batch brings its blocks to the device (timed
+        // apart), then batches read them in place.
+        std::vector<planning::CollisionResult> on_view;
+        const auto t_first = std::chrono::steady_clock::now();
+        on_view = planning::checkPoses(*cuda_map, c.shape, *c.poses, planning::CollisionOptions(),
+                                       Backend::kCuda);
+        const double first_ms = msSince(t_first);
+        const Run v =
+            timeBatch(*cuda_map, c.name, c.shape, *c.poses, Backend::kCuda, o.repeats, &on_view);
+        size_t differ = 0;
+        for (size_t i = 0; i < on_view.size(); ++i)
+          differ +=
+              on_view[i].collides != per_backend.back()[i].collides ||
+              (on_view[i].collides && on_view[i].first_cell != per_backend.back()[i].first_cell);
+        fmt::print(
+            "{:<40} {:>8} {:>8} {:>10} {:>10.2f} {:>12.3g}  map on CUDA, device layer view "
+            "(first batch {:.1f} ms; {} answers differ)\n",
+            v.shape, v.backend, v.poses, v.colliding, v.ms_median, v.poses / (v.ms_median * 1e-3),
+            first_ms, differ);
+        j["runs"].push_back({{"shape", v.shape},
+                             {"backend", "cuda+layer_view"},
+                             {"poses", v.poses},
+                             {"ms_median", v.ms_median},
+                             {"ms_min", v.ms_min},
+                             {"first_batch_ms", first_ms},
+                             {"differ", differ}});
+      }
       // The same batch over a map prepared once (PreparedMap: masks of every block kept
       // between batches, as FCL's OcTree is built once), preparation timed apart.
       const auto t_prep = std::chrono::steady_clock::now();
