@@ -130,9 +130,12 @@ bool CudaBackend::deviceView(const ViewScope& scope, BlockMap& blocks, uint64_t 
         if (b != kNoBlock && cache_.slotOf(b) < 0) return false;  // evicted again: no room
       }
     } else {
+      const uint64_t evicted = cache_.evictedCount();
       cache_.ensureResident(scope.lo, scope.hi, blocks);
+      // Making room may have evicted blocks of the box again (only then can any be missing).
       bool host_only = false;
-      cache_.forEachHostOnlyIn(blocks, scope.lo, scope.hi, [&](BlockIndex) { host_only = true; });
+      if (cache_.evictedCount() != evicted)
+        cache_.forEachHostOnlyIn(blocks, scope.lo, scope.hi, [&](BlockIndex) { host_only = true; });
       if (host_only) return false;
     }
   } catch (const CudaOutOfMemory&) {

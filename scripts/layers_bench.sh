@@ -19,7 +19,7 @@ steps=("$@")
 [ ${#steps[@]} -eq 0 ] && steps=(build workloads frontiers collision insert)
 out="${OUT:-$root/out/layers}"
 mkdir -p "$out" "$root/out"
-targets=(fragg_map fragg_map_sim fragg_map_bench fragg_map_frontier_bench fragg_map_collision_bench)
+targets=(fragg_map_bench fragg_map_frontier_bench fragg_map_collision_bench)
 status=0
 
 build_tree() {  # SRC BUILD_DIR LOG
@@ -31,7 +31,8 @@ build_tree() {  # SRC BUILD_DIR LOG
 for step in "${steps[@]}"; do
   case "$step" in
     build)
-      # This tree as scripts/device_check.sh builds it (every target, the gpu tests too).
+      # This tree as scripts/device_check.sh builds it (every target, the gpu tests too); of the
+      # baseline the three benchmarks (the workload and the map come from this tree's tools).
       build_tree "$old_src" "$root/build-old" "$out/build_old.log" &
       OUT="$out" bash "$root/scripts/device_check.sh" || status=1
       wait || { echo "baseline build failed"; grep -m5 error "$out/build_old.log"; status=1; }

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <exception>
 #include <mutex>
+#include <utility>
 
 #include "collision_batch.h"
 #include "fragg_map/errors.h"
@@ -82,11 +83,14 @@ std::vector<CollisionResult> checkOnCuda(const Map& map, DeviceScratch& scratch,
   if (shape.kind() == ShapeKind::kMesh) {
     answers = checker->checkMesh(obstacles, meshPoses(T_map_shape), meshCheck(map, shape, options));
   } else {
-    std::vector<PrimitivePose> poses(T_map_shape.size());
-    for (size_t i = 0; i < poses.size(); ++i)
+    // Prepared in parallel straight into the checker's pinned staging.
+    const int64_t n = static_cast<int64_t>(T_map_shape.size());
+    PrimitivePose* poses = checker->primitiveStaging(T_map_shape.size());
+#pragma omp parallel for schedule(static) num_threads(threadCount(options.threads))
+    for (int64_t i = 0; i < n; ++i)
       poses[i] = preparePrimitive(map, shape, T_map_shape[i], options);
     answers =
-        checker->checkPrimitives(obstacles, poses, map.resolution(),
+        checker->checkPrimitives(obstacles, T_map_shape.size(), map.resolution(),
                                  0.5 * map.resolution() - kTouchEpsilon_m, options.count_cells);
   }
   std::vector<CollisionResult> results(answers.size());
@@ -184,8 +188,14 @@ Backend resolveCollisionBackend(Backend requested, std::string* why) {
     if (why) *why = "cpu: requested";
     return Backend::kCpu;
   }
-  std::string why_not;
-  const std::string device = cudaDeviceName(0, &why_not);
+  // Asked once per process (the device properties are slow to read, and batches ask often).
+  static const std::pair<std::string, std::string> kDevice = [] {
+    std::string why;
+    std::string name = cudaDeviceName(0, &why);
+    return std::make_pair(name, why);
+  }();
+  const std::string& device = kDevice.first;
+  const std::string& why_not = kDevice.second;
   if (!device.empty()) {
     if (why)
       *why = fmt::format("{}: CUDA device 0 ({})",

@@ -60,10 +60,12 @@ struct MeshCheck {
 class CudaCollision {
  public:
   virtual ~CudaCollision() = default;
-  /// Boxes, spheres, capsules: one answer per pose (half_m: cell half size less the touching
-  /// epsilon).
-  virtual std::vector<CollisionAnswer> checkPrimitives(const ObstacleSource& masks,
-                                                       const std::vector<PrimitivePose>& poses,
+  /// Pinned host room for `n` box, sphere or capsule poses, which the caller fills (on as many
+  /// threads as it likes) before checkPrimitives(); valid until the next call.
+  virtual PrimitivePose* primitiveStaging(size_t n) = 0;
+  /// Boxes, spheres, capsules: the `n` poses staged, one answer per pose (half_m: cell half
+  /// size less the touching epsilon).
+  virtual std::vector<CollisionAnswer> checkPrimitives(const ObstacleSource& masks, size_t n,
                                                        double resolution_m, double half_m,
                                                        bool count_cells) = 0;
   /// A triangle mesh at each pose. Throws InvalidArgument when an inside test meets more than

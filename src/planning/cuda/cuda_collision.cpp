@@ -37,6 +37,8 @@ enum Buffer : int {
   kVertices,
   kSlotTriangles,
 };
+/// Pinned host buffers (their own numbering).
+enum PinnedBuffer : int { kAnswersHost = 100, kStagedPoses };
 
 class CudaCollisionImpl final : public CudaCollision {
  public:
@@ -45,15 +47,18 @@ class CudaCollisionImpl final : public CudaCollision {
     FRAGG_CUDA_CHECK(cudaSetDevice(scratch.device()));
   }
 
-  std::vector<CollisionAnswer> checkPrimitives(const ObstacleSource& masks,
-                                               const std::vector<PrimitivePose>& poses,
+  PrimitivePose* primitiveStaging(size_t n) override {
+    return s_.pinned<PrimitivePose>(kStagedPoses, n);
+  }
+
+  std::vector<CollisionAnswer> checkPrimitives(const ObstacleSource& masks, size_t count,
                                                double resolution_m, double half_m,
                                                bool count_cells) override {
-    const uint32_t n = static_cast<uint32_t>(poses.size());
+    const uint32_t n = static_cast<uint32_t>(count);
     const ObstacleMasksView view = obstacles(masks);
     PrimitivePose* d_poses = s_.device<PrimitivePose>(kPrimitivePoses, n);
     DeviceAnswer* d_answers = s_.device<DeviceAnswer>(kAnswers, n);
-    copyToDevice(d_poses, poses.data(), n, stream_);
+    copyToDevice(d_poses, s_.pinned<PrimitivePose>(kStagedPoses, n), n, stream_);
     launchPrimitiveCheck(view, d_poses, n, resolution_m, half_m, count_cells, d_answers, stream_);
     return download(d_answers, n, count_cells);
   }
@@ -147,7 +152,7 @@ class CudaCollisionImpl final : public CudaCollision {
 
   std::vector<CollisionAnswer> download(const DeviceAnswer* d_answers, uint32_t n,
                                         bool count_cells) {
-    DeviceAnswer* answers = s_.pinned<DeviceAnswer>(0, n);
+    DeviceAnswer* answers = s_.pinned<DeviceAnswer>(kAnswersHost, n);
     copyToHost(answers, d_answers, n, stream_);
     FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
     std::vector<CollisionAnswer> out(n);
