@@ -18,6 +18,8 @@ shift
 steps=("$@")
 [ ${#steps[@]} -eq 0 ] && steps=(build workloads frontiers collision insert)
 out="${OUT:-$root/out/layers}"
+# LAYERS_TREES="old device" (default) or one of them: which builds the steps run.
+read -r -a trees <<<"${LAYERS_TREES:-old device}"
 mkdir -p "$out" "$root/out"
 targets=(fragg_map_bench fragg_map_frontier_bench fragg_map_collision_bench)
 status=0
@@ -46,7 +48,7 @@ for step in "${steps[@]}"; do
           -o "$root/out/w1.fgm" --resolution 0.05 --max-range 30 --backend cuda \
           >"$out/w1_build.log" 2>&1 || { tail -3 "$out/w1_build.log"; status=1; } ;;
     frontiers)
-      for tree in old device; do
+      for tree in "${trees[@]}"; do
         for backend in cuda cpu; do
           "$root/build-$tree/bin/fragg_map_frontier_bench" --workloads "$root/out/workloads" \
             --backend "$backend" --json "$out/frontiers_${tree}_$backend.json" \
@@ -56,7 +58,7 @@ for step in "${steps[@]}"; do
         done
       done ;;
     collision)
-      for tree in old device; do
+      for tree in "${trees[@]}"; do
         "$root/build-$tree/bin/fragg_map_collision_bench" --map "$root/out/w1.fgm" \
           --backends cpu cuda --fcl-poses 0 --json "$out/collision_$tree.json" \
           >"$out/collision_$tree.log" 2>&1 || status=1
@@ -64,12 +66,12 @@ for step in "${steps[@]}"; do
         grep -E "box|mesh|differ" "$out/collision_$tree.log" | head -12
       done ;;
     insert)
-      for tree in old device; do
+      for tree in "${trees[@]}"; do
         "$root/build-$tree/bin/fragg_map_bench" --no-real --synthetic-scans 0 --workloads \
           "$root/out/workloads" --only W1 --backends cuda cuda+sequence --octomap-scans 0 \
           --repeats 2 >"$out/insert_$tree.log" 2>&1 || status=1
         echo "== insert $tree"
-        grep -E "W1|ms" "$out/insert_$tree.log" | tail -6
+        grep -E "^\| W1|p99 without" "$out/insert_$tree.log"
       done ;;
     *) echo "unknown step $step"; exit 2 ;;
   esac

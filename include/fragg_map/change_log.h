@@ -28,7 +28,10 @@ class BlockChangeLog {
   /// erased since: the caller filters). Only meaningful when reaches(revision).
   [[nodiscard]] std::vector<BlockKey> keysAfter(uint64_t revision) const;
   /// Forgets every record (the map's blocks are gone); what it answers stays complete.
-  void clear() { records_.clear(); }
+  void clear() {
+    records_.clear();
+    sorted_up_to_ = 0;
+  }
   [[nodiscard]] size_t size() const { return records_.size(); }
   [[nodiscard]] size_t bytes() const { return records_.capacity() * sizeof(Record); }
 
@@ -44,6 +47,9 @@ class BlockChangeLog {
   std::vector<Record> records_;
   /// Records of revisions <= this were dropped.
   uint64_t dropped_up_to_ = 0;
+  /// records_[0, sorted_up_to_) are in revision order (a binary search finds a question's
+  /// first record there).
+  size_t sorted_up_to_ = 0;
 };
 
 }  // namespace fragg

@@ -1,13 +1,17 @@
 #include "fragg_map/change_log.h"
 
 #include <algorithm>
-#include <unordered_set>
+
+#include "fragg_map/block_key_table.h"
 
 namespace fragg {
 
 void BlockChangeLog::record(uint64_t revision, const BlockKey& key) {
   if (revision <= dropped_up_to_) return;  // older than what the log answers for anyway
   if (records_.size() >= capacity_) dropOldest();
+  if (sorted_up_to_ == records_.size() &&
+      (records_.empty() || records_.back().revision <= revision))
+    ++sorted_up_to_;  // still in revision order
   records_.push_back({revision, key});
 }
 
@@ -23,13 +27,24 @@ void BlockChangeLog::dropOldest() {
   while (end < records_.size() && records_[end].revision == cut) ++end;
   records_.erase(records_.begin(), records_.begin() + static_cast<std::ptrdiff_t>(end));
   dropped_up_to_ = std::max(dropped_up_to_, cut);
+  sorted_up_to_ = records_.size();
 }
 
 std::vector<BlockKey> BlockChangeLog::keysAfter(uint64_t revision) const {
+  // The records in revision order are searched, the rest (a device's write-back may bring
+  // older revisions) scanned: a question about the last scan reads that scan's records only.
+  const auto sorted_end = records_.begin() + static_cast<std::ptrdiff_t>(sorted_up_to_);
+  const auto first = std::upper_bound(
+      records_.begin(), sorted_end, revision,
+      [](uint64_t r, const Record& rec) { return r < rec.revision; });
   std::vector<BlockKey> out;
-  std::unordered_set<BlockKey, BlockKeyHash> seen;
-  for (const Record& r : records_)
-    if (r.revision > revision && seen.insert(r.key).second) out.push_back(r.key);
+  BlockKeyTable seen;
+  seen.reserve(static_cast<size_t>(records_.end() - first));
+  for (auto it = first; it != records_.end(); ++it) {
+    if (it->revision <= revision || seen.find(it->key) != BlockKeyTable::kNone) continue;
+    seen.insert(it->key, 0);
+    out.push_back(it->key);
+  }
   return out;
 }
 
