@@ -1,7 +1,8 @@
 // The update over touched slots only: the same OccupancyModel::apply() (unapply() when a scan
 // is removed) as the CPU backend. Each touched slot's state masks are recomputed from the cells
 // the update leaves (every cell is read anyway), next to the slot: a warp's ballot over 32
-// consecutive cells is one 32-bit half of a mask word (little-endian, as the host's).
+// consecutive cells is one 32-bit half of a mask word (little-endian, as the host's), kept in a
+// lane's registers until the slot is done (MaskHalves).
 #include "cuda_check.h"
 #include "kernels.h"
 #include "warp_reduce.cuh"
@@ -21,7 +22,7 @@ __device__ __forceinline__ bool passIncomplete(const ScanCounters* c) {
 /// What one slot's update found, over the cells one thread updated.
 struct SlotUpdate {
   bool changed = false, occupancy_changed = false, at_lower_clamp = true;
-  bool masks_changed = false;      ///< set by lane 0 of each warp (writeMaskHalf)
+  bool masks_changed = false;      ///< set by the lanes that keep mask halves (MaskHalves)
   unsigned long long updated = 0;  ///< cells marked (summed over every slot of the thread)
 };
 
@@ -49,23 +50,37 @@ __device__ __forceinline__ CellState updateCell(Block& block, int cell, bool hit
   return model.state(value);
 }
 
-/// Writes the warp's 32 cells' states as the 32-bit half `half` of the slot's masks (every lane
-/// calls it; lane 0 writes and notes in `u` whether the half changed: against all unknown for a
-/// fresh slot, whose masks are its previous block's).
-__device__ __forceinline__ void writeMaskHalf(BlockStateMasks& masks, int half, CellState state,
-                                              unsigned lane, bool fresh, SlotUpdate& u) {
-  const uint32_t occupied = __ballot_sync(kFullMask, state == CellState::kOccupied);
-  const uint32_t free = __ballot_sync(kFullMask, state == CellState::kFree);
-  if (lane == 0) {
-    uint32_t& occupied_half = reinterpret_cast<uint32_t*>(masks.occupied)[half];
-    uint32_t& free_half = reinterpret_cast<uint32_t*>(masks.free)[half];
-    const uint32_t occupied_before = fresh ? 0u : occupied_half;
-    const uint32_t free_before = fresh ? 0u : free_half;
-    u.masks_changed |= occupied != occupied_before || free != free_before;
-    occupied_half = occupied;
-    free_half = free;
+/// A slot's state masks as 16 halves of 32 cells (half h: cells 32 h .. 32 h + 31), each held by
+/// one lane while the warp updates the cells: the ballots of each group of 32 cells are kept in
+/// registers, and the masks are read (all halves at once, before the update) and written once
+/// per slot, not once per group: a read-modify-write per group put 16 dependent global loads
+/// on every slot's path and made the apply pass 7 times slower.
+struct MaskHalves {
+  uint32_t occupied_before = 0, free_before = 0;  ///< this lane's half before the update
+  uint32_t occupied = 0, free = 0;                ///< and after it
+
+  /// Lane `lane` loads half `half` (0 for a fresh slot: its masks are its previous block's).
+  __device__ __forceinline__ void load(const BlockStateMasks& m, int half, bool fresh) {
+    if (fresh) return;
+    occupied_before = reinterpret_cast<const uint32_t*>(m.occupied)[half];
+    free_before = reinterpret_cast<const uint32_t*>(m.free)[half];
   }
-}
+  /// Every lane calls it with its cell's state; lane `keeper` keeps the group's ballots.
+  __device__ __forceinline__ void vote(CellState state, unsigned lane, unsigned keeper) {
+    const uint32_t o = __ballot_sync(kFullMask, state == CellState::kOccupied);
+    const uint32_t f = __ballot_sync(kFullMask, state == CellState::kFree);
+    if (lane == keeper) {
+      occupied = o;
+      free = f;
+    }
+  }
+  /// Writes this lane's half; whether it changed.
+  __device__ __forceinline__ bool store(BlockStateMasks& m, int half) const {
+    reinterpret_cast<uint32_t*>(m.occupied)[half] = occupied;
+    reinterpret_cast<uint32_t*>(m.free)[half] = free;
+    return occupied != occupied_before || free != free_before;
+  }
+};
 
 /// The slot's flags and stamps once its cells are updated (one thread; the flags are the
 /// slot's OR / AND over its threads).
@@ -99,6 +114,12 @@ __global__ void __launch_bounds__(kThreads)
     const bool fresh = s.fresh[slot] != 0;
     SlotScratch& marks = s.scratch[slot];
     SlotUpdate u;
+    // Warp w updates the groups of 32 cells w, w + 4, w + 8, w + 12; its lane k keeps group
+    // w + 4 k's masks.
+    const unsigned lane = threadIdx.x & 31;
+    const int my_half = int(threadIdx.x >> 5) + 4 * int(lane);
+    MaskHalves halves;
+    if (lane < kCellsPerThread) halves.load(s.masks[slot], my_half, fresh);
 #pragma unroll
     for (int k = 0; k < kCellsPerThread; ++k) {
       const int cell = threadIdx.x + k * kThreads;
@@ -106,8 +127,9 @@ __global__ void __launch_bounds__(kThreads)
       const bool hit = marks.hit[cell >> 5] & bit;
       const CellState state = updateCell(
           s.cells[slot], cell, hit, hit || (marks.free[cell >> 5] & bit), fresh, model, remove, u);
-      writeMaskHalf(s.masks[slot], cell >> 5, state, threadIdx.x & 31, fresh, u);  // 32 cells
+      halves.vote(state, lane, unsigned(k));
     }
+    if (lane < kCellsPerThread) u.masks_changed = halves.store(s.masks[slot], my_half);
     updated += u.updated;
     const bool any_changed = __syncthreads_or(u.changed);  // also: every read of marks is done
     const bool occupancy_flipped = __syncthreads_or(u.occupancy_changed);
@@ -147,6 +169,9 @@ __global__ void __launch_bounds__(kThreads)
     const uint32_t word = reinterpret_cast<const uint32_t*>(&marks)[lane];
     const uint32_t bit = 1u << lane;
     SlotUpdate u;
+    // Lane h < 16 keeps the masks of cells 32 h .. 32 h + 31.
+    MaskHalves halves;
+    if (lane < kScratchWords) halves.load(s.masks[slot], int(lane), fresh);
 #pragma unroll
     for (int k = 0; k < kScratchWords; ++k) {
       const uint32_t free_word = __shfl_sync(kFullMask, word, k);
@@ -154,8 +179,9 @@ __global__ void __launch_bounds__(kThreads)
       const bool hit = hit_word & bit;
       const CellState state = updateCell(s.cells[slot], lane + 32 * k, hit,
                                          hit || (free_word & bit), fresh, model, remove, u);
-      writeMaskHalf(s.masks[slot], k, state, lane, fresh, u);  // cells 32 k .. 32 k + 31
+      halves.vote(state, lane, unsigned(k));
     }
+    if (lane < kScratchWords) u.masks_changed = halves.store(s.masks[slot], int(lane));
     updated += u.updated;
     const bool any_changed = __any_sync(kFullMask, u.changed);
     const bool occupancy_flipped = __any_sync(kFullMask, u.occupancy_changed);
