@@ -129,6 +129,8 @@ class BlockMap {
   /// log (no walk over the map); false (nothing written) when the log no longer reaches back
   /// that far.
   [[nodiscard]] bool masksChangedSince(uint64_t revision, std::vector<BlockKey>* out) const;
+  /// The same blocks as indices (one lookup a block, for callers that read them next).
+  [[nodiscard]] bool masksChangedSince(uint64_t revision, std::vector<BlockIndex>* out) const;
   [[nodiscard]] const BlockChangeLog& changeLog() const { return changes_; }
 
   size_t size() const { return index_.size(); }

@@ -20,12 +20,15 @@ class BlockChangeLog {
 
   explicit BlockChangeLog(size_t capacity = kDefaultCapacity) : capacity_(capacity) {}
 
-  /// Records that block `key` changed state at map revision `revision`.
+  /// Records that block `key` changed state at map revision `revision` (once per block and
+  /// revision: the caller's stamp says whether it did already, BlockMap::noteMasksChanged).
   void record(uint64_t revision, const BlockKey& key);
   /// Whether the log holds every record after `revision` (none was dropped that is newer).
   [[nodiscard]] bool reaches(uint64_t revision) const { return revision >= dropped_up_to_; }
-  /// The keys recorded after `revision`, each once, in unspecified order (including blocks
-  /// erased since: the caller filters). Only meaningful when reaches(revision).
+  /// The keys recorded after `revision`, in unspecified order (including blocks erased since:
+  /// the caller filters), each once -- but a block erased and made again within one revision
+  /// may be listed twice when the question spans that revision alone. Only meaningful when
+  /// reaches(revision).
   [[nodiscard]] std::vector<BlockKey> keysAfter(uint64_t revision) const;
   /// Forgets every record (the map's blocks are gone); what it answers stays complete.
   void clear() {

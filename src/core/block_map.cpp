@@ -272,10 +272,25 @@ void BlockMap::recomputeAllMasks(const OccupancyModel& model) {
 }
 
 bool BlockMap::masksChangedSince(uint64_t revision, std::vector<BlockKey>* out) const {
+  std::vector<BlockIndex> indices;
+  if (!masksChangedSince(revision, &indices)) return false;
+  out->clear();
+  out->reserve(indices.size());
+  for (const BlockIndex i : indices) out->push_back(meta_[i].key);
+  return true;
+}
+
+bool BlockMap::masksChangedSince(uint64_t revision, std::vector<BlockIndex>* out) const {
   if (!changes_.reaches(revision)) return false;
   out->clear();
-  for (const BlockKey& key : changes_.keysAfter(revision))
-    if (index_.find(key) != kNoBlock) out->push_back(key);
+  // A block erased and made again within one revision is recorded twice: each index once.
+  std::vector<uint8_t> listed(meta_.size(), 0);
+  for (const BlockKey& key : changes_.keysAfter(revision)) {
+    const BlockIndex i = index_.find(key);
+    if (i == kNoBlock || listed[i]) continue;
+    listed[i] = 1;
+    out->push_back(i);
+  }
   return true;
 }
 

@@ -34,10 +34,17 @@ std::vector<BlockKey> BlockChangeLog::keysAfter(uint64_t revision) const {
   // The records in revision order are searched, the rest (a device's write-back may bring
   // older revisions) scanned: a question about the last scan reads that scan's records only.
   const auto sorted_end = records_.begin() + static_cast<std::ptrdiff_t>(sorted_up_to_);
-  const auto first = std::upper_bound(
-      records_.begin(), sorted_end, revision,
-      [](uint64_t r, const Record& rec) { return r < rec.revision; });
+  const auto first =
+      std::upper_bound(records_.begin(), sorted_end, revision,
+                       [](uint64_t r, const Record& rec) { return r < rec.revision; });
   std::vector<BlockKey> out;
+  // One revision in order (a question about the last scan): each block is recorded once.
+  if (sorted_up_to_ == records_.size() &&
+      (first == records_.end() || first->revision == records_.back().revision)) {
+    out.reserve(static_cast<size_t>(records_.end() - first));
+    for (auto it = first; it != records_.end(); ++it) out.push_back(it->key);
+    return out;
+  }
   BlockKeyTable seen;
   seen.reserve(static_cast<size_t>(records_.end() - first));
   for (auto it = first; it != records_.end(); ++it) {

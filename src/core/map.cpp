@@ -555,8 +555,8 @@ const char* Map::backendName() const { return backend_->name(); }
 bool Map::masksChangedSince(uint64_t revision, std::vector<BlockKey>* keys,
                             std::vector<BlockStateMasks>* masks) const {
   std::lock_guard<std::mutex> lock(*sync_mutex_);
-  std::vector<BlockKey> host_keys;
-  if (!blocks_.masksChangedSince(revision, &host_keys)) return false;
+  std::vector<BlockIndex> host;
+  if (!blocks_.masksChangedSince(revision, &host)) return false;
   std::vector<BlockKey> device_keys;
   std::vector<BlockStateMasks> device_masks;
   backend_->masksChangedSince(revision, &device_keys, &device_masks);
@@ -564,13 +564,15 @@ bool Map::masksChangedSince(uint64_t revision, std::vector<BlockKey>* keys,
   *keys = std::move(device_keys);
   *masks = std::move(device_masks);
   BlockKeyTable listed;
-  listed.reserve(keys->size() + host_keys.size());
-  for (uint32_t i = 0; i < keys->size(); ++i) listed.insert((*keys)[i], i);
-  for (const BlockKey& k : host_keys) {
-    if (listed.find(k) != BlockKeyTable::kNone) continue;
-    const BlockIndex b = blocks_.find(k);
-    if (b == kNoBlock) continue;
-    listed.insert(k, static_cast<uint32_t>(keys->size()));
+  if (!keys->empty()) {
+    listed.reserve(keys->size() + host.size());
+    for (uint32_t i = 0; i < keys->size(); ++i) listed.insert((*keys)[i], i);
+  }
+  keys->reserve(keys->size() + host.size());
+  masks->reserve(masks->size() + host.size());
+  for (const BlockIndex b : host) {
+    const BlockKey& k = blocks_.meta(b).key;
+    if (listed.size() != 0 && listed.find(k) != BlockKeyTable::kNone) continue;
     keys->push_back(k);
     masks->push_back(blocks_.masks(b));
   }

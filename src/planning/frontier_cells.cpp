@@ -94,9 +94,11 @@ std::vector<uint16_t> frontierCellsOfBlock(const Map& map, const BlockView& view
   return cells;
 }
 
-std::vector<VoxelKey> findFrontierCells(const Map& map, const FrontierFilter& filter, int threads) {
+std::vector<VoxelKey> findFrontierCells(const Map& map, const FrontierFilter& filter, int threads,
+                                        const QueryControl* control) {
   FrontierTracker tracker(filter, threads);  // validates the filter and the thread count
-  tracker.update(map);
+  tracker.update(map, control);
+  checkQuery(control, "frontier cells");
   return tracker.cells();
 }
 

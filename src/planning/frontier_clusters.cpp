@@ -72,11 +72,14 @@ uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t i) {
 // 26-connected components of `sorted` (frontierOrder), each in that order, ordered by their
 // first cell: union-find over the cells, each joined with its 13 neighbours that come before
 // it (lexicographically negative offsets).
-std::vector<std::vector<VoxelKey>> components(const std::vector<VoxelKey>& sorted) {
+std::vector<std::vector<VoxelKey>> components(const std::vector<VoxelKey>& sorted,
+                                              const QueryControl* control) {
   const CellIndex index(sorted);
   std::vector<uint32_t> parent(sorted.size());
   for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  size_t done = 0;
   for (const CellIndex::Entry& e : index.blocks()) {
+    if (++done % 4096 == 0) checkQuery(control, "frontier clusters");
     int64_t near[27];
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
@@ -246,12 +249,15 @@ FrontierClusterer::FrontierClusterer(const ClusterOptions& options) : options_(o
 }
 
 std::vector<FrontierCluster> FrontierClusterer::cluster(const Map& map,
-                                                        const std::vector<VoxelKey>& cells) {
+                                                        const std::vector<VoxelKey>& cells,
+                                                        const QueryControl* control) {
+  checkQuery(control, "frontier clusters");
   std::vector<VoxelKey> sorted = cells;
   if (!std::is_sorted(sorted.begin(), sorted.end(), frontierOrder))
     std::sort(sorted.begin(), sorted.end(), frontierOrder);
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
-  std::vector<std::vector<VoxelKey>> comps = components(sorted);
+  std::vector<std::vector<VoxelKey>> comps = components(sorted, control);
+  checkQuery(control, "frontier clusters");
   comps.erase(std::remove_if(comps.begin(), comps.end(),
                              [&](const auto& c) { return c.size() < options_.min_cells; }),
               comps.end());

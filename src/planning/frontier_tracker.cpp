@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -65,12 +66,19 @@ struct FrontierTracker::State {
   }
 
   /// Recomputes the frontier bits of records `which` (parallel) and the total.
+  /// The query's control (update()'s), checked every kCheckEvery records examined.
+  const QueryControl* control = nullptr;
+  static constexpr int64_t kCheckEvery = 4096;
+
   void examine(const Map& map, const BlockView* view, const std::vector<uint32_t>& which) {
     const int64_t n = static_cast<int64_t>(which.size());
     std::vector<uint32_t> old_counts(which.size());
     for (int64_t i = 0; i < n; ++i) old_counts[i] = records[which[i]].count;
+    std::atomic<bool> stop{false};
 #pragma omp parallel for schedule(dynamic, 256) num_threads(threadCount())
     for (int64_t i = 0; i < n; ++i) {
+      if (stop.load(std::memory_order_relaxed)) continue;
+      if (control && i % kCheckEvery == 0 && control->stopped()) stop = true;
       BlockRecord& r = records[which[i]];
       const StateMasks* around[27];
       for (int dz = -1, j = 0; dz <= 1; ++dz)
@@ -85,6 +93,7 @@ struct FrontierTracker::State {
       for (int w = 0; w < kMaskWords; ++w) count += __builtin_popcountll(r.frontier.words[w]);
       r.count = count;
     }
+    checkQuery(control, "frontier update");  // throws once stopped (the caller forgets the set)
     for (int64_t i = 0; i < n; ++i) total = total - old_counts[i] + records[which[i]].count;
   }
 
@@ -223,7 +232,21 @@ uint64_t FrontierTracker::size() const { return state_->total; }
 uint64_t FrontierTracker::revision() const { return state_->revision; }
 const FrontierFilter& FrontierTracker::filter() const { return state_->filter; }
 
-FrontierUpdateStats FrontierTracker::update(const Map& map) {
+FrontierUpdateStats FrontierTracker::update(const Map& map, const QueryControl* control) {
+  try {
+    state_->control = control;
+    FrontierUpdateStats stats = updateChecked(map);
+    state_->control = nullptr;
+    return stats;
+  } catch (...) {
+    state_->control = nullptr;
+    state_->clear();  // a stopped or failed update leaves no half-updated set behind
+    throw;
+  }
+}
+
+FrontierUpdateStats FrontierTracker::updateChecked(const Map& map) {
+  checkQuery(state_->control, "frontier update");
   const auto t0 = std::chrono::steady_clock::now();
   State& s = *state_;
   FrontierUpdateStats stats;

@@ -12,6 +12,7 @@ set(FRAGG_PLANNING_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/frontier_cells.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frontier_tracker.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frontier_clusters.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/coarse_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/viewpoints.cpp
 )
 

@@ -44,6 +44,8 @@ TEST(BlockChangeLogTest, AnswersWhatItHoldsAndNothingOlder) {
   EXPECT_FALSE(log.reaches(1));
   EXPECT_TRUE(log.reaches(2));
   EXPECT_EQ(setOf(log.keysAfter(2)), (KeySet{{0, 0, 0}, {3, 0, 0}, {4, 0, 0}, {5, 0, 0}}));
+  // One revision asked about (the records binary-searched, nothing to deduplicate).
+  EXPECT_EQ(log.keysAfter(4), (std::vector<BlockKey>{{5, 0, 0}}));
   // A record older than what was dropped is not kept; an out-of-order newer one is.
   log.record(1, BlockKey{9, 9, 9});
   log.record(3, BlockKey{7, 7, 7});

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "fragg_map/map.h"
+#include "fragg_map/planning/coarse_map.h"
 #include "fragg_map/planning/frontier_cells.h"
 #include "fragg_map/planning/frontier_clusters.h"
 #include "interop_test_util.h"
@@ -87,15 +88,34 @@ TEST(CliFrontiers, JsonMatchesTheLibrary) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find(std::to_string(cells.size()) + " frontier cells"), std::string::npos)
       << r.out;
+  EXPECT_EQ(nlohmann::json::parse(runCli(dir, "frontiers '" + path + "' --json").out)
+                .count("coarse_cells"),
+            0u)
+      << "the default JSON has no new key";
+
+  // On the coarse map: the library's answer on planning::coarseStateMap, keys saying so.
+  r = runCli(dir, "frontiers '" + path + "' --coarse-cells 4 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  j = nlohmann::json::parse(r.out);
+  const Map coarse = planning::coarseStateMap(map, 4);
+  const auto coarse_cells = planning::findFrontierCells(coarse);
+  ASSERT_GT(coarse_cells.size(), 0u);
+  EXPECT_LT(coarse_cells.size(), cells.size());
+  EXPECT_EQ(j["frontier_cells"].get<size_t>(), coarse_cells.size());
+  EXPECT_EQ(j["coarse_cells"].get<int>(), 4);
+  EXPECT_NEAR(j["frontier_resolution_m"].get<double>(), 4 * map.resolution(), 1e-12);
+  EXPECT_EQ(j["clusters"].size(),
+            planning::FrontierClusterer().cluster(coarse, coarse_cells).size());
 }
 
 TEST(CliFrontiers, BadArgumentsExitTwo) {
   const std::string dir = testDir();
   Map map;
   const std::string path = corridorMap(dir, &map);
-  for (const std::string args : {" --box 1 1 1 0 0 0", " --box nan 0 0 1 1 1", " --viewpoints -1",
-                                 " --min-cluster 0", " --viewpoints 1 --radii 0", " --sensor sonar",
-                                 " --viewpoints 1 --max-range -2", " --height 2 1"}) {
+  for (const std::string args :
+       {" --box 1 1 1 0 0 0", " --box nan 0 0 1 1 1", " --viewpoints -1", " --min-cluster 0",
+        " --viewpoints 1 --radii 0", " --sensor sonar", " --viewpoints 1 --max-range -2",
+        " --height 2 1", " --coarse-cells 3", " --coarse-cells 0"}) {
     const auto r = runCli(dir, "frontiers '" + path + "'" + args);
     EXPECT_EQ(r.exit_code, 2) << args << ": " << r.err;
     EXPECT_NE(r.err.find("rror"), std::string::npos) << args << ": " << r.err;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <random>
 #include <set>
@@ -12,9 +13,11 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/geometry/mesh_bvh.h"
 #include "fragg_map/io/dataset.h"
+#include "fragg_map/planning/coarse_map.h"
 #include "fragg_map/planning/frontier_cells.h"
 #include "fragg_map/planning/frontier_clusters.h"
 #include "fragg_map/planning/frontier_tracker.h"
+#include "fragg_map/planning/query_control.h"
 #include "fragg_map/planning/viewpoints.h"
 #include "fragg_map/sim/lidar_sensor.h"
 #include "fragg_map/sim/scene.h"
@@ -370,6 +373,89 @@ TEST(Viewpoints, RankedCandidatesInFreeSpace) {
   const auto near = clusterViewpoints(map, clusters[0], o);
   ASSERT_FALSE(near.empty());
   EXPECT_NEAR(near.front().score, near.front().gain_bits / near.front().distance_m, 1e-9);
+}
+
+// Long queries stop on a deadline or a cancel flag (QueryStopped), leave no half-updated tracker
+// behind, and a control that never fires changes nothing.
+TEST(FrontierQueries, StopOnADeadlineOrACancelAndLeaveNoHalfSet) {
+  Map map = randomMap(0.1, 8, 5);
+  const std::vector<VoxelKey> expected = findFrontierCells(map);
+  ASSERT_GT(expected.size(), 100u);
+  std::atomic<bool> cancel{true};
+  QueryControl cancelled;
+  cancelled.cancel = &cancel;
+  EXPECT_THROW(findFrontierCells(map, {}, 0, &cancelled), QueryStopped);
+  const QueryControl late = QueryControl::within(-1.0);
+  EXPECT_THROW(findFrontierCells(map, {}, 0, &late), QueryStopped);
+  FrontierClusterer clusterer;
+  EXPECT_THROW(clusterer.cluster(map, expected, &cancelled), QueryStopped);
+
+  FrontierTracker tracker;
+  EXPECT_TRUE(tracker.update(map).full);
+  EXPECT_EQ(tracker.cells(), expected);
+  map.clearBox(map.centerOf(map.bounds().min),
+               map.centerOf(map.bounds().min) + Eigen::Vector3d::Constant(0.35));
+  EXPECT_THROW(tracker.update(map, &late), QueryStopped);
+  EXPECT_EQ(tracker.size(), 0u) << "a stopped update forgets the set";
+  EXPECT_TRUE(tracker.update(map).full);
+  EXPECT_EQ(tracker.cells(), findFrontierCells(map));
+
+  cancel = false;  // the flag read when checked, not when the control was made
+  const QueryControl hour = QueryControl::within(3600.0);
+  QueryControl both = hour;
+  both.cancel = &cancel;
+  EXPECT_EQ(findFrontierCells(map, {}, 0, &both), tracker.cells());
+  EXPECT_EQ(clusterer.cluster(map, tracker.cells(), &both).size(),
+            FrontierClusterer().cluster(map, tracker.cells()).size());
+}
+
+// The coarse map against a brute force over the map's cells: a coarse cell is free when a child
+// is free, unknown when every child is, occupied otherwise; at every allowed edge.
+TEST(CoarseFrontiers, CoarseStatesMatchBruteForce) {
+  const Map map = randomMap(0.1, 16, 9);
+  const KeyBounds b = map.bounds();
+  for (const int k : {1, 2, 4, 8}) {
+    const Map coarse = coarseStateMap(map, k);
+    EXPECT_DOUBLE_EQ(coarse.resolution(), 0.1 * k);
+    const auto down = [k](int32_t v) { return static_cast<int32_t>(std::floor(double(v) / k)); };
+    size_t counted[3] = {0, 0, 0};
+    for (int32_t cz = down(b.min.z) - 1; cz <= down(b.max.z) + 1; ++cz)
+      for (int32_t cy = down(b.min.y) - 1; cy <= down(b.max.y) + 1; ++cy)
+        for (int32_t cx = down(b.min.x) - 1; cx <= down(b.max.x) + 1; ++cx) {
+          bool any_free = false, any_occupied = false;
+          for (int32_t z = cz * k; z < cz * k + k; ++z)
+            for (int32_t y = cy * k; y < cy * k + k; ++y)
+              for (int32_t x = cx * k; x < cx * k + k; ++x) {
+                const Cell* c = map.findCell({x, y, z});
+                const CellState s = c ? map.state(*c) : CellState::kUnknown;
+                any_free |= s == CellState::kFree;
+                any_occupied |= s == CellState::kOccupied;
+              }
+          const CellState want = any_free       ? CellState::kFree
+                                 : any_occupied ? CellState::kOccupied
+                                                : CellState::kUnknown;
+          const Cell* got = coarse.findCell({cx, cy, cz});
+          const CellState have = got ? coarse.state(*got) : CellState::kUnknown;
+          ASSERT_EQ(have, want) << "k " << k << " at " << cx << " " << cy << " " << cz;
+          ++counted[static_cast<int>(want == CellState::kFree) +
+                    2 * static_cast<int>(want == CellState::kOccupied)];
+        }
+    EXPECT_GT(counted[1], 0u) << k;  // some free
+    if (k == 1) EXPECT_GT(counted[2], 0u);
+    EXPECT_GT(counted[0], 0u) << k;  // some unknown (the corner without blocks, the margin)
+    // Its frontiers are those of a map like any other.
+    EXPECT_EQ(findFrontierCells(coarse), bruteForceFrontiers(coarse)) << k;
+  }
+  // k = 1 keeps every state: the same frontier cells as the map.
+  EXPECT_EQ(findFrontierCells(coarseStateMap(map, 1)), findFrontierCells(map));
+  EXPECT_THROW((void)coarseStateMap(map, 3), InvalidArgument);
+  EXPECT_THROW((void)coarseStateMap(map, 16), InvalidArgument);
+  // The edge from a sensor's beam spacing: a 2-degree VLP-16 ring step at 20 m is 14 cells of
+  // 5 cm (8 is the largest edge); a 0.2-degree step at 10 m is under one cell.
+  EXPECT_EQ(coarseCellsForBeams(0.05, 2.0 * M_PI / 180.0, 20.0), 8);
+  EXPECT_EQ(coarseCellsForBeams(0.05, 0.2 * M_PI / 180.0, 10.0), 1);
+  EXPECT_EQ(coarseCellsForBeams(0.05, 0.6 * M_PI / 180.0, 20.0), 4);
+  EXPECT_THROW((void)coarseCellsForBeams(0.05, NAN, 20.0), InvalidArgument);
 }
 
 TEST(FrontierArguments, RefusedCleanly) {

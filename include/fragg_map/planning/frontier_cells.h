@@ -11,6 +11,7 @@
 
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
+#include "fragg_map/planning/query_control.h"
 
 namespace fragg::planning {
 
@@ -38,8 +39,9 @@ bool blockOrder(const BlockKey& a, const BlockKey& b);
 
 /// Every frontier cell of the map that passes `filter`, sorted by frontierOrder; blocks examined in
 /// parallel (`threads` OpenMP threads, 0 = every core). Hold the map's read lock.
+/// `control`: a deadline or a cancel flag (QueryStopped is thrown when either comes).
 std::vector<VoxelKey> findFrontierCells(const Map& map, const FrontierFilter& filter = {},
-                                        int threads = 0);
+                                        int threads = 0, const QueryControl* control = nullptr);
 
 /// Frontier cells of one block (those passing `filter`), as cell indices (cellIndexOf)
 /// in increasing order; empty when the block does not exist.

@@ -11,6 +11,7 @@
 
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
+#include "fragg_map/planning/query_control.h"
 
 namespace fragg::planning {
 
@@ -39,7 +40,10 @@ class FrontierClusterer {
   /// Clusters of `cells` (frontier cells of `map`), ordered by their first cell (frontierOrder).
   /// Ids carry over from the previous call for clusters with exactly the same cells; new
   /// clusters get ids never used before.
-  std::vector<FrontierCluster> cluster(const Map& map, const std::vector<VoxelKey>& cells);
+  /// `control`: a deadline or a cancel flag (QueryStopped is thrown when either comes; the
+  /// ids given so far are kept).
+  std::vector<FrontierCluster> cluster(const Map& map, const std::vector<VoxelKey>& cells,
+                                       const QueryControl* control = nullptr);
 
  private:
   ClusterOptions options_;

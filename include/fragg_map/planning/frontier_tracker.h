@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "fragg_map/planning/frontier_cells.h"
+#include "fragg_map/planning/query_control.h"
 
 namespace fragg::planning {
 
@@ -41,8 +42,10 @@ class FrontierTracker {
   FrontierTracker(FrontierTracker&&) noexcept;
   FrontierTracker& operator=(FrontierTracker&&) noexcept;
 
-  /// Brings the set up to date with `map` (hold its read lock).
-  FrontierUpdateStats update(const Map& map);
+  /// Brings the set up to date with `map` (hold its read lock). With a `control` whose
+  /// deadline passes or that is cancelled, throws QueryStopped and forgets the set (the next
+  /// update is a full one).
+  FrontierUpdateStats update(const Map& map, const QueryControl* control = nullptr);
   /// Forgets everything: the next update is a full one.
   void reset();
 
@@ -58,6 +61,8 @@ class FrontierTracker {
   const FrontierFilter& filter() const;
 
  private:
+  /// update() once its control is installed.
+  FrontierUpdateStats updateChecked(const Map& map);
   struct State;
   std::unique_ptr<State> state_;
 };

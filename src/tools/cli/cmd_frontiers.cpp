@@ -5,12 +5,15 @@
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "cli/commands.h"
 #include "cli/frontier_options.h"
 #include "cli/map_input.h"
+#include "fragg_map/errors.h"
+#include "fragg_map/planning/coarse_map.h"
 
 namespace fragg::cli {
 
@@ -20,13 +23,22 @@ struct FrontierCommandOptions {
   std::string map;
   FrontierFlags flags;
   bool json = false;
+  int coarse_cells = 1;  ///< > 1: on the coarse map (planning/coarse_map.h)
 };
 
 nlohmann::json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
 void runFrontiers(const FrontierCommandOptions& o) {
   const FrontierSettings settings = frontierSettings(o.flags);
-  const Map map = loadMapFile(o.map);
+  if (!planning::validCoarseCells(o.coarse_cells))
+    throw InvalidArgument(
+        fmt::format("--coarse-cells must be 1, 2, 4 or 8, got {}", o.coarse_cells));
+  const Map loaded = loadMapFile(o.map);
+  // With --coarse-cells the frontiers, clusters and viewpoints are those of the coarse map:
+  // their cells are coarse cells (keys and centres at its resolution).
+  std::optional<Map> coarse;
+  if (o.coarse_cells > 1) coarse.emplace(planning::coarseStateMap(loaded, o.coarse_cells));
+  const Map& map = coarse ? *coarse : loaded;
   const FrontierResult r = computeFrontiers(map, settings);
   const auto& cells = r.cells;
   const auto& clusters = r.clusters;
@@ -54,10 +66,14 @@ void runFrontiers(const FrontierCommandOptions& o) {
                     {"direction", vec(c.direction)},
                     {"viewpoints", vs}});
     }
-    const nlohmann::json j = {{"frontier_cells", cells.size()},
-                              {"clusters", js},
-                              {"ms_cells", r.cells_ms},
-                              {"ms_clusters_viewpoints", r.clusters_viewpoints_ms}};
+    nlohmann::json j = {{"frontier_cells", cells.size()},
+                        {"clusters", js},
+                        {"ms_cells", r.cells_ms},
+                        {"ms_clusters_viewpoints", r.clusters_viewpoints_ms}};
+    if (o.coarse_cells > 1) {  // keys only when asked: the default JSON is unchanged
+      j["coarse_cells"] = o.coarse_cells;
+      j["frontier_resolution_m"] = map.resolution();
+    }
     std::printf("%s\n", j.dump().c_str());
     return;
   }
@@ -94,6 +110,10 @@ void addFrontiersCommand(CLI::App& app) {
   c->add_option("map", o->map, "Map (.fgm, or .bt / .ot)")->required();
   addFrontierFlags(c, &o->flags);
   c->add_flag("--json", o->json, "Print one JSON object on stdout");
+  c->add_option("--coarse-cells", o->coarse_cells,
+                "Frontiers on a grid of N x N x N map cells (1, 2, 4, 8): a coarse cell is free "
+                "when a cell is, unknown when all are (LiDAR gaps between beams vanish)")
+      ->capture_default_str();
   c->callback([o] { runFrontiers(*o); });
 }
 

@@ -1,0 +1,93 @@
+#include "fragg_map/planning/coarse_map.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <vector>
+
+#include "fragg_map/errors.h"
+#include "fragg_map/state_masks.h"
+
+namespace fragg::planning {
+
+namespace {
+
+/// floor(v / cells) for cells a power of two (arithmetic shift: right for negative keys).
+int32_t coarseOf(int32_t v, int shift) { return v >> shift; }
+
+}  // namespace
+
+bool validCoarseCells(int cells) { return cells == 1 || cells == 2 || cells == 4 || cells == 8; }
+
+Map coarseStateMap(const Map& map, int cells, const QueryControl* control) {
+  if (!validCoarseCells(cells))
+    throw InvalidArgument(
+        fmt::format("coarse frontier cells must be 1, 2, 4 or 8 map cells, got {}", cells));
+  const int shift = cells == 1 ? 0 : (cells == 2 ? 1 : (cells == 4 ? 2 : 3));
+  MapParams params = map.params();
+  params.resolution_m = map.resolution() * cells;
+  params.backend = Backend::kCpu;
+  params.scans.keep = false;
+  Map coarse(params);
+  const OccupancyModel& model = map.model();
+  const Cell free_cell{0, model.min_fx}, occupied_cell{0, model.max_fx};
+  if (model.state(free_cell) != CellState::kFree ||
+      model.state(occupied_cell) != CellState::kOccupied)
+    throw InvalidArgument(
+        "coarse map: the occupancy model's clamps lie inside its unknown band (a coarse cell "
+        "could not be written free or occupied)");
+  const BlockView view = map.blockView();
+  // Per coarse cell of a block (up to 64), its children's states OR-ed: any free, any occupied
+  // (unknown when neither).
+  const int per_edge = kBlockSize / cells;
+  std::vector<uint8_t> any_free(per_edge * per_edge * per_edge);
+  std::vector<uint8_t> any_occupied(any_free.size());
+  size_t done = 0;
+  coarse.writeCells([&](CellWriter& w) {
+    view.forEach([&](const BlockKey& b, const Block&) {
+      if (++done % 4096 == 0) checkQuery(control, "coarse map");
+      const BlockStateMasks& m = *view.findMasks(b);
+      std::fill(any_free.begin(), any_free.end(), 0);
+      std::fill(any_occupied.begin(), any_occupied.end(), 0);
+      for (int w8 = 0; w8 < kStateMaskWords; ++w8) {
+        for (uint64_t bits = m.free[w8] | m.occupied[w8]; bits; bits &= bits - 1) {
+          const int bit = __builtin_ctzll(bits);
+          const int cell = w8 * 64 + bit;
+          const int x = cell & kBlockMask, y = (cell >> kBlockBits) & kBlockMask,
+                    z = cell >> (2 * kBlockBits);
+          const int c = ((z >> shift) * per_edge + (y >> shift)) * per_edge + (x >> shift);
+          if (m.free[w8] >> bit & 1)
+            any_free[c] = 1;
+          else
+            any_occupied[c] = 1;
+        }
+      }
+      const VoxelKey origin = voxelKeyOf(b, 0);
+      for (int cz = 0; cz < per_edge; ++cz)
+        for (int cy = 0; cy < per_edge; ++cy)
+          for (int cx = 0; cx < per_edge; ++cx) {
+            const int c = (cz * per_edge + cy) * per_edge + cx;
+            if (!any_free[c] && !any_occupied[c]) continue;  // unknown: left unobserved
+            const VoxelKey k{coarseOf(origin.x, shift) + cx, coarseOf(origin.y, shift) + cy,
+                             coarseOf(origin.z, shift) + cz};
+            w.set(k, any_free[c] ? free_cell : occupied_cell);
+          }
+    });
+  });
+  checkQuery(control, "coarse map");
+  return coarse;
+}
+
+int coarseCellsForBeams(double resolution_m, double angle_rad, double range_m) {
+  if (!(resolution_m > 0.0) || !(angle_rad > 0.0) || !(range_m > 0.0) ||
+      !std::isfinite(angle_rad * range_m))
+    throw InvalidArgument(fmt::format(
+        "beam spacing needs a positive resolution, angle and range, got {} m, {} rad, {} m",
+        resolution_m, angle_rad, range_m));
+  const double spacing_cells = angle_rad * range_m / resolution_m;
+  int cells = 1;
+  while (cells < 8 && 2.0 * cells <= spacing_cells) cells *= 2;
+  return cells;
+}
+
+}  // namespace fragg::planning
