@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 #include <utility>
 
@@ -104,6 +105,21 @@ TEST(StateMasksTest, RemovalAndCorrectionKeepMasksCurrent) {
   EXPECT_NE(maskCounts(map), before) << "the removal changed no state";
   map.correctPoses({{0, poseAt(0, 0.07, 0.02)}, {2, poseAt(2, -0.05, 0.01)}});
   expectMasksCurrent(map, "correctPoses");
+}
+
+TEST(StateMasksTest, FreeBoxKeepsMasksCurrentAndListsItsBlocks) {
+  Map map(keeping());
+  for (int i = 0; i < 3; ++i) map.insert(room(), poseAt(i), lidar());
+  const uint64_t before = map.revision();
+  const Eigen::Vector3d lo(3.5, -1.0, -0.5), hi(4.5, 1.0, 0.5);  // across a wall
+  ASSERT_EQ(map.query(Eigen::Vector3d(3.99, 0.5, 0.3)), CellState::kOccupied);
+  EXPECT_GT(map.freeBox(lo, hi), 0u);
+  expectMasksCurrent(map, "freeBox");
+  EXPECT_EQ(map.query(Eigen::Vector3d(3.99, 0.5, 0.3)), CellState::kFree);
+  const std::vector<BlockKey> listed = map.changedBlocksSince(before, BlockChange::kMasks);
+  const BlockKey wall_block = blockKeyOf(map.keyOf(Eigen::Vector3d(3.99, 0.5, 0.3)));
+  EXPECT_NE(std::find(listed.begin(), listed.end(), wall_block), listed.end())
+      << "the freed wall's block is not in the kMasks list";
 }
 
 TEST(StateMasksTest, ClearBoxAndWriteCellsKeepMasksCurrent) {

@@ -6,6 +6,7 @@ if(FRAGG_HAVE_ROS)
     LABELS ros)
   fragg_add_test(ros_map_to_msgs_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/block_markers_test.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/marker_chunks_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/map_msgs_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/speckles_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/output_cache_test.cpp
@@ -67,6 +68,12 @@ if(FRAGG_HAVE_ROS)
   # tf missing / from the future / too old, a cloud the map refuses; the map unchanged.
   fragg_add_test(ros_cloud_faults_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/cloud_faults_test.cpp
+    LIBS fragg_map_nodelet
+    LABELS ros)
+  # Every cloud received in exactly one ~stats count (cloud_pipeline.h): queue drops, faults,
+  # tf missing / too old (also after a wait in the queue), counters restarted mid-flight.
+  fragg_add_test(ros_cloud_counts_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/cloud_counts_test.cpp
     LIBS fragg_map_nodelet
     LABELS ros)
   # file_root: the folder the server's file services are confined to (paths, .., symlinks).
