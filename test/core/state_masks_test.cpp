@@ -110,15 +110,25 @@ TEST(StateMasksTest, RemovalAndCorrectionKeepMasksCurrent) {
 TEST(StateMasksTest, FreeBoxKeepsMasksCurrentAndListsItsBlocks) {
   Map map(keeping());
   for (int i = 0; i < 3; ++i) map.insert(room(), poseAt(i), lidar());
+  // An occupied cell of a wall; the box around it cuts blocks (not on block bounds).
+  VoxelKey wall{0, 0, 0};
+  bool found = false;
+  map.forEachBlock([&](const BlockKey& key, const Block& block) {
+    for (int c = 0; c < kCellsPerBlock && !found; ++c)
+      if (map.state(block.cells[c]) == CellState::kOccupied) {
+        wall = voxelKeyOf(key, c);
+        found = true;
+      }
+  });
+  ASSERT_TRUE(found);
+  const Eigen::Vector3d p = map.centerOf(wall);
   const uint64_t before = map.revision();
-  const Eigen::Vector3d lo(3.5, -1.0, -0.5), hi(4.5, 1.0, 0.5);  // across a wall
-  ASSERT_EQ(map.query(Eigen::Vector3d(3.99, 0.5, 0.3)), CellState::kOccupied);
-  EXPECT_GT(map.freeBox(lo, hi), 0u);
+  EXPECT_GT(map.freeBox(p - Eigen::Vector3d(0.33, 0.41, 0.27), p + Eigen::Vector3d(0.3, 0.3, 0.3)),
+            0u);
   expectMasksCurrent(map, "freeBox");
-  EXPECT_EQ(map.query(Eigen::Vector3d(3.99, 0.5, 0.3)), CellState::kFree);
+  EXPECT_EQ(map.query(p), CellState::kFree);
   const std::vector<BlockKey> listed = map.changedBlocksSince(before, BlockChange::kMasks);
-  const BlockKey wall_block = blockKeyOf(map.keyOf(Eigen::Vector3d(3.99, 0.5, 0.3)));
-  EXPECT_NE(std::find(listed.begin(), listed.end(), wall_block), listed.end())
+  EXPECT_NE(std::find(listed.begin(), listed.end(), blockKeyOf(wall)), listed.end())
       << "the freed wall's block is not in the kMasks list";
 }
 

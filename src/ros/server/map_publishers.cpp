@@ -16,6 +16,14 @@
 #include "fragg_map/ros/frustum_marker.h"
 
 namespace fragg::ros {
+namespace {
+
+// Outgoing marker arrays kept per subscriber: an increment roscpp drops from a full queue
+// would leave that subscriber's view wrong until the next full set (the whole-map topics
+// carry the whole map in every message and keep 1).
+constexpr uint32_t kMarkerQueue = 50;
+
+}  // namespace
 
 MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
                              const ServerParams& params, SharedMap* shared,
@@ -55,11 +63,11 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
     };
   };
   occupied_markers_.pub = nh.advertise<visualization_msgs::MarkerArray>(
-      "occupied_cells_vis_array", 1, connect(&occupied_markers_), ::ros::SubscriberStatusCallback(),
+      "occupied_cells_vis_array", kMarkerQueue, connect(&occupied_markers_), ::ros::SubscriberStatusCallback(),
       ::ros::VoidConstPtr(), false);
   if (params_.publish_free_space)
     free_markers_.pub = nh.advertise<visualization_msgs::MarkerArray>(
-        "free_cells_vis_array", 1, connect(&free_markers_), ::ros::SubscriberStatusCallback(),
+        "free_cells_vis_array", kMarkerQueue, connect(&free_markers_), ::ros::SubscriberStatusCallback(),
         ::ros::VoidConstPtr(), false);
   occupied_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>(
       "occupied_cells", 1, currentMessageTo(&occupied_cloud_pub_),
