@@ -1,5 +1,5 @@
 // One CUBE_LIST marker per chunk of blocks; incremental updates from the state masks and the
-// map's change log (BlockChange::kMasks).
+// changed-block lists.
 #include "fragg_map/ros/block_markers.h"
 
 #include <algorithm>
@@ -213,9 +213,14 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
       }
     }
   }
-  // The blocks whose state masks changed (from the change log), with their 26 neighbours when
-  // speckles are hidden (a cell's speckle state follows its neighbours).
-  std::vector<fragg::BlockRef> changed = blocks.changedRefsSince(since, fragg::BlockChange::kMasks);
+  // The blocks whose drawn state changed, with their 26 neighbours when speckles are hidden
+  // (a cell's speckle state follows its neighbours' occupancy).
+  // Occupied markers: the blocks where a cell crossed the occupied threshold (most blocks a
+  // scan changes gain free cells only); other states: those whose masks changed, from the
+  // change log.
+  std::vector<fragg::BlockRef> changed = blocks.changedRefsSince(
+      since, style.state == fragg::CellState::kOccupied ? fragg::BlockChange::kOccupied
+                                                        : fragg::BlockChange::kMasks);
   if (style.hide_speckles && !changed.empty()) {
     std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around;
     for (const fragg::BlockRef& r : changed)

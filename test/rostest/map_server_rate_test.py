@@ -3,9 +3,15 @@
 dropped, every cloud received in exactly one ~stats count, latency figures and one trace_csv
 row per cloud, and the incremental chunk markers, applied in order, equal to the whole map a
 late subscriber gets as its first message and to the occupied cloud."""
+import io
 import math
+import os
 import struct
+import subprocess
+import sys
+import tempfile
 import threading
+import time
 import unittest
 
 import rospy
@@ -16,7 +22,30 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from fragg_map.msg import MapStats
 from fragg_map.srv import GetStats
-from map_server_checks import NS, wait_for
+from map_server_checks import NS
+
+# A subscriber in a process of its own (rospy shares one connection among a process's
+# subscribers to a topic, so a second one in this process would not be new to the server):
+# writes the first MarkerArray it gets, serialised, to argv[1].
+LATE_SUBSCRIBER = '''
+import io, sys, rospy
+from visualization_msgs.msg import MarkerArray
+rospy.init_node("late_marker_subscriber", anonymous=True)
+msg = rospy.wait_for_message("/occupied_cells_vis_array", MarkerArray, timeout=30)
+buf = io.BytesIO()
+msg.serialize(buf)
+open(sys.argv[1], "wb").write(buf.getvalue())
+'''
+
+
+def wait_for(predicate, timeout_s, what, period_s=1.0):
+    # Polled once a second: every ~get_stats takes the map's read lock.
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(period_s)
+    raise AssertionError("timed out waiting for " + what)
 
 
 def apply(arrays, view):
@@ -122,17 +151,12 @@ class MapServerRateTest(unittest.TestCase):
         self.assertTrue(any(not any(m.action == Marker.DELETEALL for m in a.markers)
                             for a in arrays[1:]), "no incremental update")
         # A late subscriber: its first message is the whole map (DELETEALL, then every chunk).
-        late = []
-        got = threading.Event()
-
-        def first_only(msg):
-            if not got.is_set():
-                late.append(msg)
-                got.set()
-        sub = rospy.Subscriber("/occupied_cells_vis_array", MarkerArray, first_only,
-                               queue_size=10)
-        self.assertTrue(got.wait(20), "the late subscriber got nothing")
-        sub.unregister()
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "first.bin")
+            subprocess.run([sys.executable, "-c", LATE_SUBSCRIBER, path], check=True,
+                           timeout=40)
+            with open(path, "rb") as f:
+                late = [MarkerArray().deserialize(f.read())]
         self.assertEqual(late[0].markers[0].action, Marker.DELETEALL)
         full = apply(late, {})
         self.assertEqual(drawn(incremental), drawn(full))

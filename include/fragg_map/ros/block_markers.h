@@ -2,8 +2,9 @@
 // (MarkerStyle::chunk_blocks blocks a side; 1: one marker per 8x8x8 block), so that a publisher
 // sends only the chunks whose drawn cells changed and DELETEs the chunks that no longer hold a
 // drawn cell. The drawn cells come from the blocks' state masks (state_masks.h), the blocks to
-// look at from the map's change log (Map::changedBlocksSince with BlockChange::kMasks): an
-// update's cost follows what changed, not the map. Applied in order, the updates show what a
+// look at from Map::changedBlocksSince (kOccupied for occupied markers: only the blocks where a
+// cell crossed the occupied threshold; kMasks, the change log, for the others): an update's
+// work follows what changed, not the map. Applied in order, the updates show what a
 // full rebuild (allBlockMarkers) shows.
 #pragma once
 
@@ -110,7 +111,7 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
 
 /// Markers for the chunks changed since `ledger->publishedRevision()`: ADD (or modify) for a
 /// chunk where a block's drawn cells changed and that still draws some, DELETE for a shown
-/// chunk that lost them all. The blocks looked at are those whose state masks changed (with
+/// chunk that lost them all. The blocks looked at are those whose drawn state changed (with
 /// hidden speckles, their 26 neighbours too), and, when the map's view moved, the shown ones
 /// that left the map. Updates the ledger to the map's revision.
 visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
