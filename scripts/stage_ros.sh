@@ -93,7 +93,8 @@ bag=$1; rate=$2; shift 2
 out=${OUT:-/tmp}
 port=${ROS_MASTER_URI##*:}
 rosmaster --core -p "${port%/}" > "$out/master.log" 2>&1 & master=$!
-trap 'kill $node_pid 2>/dev/null; kill $master 2>/dev/null' EXIT
+node_pid=
+trap 'kill ${node_pid:-} 2>/dev/null || true; kill $master 2>/dev/null || true' EXIT
 sleep 3
 fragg_map_server cloud_in:=/points _frame_id:=map _trace_csv:="$out/trace.csv" "$@" \
   > "$out/node.log" 2>&1 & node_pid=$!
