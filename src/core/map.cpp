@@ -461,6 +461,8 @@ uint64_t Map::freeBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max
   for (BlockIndex i : hit) {
     const BlockKey key = blocks_.meta(i).key;
     Block& b = blocks_.block(i);
+    BlockStateMasks& masks = blocks_.masks(i);  // kept current, as every writer does
+    const BlockStateMasks masks_before = masks;
     bool changed = false, occupied_changed = false, state_changed = false;
     for (int c = 0; c < kCellsPerBlock; ++c) {
       Cell& cell = b.cells[c];
@@ -475,6 +477,7 @@ uint64_t Map::freeBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max
       occupied_changed |= model_.state(cell) == CellState::kOccupied;
       state_changed |= model_.stateDiffers(cell, freed);
       cell = freed;
+      masks.set(c, model_.state(freed));
       changed = true;
     }
     if (!changed) continue;
@@ -482,6 +485,7 @@ uint64_t Map::freeBox(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max
     m.changed_at = revision_;  // also ends free_saturated_at's claim
     if (occupied_changed) m.occupied_at = revision_;
     if (state_changed) m.state_at = revision_;
+    if (masks != masks_before) blocks_.noteMasksChanged(i, revision_);
   }
   return set;
 }

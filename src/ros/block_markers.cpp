@@ -1,7 +1,8 @@
-// One CUBE_LIST marker per block; incremental updates from Map::changedBlocksSince (which
-// cells are occupied, for occupied markers; any change for the others).
+// One CUBE_LIST marker per chunk of blocks; incremental updates from the state masks and the
+// changed-block lists.
 #include "fragg_map/ros/block_markers.h"
 
+#include <algorithm>
 #include <optional>
 #include <unordered_set>
 #include <vector>
@@ -9,6 +10,7 @@
 #include "fragg_map/ros/height_color.h"
 #include "fragg_map/ros/layer_masks.h"
 #include "fragg_map/ros/speckles.h"
+#include "fragg_map/state_masks.h"
 
 namespace fragg::ros {
 namespace {
@@ -28,9 +30,27 @@ visualization_msgs::Marker markerHeader(const MarkerStyle& style, const ::ros::T
 
 }  // namespace
 
+static int32_t floorDiv(int32_t a, int32_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+fragg::BlockKey chunkOf(const fragg::BlockKey& key, int32_t chunk_blocks) {
+  if (chunk_blocks <= 1) return key;
+  return {floorDiv(key.x, chunk_blocks), floorDiv(key.y, chunk_blocks),
+          floorDiv(key.z, chunk_blocks)};
+}
+
 int32_t MarkerLedger::idOf(const fragg::BlockKey& key) const {
-  const auto it = ids_.find(key);
-  return it == ids_.end() ? -1 : it->second.id;
+  const auto it = chunks_.find(chunkOf(key, chunk_blocks_));
+  if (it == chunks_.end()) return -1;
+  for (const ShownBlock& b : it->second.blocks)
+    if (b.key == key) return it->second.id;
+  return -1;
+}
+
+void MarkerLedger::clear(int32_t chunk_blocks) {
+  chunks_.clear();
+  chunk_blocks_ = std::max(1, chunk_blocks);
+  shown_blocks_ = 0;
+  next_id_ = 0;
 }
 
 CellMask cellMask(const fragg::Map& map, const fragg::Block& block, fragg::CellState state) {
@@ -61,7 +81,19 @@ CellMask cellMask(const fragg::Map& map, const fragg::Block& block, fragg::CellS
 CellMask drawnCells(const fragg::Map& map, const fragg::BlockView& blocks,
                     const fragg::BlockKey& key, const fragg::Block& block,
                     const MarkerStyle& style) {
-  CellMask cells = cellMask(map, block, style.state);
+  // Occupied and free cells from the block's state masks (kept by every write): no cell read.
+  CellMask cells;
+  const fragg::BlockStateMasks* masks = nullptr;
+  if (style.state == fragg::CellState::kOccupied || style.state == fragg::CellState::kFree)
+    masks = blocks.findMasks(key);
+  if (masks) {
+    const uint64_t* words =
+        style.state == fragg::CellState::kOccupied ? masks->occupied : masks->free;
+    for (int w = 0; w < fragg::kStateMaskWords; ++w)
+      if (words[w]) cells |= CellMask(words[w]) << (64 * w);
+  } else {
+    cells = cellMask(map, block, style.state);
+  }
   if (!style.heights.unbounded()) {
     const uint8_t layers = style.heights.blockLayers(key.z, map.resolution());
     CellMask shown;
@@ -73,15 +105,14 @@ CellMask drawnCells(const fragg::Map& map, const fragg::BlockView& blocks,
   return cells;
 }
 
-visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::BlockKey& key,
-                                       const CellMask& cells, const MarkerStyle& style,
-                                       const ::ros::Time& stamp, int32_t id) {
-  visualization_msgs::Marker m = markerHeader(style, stamp, id, visualization_msgs::Marker::ADD);
+namespace {
+
+/// Appends the cells `cells` of block `key` to `m` (points and their colours).
+void appendCells(const fragg::Map& map, const fragg::BlockKey& key, const CellMask& cells,
+                 const MarkerStyle& style, visualization_msgs::Marker* m) {
   const double res_m = map.resolution();
-  m.scale.x = m.scale.y = m.scale.z = res_m;
-  m.color = heightColor(0.0, 0.0, 1.0, style.alpha);  // per-point colours below win
-  m.points.reserve(cells.count());
-  m.colors.reserve(cells.count());
+  m->points.reserve(m->points.size() + cells.count());
+  m->colors.reserve(m->colors.size() + cells.count());
   // Colours depend on the height only: one per z layer of the block.
   std_msgs::ColorRGBA layer_color[fragg::kBlockSize];
   for (int z = 0; z < fragg::kBlockSize; ++z) {
@@ -102,42 +133,105 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
     p.x = (v.x + 0.5) * res_m;
     p.y = (v.y + 0.5) * res_m;
     p.z = (v.z + 0.5) * res_m;
-    m.points.push_back(p);
-    m.colors.push_back(layer_color[c >> (2 * fragg::kBlockBits)]);
+    m->points.push_back(p);
+    m->colors.push_back(layer_color[c >> (2 * fragg::kBlockBits)]);
     if (style.colors) {
       if (const std::optional<Rgb8> rgb = style.colors->find(v)) {
-        m.colors.back().r = rgb->r / 255.0f;
-        m.colors.back().g = rgb->g / 255.0f;
-        m.colors.back().b = rgb->b / 255.0f;
+        m->colors.back().r = rgb->r / 255.0f;
+        m->colors.back().g = rgb->g / 255.0f;
+        m->colors.back().b = rgb->b / 255.0f;
       }
     }
   }
+}
+
+visualization_msgs::Marker emptyCubeList(const fragg::Map& map, const MarkerStyle& style,
+                                         const ::ros::Time& stamp, int32_t id) {
+  visualization_msgs::Marker m = markerHeader(style, stamp, id, visualization_msgs::Marker::ADD);
+  m.scale.x = m.scale.y = m.scale.z = map.resolution();
+  m.color = heightColor(0.0, 0.0, 1.0, style.alpha);  // per-point colours win
   return m;
 }
+
+bool byKey(const fragg::BlockKey& a, const fragg::BlockKey& b) {
+  return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
+}
+
+}  // namespace
+
+visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::BlockKey& key,
+                                       const CellMask& cells, const MarkerStyle& style,
+                                       const ::ros::Time& stamp, int32_t id) {
+  visualization_msgs::Marker m = emptyCubeList(map, style, stamp, id);
+  appendCells(map, key, cells, style, &m);
+  return m;
+}
+
+namespace {
+
+/// The marker of a chunk: its blocks' cells, blocks in key order.
+template <typename Blocks>
+visualization_msgs::Marker chunkMarker(const fragg::Map& map, const Blocks& blocks,
+                                       const MarkerStyle& style, const ::ros::Time& stamp,
+                                       int32_t id) {
+  std::vector<size_t> order(blocks.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return byKey(blocks[a].key, blocks[b].key); });
+  visualization_msgs::Marker m = emptyCubeList(map, style, stamp, id);
+  for (size_t i : order) appendCells(map, blocks[i].key, blocks[i].cells, style, &m);
+  return m;
+}
+
+}  // namespace
 
 visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
                                                     const ::ros::Time& stamp,
                                                     MarkerLedger* ledger) {
+  if (std::max(1, style.chunk_blocks) != ledger->chunk_blocks_ && !ledger->chunks_.empty())
+    return allBlockMarkers(map, style, stamp, ledger);  // a new chunk size: redraw all
+  ledger->chunk_blocks_ = std::max(1, style.chunk_blocks);
+  const int32_t chunk_blocks = ledger->chunk_blocks_;
   visualization_msgs::MarkerArray out;
   const fragg::BlockView blocks = map.blockView();
   const uint64_t since = ledger->published_revision_;
+  std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> dirty;  // chunk keys
   // Shown blocks that were erased (clearBox, reset, paged out) are not listed as changed: look
   // them up, when the map's view changed since the last update (no erase without that).
-  const bool view_moved = map.viewEpoch() != ledger->view_epoch_;
-  for (auto it = ledger->ids_.begin(); view_moved && it != ledger->ids_.end();) {
-    if (!blocks.findBlock(it->first)) {
-      out.markers.push_back(
-          markerHeader(style, stamp, it->second.id, visualization_msgs::Marker::DELETE));
-      it = ledger->ids_.erase(it);
-    } else {
-      ++it;
+  if (map.viewEpoch() != ledger->view_epoch_) {
+    for (auto& [chunk_key, chunk] : ledger->chunks_) {
+      auto& list = chunk.blocks;
+      const size_t before = list.size();
+      list.erase(std::remove_if(list.begin(), list.end(),
+                                [&](const MarkerLedger::ShownBlock& b) {
+                                  return blocks.findBlock(b.key) == nullptr;
+                                }),
+                 list.end());
+      if (list.size() != before) {
+        ledger->shown_blocks_ -= before - list.size();
+        dirty.insert(chunk_key);
+      }
     }
   }
-  // Occupied markers: only blocks where a cell crossed the occupied threshold; other states:
-  // the blocks where a cell's state changed.
+  // The blocks whose drawn state changed, with their 26 neighbours when speckles are hidden
+  // (a cell's speckle state follows its neighbours' occupancy).
+  // Occupied markers: the blocks where a cell crossed the occupied threshold (most blocks a
+  // scan changes gain free cells only); other states: those whose masks changed, from the
+  // change log.
   std::vector<fragg::BlockRef> changed = blocks.changedRefsSince(
       since, style.state == fragg::CellState::kOccupied ? fragg::BlockChange::kOccupied
-                                                        : fragg::BlockChange::kState);
+                                                        : fragg::BlockChange::kMasks);
+  if (style.hide_speckles && !changed.empty()) {
+    std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around;
+    for (const fragg::BlockRef& r : changed)
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx)
+            around.insert({r.key.x + dx, r.key.y + dy, r.key.z + dz});
+    changed.clear();
+    for (const fragg::BlockKey& k : around)
+      if (const fragg::Block* b = blocks.findBlock(k)) changed.push_back({k, b});
+  }
   // colored_map: blocks whose colours changed are redrawn even with the same cells.
   std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> recolored;
   if (style.colors) {
@@ -146,30 +240,57 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
     for (const fragg::BlockRef& r : changed) recolored.erase(r.key);
     for (const fragg::BlockKey& k : recolored) changed.push_back({k, blocks.findBlock(k)});
   }
-  // The masks in parallel (read-only), the ledger and the messages in order.
+  // The drawn cells in parallel (read-only), the ledger in order.
   std::vector<CellMask> masks(changed.size());
   const int64_t n = static_cast<int64_t>(changed.size());
 #pragma omp parallel for schedule(static) if (n > 256)
   for (int64_t j = 0; j < n; ++j)
     masks[j] = drawnCells(map, blocks, changed[j].key, *changed[j].block, style);
-  out.markers.reserve(out.markers.size() + changed.size());
   for (size_t j = 0; j < changed.size(); ++j) {
     const fragg::BlockKey& key = changed[j].key;
     const CellMask& cells = masks[j];
-    const auto shown = ledger->ids_.find(key);
-    if (shown == ledger->ids_.end()) {
+    const fragg::BlockKey chunk_key = chunkOf(key, chunk_blocks);
+    const auto chunk = ledger->chunks_.find(chunk_key);
+    if (chunk == ledger->chunks_.end()) {
       if (cells.none()) continue;
-      const int32_t id = ledger->next_id_++;
-      ledger->ids_.emplace(key, MarkerLedger::Shown{id, cells});
-      out.markers.push_back(blockMarker(map, key, cells, style, stamp, id));
-    } else if (cells.none()) {
-      out.markers.push_back(
-          markerHeader(style, stamp, shown->second.id, visualization_msgs::Marker::DELETE));
-      ledger->ids_.erase(shown);
-    } else if (cells != shown->second.cells || recolored.count(key)) {
-      shown->second.cells = cells;
-      out.markers.push_back(blockMarker(map, key, cells, style, stamp, shown->second.id));
+      MarkerLedger::Chunk& added = ledger->chunks_[chunk_key];
+      added.blocks.push_back({key, cells});
+      ++ledger->shown_blocks_;
+      dirty.insert(chunk_key);
+      continue;
     }
+    auto& list = chunk->second.blocks;
+    const auto shown = std::find_if(
+        list.begin(), list.end(), [&](const MarkerLedger::ShownBlock& b) { return b.key == key; });
+    if (shown == list.end()) {
+      if (cells.none()) continue;
+      list.push_back({key, cells});
+      ++ledger->shown_blocks_;
+      dirty.insert(chunk_key);
+    } else if (cells.none()) {
+      list.erase(shown);
+      --ledger->shown_blocks_;
+      dirty.insert(chunk_key);
+    } else if (cells != shown->cells || recolored.count(key)) {
+      shown->cells = cells;
+      dirty.insert(chunk_key);
+    }
+  }
+  // One entry per changed chunk: its whole marker, or DELETE when it draws nothing now.
+  std::vector<fragg::BlockKey> order(dirty.begin(), dirty.end());
+  std::sort(order.begin(), order.end(), byKey);
+  out.markers.reserve(order.size());
+  for (const fragg::BlockKey& chunk_key : order) {
+    const auto chunk = ledger->chunks_.find(chunk_key);
+    if (chunk->second.blocks.empty()) {
+      if (chunk->second.id >= 0)
+        out.markers.push_back(
+            markerHeader(style, stamp, chunk->second.id, visualization_msgs::Marker::DELETE));
+      ledger->chunks_.erase(chunk);
+      continue;
+    }
+    if (chunk->second.id < 0) chunk->second.id = ledger->next_id_++;
+    out.markers.push_back(chunkMarker(map, chunk->second.blocks, style, stamp, chunk->second.id));
   }
   ledger->published_revision_ = map.revision();
   ledger->view_epoch_ = map.viewEpoch();
@@ -181,16 +302,29 @@ visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const Mar
                                                 const ::ros::Time& stamp, MarkerLedger* ledger) {
   visualization_msgs::MarkerArray out;
   out.markers.push_back(markerHeader(style, stamp, 0, visualization_msgs::Marker::DELETEALL));
-  ledger->ids_.clear();
-  ledger->next_id_ = 0;
+  ledger->clear(style.chunk_blocks);
   const fragg::BlockView blocks = map.blockView();
-  map.forEachBlock([&](const fragg::BlockKey& key, const fragg::Block& block) {
-    const CellMask cells = drawnCells(map, blocks, key, block, style);
-    if (cells.none()) return;
-    const int32_t id = ledger->next_id_++;
-    ledger->ids_.emplace(key, MarkerLedger::Shown{id, cells});
-    out.markers.push_back(blockMarker(map, key, cells, style, stamp, id));
-  });
+  const std::vector<fragg::BlockRef> all = blocks.all();
+  std::vector<CellMask> masks(all.size());
+  const int64_t n = static_cast<int64_t>(all.size());
+#pragma omp parallel for schedule(static) if (n > 256)
+  for (int64_t j = 0; j < n; ++j)
+    masks[j] = drawnCells(map, blocks, all[j].key, *all[j].block, style);
+  for (size_t j = 0; j < all.size(); ++j) {
+    if (masks[j].none()) continue;
+    ledger->chunks_[chunkOf(all[j].key, ledger->chunk_blocks_)].blocks.push_back(
+        {all[j].key, masks[j]});
+    ++ledger->shown_blocks_;
+  }
+  std::vector<fragg::BlockKey> order;
+  order.reserve(ledger->chunks_.size());
+  for (const auto& [chunk_key, chunk] : ledger->chunks_) order.push_back(chunk_key);
+  std::sort(order.begin(), order.end(), byKey);
+  for (const fragg::BlockKey& chunk_key : order) {
+    MarkerLedger::Chunk& chunk = ledger->chunks_[chunk_key];
+    chunk.id = ledger->next_id_++;
+    out.markers.push_back(chunkMarker(map, chunk.blocks, style, stamp, chunk.id));
+  }
   ledger->published_revision_ = map.revision();
   ledger->view_epoch_ = map.viewEpoch();
   if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
@@ -203,11 +337,18 @@ visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map& map, const M
   visualization_msgs::MarkerArray out;
   out.markers.push_back(markerHeader(style, stamp, 0, visualization_msgs::Marker::DELETEALL));
   const fragg::BlockView blocks = map.blockView();
-  for (const auto& [key, shown] : ledger.ids_) {
-    // An erased block is still shown until the next increment deletes it: its cells stand
-    // nowhere else, so it is left out (that DELETE then finds nothing, which is harmless).
-    if (blocks.findBlock(key))
-      out.markers.push_back(blockMarker(map, key, shown.cells, style, stamp, shown.id));
+  std::vector<fragg::BlockKey> order;
+  order.reserve(ledger.chunks_.size());
+  for (const auto& [chunk_key, chunk] : ledger.chunks_) order.push_back(chunk_key);
+  std::sort(order.begin(), order.end(), byKey);
+  for (const fragg::BlockKey& chunk_key : order) {
+    const MarkerLedger::Chunk& chunk = ledger.chunks_.at(chunk_key);
+    // An erased block is still shown until the next increment redraws its chunk: its cells
+    // stand nowhere else, so it is left out (a chunk left empty is not sent).
+    std::vector<MarkerLedger::ShownBlock> present;
+    for (const MarkerLedger::ShownBlock& b : chunk.blocks)
+      if (blocks.findBlock(b.key)) present.push_back(b);
+    if (!present.empty()) out.markers.push_back(chunkMarker(map, present, style, stamp, chunk.id));
   }
   return out;
 }

@@ -140,6 +140,17 @@ void MapOutputCache::dropPiece(const fragg::BlockKey& k,
   dirty->insert(ck);
 }
 
+fragg::BlockChange MapOutputCache::refreshOn(const fragg::OccupancyModel& model) const {
+  if (options_.refresh_on != fragg::BlockChange::kMasks) return options_.refresh_on;
+  // Every cell observed has left the unknown band at its first update (OctoMap's hit and miss
+  // probabilities with the default band do): becoming observed then changes a mask, and the
+  // change log lists every block whose outputs can change.
+  const int16_t first_hit = model.updated(fragg::kUnobservedLogOdds, true);
+  const int16_t first_miss = model.updated(fragg::kUnobservedLogOdds, false);
+  const bool leaves_band = first_hit > model.occupied_above_fx && first_miss < model.free_below_fx;
+  return leaves_band ? fragg::BlockChange::kMasks : fragg::BlockChange::kState;
+}
+
 OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
   OutputCacheUpdate out;
   const fragg::BlockView blocks = map.blockView();
@@ -156,11 +167,11 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
     occupied_cells_ = 0;
     refresh = blocks.all();
   } else if (!options_.hide_speckles) {
-    refresh = blocks.changedRefsSince(revision_, options_.refresh_on);
+    refresh = blocks.changedRefsSince(revision_, refreshOn(map.model()));
   } else {
     // A cell's speckle state follows its neighbours: the blocks around a change too.
     const std::vector<fragg::BlockKey> changed =
-        blocks.changedSince(revision_, options_.refresh_on);
+        blocks.changedSince(revision_, refreshOn(map.model()));
     std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around(changed.begin(), changed.end());
     for (const fragg::BlockKey& k : changed)
       for (int dz = -1; dz <= 1; ++dz)

@@ -428,6 +428,7 @@ ServerParams parseKnown(const XmlRpcValue& root) {
   readString(root, "frame_id", &p.frame_id);
   if (p.frame_id.empty()) badParam("frame_id", "must not be empty");
   readString(root, "file_root", &p.file_root);
+  readString(root, "trace_csv", &p.trace_csv);
 
   readDouble(root, "sensor_model/hit", &m.occupancy.prob_hit);
   readDouble(root, "sensor_model/miss", &m.occupancy.prob_miss);
@@ -471,6 +472,9 @@ ServerParams parseKnown(const XmlRpcValue& root) {
   readDouble(root, "map_rate", &p.map_rate_hz);
   if (!(p.map_rate_hz >= 0.0) || !std::isfinite(p.map_rate_hz))
     badParam("map_rate", "must be a finite rate in Hz >= 0 (0 = after every cloud)");
+  readInt(root, "markers/chunk_blocks", &p.marker_chunk_blocks);
+  if (p.marker_chunk_blocks < 1 || p.marker_chunk_blocks > 64)
+    badParam("markers/chunk_blocks", "must be 1..64 blocks a side");
   readDouble(root, "markers/color_min_z", &p.color_min_z_m);
   readDouble(root, "markers/color_max_z", &p.color_max_z_m);
   if (!std::isfinite(p.color_min_z_m) || !std::isfinite(p.color_max_z_m) ||

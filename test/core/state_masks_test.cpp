@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 #include <utility>
 
@@ -104,6 +105,31 @@ TEST(StateMasksTest, RemovalAndCorrectionKeepMasksCurrent) {
   EXPECT_NE(maskCounts(map), before) << "the removal changed no state";
   map.correctPoses({{0, poseAt(0, 0.07, 0.02)}, {2, poseAt(2, -0.05, 0.01)}});
   expectMasksCurrent(map, "correctPoses");
+}
+
+TEST(StateMasksTest, FreeBoxKeepsMasksCurrentAndListsItsBlocks) {
+  Map map(keeping());
+  for (int i = 0; i < 3; ++i) map.insert(room(), poseAt(i), lidar());
+  // An occupied cell of a wall; the box around it cuts blocks (not on block bounds).
+  VoxelKey wall{0, 0, 0};
+  bool found = false;
+  map.forEachBlock([&](const BlockKey& key, const Block& block) {
+    for (int c = 0; c < kCellsPerBlock && !found; ++c)
+      if (map.state(block.cells[c]) == CellState::kOccupied) {
+        wall = voxelKeyOf(key, c);
+        found = true;
+      }
+  });
+  ASSERT_TRUE(found);
+  const Eigen::Vector3d p = map.centerOf(wall);
+  const uint64_t before = map.revision();
+  EXPECT_GT(map.freeBox(p - Eigen::Vector3d(0.33, 0.41, 0.27), p + Eigen::Vector3d(0.3, 0.3, 0.3)),
+            0u);
+  expectMasksCurrent(map, "freeBox");
+  EXPECT_EQ(map.query(p), CellState::kFree);
+  const std::vector<BlockKey> listed = map.changedBlocksSince(before, BlockChange::kMasks);
+  EXPECT_NE(std::find(listed.begin(), listed.end(), blockKeyOf(wall)), listed.end())
+      << "the freed wall's block is not in the kMasks list";
 }
 
 TEST(StateMasksTest, ClearBoxAndWriteCellsKeepMasksCurrent) {

@@ -459,6 +459,19 @@ TEST_F(TfFaultsTest, OlderThanTheBufferIsDroppedWithoutWaiting) {
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
 }
 
+TEST_F(TfFaultsTest, BeforeAFramesOnlyTransformIsTooOldAfterItTimesOut) {
+  // A frame with one transform: tf2 says "only time ... is in the buffer", not "into the past".
+  geometry_msgs::TransformStamped tf;
+  tf.header.frame_id = "map";
+  tf.header.stamp = ::ros::Time(15);
+  tf.child_frame_id = "once";
+  tf.transform.rotation.w = 1.0;
+  ASSERT_TRUE(buffer_.setTransform(tf, "test"));
+  EXPECT_EQ(wait("once", 14.0, 30.0), fragg::ros::TfWait::kTooOld) << error_;
+  EXPECT_EQ(wait("once", 16.0, 0.05), fragg::ros::TfWait::kTimedOut) << error_;
+  EXPECT_FALSE(fragg::ros::stampBeforeBuffer("frame does not exist"));
+}
+
 TEST_F(TfFaultsTest, NonFiniteTransformsNeverEnterTheBuffer) {
   geometry_msgs::TransformStamped tf;
   tf.header.frame_id = "map";

@@ -6,6 +6,7 @@ if(FRAGG_HAVE_ROS)
     LABELS ros)
   fragg_add_test(ros_map_to_msgs_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/block_markers_test.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/marker_chunks_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/map_msgs_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/speckles_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/output_cache_test.cpp
@@ -69,6 +70,12 @@ if(FRAGG_HAVE_ROS)
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/cloud_faults_test.cpp
     LIBS fragg_map_nodelet
     LABELS ros)
+  # Every cloud received in exactly one ~stats count (cloud_pipeline.h): queue drops, faults,
+  # tf missing / too old (also after a wait in the queue), counters restarted mid-flight.
+  fragg_add_test(ros_cloud_counts_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/cloud_counts_test.cpp
+    LIBS fragg_map_nodelet
+    LABELS ros)
   # file_root: the folder the server's file services are confined to (paths, .., symlinks).
   fragg_add_test(ros_file_root_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/file_root_test.cpp
@@ -115,6 +122,10 @@ if(FRAGG_HAVE_ROS AND FRAGG_SMOKE_BAG)
   # ~get_frontiers against `fragg_map frontiers` on the saved map; the frontier topics only
   # while subscribed, incremental after an insertion.
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_frontiers.test
+    ARGS bag:=${FRAGG_SMOKE_BAG})
+  # Issue 35's Done-when: the smoke bag at 2 clouds/s, every output subscribed: 0 drops, every
+  # cloud in one count, latency and trace_csv, incremental markers equal to a full rebuild.
+  add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_rate.test
     ARGS bag:=${FRAGG_SMOKE_BAG})
   if(EXISTS ${FRAGG_REAL_DATA}/small_gicp_pair/target.ply)
     set(_fragg_velodyne_bag ${CMAKE_BINARY_DIR}/bags/velodyne.bag)

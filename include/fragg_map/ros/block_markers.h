@@ -1,7 +1,11 @@
-// fragg::Map -> visualization_msgs/MarkerArray, one CUBE_LIST marker per 8x8x8 block, so that
-// a publisher can send only the blocks that changed (Map::changedBlocksSince: which cells are
-// occupied, for occupied cells; any change otherwise) and DELETE the blocks that no longer
-// hold a cell of the drawn state.
+// fragg::Map -> visualization_msgs/MarkerArray, one CUBE_LIST marker per chunk of blocks
+// (MarkerStyle::chunk_blocks blocks a side; 1: one marker per 8x8x8 block), so that a publisher
+// sends only the chunks whose drawn cells changed and DELETEs the chunks that no longer hold a
+// drawn cell. The drawn cells come from the blocks' state masks (state_masks.h), the blocks to
+// look at from Map::changedBlocksSince (kOccupied for occupied markers: only the blocks where a
+// cell crossed the occupied threshold; kMasks, the change log, for the others): an update's
+// work follows what changed, not the map. Applied in order, the updates show what a
+// full rebuild (allBlockMarkers) shows.
 #pragma once
 
 #include <ros/time.h>
@@ -11,6 +15,7 @@
 #include <cstdint>
 #include <string>
 #include <unordered_map>
+#include <vector>
 
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
@@ -36,6 +41,9 @@ struct MarkerStyle {
   /// occupancy_min_z / occupancy_max_z: cells whose cube lies outside are not drawn (as
   /// octomap_server draws its occupied and free markers).
   HeightBand heights;
+  /// Blocks per side of the chunk one marker draws (>= 1): fewer, larger markers for rviz and
+  /// the wire; a change redraws its whole chunk.
+  int32_t chunk_blocks = 1;
   /// colored_map: cells with a colour in this table are drawn in it (others as above), and
   /// blocks recoloured since the last update are redrawn. Not owned; nullptr: no colours.
   const CellColors* colors = nullptr;
@@ -53,14 +61,17 @@ CellMask drawnCells(const fragg::Map& map, const fragg::BlockView& blocks,
                     const fragg::BlockKey& key, const fragg::Block& block,
                     const MarkerStyle& style);
 
-/// Which blocks a marker topic shows, with the marker id each block got and the cells drawn,
-/// and the map revision published last. Owned by the publisher; the converters below read and
-/// update it.
+/// Which chunks a marker topic shows, with the marker id each chunk got, the blocks drawn in it
+/// and their cells, and the map revision published last. Owned by the publisher; the
+/// converters below read and update it.
 class MarkerLedger {
  public:
   uint64_t publishedRevision() const { return published_revision_; }
-  size_t shownBlocks() const { return ids_.size(); }
-  /// The id of `key`'s marker, or -1 when the block is not shown.
+  /// Blocks with drawn cells.
+  size_t shownBlocks() const { return shown_blocks_; }
+  /// Chunks shown (markers a subscriber holds).
+  size_t shownChunks() const { return chunks_.size(); }
+  /// The id of the marker that draws block `key`, or -1 when the block is not shown.
   int32_t idOf(const fragg::BlockKey& key) const;
 
  private:
@@ -70,11 +81,18 @@ class MarkerLedger {
                                                          const ::ros::Time&, MarkerLedger*);
   friend visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map&, const MarkerStyle&,
                                                            const ::ros::Time&, const MarkerLedger&);
-  struct Shown {
-    int32_t id;
+  struct ShownBlock {
+    fragg::BlockKey key;
     CellMask cells;
   };
-  std::unordered_map<fragg::BlockKey, Shown, fragg::BlockKeyHash> ids_;
+  struct Chunk {
+    int32_t id = -1;
+    std::vector<ShownBlock> blocks;  ///< those with drawn cells
+  };
+  void clear(int32_t chunk_blocks);
+  std::unordered_map<fragg::BlockKey, Chunk, fragg::BlockKeyHash> chunks_;  ///< by chunk key
+  int32_t chunk_blocks_ = 1;
+  size_t shown_blocks_ = 0;
   int32_t next_id_ = 0;
   uint64_t published_revision_ = 0;
   uint64_t colors_drawn_ = 0;  ///< CellColors::sequence() of the last update (colored_map)
@@ -83,26 +101,29 @@ class MarkerLedger {
   uint64_t view_epoch_ = 0;
 };
 
+/// The chunk (of `chunk_blocks` blocks a side) that holds block `key`.
+fragg::BlockKey chunkOf(const fragg::BlockKey& key, int32_t chunk_blocks);
+
 /// The CUBE_LIST marker of one block: centres of the cells in `cells`, coloured by height.
 visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::BlockKey& key,
                                        const CellMask& cells, const MarkerStyle& style,
                                        const ::ros::Time& stamp, int32_t id);
 
-/// Markers for the blocks changed since `ledger->publishedRevision()`: ADD (or modify) for a
-/// changed block whose set of cells in `style.state` changed and is not empty, DELETE for a
-/// shown block that lost them all or no longer exists. A block whose drawn cells stayed the
-/// same (e.g. only its free cells changed) is not sent. Updates the ledger to the map's
-/// revision.
+/// Markers for the chunks changed since `ledger->publishedRevision()`: ADD (or modify) for a
+/// chunk where a block's drawn cells changed and that still draws some, DELETE for a shown
+/// chunk that lost them all. The blocks looked at are those whose drawn state changed (with
+/// hidden speckles, their 26 neighbours too), and, when the map's view moved, the shown ones
+/// that left the map. Updates the ledger to the map's revision.
 visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
                                                     const ::ros::Time& stamp, MarkerLedger* ledger);
 
 /// A full republish (after reset or load, or for a late subscriber): a DELETEALL marker in
-/// `style.ns`, then one ADD per block with cells in `style.state`. Rebuilds the ledger.
+/// `style.ns`, then one ADD per chunk with drawn cells. Rebuilds the ledger.
 visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
                                                 const ::ros::Time& stamp, MarkerLedger* ledger);
 
 /// What a topic's subscribers see now, for a late subscriber of a latched topic: a DELETEALL,
-/// then every block the ledger shows, with the ledger's ids and cells, so that the topic's
+/// then every chunk the ledger shows, with the ledger's ids and cells, so that the topic's
 /// next increments apply to it as to everyone else. The ledger is not changed.
 visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
                                                   const ::ros::Time& stamp,

@@ -21,14 +21,16 @@ class DropOldestQueue {
     if (capacity_ == 0) throw fragg::InvalidArgument("queue capacity must be >= 1");
   }
 
-  /// Appends `item`; when the queue is full the oldest item is dropped first. Returns whether
-  /// an item was dropped. Items pushed after close() are discarded (and not counted).
-  bool push(T item) {
+  /// Appends `item`; when the queue is full the oldest item is dropped first (moved into
+  /// `*dropped_item` when given). Returns whether an item was dropped. Items pushed after
+  /// close() are discarded (and not counted).
+  bool push(T item, T* dropped_item = nullptr) {
     bool dropped = false;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (closed_) return false;
       if (items_.size() == capacity_) {
+        if (dropped_item) *dropped_item = std::move(items_.front());
         items_.pop_front();
         ++dropped_;
         dropped = true;

@@ -39,11 +39,14 @@ struct OutputCacheOptions {
   /// The projected map spans octomap_server's grid (octomapServerGridSpan of the observed
   /// cells' bounds) instead of those bounds.
   bool octomap_bounds = false;
-  /// Which blocks an update recomputes: those where a cell's state changed (kState, what the
-  /// outputs show), or every changed block (kAny: the behaviour before BlockMeta::state_at,
-  /// kept for same-run comparisons in fragg_map_server_overhead). kOccupied would miss free
-  /// cells: refused.
-  fragg::BlockChange refresh_on = fragg::BlockChange::kState;
+  /// Which blocks an update recomputes: those whose state masks changed (kMasks: from the
+  /// map's change log, no walk over the blocks), those where a cell's state changed (kState,
+  /// found by a walk over the blocks' stamps), or every changed block (kAny: the behaviour
+  /// before BlockMeta::state_at, kept for same-run comparisons in fragg_map_server_overhead).
+  /// kMasks falls back to kState for a model where a cell's first update can leave it in the
+  /// unknown band (observed without a mask change: the projected map's bounds would miss it).
+  /// kOccupied would miss free cells: refused.
+  fragg::BlockChange refresh_on = fragg::BlockChange::kMasks;
 };
 
 /// What an update did.
@@ -74,6 +77,8 @@ class MapOutputCache {
   uint64_t revision() const { return revision_; }
 
  private:
+  /// The change kind to list for `model` (options_.refresh_on, kMasks checked).
+  fragg::BlockChange refreshOn(const fragg::OccupancyModel& model) const;
   HeightBand heights() const { return {options_.occupancy_min_z_m, options_.occupancy_max_z_m}; }
 
   struct Piece {

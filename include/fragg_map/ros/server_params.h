@@ -119,6 +119,12 @@ struct ServerParams {
   /// cloud. Skipped clouds cost nothing there (the output cache catches up from the revision
   /// it last saw); reset, load, clear and corrections publish at once.
   double map_rate_hz = 0.0;
+  /// trace_csv: a file that gets one row per cloud received (its outcome and where its time
+  /// went: queue, conversion, tf, insertion, outputs); empty: none.
+  std::string trace_csv;
+  /// markers/chunk_blocks: blocks per side of the chunk one marker of the marker topics draws
+  /// (1: one marker per 8x8x8 block); a change redraws its chunk.
+  int marker_chunk_blocks = 4;
   double color_min_z_m = -1.0;  ///< marker colour ramp (markers/color_min_z)
   double color_max_z_m = 4.0;   ///< marker colour ramp (markers/color_max_z)
   CorrectionParams correction;

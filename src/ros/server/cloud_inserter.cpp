@@ -33,6 +33,25 @@ bool hasUsablePoint(const fragg::PointCloud& cloud) {
 
 }  // namespace
 
+bool stampBeforeBuffer(const std::string& tf_error) {
+  // tf2 says "extrapolation into the past" when every transform of the chain it holds is
+  // later than the stamp, and "extrapolation at time X, but only time Y is in the buffer"
+  // when a frame holds one transform: with X < Y the stamp is older too (a cloud that waited
+  // in the queue while its transforms aged out). Waiting brings only later transforms.
+  if (tf_error.find("into the past") != std::string::npos) return true;
+  static const std::string kAt = "extrapolation at time ";
+  static const std::string kOnly = "but only time ";
+  const size_t at = tf_error.find(kAt), only = tf_error.find(kOnly);
+  if (at == std::string::npos || only == std::string::npos) return false;
+  try {
+    const double requested_s = std::stod(tf_error.substr(at + kAt.size()));
+    const double held_s = std::stod(tf_error.substr(only + kOnly.size()));
+    return requested_s < held_s;
+  } catch (const std::exception&) {  // not the message we know: not too old
+    return false;
+  }
+}
+
 TfWait waitForTransform(const tf2::BufferCore& tf, const std::string& target,
                         const std::string& source, const ::ros::Time& stamp, double tolerance_s,
                         const std::atomic<bool>& stop, Eigen::Isometry3d* T_target_source,
@@ -49,9 +68,7 @@ TfWait waitForTransform(const tf2::BufferCore& tf, const std::string& target,
         *error = e.what();
       }
     }
-    // tf2 says "extrapolation into the past" when every transform of the chain it holds is
-    // later than the stamp: waiting brings only later ones.
-    if (error->find("into the past") != std::string::npos) return TfWait::kTooOld;
+    if (stampBeforeBuffer(*error)) return TfWait::kTooOld;
     if (std::chrono::steady_clock::now() >= deadline) return TfWait::kTimedOut;
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }

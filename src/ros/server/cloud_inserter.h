@@ -30,6 +30,10 @@ enum class TfWait {
   kStopped,   ///< `stop` was raised while waiting
 };
 
+/// Whether tf2's error `tf_error` (canTransform's) says the stamp is older than every
+/// transform the buffer holds for the chain, so that waiting cannot help.
+[[nodiscard]] bool stampBeforeBuffer(const std::string& tf_error);
+
 /// Polls `tf` for target <- source at `stamp` for up to `tolerance_s` seconds of wall time
 /// (every 5 ms), returning at once when the stamp is older than the buffer's data for that
 /// pair. `error` gets tf's reason when the result is not kFound.

@@ -9,11 +9,21 @@
 #include <visualization_msgs/Marker.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <algorithm>
+
 #include "flush_without_waiting.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/frustum_marker.h"
 
 namespace fragg::ros {
+namespace {
+
+// Outgoing marker arrays kept per subscriber: an increment roscpp drops from a full queue
+// would leave that subscriber's view wrong until the next full set (the whole-map topics
+// carry the whole map in every message and keep 1).
+constexpr uint32_t kMarkerQueue = 50;
+
+}  // namespace
 
 MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
                              const ServerParams& params, SharedMap* shared,
@@ -32,6 +42,7 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
     topic->style.color_min_z_m = params_.color_min_z_m;
     topic->style.color_max_z_m = params_.color_max_z_m;
     topic->style.heights = {params_.occupancy_min_z_m, params_.occupancy_max_z_m};
+    topic->style.chunk_blocks = params_.marker_chunk_blocks;
   }
   occupied_markers_.style.height_colors = params_.octomap.height_map;
   occupied_markers_.style.hide_speckles = params_.octomap.filter_speckles;
@@ -41,20 +52,23 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
   free_markers_.style.ns = "free";
   free_markers_.style.state = fragg::CellState::kFree;
   free_markers_.style.alpha = 0.3f;
-  // A latched topic's late subscriber would only see the last increment: it gets every block.
-  auto connect = [this, latch](MarkerTopic* topic) -> ::ros::SubscriberStatusCallback {
-    if (!latch) return ::ros::SubscriberStatusCallback();
+  // The marker topics latch themselves, whatever `latch` says: roscpp's latch would hand a
+  // late subscriber the last increment first. A new subscriber gets the whole map from the
+  // connect callback, and an update that finds more subscribers than the last one saw goes
+  // out in full (so that even a subscriber whose callback has not run yet starts from the
+  // whole map). Markers are built only while someone subscribes.
+  auto connect = [this](MarkerTopic* topic) -> ::ros::SubscriberStatusCallback {
     return [this, topic](const ::ros::SingleSubscriberPublisher& sub) {
       sendAllMarkersTo(*topic, sub);
     };
   };
   occupied_markers_.pub = nh.advertise<visualization_msgs::MarkerArray>(
-      "occupied_cells_vis_array", 1, connect(&occupied_markers_), ::ros::SubscriberStatusCallback(),
-      ::ros::VoidConstPtr(), latch);
+      "occupied_cells_vis_array", kMarkerQueue, connect(&occupied_markers_),
+      ::ros::SubscriberStatusCallback(), ::ros::VoidConstPtr(), false);
   if (params_.publish_free_space)
     free_markers_.pub = nh.advertise<visualization_msgs::MarkerArray>(
-        "free_cells_vis_array", 1, connect(&free_markers_), ::ros::SubscriberStatusCallback(),
-        ::ros::VoidConstPtr(), latch);
+        "free_cells_vis_array", kMarkerQueue, connect(&free_markers_),
+        ::ros::SubscriberStatusCallback(), ::ros::VoidConstPtr(), false);
   occupied_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>(
       "occupied_cells", 1, currentMessageTo(&occupied_cloud_pub_),
       ::ros::SubscriberStatusCallback(), ::ros::VoidConstPtr(), latch);
@@ -114,6 +128,10 @@ void MapPublishers::publishAfterCorrection(const ::ros::Time& stamp) {
   std::lock_guard<std::mutex> publishing(publish_mutex_);
   const SharedMap::ReadGuard state = shared_->read();
   if (coloredMap()) colors_.prune(state->map);  // truncated cells lose theirs
+  // A scan taken out can leave a cell observed in the unknown band unobserved without a mask
+  // change: the whole-map outputs are rebuilt (corrections are rare; the markers read masks
+  // only and stay incremental).
+  outputs_.invalidate();
   publishMaps(state->map, stamp, false, false);
 }
 
@@ -186,15 +204,21 @@ void MapPublishers::flushPendingMarkers(const ::ros::SteadyTimerEvent&) {
 
 void MapPublishers::publishMarkers(const fragg::Map& map, MarkerTopic& topic,
                                    const ::ros::Time& stamp, bool full) {
-  if (!wanted(topic.pub)) {
+  const uint32_t subscribers = topic.pub ? topic.pub.getNumSubscribers() : 0;
+  if (subscribers == 0) {
     // Nobody sees the markers: the next subscriber starts from a full set.
     topic.ledger = MarkerLedger();
+    topic.subscribers = 0;
     return;
   }
+  // A subscriber joined since the last update (its connect callback may not have run yet):
+  // everyone gets the whole map, so that its first message is never a partial update.
+  const bool joined = subscribers > topic.subscribers;
+  topic.subscribers = subscribers;
   const bool first = topic.ledger.publishedRevision() == 0;
   visualization_msgs::MarkerArray markers =
-      full || first ? allBlockMarkers(map, topic.style, stamp, &topic.ledger)
-                    : changedBlockMarkers(map, topic.style, stamp, &topic.ledger);
+      full || first || joined ? allBlockMarkers(map, topic.style, stamp, &topic.ledger)
+                              : changedBlockMarkers(map, topic.style, stamp, &topic.ledger);
   if (!markers.markers.empty()) topic.pub.publish(markers);
 }
 
@@ -202,8 +226,16 @@ void MapPublishers::sendAllMarkersTo(MarkerTopic& topic,
                                      const ::ros::SingleSubscriberPublisher& sub) {
   std::lock_guard<std::mutex> publishing(publish_mutex_);
   const SharedMap::ReadGuard state = shared_->read();
-  // The blocks the topic's subscribers see, under the ids its increments will use.
-  sub.publish(shownBlockMarkers(state->map, topic.style, ::ros::Time::now(), topic.ledger));
+  const ::ros::Time now = ::ros::Time::now();
+  // This subscriber has its whole map: the next update need not send everyone a full set for it.
+  topic.subscribers = std::min(topic.subscribers + 1, topic.pub.getNumSubscribers());
+  if (topic.ledger.publishedRevision() == 0 && topic.ledger.shownChunks() == 0) {
+    // Nobody subscribed before: the ledger starts here, from the whole map.
+    sub.publish(allBlockMarkers(state->map, topic.style, now, &topic.ledger));
+    return;
+  }
+  // The chunks the topic's subscribers see, under the ids its increments will use.
+  sub.publish(shownBlockMarkers(state->map, topic.style, now, topic.ledger));
 }
 
 }  // namespace fragg::ros

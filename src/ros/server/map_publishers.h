@@ -1,14 +1,15 @@
 // Every topic the map server publishes. Messages are built only for topics with subscribers
-// (or for every topic when latched). occupied_cells_vis_array and free_cells_vis_array are
-// incremental (one marker per changed block); they are republished in full after a reset or
-// load and, when latched, to each new subscriber. occupied_cells, octomap_point_cloud_centers
-// and projected_map always carry the whole map, assembled from per-block pieces that only the
-// changed blocks refresh (MapOutputCache). With `marker_rate` the marker updates are
-// throttled: the insertion thread publishes them when one is due, and a steady timer sends what
-// is still pending once the clouds stop. `map_rate` throttles the whole-map outputs the same
-// way: after a cloud that is not due the cache is not even updated (it catches up from the
-// revision it last saw at the next publication). Reset, load, clear and corrections publish
-// the whole-map outputs at once; frustum and ~stats go out after every cloud.
+// (or, but for the markers, for every topic when latched). occupied_cells_vis_array and
+// free_cells_vis_array are incremental (one marker per chunk of blocks that changed, from the
+// state masks and the change log; block_markers.h); they are republished in full after a reset
+// or load, and a new subscriber gets the whole map as its first message. occupied_cells,
+// octomap_point_cloud_centers and projected_map always carry the whole map, assembled from
+// per-block pieces that only the changed blocks refresh (MapOutputCache). With `marker_rate` the
+// marker updates are throttled: the insertion thread publishes them when one is due, and a steady
+// timer sends what is still pending once the clouds stop. `map_rate` throttles the whole-map
+// outputs the same way: after a cloud that is not due the cache is not even updated (it catches up
+// from the revision it last saw at the next publication). Reset, load, clear and corrections
+// publish the whole-map outputs at once; frustum and ~stats go out after every cloud.
 #pragma once
 
 #include <ros/node_handle.h>
@@ -52,6 +53,7 @@ class MapPublishers {
     ::ros::Publisher pub;
     MarkerStyle style;
     MarkerLedger ledger;
+    uint32_t subscribers = 0;  ///< at the last update
   };
   // Callers hold publish_mutex_ and the map's read lock.
   /// Markers (a full set, or the changes when due), whole-map outputs (with `throttle_maps`

@@ -62,42 +62,65 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
     }
   }
 
-  CorrectionPlan plan;
+  // The transforms child_frame -> the scan's cloud frame are looked up with no lock held: tf
+  // may be slow, and the write lock would hold insertion and every query back meanwhile. The
+  // scans are found under the read lock, placed without a lock, and planned and moved under
+  // the write lock (a scan gone in between is reported as naming no kept scan).
   size_t unplaced = 0;
-  double ms = 0.0;
-  {
-    const SharedMap::WriteGuard state = shared_->write();
-    requireKeptScans(state->map);
-    if (!child_frame.empty()) {
-      // Path poses of child_frame -> sensor poses (tf child_frame -> the scan's cloud frame at
-      // the scan's stamp; a static transform is found at any time). Poses that cannot be
-      // placed are left out (and counted); those naming no scan are reported by the plan.
-      std::vector<PoseRequest> placed;
-      placed.reserve(requests.size());
-      for (const PoseRequest& r : requests) {
-        const ScanStampIndex::Entry* entry = state->stamps.find(r.stamp_ns, tolerance_ns);
+  if (!child_frame.empty()) {
+    struct ToPlace {
+      size_t request;
+      std::string sensor_frame;
+      int64_t stamp_ns;
+    };
+    std::vector<ToPlace> to_place;
+    std::vector<bool> unknown(requests.size(), false);
+    {
+      const SharedMap::ReadGuard state = shared_->read();
+      requireKeptScans(state->map);
+      for (size_t i = 0; i < requests.size(); ++i) {
+        const ScanStampIndex::Entry* entry = state->stamps.find(requests[i].stamp_ns, tolerance_ns);
         if (!entry) {
-          placed.push_back(r);  // unknown: planCorrection reports it
+          unknown[i] = true;  // planCorrection reports it
           continue;
         }
         if (entry->sensor_frame.empty()) {  // kept by an older map file or a non-ROS build
           ++unplaced;
           continue;
         }
-        try {
-          ::ros::Time stamp;
-          stamp.fromNSec(static_cast<uint64_t>(state->map.scanStore().record(entry->id).stamp_ns));
-          const Eigen::Isometry3d T_child_sensor =
-              tf2::transformToEigen(tf_.lookupTransform(child_frame, entry->sensor_frame, stamp));
-          placed.push_back({r.stamp_ns, sensorPoseFromChild(r.T_map_sensor, T_child_sensor)});
-        } catch (const tf2::TransformException& e) {
-          ++unplaced;
-          ROS_WARN_THROTTLE(5.0, "fragg_map: corrected_path: no transform %s <- %s: %s",
-                            child_frame.c_str(), entry->sensor_frame.c_str(), e.what());
-        }
+        to_place.push_back(
+            {i, entry->sensor_frame, state->map.scanStore().record(entry->id).stamp_ns});
       }
-      requests.swap(placed);
     }
+    // Path poses of child_frame -> sensor poses (tf child_frame -> the scan's cloud frame at
+    // the scan's stamp; a static transform is found at any time). Poses that cannot be placed
+    // are left out (and counted); those naming no scan are reported by the plan.
+    std::vector<PoseRequest> placed;
+    placed.reserve(requests.size());
+    for (size_t i = 0; i < requests.size(); ++i)
+      if (unknown[i]) placed.push_back(requests[i]);
+    for (const ToPlace& p : to_place) {
+      try {
+        ::ros::Time stamp;
+        stamp.fromNSec(static_cast<uint64_t>(p.stamp_ns));
+        const Eigen::Isometry3d T_child_sensor =
+            tf2::transformToEigen(tf_.lookupTransform(child_frame, p.sensor_frame, stamp));
+        const PoseRequest& r = requests[p.request];
+        placed.push_back({r.stamp_ns, sensorPoseFromChild(r.T_map_sensor, T_child_sensor)});
+      } catch (const tf2::TransformException& e) {
+        ++unplaced;
+        ROS_WARN_THROTTLE(5.0, "fragg_map: corrected_path: no transform %s <- %s: %s",
+                          child_frame.c_str(), p.sensor_frame.c_str(), e.what());
+      }
+    }
+    requests.swap(placed);
+  }
+
+  CorrectionPlan plan;
+  double ms = 0.0;
+  {
+    const SharedMap::WriteGuard state = shared_->write();
+    requireKeptScans(state->map);
     const PoseThresholds& thresholds = params_.correction.thresholds;
     plan =
         planCorrection(requests, state->stamps, state->map.scanStore(), tolerance_ns, &thresholds);

@@ -3,8 +3,28 @@
 
 namespace fragg::ros {
 
+void ServerStats::settle() {
+  if (in_flight_ > 0) --in_flight_;  // outcomes without addReceived (tests, a store's start)
+}
+
+void ServerStats::addReceived() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++received_;
+  ++in_flight_;
+}
+
+void ServerStats::addLatency(double queue_ms, double tf_ms, double publish_ms, double total_ms) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  queue_ms_.add(queue_ms);
+  tf_ms_.add(tf_ms);
+  publish_ms_.add(publish_ms);
+  latency_ms_.add(total_ms);
+}
+
 void ServerStats::addInsertion(uint64_t points, double ms, const fragg::InsertStats& inserted) {
   std::lock_guard<std::mutex> lock(mutex_);
+  settle();
+  ++inserted_;
   ++scans_;
   points_ += points;
   insertion_ms_.add(ms);
@@ -17,21 +37,25 @@ void ServerStats::addInsertion(uint64_t points, double ms, const fragg::InsertSt
 
 void ServerStats::addDroppedNoTf() {
   std::lock_guard<std::mutex> lock(mutex_);
+  settle();
   ++dropped_no_tf_;
 }
 
 void ServerStats::addDroppedQueueFull() {
   std::lock_guard<std::mutex> lock(mutex_);
+  settle();
   ++dropped_queue_full_;
 }
 
 void ServerStats::addEmptyCloud() {
   std::lock_guard<std::mutex> lock(mutex_);
+  settle();
   ++empty_clouds_;
 }
 
 void ServerStats::addFault(CloudFault fault) {
   std::lock_guard<std::mutex> lock(mutex_);
+  settle();
   ++faults_[static_cast<int>(fault)];
 }
 
@@ -83,6 +107,7 @@ void ServerStats::clearInsertions() {
   scans_ = 0;
   points_ = 0;
   insertion_ms_.clear();
+  for (TimingStats* t : {&latency_ms_, &queue_ms_, &tf_ms_, &publish_ms_}) t->clear();
   corrections_ = 0;
   corrected_scans_ = 0;
   correction_ms_last_ = 0.0;
@@ -94,6 +119,8 @@ void ServerStats::restart(uint64_t scans) {
   clearInsertions();
   std::lock_guard<std::mutex> lock(mutex_);
   scans_ = scans;
+  received_ = in_flight_;  // the clouds still queued or being inserted come in the new count
+  inserted_ = 0;
   dropped_no_tf_ = 0;
   dropped_queue_full_ = 0;
   empty_clouds_ = 0;
@@ -142,6 +169,9 @@ fragg_map::MapStats ServerStats::toMsg(const fragg::Map& map, const std::string&
                         msg.rejected_bad_transform + msg.insertion_failures;
   msg.dropped_clouds =
       dropped_no_tf_ + msg.dropped_tf_too_old + dropped_queue_full_ + msg.rejected_clouds;
+  msg.clouds_received = received_;
+  msg.clouds_inserted = inserted_;
+  msg.clouds_in_flight = in_flight_;
   msg.backend_fallbacks = backend_fallbacks_;
   msg.points_invalid = points_invalid_;
   msg.points_beyond_range = points_beyond_range_;
@@ -151,6 +181,15 @@ fragg_map::MapStats ServerStats::toMsg(const fragg::Map& map, const std::string&
   msg.insertion_ms_last = static_cast<float>(insertion_ms_.lastMs());
   msg.insertion_ms_mean = static_cast<float>(insertion_ms_.meanMs());
   msg.insertion_ms_p99 = static_cast<float>(insertion_ms_.percentileMs(0.99));
+  msg.insertion_ms_p50 = static_cast<float>(insertion_ms_.percentileMs(0.5));
+  msg.latency_ms_p50 = static_cast<float>(latency_ms_.percentileMs(0.5));
+  msg.latency_ms_p99 = static_cast<float>(latency_ms_.percentileMs(0.99));
+  msg.queue_ms_p50 = static_cast<float>(queue_ms_.percentileMs(0.5));
+  msg.queue_ms_p99 = static_cast<float>(queue_ms_.percentileMs(0.99));
+  msg.tf_ms_p50 = static_cast<float>(tf_ms_.percentileMs(0.5));
+  msg.tf_ms_p99 = static_cast<float>(tf_ms_.percentileMs(0.99));
+  msg.publish_ms_p50 = static_cast<float>(publish_ms_.percentileMs(0.5));
+  msg.publish_ms_p99 = static_cast<float>(publish_ms_.percentileMs(0.99));
   msg.corrections = corrections_;
   msg.corrected_scans = corrected_scans_;
   msg.correction_ms_last = static_cast<float>(correction_ms_last_);

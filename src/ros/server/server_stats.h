@@ -24,8 +24,17 @@ enum class CloudFault {
   kTfTooOld,       ///< stamp older than the tf buffer holds: dropped without waiting
 };
 
+/// Every cloud received lands in exactly one of: inserted, a drop (queue, no_tf, tf_too_old),
+/// a rejection or insertion failure (CloudFault), empty; until then it is in flight. The
+/// outcome methods below take it out of flight; the counters restart together (restart()), the
+/// clouds in flight then counted as received anew, so that at every moment
+/// clouds_received = clouds_inserted + dropped_clouds + empty_clouds + clouds_in_flight.
 class ServerStats {
  public:
+  /// A cloud taken from cloud_in (before the queue): received and in flight.
+  void addReceived();
+  /// The latency of an inserted cloud and its parts (cloud_trace.h).
+  void addLatency(double queue_ms, double tf_ms, double publish_ms, double total_ms);
   /// A scan inserted: its points, wall time and the map's per-point counts.
   void addInsertion(uint64_t points, double ms, const fragg::InsertStats& inserted = {});
   void addDroppedNoTf();
@@ -60,8 +69,14 @@ class ServerStats {
 
  private:
   mutable std::mutex mutex_;
+  /// One cloud out of flight (an outcome counted); the caller holds mutex_.
+  void settle();
+
   uint64_t scans_ = 0;
   uint64_t points_ = 0;
+  uint64_t received_ = 0;   ///< clouds received since the counters restarted
+  uint64_t inserted_ = 0;   ///< of them inserted (scans_ also counts a loaded map's)
+  uint64_t in_flight_ = 0;  ///< received, no outcome yet (queued, waiting for tf, inserting)
   uint64_t dropped_no_tf_ = 0;
   uint64_t dropped_queue_full_ = 0;
   uint64_t empty_clouds_ = 0;
@@ -73,6 +88,7 @@ class ServerStats {
   uint64_t points_outside_height_ = 0;
   uint64_t points_outside_frustum_ = 0;
   TimingStats insertion_ms_;
+  TimingStats latency_ms_, queue_ms_, tf_ms_, publish_ms_;
   uint64_t corrections_ = 0;
   uint64_t corrected_scans_ = 0;
   double correction_ms_last_ = 0.0;

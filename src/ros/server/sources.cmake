@@ -16,6 +16,8 @@ set(FRAGG_ROS_SERVER_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/frontier_publisher.cpp
   ${CMAKE_CURRENT_LIST_DIR}/path_corrector.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cloud_inserter.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/cloud_trace.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/cloud_pipeline.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cloud_input.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_server.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_server_nodelet.cpp

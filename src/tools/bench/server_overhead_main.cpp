@@ -84,6 +84,9 @@ struct Times {
   double mapUpdate() const { return cloud + grid + serialise - marker_serialise; }
 };
 
+/// Blocks per side of a marker chunk (--marker-chunk; the server's markers/chunk_blocks).
+int g_marker_chunk_blocks = 4;
+
 /// Which outputs of the after path go out after a cloud.
 struct Due {
   bool markers = true;
@@ -93,8 +96,10 @@ struct Due {
 /// The outputs after one cloud, one way or the other. `before`: the whole-map rebuilds.
 class Outputs {
  public:
-  explicit Outputs(bool before, fragg::BlockChange refresh_on = fragg::BlockChange::kState)
-      : before_(before), cache_(optionsWith(refresh_on)) {}
+  explicit Outputs(bool before, fragg::BlockChange refresh_on = fragg::BlockChange::kMasks)
+      : before_(before), cache_(optionsWith(refresh_on)) {
+    style_.chunk_blocks = g_marker_chunk_blocks;
+  }
   /// `due`: the after path's throttled outputs (the before path ignores it).
   Times publish(const fragg::Map& map, Due due = Due()) {
     Times t;
@@ -324,6 +329,10 @@ int main(int argc, char** argv) {
                  "most whole-map publications per second, as the server's map_rate (0: every "
                  "cloud)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--marker-chunk", g_marker_chunk_blocks,
+                 "blocks per side of one marker, as the server's markers/chunk_blocks (1: one "
+                 "marker per block)")
+      ->check(CLI::Range(1, 64));
   bool after_only = false;
   app.add_flag("--after-only", after_only,
                "only the server's path (no whole-map rebuild, no cache refreshing every changed "

@@ -1,0 +1,31 @@
+// trace_csv rows.
+#include "cloud_trace.h"
+
+#include <cinttypes>
+#include <cstdio>
+
+#include "fragg_map/errors.h"
+
+namespace fragg::ros {
+
+CloudTraceCsv::CloudTraceCsv(const std::string& path) : out_(path, std::ios::trunc), path_(path) {
+  if (!out_) throw fragg::IoError("trace_csv: cannot write " + path);
+  out_ << header() << '\n';
+  out_.flush();
+}
+
+const char* CloudTraceCsv::header() {
+  return "stamp_s,points,outcome,queue_ms,tf_ms,insert_ms,publish_ms,total_ms,queue_depth";
+}
+
+void CloudTraceCsv::write(const CloudTrace& t) {
+  char row[256];
+  std::snprintf(row, sizeof(row), "%.6f,%" PRIu64 ",%s,%.3f,%.3f,%.3f,%.3f,%.3f,%zu\n", t.stamp_s,
+                t.points, t.outcome.c_str(), t.queue_ms, t.tf_ms, t.insert_ms, t.publish_ms,
+                t.total_ms, t.queue_depth);
+  std::lock_guard<std::mutex> lock(mutex_);
+  out_ << row;
+  out_.flush();
+}
+
+}  // namespace fragg::ros

@@ -1,0 +1,233 @@
+// Every cloud the map server receives lands in exactly one counter of ~stats
+// (clouds_received = clouds_inserted + dropped_clouds + empty_clouds + clouds_in_flight), on
+// the server's own insertion path (CloudPipeline: drop-oldest queue -> insertion thread ->
+// CloudInserter), without a ROS master: queue drops, malformed / empty / all-NaN clouds, a
+// missing frame, a stamp older than the tf buffer, a cloud whose transforms aged out of the
+// buffer while it waited in the queue (tf_too_old, not no_tf nor a queue drop), and counters
+// restarted while clouds are in flight. Deterministic: the queue is made to overflow by holding
+// the map's write lock (the insertion thread waits for it with its cloud taken), and each
+// phase waits (up to 60 s) until no cloud is in flight.
+#include <geometry_msgs/TransformStamped.h>
+#include <gtest/gtest.h>
+#include <ros/time.h>
+#include <tf2/buffer_core.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <thread>
+#include <vector>
+
+#include "../../src/ros/server/cloud_pipeline.h"
+#include "cloud_msg_builder.h"
+#include "fragg_map/errors.h"
+#include "fragg_map/map.h"
+
+namespace {
+
+using fragg::ros::CloudPipeline;
+using fragg::ros::ServerParams;
+using fragg::ros::ServerStats;
+using fragg::ros::SharedMap;
+using fragg::ros::test::makeCloud;
+using fragg::ros::test::packedXyz;
+using CloudPtr = sensor_msgs::PointCloud2::ConstPtr;
+
+// A wall 3 m ahead in `frame` at `stamp_s`.
+CloudPtr wall(const std::string& frame, double stamp_s) {
+  std::vector<Eigen::Vector3f> pts;
+  for (int a = -10; a <= 10; ++a)
+    for (int b = -5; b <= 5; ++b) pts.emplace_back(3.0f, 0.1f * a, 0.1f * b);
+  auto msg = boost::make_shared<sensor_msgs::PointCloud2>(
+      makeCloud(pts, static_cast<uint32_t>(pts.size()), 1, packedXyz(), 12));
+  msg->header.frame_id = frame;
+  msg->header.stamp = ::ros::Time(stamp_s);
+  return msg;
+}
+
+class CloudCountsTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { ::ros::Time::init(); }  // the throttled log lines read it
+
+  void SetUp() override {
+    params_.map.backend = fragg::Backend::kCpu;
+    params_.map.threads = 1;
+    params_.queue_size = 2;
+    params_.tf_tolerance_s = 0.05;
+    shared_ = std::make_unique<SharedMap>(fragg::ros::MapState(fragg::Map(params_.map)));
+    // map <- sensor at t = 10..20 s (10 s cache, tf2_ros's default).
+    for (int t = 10; t <= 20; ++t) addTf(t);
+    pipeline_ = std::make_unique<CloudPipeline>(params_, tf_, shared_.get(), &stats_, nullptr);
+  }
+
+  void addTf(double t) {
+    geometry_msgs::TransformStamped tf;
+    tf.header.frame_id = "map";
+    tf.header.stamp = ::ros::Time(t);
+    tf.child_frame_id = "sensor";
+    tf.transform.translation.x = 0.01 * t;
+    tf.transform.rotation.w = 1.0;
+    ASSERT_TRUE(tf_.setTransform(tf, "test"));
+  }
+
+  fragg_map::MapStats stats() const {
+    const SharedMap::ReadGuard state = shared_->read();
+    return stats_.toMsg(state->map, "map", ::ros::Time(0));
+  }
+
+  // Waits until no cloud is in flight; then checks that each cloud is in one count.
+  void settleAndCheckSum() {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (stats().clouds_in_flight > 0 && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    const fragg_map::MapStats s = stats();
+    ASSERT_EQ(s.clouds_in_flight, 0u) << "a cloud never reached a count";
+    EXPECT_EQ(s.clouds_received, s.clouds_inserted + s.dropped_clouds + s.empty_clouds);
+    EXPECT_EQ(s.dropped_clouds,
+              s.dropped_no_tf + s.dropped_tf_too_old + s.dropped_queue_full + s.rejected_clouds);
+  }
+
+  // One cloud through the pipeline, alone.
+  void offerAlone(const CloudPtr& msg) {
+    pipeline_->offer(msg);
+    settleAndCheckSum();
+  }
+
+  // Holds the map's write lock until release(): the insertion thread takes `first` and waits.
+  void blockOn(const CloudPtr& first) {
+    lock_.emplace(shared_->write());
+    pipeline_->offer(first);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (pipeline_->waiting() > 0 && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ASSERT_EQ(pipeline_->waiting(), 0u);
+  }
+  void release() { lock_.reset(); }
+
+  ServerParams params_;
+  ServerStats stats_;
+  tf2::BufferCore tf_{::ros::Duration(10.0)};
+  std::unique_ptr<SharedMap> shared_;
+  std::unique_ptr<CloudPipeline> pipeline_;
+  std::optional<SharedMap::WriteGuard> lock_;
+};
+
+TEST_F(CloudCountsTest, QueueDropsAndInsertionsSumToTheCloudsReceived) {
+  blockOn(wall("map", 1.0));
+  for (int i = 0; i < 6; ++i) pipeline_->offer(wall("map", 2.0 + i));  // 4 pushed out
+  release();
+  settleAndCheckSum();
+  const fragg_map::MapStats s = stats();
+  EXPECT_EQ(s.clouds_received, 7u);
+  EXPECT_EQ(s.dropped_queue_full, 4u);
+  EXPECT_EQ(s.clouds_inserted, 3u);
+  EXPECT_EQ(s.scans, 3u);
+}
+
+TEST_F(CloudCountsTest, FaultsLandInOneCountEach) {
+  auto malformed = boost::make_shared<sensor_msgs::PointCloud2>(*wall("map", 1.0));
+  malformed->fields.pop_back();  // no z
+  offerAlone(malformed);
+  auto empty = boost::make_shared<sensor_msgs::PointCloud2>(*wall("map", 1.0));
+  empty->width = 0;
+  empty->data.clear();
+  offerAlone(empty);
+  auto nan = boost::make_shared<sensor_msgs::PointCloud2>(makeCloud(
+      {Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN())}, 1, 1, packedXyz(), 12));
+  nan->header.frame_id = "map";
+  offerAlone(nan);
+  offerAlone(wall("lidar", 15.0));   // no such frame: no_tf after tf_tolerance
+  offerAlone(wall("sensor", 1.0));   // older than the buffer: tf_too_old at once
+  offerAlone(wall("sensor", 15.0));  // good
+  const fragg_map::MapStats s = stats();
+  EXPECT_EQ(s.clouds_received, 6u);
+  EXPECT_EQ(s.rejected_malformed, 1u);
+  EXPECT_EQ(s.empty_clouds, 1u);
+  EXPECT_EQ(s.rejected_no_finite_point, 1u);
+  EXPECT_EQ(s.dropped_no_tf, 1u);
+  EXPECT_EQ(s.dropped_tf_too_old, 1u);
+  EXPECT_EQ(s.dropped_queue_full, 0u);
+  EXPECT_EQ(s.clouds_inserted, 1u);
+}
+
+TEST_F(CloudCountsTest, TransformsAgedOutDuringTheQueueWaitCountAsTooOld) {
+  blockOn(wall("map", 1.0));
+  pipeline_->offer(wall("sensor", 10.5));   // its transforms are in the buffer now
+  for (int t = 21; t <= 32; ++t) addTf(t);  // ... and age out while it waits
+  release();
+  settleAndCheckSum();
+  const fragg_map::MapStats s = stats();
+  EXPECT_EQ(s.clouds_received, 2u);
+  EXPECT_EQ(s.dropped_tf_too_old, 1u);
+  EXPECT_EQ(s.dropped_no_tf, 0u);
+  EXPECT_EQ(s.dropped_queue_full, 0u);
+  EXPECT_EQ(s.clouds_inserted, 1u);
+}
+
+TEST_F(CloudCountsTest, CountersRestartedWithCloudsInFlightStillSum) {
+  offerAlone(wall("map", 1.0));
+  blockOn(wall("map", 2.0));
+  pipeline_->offer(wall("map", 3.0));
+  stats_.restart(0);  // as ~reset_map does, with two clouds in flight
+  release();
+  settleAndCheckSum();
+  const fragg_map::MapStats s = stats();
+  EXPECT_EQ(s.clouds_received, 2u) << "the clouds in flight at the restart";
+  EXPECT_EQ(s.clouds_inserted, 2u);
+}
+
+TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
+  const std::string path = ::testing::TempDir() + "fragg_cloud_trace.csv";
+  params_.trace_csv = path;
+  pipeline_ = std::make_unique<CloudPipeline>(params_, tf_, shared_.get(), &stats_, nullptr);
+  blockOn(wall("map", 1.0));
+  for (int i = 0; i < 3; ++i) pipeline_->offer(wall("map", 2.0 + i));  // 1 pushed out
+  release();
+  settleAndCheckSum();
+  offerAlone(wall("sensor", 1.0));  // tf_too_old
+  offerAlone(wall("lidar", 15.0));  // no_tf
+  pipeline_.reset();                // closes nothing early: every row is flushed
+  std::ifstream in(path);
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  EXPECT_EQ(line, fragg::ros::CloudTraceCsv::header());
+  std::map<std::string, int> outcomes;
+  int rows = 0;
+  while (std::getline(in, line)) {
+    ++rows;
+    std::stringstream row(line);
+    std::string stamp, points, outcome, queue_ms, tf_ms, insert_ms, publish_ms, total_ms;
+    std::getline(row, stamp, ',');
+    std::getline(row, points, ',');
+    std::getline(row, outcome, ',');
+    std::getline(row, queue_ms, ',');
+    std::getline(row, tf_ms, ',');
+    std::getline(row, insert_ms, ',');
+    std::getline(row, publish_ms, ',');
+    std::getline(row, total_ms, ',');
+    ++outcomes[outcome];
+    EXPECT_EQ(std::stoul(points), 231u);
+    EXPECT_GE(std::stod(total_ms) + 1e-3,
+              std::stod(queue_ms) + std::stod(tf_ms) + std::stod(insert_ms) + std::stod(publish_ms))
+        << line;
+  }
+  const fragg_map::MapStats s = stats();
+  EXPECT_EQ(rows, static_cast<int>(s.clouds_received));
+  EXPECT_EQ(outcomes["inserted"], 3);
+  EXPECT_EQ(outcomes["queue_full"], 1);
+  EXPECT_EQ(outcomes["tf_too_old"], 1);
+  EXPECT_EQ(outcomes["no_tf"], 1);
+  EXPECT_GT(s.latency_ms_p99, 0.0f);
+  EXPECT_GE(s.latency_ms_p99, s.latency_ms_p50);
+  std::remove(path.c_str());
+}
+
+TEST(CloudTraceCsv, AnUnwritablePathIsAClearError) {
+  EXPECT_THROW(fragg::ros::CloudTraceCsv("/nonexistent-dir/trace.csv"), fragg::IoError);
+}
+
+}  // namespace

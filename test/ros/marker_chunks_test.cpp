@@ -1,0 +1,209 @@
+// Incremental chunk markers (block_markers.h with chunk_blocks > 1, as the server sends them):
+// after a sequence of insertions and edits (clear box, free box, cells set by hand, a block
+// emptied), the updates applied in order show exactly what a full rebuild shows (the same
+// cells in the same colours, one marker per chunk), chunks that empty are DELETEd, an update
+// carries only the chunks that changed, and a late subscriber's snapshot (shownBlockMarkers)
+// followed by the next increments shows the same. Also with hidden speckles and a height band.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <iterator>
+#include <map>
+#include <set>
+#include <tuple>
+
+#include "fragg_map/ros/block_markers.h"
+#include "map_fixtures.h"
+
+namespace {
+
+using fragg::ros::MarkerLedger;
+using fragg::ros::MarkerStyle;
+using visualization_msgs::Marker;
+using visualization_msgs::MarkerArray;
+
+const ros::Time kStamp(12, 34);
+
+// A drawn cell: voxel key and colour (to 1/1000).
+using Drawn = std::tuple<int32_t, int32_t, int32_t, int, int, int, int>;
+// What rviz shows after applying marker arrays in order: each marker id's cells.
+using View = std::map<int32_t, std::vector<Drawn>>;
+
+void apply(const fragg::Map& map, const MarkerArray& a, View* view) {
+  for (const Marker& m : a.markers) {
+    if (m.action == Marker::DELETEALL) {
+      view->clear();
+    } else if (m.action == Marker::DELETE) {
+      EXPECT_EQ(view->erase(m.id), 1u) << "DELETE of a marker that is not shown";
+    } else {
+      ASSERT_EQ(m.action, Marker::ADD);
+      ASSERT_EQ(m.type, Marker::CUBE_LIST);
+      ASSERT_EQ(m.points.size(), m.colors.size());
+      ASSERT_FALSE(m.points.empty()) << "an ADD of an empty chunk";
+      std::vector<Drawn>& cells = (*view)[m.id];
+      cells.clear();
+      for (size_t i = 0; i < m.points.size(); ++i) {
+        const auto& p = m.points[i];
+        const fragg::VoxelKey v = map.keyOf(Eigen::Vector3d(p.x, p.y, p.z));
+        const auto& c = m.colors[i];
+        auto q = [](float x) { return static_cast<int>(std::lround(x * 1000.0f)); };
+        cells.emplace_back(v.x, v.y, v.z, q(c.r), q(c.g), q(c.b), q(c.a));
+      }
+    }
+  }
+}
+
+std::multiset<Drawn> allDrawn(const View& view) {
+  std::multiset<Drawn> all;
+  for (const auto& [id, cells] : view) all.insert(cells.begin(), cells.end());
+  return all;
+}
+
+// The map after edit step `step` of the sequence (each step changes it).
+void edit(fragg::Map& map, int step) {
+  using fragg::ros::test::insertWall;
+  using fragg::ros::test::setCell;
+  switch (step) {
+    case 0:
+      insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+      break;
+    case 1:
+      insertWall(map, Eigen::Vector3d(0.0, 1.5, 0.3), 3.0);  // overlaps the first
+      break;
+    case 2:
+      setCell(map, {40, -17, 5}, fragg::CellState::kOccupied);  // a lone cell, negative keys
+      setCell(map, {41, -17, 5}, fragg::CellState::kOccupied);
+      break;
+    case 3:
+      insertWall(map, Eigen::Vector3d(-2.0, 0.0, 0.0), 5.5);  // the wall from farther away
+      break;
+    case 4:
+      map.clearBox(Eigen::Vector3d(2.5, -0.5, -0.5), Eigen::Vector3d(3.5, 0.5, 0.5));
+      break;
+    case 5:
+      setCell(map, {40, -17, 5}, fragg::CellState::kFree);  // its chunk keeps the other
+      break;
+    case 6:
+      setCell(map, {41, -17, 5}, fragg::CellState::kFree);  // ... now empties
+      break;
+    case 7:
+      map.freeBox(Eigen::Vector3d(2.5, 1.0, -1.0), Eigen::Vector3d(3.5, 2.0, 1.0));
+      break;
+    default:
+      insertWall(map, Eigen::Vector3d(0.0, -3.0, 0.0), 2.0 + 0.5 * step);
+  }
+}
+
+void expectIncrementsEqualRebuild(MarkerStyle style) {
+  fragg::Map map(fragg::ros::test::cpuParams());
+  MarkerLedger topic, late;
+  View view, late_view;
+  for (int step = 0; step < 10; ++step) {
+    SCOPED_TRACE("after edit " + std::to_string(step));
+    edit(map, step);
+    const MarkerArray update = fragg::ros::changedBlockMarkers(map, style, kStamp, &topic);
+    apply(map, update, &view);
+    // No entry for a chunk twice, and fewer entries than chunks shown plus deleted.
+    std::set<int32_t> ids;
+    for (const Marker& m : update.markers) EXPECT_TRUE(ids.insert(m.id).second);
+    MarkerLedger rebuilt;
+    View full;
+    apply(map, fragg::ros::allBlockMarkers(map, style, kStamp, &rebuilt), &full);
+    {
+      const auto a = allDrawn(view), b = allDrawn(full);
+      std::vector<Drawn> only_inc, only_full;
+      std::set_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(only_inc));
+      std::set_difference(b.begin(), b.end(), a.begin(), a.end(), std::back_inserter(only_full));
+      EXPECT_TRUE(only_inc.empty() && only_full.empty())
+          << only_inc.size() << " cells only in the increments, " << only_full.size()
+          << " only in the rebuild"
+          << (only_inc.empty() ? std::string()
+                               : " e.g. " + std::to_string(std::get<0>(only_inc[0])) + "," +
+                                     std::to_string(std::get<1>(only_inc[0])) + "," +
+                                     std::to_string(std::get<2>(only_inc[0])));
+    }
+    EXPECT_EQ(view.size(), full.size()) << "one marker per chunk";
+    EXPECT_EQ(topic.shownBlocks(), rebuilt.shownBlocks());
+    EXPECT_EQ(topic.shownChunks(), rebuilt.shownChunks());
+    if (step == 4) {
+      // A subscriber joining now: the snapshot, then the topic's next increments.
+      apply(map, fragg::ros::shownBlockMarkers(map, style, kStamp, topic), &late_view);
+      EXPECT_EQ(allDrawn(late_view), allDrawn(full));
+    } else if (step > 4) {
+      apply(map, update, &late_view);
+      EXPECT_EQ(allDrawn(late_view), allDrawn(full));
+    }
+  }
+  EXPECT_FALSE(view.empty());
+}
+
+TEST(MarkerChunks, IncrementsEqualAFullRebuildAfterInsertionsAndEdits) {
+  MarkerStyle style;
+  style.chunk_blocks = 4;
+  expectIncrementsEqualRebuild(style);
+}
+
+TEST(MarkerChunks, PerBlockAndChunkOfTwoToo) {
+  for (int chunk : {1, 2}) {
+    MarkerStyle style;
+    style.chunk_blocks = chunk;
+    SCOPED_TRACE("chunk_blocks " + std::to_string(chunk));
+    expectIncrementsEqualRebuild(style);
+  }
+}
+
+TEST(MarkerChunks, HiddenSpecklesAndAHeightBandToo) {
+  MarkerStyle style;
+  style.chunk_blocks = 4;
+  style.hide_speckles = true;
+  style.heights = {-0.45, 0.65};
+  expectIncrementsEqualRebuild(style);
+}
+
+TEST(MarkerChunks, FreeCellsToo) {
+  MarkerStyle style;
+  style.chunk_blocks = 4;
+  style.state = fragg::CellState::kFree;
+  style.ns = "free";
+  expectIncrementsEqualRebuild(style);
+}
+
+TEST(MarkerChunks, AnUpdateCarriesOnlyTheChunksThatChangedAndDeletesEmptiedOnes) {
+  fragg::Map map(fragg::ros::test::cpuParams());
+  MarkerStyle style;
+  style.chunk_blocks = 4;
+  MarkerLedger topic;
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  const MarkerArray first = fragg::ros::changedBlockMarkers(map, style, kStamp, &topic);
+  const size_t wall_chunks = topic.shownChunks();
+  ASSERT_GT(wall_chunks, 1u);
+  EXPECT_EQ(first.markers.size(), wall_chunks);
+  EXPECT_LT(wall_chunks, topic.shownBlocks()) << "chunks hold several blocks";
+  // One lone cell far away: one new chunk, the wall's chunks not resent.
+  const fragg::VoxelKey lone{200, 200, 3};
+  fragg::ros::test::setCell(map, lone, fragg::CellState::kOccupied);
+  const MarkerArray add = fragg::ros::changedBlockMarkers(map, style, kStamp, &topic);
+  ASSERT_EQ(add.markers.size(), 1u);
+  EXPECT_EQ(add.markers[0].action, Marker::ADD);
+  EXPECT_EQ(add.markers[0].points.size(), 1u);
+  const int32_t id = topic.idOf(fragg::blockKeyOf(lone));
+  EXPECT_EQ(add.markers[0].id, id);
+  // Nothing changed: nothing sent.
+  EXPECT_TRUE(fragg::ros::changedBlockMarkers(map, style, kStamp, &topic).markers.empty());
+  // The lone cell freed: its chunk is deleted.
+  fragg::ros::test::setCell(map, lone, fragg::CellState::kFree);
+  const MarkerArray del = fragg::ros::changedBlockMarkers(map, style, kStamp, &topic);
+  ASSERT_EQ(del.markers.size(), 1u);
+  EXPECT_EQ(del.markers[0].action, Marker::DELETE);
+  EXPECT_EQ(del.markers[0].id, id);
+  EXPECT_EQ(topic.idOf(fragg::blockKeyOf(lone)), -1);
+  EXPECT_EQ(topic.shownChunks(), wall_chunks);
+}
+
+TEST(MarkerChunks, ChunkKeysFloorNegativeBlocks) {
+  EXPECT_EQ(fragg::ros::chunkOf({-1, -4, -5}, 4), (fragg::BlockKey{-1, -1, -2}));
+  EXPECT_EQ(fragg::ros::chunkOf({3, 4, 0}, 4), (fragg::BlockKey{0, 1, 0}));
+  EXPECT_EQ(fragg::ros::chunkOf({-7, 7, 9}, 1), (fragg::BlockKey{-7, 7, 9}));
+}
+
+}  // namespace
