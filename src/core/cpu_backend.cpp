@@ -7,6 +7,7 @@
 #include <cmath>
 #include <iterator>
 
+#include "fragg_map/internal/dynamic_classifier.h"
 #include "fragg_map/internal/thread_count.h"
 #include "fragg_map/raycast.h"
 
@@ -110,6 +111,17 @@ void CpuBackend::update(const ScanInput& in, ScanUpdate what, const UpdateSettin
   const auto t0 = std::chrono::steady_clock::now();
   prepareScan(in.cloud, in.T_map_sensor, in.model, in.frustum, in.explicit_model, how.params,
               prepared_, stats);
+  dynamic_points_S_.clear();
+  if (how.params.dynamic.enabled && what == ScanUpdate::kIntegrate) {
+    // Hits in void space become free-only rays before any cell changes (the map as it was).
+    classifyDynamicHits(prepared_, blocks, DynamicRule::fromParams(how.params.dynamic),
+                        threadCount(threads_), dynamic_rays_);
+    dynamic_points_S_.reserve(dynamic_rays_.size());
+    for (uint32_t r : dynamic_rays_)
+      dynamic_points_S_.push_back(in.cloud.points_S[prepared_.point_index[r]]);
+    stats.rays_dynamic += dynamic_rays_.size();
+    stats.rays_hit -= dynamic_rays_.size();
+  }
   stats.seconds_prepare += secondsSince(t0);
   updatePrepared(prepared_, what, how.model, how.params.raycast, how.params.skip_saturated_blocks,
                  how, blocks, stats);

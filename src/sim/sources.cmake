@@ -12,6 +12,7 @@ set(FRAGG_SIM_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/depth_camera.cpp
   ${CMAKE_CURRENT_LIST_DIR}/dataset_writers.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_quality.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/dynamic_quality.cpp
 )
 set(FRAGG_SIM_ROS_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/bag_writer.cpp

@@ -4,8 +4,10 @@
 #include <ros/console.h>
 
 #include <string>
+#include <vector>
 
 #include "fragg_map/ros/ground_filter.h"
+#include "fragg_map/ros/occupied_cloud.h"
 
 namespace fragg::ros {
 namespace {
@@ -32,6 +34,10 @@ CloudInput::CloudInput(::ros::NodeHandle& nh, const ServerParams& params, const 
       inserter_(params, shared, stats),
       on_inserted_(std::move(on_inserted)),
       queue_(static_cast<size_t>(params.queue_size)) {
+  // MapParams::dynamic: the points of each scan classified dynamic (sensor frame), built only
+  // while someone listens.
+  if (params_.map.dynamic.enabled)
+    dynamic_pub_ = nh.advertise<sensor_msgs::PointCloud2>("dynamic_points", 1);
   worker_ = std::thread([this] { run(); });
   // The subscription on a callback queue of its own with one thread: onCloud only moves the
   // message into queue_, so it runs at once even while every thread of the node's queue waits
@@ -126,9 +132,18 @@ void CloudInput::process(const sensor_msgs::PointCloud2& msg) {
                         params_.octomap.base_frame_id.c_str());
   }
   fragg::InsertStats inserted;
+  const bool publish_dynamic = dynamic_pub_ && dynamic_pub_.getNumSubscribers() > 0;
+  std::vector<Eigen::Vector3f> dynamic_S;
   if (!inserter_.insert(*cloud, T_map_sensor, static_cast<int64_t>(msg.header.stamp.toNSec()),
-                        withoutLeadingSlash(msg.header.frame_id), &inserted))
+                        withoutLeadingSlash(msg.header.frame_id), &inserted,
+                        publish_dynamic ? &dynamic_S : nullptr))
     return;
+  if (publish_dynamic) {
+    std::vector<float> xyz;
+    xyz.reserve(3 * dynamic_S.size());
+    for (const Eigen::Vector3f& p : dynamic_S) xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
+    dynamic_pub_.publish(packedXyzCloud(xyz, msg.header.frame_id, msg.header.stamp));
+  }
   if (on_inserted_) on_inserted_(msg, inserted.sensor, T_map_sensor);
 }
 

@@ -17,6 +17,7 @@
 
 #include <ros/callback_queue.h>
 #include <ros/node_handle.h>
+#include <ros/publisher.h>
 #include <ros/spinner.h>
 #include <ros/subscriber.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -69,6 +70,7 @@ class CloudInput {
   std::atomic<bool> stopping_{false};
   ::ros::CallbackQueue callbacks_;  ///< cloud_in's only (onCloud), before sub_ and spinner_
   ::ros::Subscriber sub_;
+  ::ros::Publisher dynamic_pub_;  ///< dynamic_points (MapParams::dynamic enabled only)
   std::unique_ptr<::ros::AsyncSpinner> spinner_;  ///< one thread on callbacks_
   std::thread worker_;
 };
