@@ -17,7 +17,7 @@ bool occupiedCell(const Map& map, const Cell* c, bool octomap_threshold) {
 
 void addLabelledScan(const Map& map, const PointCloud& cloud_S,
                      const Eigen::Isometry3d& T_map_sensor, const std::vector<uint8_t>& labels,
-                     bool octomap_threshold, DynamicQuality& quality) {
+                     bool octomap_threshold, DynamicQuality& quality, double max_range_m) {
   size_t finite = 0;
   for (const Eigen::Vector3f& p : cloud_S.points_S) finite += p.allFinite() ? 1 : 0;
   if (finite != labels.size())
@@ -27,6 +27,7 @@ void addLabelledScan(const Map& map, const PointCloud& cloud_S,
   for (const Eigen::Vector3f& p : cloud_S.points_S) {
     if (!p.allFinite()) continue;
     const bool dynamic = labels[k++] != 0;
+    if (p.cast<double>().norm() > max_range_m) continue;
     const Cell* c = map.findCell(map.keyOf(T_map_sensor * p.cast<double>()));
     const bool occupied = occupiedCell(map, c, octomap_threshold);
     if (dynamic) {

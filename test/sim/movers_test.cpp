@@ -10,8 +10,10 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/geometry/mesh_bvh.h"
 #include "fragg_map/io/dataset.h"
+#include "fragg_map/map.h"
 #include "fragg_map/sim/dataset_writers.h"
 #include "fragg_map/sim/depth_camera.h"
+#include "fragg_map/sim/dynamic_quality.h"
 #include "fragg_map/sim/lidar_sensor.h"
 #include "fragg_map/sim/scene.h"
 #include "sim_test_util.h"
@@ -171,6 +173,51 @@ TEST(SimMovers, LabelsAreWrittenPerReturnedPointAndReadBack) {
   for (uint8_t v : back) ones += v;
   EXPECT_GT(ones, 10u);
   EXPECT_THROW(readDynamicLabels(dir + "/depth_set", 1), IoError);
+}
+
+// SA, DA and ghost cells on a hand-made case: a ground slab seen from above, one floating
+// "mover" point inserted (a ghost, not removed) and one dynamic point whose cell stays free.
+TEST(SimDynamicQuality, CountsKeptStaticRemovedDynamicAndGhostCells) {
+  const MeshBvh ground(test::flatGround(10));  // top at z = 0
+  MapParams params;
+  params.resolution_m = 0.1;
+  params.backend = Backend::kCpu;
+  Map map(params);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(0.05, 0.05, 2.05);
+  PointCloud cloud;
+  for (int x = -5; x <= 5; ++x)
+    for (int y = -5; y <= 5; ++y)
+      cloud.points_S.emplace_back(0.1f * x, 0.1f * y, -2.03f);  // on the ground (z = 0.02)
+  cloud.points_S.emplace_back(0.3f, 0.3f, -1.0f);               // a mover's hit, in the air
+  cloud.points_S.emplace_back(std::nanf(""), 0.f, 0.f);         // no return: no label
+  for (int k = 0; k < 3; ++k) map.insert(cloud, T, SensorModel::autoFromCloud());
+  std::vector<uint8_t> labels(121, 0);
+  labels.push_back(1);
+  // A second dynamic point in a cell the rays cleared (free): removed.
+  PointCloud eval_cloud = cloud;
+  eval_cloud.points_S.emplace_back(0.0f, 0.0f, -0.5f);
+  std::vector<uint8_t> eval_labels = labels;
+  eval_labels.push_back(1);
+  DynamicQuality q;
+  addLabelledScan(map, eval_cloud, T, eval_labels, false, q);
+  countGhostCells(map, ground, false, q);
+  EXPECT_EQ(q.static_points, 121u);
+  EXPECT_EQ(q.static_kept, 121u);
+  EXPECT_DOUBLE_EQ(q.staticAccuracy(), 1.0);
+  EXPECT_EQ(q.dynamic_points, 2u);
+  EXPECT_EQ(q.dynamic_removed, 1u);  // the floating hit is occupied: not removed
+  EXPECT_DOUBLE_EQ(q.dynamicAccuracy(), 0.5);
+  EXPECT_EQ(q.ghost_cells, 1u);  // its cell is free in the static truth
+  EXPECT_GE(q.occupied, 122u);
+  // A range limit leaves the far points out.
+  DynamicQuality near;
+  addLabelledScan(map, eval_cloud, T, eval_labels, false, near, 1.8);
+  EXPECT_EQ(near.static_points, 0u);
+  EXPECT_EQ(near.dynamic_points, 2u);
+  // A label count other than the finite points is refused.
+  eval_labels.pop_back();
+  EXPECT_THROW(addLabelledScan(map, eval_cloud, T, eval_labels, false, q), InvalidArgument);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "fragg_map/geometry/mesh_bvh.h"
@@ -41,9 +42,12 @@ struct DynamicQuality {
 
 /// Adds one labelled scan to SA and DA: `labels` holds one flag (1 = dynamic) a finite point
 /// of `cloud_S`, in order (readDynamicLabels). Throws InvalidArgument when the count differs.
+/// Points farther than `max_range_m` from the sensor (> 0; the map's build range) are left out:
+/// no map inserts them.
 void addLabelledScan(const Map& map, const PointCloud& cloud_S,
                      const Eigen::Isometry3d& T_map_sensor, const std::vector<uint8_t>& labels,
-                     bool octomap_threshold, DynamicQuality& quality);
+                     bool octomap_threshold, DynamicQuality& quality,
+                     double max_range_m = std::numeric_limits<double>::infinity());
 
 /// Counts the map's occupied voxels and its ghost cells against the static truth
 /// `static_scene` (map frame = scene frame). Multithreaded (OpenMP).

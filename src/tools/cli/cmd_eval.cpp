@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -29,6 +30,7 @@ struct EvalOptions {
   bool json = false, octomap_threshold = false;
   std::string labels;  ///< labelled dataset (labels/*.dyn): SA, DA, ghost cells
   size_t label_every = 1, label_scans = 0;
+  double label_max_range_m = -1.0;
 };
 
 constexpr const char* kDynamicMetrics =
@@ -223,6 +225,10 @@ void addEvalCommand(CLI::App& app) {
       ->capture_default_str();
   c->add_option("--label-scans", o->label_scans,
                 "With --labels: the first N scans (0 = all; give the build's --scans)")
+      ->capture_default_str();
+  c->add_option("--label-max-range", o->label_max_range_m,
+                "With --labels: only points within this range of the sensor (m; give the "
+                "build's --max-range; <= 0: all)")
       ->capture_default_str();
   c->add_flag("--json", o->json, "Print one JSON object on stdout");
   c->callback([o] { runEval(*o); });
