@@ -97,8 +97,11 @@ struct HeightFilterParams {
 /// neighbour within known_radius_cells (Chebyshev) has been observed is dynamic: it is not
 /// inserted, its ray clears up to it as a free-only ray would (the hit's own cell is left as
 /// it was), and it is counted (InsertStats::rays_dynamic) and handed back (Map's last dynamic
-/// points). The neighbourhood keeps surfaces static where the map has not seen around them
-/// (the ground's cells border unobserved cells below it), as DUFOMap's unknown inflation does.
+/// points). And a ray passing through an occupied cell whose neighbourhood has been observed
+/// makes it void at once (what stood there has moved) instead of taking one miss. The
+/// neighbourhood keeps surfaces static where the map has not seen around them (the ground's
+/// cells border unobserved cells below it, a wall's its inside), as DUFOMap's unknown
+/// inflation does. Blocks that are paged out read as unobserved.
 struct DynamicParams {
   bool enabled = false;
   /// A cell is void at or below this occupancy probability; in (0, 0.5 - unknown band), and

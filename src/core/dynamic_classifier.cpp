@@ -41,9 +41,7 @@ class CellReader {
   bool valid_ = false;
 };
 
-bool dynamicAt(const VoxelKey& end, CellReader& cells, const DynamicRule& rule) {
-  const Cell* c = cells.find(end);
-  if (!c || !rule.isVoid(*c)) return false;
+bool observedAround(const VoxelKey& end, CellReader& cells, const DynamicRule& rule) {
   const int r = rule.known_radius_cells;
   for (int dz = -r; dz <= r; ++dz)
     for (int dy = -r; dy <= r; ++dy)
@@ -54,11 +52,37 @@ bool dynamicAt(const VoxelKey& end, CellReader& cells, const DynamicRule& rule) 
   return true;
 }
 
+bool dynamicAt(const VoxelKey& end, CellReader& cells, const DynamicRule& rule) {
+  const Cell* c = cells.find(end);
+  if (!c || !rule.isVoid(*c)) return false;
+  return observedAround(end, cells, rule);
+}
+
 }  // namespace
 
 bool isDynamicHit(const VoxelKey& end, const BlockMap& blocks, const DynamicRule& rule) {
   CellReader cells(blocks);
   return dynamicAt(end, cells, rule);
+}
+
+bool neighbourhoodObserved(const VoxelKey& v, const BlockMap& blocks, const DynamicRule& rule) {
+  CellReader cells(blocks);
+  return observedAround(v, cells, rule);
+}
+
+void passThroughResets(const BlockKey& key, const uint64_t* free_marks, const uint64_t* hit_marks,
+                       const BlockMap& blocks, const DynamicRule& rule, uint64_t* resets) {
+  for (int w = 0; w < kStateMaskWords; ++w) resets[w] = 0;
+  const BlockIndex i = blocks.find(key);
+  if (i == kNoBlock) return;
+  const BlockStateMasks& masks = blocks.masks(i);
+  CellReader cells(blocks);
+  for (int w = 0; w < kStateMaskWords; ++w)
+    for (uint64_t bits = free_marks[w] & ~hit_marks[w] & masks.occupied[w]; bits != 0;
+         bits &= bits - 1) {
+      const int c = w * 64 + __builtin_ctzll(bits);
+      if (observedAround(voxelKeyOf(key, c), cells, rule)) resets[w] |= uint64_t{1} << (c & 63);
+    }
 }
 
 void classifyDynamicHits(PreparedScan& scan, const BlockMap& blocks, const DynamicRule& rule,

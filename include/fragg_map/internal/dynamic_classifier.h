@@ -23,4 +23,19 @@ namespace fragg {
 void classifyDynamicHits(PreparedScan& scan, const BlockMap& blocks, const DynamicRule& rule,
                          int threads, std::vector<uint32_t>& dynamic_rays);
 
+/// Whether every cell within rule.known_radius_cells of `v` (Chebyshev, `v` included) has been
+/// observed in `blocks`.
+[[nodiscard]] bool neighbourhoodObserved(const VoxelKey& v, const BlockMap& blocks,
+                                         const DynamicRule& rule);
+
+/// The pass-through rule: a ray that passes through an occupied cell (marked free, not hit, by
+/// this scan) whose neighbourhood has been observed (neighbourhoodObserved) shows that what
+/// was there has moved: the cell becomes void (log-odds rule.void_at_or_below_fx) instead of
+/// taking one miss. A static surface keeps unobserved cells behind it (the ground's below it,
+/// a wall's inside it), so its cells do not qualify. `free_marks`/`hit_marks`: the scan's
+/// marks of the block `key` (8 words each); `resets` gets the cells to make void (8 words,
+/// bit c = cell index c), read from `blocks` as they are before the scan.
+void passThroughResets(const BlockKey& key, const uint64_t* free_marks, const uint64_t* hit_marks,
+                       const BlockMap& blocks, const DynamicRule& rule, uint64_t* resets);
+
 }  // namespace fragg
