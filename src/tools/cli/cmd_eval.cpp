@@ -53,8 +53,10 @@ sim::DynamicQuality dynamicQuality(const Map& map, const geometry::MeshBvh& scen
     if (o.label_scans > 0 && i >= o.label_scans) break;
     if (i % o.label_every != 0) continue;
     try {
-      sim::addLabelledScan(map, scan.cloud, scan.T_map_sensor, sim::readDynamicLabels(o.labels, i),
-                           o.octomap_threshold, q);
+      sim::addLabelledScan(
+          map, scan.cloud, scan.T_map_sensor, sim::readDynamicLabels(o.labels, i),
+          o.octomap_threshold, q,
+          o.label_max_range_m > 0 ? o.label_max_range_m : std::numeric_limits<double>::infinity());
     } catch (const InvalidArgument& e) {
       throw InvalidArgument("--labels: scan " + std::to_string(i) + ": " + e.what());
     }
