@@ -5,7 +5,10 @@
 #   fragg_map eval MAP --scene STATIC_TRUTH.obj --labels DATASET --label-max-range R --json
 # on each and prints a markdown table: SA (static points kept), DA (dynamic points removed),
 # ghost cells (occupied, free in the static truth), ms per scan (median, whole insert).
-#   W5 w5_movers: 10 cm, max range 30 m      W6 w6_people: 5 cm, max range 6 m
+#   W5 w5_movers: 10 cm, max range 30 m, fragg given the LiDAR's range noise (--range-noise 0.01)
+#   W6 w6_people: 5 cm, max range 6 m, fragg given the camera's (--range-noise-quadratic 0.001)
+# (the noise is fragg's clearing margin: cells just in front of a hit are not cleared, so
+# they do not become void under noisy static hits; OctoMap has no such model)
 # Usage: bash scripts/eval_dynamic.sh [--workloads DIR] [--out DIR] [--bin DIR] [--only w5|w6]
 #                                     [--reuse]   (--reuse keeps OctoMap's .bt when present)
 set -euo pipefail
@@ -32,14 +35,15 @@ fm="$bin/fragg_map"
 [ -x "$fm" ] || { echo "eval_dynamic: no fragg_map in $bin (build first)" >&2; exit 1; }
 mkdir -p "$out"
 
-run() {  # name dataset static_obj resolution range
+run() {  # name dataset static_obj resolution range [fragg build args: the sensor's noise]
   local name="$1" data="$2" obj="$3" res="$4" range="$5"
+  shift 5
   [ -d "$data/labels" ] || { echo "eval_dynamic: $data has no labels/ (make_workloads.sh --only $name)" >&2; exit 1; }
   for mode in off on; do
     local flag=()
     [ "$mode" = on ] && flag=(--dynamic)
     "$fm" build "$data" -o "$out/${name}_$mode.fgm" --resolution "$res" --max-range "$range" \
-      --backend cpu --threads 1 "${flag[@]}" --json > "$out/${name}_$mode.build.json"
+      --backend cpu --threads 1 "$@" "${flag[@]}" --json > "$out/${name}_$mode.build.json"
   done
   if [ "$reuse" = 0 ] || [ ! -f "$out/${name}_octomap.bt" ]; then
     "$fm" octomap-build "$data" -o "$out/${name}_octomap.bt" --resolution "$res" \
@@ -68,8 +72,10 @@ PY
 
 for w in ${only//,/ }; do
   case "$w" in
-    w5) run w5 "$workloads/w5_movers" "$workloads/scenes/campus_movers.obj" 0.1 30 ;;
-    w6) run w6 "$workloads/w6_people" "$workloads/scenes/office_people.obj" 0.05 6 ;;
+    w5) run w5 "$workloads/w5_movers" "$workloads/scenes/campus_movers.obj" 0.1 30 \
+      --range-noise 0.01 ;;
+    w6) run w6 "$workloads/w6_people" "$workloads/scenes/office_people.obj" 0.05 6 \
+      --range-noise-quadratic 0.001 ;;
     *) echo "eval_dynamic: unknown workload '$w'" >&2; exit 2 ;;
   esac
 done
