@@ -15,7 +15,7 @@ struct DynamicParams;
 struct DynamicRule {
   bool enabled = false;
   int16_t void_at_or_below_fx = 0;  ///< a cell is void at or below this log-odds
-  int known_radius_cells = 1;
+  int known_radius_cells = 2;
 
   /// From the map's (validated) parameters.
   static DynamicRule fromParams(const DynamicParams& p);

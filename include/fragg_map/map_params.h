@@ -108,7 +108,7 @@ struct DynamicParams {
   /// at least occupancy.clamp_min (below it no cell could be void).
   double void_probability = 0.25;
   /// Neighbours (Chebyshev radius, cells) that must be observed around a void hit: 0 to 2.
-  int known_radius_cells = 1;
+  int known_radius_cells = 2;
 };
 
 struct MapParams {

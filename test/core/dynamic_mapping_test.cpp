@@ -24,12 +24,13 @@ namespace {
 
 constexpr double kRes = 0.1;
 
-MapParams dynamicParams(bool enabled) {
+MapParams dynamicParams(bool enabled, int known_radius_cells = 1) {
   MapParams p;
   p.resolution_m = kRes;
   p.backend = Backend::kCpu;
   p.threads = 2;
   p.dynamic.enabled = enabled;
+  p.dynamic.known_radius_cells = known_radius_cells;
   return p;
 }
 
@@ -123,10 +124,19 @@ TEST(DynamicMappingTest, NothingVoidIntegratesAsWithTheOptionOff) {
   test::expectSameMap(on, off, "first scan");
 }
 
-TEST(DynamicMappingTest, PersonWalkingThroughVoidSpaceMatchesBruteForce) {
-  const MapParams params = dynamicParams(true);
-  Map map(params), ref(dynamicParams(false));
+// The sequence through a map with the option on and through the brute-force reference, both
+// with the neighbourhood radius `r`; checks every scan, returns the counts.
+struct PersonRun {
   uint64_t dynamic_total = 0, void_but_static = 0, resets = 0;
+};
+
+void walkPerson(int r, Map* out_map, PersonRun* run) {
+  const MapParams params = dynamicParams(true, r);
+  Map& map = *out_map;
+  Map ref(dynamicParams(false));
+  uint64_t& dynamic_total = run->dynamic_total;
+  uint64_t& void_but_static = run->void_but_static;
+  uint64_t& resets = run->resets;
   for (size_t step = 0; step < std::size(kPersonY); ++step) {
     const PointCloud cloud = sceneCloud(kPersonY[step]);
     const std::vector<uint8_t> expected = referenceDynamic(ref, cloud, params.dynamic);
@@ -172,6 +182,19 @@ TEST(DynamicMappingTest, PersonWalkingThroughVoidSpaceMatchesBruteForce) {
     EXPECT_EQ(test::blocksWithStaleMasks(map), 0u) << "scan " << step;
     dynamic_total += s.rays_dynamic;
   }
+}
+
+TEST(DynamicMappingTest, PersonWalkingThroughVoidSpaceMatchesBruteForce) {
+  Map wide(dynamicParams(true, 2));
+  PersonRun wide_run;
+  walkPerson(2, &wide, &wide_run);  // the default radius: fewer cells qualify
+  EXPECT_GT(wide_run.dynamic_total, 0u);
+  Map map(dynamicParams(true, 1));
+  PersonRun run;
+  walkPerson(1, &map, &run);
+  const uint64_t dynamic_total = run.dynamic_total, void_but_static = run.void_but_static,
+                 resets = run.resets;
+  EXPECT_GT(dynamic_total, wide_run.dynamic_total);
   EXPECT_GT(dynamic_total, 50u);  // the person's columns, after the room became void
   EXPECT_GT(void_but_static, 0u);
   EXPECT_GE(resets, 10u);  // the first standing place, cleared by the rays through it
