@@ -177,6 +177,7 @@ void walkPerson(int r, Map* out_map, PersonRun* run) {
     for (size_t i = 0; i < cloud.size(); ++i)
       if (expected[i]) expected_points.push_back(cloud.points_S[i]);
     EXPECT_EQ(s.rays_dynamic, expected_points.size()) << "scan " << step;
+    EXPECT_EQ(s.rays_hit + s.rays_dynamic, cloud.size()) << "scan " << step;  // all hits
     EXPECT_EQ(map.lastDynamicPoints_S(), expected_points) << "scan " << step;
     test::expectSameMap(map, ref, "scan");
     EXPECT_EQ(test::blocksWithStaleMasks(map), 0u) << "scan " << step;
