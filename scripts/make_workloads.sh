@@ -7,6 +7,13 @@
 #   w3_loopclosure/  KITTI folder + poses_odom.txt, and w3_loopclosure.bag (drifting tf,
 #                    ground-truth pose and path) when fragg_map_sim has bag output (ROS build)
 #   smoke/           KITTI folder and smoke.bag (< 2 MB; bag with ROS only)
+#   w5_movers/       KITTI folder + labels/*.dyn (1 = return from a mover), 120 x 32k-point
+#                    scans of the campus street among 24 movers (config/scenes/campus_movers.json),
+#                    and scenes/campus_movers.obj, its static truth (movers left out)
+#   w6_people/       depth-image folder + labels/*.dyn, 150 x 320x240 frames of an office with
+#                    five people walking and a door (config/scenes/office_people.json), and
+#                    scenes/office_people.obj (static truth)
+#   movers_smoke/    W5's scene, 12 x 4k-point scans (< 1 MB), for tests
 #   w4_long_drive/   only when asked for (--only w4; scripts/w4.sh): KITTI folder, 579 scans
 #                    of a 1,156 m loop through the campus laid out four times (~1.5 GB), and
 #                    scenes/campus_long.obj
@@ -18,10 +25,10 @@ repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
 
 usage() {
   cat <<USAGE
-usage: bash scripts/make_workloads.sh [--out DIR] [--only w1,w2,w3,smoke,w4] [--sim PATH] [--jobs N]
+usage: bash scripts/make_workloads.sh [--out DIR] [--only w1,w2,w3,smoke,w4,w5,w6,movers_smoke] [--sim PATH] [--jobs N]
   --out DIR    cache folder (default: \$FRAGG_WORKLOADS or ~/.cache/fragg_map/workloads)
-  --only LIST  comma-separated subset of w1,w2,w3,smoke,w4 (default: w1,w2,w3,smoke; W4, the
-               1.5 GB long drive, only when named)
+  --only LIST  comma-separated subset of w1,w2,w3,smoke,w4,w5,w6,movers_smoke (default:
+               w1,w2,w3,smoke,w5,w6,movers_smoke; W4, the 1.5 GB long drive, only when named)
   --sim PATH   fragg_map_sim to use (default: <checkout>_ws/devel/lib/fragg_map/fragg_map_sim, else
                build-core/bin/fragg_map_sim, built with plain CMake when missing)
   --jobs N     compile jobs when building (default 2)
@@ -29,7 +36,7 @@ USAGE
 }
 
 out="${FRAGG_WORKLOADS:-$HOME/.cache/fragg_map/workloads}"
-only="w1,w2,w3,smoke"
+only="w1,w2,w3,smoke,w5,w6,movers_smoke"
 sim=""
 jobs=2
 while [ $# -gt 0 ]; do
@@ -43,7 +50,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 for w in ${only//,/ }; do
-  case "$w" in w1|w2|w3|smoke|w4) ;; *) echo "make_workloads: unknown workload '$w'" >&2; exit 2 ;; esac
+  case "$w" in w1|w2|w3|smoke|w4|w5|w6|movers_smoke) ;; *) echo "make_workloads: unknown workload '$w'" >&2; exit 2 ;; esac
 done
 
 if [ -z "$sim" ]; then
@@ -68,6 +75,9 @@ out="$(cd "$out" && pwd -P)"
 cd "$repo"  # scene paths in the .args files are relative to the repository
 "$sim" scene config/scenes/campus.json -o "$out/scenes/campus.obj"
 "$sim" scene config/scenes/pipes.json -o "$out/scenes/pipes.obj"
+# Static truths of the mover scenes (the scene command writes the static mesh only).
+"$sim" scene config/scenes/campus_movers.json -o "$out/scenes/campus_movers.obj"
+"$sim" scene config/scenes/office_people.json -o "$out/scenes/office_people.obj"
 case ",$only," in *,w4,*)
   "$sim" scene config/scenes/campus_long.json -o "$out/scenes/campus_long.obj" ;;
 esac
@@ -98,6 +108,9 @@ for w in ${only//,/ }; do
     # shellcheck disable=SC2046
     smoke) run smoke --kitti "$out/smoke" --organised $(bag_flag smoke) ;;
     w4) run w4_long_drive --kitti "$out/w4_long_drive" ;;
+    w5) run w5_movers --kitti "$out/w5_movers" ;;
+    w6) run w6_people --depth-folder "$out/w6_people" ;;
+    movers_smoke) run movers_smoke --kitti "$out/movers_smoke" ;;
   esac
 done
 

@@ -17,6 +17,9 @@ struct InsertStats {
   uint64_t rays_hit = 0;        ///< rays ending in a hit
   uint64_t rays_free_only = 0;  ///< beyond max range: clear up to max range, no hit
   uint64_t rays_no_return = 0;  ///< organised no-return rays cleared (when enabled)
+  /// MapParams::dynamic: hits in void space, classified dynamic and not inserted (their rays
+  /// cleared up to them); not counted in rays_hit
+  uint64_t rays_dynamic = 0;
   /// NaN / Inf / (0, 0, 0), beyond the int32 key range, or ending more than 2^24 voxels from the
   /// sensor (kMaxRayV: beyond float precision)
   uint64_t dropped_invalid = 0;
@@ -34,7 +37,7 @@ struct InsertStats {
   uint64_t scans_staged = 0;
   CullCounters culling;
   double seconds_total = 0;
-  double seconds_prepare = 0;    ///< transform + filter
+  double seconds_prepare = 0;    ///< transform + filter (+ dynamic classification)
   double seconds_cull = 0;       ///< sensor model (auto), frustum and host culling
   double seconds_residency = 0;  ///< CUDA: window, uploads, evictions (host side)
   double seconds_raycast = 0;

@@ -116,6 +116,10 @@ class Map {
   InsertStats insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                      const SensorModel& sensor, int64_t stamp_ns = 0,
                      const std::string& sensor_frame = std::string());
+  /// MapParams::dynamic: the points of the last inserted scan (sensor frame, as given, after
+  /// the height filter) that were classified dynamic and not inserted; empty when the option is
+  /// off.
+  [[nodiscard]] const std::vector<Eigen::Vector3f>& lastDynamicPoints_S() const;
   /// Inserts the scans in order, each as insert() would (the same cells, kept scans and
   /// statistics: one InsertStats per scan), while the backend overlaps a scan's host work with
   /// the device's work on the scan before: the CUDA backend copies the next cloud into pinned

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <iterator>
 
+#include "fragg_map/internal/dynamic_classifier.h"
 #include "fragg_map/internal/thread_count.h"
 #include "fragg_map/raycast.h"
 
@@ -110,6 +111,17 @@ void CpuBackend::update(const ScanInput& in, ScanUpdate what, const UpdateSettin
   const auto t0 = std::chrono::steady_clock::now();
   prepareScan(in.cloud, in.T_map_sensor, in.model, in.frustum, in.explicit_model, how.params,
               prepared_, stats);
+  dynamic_points_S_.clear();
+  if (how.params.dynamic.enabled && what == ScanUpdate::kIntegrate) {
+    // Hits in void space become free-only rays before any cell changes (the map as it was).
+    classifyDynamicHits(prepared_, blocks, DynamicRule::fromParams(how.params.dynamic),
+                        threadCount(threads_), dynamic_rays_);
+    dynamic_points_S_.reserve(dynamic_rays_.size());
+    for (uint32_t r : dynamic_rays_)
+      dynamic_points_S_.push_back(in.cloud.points_S[prepared_.point_index[r]]);
+    stats.rays_dynamic += dynamic_rays_.size();
+    stats.rays_hit -= dynamic_rays_.size();
+  }
   stats.seconds_prepare += secondsSince(t0);
   updatePrepared(prepared_, what, how.model, how.params.raycast, how.params.skip_saturated_blocks,
                  how, blocks, stats);
@@ -167,6 +179,18 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
   // 3. Apply: find or create the host blocks, then update the marked cells.
   t0 = std::chrono::steady_clock::now();
   const long touched = static_cast<long>(merged.touchedCount());
+  // MapParams::dynamic: occupied cells the rays passed through become void (read before any
+  // cell changes).
+  const bool pass_through = how.params.dynamic.enabled && !remove;
+  const DynamicRule rule = DynamicRule::fromParams(how.params.dynamic);
+  std::vector<uint64_t> resets(pass_through ? static_cast<size_t>(touched) * kStateMaskWords : 0);
+  if (pass_through) {
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 64)
+    for (long j = 0; j < touched; ++j) {
+      const ScratchBlock& b = merged.touched(j);
+      passThroughResets(b.key, b.free, b.hit, blocks, rule, &resets[j * kStateMaskWords]);
+    }
+  }
   std::vector<BlockIndex> target(static_cast<size_t>(touched), kNoBlock);
   // A scratch block without marks was only entered by misses in a skipped block: nothing to do.
   std::vector<char> marked(static_cast<size_t>(touched), 0);
@@ -218,7 +242,10 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
         const int bit = __builtin_ctzll(bits);
         Cell& cell = block.cells[w * 64 + bit];
         const Cell before = cell;
-        model.update(cell, (marks.hit[w] >> bit) & 1, remove);
+        if (pass_through && (resets[j * kStateMaskWords + w] >> bit) & 1)
+          cell.log_odds_fx = rule.void_at_or_below_fx;
+        else
+          model.update(cell, (marks.hit[w] >> bit) & 1, remove);
         changed |= before.log_odds_fx != cell.log_odds_fx || before.hits != cell.hits;
         const CellState was = model.state(before), is = model.state(cell);
         occupancy_changed |= (was == CellState::kOccupied) != (is == CellState::kOccupied);

@@ -7,6 +7,7 @@ void InsertStats::add(const InsertStats& o) {
   rays_hit += o.rays_hit;
   rays_free_only += o.rays_free_only;
   rays_no_return += o.rays_no_return;
+  rays_dynamic += o.rays_dynamic;
   dropped_invalid += o.dropped_invalid;
   dropped_min_range += o.dropped_min_range;
   dropped_outside_frustum += o.dropped_outside_frustum;

@@ -127,6 +127,10 @@ InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_
   return insertChecked(cloud, T_map_sensor, sensor, stamp_ns, sensor_frame, false, nullptr);
 }
 
+const std::vector<Eigen::Vector3f>& Map::lastDynamicPoints_S() const {
+  return backend_->lastDynamicPoints();
+}
+
 std::vector<InsertStats> Map::insertSequence(const std::vector<ScanToInsert>& scans) {
   for (size_t i = 0; i < scans.size(); ++i) {
     const ScanToInsert& s = scans[i];

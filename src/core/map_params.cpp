@@ -67,6 +67,24 @@ void MapParams::validate() const {
     throw InvalidArgument("height_filter.min_z_m (" + std::to_string(height_filter.min_z_m) +
                           " m) must not exceed height_filter.max_z_m (" +
                           std::to_string(height_filter.max_z_m) + " m)");
+  if (dynamic.enabled) {
+    const double v = dynamic.void_probability;
+    if (!std::isfinite(v) || v <= 0.0 || v >= 0.5 - occupancy.unknown_band)
+      throw InvalidArgument("dynamic.void_probability must be in (0, 0.5 - unknown_band = " +
+                            std::to_string(0.5 - occupancy.unknown_band) + "), got " +
+                            std::to_string(v));
+    if (v < occupancy.clamp_min)
+      throw InvalidArgument("dynamic.void_probability (" + std::to_string(v) +
+                            ") is below occupancy.clamp_min (" +
+                            std::to_string(occupancy.clamp_min) + "): no cell could be void");
+    if (dynamic.known_radius_cells < 0 || dynamic.known_radius_cells > 2)
+      throw InvalidArgument("dynamic.known_radius_cells must be in [0, 2] cells, got " +
+                            std::to_string(dynamic.known_radius_cells));
+    if (scans.keep)
+      throw InvalidArgument(
+          "dynamic.enabled cannot be combined with scans.keep: removing a scan would not know "
+          "which of its hits were dynamic");
+  }
 }
 
 }  // namespace fragg

@@ -80,6 +80,10 @@ void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
 
   const int threads = threadCount(params.threads);
   std::vector<std::vector<RayEnd>> per_thread(threads);
+  // Dynamic classification hands points back: each ray remembers its point.
+  const bool index_points = params.dynamic.enabled;
+  std::vector<std::vector<uint32_t>> per_thread_index(index_points ? threads : 0);
+  out.point_index.clear();
   uint64_t invalid = 0, too_close = 0, outside = 0, hits = 0, free_only = 0, no_return = 0;
   const bool clear_no_return = params.clear_no_return_rays && cloud.organised();
 #pragma omp parallel num_threads(threads) reduction(+ : invalid, too_close, outside, hits, \
@@ -87,6 +91,8 @@ void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
   {
     std::vector<RayEnd>& local = per_thread[omp_get_thread_num()];
     local.reserve(n / threads + 16);
+    std::vector<uint32_t>* local_index =
+        index_points ? &per_thread_index[omp_get_thread_num()] : nullptr;
 #pragma omp for schedule(static)
     for (long i = 0; i < static_cast<long>(n); ++i) {
       const Eigen::Vector3f& p = cloud.points_S[i];
@@ -99,6 +105,7 @@ void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                                dir_S.z() * prep.max_range_m};
           if (rayEndFromSensor(prep, s, 0u, &ray)) {
             local.push_back(ray);
+            if (local_index) local_index->push_back(static_cast<uint32_t>(i));
             ++no_return;
             continue;
           }
@@ -106,6 +113,7 @@ void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
         ++invalid;
         continue;
       }
+      const size_t before = local.size();
       switch (prepareRay(prep, frustum, p.x(), p.y(), p.z(), cloud.freeOnly(i), &ray)) {
         case RayPrep::kHit:
           local.push_back(ray);
@@ -125,12 +133,18 @@ void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
           ++outside;
           break;
       }
+      if (local_index && local.size() != before) local_index->push_back(static_cast<uint32_t>(i));
     }
   }
   size_t total = 0;
   for (const auto& v : per_thread) total += v.size();
   out.rays.reserve(total);
   for (const auto& v : per_thread) out.rays.insert(out.rays.end(), v.begin(), v.end());
+  if (index_points) {
+    out.point_index.reserve(total);
+    for (const auto& v : per_thread_index)
+      out.point_index.insert(out.point_index.end(), v.begin(), v.end());
+  }
   stats.dropped_invalid += invalid;
   stats.dropped_min_range += too_close;
   stats.dropped_outside_frustum += outside;

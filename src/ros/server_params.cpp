@@ -123,6 +123,9 @@ const std::vector<fragg::FieldName>& parameterNames() {
       {"scans.point_step_m", "scan_store/point_step"},
       {"height_filter.min_z_m", "pointcloud_min_z"},
       {"height_filter.max_z_m", "pointcloud_max_z"},
+      {"dynamic.void_probability", "dynamic/void_probability"},
+      {"dynamic.known_radius_cells", "dynamic/known_radius"},
+      {"dynamic.enabled", "dynamic/enabled"},
       {"sensor.type", "sensor/type"},
       {"sensor.hfov_rad", "sensor/hfov"},
       {"sensor.vfov_rad", "sensor/vfov"},
@@ -452,6 +455,9 @@ ServerParams parseKnown(const XmlRpcValue& root) {
   readScanStore(root, m.scans);
   readDouble(root, "pointcloud_min_z", &m.height_filter.min_z_m);
   readDouble(root, "pointcloud_max_z", &m.height_filter.max_z_m);
+  readBool(root, "dynamic/enabled", &m.dynamic.enabled);
+  readDouble(root, "dynamic/void_probability", &m.dynamic.void_probability);
+  readInt(root, "dynamic/known_radius", &m.dynamic.known_radius_cells);
   asParameters([&] { m.validate(); });
 
   readSensor(root, p);

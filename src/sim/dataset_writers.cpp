@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "fragg_map/atomic_file.h"
 #include "fragg_map/errors.h"
@@ -26,7 +28,33 @@ void writeText(const std::string& path, const std::string& text) {
 
 std::string frameName(size_t i, const char* ext) { return fmt::format("{:06d}{}", i, ext); }
 
+// labels/NNNNNN.dyn of the points kept[i] != 0.
+void writeLabels(const std::string& dir, size_t index, const std::vector<uint8_t>& labels,
+                 const std::vector<char>& kept) {
+  std::string bytes;
+  for (size_t i = 0; i < labels.size(); ++i)
+    if (kept[i]) bytes.push_back(static_cast<char>(labels[i] ? 1 : 0));
+  writeText(dir + "/labels/" + frameName(index, ".dyn"), bytes);
+}
+
+void checkLabelCount(const PointCloud& cloud, const std::vector<uint8_t>* labels) {
+  if (labels && labels->size() != cloud.size())
+    throw InvalidArgument("dataset writer: " + std::to_string(labels->size()) + " labels for " +
+                          std::to_string(cloud.size()) + " points");
+}
+
 }  // namespace
+
+std::vector<uint8_t> readDynamicLabels(const std::string& dir, size_t index) {
+  const std::string path = dir + "/labels/" + frameName(index, ".dyn");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path + ": cannot open labels file");
+  std::vector<uint8_t> labels((std::istreambuf_iterator<char>(in)),
+                              std::istreambuf_iterator<char>());
+  for (uint8_t v : labels)
+    if (v > 1) throw IoError(path + ": a label is " + std::to_string(v) + " (0 or 1 expected)");
+  return labels;
+}
 
 std::string tumPoseLines(const std::vector<Eigen::Isometry3d>& poses,
                          const std::vector<double>& stamps_s) {
@@ -70,8 +98,16 @@ KittiFolderWriter::KittiFolderWriter(const std::string& dir, bool organised)
 }
 
 void KittiFolderWriter::add(const PointCloud& cloud_S, const Eigen::Isometry3d& T_map_sensor,
-                            const Eigen::Isometry3d& T_odom_sensor, double stamp_s) {
+                            const Eigen::Isometry3d& T_odom_sensor, double stamp_s,
+                            const std::vector<uint8_t>* dynamic_labels) {
+  checkLabelCount(cloud_S, dynamic_labels);
   const size_t i = gt_.size();
+  if (dynamic_labels) {
+    makeDir(dir_ + "/labels");
+    std::vector<char> kept(cloud_S.size());
+    for (size_t k = 0; k < cloud_S.size(); ++k) kept[k] = cloud_S.points_S[k].allFinite();
+    writeLabels(dir_, i, *dynamic_labels, kept);
+  }
   writeKittiBin(dir_ + "/velodyne/" + frameName(i, ".bin"), cloud_S);
   if (organised_) writePcd(dir_ + "/organised/" + frameName(i, ".pcd"), cloud_S);
   gt_.push_back(T_map_sensor);
@@ -97,9 +133,17 @@ DepthFolderWriter::DepthFolderWriter(const std::string& dir, const DepthIntrinsi
 }
 
 void DepthFolderWriter::add(const PointCloud& cloud_C, const Eigen::Isometry3d& T_map_camera,
-                            const Eigen::Isometry3d& T_odom_camera, double stamp_s) {
-  writePgm16(dir_ + "/depth/" + frameName(gt_.size(), ".pgm"),
-             toDepthImage(cloud_C, intrinsics_.depth_scale_m));
+                            const Eigen::Isometry3d& T_odom_camera, double stamp_s,
+                            const std::vector<uint8_t>* dynamic_labels) {
+  checkLabelCount(cloud_C, dynamic_labels);
+  const DepthImage image = toDepthImage(cloud_C, intrinsics_.depth_scale_m);
+  writePgm16(dir_ + "/depth/" + frameName(gt_.size(), ".pgm"), image);
+  if (dynamic_labels) {  // the pixels the reader gives back: non-zero depth
+    makeDir(dir_ + "/labels");
+    std::vector<char> kept(image.depth.size());
+    for (size_t k = 0; k < image.depth.size(); ++k) kept[k] = image.depth[k] != 0;
+    writeLabels(dir_, gt_.size(), *dynamic_labels, kept);
+  }
   gt_.push_back(T_map_camera);
   odom_.push_back(T_odom_camera);
   stamps_.push_back(stamp_s);

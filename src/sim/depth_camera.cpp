@@ -5,6 +5,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/sim/random.h"
+#include "sensor_rays.h"
 
 namespace fragg::sim {
 
@@ -32,8 +33,9 @@ DepthIntrinsics DepthCameraSpec::intrinsics() const {
 }
 
 PointCloud simulateDepthCamera(const geometry::MeshBvh& scene, const DepthCameraSpec& spec,
-                               const Eigen::Isometry3d& T_map_camera, uint64_t seed,
-                               uint64_t frame) {
+                               const Eigen::Isometry3d& T_map_camera, uint64_t seed, uint64_t frame,
+                               const geometry::MeshBvh* movers,
+                               std::vector<uint8_t>* dynamic_labels) {
   spec.validate();
   const DepthIntrinsics k = spec.intrinsics();
   PointCloud cloud;
@@ -41,6 +43,7 @@ PointCloud simulateDepthCamera(const geometry::MeshBvh& scene, const DepthCamera
   cloud.height = static_cast<uint32_t>(spec.height);
   const int64_t n = int64_t{spec.width} * spec.height;
   cloud.points_S.assign(n, Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+  if (dynamic_labels) dynamic_labels->assign(n, 0);
   const Eigen::Matrix3f R = T_map_camera.linear().cast<float>();
   const Eigen::Vector3f origin = T_map_camera.translation().cast<float>();
   const uint64_t frame_key = randomKey(seed, kStreamDepth, frame);
@@ -51,7 +54,8 @@ PointCloud simulateDepthCamera(const geometry::MeshBvh& scene, const DepthCamera
     const float len = ray_C.norm();
     geometry::RayHit hit;
     const float t_max = static_cast<float>(spec.max_range_m) * len;
-    if (!scene.intersect(origin, R * (ray_C / len), t_max, &hit)) continue;
+    bool dynamic = false;
+    if (!nearestHit(scene, movers, origin, R * (ray_C / len), t_max, &hit, &dynamic)) continue;
     double depth = hit.t_m / len;
     if (depth < spec.min_range_m) continue;
     const uint64_t key = mix64(frame_key ^ static_cast<uint64_t>(i));
@@ -59,6 +63,7 @@ PointCloud simulateDepthCamera(const geometry::MeshBvh& scene, const DepthCamera
     if (spec.noise_m > 0) depth += spec.noise_m * depth * depth * gaussian(mix64(key));
     if (!(depth > spec.min_range_m && depth < spec.max_range_m)) continue;
     cloud.points_S[i] = ray_C * static_cast<float>(depth);
+    if (dynamic_labels) (*dynamic_labels)[i] = dynamic ? 1 : 0;
   }
   return cloud;
 }

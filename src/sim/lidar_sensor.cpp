@@ -5,6 +5,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/sim/random.h"
+#include "sensor_rays.h"
 
 namespace fragg::sim {
 
@@ -33,13 +34,15 @@ Eigen::Vector3f LidarSpec::direction(int beam, int column) const {
 }
 
 PointCloud simulateLidar(const geometry::MeshBvh& scene, const LidarSpec& spec,
-                         const Eigen::Isometry3d& T_map_sensor, uint64_t seed, uint64_t frame) {
+                         const Eigen::Isometry3d& T_map_sensor, uint64_t seed, uint64_t frame,
+                         const geometry::MeshBvh* movers, std::vector<uint8_t>* dynamic_labels) {
   spec.validate();
   PointCloud cloud;
   cloud.width = static_cast<uint32_t>(spec.azimuth_steps);
   cloud.height = static_cast<uint32_t>(spec.beams);
   const int64_t n = int64_t{spec.beams} * spec.azimuth_steps;
   cloud.points_S.assign(n, Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+  if (dynamic_labels) dynamic_labels->assign(n, 0);
   const Eigen::Matrix3f R = T_map_sensor.linear().cast<float>();
   const Eigen::Vector3f origin = T_map_sensor.translation().cast<float>();
   const uint64_t frame_key = randomKey(seed, kStreamLidar, frame);
@@ -49,7 +52,10 @@ PointCloud simulateLidar(const geometry::MeshBvh& scene, const LidarSpec& spec,
     const int column = static_cast<int>(i % spec.azimuth_steps);
     const Eigen::Vector3f d_S = spec.direction(beam, column);
     geometry::RayHit hit;
-    if (!scene.intersect(origin, R * d_S, static_cast<float>(spec.max_range_m), &hit)) continue;
+    bool dynamic = false;
+    if (!nearestHit(scene, movers, origin, R * d_S, static_cast<float>(spec.max_range_m), &hit,
+                    &dynamic))
+      continue;
     if (hit.t_m < spec.min_range_m) continue;
     const uint64_t key = mix64(frame_key ^ static_cast<uint64_t>(i));
     if (spec.dropout > 0 && uniform01(key) < spec.dropout) continue;
@@ -57,6 +63,7 @@ PointCloud simulateLidar(const geometry::MeshBvh& scene, const LidarSpec& spec,
         hit.t_m + (spec.range_noise_m > 0 ? spec.range_noise_m * gaussian(mix64(key)) : 0.0);
     if (!(range > spec.min_range_m && range < spec.max_range_m)) continue;
     cloud.points_S[i] = d_S * static_cast<float>(range);
+    if (dynamic_labels) (*dynamic_labels)[i] = dynamic ? 1 : 0;
   }
   return cloud;
 }

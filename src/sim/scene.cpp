@@ -154,6 +154,59 @@ TrajectorySpec readTrajectory(const json& t) {
   return spec;
 }
 
+MoverSpec readMover(const json& o, size_t index) {
+  MoverSpec m;
+  m.name = o.value("name", "mover" + std::to_string(index));
+  m.kind = moverKindFromString(o.value("type", ""));
+  switch (m.kind) {
+    case MoverKind::kCar:
+      m.size_m = Eigen::Vector3d(4.5, 1.8, 1.5);
+      m.speed_mps = 5.0;
+      break;
+    case MoverKind::kDoor:
+      m.size_m = Eigen::Vector3d(1.0, 0.08, 2.1);
+      break;
+    default:
+      break;
+  }
+  if (o.contains("size")) m.size_m = vec(o, "size", 3, 3);
+  if (m.kind == MoverKind::kDoor) {
+    m.hinge_m = vec(o, "hinge", 2, 2);
+    m.closed_yaw_deg = num(o, "closed_yaw", m.closed_yaw_deg);
+    m.open_yaw_deg = num(o, "open_yaw", m.open_yaw_deg);
+    m.period_s = num(o, "period", m.period_s);
+  } else {
+    if (!o.contains("path") || !o.at("path").is_array())
+      throw InvalidArgument("a mover needs 'path' (an array of [x, y])");
+    for (const json& w : o.at("path")) {
+      json wrap = {{"p", w}};
+      const Eigen::VectorXd p = vec(wrap, "p", 2, 2);
+      m.waypoints_m.emplace_back(p[0], p[1]);
+    }
+    m.speed_mps = num(o, "speed", m.speed_mps);
+    if (o.contains("pause")) {
+      if (o.at("pause").is_array()) {
+        const Eigen::VectorXd p = vec(o, "pause", 1, 100000);
+        m.pause_s.assign(p.data(), p.data() + p.size());
+      } else {
+        m.pause_s = {num(o, "pause", 0.0)};
+      }
+    }
+    const std::string repeat = o.value("repeat", "pingpong");
+    if (repeat == "pingpong")
+      m.repeat = MoverRepeat::kPingPong;
+    else if (repeat == "loop")
+      m.repeat = MoverRepeat::kLoop;
+    else if (repeat == "once")
+      m.repeat = MoverRepeat::kOnce;
+    else
+      throw InvalidArgument("'repeat' must be pingpong, loop or once, not '" + repeat + "'");
+  }
+  m.start_s = num(o, "start", 0.0);
+  m.validate();
+  return m;
+}
+
 }  // namespace
 
 double Terrain::heightAt(double x_m, double y_m) const {
@@ -191,6 +244,18 @@ Scene sceneFromJson(const std::string& json_text, const std::string& base_dir) {
       } catch (const InvalidArgument& e) {
         throw InvalidArgument("scene object " + std::to_string(index) + " (" +
                               o.value("type", "?") + "): " + e.what());
+      }
+      ++index;
+    }
+  }
+  if (j.contains("movers")) {
+    size_t index = 0;
+    for (const json& o : j.at("movers")) {
+      try {
+        scene.movers.push_back(readMover(o, index));
+      } catch (const InvalidArgument& e) {
+        throw InvalidArgument("scene mover " + std::to_string(index) + " (" + o.value("type", "?") +
+                              "): " + e.what());
       }
       ++index;
     }

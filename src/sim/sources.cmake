@@ -7,10 +7,12 @@ set(FRAGG_SIM_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/scene.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene_tiles.cpp
   ${CMAKE_CURRENT_LIST_DIR}/trajectory.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/movers.cpp
   ${CMAKE_CURRENT_LIST_DIR}/lidar_sensor.cpp
   ${CMAKE_CURRENT_LIST_DIR}/depth_camera.cpp
   ${CMAKE_CURRENT_LIST_DIR}/dataset_writers.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_quality.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/dynamic_quality.cpp
 )
 set(FRAGG_SIM_ROS_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/bag_writer.cpp

@@ -36,3 +36,9 @@ if(TARGET fragg_core_map_image_test)
   target_compile_definitions(fragg_core_map_image_test PRIVATE
     FRAGG_SAVE_LOOP="$<TARGET_FILE:fragg_map_save_loop>")
 endif()
+
+# Dynamic-aware mapping (MapParams::dynamic) on the CPU backend against a brute-force reference.
+fragg_add_test(fragg_dynamic_mapping_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/dynamic_mapping_test.cpp
+  LIBS fragg_map_core
+  LABELS core)

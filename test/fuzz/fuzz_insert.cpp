@@ -21,10 +21,11 @@ void check(bool ok) {
   if (!ok) std::abort();
 }
 
-/// Every point of `s` counted once: a ray (hit, free-only, no return) or a drop.
+/// Every point of `s` counted once: a ray (hit, dynamic hit, free-only, no return) or a drop.
 void checkPointsAccountedFor(const InsertStats& s, size_t points) {
-  const uint64_t counted = s.rays_hit + s.rays_free_only + s.rays_no_return + s.dropped_invalid +
-                           s.dropped_min_range + s.dropped_outside_frustum + s.dropped_height;
+  const uint64_t counted = s.rays_hit + s.rays_dynamic + s.rays_free_only + s.rays_no_return +
+                           s.dropped_invalid + s.dropped_min_range + s.dropped_outside_frustum +
+                           s.dropped_height;
   check(s.points_in == points && counted == points);
 }
 

@@ -408,6 +408,9 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.map.scans.max_bytes, d.map.scans.max_bytes);
   EXPECT_EQ(p.map.scans.point_step_m, d.map.scans.point_step_m);
   EXPECT_EQ(p.map.scans.spill_dir, d.map.scans.spill_dir);
+  EXPECT_EQ(p.map.dynamic.enabled, d.map.dynamic.enabled);
+  EXPECT_EQ(p.map.dynamic.void_probability, d.map.dynamic.void_probability);
+  EXPECT_EQ(p.map.dynamic.known_radius_cells, d.map.dynamic.known_radius_cells);
   EXPECT_EQ(p.correction.thresholds.min_translation_m, d.correction.thresholds.min_translation_m);
   EXPECT_EQ(p.correction.thresholds.min_rotation_rad, d.correction.thresholds.min_rotation_rad);
   EXPECT_EQ(p.correction.stamp_tolerance_s, d.correction.stamp_tolerance_s);

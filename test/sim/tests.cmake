@@ -51,3 +51,9 @@ if(TARGET sim_long_drive_test)
     FRAGG_SCENES_DIR="${PROJECT_SOURCE_DIR}/config/scenes"
     FRAGG_WORKLOADS_CONFIG_DIR="${PROJECT_SOURCE_DIR}/config/workloads")
 endif()
+
+# Movers: scripted poses, scene files with movers, per-point dynamic labels and their files.
+fragg_add_test(sim_movers_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/movers_test.cpp
+  LIBS fragg_map_sim_lib
+  LABELS sim)

@@ -148,6 +148,12 @@ class MapBackend {
     update(scan, ScanUpdate::kRemove, how, blocks, stats);
   }
 
+  /// MapParams::dynamic: the points (sensor frame) of the last integrated scan that were
+  /// classified dynamic (empty when the option is off).
+  virtual const std::vector<Eigen::Vector3f>& lastDynamicPoints() const {
+    static const std::vector<Eigen::Vector3f> kNone;
+    return kNone;
+  }
   virtual BlockCache& cache() = 0;
   const BlockCache& cache() const { return const_cast<MapBackend*>(this)->cache(); }
 

@@ -18,6 +18,9 @@ class CpuBackend : public MapBackend {
   const char* name() const override { return "cpu"; }
   BlockCache& cache() override { return cache_; }
   bool pagesInMarkedBlocks() const override { return true; }
+  const std::vector<Eigen::Vector3f>& lastDynamicPoints() const override {
+    return dynamic_points_S_;
+  }
 
  protected:
   void update(const ScanInput& scan, ScanUpdate what, const UpdateSettings& how, BlockMap& blocks,
@@ -35,6 +38,8 @@ class CpuBackend : public MapBackend {
   HostBlockCache cache_;
   std::vector<std::unique_ptr<ScanScratch>> scratch_;  // one per thread
   PreparedScan prepared_;
+  std::vector<uint32_t> dynamic_rays_;             // MapParams::dynamic, last scan
+  std::vector<Eigen::Vector3f> dynamic_points_S_;  // their points
 };
 
 }  // namespace fragg

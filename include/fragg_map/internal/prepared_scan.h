@@ -19,6 +19,8 @@ struct PreparedScan {
   VoxelKey ref;                  ///< the sensor origin's voxel
   float start_v[3] = {0, 0, 0};  ///< sensor origin relative to ref, voxel units, in [0, 1)
   std::vector<RayEnd> rays;
+  /// With MapParams::dynamic enabled: the cloud index of each ray's point (else empty).
+  std::vector<uint32_t> point_index;
 
   RayVox ray(size_t i) const {
     const RayEnd& e = rays[i];

@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <vector>
 
 #include "fragg_map/geometry/mesh_bvh.h"
 #include "fragg_map/io/depth_image.h"
@@ -27,9 +28,12 @@ struct DepthCameraSpec {
 };
 
 /// One frame from pose T_map_camera (optical frame). Deterministic in (seed, frame, pixel).
+/// With `movers`, as simulateLidar: rays meet the nearer of both meshes and
+/// `dynamic_labels` flags (1) each pixel whose return is from a mover.
 PointCloud simulateDepthCamera(const geometry::MeshBvh& scene, const DepthCameraSpec& spec,
-                               const Eigen::Isometry3d& T_map_camera, uint64_t seed,
-                               uint64_t frame);
+                               const Eigen::Isometry3d& T_map_camera, uint64_t seed, uint64_t frame,
+                               const geometry::MeshBvh* movers = nullptr,
+                               std::vector<uint8_t>* dynamic_labels = nullptr);
 
 /// The 16-bit depth image of an organised optical-frame cloud (NaN -> 0), with `scale_m` per
 /// unit (1 mm by default); depths that do not fit in 16 bits become 0.

@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <vector>
 
 #include "fragg_map/geometry/mesh_bvh.h"
 #include "fragg_map/point_cloud.h"
@@ -29,7 +30,12 @@ struct LidarSpec {
 
 /// One scan from pose T_map_sensor. Noise and dropout are drawn from (seed, frame, ray), so the
 /// same arguments give the same cloud whatever the thread count. Multithreaded (OpenMP).
+/// With `movers` (the moving objects' mesh at the scan's time), rays are cast against both
+/// meshes and `dynamic_labels` (when given) gets one flag a point of the cloud: 1 where the
+/// return is from a mover (the nearer surface), 0 elsewhere (static returns and no-returns).
 PointCloud simulateLidar(const geometry::MeshBvh& scene, const LidarSpec& spec,
-                         const Eigen::Isometry3d& T_map_sensor, uint64_t seed, uint64_t frame);
+                         const Eigen::Isometry3d& T_map_sensor, uint64_t seed, uint64_t frame,
+                         const geometry::MeshBvh* movers = nullptr,
+                         std::vector<uint8_t>* dynamic_labels = nullptr);
 
 }  // namespace fragg::sim

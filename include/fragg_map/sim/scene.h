@@ -1,12 +1,14 @@
 // A simulated scene: closed solids (ground slab, buildings, walls, trees, pipes, spheres, OBJ
-// meshes) and named trajectories, read from a JSON scene file (config/scenes/*.json; the format
-// is described in docs/cli.md, "Simulator").
+// meshes), moving objects ("movers": pedestrians, cars, doors) and named trajectories, read from a
+// JSON scene file (config/scenes/*.json; the format is described in docs/cli.md, "Simulator").
 #pragma once
 
 #include <map>
 #include <string>
+#include <vector>
 
 #include "fragg_map/geometry/triangle_mesh.h"
+#include "fragg_map/sim/movers.h"
 #include "fragg_map/sim/trajectory.h"
 
 namespace fragg::sim {
@@ -29,7 +31,8 @@ struct Terrain {
 struct Scene {
   std::string name;
   Terrain terrain;
-  geometry::TriangleMesh mesh;  ///< every object, closed solids
+  geometry::TriangleMesh mesh;    ///< every static object, closed solids (the static truth)
+  std::vector<MoverSpec> movers;  ///< moving objects, not in `mesh`
   std::map<std::string, TrajectorySpec> trajectories;
 };
 

@@ -15,6 +15,7 @@
 
 #include <ros/callback_queue.h>
 #include <ros/node_handle.h>
+#include <ros/publisher.h>
 #include <ros/spinner.h>
 #include <ros/subscriber.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -40,6 +41,9 @@ class CloudInput {
   CloudInput& operator=(const CloudInput&) = delete;
 
  private:
+  /// dynamic_points (MapParams::dynamic enabled only): before pipeline_, whose insertion thread
+  /// publishes on it, so that it outlives that thread.
+  ::ros::Publisher dynamic_pub_;
   CloudPipeline pipeline_;
   ::ros::CallbackQueue callbacks_;  ///< cloud_in's only, before sub_ and spinner_
   ::ros::Subscriber sub_;

@@ -162,8 +162,8 @@ std::optional<fragg::PointCloud> CloudInserter::convert(const sensor_msgs::Point
 }
 
 bool CloudInserter::insert(const fragg::PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
-                           int64_t stamp_ns, const std::string& frame,
-                           fragg::InsertStats* inserted) const {
+                           int64_t stamp_ns, const std::string& frame, fragg::InsertStats* inserted,
+                           std::vector<Eigen::Vector3f>* dynamic_points_S) const {
   if (const auto problem = transformProblem(T_map_sensor, params_.map.resolution_m)) {
     stats_->addFault(CloudFault::kBadTransform);
     ROS_ERROR_THROTTLE(5.0, "fragg_map: cloud from '%s' dropped: %s (%lu such so far)",
@@ -179,6 +179,7 @@ bool CloudInserter::insert(const fragg::PointCloud& cloud, const Eigen::Isometry
     const SharedMap::WriteGuard state = shared_->write();
     const std::string backend_before = state->map.backendName();
     *inserted = state->map.insert(cloud, T_map_sensor, params_.sensor, stamp_ns, frame);
+    if (dynamic_points_S) *dynamic_points_S = state->map.lastDynamicPoints_S();
     if (state->map.scanStore().contains(inserted->scan_id))
       state->stamps.add(stamp_ns, inserted->scan_id, frame);
     fell_back = state->map.backendName() != backend_before;

@@ -13,6 +13,7 @@
 #include <atomic>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "fragg_map/insert_stats.h"
 #include "fragg_map/point_cloud.h"
@@ -65,9 +66,11 @@ class CloudInserter {
 
   /// Inserts `cloud` (sensor frame `frame`) at `T_map_sensor` under the write lock. False
   /// (counted, logged, map unchanged) for an unusable transform or when the map throws.
-  /// Counts the scan's left-out points and a CUDA -> CPU fallback.
+  /// Counts the scan's left-out points and a CUDA -> CPU fallback. `dynamic_points_S` (when
+  /// given) gets the scan's points classified dynamic (MapParams::dynamic), sensor frame.
   bool insert(const fragg::PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
-              int64_t stamp_ns, const std::string& frame, fragg::InsertStats* inserted) const;
+              int64_t stamp_ns, const std::string& frame, fragg::InsertStats* inserted,
+              std::vector<Eigen::Vector3f>* dynamic_points_S = nullptr) const;
 
  private:
   const ServerParams params_;

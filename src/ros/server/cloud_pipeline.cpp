@@ -26,12 +26,14 @@ GroundFilterParams groundFilterParamsOf(const OctomapCompatParams& o) {
 }  // namespace
 
 CloudPipeline::CloudPipeline(const ServerParams& params, const tf2::BufferCore& tf,
-                             SharedMap* shared, ServerStats* stats, InsertedFn on_inserted)
+                             SharedMap* shared, ServerStats* stats, InsertedFn on_inserted,
+                             DynamicOutput dynamic)
     : params_(params),
       tf_(tf),
       stats_(stats),
       inserter_(params, shared, stats),
       on_inserted_(std::move(on_inserted)),
+      dynamic_(std::move(dynamic)),
       queue_(static_cast<size_t>(params.queue_size)) {
   if (!params.trace_csv.empty()) trace_csv_ = std::make_unique<CloudTraceCsv>(params.trace_csv);
   worker_ = std::thread([this] { run(); });
@@ -153,9 +155,11 @@ void CloudPipeline::process(const Queued& item, CloudTrace* trace) {
   const Clock::time_point transformed = Clock::now();
   trace->tf_ms = msBetween(taken, transformed);
   fragg::InsertStats inserted;
-  const bool ok =
-      inserter_.insert(*cloud, T_map_sensor, static_cast<int64_t>(msg.header.stamp.toNSec()),
-                       withoutLeadingSlash(msg.header.frame_id), &inserted);
+  const bool publish_dynamic = dynamic_.wanted && dynamic_.publish && dynamic_.wanted();
+  std::vector<Eigen::Vector3f> dynamic_S;
+  const bool ok = inserter_.insert(
+      *cloud, T_map_sensor, static_cast<int64_t>(msg.header.stamp.toNSec()),
+      withoutLeadingSlash(msg.header.frame_id), &inserted, publish_dynamic ? &dynamic_S : nullptr);
   const Clock::time_point done = Clock::now();
   trace->insert_ms = msBetween(transformed, done);
   if (!ok) {
@@ -164,6 +168,13 @@ void CloudPipeline::process(const Queued& item, CloudTrace* trace) {
   }
   trace->outcome = "inserted";
   // The cloud is counted (inserted): a failure to publish is not a fault of the cloud.
+  if (publish_dynamic) {
+    try {
+      dynamic_.publish(msg, dynamic_S);
+    } catch (const std::exception& e) {
+      ROS_ERROR_THROTTLE(5.0, "fragg_map: dynamic_points not published: %s", e.what());
+    }
+  }
   if (!on_inserted_) return;
   try {
     on_inserted_(msg, inserted.sensor, T_map_sensor);

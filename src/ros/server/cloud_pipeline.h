@@ -22,6 +22,7 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "cloud_inserter.h"
 #include "cloud_trace.h"
@@ -41,10 +42,20 @@ class CloudPipeline {
       std::function<void(const sensor_msgs::PointCloud2& msg, const fragg::SensorModel&,
                          const Eigen::Isometry3d& T_map_sensor)>;
 
+  /// The points of a scan classified dynamic (MapParams::dynamic; sensor frame), for the
+  /// `dynamic_points` topic: `wanted` says whether anyone listens (asked before the insertion),
+  /// `publish` gets them after it with the cloud's message.
+  struct DynamicOutput {
+    std::function<bool()> wanted;
+    std::function<void(const sensor_msgs::PointCloud2& msg,
+                       const std::vector<Eigen::Vector3f>& points_S)>
+        publish;
+  };
+
   /// Starts the insertion thread. `tf` outlives the pipeline. With params.trace_csv, opens
   /// that file (throws fragg::IoError when it cannot) for one row per cloud.
   CloudPipeline(const ServerParams& params, const tf2::BufferCore& tf, SharedMap* shared,
-                ServerStats* stats, InsertedFn on_inserted);
+                ServerStats* stats, InsertedFn on_inserted, DynamicOutput dynamic = {});
   ~CloudPipeline();  ///< stops the insertion thread; clouds still waiting are discarded
   CloudPipeline(const CloudPipeline&) = delete;
   CloudPipeline& operator=(const CloudPipeline&) = delete;
@@ -78,6 +89,7 @@ class CloudPipeline {
   ServerStats* stats_;
   CloudInserter inserter_;
   InsertedFn on_inserted_;
+  DynamicOutput dynamic_;
   DropOldestQueue<Queued> queue_;
   std::unique_ptr<CloudTraceCsv> trace_csv_;  ///< null without trace_csv
   std::atomic<bool> stopping_{false};

@@ -48,6 +48,7 @@ struct BuildOptions {
   ScanStoreParams scans;
   double scan_budget_mib = 0.0;
   HeightFilterParams height_filter;
+  DynamicParams dynamic;
   std::string page_store;  ///< out-of-core paging: the store is the map
   PagingPolicy paging;
 };
@@ -67,6 +68,9 @@ const std::vector<FieldName>& flagNames() {
       {"scans.point_step_m", "--scan-step"},
       {"height_filter.min_z_m", "--min-z"},
       {"height_filter.max_z_m", "--max-z"},
+      {"dynamic.void_probability", "--void-probability"},
+      {"dynamic.known_radius_cells", "--known-radius"},
+      {"dynamic.enabled", "--dynamic"},
       {"sensor.type", "--sensor"},
       {"sensor.hfov_rad", "--hfov"},
       {"sensor.vfov_rad", "--vfov"},
@@ -124,6 +128,7 @@ void runBuild(const BuildOptions& o) {
         params.threads = o.threads;
         params.scans = o.scans;
         params.height_filter = o.height_filter;
+        params.dynamic = o.dynamic;
         params.validate();
         sensor = sensorFrom(o);
       },
@@ -177,6 +182,7 @@ void runBuild(const BuildOptions& o) {
   Progress progress(source->size());
   InsertStats total;
   std::vector<double> ms_per_scan;
+  std::vector<uint64_t> dynamic_per_scan;  // MapParams::dynamic: hits classified dynamic
   // Scans are read a batch at a time on another thread while the batch before is integrated
   // by one Map::insertSequence call (whose backend stages each next cloud during the scan
   // before). The reader skips empty messages (nothing to integrate) and the scans a resumed
@@ -222,6 +228,7 @@ void runBuild(const BuildOptions& o) {
     for (const InsertStats& s : map.insertSequence(to_insert)) {
       total.add(s);
       ms_per_scan.push_back(s.seconds_total * 1e3);
+      dynamic_per_scan.push_back(s.rays_dynamic);
     }
     progress.update(ms_per_scan.size());
   }
@@ -263,6 +270,7 @@ void runBuild(const BuildOptions& o) {
         {"rays_hit", total.rays_hit},
         {"rays_free_only", total.rays_free_only},
         {"rays_no_return", total.rays_no_return},
+        {"rays_dynamic", total.rays_dynamic},
         {"dropped_invalid", total.dropped_invalid},
         {"dropped_min_range", total.dropped_min_range},
         {"dropped_outside_frustum", total.dropped_outside_frustum},
@@ -285,6 +293,10 @@ void runBuild(const BuildOptions& o) {
           {"saved_by_plane_memory", total.culling.saved_by_plane_memory},
           {"saved_by_rotation", total.culling.saved_by_rotation},
           {"saved_by_translation", total.culling.saved_by_translation}}}};
+    if (params.dynamic.enabled)
+      j["dynamic"] = {{"void_probability", params.dynamic.void_probability},
+                      {"known_radius_cells", params.dynamic.known_radius_cells},
+                      {"rays_dynamic_per_scan", dynamic_per_scan}};
     if (paging.enabled)
       j["paging"] = {{"store", paging.store},
                      {"budget_mb", o.paging.budget_mb},
@@ -390,6 +402,16 @@ void addBuildCommand(CLI::App& app) {
                 "Points above this map-frame height are not inserted (m; pointcloud_max_z)");
   c->add_flag("--clear-no-return", o->clear_no_return,
               "Organised clouds: clear free space along rays without a return");
+  c->add_flag("--dynamic", o->dynamic.enabled,
+              "Dynamic scenes: hits in void space (observed free with confidence) are dynamic, "
+              "not inserted; counted per scan in --json (CPU backend)");
+  c->add_option("--void-probability", o->dynamic.void_probability,
+                "With --dynamic: a cell is void at or below this probability")
+      ->capture_default_str();
+  c->add_option("--known-radius", o->dynamic.known_radius_cells,
+                "With --dynamic: cells around a void hit that must have been observed "
+                "(Chebyshev radius, 0-2)")
+      ->capture_default_str();
   c->add_option("--threads", o->threads, "CPU threads (0 = every core)")->capture_default_str();
   c->add_option("--scans", o->max_scans, "Integrate only the first N scans (0 = all)")
       ->capture_default_str();

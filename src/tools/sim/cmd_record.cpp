@@ -16,6 +16,7 @@
 #include "fragg_map/sim/dataset_writers.h"
 #include "fragg_map/sim/depth_camera.h"
 #include "fragg_map/sim/lidar_sensor.h"
+#include "fragg_map/sim/movers.h"
 #include "fragg_map/sim/scene.h"
 #include "sim/commands.h"
 #ifdef FRAGG_HAVE_SIM_BAG
@@ -91,7 +92,8 @@ void runRecord(const RecordOptions& o) {
   const std::vector<PoseSample> poses = sampleTrajectory(
       spec, [&terrain](double x, double y) { return terrain.heightAt(x, y); }, o.drift, o.seed,
       o.frames);
-  if (!o.obj.empty()) geometry::writeObj(scene.mesh, o.obj);
+  if (!o.obj.empty()) geometry::writeObj(scene.mesh, o.obj);  // the static truth
+  const std::vector<MoverSpec> movers = scene.movers;
   const geometry::MeshBvh bvh(std::move(scene.mesh));
   const Eigen::Isometry3d T_base_sensor = mountOf(o, lidar);
 
@@ -108,18 +110,30 @@ void runRecord(const RecordOptions& o) {
   }
 #endif
   double cast_s = 0;
-  size_t points = 0, returns = 0;
+  size_t points = 0, returns = 0, dynamic_returns = 0;
+  std::vector<uint8_t> labels;
   for (size_t i = 0; i < poses.size(); ++i) {
     const Eigen::Isometry3d T_map_sensor = poses[i].T_map_base * T_base_sensor;
     const Eigen::Isometry3d T_odom_sensor = poses[i].T_odom_base * T_base_sensor;
     const auto t0 = std::chrono::steady_clock::now();
-    const PointCloud cloud = lidar ? simulateLidar(bvh, o.lidar, T_map_sensor, o.seed, i)
-                                   : simulateDepthCamera(bvh, o.depth, T_map_sensor, o.seed, i);
+    // The movers where they are at this frame's time (labels only for scenes with movers).
+    std::optional<geometry::MeshBvh> mover_bvh;
+    if (!movers.empty())
+      mover_bvh.emplace(moversMeshAt(movers, poses[i].stamp_s, [&terrain](double x, double y) {
+        return terrain.heightAt(x, y);
+      }));
+    const geometry::MeshBvh* mv = mover_bvh ? &*mover_bvh : nullptr;
+    std::vector<uint8_t>* lb = mv ? &labels : nullptr;
+    const PointCloud cloud =
+        lidar ? simulateLidar(bvh, o.lidar, T_map_sensor, o.seed, i, mv, lb)
+              : simulateDepthCamera(bvh, o.depth, T_map_sensor, o.seed, i, mv, lb);
     cast_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     points += cloud.size();
     for (const Eigen::Vector3f& p : cloud.points_S) returns += p.allFinite();
-    if (kitti) kitti->add(cloud, T_map_sensor, T_odom_sensor, poses[i].stamp_s);
-    if (depth) depth->add(cloud, T_map_sensor, T_odom_sensor, poses[i].stamp_s);
+    if (lb)
+      for (uint8_t l : labels) dynamic_returns += l;
+    if (kitti) kitti->add(cloud, T_map_sensor, T_odom_sensor, poses[i].stamp_s, lb);
+    if (depth) depth->add(cloud, T_map_sensor, T_odom_sensor, poses[i].stamp_s, lb);
 #ifdef FRAGG_HAVE_SIM_BAG
     if (bag) bag->add(cloud, poses[i]);
 #endif
@@ -136,6 +150,12 @@ void runRecord(const RecordOptions& o) {
                                 points ? 100.0 * returns / points : 0.0, n ? 1e3 * cast_s / n : 0.0,
                                 bvh.mesh().size())
                         .c_str());
+  if (!movers.empty())
+    std::printf("%s", fmt::format("{} movers: {} dynamic returns ({:.2f} % of the returns), "
+                                  "labels in labels/*.dyn\n",
+                                  movers.size(), dynamic_returns,
+                                  returns ? 100.0 * dynamic_returns / returns : 0.0)
+                          .c_str());
 }
 
 }  // namespace
