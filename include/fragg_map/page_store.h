@@ -23,7 +23,11 @@ namespace fragg {
 
 /// A record holds the blocks of a region (1 << kRegionBits)^3 blocks: 4x4x4 (docs/benchmarks.md,
 /// "Records by region": 8x8x8 regions page in 8 times the blocks for each one a ray reaches).
-constexpr int kRegionBits = 2;
+#ifndef FRAGG_PAGE_REGION_BITS
+#define FRAGG_PAGE_REGION_BITS 2  // 3 (8x8x8) only for the measurement: records tell their size
+#endif
+constexpr int kRegionBits = FRAGG_PAGE_REGION_BITS;
+static_assert(kRegionBits >= 1 && kRegionBits <= 3, "a region is 2 to 8 blocks on an edge");
 constexpr int kRegionMask = (1 << kRegionBits) - 1;
 constexpr int kBlocksPerRegion = 1 << (3 * kRegionBits);
 /// The version of the store format this build reads and writes: 1 was one record per block
