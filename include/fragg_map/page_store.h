@@ -128,11 +128,11 @@ struct PagingStats {
   std::string store;             ///< "sqlite:/path/map.db"
   uint64_t resident_blocks = 0;  ///< in RAM now
   uint64_t peak_resident_blocks = 0;
-  uint64_t budget_blocks = 0;  ///< the RAM budget in resident blocks (0: no budget)
-  uint64_t paged_blocks = 0;   ///< in the store only
+  uint64_t budget_blocks = 0;    ///< the RAM budget in resident blocks (0: no budget)
+  uint64_t paged_blocks = 0;     ///< in the store only
   uint64_t pages_written = 0;    ///< blocks written (in the region records of commits)
   uint64_t records_written = 0;  ///< region records written
-  uint64_t pages_read = 0;     ///< block records read back into RAM
+  uint64_t pages_read = 0;       ///< block records read back into RAM
   /// ... of them read from a commit not yet written (the background writer's batch)
   uint64_t pages_read_pending = 0;
   uint64_t pages_evicted = 0;  ///< blocks dropped from RAM

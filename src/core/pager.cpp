@@ -429,7 +429,7 @@ std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vect
   // Blocks leave by region (a store record holds a region): the candidates are the resident
   // regions, each with its blocks.
   struct Candidate {
-    bool near = false;  ///< within the radius: after every other region
+    bool near = false;   ///< within the radius: after every other region
     uint64_t order = 0;  ///< outside: the last use; inside: farther first
     BlockKey region;
     bool dirty = false;

@@ -9,7 +9,6 @@
 #include <utility>
 
 #include "fragg_map/errors.h"
-
 #include "fragg_map/store/page_stores.h"
 
 namespace fragg {
@@ -62,8 +61,7 @@ bool storeOrder(const BlockKey& a, const BlockKey& b) {
 }
 }  // namespace
 
-ConvertStats convertPageStore(const std::string& from, const std::string& to,
-                              size_t batch_blocks) {
+ConvertStats convertPageStore(const std::string& from, const std::string& to, size_t batch_blocks) {
   std::error_code ec;
   if (std::filesystem::exists(to, ec))
     throw IoError("cannot convert into " + to + ": it exists (give a new store)");

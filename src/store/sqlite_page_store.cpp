@@ -10,9 +10,9 @@
 #include <mutex>
 
 #include "block_codec.h"
-#include "region_record_store.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/store/page_stores.h"
+#include "region_record_store.h"
 
 namespace fragg {
 
@@ -81,8 +81,8 @@ class SqlitePageStore final : public RegionRecordStore {
       } else if (app == 0) {
         throw IoError(path + ": not a fragg_map page store (empty or another database)");
       }
-      const int format = app == 0 ? static_cast<int>(kPageStoreFormat)
-                                  : pragmaInt("PRAGMA user_version");
+      const int format =
+          app == 0 ? static_cast<int>(kPageStoreFormat) : pragmaInt("PRAGMA user_version");
       if (format == 0 && !format1) refuseFormat1(path);
       if (format != (format1 ? 0 : static_cast<int>(kPageStoreFormat)))
         throw IoError(path + ": a page store of format " + std::to_string(format) +

@@ -105,8 +105,7 @@ class Pager {
   /// with `keep_scan_box`, the regions of the last touched box (the scan in progress, whose
   /// blocks the backend holds) are left out.
   std::vector<BlockIndex> victims(const BlockMap& blocks, const Eigen::Vector3d& sensor_m,
-                                  bool clean_only, size_t incoming = 0,
-                                  bool keep_scan_box = false);
+                                  bool clean_only, size_t incoming = 0, bool keep_scan_box = false);
   /// The sensor position of the last victims() call (the last paging round).
   [[nodiscard]] const Eigen::Vector3d& lastSensor() const { return last_sensor_m_; }
   /// The resident blocks above the budget (0 when within it).

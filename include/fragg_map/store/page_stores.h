@@ -37,8 +37,8 @@ std::shared_ptr<PageStore> openPageStore(const std::string& path, bool read_only
 
 /// A store of format 1 (one record per block) read whole from one snapshot: fn(key, block)
 /// for each block; returns its metadata record. IoError when it is not a store of format 1.
-std::vector<uint8_t> readSqliteFormat1(const std::string& path,
-                                       const std::function<void(const BlockKey&, const Block&)>& fn);
+std::vector<uint8_t> readSqliteFormat1(
+    const std::string& path, const std::function<void(const BlockKey&, const Block&)>& fn);
 std::vector<uint8_t> readLmdbFormat1(const std::string& path,
                                      const std::function<void(const BlockKey&, const Block&)>& fn);
 

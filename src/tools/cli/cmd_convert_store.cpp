@@ -4,8 +4,8 @@
 #include <fmt/format.h>
 
 #include <chrono>
-#include <memory>
 #include <cstdio>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -33,8 +33,10 @@ void runConvertStore(const ConvertStoreOptions& o) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (o.json) {
-    const nlohmann::json j = {{"from", o.from},           {"to", o.to},
-                              {"blocks", stats.blocks},   {"records", stats.records},
+    const nlohmann::json j = {{"from", o.from},
+                              {"to", o.to},
+                              {"blocks", stats.blocks},
+                              {"records", stats.records},
                               {"seconds", seconds}};
     std::printf("%s\n", j.dump().c_str());
   } else {
