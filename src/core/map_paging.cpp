@@ -137,28 +137,7 @@ void Map::pageInBlocks(const BlockKey& lo, const BlockKey& hi) {
 
 void Map::pageInKeys(const std::vector<BlockKey>& keys) {
   if (!pager_) return;
-  // The budget is a hard limit: the blocks this scan reads back (whole regions) and creates
-  // fit before they come, room made outside the scan's box (the backend holds the blocks it
-  // marked there; nothing of this scan is applied yet, so a commit here is the map before it).
-  size_t fresh = 0;
-  std::vector<BlockKey> wanted = pager_->pagedOutOfRegions(keys, &fresh);
-  const size_t incoming = wanted.size() + fresh;
-  if (pager_->excessOverBudget(blocks_.size() + incoming) > 0) {
-    const auto t0 = std::chrono::steady_clock::now();
-    const Eigen::Vector3d sensor = pager_->lastSensor();
-    std::vector<BlockIndex> out = pager_->victims(blocks_, sensor, /*clean_only=*/true, incoming,
-                                                  /*keep_scan_box=*/true);
-    if (pager_->excessOverBudget(blocks_.size() - out.size() + incoming) > 0) {
-      pager_->commit(blocks_, revision_, metaOf(params_, scans_));
-      out = pager_->victims(blocks_, sensor, /*clean_only=*/false, incoming,
-                            /*keep_scan_box=*/true);
-    }
-    backend_->cache().forget(out, blocks_);  // the insertion holds sync_mutex_ already
-    pager_->pageOut(out, blocks_);
-    pager_->notePageOutSeconds(
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-  }
-  const std::vector<BlockIndex> read = pager_->readBack(std::move(wanted), blocks_);
+  const std::vector<BlockIndex> read = pager_->pageIn(keys, blocks_);
   blocks_.recomputeMasks(read, model_);  // the store keeps cells only
   if (read.empty()) return;
   backend_->cache().added(read, blocks_);

@@ -196,16 +196,6 @@ std::vector<BlockIndex> Pager::pageIn(BlockKey lo, BlockKey hi, BlockMap& blocks
 
 std::vector<BlockIndex> Pager::pageIn(const std::vector<BlockKey>& keys, BlockMap& blocks) {
   if (paged_count_ == 0) return {};
-  return readBack(pagedOutOfRegions(keys, nullptr), blocks);
-}
-
-std::vector<BlockKey> Pager::pagedOutOfRegions(const std::vector<BlockKey>& keys,
-                                               size_t* fresh) const {
-  if (fresh) *fresh = 0;
-  if (paged_count_ == 0) {
-    if (fresh) *fresh = keys.size();
-    return {};
-  }
   // Every paged-out block of the keys' regions (a region comes back whole).
   std::vector<BlockKey> regions;
   for (const BlockKey& k : keys) {
@@ -220,11 +210,7 @@ std::vector<BlockKey> Pager::pagedOutOfRegions(const std::vector<BlockKey>& keys
       any = p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
     }
     if (any) regions.push_back(regionOf(k));
-    if (fresh && !(it->second.test(bitOf(k)))) ++*fresh;
   }
-  if (fresh)  // keys whose region has no paged-out block at all
-    for (const BlockKey& k : keys)
-      if (paged_super_.find(superOf(k)) == paged_super_.end()) ++*fresh;
   std::sort(regions.begin(), regions.end(), storeOrder);
   regions.erase(std::unique(regions.begin(), regions.end()), regions.end());
   std::vector<BlockKey> wanted;
@@ -236,7 +222,7 @@ std::vector<BlockKey> Pager::pagedOutOfRegions(const std::vector<BlockKey>& keys
       return true;
     });
   }
-  return wanted;
+  return readBack(std::move(wanted), blocks);
 }
 
 std::vector<BlockIndex> Pager::readBack(std::vector<BlockKey> wanted, BlockMap& blocks) {
@@ -308,9 +294,6 @@ std::vector<BlockIndex> Pager::pageInAll(BlockMap& blocks) {
 }
 
 void Pager::touch(const BlockKey& lo, const BlockKey& hi, uint64_t stamp) {
-  scan_lo_ = lo;
-  scan_hi_ = hi;
-  has_scan_box_ = true;
   const BlockKey slo = superOf(lo), shi = superOf(hi);
   const double volume = regionCount(slo, shi);
   if (volume > 4194304.0) return;  // a box this large is not a sensor's or a query's
@@ -418,14 +401,10 @@ void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta
 }
 
 std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vector3d& sensor_m,
-                                       bool clean_only, size_t incoming, bool keep_scan_box) {
-  last_sensor_m_ = sensor_m;
+                                       bool clean_only) {
   const size_t target =
       static_cast<size_t>(static_cast<double>(budgetBlocks()) * policy_.low_water);
-  if (blocks.size() + incoming <= target) return {};
-  BlockKey keep_lo = scan_lo_, keep_hi = scan_hi_;
-  keep_scan_box &= has_scan_box_;
-  if (keep_scan_box) regionBox(&keep_lo, &keep_hi);
+  if (blocks.size() <= target) return {};
   // Blocks leave by region (a store record holds a region): the candidates are the resident
   // regions, each with its blocks.
   struct Candidate {
@@ -461,12 +440,6 @@ std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vect
   for (Candidate& c : candidates) {
     if (clean_only && c.dirty) continue;
     const BlockKey& r = c.region;
-    if (keep_scan_box) {
-      const BlockKey f = firstBlockOf(r);
-      if (f.x >= keep_lo.x && f.x <= keep_hi.x && f.y >= keep_lo.y && f.y <= keep_hi.y &&
-          f.z >= keep_lo.z && f.z <= keep_hi.z)
-        continue;  // the scan in progress may hold its blocks
-    }
     const Eigen::Vector3d centre =
         (Eigen::Vector3d(r.x, r.y, r.z).array() + 0.5).matrix() * region_m;
     const double d2 = (centre - sensor_m).squaredNorm();
@@ -485,7 +458,7 @@ std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vect
     return std::tie(a->near, a->order, a->region.z, a->region.y, a->region.x) <
            std::tie(b->near, b->order, b->region.z, b->region.y, b->region.x);
   });
-  const size_t needed = blocks.size() + incoming - target;
+  const size_t needed = blocks.size() - target;
   std::vector<BlockIndex> out;
   out.reserve(needed + kBlocksPerRegion);
   bool any_near = false;

@@ -57,14 +57,6 @@ class Pager {
   /// The same for the regions of `keys` (whole regions: every block created over one of the
   /// keys finds its region resident).
   std::vector<BlockIndex> pageIn(const std::vector<BlockKey>& keys, BlockMap& blocks);
-  /// The paged-out blocks of the regions of `keys` (store order), which pageIn(keys) reads;
-  /// with `fresh`, also how many of `keys` (none resident, no key twice) are not paged out:
-  /// the blocks a scan will create.
-  [[nodiscard]] std::vector<BlockKey> pagedOutOfRegions(const std::vector<BlockKey>& keys,
-                                                        size_t* fresh) const;
-  /// Reads `wanted` (paged out, whole regions, no duplicates: pagedOutOfRegions) back into
-  /// `blocks` (clean: stamped 0); returns their indices. On failure none is read.
-  std::vector<BlockIndex> readBack(std::vector<BlockKey> wanted, BlockMap& blocks);
   /// Every paged-out block.
   std::vector<BlockIndex> pageInAll(BlockMap& blocks);
   /// A paged-out block's cells (from a commit not yet written, else the store); false when
@@ -101,13 +93,8 @@ class Pager {
   /// (farthest first: the budget wins over the radius). With `clean_only`, regions with a
   /// dirty block or an erasure and regions within the radius are left out (they may be fewer
   /// than needed). Deterministic (ties by region key).
-  /// `incoming`: blocks about to be read back or created (they count against the target);
-  /// with `keep_scan_box`, the regions of the last touched box (the scan in progress, whose
-  /// blocks the backend holds) are left out.
   std::vector<BlockIndex> victims(const BlockMap& blocks, const Eigen::Vector3d& sensor_m,
-                                  bool clean_only, size_t incoming = 0, bool keep_scan_box = false);
-  /// The sensor position of the last victims() call (the last paging round).
-  [[nodiscard]] const Eigen::Vector3d& lastSensor() const { return last_sensor_m_; }
+                                  bool clean_only);
   /// The resident blocks above the budget (0 when within it).
   size_t excessOverBudget(size_t resident) const;
   /// Drops the blocks (clean: their records are committed) from RAM; they are paged out.
@@ -125,6 +112,8 @@ class Pager {
   static BlockKey superOf(const BlockKey& b) {
     return {b.x >> kBlockBits, b.y >> kBlockBits, b.z >> kBlockBits};
   }
+  /// Reads `wanted` (paged out, no duplicates) back into `blocks`.
+  std::vector<BlockIndex> readBack(std::vector<BlockKey> wanted, BlockMap& blocks);
   void addPagedOut(const BlockKey& key);
   void removePagedOut(const BlockKey& key);
   size_t budgetBlocks() const;
@@ -154,10 +143,6 @@ class Pager {
   std::unordered_map<BlockKey, RegionBits, BlockKeyHash> saturated_super_;
   size_t paged_count_ = 0;
   bool radius_yield_warned_ = false;
-  /// The last touched box (Map::insert: the scan's ray box) and the last round's sensor.
-  BlockKey scan_lo_{}, scan_hi_{};
-  bool has_scan_box_ = false;
-  Eigen::Vector3d last_sensor_m_ = Eigen::Vector3d::Zero();
   /// Last use (scan number) by 8x8x8-block region.
   std::unordered_map<BlockKey, uint64_t, BlockKeyHash> last_used_;
   std::vector<BlockKey> erased_;
