@@ -129,7 +129,7 @@ for name in runs:
     wall = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): ([\d:.]+)", t).group(1)
     wall_s = sum(float(x) * 60 ** i for i, x in enumerate(reversed(wall.split(":"))))
     paging = ", ".join(f"{k} {v}" for k, v in sorted(j.get("paging", {}).items())
-                       if re.search(r"pages_|resident|commits", k))
+                       if re.search(r"pages_|records_|resident|commits", k))
     print(f"| {name} | {j['scans']} | {wall_s:.1f} | {j['seconds']:.1f} | "
           f"{j['scans'] / j['seconds']:.2f} | {rss_mib:,.0f} | {j['host_bytes'] / 2**20:,.0f} | "
           f"{j['blocks']:,} | {paging or '-'} |")
@@ -138,5 +138,12 @@ if "paged" in runs:
     paged = json.load(open(f"{out}/paged.json"))["seconds"]
     print(f"paged throughput: {100 * mem / paged:.1f} % of in-memory (build loops {paged:.2f} "
           f"against {mem:.2f} s)")
+    p = json.load(open(f"{out}/paged.json"))
+    pg, blocks = p["paging"], p["blocks"]
+    if blocks:
+        print(f"written per stored block: {pg['pages_written'] / blocks:.2f} blocks, "
+              f"{pg.get('records_written', pg['pages_written']) / blocks:.3f} records "
+              f"({blocks:,} blocks; store {pg['store_bytes'] / 2**20:,.0f} MiB; "
+              f"peak resident {pg['peak_resident_blocks']:,} of {pg['budget_blocks']:,} allowed)")
 PY
 for line in "${checks[@]}"; do echo "$line"; done

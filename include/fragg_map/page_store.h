@@ -2,9 +2,12 @@
 // holds a map's blocks while they are out of RAM, and the policy that decides which blocks
 // leave. Implementations (SQLite, LMDB) live in fragg_map_store (fragg_map/store/).
 //
-// A store is a map on its own: one record per block (key -> compressed cells) and one metadata
-// record (the map's resolution, occupancy model and the number of scans it holds), written
-// together in one transaction by commit(). Readers see the last committed state.
+// A store is a map on its own: one record per region of 4x4x4 blocks (region key -> the
+// region's blocks, each compressed on its own so that one can be read without the others) and
+// one metadata record (the map's resolution, occupancy model and the number of scans it
+// holds), written together in one transaction by commitRecords(). Readers see the last
+// committed state. The store's format has a version (kPageStoreFormat); a store of another
+// version is refused on open with a one-line message naming the command that converts it.
 #pragma once
 
 #include <cstdint>
@@ -18,8 +21,34 @@
 
 namespace fragg {
 
-/// A block record: the store's encoding of one block's cells (compressed, with a checksum).
+/// A record holds the blocks of a region (1 << kRegionBits)^3 blocks: 4x4x4 (docs/benchmarks.md,
+/// "Records by region": 8x8x8 regions page in 8 times the blocks for each one a ray reaches).
+#ifndef FRAGG_PAGE_REGION_BITS
+#define FRAGG_PAGE_REGION_BITS 2  // 3 (8x8x8) only for the measurement: records tell their size
+#endif
+constexpr int kRegionBits = FRAGG_PAGE_REGION_BITS;
+static_assert(kRegionBits >= 1 && kRegionBits <= 3, "a region is 2 to 8 blocks on an edge");
+constexpr int kRegionMask = (1 << kRegionBits) - 1;
+constexpr int kBlocksPerRegion = 1 << (3 * kRegionBits);
+/// The version of the store format this build reads and writes: 1 was one record per block
+/// (no version recorded), 2 one record per region.
+constexpr uint32_t kPageStoreFormat = 2;
+
+/// The region (a key in region units, kRegionBits coarser than blocks) that holds block `b`.
+inline BlockKey regionOf(const BlockKey& b) {
+  return {b.x >> kRegionBits, b.y >> kRegionBits, b.z >> kRegionBits};
+}
+/// The first (lowest) block of region `r`.
+inline BlockKey firstBlockOf(const BlockKey& r) {
+  return {static_cast<int32_t>(static_cast<uint32_t>(r.x) << kRegionBits),
+          static_cast<int32_t>(static_cast<uint32_t>(r.y) << kRegionBits),
+          static_cast<int32_t>(static_cast<uint32_t>(r.z) << kRegionBits)};
+}
+
+/// A region record: the store's encoding of one region's blocks (each compressed, checked).
 using BlockRecord = std::vector<uint8_t>;
+/// The blocks of one region, by block key (all in the same region, no key twice).
+using RegionBlocks = std::vector<std::pair<BlockKey, const Block*>>;
 
 class PageStore {
  public:
@@ -28,10 +57,10 @@ class PageStore {
   virtual const char* kind() const = 0;
   /// Where the store is (its file).
   virtual const std::string& path() const = 0;
-  /// Keys of every committed block record.
+  /// Keys of every committed block (from the region records).
   virtual std::vector<BlockKey> keys() = 0;
-  /// Reads one committed block; false when there is no record for `key`. IoError when the
-  /// record does not decode to a block.
+  /// Reads one committed block; false when there is no record of it. IoError when the record
+  /// does not decode to a block.
   virtual bool read(const BlockKey& key, Block* out) = 0;
   /// The committed metadata record (empty: a new store that holds no map yet).
   virtual std::vector<uint8_t> readMeta() = 0;
@@ -39,27 +68,29 @@ class PageStore {
   /// for each block, then the metadata is returned. IoError when a record does not decode.
   virtual std::vector<uint8_t> readAll(
       const std::function<void(const BlockKey&, const Block&)>& fn) = 0;
-  /// Reads the committed blocks `keys` from one snapshot into outs[j] (j-th key), decoding on
-  /// every core; found[j] says whether keys[j] has a record. IoError when a record does not
-  /// decode. The default reads them one at a time.
+  /// Reads the committed blocks `keys` from one snapshot into outs[j] (j-th key), each
+  /// region's record fetched once, decoding on every core; found[j] says whether keys[j] has
+  /// a record. IoError when a record does not decode.
   virtual std::vector<bool> readMany(const std::vector<BlockKey>& keys,
-                                     const std::vector<Block*>& outs);
-  /// The records of `blocks` (out[j] is blocks[j]'s), encoded on every core. Touches no store
-  /// state: safe on any thread, while the store reads or writes.
-  virtual std::vector<BlockRecord> encode(const std::vector<const Block*>& blocks) const = 0;
-  /// Decodes a record made by encode() (safe on any thread). IoError when it does not decode to
-  /// a block.
-  virtual void decode(const BlockRecord& record, Block* out) const = 0;
-  /// Writes the records, erases the keys and replaces the metadata in one transaction: after a
-  /// crash the store holds either all of it or none of it. Throws IoError (nothing written).
-  /// May run on another thread than the reads (the map's background writer): reads see the
-  /// last finished commit meanwhile.
+                                     const std::vector<Block*>& outs) = 0;
+  /// The records of `regions` (out[j] holds regions[j]'s blocks and no other), encoded on every
+  /// core. Touches no store state: safe on any thread, while the store reads or writes.
+  virtual std::vector<BlockRecord> encode(const std::vector<RegionBlocks>& regions) const = 0;
+  /// Decodes block `key` of a record made by encode() (safe on any thread); false when the
+  /// record does not hold it. IoError when the record does not decode.
+  virtual bool decode(const BlockRecord& record, const BlockKey& key, Block* out) const = 0;
+  /// Writes the region records (keyed by region: regionOf), erases the regions' records and
+  /// replaces the metadata in one transaction: after a crash the store holds either all of it
+  /// or none of it. A record replaces its region's: it holds every block of the region.
+  /// Throws IoError (nothing written). May run on another thread than the reads (the map's
+  /// background writer): reads see the last finished commit meanwhile.
   virtual void commitRecords(const std::vector<std::pair<BlockKey, BlockRecord>>& puts,
-                             const std::vector<BlockKey>& erases,
+                             const std::vector<BlockKey>& erase_regions,
                              const std::vector<uint8_t>& meta) = 0;
-  /// encode() and commitRecords() on the calling thread.
-  void commit(const std::vector<std::pair<BlockKey, const Block*>>& puts,
-              const std::vector<BlockKey>& erases, const std::vector<uint8_t>& meta);
+  /// Writes blocks and erases blocks (by block key) in one transaction, on the calling thread:
+  /// the committed records of the regions they touch are read, changed and written back.
+  virtual void commit(const std::vector<std::pair<BlockKey, const Block*>>& puts,
+                      const std::vector<BlockKey>& erases, const std::vector<uint8_t>& meta) = 0;
   /// The store's size on disk (its files).
   virtual uint64_t diskBytes() const = 0;
   /// Drops the store's file pages from this process's resident memory where the store maps
@@ -97,10 +128,11 @@ struct PagingStats {
   std::string store;             ///< "sqlite:/path/map.db"
   uint64_t resident_blocks = 0;  ///< in RAM now
   uint64_t peak_resident_blocks = 0;
-  uint64_t budget_blocks = 0;  ///< the RAM budget in resident blocks (0: no budget)
-  uint64_t paged_blocks = 0;   ///< in the store only
-  uint64_t pages_written = 0;  ///< block records written (commits of dirty blocks)
-  uint64_t pages_read = 0;     ///< block records read back into RAM
+  uint64_t budget_blocks = 0;    ///< the RAM budget in resident blocks (0: no budget)
+  uint64_t paged_blocks = 0;     ///< in the store only
+  uint64_t pages_written = 0;    ///< blocks written (in the region records of commits)
+  uint64_t records_written = 0;  ///< region records written
+  uint64_t pages_read = 0;       ///< block records read back into RAM
   /// ... of them read from a commit not yet written (the background writer's batch)
   uint64_t pages_read_pending = 0;
   uint64_t pages_evicted = 0;  ///< blocks dropped from RAM

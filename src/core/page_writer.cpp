@@ -129,17 +129,15 @@ const BlockRecord* PageWriter::findIn(const Batch& batch, const BlockKey& key) {
   return &it->second;
 }
 
-bool PageWriter::findPending(const BlockKey& key, Block* out) {
+PageWriter::Pending PageWriter::findPending(const BlockKey& key, Block* out) {
   std::lock_guard<std::mutex> lock(mutex_);
   // At most one of the two exists: a failed batch is merged into the next one submitted.
   for (const Batch* b : {in_flight_.get(), failed_.get()}) {
     if (!b) continue;
-    if (const BlockRecord* r = findIn(*b, key)) {
-      store_->decode(*r, out);
-      return true;
-    }
+    if (const BlockRecord* r = findIn(*b, regionOf(key)))
+      return store_->decode(*r, key, out) ? Pending::kFound : Pending::kMissing;
   }
-  return false;
+  return Pending::kNone;
 }
 
 double PageWriter::secondsWriting() const {

@@ -24,6 +24,21 @@ double regionCount(const BlockKey& slo, const BlockKey& shi) {
   return (double{1} + shi.x - slo.x) * (double{1} + shi.y - slo.y) * (double{1} + shi.z - slo.z);
 }
 
+/// The box of whole regions that holds [lo, hi]: blocks page in and out by region (a store
+/// record holds a region), so a region is either resident or paged out as a whole.
+void regionBox(BlockKey* lo, BlockKey* hi) {
+  lo->x &= ~kRegionMask;
+  lo->y &= ~kRegionMask;
+  lo->z &= ~kRegionMask;
+  hi->x |= kRegionMask;
+  hi->y |= kRegionMask;
+  hi->z |= kRegionMask;
+}
+
+bool storeOrder(const BlockKey& a, const BlockKey& b) {
+  return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+}
+
 double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -150,7 +165,8 @@ void Pager::forEachPagedOutIn(const BlockKey& lo, const BlockKey& hi, Fn&& fn) c
       }
 }
 
-bool Pager::anyPagedOut(const BlockKey& lo, const BlockKey& hi) const {
+bool Pager::anyPagedOut(BlockKey lo, BlockKey hi) const {
+  regionBox(&lo, &hi);
   bool any = false;
   forEachPagedOutIn(lo, hi, [&](const BlockKey&) {
     any = true;
@@ -160,12 +176,16 @@ bool Pager::anyPagedOut(const BlockKey& lo, const BlockKey& hi) const {
 }
 
 bool Pager::readPagedOut(const BlockKey& key, Block* out) {
-  if (writer_ && writer_->findPending(key, out)) return true;
+  if (writer_) {
+    const PageWriter::Pending p = writer_->findPending(key, out);
+    if (p != PageWriter::Pending::kNone) return p == PageWriter::Pending::kFound;
+  }
   return store_->read(key, out);
 }
 
-std::vector<BlockIndex> Pager::pageIn(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) {
+std::vector<BlockIndex> Pager::pageIn(BlockKey lo, BlockKey hi, BlockMap& blocks) {
   if (paged_count_ == 0) return {};
+  regionBox(&lo, &hi);
   std::vector<BlockKey> wanted;
   forEachPagedOutIn(lo, hi, [&](const BlockKey& k) {
     wanted.push_back(k);
@@ -176,13 +196,32 @@ std::vector<BlockIndex> Pager::pageIn(const BlockKey& lo, const BlockKey& hi, Bl
 
 std::vector<BlockIndex> Pager::pageIn(const std::vector<BlockKey>& keys, BlockMap& blocks) {
   if (paged_count_ == 0) return {};
+  // Every paged-out block of the keys' regions (a region comes back whole).
+  std::vector<BlockKey> regions;
+  for (const BlockKey& k : keys) {
+    auto it = paged_super_.find(superOf(k));
+    if (it == paged_super_.end()) continue;
+    BlockKey lo = k, hi = k;
+    regionBox(&lo, &hi);
+    bool any = false;
+    for (size_t b = it->second._Find_first(); b < it->second.size() && !any;
+         b = it->second._Find_next(b)) {
+      const BlockKey p = keyOfBit(it->first, b);
+      any = p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
+    }
+    if (any) regions.push_back(regionOf(k));
+  }
+  std::sort(regions.begin(), regions.end(), storeOrder);
+  regions.erase(std::unique(regions.begin(), regions.end()), regions.end());
   std::vector<BlockKey> wanted;
-  for (const BlockKey& k : keys)
-    if (isPagedOut(k)) wanted.push_back(k);
-  std::sort(wanted.begin(), wanted.end(), [](const BlockKey& a, const BlockKey& b) {
-    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
-  });
-  wanted.erase(std::unique(wanted.begin(), wanted.end()), wanted.end());
+  for (const BlockKey& r : regions) {
+    BlockKey lo = firstBlockOf(r), hi = lo;
+    regionBox(&lo, &hi);
+    forEachPagedOutIn(lo, hi, [&](const BlockKey& k) {
+      wanted.push_back(k);
+      return true;
+    });
+  }
   return readBack(std::move(wanted), blocks);
 }
 
@@ -216,9 +255,14 @@ std::vector<BlockIndex> Pager::readBack(std::vector<BlockKey> wanted, BlockMap& 
     std::vector<Block*> outs;
     for (size_t j = 0; j < wanted.size(); ++j) {
       Block* out = &blocks.block(read[j]);
-      if (writer_ && writer_->findPending(wanted[j], out)) {
-        ++counters_.pages_read_pending;
-        continue;
+      if (writer_) {
+        const PageWriter::Pending p = writer_->findPending(wanted[j], out);
+        if (p == PageWriter::Pending::kMissing)
+          throw IoError(store_->path() + ": block missing from its region's pending record");
+        if (p == PageWriter::Pending::kFound) {
+          ++counters_.pages_read_pending;
+          continue;
+        }
       }
       from_store.push_back(wanted[j]);
       outs.push_back(out);
@@ -291,28 +335,55 @@ void Pager::flush() {
 
 void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta& meta) {
   const auto t0 = Clock::now();
-  std::vector<std::pair<BlockKey, const Block*>> puts;
+  // The regions to write: those of the dirty blocks and of the blocks erased since the last
+  // commit. A region is resident or paged out as a whole: its record is its resident blocks.
+  std::unordered_map<BlockKey, size_t, BlockKeyHash> slot;
+  std::vector<BlockKey> regions;
+  auto addRegion = [&](const BlockKey& region) {
+    if (slot.emplace(region, regions.size()).second) regions.push_back(region);
+  };
   blocks.forEach([&](BlockIndex i) {
     const BlockMeta& m = blocks.meta(i);
-    if (all_dirty_ || m.changed_at > committed_revision_)
-      puts.emplace_back(m.key, &blocks.block(i));
+    if (dirty(m)) addRegion(regionOf(m.key));
   });
-  std::sort(puts.begin(), puts.end(), [](const auto& a, const auto& b) {
-    return std::tie(a.first.z, a.first.y, a.first.x) < std::tie(b.first.z, b.first.y, b.first.x);
-  });
-  // An erased key that is resident again (re-observed) is written instead.
+  for (const BlockKey& k : erased_) addRegion(regionOf(k));
+  std::vector<RegionBlocks> members(regions.size());
+  if (!regions.empty())
+    blocks.forEach([&](BlockIndex i) {
+      const BlockKey& k = blocks.meta(i).key;
+      auto it = slot.find(regionOf(k));
+      if (it != slot.end()) members[it->second].emplace_back(k, &blocks.block(i));
+    });
+  std::vector<size_t> order(regions.size());
+  for (size_t j = 0; j < order.size(); ++j) order[j] = j;
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return storeOrder(regions[a], regions[b]); });
   PageWriter::Batch batch;
-  for (const BlockKey& k : erased_)
-    if (blocks.find(k) == kNoBlock && !isPagedOut(k)) batch.erases.push_back(k);
+  std::vector<RegionBlocks> to_encode;
+  std::vector<BlockKey> to_encode_keys;
+  size_t block_count = 0;
+  for (size_t j : order) {
+    if (members[j].empty()) {
+      // Every block of the region erased: its record goes (a region with a block paged out
+      // has no resident blocks erased: it left whole, clean).
+      BlockKey lo = firstBlockOf(regions[j]), hi = lo;
+      regionBox(&lo, &hi);
+      bool paged = false;
+      forEachPagedOutIn(lo, hi, [&](const BlockKey&) { return !(paged = true); });
+      if (!paged) batch.erases.push_back(regions[j]);
+      continue;
+    }
+    block_count += members[j].size();
+    to_encode.push_back(std::move(members[j]));
+    to_encode_keys.push_back(regions[j]);
+  }
   // The records are the commit's snapshot: encoded here, on every core.
-  std::vector<const Block*> cells;
-  cells.reserve(puts.size());
-  for (const auto& p : puts) cells.push_back(p.second);
-  std::vector<BlockRecord> records = store_->encode(cells);
-  batch.puts.reserve(puts.size());
-  for (size_t j = 0; j < puts.size(); ++j)
-    batch.puts.emplace_back(puts[j].first, std::move(records[j]));
+  std::vector<BlockRecord> records = store_->encode(to_encode);
+  batch.puts.reserve(records.size());
+  for (size_t j = 0; j < records.size(); ++j)
+    batch.puts.emplace_back(to_encode_keys[j], std::move(records[j]));
   batch.meta = encodeStoreMeta(meta);
+  const size_t record_count = batch.puts.size();
   if (writer_)
     writer_->submit(std::move(batch));  // waits for the previous commit first
   else
@@ -322,7 +393,8 @@ void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta
   committed_revision_ = revision;
   committed_scans_ = meta.scans;
   last_commit_ = Clock::now();
-  counters_.pages_written += puts.size();
+  counters_.pages_written += block_count;
+  counters_.records_written += record_count;
   ++counters_.commits;
   counters_.committed_scans = meta.scans;
   counters_.seconds_commit += secondsSince(t0);
@@ -333,43 +405,67 @@ std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vect
   const size_t target =
       static_cast<size_t>(static_cast<double>(budgetBlocks()) * policy_.low_water);
   if (blocks.size() <= target) return {};
+  // Blocks leave by region (a store record holds a region): the candidates are the resident
+  // regions, each with its blocks.
   struct Candidate {
-    bool near;       ///< within the radius: after every other block
-    uint64_t order;  ///< outside: the last use; inside: farther first
-    BlockKey key;
-    BlockIndex index;
+    bool near = false;   ///< within the radius: after every other region
+    uint64_t order = 0;  ///< outside: the last use; inside: farther first
+    BlockKey region;
+    bool dirty = false;
+    std::vector<BlockIndex> members;
   };
+  std::unordered_map<BlockKey, size_t, BlockKeyHash> slot;
   std::vector<Candidate> candidates;
-  candidates.reserve(blocks.size());
-  const double r2 = policy_.radius_m * policy_.radius_m;
   blocks.forEach([&](BlockIndex i) {
     const BlockMeta& m = blocks.meta(i);
-    if (clean_only && dirty(m)) return;
-    const BlockKey& k = m.key;
-    const Eigen::Vector3d c = (Eigen::Vector3d(k.x, k.y, k.z).array() + 0.5).matrix() * block_m_;
-    const double d2 = (c - sensor_m).squaredNorm();
-    if (d2 <= r2) {
-      if (clean_only) return;  // near blocks leave only in a full round (after a commit)
-      // Millimetres from the radius inwards: the farthest near block goes first.
-      candidates.push_back({true, static_cast<uint64_t>((r2 - d2) * 1e3), k, i});
-    } else {
-      auto it = last_used_.find(superOf(k));
-      candidates.push_back({false, it == last_used_.end() ? 0 : it->second, k, i});
+    const BlockKey region = regionOf(m.key);
+    const auto [it, added] = slot.emplace(region, candidates.size());
+    if (added) {
+      candidates.emplace_back();
+      candidates.back().region = region;
     }
+    Candidate& c = candidates[it->second];
+    c.dirty |= dirty(m);
+    c.members.push_back(i);
   });
-  const size_t n = std::min(candidates.size(), blocks.size() - target);
-  auto before = [](const Candidate& a, const Candidate& b) {
-    return std::tie(a.near, a.order, a.key.z, a.key.y, a.key.x) <
-           std::tie(b.near, b.order, b.key.z, b.key.y, b.key.x);
-  };
-  std::nth_element(candidates.begin(), candidates.begin() + static_cast<long>(n), candidates.end(),
-                   before);
+  // A region with a block erased since the last commit has a record older than it.
+  for (const BlockKey& k : erased_) {
+    auto it = slot.find(regionOf(k));
+    if (it != slot.end()) candidates[it->second].dirty = true;
+  }
+  const double r2 = policy_.radius_m * policy_.radius_m;
+  const double region_m = block_m_ * (1 << kRegionBits);
+  std::vector<Candidate*> order;
+  order.reserve(candidates.size());
+  for (Candidate& c : candidates) {
+    if (clean_only && c.dirty) continue;
+    const BlockKey& r = c.region;
+    const Eigen::Vector3d centre =
+        (Eigen::Vector3d(r.x, r.y, r.z).array() + 0.5).matrix() * region_m;
+    const double d2 = (centre - sensor_m).squaredNorm();
+    if (d2 <= r2) {
+      if (clean_only) continue;  // near regions leave only in a full round (after a commit)
+      // Millimetres from the radius inwards: the farthest near region goes first.
+      c.near = true;
+      c.order = static_cast<uint64_t>((r2 - d2) * 1e3);
+    } else {
+      auto it = last_used_.find(superOf(firstBlockOf(r)));
+      c.order = it == last_used_.end() ? 0 : it->second;
+    }
+    order.push_back(&c);
+  }
+  std::sort(order.begin(), order.end(), [](const Candidate* a, const Candidate* b) {
+    return std::tie(a->near, a->order, a->region.z, a->region.y, a->region.x) <
+           std::tie(b->near, b->order, b->region.z, b->region.y, b->region.x);
+  });
+  const size_t needed = blocks.size() - target;
   std::vector<BlockIndex> out;
-  out.reserve(n);
+  out.reserve(needed + kBlocksPerRegion);
   bool any_near = false;
-  for (size_t j = 0; j < n; ++j) {
-    out.push_back(candidates[j].index);
-    any_near |= candidates[j].near;
+  for (const Candidate* c : order) {
+    if (out.size() >= needed) break;
+    out.insert(out.end(), c->members.begin(), c->members.end());
+    any_near |= c->near;
   }
   if (any_near && !radius_yield_warned_) {
     radius_yield_warned_ = true;

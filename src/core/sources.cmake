@@ -27,7 +27,6 @@ set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/block_chunks.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_paging.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/page_store.cpp
   ${CMAKE_CURRENT_LIST_DIR}/page_writer.cpp
   ${CMAKE_CURRENT_LIST_DIR}/pager.cpp
   ${CMAKE_CURRENT_LIST_DIR}/submap_region.cpp

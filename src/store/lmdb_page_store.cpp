@@ -1,5 +1,6 @@
 // The LMDB page store (built when LMDB is found): one file (MDB_NOSUBDIR) plus its lock file
-// "<path>-lock", named databases "blocks" (12-byte key -> zstd'd cells) and "meta". Commits
+// "<path>-lock", named databases "blocks" (12-byte region key -> region record) and "meta"
+// ("map": the map's metadata; "format": the store format, a uint32, absent in format 1). Commits
 // sync the data, not the meta page (MDB_NOMETASYNC): a commit survives the process being
 // killed; a power loss may take the last commit back, never the database's integrity.
 #include "fragg_map/errors.h"
@@ -12,12 +13,14 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <string>
 
 #include "block_codec.h"
+#include "region_record_store.h"
 #endif
 
 namespace fragg {
@@ -30,9 +33,10 @@ constexpr size_t kMapSizeBytes = size_t{1} << 40;
 /// pages are dropped.
 constexpr size_t kDropAboveBytes = size_t{64} << 20;
 
-class LmdbPageStore final : public PageStore {
+class LmdbPageStore final : public RegionRecordStore {
  public:
-  LmdbPageStore(const std::string& path, bool read_only) : path_(path) {
+  /// format1: open a store of format 1 (read-only, for readFormat1) instead of refusing it.
+  LmdbPageStore(const std::string& path, bool read_only, bool format1 = false) : path_(path) {
     std::error_code ec;
     if (read_only && !std::filesystem::exists(path, ec))
       throw IoError("cannot read " + path + ": no such file");
@@ -52,6 +56,12 @@ class LmdbPageStore final : public PageStore {
         if (rc == MDB_NOTFOUND) throw IoError(path + ": not a fragg_map page store");
         check(rc, "open databases");
       }
+      try {
+        checkFormat(txn, read_only, format1);
+      } catch (...) {
+        mdb_txn_abort(txn);
+        throw;
+      }
       check(mdb_txn_commit(txn), "commit");
     } catch (...) {
       mdb_env_close(env_);
@@ -66,74 +76,35 @@ class LmdbPageStore final : public PageStore {
 
   // Reads take no lock: LMDB's read transactions run beside the write transaction of a
   // commit on another thread (the map's background writer) and see the last finished commit.
-  std::vector<BlockKey> keys() override {
-    std::vector<BlockKey> out;
-    ReadTxn txn(*this);
-    forEachRecord(txn.txn, [&](const MDB_val& k, const MDB_val&) {
-      out.push_back(blockKeyOfStoreKey(k.mv_data, k.mv_size, path_));
-    });
-    return out;
-  }
-
-  bool read(const BlockKey& key, Block* out) override {
-    ReadTxn txn(*this);
-    StoreKey sk = storeKeyOf(key);
-    MDB_val k{sizeof(sk.bytes), sk.bytes}, v;
-    const int rc = mdb_get(txn.txn, blocks_, &k, &v);
-    if (rc == MDB_NOTFOUND) return false;
-    check(rc, "read");
-    decodeBlock(v.mv_data, v.mv_size, out, path_);
-    return true;
-  }
-
-  std::vector<bool> readMany(const std::vector<BlockKey>& keys,
-                             const std::vector<Block*>& outs) override {
-    std::vector<bool> found(keys.size(), false);
-    if (keys.empty()) return found;
-    ReadTxn txn(*this);  // one snapshot; the values stay valid until it ends
-    std::vector<std::pair<const void*, size_t>> records;
-    std::vector<Block*> to;
-    records.reserve(keys.size());
-    to.reserve(keys.size());
-    for (size_t j = 0; j < keys.size(); ++j) {
-      StoreKey sk = storeKeyOf(keys[j]);
-      MDB_val k{sizeof(sk.bytes), sk.bytes}, v;
-      const int rc = mdb_get(txn.txn, blocks_, &k, &v);
-      if (rc == MDB_NOTFOUND) continue;
-      check(rc, "read");
-      found[j] = true;
-      records.emplace_back(v.mv_data, v.mv_size);
-      to.push_back(outs[j]);
-    }
-    decodeBlocks(records, to, path_);
-    // A page-in batch reads records all over the store: without this, the file pages it
-    // touched stay in the process's resident memory until the next commit drops them (the
-    // paged W4 build peaked 365 MiB above the same build on SQLite).
-    dropMappedPages();
-    return found;
-  }
-
-  std::vector<BlockRecord> encode(const std::vector<const Block*>& blocks) const override {
-    return encodeBlocks(blocks);
-  }
-
-  void decode(const BlockRecord& record, Block* out) const override {
-    decodeBlock(record.data(), record.size(), out, path_);
-  }
-
   std::vector<uint8_t> readMeta() override {
     ReadTxn txn(*this);
     return metaIn(txn.txn);
   }
 
-  std::vector<uint8_t> readAll(
-      const std::function<void(const BlockKey&, const Block&)>& fn) override {
-    ReadTxn txn(*this);  // one snapshot for the blocks and the metadata
-    Block block;
-    forEachRecord(txn.txn, [&](const MDB_val& k, const MDB_val& v) {
-      const BlockKey key = blockKeyOfStoreKey(k.mv_data, k.mv_size, path_);
-      decodeBlock(v.mv_data, v.mv_size, &block, path_);
-      fn(key, block);
+  void withRecords(const std::vector<BlockKey>& regions,
+                   const std::function<void(const Records&)>& fn) override {
+    ReadTxn txn(*this);  // one snapshot; the values stay valid until it ends
+    Records records(regions.size(), {nullptr, 0});
+    for (size_t j = 0; j < regions.size(); ++j) {
+      StoreKey sk = storeKeyOf(regions[j]);
+      MDB_val k{sizeof(sk.bytes), sk.bytes}, v;
+      const int rc = mdb_get(txn.txn, blocks_, &k, &v);
+      if (rc == MDB_NOTFOUND) continue;
+      check(rc, "read");
+      records[j] = {v.mv_data, v.mv_size};
+    }
+    fn(records);
+    // A page-in batch reads records all over the store: without this, the file pages it
+    // touched stay in the process's resident memory until the next commit drops them (the
+    // paged W4 build peaked 365 MiB above the same build on SQLite).
+    dropMappedPages();
+  }
+
+  std::vector<uint8_t> forEachRecord(
+      const std::function<void(const BlockKey&, const void*, size_t)>& fn) override {
+    ReadTxn txn(*this);  // one snapshot for the records and the metadata
+    forEachRecordIn(txn.txn, [&](const MDB_val& k, const MDB_val& v) {
+      fn(blockKeyOfStoreKey(k.mv_data, k.mv_size, path_), v.mv_data, v.mv_size);
     });
     return metaIn(txn.txn);
   }
@@ -236,8 +207,37 @@ class LmdbPageStore final : public PageStore {
   void check(int rc, const char* what) const {
     if (rc != 0) throw IoError(path_ + ": LMDB " + what + ": " + mdb_strerror(rc));
   }
+  /// The store's format ("format" in meta): a new store gets kPageStoreFormat; a store with
+  /// blocks or a map but no format is of format 1, refused unless `format1`.
+  void checkFormat(MDB_txn* txn, bool read_only, bool format1) {
+    char name[] = "format";
+    MDB_val k{6, name}, v;
+    int rc = mdb_get(txn, meta_, &k, &v);
+    if (rc == 0) {
+      uint32_t format = 0;
+      if (v.mv_size == sizeof(format)) std::memcpy(&format, v.mv_data, sizeof(format));
+      if (format != kPageStoreFormat || format1)
+        throw IoError(path_ + ": a page store of format " + std::to_string(format) +
+                      ", this fragg_map reads format " + std::to_string(kPageStoreFormat));
+      return;
+    }
+    if (rc != MDB_NOTFOUND) check(rc, "read the format");
+    MDB_stat blocks, meta;
+    check(mdb_stat(txn, blocks_, &blocks), "stat");
+    check(mdb_stat(txn, meta_, &meta), "stat");
+    if (blocks.ms_entries > 0 || meta.ms_entries > 0) {
+      if (!format1) refuseFormat1(path_);
+      return;
+    }
+    if (format1) throw IoError(path_ + ": an empty page store (no store of format 1)");
+    if (read_only) return;  // empty: nothing to read, whatever its format
+    uint32_t format = kPageStoreFormat;
+    MDB_val fv{sizeof(format), &format};
+    check(mdb_put(txn, meta_, &k, &fv, 0), "write the format");
+  }
+
   template <class Fn>
-  void forEachRecord(MDB_txn* txn, Fn&& fn) {
+  void forEachRecordIn(MDB_txn* txn, Fn&& fn) {
     MDB_cursor* cursor = nullptr;
     check(mdb_cursor_open(txn, blocks_, &cursor), "cursor");
     MDB_val k, v;
@@ -278,10 +278,21 @@ bool lmdbAvailable() { return true; }
 std::shared_ptr<PageStore> openLmdbPageStore(const std::string& path, bool read_only) {
   return std::make_shared<LmdbPageStore>(path, read_only);
 }
+
+std::vector<uint8_t> readLmdbFormat1(const std::string& path,
+                                     const std::function<void(const BlockKey&, const Block&)>& fn) {
+  LmdbPageStore store(path, /*read_only=*/true, /*format1=*/true);
+  return store.readFormat1(fn);
+}
 #else
 bool lmdbAvailable() { return false; }
 
 std::shared_ptr<PageStore> openLmdbPageStore(const std::string& path, bool) {
+  throw InvalidArgument(path + ": this fragg_map was built without LMDB");
+}
+
+std::vector<uint8_t> readLmdbFormat1(const std::string& path,
+                                     const std::function<void(const BlockKey&, const Block&)>&) {
   throw InvalidArgument(path + ": this fragg_map was built without LMDB");
 }
 #endif

@@ -1,8 +1,9 @@
 // The SQLite page store: WAL mode (readers in other processes see the last commit while the
 // map writes), synchronous=NORMAL (a commit survives the process being killed; a power loss
 // may take the last commits back, never the database's integrity). Tables:
-//   blocks(k BLOB PRIMARY KEY, v BLOB) WITHOUT ROWID   -- 12-byte key -> zstd'd cells
+//   blocks(k BLOB PRIMARY KEY, v BLOB) WITHOUT ROWID   -- 12-byte region key -> region record
 //   meta(name TEXT PRIMARY KEY, v BLOB)                -- 'map' -> the map's metadata
+// PRAGMA user_version is the store format (0 in format 1's stores, keyed by block).
 #include <sqlite3.h>
 
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include "block_codec.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/store/page_stores.h"
+#include "region_record_store.h"
 
 namespace fragg {
 
@@ -45,9 +47,10 @@ class Statement {
   std::string path_;
 };
 
-class SqlitePageStore final : public PageStore {
+class SqlitePageStore final : public RegionRecordStore {
  public:
-  SqlitePageStore(const std::string& path, bool read_only) : path_(path) {
+  /// format1: open a store of format 1 (read-only, for readFormat1) instead of refusing it.
+  SqlitePageStore(const std::string& path, bool read_only, bool format1 = false) : path_(path) {
     std::error_code ec;
     if (read_only && !std::filesystem::exists(path, ec))
       throw IoError("cannot read " + path + ": no such file");
@@ -72,11 +75,18 @@ class SqlitePageStore final : public PageStore {
               "WITHOUT ROWID");
           exec("CREATE TABLE IF NOT EXISTS meta(name TEXT PRIMARY KEY, v BLOB NOT NULL)");
           exec(("PRAGMA application_id=" + std::to_string(kApplicationId)).c_str());
+          exec(("PRAGMA user_version=" + std::to_string(kPageStoreFormat)).c_str());
           exec("COMMIT");
         }
       } else if (app == 0) {
         throw IoError(path + ": not a fragg_map page store (empty or another database)");
       }
+      const int format =
+          app == 0 ? static_cast<int>(kPageStoreFormat) : pragmaInt("PRAGMA user_version");
+      if (format == 0 && !format1) refuseFormat1(path);
+      if (format != (format1 ? 0 : static_cast<int>(kPageStoreFormat)))
+        throw IoError(path + ": a page store of format " + std::to_string(format) +
+                      ", this fragg_map reads format " + std::to_string(kPageStoreFormat));
     } catch (...) {
       sqlite3_close(db_);
       throw;
@@ -84,81 +94,44 @@ class SqlitePageStore final : public PageStore {
   }
   ~SqlitePageStore() override {
     get_.reset();
-    keys_.reset();
     sqlite3_close(db_);
   }
 
   const char* kind() const override { return "sqlite"; }
   const std::string& path() const override { return path_; }
 
-  std::vector<BlockKey> keys() override {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!keys_) keys_ = std::make_unique<Statement>(db_, "SELECT k FROM blocks", path_);
-    std::vector<BlockKey> out;
-    keys_->reset();
-    while (keys_->step() == SQLITE_ROW)
-      out.push_back(blockKeyOfStoreKey(sqlite3_column_blob(keys_->get(), 0),
-                                       sqlite3_column_bytes(keys_->get(), 0), path_));
-    keys_->reset();
-    return out;
-  }
-
-  bool read(const BlockKey& key, Block* out) override {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!get_) get_ = std::make_unique<Statement>(db_, "SELECT v FROM blocks WHERE k=?", path_);
-    const StoreKey k = storeKeyOf(key);
-    get_->reset();
-    sqlite3_bind_blob(get_->get(), 1, k.bytes, sizeof(k.bytes), SQLITE_STATIC);
-    const bool found = get_->step() == SQLITE_ROW;
-    if (found)
-      decodeBlock(sqlite3_column_blob(get_->get(), 0), sqlite3_column_bytes(get_->get(), 0), out,
-                  path_);
-    get_->reset();
-    return found;
-  }
-
   // Reads and commits share the connection and its lock: a read waits for a commit that the
   // map's background writer is running (LMDB's reads do not).
-  std::vector<bool> readMany(const std::vector<BlockKey>& keys,
-                             const std::vector<Block*>& outs) override {
-    std::vector<bool> found(keys.size(), false);
-    if (keys.empty()) return found;
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!get_) get_ = std::make_unique<Statement>(db_, "SELECT v FROM blocks WHERE k=?", path_);
-    std::vector<BlockRecord> bytes;
-    std::vector<Block*> to;
-    exec("BEGIN");  // one snapshot
-    try {
-      for (size_t j = 0; j < keys.size(); ++j) {
-        const StoreKey k = storeKeyOf(keys[j]);
+  void withRecords(const std::vector<BlockKey>& regions,
+                   const std::function<void(const Records&)>& fn) override {
+    std::vector<BlockRecord> bytes(regions.size());
+    std::vector<bool> found(regions.size(), false);
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!get_) get_ = std::make_unique<Statement>(db_, "SELECT v FROM blocks WHERE k=?", path_);
+      exec("BEGIN");  // one snapshot
+      try {
+        for (size_t j = 0; j < regions.size(); ++j) {
+          const StoreKey k = storeKeyOf(regions[j]);
+          get_->reset();
+          sqlite3_bind_blob(get_->get(), 1, k.bytes, sizeof(k.bytes), SQLITE_STATIC);
+          if (get_->step() != SQLITE_ROW) continue;
+          const auto* p = static_cast<const uint8_t*>(sqlite3_column_blob(get_->get(), 0));
+          bytes[j].assign(p, p + sqlite3_column_bytes(get_->get(), 0));
+          found[j] = true;
+        }
         get_->reset();
-        sqlite3_bind_blob(get_->get(), 1, k.bytes, sizeof(k.bytes), SQLITE_STATIC);
-        if (get_->step() != SQLITE_ROW) continue;
-        const auto* p = static_cast<const uint8_t*>(sqlite3_column_blob(get_->get(), 0));
-        bytes.emplace_back(p, p + sqlite3_column_bytes(get_->get(), 0));
-        to.push_back(outs[j]);
-        found[j] = true;
+        exec("COMMIT");
+      } catch (...) {
+        get_->reset();
+        sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+        throw;
       }
-      get_->reset();
-      exec("COMMIT");
-    } catch (...) {
-      get_->reset();
-      sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
-      throw;
     }
-    std::vector<std::pair<const void*, size_t>> records;
-    records.reserve(bytes.size());
-    for (const BlockRecord& b : bytes) records.emplace_back(b.data(), b.size());
-    decodeBlocks(records, to, path_);
-    return found;
-  }
-
-  std::vector<BlockRecord> encode(const std::vector<const Block*>& blocks) const override {
-    return encodeBlocks(blocks);
-  }
-
-  void decode(const BlockRecord& record, Block* out) const override {
-    decodeBlock(record.data(), record.size(), out, path_);
+    Records records(regions.size(), {nullptr, 0});
+    for (size_t j = 0; j < regions.size(); ++j)
+      if (found[j]) records[j] = {bytes[j].data(), bytes[j].size()};
+    fn(records);
   }
 
   std::vector<uint8_t> readMeta() override {
@@ -166,19 +139,17 @@ class SqlitePageStore final : public PageStore {
     return readMetaLocked();
   }
 
-  std::vector<uint8_t> readAll(
-      const std::function<void(const BlockKey&, const Block&)>& fn) override {
+  std::vector<uint8_t> forEachRecord(
+      const std::function<void(const BlockKey&, const void*, size_t)>& fn) override {
     std::lock_guard<std::mutex> lock(mutex_);
-    exec("BEGIN");  // one snapshot for the blocks and the metadata
+    exec("BEGIN");  // one snapshot for the records and the metadata
     try {
       Statement all(db_, "SELECT k, v FROM blocks", path_);
-      Block block;
       while (all.step() == SQLITE_ROW) {
         const BlockKey key = blockKeyOfStoreKey(sqlite3_column_blob(all.get(), 0),
                                                 sqlite3_column_bytes(all.get(), 0), path_);
-        decodeBlock(sqlite3_column_blob(all.get(), 1), sqlite3_column_bytes(all.get(), 1), &block,
-                    path_);
-        fn(key, block);
+        fn(key, sqlite3_column_blob(all.get(), 1),
+           static_cast<size_t>(sqlite3_column_bytes(all.get(), 1)));
       }
       std::vector<uint8_t> meta = readMetaLocked();
       exec("COMMIT");
@@ -255,12 +226,18 @@ class SqlitePageStore final : public PageStore {
   std::string path_;
   sqlite3* db_ = nullptr;
   std::mutex mutex_;
-  std::unique_ptr<Statement> get_, keys_;
+  std::unique_ptr<Statement> get_;
 };
 }  // namespace
 
 std::shared_ptr<PageStore> openSqlitePageStore(const std::string& path, bool read_only) {
   return std::make_shared<SqlitePageStore>(path, read_only);
+}
+
+std::vector<uint8_t> readSqliteFormat1(
+    const std::string& path, const std::function<void(const BlockKey&, const Block&)>& fn) {
+  SqlitePageStore store(path, /*read_only=*/true, /*format1=*/true);
+  return store.readFormat1(fn);
 }
 
 }  // namespace fragg

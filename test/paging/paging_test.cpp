@@ -140,7 +140,8 @@ TEST_P(Paging, TheBudgetWinsOverTheRadiusAndUnchangedBlocksAreNotWrittenAgain) {
 TEST_P(Paging, AScanReadsBackOnlyTheBlocksItsRaysReach) {
   // The CPU backend asks for the blocks its rays mark, not for every paged-out block of the
   // scan's box: a few rays across the corridor, diagonally up to the ceiling, leave the
-  // paged-out blocks of their box that they do not cross where they are.
+  // paged-out blocks of their box that they do not cross where they are. Blocks come back by
+  // region (a store record holds 4x4x4 blocks): at most the regions of the blocks touched.
   const std::string dir = testDir();
   Map paged(corridorParams());
   paged.attachPageStore(openPageStore(storePath(dir), false), smallBudget());
@@ -157,7 +158,7 @@ TEST_P(Paging, AScanReadsBackOnlyTheBlocksItsRaysReach) {
   const InsertStats st = paged.insert(rays, T, corridorSensor());
   const uint64_t read_by_scan = paged.pagingStats().pages_read - read_before;
   EXPECT_GT(read_by_scan, 0u);
-  EXPECT_LE(read_by_scan, st.blocks_touched);
+  EXPECT_LE(read_by_scan, st.blocks_touched * kBlocksPerRegion);
   // The box of those rays (sensor to the farthest end, a cell's margin) still holds
   // paged-out blocks: bringing it in reads them.
   const uint64_t read_after_scan = paged.pagingStats().pages_read;
@@ -349,7 +350,7 @@ TEST(BlockMap, PagesOfFreeBlocksGoBackToTheSystemAndComeBackUsable) {
   EXPECT_EQ(blocks.size(), static_cast<size_t>(kBlocks));
 }
 
-TEST(PageStoreRecords, UniformBlocksAreShortRecordsAndEveryRecordIsChecked) {
+TEST(PageStoreRecords, ARegionRecordHoldsItsBlocksUniformOnesShortAndEveryByteIsChecked) {
   const std::string dir = testDir();
   for (const std::string name : {"/r.db", "/r.lmdb"}) {
     if (name == "/r.lmdb" && !lmdbAvailable()) continue;
@@ -357,32 +358,54 @@ TEST(PageStoreRecords, UniformBlocksAreShortRecordsAndEveryRecordIsChecked) {
     Block uniform, mixed;
     for (Cell& c : uniform.cells) c = Cell{0, -2000};
     for (int i = 0; i < kCellsPerBlock; ++i) mixed.cells[i] = Cell{int16_t(i % 3), int16_t(-i)};
-    const std::vector<BlockRecord> records = store->encode({&uniform, &mixed});
+    // Two blocks of region (-1, 0, 0) (negative keys too), one alone in region (0, 0, 0).
+    const BlockKey ku{-4, 1, 3}, km{-1, 2, 0}, kalone{2, 0, 0};
+    ASSERT_TRUE(regionOf(ku) == regionOf(km));
+    const std::vector<BlockRecord> records =
+        store->encode({{{km, &mixed}, {ku, &uniform}}, {{kalone, &uniform}}});
     ASSERT_EQ(records.size(), 2u);
-    EXPECT_EQ(records[0].size(), 9u);  // tag, cell, check
-    EXPECT_GT(records[1].size(), 9u);
+    // Header 4 bytes, 6 a block, a uniform block 9 bytes (tag, cell, check).
+    EXPECT_EQ(records[1].size(), 4u + 6u + 9u);
+    EXPECT_GT(records[0].size(), 4u + 12u + 9u + 9u);
     Block back;
-    for (int j = 0; j < 2; ++j) {
-      store->decode(records[j], &back);
-      EXPECT_EQ(std::memcmp(&back, j == 0 ? &uniform : &mixed, sizeof(Block)), 0) << name << j;
-    }
-    // A byte changed anywhere in either kind of record is refused, or (a bit zstd's frame
-    // header leaves unused) reads as the same block: never as another block.
-    size_t refused[2] = {0, 0};
-    for (int j = 0; j < 2; ++j)
-      for (size_t at = 0; at < records[j].size(); ++at) {
-        BlockRecord bad = records[j];
-        bad[at] ^= 0x10;
-        try {
-          store->decode(bad, &back);
-          EXPECT_EQ(std::memcmp(&back, j == 0 ? &uniform : &mixed, sizeof(Block)), 0)
-              << name << " record " << j << " byte " << at;
-        } catch (const IoError&) {
-          ++refused[j];
+    ASSERT_TRUE(store->decode(records[0], ku, &back));
+    EXPECT_EQ(std::memcmp(&back, &uniform, sizeof(Block)), 0) << name;
+    ASSERT_TRUE(store->decode(records[0], km, &back));
+    EXPECT_EQ(std::memcmp(&back, &mixed, sizeof(Block)), 0) << name;
+    EXPECT_FALSE(store->decode(records[0], BlockKey{-2, 1, 3}, &back)) << "not in the record";
+    // A byte changed anywhere in the record is refused, or (a bit zstd's frame header leaves
+    // unused) reads as the same blocks: never as other blocks.
+    size_t refused = 0;
+    for (size_t at = 0; at < records[0].size(); ++at) {
+      BlockRecord bad = records[0];
+      bad[at] ^= 0x10;
+      try {
+        for (const auto& [k, b] : {std::pair{ku, &uniform}, std::pair{km, &mixed}}) {
+          Block out;
+          if (!store->decode(bad, k, &out)) throw IoError("block gone");
+          EXPECT_EQ(std::memcmp(&out, b, sizeof(Block)), 0) << name << " byte " << at;
         }
+      } catch (const IoError&) {
+        ++refused;
       }
-    EXPECT_EQ(refused[0], records[0].size());  // every byte of a uniform record is checked
-    EXPECT_GE(refused[1], records[1].size() - 2);
+    }
+    EXPECT_GE(refused, records[0].size() - 2);
+    // Commits of single blocks merge into their regions' records; erasing the last block of a
+    // region erases its record.
+    const std::vector<uint8_t> meta = {7};
+    store->commit({{ku, &uniform}, {km, &mixed}, {kalone, &mixed}}, {}, meta);
+    store->commit({{kalone, &uniform}}, {km}, meta);
+    std::vector<BlockKey> keys = store->keys();
+    ASSERT_EQ(keys.size(), 2u);
+    ASSERT_TRUE(store->read(kalone, &back));
+    EXPECT_EQ(std::memcmp(&back, &uniform, sizeof(Block)), 0) << name;
+    EXPECT_FALSE(store->read(km, &back));
+    Block a, c;
+    const std::vector<bool> found = store->readMany({ku, km, kalone}, {&a, &back, &c});
+    EXPECT_EQ(found, (std::vector<bool>{true, false, true}));
+    EXPECT_EQ(std::memcmp(&a, &uniform, sizeof(Block)), 0) << name;
+    store->commit({}, {ku, kalone}, meta);
+    EXPECT_TRUE(store->keys().empty()) << name;
   }
 }
 
@@ -396,10 +419,10 @@ TEST(SqlitePageStore, ACorruptRecordIsRefusedWhenRead) {
   }
   ASSERT_GT(Map::loadPageStore(*openPageStore(path, true)).blockCount(), 0u);
   // One record's value overwritten behind the store's back (as a disk error would): the
-  // record of the block that holds the first scan's sensor, which every ray of a scan from
+  // record of the region that holds the first scan's sensor, which every ray of a scan from
   // there crosses. The record key is z, y, x, each big-endian with the sign bit flipped.
   const Eigen::Isometry3d T = corridorPose(0, kScans);
-  const BlockKey bad = blockKeyOf(Map(corridorParams()).keyOf(T.translation()));
+  const BlockKey bad = regionOf(blockKeyOf(Map(corridorParams()).keyOf(T.translation())));
   std::string hex;
   for (int32_t v : {bad.z, bad.y, bad.x}) {
     char word[9];
@@ -464,10 +487,16 @@ class GatedStore final : public PageStore {
       const std::function<void(const BlockKey&, const Block&)>& fn) override {
     return inner_->readAll(fn);
   }
-  std::vector<BlockRecord> encode(const std::vector<const Block*>& blocks) const override {
-    return inner_->encode(blocks);
+  std::vector<BlockRecord> encode(const std::vector<RegionBlocks>& regions) const override {
+    return inner_->encode(regions);
   }
-  void decode(const BlockRecord& record, Block* out) const override { inner_->decode(record, out); }
+  bool decode(const BlockRecord& record, const BlockKey& key, Block* out) const override {
+    return inner_->decode(record, key, out);
+  }
+  void commit(const std::vector<std::pair<BlockKey, const Block*>>& puts,
+              const std::vector<BlockKey>& erases, const std::vector<uint8_t>& meta) override {
+    inner_->commit(puts, erases, meta);
+  }
   void commitRecords(const std::vector<std::pair<BlockKey, BlockRecord>>& puts,
                      const std::vector<BlockKey>& erases,
                      const std::vector<uint8_t>& meta) override {

@@ -7,6 +7,19 @@ if(TARGET fragg_map_store)
     LIBS fragg_map_store fragg_map_planning SQLite::SQLite3
     LABELS core paging)
 
+  # Store formats: format 1 refused with the command that converts it, and converted.
+  fragg_add_test(fragg_store_format_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/store_format_test.cpp
+    LIBS fragg_map_store SQLite::SQLite3 ${ZSTD_LIBRARY} $<$<BOOL:${FRAGG_HAVE_LMDB}>:${LMDB_LIBRARY}>
+    LABELS core paging)
+  if(TARGET fragg_store_format_test)
+    target_include_directories(fragg_store_format_test SYSTEM PRIVATE ${ZSTD_INCLUDE_DIR})
+    if(FRAGG_HAVE_LMDB)
+      target_include_directories(fragg_store_format_test SYSTEM PRIVATE ${LMDB_INCLUDE_DIR})
+      target_compile_definitions(fragg_store_format_test PRIVATE FRAGG_TEST_LMDB=1)
+    endif()
+  endif()
+
   # kill -9 of `fragg_map build --page-store` at several moments; the store read meanwhile.
   fragg_add_test(cli_store_crash_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/store_crash_test.cpp

@@ -1,8 +1,8 @@
 // The page store's background writer (Pager): a commit's records, encoded on the map's thread
 // (a snapshot of the dirty blocks), are written to the store on this thread while the map goes
 // on. Double-buffered: one batch is written while the map builds the next; submitting waits for
-// the one in flight. A block paged out while its record is in a batch not yet written is read
-// from that batch (findPending), so the map never reads an older record from the store.
+// the one in flight. A block paged out while its region's record is in a batch not yet written
+// is read from that batch (findPending), so the map never reads an older record from the store.
 #pragma once
 
 #include <condition_variable>
@@ -21,8 +21,9 @@ namespace fragg {
 class PageWriter {
  public:
   struct Batch {
-    /// Sorted by key in the stores' order (z, y, x), one record per key.
+    /// Region records, sorted by region key in the stores' order (z, y, x), one per region.
     std::vector<std::pair<BlockKey, BlockRecord>> puts;
+    /// Regions whose records go.
     std::vector<BlockKey> erases;
     std::vector<uint8_t> meta;
   };
@@ -40,8 +41,13 @@ class PageWriter {
   /// Waits until nothing is in flight; IoError when the last batch failed (it stays pending
   /// and goes with the next submit).
   void wait();
-  /// The record of `key` in a batch not yet written, decoded into *out; false when none.
-  bool findPending(const BlockKey& key, Block* out);
+  enum class Pending {
+    kNone,     ///< no batch not yet written holds a record of the block's region
+    kFound,    ///< decoded into *out
+    kMissing,  ///< such a batch holds the region's record, without the block
+  };
+  /// Block `key` from the record of its region in a batch not yet written.
+  Pending findPending(const BlockKey& key, Block* out);
   /// Seconds the thread spent writing, and batches written.
   double secondsWriting() const;
   uint64_t batchesWritten() const;

@@ -1,7 +1,9 @@
 // The map's side of out-of-core paging (Map::attachPageStore): which blocks are in the store
 // only, which resident blocks were used least recently, and the commits that keep the store
 // equal to the map. The Map calls it around every edit; no block is created over a key that
-// is paged out (the Map pages it in first).
+// is paged out (the Map pages it in first). Blocks page in and out by region (a store record
+// holds a region, page_store.h): a region is resident or paged out as a whole, so a commit
+// writes a region's record from its resident blocks without reading the store.
 #pragma once
 
 #include <Eigen/Core>
@@ -40,8 +42,8 @@ class Pager {
   PageStore& store() { return *store_; }
   const PagingPolicy& policy() const { return policy_; }
 
-  /// Whether a block of [lo, hi] is paged out (no store access).
-  bool anyPagedOut(const BlockKey& lo, const BlockKey& hi) const;
+  /// Whether a block of the regions of [lo, hi] is paged out (no store access).
+  [[nodiscard]] bool anyPagedOut(BlockKey lo, BlockKey hi) const;
   bool isPagedOut(const BlockKey& key) const;
   /// Whether the block is paged out with every cell at the lower clamp (it was
   /// BlockMeta::freeSaturated when it left this session; unknown, so false, for the blocks of
@@ -49,10 +51,11 @@ class Pager {
   bool isPagedOutSaturated(const BlockKey& key) const;
   size_t pagedOutCount() const { return paged_count_; }
   std::vector<BlockKey> pagedOutKeys() const;
-  /// Reads the paged-out blocks of [lo, hi] back into `blocks` (clean: stamped 0); returns
-  /// their indices in `blocks`.
-  std::vector<BlockIndex> pageIn(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks);
-  /// The same for the blocks of `keys` that are paged out (the others are skipped).
+  /// Reads the paged-out blocks of the regions of [lo, hi] back into `blocks` (clean: stamped
+  /// 0); returns their indices in `blocks`.
+  std::vector<BlockIndex> pageIn(BlockKey lo, BlockKey hi, BlockMap& blocks);
+  /// The same for the regions of `keys` (whole regions: every block created over one of the
+  /// keys finds its region resident).
   std::vector<BlockIndex> pageIn(const std::vector<BlockKey>& keys, BlockMap& blocks);
   /// Every paged-out block.
   std::vector<BlockIndex> pageInAll(BlockMap& blocks);
@@ -77,17 +80,19 @@ class Pager {
   bool overBudget(const BlockMap& blocks) const;
   /// Whether the block changed after the last commit (its record is older than it).
   bool dirty(const BlockMeta& m) const { return all_dirty_ || m.changed_at > committed_revision_; }
-  /// Writes the dirty resident blocks, the erasures and `meta` in one transaction; `revision`
+  /// Writes the records of the regions with a dirty resident block or an erasure (each region
+  /// whole, from its resident blocks) and `meta` in one transaction; `revision`
   /// is the map's revision now (blocks changed after it are dirty next time). The records are
   /// encoded here (the blocks may change or leave as soon as this returns); with the background
   /// writer the transaction runs on its thread (flush() waits for it).
   void commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta& meta);
   /// Waits until every commit is in the store; IoError when the last one failed.
   void flush();
-  /// The resident blocks to page out so that the resident blocks fit the low-water mark:
-  /// least recently used first, blocks within the radius of `sensor_m` last (farthest first:
-  /// the budget wins over the radius). With `clean_only`, dirty blocks and blocks within the
-  /// radius are left out (they may be fewer than needed). Deterministic (ties by key).
+  /// The resident blocks to page out so that the resident blocks fit the low-water mark, whole
+  /// regions: least recently used first, regions within the radius of `sensor_m` last
+  /// (farthest first: the budget wins over the radius). With `clean_only`, regions with a
+  /// dirty block or an erasure and regions within the radius are left out (they may be fewer
+  /// than needed). Deterministic (ties by region key).
   std::vector<BlockIndex> victims(const BlockMap& blocks, const Eigen::Vector3d& sensor_m,
                                   bool clean_only);
   /// The resident blocks above the budget (0 when within it).

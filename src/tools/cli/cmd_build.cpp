@@ -308,6 +308,7 @@ void runBuild(const BuildOptions& o) {
                      {"resident_blocks", paging.resident_blocks},
                      {"paged_blocks", paging.paged_blocks},
                      {"pages_written", paging.pages_written},
+                     {"records_written", paging.records_written},
                      {"pages_read", paging.pages_read},
                      {"pages_read_pending", paging.pages_read_pending},
                      {"pages_evicted", paging.pages_evicted},

@@ -19,5 +19,6 @@ void addEvalCommand(CLI::App& app);
 void addOctomapBuildCommand(CLI::App& app);
 void addCollideCommand(CLI::App& app);
 void addFrontiersCommand(CLI::App& app);
+void addConvertStoreCommand(CLI::App& app);
 
 }  // namespace fragg::cli

@@ -12,7 +12,7 @@
 int main(int argc, char** argv) {
   CLI::App app{
       "fragg_map: GPU-accelerated 3D occupancy maps (build, stats, export, render, "
-      "compare, eval, octomap-build, truncate, merge, collide)"};
+      "compare, eval, octomap-build, truncate, merge, collide, convert-store)"};
   app.require_subcommand(1);
   // The backend choice is part of each command's summary line; warnings go to stderr.
   fragg::setLogSink([](fragg::LogLevel level, const std::string& message) {
@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   fragg::cli::addOctomapBuildCommand(app);
   fragg::cli::addCollideCommand(app);
   fragg::cli::addFrontiersCommand(app);
+  fragg::cli::addConvertStoreCommand(app);
   const std::string command_error = fragg::tools::commandError(app, argc, argv);
   if (!command_error.empty()) {
     std::fprintf(stderr, "fragg_map: error: %s\n", command_error.c_str());
