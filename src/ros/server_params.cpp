@@ -16,6 +16,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/field_names.h"
+#include "fragg_map/planning/coarse_map.h"
 #include "fragg_map/ros/autosave_params.h"
 #include "fragg_map/ros/paging_params.h"
 
@@ -327,6 +328,12 @@ void readFrontiers(const XmlRpcValue& root, FrontierParams& f) {
   f.views.validate();
   readInt(root, "frontiers/max_marker_cells", &f.max_marker_cells);
   if (f.max_marker_cells < 0) badParam("frontiers/max_marker_cells", "must be >= 0");
+  readInt(root, "frontiers/coarse_cells", &f.coarse_cells);
+  if (!planning::validCoarseCells(f.coarse_cells))
+    badParam("frontiers/coarse_cells", "must be 1, 2, 4 or 8 map cells");
+  readDouble(root, "frontiers/deadline_s", &f.deadline_s);
+  if (!std::isfinite(f.deadline_s) || f.deadline_s < 0.0)
+    badParam("frontiers/deadline_s", "must be a finite time in s >= 0 (0: none)");
 }
 
 void readOctomapCompat(const XmlRpcValue& root, OctomapCompatParams& o) {

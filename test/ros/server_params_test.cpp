@@ -473,6 +473,8 @@ TEST(ServerParams, FrontierDefaultsValuesAndRefusals) {
   EXPECT_EQ(f.views.sensor.rows, 48);
   EXPECT_EQ(f.views.sensor.max_range_m, 10.0);
   EXPECT_EQ(f.max_marker_cells, 200000);
+  EXPECT_EQ(f.coarse_cells, 1) << "the map's cells, as the CLI's default";
+  EXPECT_EQ(f.deadline_s, 0.0);
 
   XmlRpcValue root;
   XmlRpcValue lo, hi, radii;
@@ -494,6 +496,8 @@ TEST(ServerParams, FrontierDefaultsValuesAndRefusals) {
   set(root, "frontiers/sensor/rows", 8);
   set(root, "frontiers/sensor/max_range", 20.0);
   set(root, "frontiers/max_marker_cells", 1000);
+  set(root, "frontiers/coarse_cells", 4);
+  set(root, "frontiers/deadline_s", 2.5);
   const fragg::ros::FrontierParams p = fragg::ros::parseParameters(root).frontiers;
   EXPECT_EQ(p.rate_hz, 5.0);
   EXPECT_TRUE(p.filter.use_box);
@@ -515,8 +519,14 @@ TEST(ServerParams, FrontierDefaultsValuesAndRefusals) {
   EXPECT_EQ(p.views.sensor.rows, 8);
   EXPECT_EQ(p.views.sensor.max_range_m, 20.0);
   EXPECT_EQ(p.max_marker_cells, 1000);
+  EXPECT_EQ(p.coarse_cells, 4);
+  EXPECT_EQ(p.deadline_s, 2.5);
 
   expectRejected("frontiers/rate_hz", 0.0);
+  expectRejected("frontiers/coarse_cells", 3);
+  expectRejected("frontiers/coarse_cells", 0);
+  expectRejected("frontiers/deadline_s", -1.0);
+  expectRejected("frontiers/deadline_s", std::numeric_limits<double>::quiet_NaN());
   expectRejected("frontiers/rate_hz", std::numeric_limits<double>::infinity());
   expectRejected("frontiers/min_cluster", 0);
   expectRejected("frontiers/max_extent", -1.0);

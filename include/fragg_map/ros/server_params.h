@@ -58,6 +58,14 @@ struct FrontierParams {
   /// frontiers/max_marker_cells: most frontier cells drawn on `frontiers` and sent on
   /// `frontier_cells` (an even subsample beyond it, logged); >= 0.
   int max_marker_cells = 200000;
+  /// frontiers/coarse_cells: ~get_frontiers on a grid of N x N x N map cells (1, 2, 4 or 8;
+  /// planning/coarse_map.h: a coarse cell is free when a cell is, unknown when all are), so
+  /// that the gaps between a LiDAR's beams are not frontiers; the map's lock is held only while
+  /// the coarse copy is made. 1: the map's own cells (the CLI's default).
+  int coarse_cells = 1;
+  /// frontiers/deadline_s: ~get_frontiers gives up after this long (success false, saying so);
+  /// 0: no deadline.
+  double deadline_s = 0.0;
 };
 
 /// octomap_server's parameters of the same name and meaning (docs/ros.md: "octomap_server ->

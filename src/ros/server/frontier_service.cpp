@@ -7,9 +7,12 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/planning/coarse_map.h"
+#include "fragg_map/planning/query_control.h"
 
 namespace fragg::ros {
 namespace {
@@ -156,16 +159,32 @@ bool FrontierService::get(fragg_map::GetFrontiers::Request& req,
     std::vector<VoxelKey> cells;
     std::vector<planning::FrontierCluster> clusters;
     std::vector<std::vector<planning::Viewpoint>> views;
+    // frontiers/deadline_s: the query stops (QueryStopped) once it passed.
+    std::optional<planning::QueryControl> deadline;
+    if (params_.frontiers.deadline_s > 0.0)
+      deadline = planning::QueryControl::within(params_.frontiers.deadline_s);
+    const planning::QueryControl* control = deadline ? &*deadline : nullptr;
+    const auto answer = [&](const Map& map) {
+      cells = planning::findFrontierCells(map, q.filter, params_.map.threads, control);
+      planning::FrontierClusterer clusterer(q.clusters);
+      clusters = clusterer.cluster(map, cells, control);
+      views.resize(clusters.size());
+      for (size_t i = 0; i < clusters.size(); ++i) {
+        planning::checkQuery(control, "frontier viewpoints");
+        views[i] = planning::clusterViewpoints(map, clusters[i], q.views);
+      }
+    };
+    std::optional<Map> coarse;  // frontiers/coarse_cells > 1: the query's own coarse copy
     {
       const SharedMap::ReadGuard state = shared_->read();
       res.revision = state->map.revision();
-      cells = planning::findFrontierCells(state->map, q.filter, params_.map.threads);
-      planning::FrontierClusterer clusterer(q.clusters);
-      clusters = clusterer.cluster(state->map, cells);
-      views.resize(clusters.size());
-      for (size_t i = 0; i < clusters.size(); ++i)
-        views[i] = planning::clusterViewpoints(state->map, clusters[i], q.views);
+      if (params_.frontiers.coarse_cells > 1)
+        coarse.emplace(
+            planning::coarseStateMap(state->map, params_.frontiers.coarse_cells, control));
+      else
+        answer(state->map);
     }
+    if (coarse) answer(*coarse);  // the map's lock released: insertion and services go on
     res.ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     res.frontier_cells = cells.size();
@@ -176,9 +195,12 @@ bool FrontierService::get(fragg_map::GetFrontiers::Request& req,
     }
     res.success = true;
     stats_->addFrontierQuery();
-    res.message = std::to_string(cells.size()) + " frontier cells in " +
-                  std::to_string(clusters.size()) + " clusters (" + std::to_string(with_views) +
-                  " with viewpoints), " + std::to_string(res.ms) + " ms";
+    res.message = std::to_string(cells.size()) + " frontier cells" +
+                  (coarse ? " (coarse cells of " + std::to_string(coarse->resolution()) + " m)"
+                          : std::string()) +
+                  " in " + std::to_string(clusters.size()) + " clusters (" +
+                  std::to_string(with_views) + " with viewpoints), " + std::to_string(res.ms) +
+                  " ms";
   } catch (const std::exception& e) {
     res = fragg_map::GetFrontiers::Response();
     res.success = false;
