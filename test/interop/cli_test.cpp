@@ -180,7 +180,7 @@ TEST_F(Cli, BadArgumentsAndInputsFailCleanly) {
 TEST_F(Cli, UnknownOrMissingCommandIsNamedAndTheCommandsListed) {
   const char* kCommands =
       "build, correct, truncate, merge, stats, export, render, compare, eval, octomap-build, "
-      "collide, frontiers";
+      "collide, frontiers, convert-store";
   RunResult r = run("frobnicate " + in("map.fgm"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err, std::string("fragg_map: error: unknown command 'frobnicate'; the commands "
