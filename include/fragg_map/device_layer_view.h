@@ -20,14 +20,9 @@ namespace fragg {
 /// Table entry of an empty place.
 constexpr int32_t kNoViewSlot = -1;
 
-/// Where block key `k` starts probing (the spatial hash of BlockKeyHash, in 32 bits).
+/// Where block key `k` starts probing (BlockKeyHash's spatial hash, in 32 bits).
 [[nodiscard]] FRAGG_HD uint32_t layerViewHash(const BlockKey& k) {
-  uint64_t h = static_cast<uint64_t>(static_cast<uint32_t>(k.x)) * 73856093ULL;
-  h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.y)) * 19349669ULL << 21;
-  h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.z)) * 83492791ULL << 42;
-  h ^= h >> 29;
-  h *= 0xbf58476d1ce4e5b9ULL;
-  return static_cast<uint32_t>(h ^ (h >> 32));
+  return static_cast<uint32_t>(blockKeyHash64(k));
 }
 
 struct DeviceLayerView {

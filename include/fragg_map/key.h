@@ -45,15 +45,20 @@ FRAGG_HD VoxelKey voxelKeyOf(const BlockKey& b, int cell_index) {
           b.z * kBlockSize + ((cell_index >> (2 * kBlockBits)) & kBlockMask)};
 }
 
+/// The spatial hash of a block key (host and device): large odd multipliers (as in Teschner et
+/// al. spatial hashing), mixed into 64 bits.
+[[nodiscard]] FRAGG_HD uint64_t blockKeyHash64(const BlockKey& k) {
+  uint64_t h = static_cast<uint64_t>(static_cast<uint32_t>(k.x)) * 73856093ULL;
+  h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.y)) * 19349669ULL << 21;
+  h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.z)) * 83492791ULL << 42;
+  h ^= h >> 29;
+  h *= 0xbf58476d1ce4e5b9ULL;
+  return h ^ (h >> 32);
+}
+
 struct BlockKeyHash {
   size_t operator()(const BlockKey& k) const noexcept {
-    // Large odd multipliers (as in Teschner et al. spatial hashing), mixed into 64 bits.
-    uint64_t h = static_cast<uint64_t>(static_cast<uint32_t>(k.x)) * 73856093ULL;
-    h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.y)) * 19349669ULL << 21;
-    h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.z)) * 83492791ULL << 42;
-    h ^= h >> 29;
-    h *= 0xbf58476d1ce4e5b9ULL;
-    return static_cast<size_t>(h ^ (h >> 32));
+    return static_cast<size_t>(blockKeyHash64(k));
   }
 };
 

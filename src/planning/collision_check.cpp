@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <exception>
 #include <mutex>
 #include <utility>
@@ -133,7 +132,7 @@ std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape
     }
     // Otherwise its host masks, indexed and uploaded to device 0 for this batch.
     const BlockView view = map.blockView();
-    const ObstacleIndex index(map, view, lo, hi, options.unknown_is_occupied, options.threads);
+    const ObstacleIndex index(view, lo, hi, options.unknown_is_occupied, options.threads);
     const std::unique_ptr<DeviceScratch> scratch = makeDeviceScratch(0);
     return checkIndexOnCuda(map, *scratch, index, shape, T_map_shape, options);
   }
@@ -141,7 +140,7 @@ std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape
   (void)use;  // kCuda cannot be resolved without CUDA
 #endif
   const BlockView view = map.blockView();
-  const ObstacleIndex index(map, view, lo, hi, options.unknown_is_occupied, options.threads);
+  const ObstacleIndex index(view, lo, hi, options.unknown_is_occupied, options.threads);
   return checkOnCpu(map, index, shape, T_map_shape, options);
 }
 
@@ -229,7 +228,7 @@ PreparedMap::PreparedMap(const Map& map, bool unknown_is_occupied, int threads)
   if (threads < 0) throw InvalidArgument(fmt::format("threads must be >= 0, got {}", threads));
   const BlockView view = map.blockView();
   const BlockKey lo{INT32_MIN, INT32_MIN, INT32_MIN}, hi{INT32_MAX, INT32_MAX, INT32_MAX};
-  index_ = std::make_shared<const ObstacleIndex>(map, view, lo, hi, unknown_is_occupied, threads);
+  index_ = std::make_shared<const ObstacleIndex>(view, lo, hi, unknown_is_occupied, threads);
 }
 
 size_t PreparedMap::blockCount() const { return index_->blockCount(); }

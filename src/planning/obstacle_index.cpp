@@ -8,8 +8,8 @@
 
 namespace fragg::planning {
 
-ObstacleIndex::ObstacleIndex(const Map& map, const BlockView& view, const BlockKey& lo,
-                             const BlockKey& hi, bool unknown_is_occupied, int threads)
+ObstacleIndex::ObstacleIndex(const BlockView& view, const BlockKey& lo, const BlockKey& hi,
+                             bool unknown_is_occupied, int threads)
     : default_word_(unknown_is_occupied ? ~uint64_t{0} : 0) {
   const std::vector<BlockRef> blocks = view.in(lo, hi);
   const int64_t n = static_cast<int64_t>(blocks.size());

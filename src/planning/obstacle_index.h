@@ -9,16 +9,15 @@
 #include <vector>
 
 #include "fragg_map/block_view.h"
-#include "fragg_map/map.h"
 #include "obstacle_masks.h"
 
 namespace fragg::planning {
 
 class ObstacleIndex {
  public:
-  /// The blocks of `view` in [lo, hi] (inclusive), their cells classified as map.state() does,
-  /// on `threads` OpenMP threads (0: every core).
-  ObstacleIndex(const Map& map, const BlockView& view, const BlockKey& lo, const BlockKey& hi,
+  /// The blocks of `view` in [lo, hi] (inclusive), their masks copied from the view's state
+  /// masks, on `threads` OpenMP threads (0: every core).
+  ObstacleIndex(const BlockView& view, const BlockKey& lo, const BlockKey& hi,
                 bool unknown_is_occupied, int threads = 0);
 
   ObstacleMasksView view() const;

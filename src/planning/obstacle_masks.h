@@ -46,12 +46,7 @@ inline ObstacleMasksView layerObstacles(const DeviceLayerView& layer, bool unkno
 }
 
 FRAGG_HD uint32_t maskTableHash(const BlockKey& k) {
-  uint64_t h = static_cast<uint64_t>(static_cast<uint32_t>(k.x)) * 73856093ULL;
-  h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.y)) * 19349669ULL << 21;
-  h ^= static_cast<uint64_t>(static_cast<uint32_t>(k.z)) * 83492791ULL << 42;
-  h ^= h >> 29;
-  h *= 0xbf58476d1ce4e5b9ULL;
-  return static_cast<uint32_t>(h ^ (h >> 32));
+  return static_cast<uint32_t>(blockKeyHash64(k));
 }
 
 /// The block's 8 mask words, or nullptr when it has none stored (then default_word applies).

@@ -36,17 +36,7 @@ Map buildRoomMap(Backend backend) {
 }
 
 const Map& roomMap() {
-  static const Map map = [] {
-    MapParams params;
-    params.resolution_m = 0.05;
-    params.backend = Backend::kCpu;
-    Map m(params);
-    auto source = openDataset(kRoomScan);
-    Scan scan;
-    while (source->next(scan))
-      m.insert(scan.cloud, scan.T_map_sensor, SensorModel::autoFromCloud());
-    return m;
-  }();
+  static const Map map = buildRoomMap(Backend::kCpu);
   return map;
 }
 

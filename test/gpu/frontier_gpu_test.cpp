@@ -1,6 +1,6 @@
 // Frontiers on the CUDA backend against the CPU backend: the same W1-like drive integrated by
-// each; after every scan the CUDA map's incremental tracker (cell states read by the kernel
-// over the device block cache) equals the CPU map's, and full recomputes agree. Needs a
+// each; after every scan the CUDA map's incremental tracker (fed by the changed-block list
+// compacted on the device) equals the CPU map's, and full recomputes agree. Needs a
 // device (skips without one). Then viewpoint gains: the CUDA kernel against the CPU walk.
 #include <gtest/gtest.h>
 
