@@ -19,7 +19,11 @@ int32_t coarseOf(int32_t v, int shift) { return v >> shift; }
 
 bool validCoarseCells(int cells) { return cells == 1 || cells == 2 || cells == 4 || cells == 8; }
 
-Map coarseStateMap(const Map& map, int cells, const QueryControl* control) {
+namespace {
+
+// The coarse map of the blocks in [lo, hi] (block keys).
+Map coarseOfBlocks(const Map& map, int cells, const BlockKey& lo, const BlockKey& hi,
+                   const QueryControl* control) {
   if (!validCoarseCells(cells))
     throw InvalidArgument(
         fmt::format("coarse frontier cells must be 1, 2, 4 or 8 map cells, got {}", cells));
@@ -44,7 +48,7 @@ Map coarseStateMap(const Map& map, int cells, const QueryControl* control) {
   std::vector<uint8_t> any_occupied(any_free.size());
   size_t done = 0;
   coarse.writeCells([&](CellWriter& w) {
-    view.forEach([&](const BlockKey& b, const Block&) {
+    view.forEachIn(lo, hi, [&](const BlockKey& b, const Block&) {
       if (++done % 4096 == 0) checkQuery(control, "coarse map");
       const BlockStateMasks& m = *view.findMasks(b);
       std::fill(any_free.begin(), any_free.end(), 0);
@@ -76,6 +80,27 @@ Map coarseStateMap(const Map& map, int cells, const QueryControl* control) {
   });
   checkQuery(control, "coarse map");
   return coarse;
+}
+
+}  // namespace
+
+Map coarseStateMap(const Map& map, int cells, const QueryControl* control) {
+  return coarseOfBlocks(map, cells, BlockKey{INT32_MIN, INT32_MIN, INT32_MIN},
+                        BlockKey{INT32_MAX, INT32_MAX, INT32_MAX}, control);
+}
+
+Map coarseStateMapIn(const Map& map, int cells, const Eigen::Vector3d& lo_m,
+                     const Eigen::Vector3d& hi_m, double margin_m, const QueryControl* control) {
+  if (!lo_m.allFinite() || !hi_m.allFinite() || (lo_m.array() > hi_m.array()).any())
+    throw InvalidArgument("coarse map box must be finite with min <= max");
+  if (!std::isfinite(margin_m) || margin_m < 0.0)
+    throw InvalidArgument(
+        fmt::format("coarse map margin must be finite and >= 0, got {}", margin_m));
+  // One coarse cell more than asked: a coarse cell inside the grown box has all 26 neighbours.
+  const double grow_m = margin_m + cells * map.resolution();
+  const BlockKey lo = blockKeyOf(map.keyOf(lo_m - Eigen::Vector3d::Constant(grow_m)));
+  const BlockKey hi = blockKeyOf(map.keyOf(hi_m + Eigen::Vector3d::Constant(grow_m)));
+  return coarseOfBlocks(map, cells, lo, hi, control);
 }
 
 int coarseCellsForBeams(double resolution_m, double angle_rad, double range_m) {
