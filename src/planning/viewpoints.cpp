@@ -312,12 +312,13 @@ namespace {
 // relative to the sensor) inside its field of view: the pinhole's image rectangle (as
 // sensorRays spans it: |y / x| <= tan(hfov / 2), |z / x| <= tan(vfov / 2), x > 0) or the
 // LiDAR's elevation band.
-bool inFieldOfView(const GainSensor& sensor, double c, double s, const Eigen::Vector3d& d_m) {
+// `tan_half_h`, `tan_half_v`: tan(hfov / 2), tan(vfov / 2) (pinhole).
+bool inFieldOfView(const GainSensor& sensor, double tan_half_h, double tan_half_v, double c,
+                   double s, const Eigen::Vector3d& d_m) {
   const double x = c * d_m.x() + s * d_m.y(), y = -s * d_m.x() + c * d_m.y(), z = d_m.z();
   if (sensor.kind == GainSensor::Kind::kPinhole) {
     if (x <= 0.0) return false;
-    return std::abs(y) <= x * std::tan(0.5 * sensor.horizontal_fov_rad) &&
-           std::abs(z) <= x * std::tan(0.5 * sensor.vertical_fov_rad);
+    return std::abs(y) <= x * tan_half_h && std::abs(z) <= x * tan_half_v;
   }
   const double elevation = std::atan2(z, std::hypot(x, y));
   return elevation >= sensor.min_elevation_rad && elevation <= sensor.max_elevation_rad;
@@ -359,10 +360,14 @@ double coverageGain(const Map& map, NearBlocks& blocks, const FrontierCluster& c
   const double res = map.resolution();
   const double from_v[3] = {position_m.x() / res, position_m.y() / res, position_m.z() / res};
   const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
+  const double tan_half_h = std::tan(0.5 * sensor.horizontal_fov_rad);
+  const double tan_half_v = std::tan(0.5 * sensor.vertical_fov_rad);
+  const double range2 = sensor.max_range_m * sensor.max_range_m;
   double seen = 0.0;
   for (const VoxelKey& k : cluster.cells) {
     const Eigen::Vector3d d_m = map.centerOf(k) - position_m;
-    if (d_m.norm() > sensor.max_range_m || !inFieldOfView(sensor, c, s, d_m)) continue;
+    if (d_m.squaredNorm() > range2 || !inFieldOfView(sensor, tan_half_h, tan_half_v, c, s, d_m))
+      continue;
     if (lineOfSight(map, blocks, from_v, k)) seen += 1.0;
   }
   return seen;
