@@ -26,6 +26,7 @@ docs/ros.md row -> test:
   filter_speckles                                               test_13
   sensor_model/free_cut_cell (a ray cut at max_range frees the cut point's cell)  test_16
   dynamic_reconfigure (~set_parameters, octomap_server's names)  test_17
+  free_cells_vis_array advertised always; no corrected_path subscription  test_18
 A new row is one test function: ExtraServer(self, name, {parameters}) gives a server of its
 own with those parameters over the YAML's, .insert(points) feeds it a cloud, .occupied() /
 .cells() / .last(topic) read what it made."""
@@ -577,6 +578,27 @@ class OctomapCompatTest(unittest.TestCase):
         self.assertAlmostEqual(config["occupancy_max_z"], 3.0)
         client.close()
         server.stop()
+
+    def test_18_topics_as_octomap_server_advertises_them(self):
+        """free_cells_vis_array is advertised without publish_free_space too (octomap_server
+        advertises it always) and carries no marker then; octomap_compat.launch leaves
+        corrected_path (fragg_map's loop-closure input) unsubscribed."""
+        import rosgraph
+        publishers, subscribers, _ = rosgraph.Master("/octomap_compat_test").getSystemState()
+        self.assertNotIn("/octomap_server",
+                         dict(subscribers).get("/corrected_path", []))
+        arrays = []
+        sub = rospy.Subscriber("/free_off/free_cells_vis_array", MarkerArray, arrays.append)
+        server = ExtraServer(self, "free_off", {"publish_free_space": False})
+        publishers, _, _ = rosgraph.Master("/octomap_compat_test").getSystemState()
+        self.assertIn("/free_off/free_off",
+                      dict(publishers).get("/free_off/free_cells_vis_array", []))
+        server.insert(scene_points()[0])
+        self.assertTrue(server.occupied())
+        time.sleep(1.0)
+        sub.unregister()
+        server.stop()
+        self.assertFalse(any(m.points for a in arrays for m in a.markers))
 
     # ---- colored_map and incremental_2D_projection, in servers started here ----
     def cloud_to(self, ns, points, rgb=None):
