@@ -6,6 +6,8 @@
 # octomap_full and octomap_binary), and compares the two maps cell by cell (fragg_map compare
 # --octomap-threshold: the share of cells either map knows that agree).
 #   bash scripts/side_by_side.sh [--mirror DIR] [--ws DIR]
+# SBS_ONLY="rgbd nebula" runs those bags only (velodyne_pair, nebula, rgbd), appending to the
+# summary.
 # Needs the workspace built (scripts/build.sh); builds octomap_server first when it is not
 # there yet (scripts/side_by_side_build.sh, ~6 min on 2 cores). Everything it writes lies
 # under out/side_by_side/ (git-ignored); the summary is out/side_by_side/results.md.
@@ -72,8 +74,12 @@ run_one() {
   fi
   local node_pid=$!
   pids=("$node_pid")
-  for _ in $(seq 150); do rosservice list 2>/dev/null | grep -q '^/octomap_full$' && break; sleep 0.2; done
-  if ! rosservice list 2>/dev/null | grep -q '^/octomap_full$'; then
+  # Up to 2 minutes. The list is read whole first: `rosservice list | grep -q` fails under
+  # pipefail when grep exits before rosservice has written everything.
+  has_octomap_full() { rosservice list 2>/dev/null | grep -c '^/octomap_full$' >/dev/null; }
+  local deadline=$((SECONDS + 120))
+  until has_octomap_full || [ $SECONDS -ge $deadline ]; do sleep 0.5; done
+  if ! has_octomap_full; then
     echo "$what did not come up on $name (see $dir/node.log)" >&2
     stop_all
     return 1
@@ -113,6 +119,7 @@ PY
 # name bag topic yaml: both servers on one bag, then the comparison.
 compare_bag() {
   local name="$1" bag="$2" topic="$3" yaml="$4"
+  case " ${SBS_ONLY:-$name} " in *" $name "*) ;; *) return 0 ;; esac
   run_one octomap_server "$bag" "$topic" "$yaml" "$name"
   run_one fragg_map "$bag" "$topic" "$yaml" "$name"
   local a="$OUT/run/$name/octomap_server" b="$OUT/run/$name/fragg_map"
@@ -225,7 +232,7 @@ resolution: 0.05
 sensor_model: {max_range: 6.0}
 EOF
 
-{
+[ -n "${SBS_ONLY:-}" ] || {
   echo "## octomap_server (octomap_mapping efa61ca) beside fragg_map ($(git -C "$FRAGG_REPO" rev-parse --short HEAD)), $(date -u +%F)"
   echo
 } >"$OUT/results.md"
