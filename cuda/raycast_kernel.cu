@@ -165,8 +165,9 @@ __device__ RayVox rayOf(const RaycastArgs& a, const float4& end) {
   return RayVox{a.ref,
                 {a.start_v[0], a.start_v[1], a.start_v[2]},
                 {end.x, end.y, end.z},
-                hit != 0,
-                marginOfHitCode(hit)};
+                isHitCode(hit),
+                marginOfHitCode(hit),
+                hit == kFreeEndCode};
 }
 
 __device__ void clearFilter(unsigned long long* filter) {

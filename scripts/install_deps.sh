@@ -23,6 +23,8 @@ packages=(
   python3-std-srvs python3-nav-msgs liboctomap-dev libgtest-dev
   # ~check_collision takes a shape_msgs/Mesh
   libshape-msgs-dev python3-shape-msgs
+  # ~set_parameters (octomap_server's dynamic_reconfigure names; rostest client)
+  libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   # core, CLI, benchmark, tests, format check
   libcli11-dev nlohmann-json3-dev libpng-dev libfmt-dev libbenchmark-dev zlib1g-dev
   clang-format octomap-tools libgmock-dev bzip2

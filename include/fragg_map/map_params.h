@@ -118,6 +118,10 @@ struct MapParams {
   RayCast raycast = RayCast::kDda;
   /// Rays of organised clouds without a return clear free space up to the max range.
   bool clear_no_return_rays = false;
+  /// A ray cut at the sensor's max range also frees the cell at the cut point, as
+  /// octomap_server's insertScan does (off: liboctomap's insertPointCloud, which leaves that
+  /// cell as it was). Ground and other free-only points keep their end cell either way.
+  bool free_cut_cell = false;
   /// The ray pass walks past blocks whose every cell sits at the lower clamp without visiting
   /// their cells (a miss changes nothing there: the map is the same either way). Off only to
   /// measure what it saves.

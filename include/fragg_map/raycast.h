@@ -36,6 +36,9 @@ struct RayVox {
   /// the endpoint (along the ray) are skipped, so that range noise does not clear the surface
   /// that was hit. Ignored for free-only rays.
   float keep_v = 0.f;
+  /// A free-only ray whose end cell is visited as free as well (a ray cut at max range under
+  /// octomap_server's rule); ignored when `end_is_hit`.
+  bool end_is_free = false;
 };
 
 /// Ray parameter (0 at the start, 1 at the end) beyond which a free cell's exit puts it inside
@@ -300,8 +303,8 @@ FRAGG_HD int traverseDdaSteps(const RayVox& ray, const DdaPiece& piece, Visit& v
     entry = ddaStep(x, y, z);
     --total;
   }
-  if (last_piece && ray.end_is_hit) {
-    visit(VoxelKey{x.cur, y.cur, z.cur}, true, skipped ? kUnknownBlock : entry);
+  if (last_piece && (ray.end_is_hit || ray.end_is_free)) {
+    visit(VoxelKey{x.cur, y.cur, z.cur}, ray.end_is_hit, skipped ? kUnknownBlock : entry);
     ++visited;
   }
   return visited;
@@ -381,13 +384,13 @@ FRAGG_HD int traverseBresenham(const RayVox& ray, Visit& visit) {
     err2 += 2 * d[a2];
     cur[major] += s[major];
   }
-  if (ray.end_is_hit) {
+  if (ray.end_is_hit || ray.end_is_free) {
     const VoxelKey key{r.x + cur[0], r.y + cur[1], r.z + cur[2]};
     if (visited > 0)
       entry = ((key.x ^ previous.x) | (key.y ^ previous.y) | (key.z ^ previous.z)) & ~kBlockMask
                   ? kUnknownBlock
                   : kSameBlock;
-    visit(key, true, entry);
+    visit(key, ray.end_is_hit, entry);
     ++visited;
   }
   return visited;

@@ -63,7 +63,8 @@ struct ScanRecord {
   bool explicit_model = false;
   RayCast raycast = RayCast::kDda;
   bool clear_no_return_rays = false;
-  uint64_t points = 0;  ///< points of the cloud
+  bool free_cut_cell = false;  ///< MapParams::free_cut_cell when it was integrated
+  uint64_t points = 0;         ///< points of the cloud
   /// False once cells the scan updated were changed by other means than scans (Map::clearBox,
   /// Map::writeCells): its removal would no longer undo its own updates.
   bool removable = true;

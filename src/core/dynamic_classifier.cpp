@@ -97,7 +97,7 @@ void classifyDynamicHits(PreparedScan& scan, const BlockMap& blocks, const Dynam
 #pragma omp for schedule(static)
     for (long i = 0; i < n; ++i) {
       const RayEnd& ray = scan.rays[i];
-      if (ray.hit == 0) continue;
+      if (!isHitCode(ray.hit)) continue;
       const VoxelKey end{scan.ref.x + floorToInt(ray.end_v[0]),
                          scan.ref.y + floorToInt(ray.end_v[1]),
                          scan.ref.z + floorToInt(ray.end_v[2])};

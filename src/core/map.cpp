@@ -195,6 +195,7 @@ InsertStats Map::insertChecked(const PointCloud& cloud, const Eigen::Isometry3d&
   if (how.model.max_range_m <= 0.0) how.model.max_range_m = farthestPoint(used);
   how.raycast = params_.raycast;
   how.clear_no_return_rays = params_.clear_no_return_rays;
+  how.free_cut_cell = params_.free_cut_cell;
   const double seconds_model =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -235,6 +236,7 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   MapParams params = params_;
   params.raycast = how.raycast;
   params.clear_no_return_rays = how.clear_no_return_rays;
+  params.free_cut_cell = how.free_cut_cell;
   InsertStats stats;
   PageInKeys page_in;
   PagedOutSaturated paged_out_saturated;

@@ -119,7 +119,9 @@ void writeScan(ByteWriter& w, const ScanRecord& r, const EncodedPoints& p) {
   w.put(static_cast<uint8_t>(m.optical_axis));
   w.put(static_cast<uint8_t>(r.explicit_model));
   w.put(static_cast<uint8_t>(r.raycast));
-  w.put(static_cast<uint8_t>(r.clear_no_return_rays));
+  // Ray flags: bit 0 no-return rays cleared, bit 1 the cut cell freed (a reader before the cut
+  // cell rule refuses bit 1 rather than walk the scan differently).
+  w.put(static_cast<uint8_t>(uint8_t(r.clear_no_return_rays) | uint8_t(r.free_cut_cell) << 1));
   w.put(static_cast<uint8_t>(r.removable));
   for (double v : {m.hfov_rad, m.vfov_rad, m.elevation_min_rad, m.elevation_max_rad, m.min_range_m,
                    m.max_range_m})
@@ -162,13 +164,14 @@ void readScan(ByteReader& rd, ScanRecord& r, EncodedPoints& p, uint32_t file_ver
   if (type != uint8_t(SensorType::kSpinningLidar) && type != uint8_t(SensorType::kPinhole))
     rd.fail("scan " + std::to_string(r.id) + ": unknown sensor type " + std::to_string(type));
   if (axis > uint8_t(OpticalAxis::kXForward) || explicit_model > 1 ||
-      raycast > uint8_t(RayCast::kBresenham) || no_return > 1 || removable > 1)
+      raycast > uint8_t(RayCast::kBresenham) || no_return > 3 || removable > 1)
     rd.fail("scan " + std::to_string(r.id) + ": bad sensor or insertion flags");
   m.type = static_cast<SensorType>(type);
   m.optical_axis = static_cast<OpticalAxis>(axis);
   r.explicit_model = explicit_model != 0;
   r.raycast = static_cast<RayCast>(raycast);
-  r.clear_no_return_rays = no_return != 0;
+  r.clear_no_return_rays = (no_return & 1) != 0;
+  r.free_cut_cell = (no_return & 2) != 0;
   r.removable = removable != 0;
   for (double* v : {&m.hfov_rad, &m.vfov_rad, &m.elevation_min_rad, &m.elevation_max_rad,
                     &m.min_range_m, &m.max_range_m})

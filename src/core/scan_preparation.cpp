@@ -67,6 +67,7 @@ RayPrepParams rayPrepParams(const Eigen::Isometry3d& T_map_sensor, const SensorM
   p.noise_quadratic_per_m = model.range_noise_quadratic_per_m;
   p.explicit_model = explicit_model;
   p.slack_m = static_cast<float>(1e-3 + params.resolution_m);
+  p.free_cut_cell = params.free_cut_cell;
   return p;
 }
 

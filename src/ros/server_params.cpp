@@ -460,6 +460,7 @@ ServerParams parseKnown(const XmlRpcValue& root) {
     m.raycast = fragg::rayCastFromString(raycast);
   });
   readBool(root, "clear_no_return_rays", &m.clear_no_return_rays);
+  readBool(root, "sensor_model/free_cut_cell", &m.free_cut_cell);
   readInt(root, "threads", &m.threads);
   readBool(root, "culling/plane_memory", &m.culling.plane_memory);
   readBool(root, "culling/rotation_coherence", &m.culling.rotation_coherence);

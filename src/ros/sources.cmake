@@ -21,4 +21,5 @@ set(FRAGG_ROS_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/frontier_markers.cpp
   ${CMAKE_CURRENT_LIST_DIR}/paging_params.cpp
   ${CMAKE_CURRENT_LIST_DIR}/autosave_params.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/reconfigure_params.cpp
 )

@@ -260,6 +260,18 @@ TEST(CudaBackendTest, OptionsMatchTheCpu) {
   expectBackendsAgree(scans, p,
                       SensorModel::spinningLidar(-20 * M_PI / 180, 10 * M_PI / 180, 1.0, 25.0),
                       "explicit lidar model, min range");
+  // octomap_server's cut cell rule: rays cut at 8 m (the scans reach 30 m) free their cut cell,
+  // through the piece walk and the one-thread-a-ray walk, DDA and Bresenham.
+  for (int pieces : {192, 0})
+    for (RayCast raycast : {RayCast::kDda, RayCast::kBresenham}) {
+      p = paramsFor(Backend::kCuda, 0.1);
+      p.free_cut_cell = true;
+      p.cuda.ray_piece_steps = pieces;
+      p.raycast = raycast;
+      expectBackendsAgree(
+          scans, p, SensorModel::autoFromCloud(0.0, 8.0),
+          raycast == RayCast::kDda ? "free cut cell, dda" : "free cut cell, bresenham");
+    }
 }
 
 TEST(CudaBackendTest, InsertSequenceStagesTheNextCloudAndIsByteIdentical) {

@@ -28,6 +28,7 @@ if(FRAGG_HAVE_ROS)
     LABELS ros)
   fragg_add_test(ros_server_params_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/server_params_test.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/reconfigure_params_test.cpp
     LIBS fragg_map_ros
     LABELS ros)
   fragg_add_test(ros_server_parts_test

@@ -24,6 +24,9 @@ docs/ros.md row -> test:
   octomap_binary / octomap_full topics and services             test_11
   base_frame_id, filter_ground, ground_filter/*                 test_12
   filter_speckles                                               test_13
+  sensor_model/free_cut_cell (a ray cut at max_range frees the cut point's cell)  test_16
+  dynamic_reconfigure (~set_parameters, octomap_server's names)  test_17
+  free_cells_vis_array advertised always; no corrected_path subscription  test_18
 A new row is one test function: ExtraServer(self, name, {parameters}) gives a server of its
 own with those parameters over the YAML's, .insert(points) feeds it a cloud, .occupied() /
 .cells() / .last(topic) read what it made."""
@@ -170,6 +173,13 @@ class OctomapCompatTest(unittest.TestCase):
         wait_for(lambda: all(t in cls.last for t in ("occupied_cells_vis_array",
                                                       "octomap_point_cloud_centers",
                                                       "occupied_cells")), 20, "the map topics")
+        # The scan count rises before the outputs of the cloud go out, and a subscriber that
+        # connected before the insertion first gets the empty map: wait for the cloud's markers.
+        def markers_with_points(topic):
+            msg = cls.last.get(topic)
+            return msg is not None and any(m.points for m in msg.markers)
+        wait_for(lambda: markers_with_points("occupied_cells_vis_array") and
+                 markers_with_points("free_cells_vis_array"), 20, "the cloud's markers")
 
     @classmethod
     def keep(cls, topic):
@@ -514,6 +524,81 @@ class OctomapCompatTest(unittest.TestCase):
             self.assertEqual(speckle_key in occupied, not on)
             self.assertEqual(centers, occupied)
 
+
+    def test_16_cut_cell_free_as_octomap_server(self):
+        """octomap_compat.launch sets sensor_model/free_cut_cell: the ray of the point beyond
+        max_range (8.05 m against 5 m) frees the cell at the cut point as well, as
+        octomap_server's insertScan does; a server with the liboctomap rule (false, fragg_map's
+        default) leaves that cell unknown, and the cells before it are free either way."""
+        _, beyond, _, _ = scene_points()
+        x, y, z = beyond[0]
+        r = math.sqrt(x * x + y * y + z * z)
+        k = 5.0 / r  # sensor_model/max_range of the YAML
+        cut = key(x * k, y * k, z * k + SENSOR_Z)
+        before = key(x * k - 2 * RES, y * k, z * k + SENSOR_Z)
+        path = os.path.join(self.tmp, "cut_cell.fgm")
+        self.assertTrue(rospy.ServiceProxy(NS + "save_map", SaveMap)(path).success)
+        in_map = cell_log_odds(path)
+        self.assertLess(in_map.get(cut, 0), 0)  # free
+        self.assertLess(in_map.get(before, 0), 0)
+        self.assertNotIn((cut[0] + 1, cut[1], cut[2]), in_map)
+        sensor_model = dict(yaml_params()["sensor_model"], free_cut_cell=False)
+        server = ExtraServer(self, "cut_cell_liboctomap", {"sensor_model": sensor_model})
+        server.insert(beyond + scene_points()[0])
+        cells = server.cells()
+        server.stop()
+        self.assertNotIn(cut, cells)
+        self.assertLess(cells.get(before, 0), 0)
+
+    def test_17_dynamic_reconfigure_changes_a_parameter(self):
+        """~set_parameters under octomap_server's names: the start-up values are the YAML's
+        (sensor_model/max_range 5 m -> sensor_model_max_range); raising occupancy_max_z shows
+        the cell above the YAML's band in occupied_cells at once; a change the node refuses
+        (occupancy_min_z above occupancy_max_z) leaves the values as they were."""
+        import dynamic_reconfigure.client
+        server = ExtraServer(self, "reconfigure", {})
+        wall, _, _, outside_band = scene_points()
+        high = outside_band[0]  # map z 2.55 > occupancy_max_z 2
+        high_key = key(high[0], high[1], high[2] + SENSOR_Z)
+        server.insert(wall + [high])
+        self.assertNotIn(high_key, server.occupied())
+        client = dynamic_reconfigure.client.Client(server.private.rstrip("/"), timeout=20)
+        config = client.get_configuration(timeout=20)
+        self.assertAlmostEqual(config["sensor_model_max_range"], 5.0)
+        self.assertAlmostEqual(config["occupancy_max_z"], 2.0)
+        self.assertTrue(config["compress_map"])
+        server.msgs.clear()
+        config = client.update_configuration({"occupancy_max_z": 3.0})
+        self.assertAlmostEqual(config["occupancy_max_z"], 3.0)
+        occupied = server.occupied()
+        self.assertIn(high_key, occupied)
+        self.assertEqual(len(occupied), len(wall) + 1)
+        config = client.update_configuration({"occupancy_min_z": 5.0})
+        self.assertAlmostEqual(config["occupancy_min_z"], 0.0)
+        self.assertAlmostEqual(config["occupancy_max_z"], 3.0)
+        client.close()
+        server.stop()
+
+    def test_18_topics_as_octomap_server_advertises_them(self):
+        """free_cells_vis_array is advertised without publish_free_space too (octomap_server
+        advertises it always) and carries no marker then; octomap_compat.launch leaves
+        corrected_path (fragg_map's loop-closure input) unsubscribed."""
+        import rosgraph
+        publishers, subscribers, _ = rosgraph.Master("/octomap_compat_test").getSystemState()
+        self.assertNotIn("/octomap_server",
+                         dict(subscribers).get("/corrected_path", []))
+        arrays = []
+        sub = rospy.Subscriber("/free_off/free_cells_vis_array", MarkerArray, arrays.append)
+        server = ExtraServer(self, "free_off", {"publish_free_space": False})
+        publishers, _, _ = rosgraph.Master("/octomap_compat_test").getSystemState()
+        self.assertIn("/free_off/free_off",
+                      dict(publishers).get("/free_off/free_cells_vis_array", []))
+        server.insert(scene_points()[0])
+        self.assertTrue(server.occupied())
+        time.sleep(1.0)
+        sub.unregister()
+        server.stop()
+        self.assertFalse(any(m.points for a in arrays for m in a.markers))
 
     # ---- colored_map and incremental_2D_projection, in servers started here ----
     def cloud_to(self, ns, points, rgb=None):

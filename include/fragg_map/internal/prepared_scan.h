@@ -27,8 +27,9 @@ struct PreparedScan {
     return RayVox{ref,
                   {start_v[0], start_v[1], start_v[2]},
                   {e.end_v[0], e.end_v[1], e.end_v[2]},
-                  e.hit != 0,
-                  marginOfHitCode(e.hit)};
+                  isHitCode(e.hit),
+                  marginOfHitCode(e.hit),
+                  e.hit == kFreeEndCode};
   }
 };
 

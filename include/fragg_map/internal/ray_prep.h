@@ -13,7 +13,8 @@ namespace fragg {
 
 struct RayEnd {
   float end_v[3];  ///< relative to the scan's reference voxel, voxel units
-  /// 0: free-only ray (clipped or no return); otherwise the end cell is a hit and
+  /// 0: free-only ray (clipped or no return); kFreeEndCode: a ray cut at max range whose end
+  /// cell is free too (MapParams::free_cut_cell); otherwise the end cell is a hit and
   /// (hit - 1) / kMarginSteps is its clearing margin in voxels (see RayVox::keep_v).
   uint32_t hit;
 };
@@ -23,6 +24,14 @@ static_assert(sizeof(RayEnd) == 16, "RayEnd is 16 bytes");
 constexpr float kMarginSteps = 256.f;
 constexpr double kMaxMarginV = 65536.0;
 
+/// RayEnd::hit of a ray cut at max range whose end cell is free as well (octomap_server's
+/// rule). Above every hit code (at most 1 + kMaxMarginV * kMarginSteps) and, read as the float
+/// of a float4 on the device, a finite number.
+constexpr uint32_t kFreeEndCode = 0x7F000000u;
+
+/// True when a RayEnd::hit value makes the end cell a hit.
+FRAGG_HD bool isHitCode(uint32_t hit) { return hit != 0u && hit != kFreeEndCode; }
+
 /// RayEnd::hit of a hit whose clearing margin is `margin_v` voxels (>= 0).
 FRAGG_HD uint32_t hitCode(double margin_v) {
   const double m = margin_v < kMaxMarginV ? margin_v : kMaxMarginV;
@@ -30,7 +39,7 @@ FRAGG_HD uint32_t hitCode(double margin_v) {
 }
 /// The clearing margin (voxels) of a RayEnd::hit value; 0 for a free-only ray.
 FRAGG_HD float marginOfHitCode(uint32_t hit) {
-  return hit ? static_cast<float>(hit - 1u) / kMarginSteps : 0.f;
+  return isHitCode(hit) ? static_cast<float>(hit - 1u) / kMarginSteps : 0.f;
 }
 
 /// Keys must stay inside int32 with room for a ray's traversal.
@@ -55,6 +64,9 @@ struct RayPrepParams {
   double noise_quadratic_per_m;
   bool explicit_model;  ///< drop points outside `frustum`
   float slack_m;        ///< tolerance of that test
+  /// A ray cut at max range also frees the cell at the cut point (octomap_server's rule; off:
+  /// liboctomap's insertPointCloud, that cell is left as it was).
+  bool free_cut_cell;
 };
 
 enum class RayPrep : uint8_t { kHit, kFreeOnly, kInvalid, kTooClose, kOutside };
@@ -79,7 +91,8 @@ FRAGG_HD bool rayEndFromSensor(const RayPrepParams& p, const double s[3], uint32
 }
 
 /// OctoMap semantics: NaN/Inf and (0,0,0) points are invalid, points closer than min range
-/// dropped, points beyond max range become free-only rays ending at max range. A point marked
+/// dropped, points beyond max range become free-only rays ending at max range (with
+/// `free_cut_cell`, rays whose end cell is free too: kFreeEndCode). A point marked
 /// `free_only` (PointCloud::free_only) gives a free-only ray ending at the point (at max range
 /// when farther). A hit carries its clearing margin: the sensor's range noise at the measured
 /// range, in voxels.
@@ -103,7 +116,7 @@ FRAGG_HD RayPrep prepareRay(const RayPrepParams& p, const Frustum& f, float x_S,
     if (!frustumContains(f, rel_f, p.slack_m)) return RayPrep::kOutside;
   }
   const bool no_hit = clipped || free_only;
-  uint32_t hit = 0u;
+  uint32_t hit = clipped && !free_only && p.free_cut_cell ? kFreeEndCode : 0u;
   if (!no_hit) {
     const double noise_m = p.noise_m + p.noise_quadratic_per_m * range * range;
     hit = hitCode(noise_m * p.inv_res);

@@ -65,10 +65,11 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
   occupied_markers_.pub = nh.advertise<visualization_msgs::MarkerArray>(
       "occupied_cells_vis_array", kMarkerQueue, connect(&occupied_markers_),
       ::ros::SubscriberStatusCallback(), ::ros::VoidConstPtr(), false);
-  if (params_.publish_free_space)
-    free_markers_.pub = nh.advertise<visualization_msgs::MarkerArray>(
-        "free_cells_vis_array", kMarkerQueue, connect(&free_markers_),
-        ::ros::SubscriberStatusCallback(), ::ros::VoidConstPtr(), false);
+  // Advertised always, as octomap_server advertises it; markers only with publish_free_space.
+  free_markers_.pub = nh.advertise<visualization_msgs::MarkerArray>(
+      "free_cells_vis_array", kMarkerQueue,
+      params_.publish_free_space ? connect(&free_markers_) : ::ros::SubscriberStatusCallback(),
+      ::ros::SubscriberStatusCallback(), ::ros::VoidConstPtr(), false);
   occupied_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>(
       "occupied_cells", 1, currentMessageTo(&occupied_cloud_pub_),
       ::ros::SubscriberStatusCallback(), ::ros::VoidConstPtr(), latch);

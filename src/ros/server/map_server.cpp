@@ -35,37 +35,22 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
     autosave_params_ = parseAutosaveParameters(root);
   }
   shared_ = std::make_unique<SharedMap>(MapState(makeServerMap(params_.map, paging_)));
-  publishers_ = std::make_unique<MapPublishers>(nh, private_nh, params_, shared_.get(), &stats_);
-#if FRAGG_HAVE_OCTOMAP_MSGS
-  octomap_outputs_ = std::make_unique<OctomapOutputs>(nh, params_, shared_.get());
-#endif
-  // Without octomap_msgs there is no OctomapOutputs to call (nor its code to link). After a
-  // cloud map_rate applies; after reset, load, clear and corrections they go out at once.
-  auto publish_octomaps = [this](const ::ros::Time& stamp, bool after_insert) {
-#if FRAGG_HAVE_OCTOMAP_MSGS
-    if (!octomap_outputs_) return;
-    if (after_insert)
-      octomap_outputs_->publishAfterInsert(stamp);
-    else
-      octomap_outputs_->publish(stamp);
-#else
-    (void)this;
-    (void)stamp;
-    (void)after_insert;
-#endif
-  };
-  services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_,
-                                            [this, publish_octomaps] {
-                                              publishers_->publishFull(::ros::Time::now());
-                                              publish_octomaps(::ros::Time::now(), false);
-                                            });
+  nh_ = nh;
+  private_nh_ = private_nh;
+  startOutputs();
+  services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_, [this] {
+    const std::shared_lock<std::shared_mutex> outputs(outputs_mutex_);
+    publishers_->publishFull(::ros::Time::now());
+    publishOctomaps(::ros::Time::now(), false);
+  });
   octomap_services_ = std::make_unique<OctomapCompatServices>(private_nh, services_.get(),
                                                               params_.octomap.clear_bbx_free);
   loadStartMap();  // throws (the node does not start) when a file is unreadable
-  auto publish_changed = [this, publish_octomaps] {
+  auto publish_changed = [this] {
     try {
+      const std::shared_lock<std::shared_mutex> outputs(outputs_mutex_);
       publishers_->publishAfterCorrection(::ros::Time::now());
-      publish_octomaps(::ros::Time::now(), false);
+      publishOctomaps(::ros::Time::now(), false);
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
     }
@@ -82,18 +67,11 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
   if (params_.correction.subscribe_path)
     path_corrector_ = std::make_unique<PathCorrector>(nh, params_, tf_buffer_, shared_.get(),
                                                       &stats_, publish_changed);
-  input_ = std::make_unique<CloudInput>(
-      nh, params_, tf_buffer_, shared_.get(), &stats_,
-      [this, publish_octomaps](const sensor_msgs::PointCloud2& msg,
-                               const fragg::SensorModel& sensor,
-                               const Eigen::Isometry3d& T_map_sensor) {
-        try {
-          publishers_->publishAfterInsert(msg, sensor, T_map_sensor);
-          publish_octomaps(msg.header.stamp, true);
-        } catch (const std::exception& e) {
-          ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
-        }
-      });
+  startInput();
+#if FRAGG_HAVE_DYNAMIC_RECONFIGURE
+  reconfigure_ = std::make_unique<ReconfigureServer>(
+      private_nh, params_, [this](const ServerParams& next) { applyParams(next); });
+#endif
   if (autosave_params_.enabled()) {
     autosaver_ = std::make_unique<Autosaver>(autosave_params_, shared_.get());
     if (autosave_params_.period_s > 0)
@@ -171,7 +149,63 @@ void MapServer::loadStartMap() {
   }
 }
 
+void MapServer::startOutputs() {
+  publishers_ = std::make_unique<MapPublishers>(nh_, private_nh_, params_, shared_.get(), &stats_);
+#if FRAGG_HAVE_OCTOMAP_MSGS
+  octomap_outputs_ = std::make_unique<OctomapOutputs>(nh_, params_, shared_.get());
+#endif
+}
+
+void MapServer::publishOctomaps(const ::ros::Time& stamp, bool after_insert) {
+  // Without octomap_msgs there is no OctomapOutputs to call (nor its code to link). After a
+  // cloud map_rate applies; after reset, load, clear and corrections they go out at once.
+#if FRAGG_HAVE_OCTOMAP_MSGS
+  if (!octomap_outputs_) return;
+  if (after_insert)
+    octomap_outputs_->publishAfterInsert(stamp);
+  else
+    octomap_outputs_->publish(stamp);
+#else
+  (void)stamp;
+  (void)after_insert;
+#endif
+}
+
+void MapServer::startInput() {
+  input_ = std::make_unique<CloudInput>(
+      nh_, params_, tf_buffer_, shared_.get(), &stats_,
+      [this](const sensor_msgs::PointCloud2& msg, const fragg::SensorModel& sensor,
+             const Eigen::Isometry3d& T_map_sensor) {
+        try {
+          const std::shared_lock<std::shared_mutex> outputs(outputs_mutex_);
+          publishers_->publishAfterInsert(msg, sensor, T_map_sensor);
+          publishOctomaps(msg.header.stamp, true);
+        } catch (const std::exception& e) {
+          ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
+        }
+      });
+}
+
+void MapServer::applyParams(const ServerParams& next) {
+  input_.reset();  // its thread publishes under the shared lock: stopped before taking it
+  {
+    const std::unique_lock<std::shared_mutex> outputs(outputs_mutex_);
+#if FRAGG_HAVE_OCTOMAP_MSGS
+    octomap_outputs_.reset();
+#endif
+    publishers_.reset();  // its topics go before the new ones are advertised
+    params_ = next;
+    startOutputs();
+    publishers_->publishFull(::ros::Time::now());
+    publishOctomaps(::ros::Time::now(), false);
+  }
+  startInput();
+}
+
 MapServer::~MapServer() {
+#if FRAGG_HAVE_DYNAMIC_RECONFIGURE
+  reconfigure_.reset();  // no change arrives while the parts go
+#endif
   input_.reset();      // stop the insertion thread before the rest goes
   autosaver_.reset();  // then the last save
   fragg::setLogSink(fragg::LogSink());

@@ -10,6 +10,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <memory>
+#include <shared_mutex>
 #include <string>
 
 #include "autosave.h"
@@ -26,6 +27,9 @@
 #include "octomap_compat_services.h"
 #include "octomap_outputs.h"
 #include "path_corrector.h"
+#if FRAGG_HAVE_DYNAMIC_RECONFIGURE
+#include "reconfigure.h"
+#endif
 #include "server_stats.h"
 #include "shared_map.h"
 #include "submap_services.h"
@@ -44,10 +48,21 @@ class MapServer {
  private:
   /// The start map: the page store's, else an existing autosave, else map_file; one log line.
   void loadStartMap();
+  /// The outputs that read the parameters dynamic_reconfigure changes (publishers_,
+  /// octomap_outputs_), made from params_.
+  void startOutputs();
+  /// input_ made from params_.
+  void startInput();
+  /// octomap_binary / octomap_full after a cloud (`after_insert`) or any other change.
+  void publishOctomaps(const ::ros::Time& stamp, bool after_insert);
+  /// dynamic_reconfigure: the input and the outputs again with `next` (the input stopped
+  /// first, so no cloud is half inserted), the full outputs published.
+  void applyParams(const ServerParams& next);
 
   ServerParams params_;
-  PagingParams paging_;             ///< paging/* (paging_params.h)
-  AutosaveParams autosave_params_;  ///< autosave/*, file_root (autosave_params.h)
+  ::ros::NodeHandle nh_, private_nh_;  ///< the node's, for the parts made again by applyParams
+  PagingParams paging_;                ///< paging/* (paging_params.h)
+  AutosaveParams autosave_params_;     ///< autosave/*, file_root (autosave_params.h)
   std::unique_ptr<SharedMap> shared_;
   ServerStats stats_;
   tf2_ros::Buffer tf_buffer_;
@@ -63,7 +78,13 @@ class MapServer {
   std::unique_ptr<FrontierPublisher> frontier_publisher_;
   std::unique_ptr<PathCorrector> path_corrector_;  // only with correction/subscribe_path
   std::unique_ptr<Autosaver> autosaver_;           // only with autosave/path
-  std::unique_ptr<CloudInput> input_;              // last: its thread uses everything above
+  std::unique_ptr<CloudInput> input_;              // its thread uses everything above
+#if FRAGG_HAVE_DYNAMIC_RECONFIGURE
+  std::unique_ptr<ReconfigureServer> reconfigure_;
+#endif
+  /// Held shared while publishers_ / octomap_outputs_ are used from a service or the input,
+  /// exclusively while applyParams replaces them.
+  std::shared_mutex outputs_mutex_;
 };
 
 }  // namespace fragg::ros

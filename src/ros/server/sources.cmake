@@ -25,3 +25,5 @@ set(FRAGG_ROS_SERVER_SOURCES
 # With octomap_msgs (and liboctomap) only: octomap_binary / octomap_full.
 set(FRAGG_ROS_OCTOMAP_MSGS_SOURCES ${CMAKE_CURRENT_LIST_DIR}/octomap_outputs.cpp)
 set(FRAGG_ROS_SERVER_NODE_SOURCES ${CMAKE_CURRENT_LIST_DIR}/server_node.cpp)
+# With dynamic_reconfigure only: ~set_parameters (cfg/MapServer.cfg).
+set(FRAGG_ROS_RECONFIGURE_SOURCES ${CMAKE_CURRENT_LIST_DIR}/reconfigure.cpp)

@@ -42,6 +42,7 @@ struct BuildOptions {
   std::string topic, frame = "map";
   OccupancyParams occupancy;
   bool clear_no_return = false;
+  bool free_cut_cell = false;
   int threads = 0;
   size_t max_scans = 0;
   bool json = false;
@@ -125,6 +126,7 @@ void runBuild(const BuildOptions& o) {
         params.backend = backendFromString(o.backend);
         params.raycast = rayCastFromString(o.raycast);
         params.clear_no_return_rays = o.clear_no_return;
+        params.free_cut_cell = o.free_cut_cell;
         params.threads = o.threads;
         params.scans = o.scans;
         params.height_filter = o.height_filter;
@@ -403,6 +405,9 @@ void addBuildCommand(CLI::App& app) {
                 "Points above this map-frame height are not inserted (m; pointcloud_max_z)");
   c->add_flag("--clear-no-return", o->clear_no_return,
               "Organised clouds: clear free space along rays without a return");
+  c->add_flag("--free-cut-cell", o->free_cut_cell,
+              "A ray cut at --max-range also frees the cell at the cut point (octomap_server's "
+              "rule; off: liboctomap's insertPointCloud leaves it)");
   c->add_flag("--dynamic", o->dynamic.enabled,
               "Dynamic scenes: hits in void space (observed free with confidence) are dynamic, "
               "not inserted; counted per scan in --json (CPU backend)");
