@@ -145,5 +145,11 @@ if "paged" in runs:
               f"{pg.get('records_written', pg['pages_written']) / blocks:.3f} records "
               f"({blocks:,} blocks; store {pg['store_bytes'] / 2**20:,.0f} MiB; "
               f"peak resident {pg['peak_resident_blocks']:,} of {pg['budget_blocks']:,} allowed)")
+        if "blocks_encoded" in pg:
+            print(f"compressed per stored block: {pg['blocks_encoded'] / blocks:.2f} blocks "
+                  f"(the others kept their encodings); blocks held for a commit: "
+                  f"{pg.get('blocks_held', 0):,}; budget count peak "
+                  f"{pg['peak_counted_bytes'] / 2**20:,.1f} of {pg['budget_bytes'] / 2**20:,.1f} MiB "
+                  f"(blocks and kept records); commits {pg['commits']}")
 PY
 for line in "${checks[@]}"; do echo "$line"; done
