@@ -139,7 +139,9 @@ if "paged" in runs:
     print(f"paged throughput: {100 * mem / paged:.1f} % of in-memory (build loops {paged:.2f} "
           f"against {mem:.2f} s)")
     p = json.load(open(f"{out}/paged.json"))
-    pg, blocks = p["paging"], p["blocks"]
+    # Stored blocks: the map's (the in-memory build's count; the paged build's is its resident
+    # blocks only, unless it wrote its map).
+    pg, blocks = p["paging"], json.load(open(f"{out}/in_memory.json"))["blocks"]
     if blocks:
         print(f"written per stored block: {pg['pages_written'] / blocks:.2f} blocks, "
               f"{pg.get('records_written', pg['pages_written']) / blocks:.3f} records "
