@@ -139,11 +139,19 @@ if "paged" in runs:
     print(f"paged throughput: {100 * mem / paged:.1f} % of in-memory (build loops {paged:.2f} "
           f"against {mem:.2f} s)")
     p = json.load(open(f"{out}/paged.json"))
-    pg, blocks = p["paging"], p["blocks"]
+    # Stored blocks: the map's (the in-memory build's count; the paged build's is its resident
+    # blocks only, unless it wrote its map).
+    pg, blocks = p["paging"], json.load(open(f"{out}/in_memory.json"))["blocks"]
     if blocks:
         print(f"written per stored block: {pg['pages_written'] / blocks:.2f} blocks, "
               f"{pg.get('records_written', pg['pages_written']) / blocks:.3f} records "
               f"({blocks:,} blocks; store {pg['store_bytes'] / 2**20:,.0f} MiB; "
               f"peak resident {pg['peak_resident_blocks']:,} of {pg['budget_blocks']:,} allowed)")
+        if "blocks_encoded" in pg:
+            print(f"compressed per stored block: {pg['blocks_encoded'] / blocks:.2f} blocks "
+                  f"(the others kept their encodings); blocks held for a commit: "
+                  f"{pg.get('blocks_held', 0):,}; budget count peak "
+                  f"{pg['peak_counted_bytes'] / 2**20:,.1f} of {pg['budget_bytes'] / 2**20:,.1f} MiB "
+                  f"(blocks and kept records); commits {pg['commits']}")
 PY
 for line in "${checks[@]}"; do echo "$line"; done

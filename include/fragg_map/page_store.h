@@ -70,12 +70,20 @@ class PageStore {
       const std::function<void(const BlockKey&, const Block&)>& fn) = 0;
   /// Reads the committed blocks `keys` from one snapshot into outs[j] (j-th key), each
   /// region's record fetched once, decoding on every core; found[j] says whether keys[j] has
-  /// a record. IoError when a record does not decode.
-  virtual std::vector<bool> readMany(const std::vector<BlockKey>& keys,
-                                     const std::vector<Block*>& outs) = 0;
+  /// a record. With `records`, a copy of each region record read goes there (region key,
+  /// record), so that a later encode() can keep its blocks' encodings. IoError when a record
+  /// does not decode.
+  virtual std::vector<bool> readMany(
+      const std::vector<BlockKey>& keys, const std::vector<Block*>& outs,
+      std::vector<std::pair<BlockKey, BlockRecord>>* records = nullptr) = 0;
   /// The records of `regions` (out[j] holds regions[j]'s blocks and no other), encoded on every
-  /// core. Touches no store state: safe on any thread, while the store reads or writes.
-  virtual std::vector<BlockRecord> encode(const std::vector<RegionBlocks>& regions) const = 0;
+  /// core. A block given without cells (nullptr) keeps its encoding from previous[j] (the
+  /// region's earlier record, byte for byte: only changed blocks are compressed again);
+  /// IoError when previous[j] is missing or does not hold it. Touches no store state: safe on
+  /// any thread, while the store reads or writes.
+  virtual std::vector<BlockRecord> encode(
+      const std::vector<RegionBlocks>& regions,
+      const std::vector<const BlockRecord*>& previous = {}) const = 0;
   /// Decodes block `key` of a record made by encode() (safe on any thread); false when the
   /// record does not hold it. IoError when the record does not decode.
   virtual bool decode(const BlockRecord& record, const BlockKey& key, Block* out) const = 0;
@@ -101,8 +109,9 @@ class PageStore {
 
 /// When blocks leave RAM (Map::attachPageStore).
 struct PagingPolicy {
-  /// Resident blocks' memory (cells, metadata, index) above which blocks are paged out;
-  /// 0: never page out (the store still receives every commit).
+  /// Resident blocks' memory (cells, metadata, index) and the resident regions' last records
+  /// (kept so that a commit compresses only the blocks that changed) above which blocks are
+  /// paged out; 0: never page out (the store still receives every commit).
   double budget_mb = 0.0;
   /// Blocks whose centre lies within this distance of the last sensor position are paged
   /// out last (farthest first), only when the others cannot bring the map within the budget:
@@ -128,14 +137,24 @@ struct PagingStats {
   std::string store;             ///< "sqlite:/path/map.db"
   uint64_t resident_blocks = 0;  ///< in RAM now
   uint64_t peak_resident_blocks = 0;
-  uint64_t budget_blocks = 0;    ///< the RAM budget in resident blocks (0: no budget)
-  uint64_t paged_blocks = 0;     ///< in the store only
-  uint64_t pages_written = 0;    ///< blocks written (in the region records of commits)
+  uint64_t budget_blocks = 0;  ///< the RAM budget in resident blocks (0: no budget)
+  uint64_t paged_blocks = 0;   ///< in the store only
+  uint64_t pages_written = 0;  ///< blocks written (in the region records of commits)
+  /// ... of them compressed anew (changed since their region's last record; the others keep
+  /// their encoding from it)
+  uint64_t blocks_encoded = 0;
   uint64_t records_written = 0;  ///< region records written
-  uint64_t pages_read = 0;       ///< block records read back into RAM
+  /// The budget in bytes, and the most the budget's count ever reached: resident blocks (cells,
+  /// metadata, index) plus the resident regions' last records kept for the next commit.
+  uint64_t budget_bytes = 0;
+  uint64_t peak_counted_bytes = 0;
+  uint64_t record_cache_bytes = 0;  ///< the resident regions' last records, now
+  uint64_t pages_read = 0;          ///< block records read back into RAM
   /// ... of them read from a commit not yet written (the background writer's batch)
   uint64_t pages_read_pending = 0;
   uint64_t pages_evicted = 0;  ///< blocks dropped from RAM
+  /// ... of them in regions that left changed: held as records until the next commit
+  uint64_t blocks_held = 0;
   uint64_t commits = 0;
   uint64_t committed_scans = 0;  ///< scans the store holds (its last commit)
   double seconds_commit = 0;     ///< time in commits on the map's thread

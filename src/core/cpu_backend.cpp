@@ -201,14 +201,21 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
   }
   if (page_in) {
     // Paging: the marked blocks the map lacks may be in the store; those come back first
-    // (exactly the blocks the rays reach, not the scan's whole box).
-    std::vector<BlockKey> missing;
-    for (long j = 0; j < touched; ++j)
-      if (marked[j] && target[j] == kNoBlock) missing.push_back(merged.touched(j).key);
-    if (!missing.empty()) {
-      (*page_in)(missing);
+    // (exactly the blocks the rays reach, not the scan's whole box). The pager gets every
+    // marked block: it may page out others to make room for them (the budget is a hard
+    // limit), so every target is found again.
+    std::vector<BlockKey> keys;
+    bool missing = false;
+    for (long j = 0; j < touched; ++j) {
+      if (!marked[j]) continue;
+      keys.push_back(merged.touched(j).key);
+      missing |= target[j] == kNoBlock;
+    }
+    if (missing) {
+      (*page_in)(keys);
+#pragma omp parallel for num_threads(threads) schedule(static)
       for (long j = 0; j < touched; ++j)
-        if (marked[j] && target[j] == kNoBlock) target[j] = blocks.find(merged.touched(j).key);
+        if (marked[j]) target[j] = blocks.find(merged.touched(j).key);
     }
   }
   uint64_t created = 0, touched_marked = 0;

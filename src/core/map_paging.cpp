@@ -137,7 +137,47 @@ void Map::pageInBlocks(const BlockKey& lo, const BlockKey& hi) {
 
 void Map::pageInKeys(const std::vector<BlockKey>& keys) {
   if (!pager_) return;
-  const std::vector<BlockIndex> read = pager_->pageIn(keys, blocks_);
+  // The budget is a hard limit: `keys` are every block this scan's rays mark (CPU backend),
+  // before any of its changes is applied. The paged-out blocks of their regions come back and
+  // the missing ones are created; room is made for both first, from the other regions (clean
+  // ones first, then changed ones, held as records for the next commit). When the scan's
+  // regions alone exceed the budget the scan is refused: nothing has changed yet.
+  size_t fresh = 0;
+  std::vector<BlockKey> wanted = pager_->pagedOutOfRegions(keys, blocks_, &fresh);
+  const size_t incoming = wanted.size() + fresh;
+  if (pager_->excessOverBudget(blocks_.size() + incoming) > 0) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const Eigen::Vector3d sensor = pager_->lastSensor();
+    std::vector<BlockIndex> out =
+        pager_->victims(blocks_, sensor, /*clean_only=*/true, incoming, &keys);
+    if (pager_->excessOverBudget(blocks_.size() - out.size() + incoming) > 0)
+      out = pager_->victims(blocks_, sensor, /*clean_only=*/false, incoming, &keys);
+    backend_->cache().forget(out, blocks_);  // the insertion holds sync_mutex_ already
+    pager_->pageOut(out, blocks_);
+    if (!pager_->dropRecordsToFit(blocks_.size() + incoming)) {
+      const size_t needed = blocks_.size() + incoming;
+      const double needed_mb =
+          static_cast<double>(needed * Pager::residentBlockBytes()) / (1024.0 * 1024.0);
+      throw InvalidArgument("paging: one scan needs " + std::to_string(needed) +
+                            " blocks resident (the regions its rays reach, " +
+                            std::to_string(needed_mb) + " MB) but the paging budget is " +
+                            std::to_string(pager_->policy().budget_mb) +
+                            " MB: raise the budget; the scan was not integrated");
+    }
+    pager_->notePageOutSeconds(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  pager_->noteScanIncoming(incoming);
+  pager_->reserveBlocks(fresh);
+  std::vector<BlockIndex> read;
+  try {
+    read = pager_->readBack(std::move(wanted), blocks_);
+  } catch (...) {
+    pager_->reserveBlocks(0);
+    throw;
+  }
+  pager_->noteResident(blocks_.size() + fresh);
+  pager_->reserveBlocks(0);
   blocks_.recomputeMasks(read, model_);  // the store keeps cells only
   if (read.empty()) return;
   backend_->cache().added(read, blocks_);
@@ -188,6 +228,7 @@ void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
   // needs the host map complete (every scan, that was most of the CUDA path's paging time).
   const size_t resident = blocks_.size() + backend_->cache().blocksNotInHostMap();
   pager_->noteResident(resident);
+  pager_->noteSensor(sensor_map);  // for the room the next scan makes
   const bool due = pager_->commitDue(scans_);
   if (pager_->excessOverBudget(resident) == 0 && !due) return;
   auto t0 = Clock::now();
@@ -201,23 +242,21 @@ void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
   pager_->noteSyncSeconds(std::chrono::duration<double>(Clock::now() - t0).count());
   pager_->noteResident(blocks_.size());
   // Counted now: a block the device made but never applied gets no host block.
-  const bool over = pager_->overBudget(blocks_);
-  const StoreMapMeta meta = metaOf(params_, scans_);
-  if (due) pager_->commit(blocks_, revision_, meta);
+  // A round runs when the map is over its budget (a device backend's blocks) or when the
+  // next scan, reaching as many new blocks as this one, would not fit: most rounds then run
+  // here, between scans, rather than inside the next scan (Map::pageInKeys).
+  const size_t next_scan = pager_->lastScanIncoming();
+  const bool over = pager_->excessOverBudget(blocks_.size() + next_scan) > 0;
+  if (due) pager_->commit(blocks_, revision_, metaOf(params_, scans_));
   if (!over) return;
   t0 = Clock::now();
-  double seconds_commit = 0;  // counted by the commit itself
-  // Blocks unchanged since the last commit leave without a commit; only when they cannot
-  // bring the map within its budget is everything committed and any block may leave. The
-  // blocks near the sensor change with every scan: committing them at every paging round
-  // wrote them many times over.
+  // Blocks unchanged since the last commit leave first; when they cannot make the room, the
+  // changed regions leave too, held as records for the next commit (Pager::pageOut): a
+  // paging round writes nothing and commits nothing (the blocks near the sensor change with
+  // every scan: committing them at every round wrote them many times over).
   std::vector<BlockIndex> out = pager_->victims(blocks_, sensor_map, /*clean_only=*/true);
-  if (pager_->excessOverBudget(blocks_.size() - out.size()) > 0) {
-    const auto tc = Clock::now();
-    pager_->commit(blocks_, revision_, meta);
-    seconds_commit = std::chrono::duration<double>(Clock::now() - tc).count();
+  if (pager_->excessOverBudget(blocks_.size() - out.size() + next_scan) > 0)
     out = pager_->victims(blocks_, sensor_map, /*clean_only=*/false);
-  }
   {
     // Only the leaving blocks' device copies go; the cache keeps the rest.
     std::lock_guard<std::mutex> lock(*sync_mutex_);
@@ -226,8 +265,7 @@ void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
   pager_->pageOut(out, blocks_);
   releasePagedOutMemory();
   bumpViewEpoch();
-  pager_->notePageOutSeconds(std::chrono::duration<double>(Clock::now() - t0).count() -
-                             seconds_commit);
+  pager_->notePageOutSeconds(std::chrono::duration<double>(Clock::now() - t0).count());
 }
 
 void Map::releasePagedOutMemory() {

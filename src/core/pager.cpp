@@ -18,6 +18,8 @@ constexpr uint32_t kStoreMetaVersion = 1;
 /// RAM one resident block takes: cells, metadata, index entries (as BlockMap::hostBytes
 /// counts them), and its share of the store's key set.
 constexpr size_t kResidentBlockBytes = sizeof(Block) + sizeof(BlockMeta) + 64;
+/// RAM a kept record takes besides its bytes (its hash node and vector header).
+constexpr size_t kKeptRecordOverhead = 64;
 
 /// Regions in [slo, shi] (as a double: a box over the whole key range overflows 64 bits).
 double regionCount(const BlockKey& slo, const BlockKey& shi) {
@@ -176,6 +178,8 @@ bool Pager::anyPagedOut(BlockKey lo, BlockKey hi) const {
 }
 
 bool Pager::readPagedOut(const BlockKey& key, Block* out) {
+  auto held = held_.find(regionOf(key));
+  if (held != held_.end()) return store_->decode(held->second.record, key, out);
   if (writer_) {
     const PageWriter::Pending p = writer_->findPending(key, out);
     if (p != PageWriter::Pending::kNone) return p == PageWriter::Pending::kFound;
@@ -195,6 +199,16 @@ std::vector<BlockIndex> Pager::pageIn(BlockKey lo, BlockKey hi, BlockMap& blocks
 }
 
 std::vector<BlockIndex> Pager::pageIn(const std::vector<BlockKey>& keys, BlockMap& blocks) {
+  if (paged_count_ == 0) return {};
+  return readBack(pagedOutOfRegions(keys, blocks, nullptr), blocks);
+}
+
+std::vector<BlockKey> Pager::pagedOutOfRegions(const std::vector<BlockKey>& keys,
+                                               const BlockMap& blocks, size_t* fresh) const {
+  if (fresh) {
+    *fresh = 0;
+    for (const BlockKey& k : keys) *fresh += !isPagedOut(k) && blocks.find(k) == kNoBlock;
+  }
   if (paged_count_ == 0) return {};
   // Every paged-out block of the keys' regions (a region comes back whole).
   std::vector<BlockKey> regions;
@@ -222,7 +236,7 @@ std::vector<BlockIndex> Pager::pageIn(const std::vector<BlockKey>& keys, BlockMa
       return true;
     });
   }
-  return readBack(std::move(wanted), blocks);
+  return wanted;
 }
 
 std::vector<BlockIndex> Pager::readBack(std::vector<BlockKey> wanted, BlockMap& blocks) {
@@ -235,6 +249,7 @@ std::vector<BlockIndex> Pager::readBack(std::vector<BlockKey> wanted, BlockMap& 
   blocks.reserve(wanted.size());
   std::vector<BlockIndex> read;
   read.reserve(wanted.size());
+  std::vector<std::pair<BlockKey, BlockRecord>> records;
   // On any failure the blocks made here go again: they stay paged out, the map is as before.
   auto undo = [&] {
     for (size_t j = 0; j < read.size(); ++j) blocks.erase(wanted[j]);
@@ -255,6 +270,12 @@ std::vector<BlockIndex> Pager::readBack(std::vector<BlockKey> wanted, BlockMap& 
     std::vector<Block*> outs;
     for (size_t j = 0; j < wanted.size(); ++j) {
       Block* out = &blocks.block(read[j]);
+      auto held = held_.find(regionOf(wanted[j]));
+      if (held != held_.end()) {
+        if (!store_->decode(held->second.record, wanted[j], out))
+          throw IoError(store_->path() + ": block missing from its region's held record");
+        continue;
+      }
       if (writer_) {
         const PageWriter::Pending p = writer_->findPending(wanted[j], out);
         if (p == PageWriter::Pending::kMissing)
@@ -267,12 +288,28 @@ std::vector<BlockIndex> Pager::readBack(std::vector<BlockKey> wanted, BlockMap& 
       from_store.push_back(wanted[j]);
       outs.push_back(out);
     }
-    const std::vector<bool> found = store_->readMany(from_store, outs);
+    const std::vector<bool> found = store_->readMany(from_store, outs, &records);
     for (bool f : found)
       if (!f) throw IoError(store_->path() + ": block record missing from the page store");
   } catch (...) {
     undo();
     throw;
+  }
+  // The records read are the regions' last (a region comes back whole): kept, so that the
+  // next commit compresses only the blocks that change. Regions read from a pending batch
+  // have none kept (their next commit compresses them whole).
+  for (auto& [region, record] : records) keepRecord(region, std::move(record), blocks.size());
+  // Regions read from their held record: it becomes their kept record, and they are written
+  // at the next commit (the store's record is older).
+  for (const BlockKey& k : wanted) {
+    auto held = held_.find(regionOf(k));
+    if (held == held_.end()) continue;
+    const BlockKey region = held->first;
+    BlockRecord record = std::move(held->second.record);
+    held_bytes_ -= record.capacity() + kKeptRecordOverhead;
+    held_.erase(held);
+    stale_.emplace(region, true);
+    keepRecord(region, std::move(record), blocks.size());
   }
   for (size_t j = 0; j < wanted.size(); ++j) {
     BlockMeta& m = blocks.meta(read[j]);
@@ -309,24 +346,79 @@ void Pager::forgetAll(const BlockMap& blocks) {
   saturated_super_.clear();
   paged_count_ = 0;
   last_used_.clear();
+  records_.clear();
+  record_bytes_ = 0;
+  held_.clear();
+  held_bytes_ = 0;
+  stale_.clear();
+}
+
+void Pager::keepRecord(const BlockKey& region, BlockRecord record, size_t resident) {
+  dropRecord(region);
+  record.shrink_to_fit();
+  const size_t bytes = record.capacity() + kKeptRecordOverhead;
+  // Kept records are a saving, never a reason to page blocks out: one that does not fit the
+  // budget is not kept (its region is compressed whole at its next commit).
+  if (policy_.budget_mb > 0 && countedBytes(resident + reserved_blocks_) + bytes > budgetBytes())
+    return;
+  records_.emplace(region, std::move(record));
+  record_bytes_ += bytes;
+}
+
+bool Pager::dropRecordsToFit(size_t resident) {
+  if (policy_.budget_mb <= 0) return true;
+  if (resident * kResidentBlockBytes > budgetBytes()) return false;
+  if (countedBytes(resident) <= budgetBytes()) return true;
+  std::vector<BlockKey> regions;
+  regions.reserve(records_.size());
+  for (const auto& r : records_) regions.push_back(r.first);
+  std::sort(regions.begin(), regions.end(), storeOrder);  // deterministic
+  for (const BlockKey& r : regions) {
+    if (countedBytes(resident) <= budgetBytes()) break;
+    dropRecord(r);
+  }
+  return true;
+}
+
+void Pager::dropRecord(const BlockKey& region) {
+  auto it = records_.find(region);
+  if (it == records_.end()) return;
+  record_bytes_ -= it->second.capacity() + kKeptRecordOverhead;
+  records_.erase(it);
 }
 
 bool Pager::commitDue(uint64_t scans) const {
   if (policy_.commit_every_scans > 0 && scans >= committed_scans_ + policy_.commit_every_scans)
     return true;
+  if (policy_.budget_mb > 0 && held_bytes_ > budgetBytes() / 8) return true;
   return policy_.commit_every_s > 0 && secondsSince(last_commit_) >= policy_.commit_every_s;
 }
 
-size_t Pager::budgetBlocks() const {
-  return static_cast<size_t>(policy_.budget_mb * 1024.0 * 1024.0 / kResidentBlockBytes);
+size_t Pager::budgetBytes() const {
+  return static_cast<size_t>(policy_.budget_mb * 1024.0 * 1024.0);
+}
+
+size_t Pager::residentBlockBytes() { return kResidentBlockBytes; }
+
+size_t Pager::budgetBlocks() const { return budgetBytes() / kResidentBlockBytes; }
+
+size_t Pager::countedBytes(size_t resident) const {
+  return resident * kResidentBlockBytes + record_bytes_ + held_bytes_;
+}
+
+size_t Pager::blocksWithin(double fraction, size_t resident) const {
+  // A block that leaves takes its share of the kept records with it.
+  const double per_block =
+      kResidentBlockBytes + static_cast<double>(record_bytes_) / std::max<size_t>(resident, 1);
+  return static_cast<size_t>(fraction * static_cast<double>(budgetBytes()) / per_block);
 }
 
 bool Pager::overBudget(const BlockMap& blocks) const { return excessOverBudget(blocks.size()) > 0; }
 
 size_t Pager::excessOverBudget(size_t resident) const {
-  if (policy_.budget_mb <= 0) return 0;
-  const size_t budget = budgetBlocks();
-  return resident > budget ? resident - budget : 0;
+  if (policy_.budget_mb <= 0 || countedBytes(resident) <= budgetBytes()) return 0;
+  const size_t within = blocksWithin(1.0, resident);
+  return resident > within ? resident - within : 1;
 }
 
 void Pager::flush() {
@@ -347,12 +439,24 @@ void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta
     if (dirty(m)) addRegion(regionOf(m.key));
   });
   for (const BlockKey& k : erased_) addRegion(regionOf(k));
+  for (const auto& s : stale_) addRegion(s.first);
+  // A region's last record (when kept) gives its clean blocks' encodings: only the blocks
+  // changed since are compressed (given with their cells; the others as nullptr).
+  std::vector<const BlockRecord*> previous(regions.size(), nullptr);
+  for (size_t j = 0; j < regions.size(); ++j) {
+    auto it = records_.find(regions[j]);
+    if (it != records_.end()) previous[j] = &it->second;
+  }
   std::vector<RegionBlocks> members(regions.size());
+  size_t compressed = 0;
   if (!regions.empty())
     blocks.forEach([&](BlockIndex i) {
-      const BlockKey& k = blocks.meta(i).key;
-      auto it = slot.find(regionOf(k));
-      if (it != slot.end()) members[it->second].emplace_back(k, &blocks.block(i));
+      const BlockMeta& m = blocks.meta(i);
+      auto it = slot.find(regionOf(m.key));
+      if (it == slot.end()) return;
+      const bool encode = !previous[it->second] || dirty(m);
+      compressed += encode;
+      members[it->second].emplace_back(m.key, encode ? &blocks.block(i) : nullptr);
     });
   std::vector<size_t> order(regions.size());
   for (size_t j = 0; j < order.size(); ++j) order[j] = j;
@@ -361,6 +465,7 @@ void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta
   PageWriter::Batch batch;
   std::vector<RegionBlocks> to_encode;
   std::vector<BlockKey> to_encode_keys;
+  std::vector<const BlockRecord*> to_encode_previous;
   size_t block_count = 0;
   for (size_t j : order) {
     if (members[j].empty()) {
@@ -376,12 +481,28 @@ void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta
     block_count += members[j].size();
     to_encode.push_back(std::move(members[j]));
     to_encode_keys.push_back(regions[j]);
+    to_encode_previous.push_back(previous[j]);
   }
   // The records are the commit's snapshot: encoded here, on every core.
-  std::vector<BlockRecord> records = store_->encode(to_encode);
-  batch.puts.reserve(records.size());
-  for (size_t j = 0; j < records.size(); ++j)
+  std::vector<BlockRecord> records = store_->encode(to_encode, to_encode_previous);
+  for (const BlockKey& r : batch.erases) dropRecord(r);
+  batch.puts.reserve(records.size() + held_.size());
+  for (size_t j = 0; j < records.size(); ++j) {
+    // A copy: the batch's goes to the writer.
+    keepRecord(to_encode_keys[j], records[j], blocks.size());
     batch.puts.emplace_back(to_encode_keys[j], std::move(records[j]));
+  }
+  // The records of the changed regions that left since the last commit (paged out: none of
+  // them is among the resident regions above).
+  for (auto& [region, held] : held_) {
+    block_count += held.blocks;
+    batch.puts.emplace_back(region, std::move(held.record));
+  }
+  held_.clear();
+  held_bytes_ = 0;
+  stale_.clear();
+  std::sort(batch.puts.begin(), batch.puts.end(),
+            [](const auto& a, const auto& b) { return storeOrder(a.first, b.first); });
   batch.meta = encodeStoreMeta(meta);
   const size_t record_count = batch.puts.size();
   if (writer_)
@@ -394,6 +515,7 @@ void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta
   committed_scans_ = meta.scans;
   last_commit_ = Clock::now();
   counters_.pages_written += block_count;
+  counters_.blocks_encoded += compressed;
   counters_.records_written += record_count;
   ++counters_.commits;
   counters_.committed_scans = meta.scans;
@@ -401,10 +523,14 @@ void Pager::commit(const BlockMap& blocks, uint64_t revision, const StoreMapMeta
 }
 
 std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vector3d& sensor_m,
-                                       bool clean_only) {
-  const size_t target =
-      static_cast<size_t>(static_cast<double>(budgetBlocks()) * policy_.low_water);
-  if (blocks.size() <= target) return {};
+                                       bool clean_only, size_t incoming,
+                                       const std::vector<BlockKey>* pinned) {
+  last_sensor_m_ = sensor_m;
+  const size_t target = blocksWithin(policy_.low_water, blocks.size() + incoming);
+  if (blocks.size() + incoming <= target) return {};
+  std::unordered_map<BlockKey, bool, BlockKeyHash> pinned_regions;
+  if (pinned)
+    for (const BlockKey& k : *pinned) pinned_regions.emplace(regionOf(k), true);
   // Blocks leave by region (a store record holds a region): the candidates are the resident
   // regions, each with its blocks.
   struct Candidate {
@@ -433,6 +559,10 @@ std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vect
     auto it = slot.find(regionOf(k));
     if (it != slot.end()) candidates[it->second].dirty = true;
   }
+  for (const auto& s : stale_) {
+    auto it = slot.find(s.first);
+    if (it != slot.end()) candidates[it->second].dirty = true;
+  }
   const double r2 = policy_.radius_m * policy_.radius_m;
   const double region_m = block_m_ * (1 << kRegionBits);
   std::vector<Candidate*> order;
@@ -440,6 +570,7 @@ std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vect
   for (Candidate& c : candidates) {
     if (clean_only && c.dirty) continue;
     const BlockKey& r = c.region;
+    if (pinned_regions.count(r)) continue;  // the scan in progress holds its blocks
     const Eigen::Vector3d centre =
         (Eigen::Vector3d(r.x, r.y, r.z).array() + 0.5).matrix() * region_m;
     const double d2 = (centre - sensor_m).squaredNorm();
@@ -458,7 +589,7 @@ std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vect
     return std::tie(a->near, a->order, a->region.z, a->region.y, a->region.x) <
            std::tie(b->near, b->order, b->region.z, b->region.y, b->region.x);
   });
-  const size_t needed = blocks.size() - target;
+  const size_t needed = blocks.size() + incoming - target;
   std::vector<BlockIndex> out;
   out.reserve(needed + kBlocksPerRegion);
   bool any_near = false;
@@ -480,14 +611,58 @@ std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vect
 void Pager::pageOut(const std::vector<BlockIndex>& victims, BlockMap& blocks) {
   std::vector<BlockKey> keys;
   keys.reserve(victims.size());
+  // The regions with a change the store lacks (a dirty block, an erased one, or read back
+  // from a held record) leave as records held for the next commit.
+  std::unordered_map<BlockKey, bool, BlockKeyHash> changed;
+  for (const BlockKey& k : erased_) changed.emplace(regionOf(k), true);
+  std::unordered_map<BlockKey, size_t, BlockKeyHash> slot;
+  std::vector<BlockKey> held_regions;
+  std::vector<RegionBlocks> members;
+  std::vector<const BlockRecord*> previous;
+  std::vector<char> region_dirty;
   for (BlockIndex i : victims) {
-    if (dirty(blocks.meta(i)))
-      throw IoError(
-          "paging: a block changed since its last commit cannot be paged out "
-          "(internal error)");
-    keys.push_back(blocks.meta(i).key);
+    const BlockMeta& m = blocks.meta(i);
+    keys.push_back(m.key);
+    const BlockKey region = regionOf(m.key);
+    auto it = slot.find(region);
+    if (it == slot.end()) {
+      it = slot.emplace(region, held_regions.size()).first;
+      held_regions.push_back(region);
+      auto kept = records_.find(region);
+      previous.push_back(kept == records_.end() ? nullptr : &kept->second);
+      members.emplace_back();
+      region_dirty.push_back(0);
+    }
+    region_dirty[it->second] |= dirty(m);
+    const bool encode = !previous[it->second] || dirty(m);
+    members[it->second].emplace_back(m.key, encode ? &blocks.block(i) : nullptr);
+  }
+  std::vector<RegionBlocks> to_encode;
+  std::vector<const BlockRecord*> to_encode_previous;
+  std::vector<BlockKey> to_encode_keys;
+  for (size_t j = 0; j < held_regions.size(); ++j) {
+    if (!region_dirty[j] && !changed.count(held_regions[j]) && !stale_.count(held_regions[j]))
+      continue;  // clean: the store (or the writer's batch) has its record
+    for (const auto& [k, b] : members[j]) counters_.blocks_encoded += b != nullptr;
+    to_encode.push_back(std::move(members[j]));
+    to_encode_previous.push_back(previous[j]);
+    to_encode_keys.push_back(held_regions[j]);
+  }
+  if (!to_encode.empty()) {
+    std::vector<BlockRecord> records = store_->encode(to_encode, to_encode_previous);
+    for (size_t j = 0; j < records.size(); ++j) {
+      Held& h = held_[to_encode_keys[j]];
+      held_bytes_ -= h.record.empty() ? 0 : h.record.capacity() + kKeptRecordOverhead;
+      h.record = std::move(records[j]);
+      h.record.shrink_to_fit();
+      h.blocks = to_encode[j].size();
+      held_bytes_ += h.record.capacity() + kKeptRecordOverhead;
+      stale_.erase(to_encode_keys[j]);
+      counters_.blocks_held += h.blocks;
+    }
   }
   for (size_t j = 0; j < keys.size(); ++j) {
+    dropRecord(regionOf(keys[j]));  // the region leaves whole: its record is stored or held
     addPagedOut(keys[j]);
     if (blocks.meta(victims[j]).freeSaturated())
       saturated_super_[superOf(keys[j])].set(bitOf(keys[j]));
@@ -499,6 +674,8 @@ void Pager::pageOut(const std::vector<BlockIndex>& victims, BlockMap& blocks) {
 
 void Pager::noteResident(size_t resident) {
   counters_.peak_resident_blocks = std::max<uint64_t>(counters_.peak_resident_blocks, resident);
+  counters_.peak_counted_bytes =
+      std::max<uint64_t>(counters_.peak_counted_bytes, countedBytes(resident));
 }
 
 PagingStats Pager::stats(const BlockMap& blocks) const {
@@ -507,6 +684,9 @@ PagingStats Pager::stats(const BlockMap& blocks) const {
   s.peak_resident_blocks = std::max<uint64_t>(s.peak_resident_blocks, blocks.size());
   s.paged_blocks = paged_count_;
   s.budget_blocks = policy_.budget_mb > 0 ? budgetBlocks() : 0;
+  s.budget_bytes = policy_.budget_mb > 0 ? budgetBytes() : 0;
+  s.peak_counted_bytes = std::max<uint64_t>(s.peak_counted_bytes, countedBytes(blocks.size()));
+  s.record_cache_bytes = record_bytes_;
   s.store_bytes = store_->diskBytes();
   if (writer_) s.seconds_writer = writer_->secondsWriting();
   return s;

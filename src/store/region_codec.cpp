@@ -67,33 +67,58 @@ bool RegionRecordView::find(const BlockKey& key, size_t* i) const {
   return true;
 }
 
-void encodeRegion(BlockCodec& codec, const BlockKey& region, RegionBlocks blocks,
-                  BlockRecord* out) {
+size_t encodeRegion(BlockCodec& codec, const BlockKey& region, RegionBlocks blocks,
+                    const BlockRecord* previous, const std::string& where, BlockRecord* out) {
   if (blocks.empty() || blocks.size() > static_cast<size_t>(kBlocksPerRegion))
     throw IoError("paging: a region record holds 1 to 64 blocks (internal error)");
   std::sort(blocks.begin(), blocks.end(), [](const auto& a, const auto& b) {
     return localIndexOf(a.first) < localIndexOf(b.first);
   });
+  std::unique_ptr<RegionRecordView> before;
+  if (previous)
+    before = std::make_unique<RegionRecordView>(previous->data(), previous->size(), region, where);
   out->assign(kHeaderBytes + blocks.size() * kEntryBytes, 0);
   (*out)[0] = kRegionTag;
   (*out)[1] = static_cast<uint8_t>(kRegionBits);
   const auto count = static_cast<uint16_t>(blocks.size());
   std::memcpy(out->data() + 2, &count, sizeof(count));
+  size_t compressed = 0;
   for (size_t i = 0; i < blocks.size(); ++i) {
     const BlockKey& k = blocks[i].first;
     if (!(regionOf(k) == region) || (i > 0 && localIndexOf(k) == localIndexOf(blocks[i - 1].first)))
       throw IoError("paging: a block outside its region record, or twice (internal error)");
-    const std::vector<uint8_t>& enc = codec.encode(*blocks[i].second);
+    const uint8_t* bytes = nullptr;
+    size_t size = 0;
+    if (blocks[i].second) {
+      const std::vector<uint8_t>& enc = codec.encode(*blocks[i].second);
+      bytes = enc.data();
+      size = enc.size();
+      ++compressed;
+    } else {
+      size_t at = 0;
+      if (!before || !before->find(k, &at))
+        throw IoError(where +
+                      ": a block kept from its region's earlier record is not in it "
+                      "(internal error)");
+      const auto [data, n] = before->encoding(at);
+      bytes = static_cast<const uint8_t*>(data);
+      size = n;
+    }
     const uint16_t local = localIndexOf(k);
-    const auto size = static_cast<uint32_t>(enc.size());
+    const auto size32 = static_cast<uint32_t>(size);
     uint8_t* e = out->data() + kHeaderBytes + i * kEntryBytes;
     std::memcpy(e, &local, sizeof(local));
-    std::memcpy(e + 2, &size, sizeof(size));
-    out->insert(out->end(), enc.begin(), enc.end());
+    std::memcpy(e + 2, &size32, sizeof(size32));
+    out->insert(out->end(), bytes, bytes + size);
   }
+  return compressed;
 }
 
-std::vector<BlockRecord> encodeRegions(const std::vector<RegionBlocks>& regions) {
+std::vector<BlockRecord> encodeRegions(const std::vector<RegionBlocks>& regions,
+                                       const std::vector<const BlockRecord*>& previous,
+                                       const std::string& where) {
+  if (!previous.empty() && previous.size() != regions.size())
+    throw IoError("paging: one earlier record (or none) per region (internal error)");
   std::vector<BlockRecord> out(regions.size());
   const long n = static_cast<long>(regions.size());
   bool failed = false;
@@ -116,7 +141,8 @@ std::vector<BlockRecord> encodeRegions(const std::vector<RegionBlocks>& regions)
       if (!codec) continue;
       try {
         const RegionBlocks& r = regions[j];
-        encodeRegion(*codec, r.empty() ? BlockKey{} : regionOf(r.front().first), r, &out[j]);
+        encodeRegion(*codec, r.empty() ? BlockKey{} : regionOf(r.front().first), r,
+                     previous.empty() ? nullptr : previous[j], where, &out[j]);
       } catch (const std::exception& e) {
 #pragma omp critical(fragg_encode_regions)
         {

@@ -49,9 +49,15 @@ inline uint16_t localIndexOf(const BlockKey& b) {
                                ((b.z & kRegionMask) << (2 * kRegionBits)));
 }
 
-/// Encodes one region's blocks (all of region `region`) into `out`.
-void encodeRegion(BlockCodec& codec, const BlockKey& region, RegionBlocks blocks, BlockRecord* out);
-/// The records of `regions`, encoded on every core (a codec per thread).
-std::vector<BlockRecord> encodeRegions(const std::vector<RegionBlocks>& regions);
+/// Encodes one region's blocks (all of region `region`) into `out`. A block given as nullptr
+/// keeps its encoding from `previous` (the region's earlier record; IoError naming `where`
+/// when it is null or does not hold the block). Returns the blocks compressed.
+size_t encodeRegion(BlockCodec& codec, const BlockKey& region, RegionBlocks blocks,
+                    const BlockRecord* previous, const std::string& where, BlockRecord* out);
+/// The records of `regions`, encoded on every core (a codec per thread); previous[j] (when
+/// `previous` is not empty) is regions[j]'s earlier record, as for encodeRegion.
+std::vector<BlockRecord> encodeRegions(const std::vector<RegionBlocks>& regions,
+                                       const std::vector<const BlockRecord*>& previous = {},
+                                       const std::string& where = "paging");
 
 }  // namespace fragg

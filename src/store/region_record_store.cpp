@@ -50,8 +50,9 @@ bool RegionRecordStore::read(const BlockKey& key, Block* out) {
   return found;
 }
 
-std::vector<bool> RegionRecordStore::readMany(const std::vector<BlockKey>& keys,
-                                              const std::vector<Block*>& outs) {
+std::vector<bool> RegionRecordStore::readMany(
+    const std::vector<BlockKey>& keys, const std::vector<Block*>& outs,
+    std::vector<std::pair<BlockKey, BlockRecord>>* records_out) {
   std::vector<bool> found(keys.size(), false);
   if (keys.empty()) return found;
   std::unordered_map<BlockKey, size_t, BlockKeyHash> slot;
@@ -65,9 +66,14 @@ std::vector<bool> RegionRecordStore::readMany(const std::vector<BlockKey>& keys,
   withRecords(regions, [&](const Records& records) {
     std::vector<std::unique_ptr<RegionRecordView>> views(regions.size());
     for (size_t r = 0; r < regions.size(); ++r)
-      if (records[r].first)
+      if (records[r].first) {
         views[r] = std::make_unique<RegionRecordView>(records[r].first, records[r].second,
                                                       regions[r], path());
+        if (records_out) {
+          const auto* bytes = static_cast<const uint8_t*>(records[r].first);
+          records_out->emplace_back(regions[r], BlockRecord(bytes, bytes + records[r].second));
+        }
+      }
     std::vector<std::pair<const void*, size_t>> encodings;
     std::vector<Block*> to;
     encodings.reserve(keys.size());
@@ -107,8 +113,10 @@ std::vector<uint8_t> RegionRecordStore::readFormat1(
   });
 }
 
-std::vector<BlockRecord> RegionRecordStore::encode(const std::vector<RegionBlocks>& regions) const {
-  return encodeRegions(regions);
+std::vector<BlockRecord> RegionRecordStore::encode(
+    const std::vector<RegionBlocks>& regions,
+    const std::vector<const BlockRecord*>& previous) const {
+  return encodeRegions(regions, previous, path());
 }
 
 bool RegionRecordStore::decode(const BlockRecord& record, const BlockKey& key, Block* out) const {

@@ -18,11 +18,14 @@ class RegionRecordStore : public PageStore {
  public:
   std::vector<BlockKey> keys() override;
   bool read(const BlockKey& key, Block* out) override;
-  std::vector<bool> readMany(const std::vector<BlockKey>& keys,
-                             const std::vector<Block*>& outs) override;
+  std::vector<bool> readMany(
+      const std::vector<BlockKey>& keys, const std::vector<Block*>& outs,
+      std::vector<std::pair<BlockKey, BlockRecord>>* records = nullptr) override;
   std::vector<uint8_t> readAll(
       const std::function<void(const BlockKey&, const Block&)>& fn) override;
-  std::vector<BlockRecord> encode(const std::vector<RegionBlocks>& regions) const override;
+  std::vector<BlockRecord> encode(
+      const std::vector<RegionBlocks>& regions,
+      const std::vector<const BlockRecord*>& previous = {}) const override;
   bool decode(const BlockRecord& record, const BlockKey& key, Block* out) const override;
   void commit(const std::vector<std::pair<BlockKey, const Block*>>& puts,
               const std::vector<BlockKey>& erases, const std::vector<uint8_t>& meta) override;

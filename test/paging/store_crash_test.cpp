@@ -89,7 +89,7 @@ pid_t launchBuild(const std::string& dataset, const std::string& store, const st
                                    "--page-store",
                                    store,
                                    "--page-budget-mb",
-                                   "2",
+                                   "10",
                                    "--page-radius",
                                    "4",
                                    "--commit-every",
@@ -201,7 +201,7 @@ TEST(CliPaging, StoresAreReadWhereMapsAreAndBadFlagsAreRefused) {
   ASSERT_EQ(runCli(dir, "build " + common + " -o '" + dir + "/mem.fgm'", &out), 0) << out;
   ASSERT_EQ(runCli(dir,
                    "build " + common + " --page-store '" + dir +
-                       "/s.lmdb' --page-budget-mb 1 --page-radius 3 --json",
+                       "/s.lmdb' --page-budget-mb 10 --page-radius 3 --json",
                    &out),
             0)
       << out;

@@ -4,6 +4,7 @@ if(TARGET fragg_map_store)
   fragg_add_test(fragg_paging_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/paging_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/state_masks_paging_test.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/paging_budget_test.cpp
     LIBS fragg_map_store fragg_map_planning SQLite::SQLite3
     LABELS core paging)
 

@@ -97,7 +97,9 @@ class HostBlockCache final : public BlockCache {
 
 /// Out-of-core paging, for a backend that asks for the blocks its rays reach
 /// (MapBackend::pagesInMarkedBlocks): the blocks of `keys` that are paged out are read back
-/// into the host map (others are left alone); throws IoError with the map as before.
+/// into the host map; blocks of other regions may be paged out to make room for `keys` (the
+/// budget is a hard limit), so block indices found before the call are stale. Throws IoError
+/// (or InvalidArgument when `keys` alone exceed the budget) with the map's cells as before.
 using PageInKeys = std::function<void(const std::vector<BlockKey>& keys)>;
 /// Paging: whether a block the host map lacks is paged out with every cell at the lower clamp
 /// (BlockMeta::freeSaturated when it left), so that the rays' misses may skip it as they skip
@@ -109,8 +111,8 @@ struct UpdateSettings {
   const MapParams& params;  ///< ray cast mode and no-return setting are the scan's own
   const OccupancyModel& model;
   uint64_t revision;  ///< stamped on the blocks the scan changes
-  /// Paging: called with the blocks the scan's rays mark that the host map lacks, before any
-  /// is created (null: no paging, or the map paged in the scan's whole box first).
+  /// Paging: called with every block the scan's rays mark when the host map lacks one, before
+  /// any is created (null: no paging, or the map paged in the scan's whole box first).
   const PageInKeys* page_in = nullptr;
   /// With page_in: see PagedOutSaturated (null: no such block is known).
   const PagedOutSaturated* paged_out_saturated = nullptr;

@@ -59,6 +59,18 @@ class Pager {
   std::vector<BlockIndex> pageIn(const std::vector<BlockKey>& keys, BlockMap& blocks);
   /// Every paged-out block.
   std::vector<BlockIndex> pageInAll(BlockMap& blocks);
+  /// The paged-out blocks of the regions of `keys` (what pageIn(keys) reads back), and in
+  /// *fresh the keys neither resident nor paged out (blocks a scan creates).
+  std::vector<BlockKey> pagedOutOfRegions(const std::vector<BlockKey>& keys, const BlockMap& blocks,
+                                          size_t* fresh) const;
+  /// Reads `wanted` (paged out, no duplicates) back into `blocks`.
+  std::vector<BlockIndex> readBack(std::vector<BlockKey> wanted, BlockMap& blocks);
+  /// Blocks about to be created (a scan's fresh blocks): the records kept meanwhile leave
+  /// room for them. 0 once they exist.
+  void reserveBlocks(size_t blocks) { reserved_blocks_ = blocks; }
+  /// Drops kept records (regions in key order) until `resident` blocks and the records fit the
+  /// budget; returns whether they do (false: the blocks alone exceed it).
+  bool dropRecordsToFit(size_t resident);
   /// A paged-out block's cells (from a commit not yet written, else the store); false when
   /// the store has no record of it.
   bool readPagedOut(const BlockKey& key, Block* out);
@@ -76,6 +88,8 @@ class Pager {
     committed_revision_ = revision;
   }
 
+  /// Whether a commit is due: by scans or seconds (the policy), or the records held for it
+  /// pass an eighth of the budget.
   bool commitDue(uint64_t scans) const;
   bool overBudget(const BlockMap& blocks) const;
   /// Whether the block changed after the last commit (its record is older than it).
@@ -93,12 +107,29 @@ class Pager {
   /// (farthest first: the budget wins over the radius). With `clean_only`, regions with a
   /// dirty block or an erasure and regions within the radius are left out (they may be fewer
   /// than needed). Deterministic (ties by region key).
+  /// `incoming` blocks are about to arrive (they count as resident), and the regions of
+  /// `pinned` (block keys) stay: a scan in progress holds them.
   std::vector<BlockIndex> victims(const BlockMap& blocks, const Eigen::Vector3d& sensor_m,
-                                  bool clean_only);
-  /// The resident blocks above the budget (0 when within it).
+                                  bool clean_only, size_t incoming = 0,
+                                  const std::vector<BlockKey>* pinned = nullptr);
+  /// The last sensor position victims() or noteSensor() was given.
+  const Eigen::Vector3d& lastSensor() const { return last_sensor_m_; }
+  void noteSensor(const Eigen::Vector3d& sensor_m) { last_sensor_m_ = sensor_m; }
+  /// Blocks the last scan read back or created (CPU backend; 0 for the others).
+  size_t lastScanIncoming() const { return last_incoming_; }
+  void noteScanIncoming(size_t blocks) { last_incoming_ = blocks; }
+  /// RAM the budget counts for one resident block.
+  static size_t residentBlockBytes();
+  /// The resident blocks to page out for the budget to hold `resident` blocks with the
+  /// records kept (0 when within it).
   size_t excessOverBudget(size_t resident) const;
-  /// Drops the blocks (clean: their records are committed) from RAM; they are paged out.
+  /// Drops the blocks (whole regions) from RAM; they are paged out. A region with a change
+  /// since the last commit leaves as its record, encoded here and held in RAM (counted against
+  /// the budget) until the next commit writes it: paging out writes nothing, so the store stays
+  /// the map of its last commit and the blocks the sensor still works on are not written.
   void pageOut(const std::vector<BlockIndex>& victims, BlockMap& blocks);
+  /// Bytes of the records held for the next commit (changed regions that left).
+  size_t heldBytes() const { return held_bytes_; }
 
   PagingStats stats(const BlockMap& blocks) const;
   /// Resident block count after an edit (for the peak).
@@ -112,11 +143,19 @@ class Pager {
   static BlockKey superOf(const BlockKey& b) {
     return {b.x >> kBlockBits, b.y >> kBlockBits, b.z >> kBlockBits};
   }
-  /// Reads `wanted` (paged out, no duplicates) back into `blocks`.
-  std::vector<BlockIndex> readBack(std::vector<BlockKey> wanted, BlockMap& blocks);
   void addPagedOut(const BlockKey& key);
   void removePagedOut(const BlockKey& key);
   size_t budgetBlocks() const;
+  size_t budgetBytes() const;
+  /// What the budget counts with `resident` blocks: their bytes and the records kept.
+  size_t countedBytes(size_t resident) const;
+  /// The resident blocks the budget holds at `fraction` of it, with as many bytes of kept
+  /// records a block as now.
+  size_t blocksWithin(double fraction, size_t resident) const;
+  /// Keeps `record` as the region's last, when it fits the budget beside `resident` blocks
+  /// (and the reserved ones); else the region has none kept.
+  void keepRecord(const BlockKey& region, BlockRecord record, size_t resident);
+  void dropRecord(const BlockKey& region);
 
   std::shared_ptr<PageStore> store_;
   PagingPolicy policy_;
@@ -145,6 +184,25 @@ class Pager {
   bool radius_yield_warned_ = false;
   /// Last use (scan number) by 8x8x8-block region.
   std::unordered_map<BlockKey, uint64_t, BlockKeyHash> last_used_;
+  /// The last record of each resident region (written by a commit or read by a page-in,
+  /// byte-equal to the store's or the pending batch's): a commit compresses a region's changed
+  /// blocks only and copies the others' encodings from it. Counted against the budget.
+  std::unordered_map<BlockKey, BlockRecord, BlockKeyHash> records_;
+  size_t record_bytes_ = 0;
+  /// Records of the regions that left with changes the store does not have yet: written by the
+  /// next commit, read by a page-in before the writer's batches and the store.
+  struct Held {
+    BlockRecord record;
+    size_t blocks = 0;
+  };
+  std::unordered_map<BlockKey, Held, BlockKeyHash> held_;
+  size_t held_bytes_ = 0;
+  /// Resident regions read back from held_: their store record is older than their blocks
+  /// (clean by stamp), so the next commit writes them.
+  std::unordered_map<BlockKey, bool, BlockKeyHash> stale_;
+  size_t reserved_blocks_ = 0;
+  size_t last_incoming_ = 0;
+  Eigen::Vector3d last_sensor_m_ = Eigen::Vector3d::Zero();
   std::vector<BlockKey> erased_;
   bool all_dirty_ = false;
   uint64_t committed_revision_ = 0;

@@ -1,0 +1,144 @@
+// The paging budget as a hard limit (CPU backend), and commits that compress only what changed:
+// the resident blocks and the records kept for the next commit never exceed the budget, not
+// even inside a scan; a scan whose regions alone exceed it is refused with the map intact; a
+// commit after one changed cell compresses that cell's block only, and the store still reads
+// back to the map.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "fragg_map/cell_writer.h"
+#include "fragg_map/errors.h"
+#include "fragg_map/store/page_stores.h"
+#include "paging_scenes.h"
+
+namespace fragg::test {
+namespace {
+
+constexpr int kScans = 80;
+
+PagingPolicy budgetOf(double mb) {
+  PagingPolicy p;
+  p.budget_mb = mb;
+  p.radius_m = 4.0;
+  p.commit_every_scans = 7;
+  p.commit_every_s = 0;
+  return p;
+}
+
+class PagingBudget : public ::testing::TestWithParam<PageStoreKind> {
+ protected:
+  std::string storePath(const std::string& dir) const {
+    return dir + (GetParam() == PageStoreKind::kLmdb ? "/map.lmdb" : "/map.db");
+  }
+  void SetUp() override {
+    if (GetParam() == PageStoreKind::kLmdb && !lmdbAvailable()) GTEST_SKIP() << "no LMDB";
+  }
+};
+
+void insertScans(Map& map, int from, int to) {
+  for (int i = from; i < to; ++i) {
+    const Eigen::Isometry3d T = corridorPose(i, kScans);
+    map.insert(corridorScan(T), T, corridorSensor());
+  }
+}
+
+TEST_P(PagingBudget, ResidentBlocksAndKeptRecordsNeverExceedTheBudget) {
+  const std::string dir = testDir();
+  Map memory(corridorParams());
+  insertScans(memory, 0, kScans);
+  Map paged(corridorParams());
+  // 10 MB: about 4,800 blocks of the corridor's 8,359; one scan reaches up to ~3,900 (8.1 MB).
+  paged.attachPageStore(openPageStore(storePath(dir), false), budgetOf(10.0));
+  const PagingStats at_start = paged.pagingStats();
+  ASSERT_GT(at_start.budget_blocks, 0u);
+  ASSERT_LT(at_start.budget_blocks, memory.blockCount());
+  for (int i = 0; i < kScans; ++i) {
+    insertScans(paged, i, i + 1);
+    // The peak counts every moment the resident blocks grow (a page-in, a scan's new blocks)
+    // and every record kept: it is the most the map held, not a sample after the scan.
+    const PagingStats st = paged.pagingStats();
+    ASSERT_LE(st.peak_resident_blocks, st.budget_blocks) << "scan " << i;
+    ASSERT_LE(st.peak_counted_bytes, st.budget_bytes) << "scan " << i;
+  }
+  const PagingStats st = paged.pagingStats();
+  EXPECT_GT(st.pages_evicted, 1000u);
+  EXPECT_GT(st.pages_read, 100u);
+  // Commits kept the regions' records and compressed the changed blocks only.
+  EXPECT_GT(st.record_cache_bytes, 0u);
+  EXPECT_LT(st.blocks_encoded, st.pages_written);
+  paged.commitPages();
+  std::string why;
+  const Map from_store = Map::loadPageStore(*openPageStore(storePath(dir), true));
+  EXPECT_TRUE(sameBlocks(from_store, memory, &why)) << why;
+  paged.ensureAllResident();  // no budget check from here: the whole map comes back
+  EXPECT_TRUE(sameBlocks(paged, memory, &why)) << why;
+}
+
+TEST_P(PagingBudget, AScanThatCannotFitTheBudgetIsRefusedAndTheMapStaysAsItWas) {
+  const std::string dir = testDir();
+  Map paged(corridorParams());
+  // 0.25 MB: 119 blocks, fewer than one corridor scan reaches.
+  paged.attachPageStore(openPageStore(storePath(dir), false), budgetOf(0.25));
+  const Eigen::Isometry3d T = corridorPose(0, kScans);
+  try {
+    paged.insert(corridorScan(T), T, corridorSensor());
+    ADD_FAILURE() << "a scan larger than the budget was integrated";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("raise the budget"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(paged.scanCount(), 0u);
+  EXPECT_EQ(paged.blockCount(), 0u);
+  EXPECT_LE(paged.pagingStats().peak_resident_blocks, paged.pagingStats().budget_blocks);
+
+  // A scan that fits goes in afterwards, as it would into a map without paging.
+  PointCloud few;
+  for (const Eigen::Vector3d& p_map :
+       {Eigen::Vector3d(3.0, 1.0, 1.0), Eigen::Vector3d(3.0, -1.0, 1.2)})
+    few.points_S.push_back((T.inverse() * p_map).cast<float>());
+  few.width = 2;
+  few.height = 1;
+  paged.insert(few, T, corridorSensor());
+  Map memory(corridorParams());
+  memory.insert(few, T, corridorSensor());
+  EXPECT_EQ(paged.scanCount(), 1u);
+  std::string why;
+  EXPECT_TRUE(sameBlocks(paged, memory, &why)) << why;
+}
+
+TEST_P(PagingBudget, ACommitCompressesOnlyTheBlocksThatChanged) {
+  const std::string dir = testDir();
+  Map paged(corridorParams());
+  PagingPolicy policy = budgetOf(0);  // no budget: every block stays, each commit explicit
+  policy.commit_every_scans = 0;
+  paged.attachPageStore(openPageStore(storePath(dir), false), policy);
+  insertScans(paged, 0, 10);
+  paged.commitPages();
+  const PagingStats before = paged.pagingStats();
+  ASSERT_GT(paged.blockCount(), 100u);
+
+  // One cell of one block changes: its region's record is written (every block of it), and
+  // only that block is compressed again.
+  const Eigen::Vector3d p(2.0, 0.0, 1.0);
+  const VoxelKey key = paged.keyOf(p);
+  paged.writeCells([&](CellWriter& w) { w.set(key, Cell{1, 100}); });
+  paged.commitPages();
+  const PagingStats after = paged.pagingStats();
+  EXPECT_EQ(after.blocks_encoded - before.blocks_encoded, 1u);
+  EXPECT_EQ(after.records_written - before.records_written, 1u);
+  EXPECT_GE(after.pages_written - before.pages_written, 1u);
+
+  // The record made of kept encodings and the new one reads back to the map.
+  const Map from_store = Map::loadPageStore(*openPageStore(storePath(dir), true));
+  std::string why;
+  EXPECT_TRUE(sameBlocks(from_store, paged, &why)) << why;
+}
+
+INSTANTIATE_TEST_SUITE_P(Stores, PagingBudget,
+                         ::testing::Values(PageStoreKind::kSqlite, PageStoreKind::kLmdb),
+                         [](const auto& info) {
+                           return info.param == PageStoreKind::kLmdb ? "Lmdb" : "Sqlite";
+                         });
+
+}  // namespace
+}  // namespace fragg::test
