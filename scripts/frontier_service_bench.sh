@@ -91,8 +91,13 @@ rosrun nodelet nodelet standalone fragg_map/MapServerNodelet __name:=fragg_map \
   cloud_in:=/points >>"$log" 2>&1 &
 pids+=("$!")
 for _ in $(seq 100); do rosservice list 2>/dev/null | grep -q /fragg_map/get_stats && break; sleep 0.2; done
-rosbag play --clock -q -r 0.5 "$first" >>"$log" 2>&1
+# Kept alive past the bag's end (an exiting player can lose its last message); the probe waits
+# for the node to hold every cloud of it.
+rosbag play --clock -q -r 0.5 --keep-alive "$first" >>"$log" 2>&1 &
+player_pid=$!
+pids+=("$player_pid")
 # shellcheck disable=SC2086
 /usr/bin/python3 "$FRAGG_REPO/scripts/frontier_service_probe.py" --scans "$scans" \
-  --more-bag "$rest" --k "$k" --box-edge "$box_edge" --box-center $center | tee "$out/probe.json"
+  --more-bag "$rest" --k "$k" --box-edge "$box_edge" --box-center $center \
+  --before-queries "kill -INT $player_pid" | tee "$out/probe.json"
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); commit $(git -C "$FRAGG_REPO" rev-parse --short HEAD)"

@@ -32,6 +32,7 @@ def main():
                     help="the box's centre (map frame, m): the last sensor position")
     ap.add_argument("--ns", default="/fragg_map")
     ap.add_argument("--timeout", type=float, default=900.0)
+    ap.add_argument("--before-queries", default="", help="a shell command run before the queries")
     a = ap.parse_args()
     rospy.init_node("frontier_service_probe", anonymous=True)
     rospy.wait_for_service(a.ns + "/get_stats", timeout=120)
@@ -45,6 +46,9 @@ def main():
             raise SystemExit("probe: the node never held %d scans" % a.scans)
         time.sleep(0.2)
     before = stats().stats
+    if a.before_queries:  # e.g. stop the first bag's player (kept alive past its end)
+        subprocess.run(a.before_queries, shell=True, check=False)
+        time.sleep(1.0)
     out = {"scans": before.scans, "known_voxels": before.known_voxels, "queries": []}
 
     player = None
@@ -57,7 +61,7 @@ def main():
                                       box_max=Point(c[0] + half, c[1] + half, c[2] + height))
             name = "box %.0f x %.0f x %.0f m" % (a.box_edge, a.box_edge, a.box_height)
         if player is None:  # insertion goes on during the queries
-            player = subprocess.Popen(["rosbag", "play", "--clock", "-q", a.more_bag],
+            player = subprocess.Popen(["rosbag", "play", "--clock", "-q", "--keep-alive", a.more_bag],
                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         slowest = [0.0]
         running = threading.Event()
@@ -86,6 +90,7 @@ def main():
             "message": res.message, "slowest_get_stats_s": round(slowest[0], 4),
             "scans_inserted_meanwhile": stats().stats.scans - scans_before})
     if player is not None:
+        player.terminate()
         player.wait()
     after = stats().stats
     out["insertion_ms_mean"] = round(after.insertion_ms_mean, 1)
