@@ -5,6 +5,7 @@
 #include <tf2/exceptions.h>
 #include <tf2_eigen/tf2_eigen.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -174,17 +175,19 @@ bool FrontierService::get(fragg_map::GetFrontiers::Request& req,
         views[i] = planning::clusterViewpoints(map, clusters[i], q.views);
       }
     };
-    std::optional<Map> coarse;  // frontiers/coarse_cells > 1: the query's own coarse copy
+    // The query runs on its own copy of the cell states (frontiers/coarse_cells > 1: the coarse
+    // map; else the states as they are, coarseStateMap at 1 cell, which answers as the map:
+    // frontiers, clusters and gains read cell states only). The map's read lock is held only
+    // while the copy is made: insertion and the other services go on meanwhile.
+    const int coarse_cells = std::max(1, params_.frontiers.coarse_cells);
+    std::optional<Map> copy;
     {
       const SharedMap::ReadGuard state = shared_->read();
       res.revision = state->map.revision();
-      if (params_.frontiers.coarse_cells > 1)
-        coarse.emplace(
-            planning::coarseStateMap(state->map, params_.frontiers.coarse_cells, control));
-      else
-        answer(state->map);
+      copy.emplace(planning::coarseStateMap(state->map, coarse_cells, control));
     }
-    if (coarse) answer(*coarse);  // the map's lock released: insertion and services go on
+    answer(*copy);
+    const bool coarse = coarse_cells > 1;
     res.ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     res.frontier_cells = cells.size();
@@ -196,7 +199,7 @@ bool FrontierService::get(fragg_map::GetFrontiers::Request& req,
     res.success = true;
     stats_->addFrontierQuery();
     res.message = std::to_string(cells.size()) + " frontier cells" +
-                  (coarse ? " (coarse cells of " + std::to_string(coarse->resolution()) + " m)"
+                  (coarse ? " (coarse cells of " + std::to_string(copy->resolution()) + " m)"
                           : std::string()) +
                   " in " + std::to_string(clusters.size()) + " clusters (" +
                   std::to_string(with_views) + " with viewpoints), " + std::to_string(res.ms) +

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "file_root.h"
 #include "fragg_map/errors.h"
@@ -39,20 +40,38 @@ bool answer(const char* service, Response& res, Fn&& fn) {
 
 Eigen::Vector3d toEigen(const geometry_msgs::Point& p) { return {p.x, p.y, p.z}; }
 
+#if FRAGG_HAVE_OCTOMAP
+// Every observed cell of `map` in a new CPU map of the same resolution and occupancy model
+// (Map::extract over the observed key bounds; an empty map gives an empty copy). Hold the read
+// lock.
+fragg::Map observedCopy(const fragg::Map& map) {
+  const fragg::KeyBounds bounds = map.bounds();
+  if (bounds.empty) return map.extract(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+  const double r = map.resolution();
+  const Eigen::Vector3d lo = map.centerOf(bounds.min) - Eigen::Vector3d::Constant(0.25 * r);
+  const Eigen::Vector3d hi = map.centerOf(bounds.max) + Eigen::Vector3d::Constant(0.25 * r);
+  return map.extract(lo, hi);
+}
+#endif
+
 }  // namespace
 
-MapServices::MapServices(::ros::NodeHandle& private_nh, const ServerParams& params,
-                         SharedMap* shared, ServerStats* stats,
+MapServices::MapServices(::ros::NodeHandle& private_nh, ServiceThreads* threads,
+                         const ServerParams& params, SharedMap* shared, ServerStats* stats,
                          std::function<void()> on_map_replaced)
     : params_(params),
       shared_(shared),
       stats_(stats),
       on_map_replaced_(std::move(on_map_replaced)) {
-  save_ = private_nh.advertiseService("save_map", &MapServices::saveMap, this);
-  load_ = private_nh.advertiseService("load_map", &MapServices::loadMap, this);
-  reset_ = private_nh.advertiseService("reset_map", &MapServices::reset, this);
-  clear_ = private_nh.advertiseService("clear_bbox", &MapServices::clearBox, this);
-  stats_srv_ = private_nh.advertiseService("get_stats", &MapServices::getStats, this);
+  ::ros::NodeHandle save_nh = threads->handle(private_nh, "save_map");
+  ::ros::NodeHandle load_nh = threads->handle(private_nh, "load_map");
+  ::ros::NodeHandle edit_nh = threads->handle(private_nh, "map_edits");
+  ::ros::NodeHandle stats_nh = threads->handle(private_nh, "get_stats");
+  save_ = save_nh.advertiseService("save_map", &MapServices::saveMap, this);
+  load_ = load_nh.advertiseService("load_map", &MapServices::loadMap, this);
+  reset_ = edit_nh.advertiseService("reset_map", &MapServices::reset, this);
+  clear_ = edit_nh.advertiseService("clear_bbox", &MapServices::clearBox, this);
+  stats_srv_ = stats_nh.advertiseService("get_stats", &MapServices::getStats, this);
 }
 
 bool MapServices::saveMap(fragg_map::SaveMap::Request& req, fragg_map::SaveMap::Response& res) {
@@ -82,9 +101,20 @@ bool MapServices::saveMap(fragg_map::SaveMap::Request& req, fragg_map::SaveMap::
     if (!endsWith(path, ".bt"))
       throw fragg::InvalidArgument("unknown extension of '" + path + "': use .fgm or .bt");
 #if FRAGG_HAVE_OCTOMAP
-    const SharedMap::ReadGuard state = shared_->read();  // the export reads the map
-    fragg::exportOctomap(state->map, path);
-    return saved(state->map.knownVoxelCount());
+    // A copy of the observed cells under the read lock (insertion waits for the copy only);
+    // the tree is built and written from the copy. A paged map has no whole copy in RAM: its
+    // export reads the resident blocks under the lock.
+    std::optional<fragg::Map> copy;
+    {
+      const SharedMap::ReadGuard state = shared_->read();
+      if (state->map.paging()) {
+        fragg::exportOctomap(state->map, path);
+        return saved(state->map.knownVoxelCount());
+      }
+      copy.emplace(observedCopy(state->map));
+    }
+    fragg::exportOctomap(*copy, path);
+    return saved(copy->knownVoxelCount());
 #else
     throw fragg::InvalidArgument("this build has no liboctomap: .bt is not available");
 #endif
