@@ -221,7 +221,7 @@ TEST(FrontierTracker, CollectThenApplyEqualsUpdate) {
   const sim::Terrain terrain = scene.terrain;
   const auto poses = sim::sampleTrajectory(
       scene.trajectories.at("street"),
-      [&terrain](double x, double y) { return terrain.heightAt(x, y); }, sim::DriftSpec(), 7, 25);
+      [&terrain](double x, double y) { return terrain.heightAt(x, y); }, sim::DriftSpec(), 7, 15);
   const geometry::MeshBvh bvh(std::move(scene.mesh));
   sim::LidarSpec spec;
   spec.beams = 16;

@@ -8,6 +8,7 @@
 #include <optional>
 #include <vector>
 
+#include "fragg_map/planning/coarse_map.h"
 #include "fragg_map/planning/viewpoints.h"
 #include "fragg_map/ros/frontier_markers.h"
 
@@ -53,8 +54,7 @@ void FrontierPublisher::onTimer(const ::ros::SteadyTimerEvent&) {
   // The tracker's input (the changed-block list with masks, or every block's masks for a full
   // update) is copied under the map's read lock and the tracker updated without it, so that a
   // long update (the first one on a big map) never holds insertion back. The obstacle distance
-  // filter reads cells: with it the update runs under the lock. Clusters and viewpoints (the
-  // markers only) read the map's cells near the frontier, under the lock.
+  // filter reads cells: with it the update runs under the lock.
   const bool copy_first = fp.filter.min_obstacle_distance_m <= 0.0;
   try {
     std::optional<planning::FrontierMapChanges> changes;
@@ -71,12 +71,18 @@ void FrontierPublisher::onTimer(const ::ros::SteadyTimerEvent&) {
     if (changes) update = tracker_.apply(*changes);
     cells = tracker_.cells();
     if (marker_subs > 0) {
-      const SharedMap::ReadGuard state = shared_->read();
-      clusters = clusterer_.cluster(state->map, cells);
+      // Clusters and viewpoints read cell states around the frontier: on a copy of the states
+      // (planning::coarseStateMap at 1 cell: they answer as on the map), taken under the lock.
+      std::optional<Map> states;
+      {
+        const SharedMap::ReadGuard state = shared_->read();
+        states.emplace(planning::coarseStateMap(state->map, 1));
+      }
+      clusters = clusterer_.cluster(*states, cells);
       if (fp.viewpoints > 0) {
         views.resize(clusters.size());
         for (size_t i = 0; i < clusters.size(); ++i)
-          views[i] = planning::clusterViewpoints(state->map, clusters[i], fp.views);
+          views[i] = planning::clusterViewpoints(*states, clusters[i], fp.views);
       }
     }
   } catch (const std::exception& e) {
