@@ -7,8 +7,9 @@
 # output subscribed (the staged rosbag recorder on occupied and free markers, occupied cloud,
 # centres, projected map, frontiers, frontier cells, frustum and ~stats). Prints the card, the
 # trace_csv rows by outcome (drops included), and the receive-to-published latency p50/p99
-# with each stage's p99. Parameters: config/default.yaml with backend, resolution,
-# sensor_model/max_range and publish_free_space (true) set, plus any `name:=value` arguments.
+# with each stage's p99. Parameters: config/default.yaml with backend, resolution and
+# sensor_model/max_range set, plus any `name:=value` arguments (e.g. marker_rate:=1
+# map_rate:=1; publish_free_space:=true adds the free-space markers, huge on a LiDAR map).
 # Usage (on the device, in the checkout; .device/ros or .device/ros.tar.zst carried):
 #   bash scripts/device_node_rate.sh [--rate HZ] [--clouds N] [--resolution M] [--max-range M]
 #     [--backend cuda|cpu|auto] [--bag FILE] [--out DIR] [name:=value ...]
@@ -25,7 +26,7 @@ while [ $# -gt 0 ]; do
     --bag) bag="$2"; shift 2 ;;
     --out) out="$2"; shift 2 ;;
     *:=*) params+=("$1"); shift ;;
-    *) sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; exit 2 ;;
+    *) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; exit 2 ;;
   esac
 done
 top=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)
@@ -50,7 +51,7 @@ if [ ! -f "$bag" ]; then
 fi
 pids=()
 cleanup() {
-  for pid in "${pids[@]+"${pids[@]}"}"; do kill -INT "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]+"${pids[@]}"}"; do kill -TERM "$pid" 2>/dev/null || true; done
   sleep 2
   for pid in "${pids[@]+"${pids[@]}"}"; do kill -KILL "$pid" 2>/dev/null || true; done
   rm -rf "$scratch"
@@ -73,8 +74,7 @@ for _ in range(100):
 m.setParam("/fragg_map", yaml.safe_load(open(sys.argv[1])))
 m.setParam("/use_sim_time", True)
 for name, value in [("backend", sys.argv[2]), ("resolution", float(sys.argv[3])),
-                    ("sensor_model/max_range", float(sys.argv[4])), ("trace_csv", sys.argv[5]),
-                    ("publish_free_space", True)]:
+                    ("sensor_model/max_range", float(sys.argv[4])), ("trace_csv", sys.argv[5])]:
     m.setParam("/fragg_map/" + name, value)
 for arg in sys.argv[6:]:
     name, value = arg.split(":=", 1)
@@ -86,7 +86,10 @@ pids+=("$node_pid")
 for _ in $(seq 300); do grep -q "map at" "$out/node.log" && break; sleep 0.2; done
 grep -q "map at" "$out/node.log" || { echo "device_node_rate: the node did not start" >&2; tail "$out/node.log" >&2; exit 1; }
 grep -m1 "map at" "$out/node.log"
-record -q -O "$scratch/outputs.bag" /occupied_cells_vis_array /free_cells_vis_array \
+# The recorder writes what it receives: split at 1 GB, at most 2 files kept, so that a long run
+# at every-cloud output rates (tens of GB) cannot fill the disk.
+record -q --split --size 1024 --max-splits 2 -O "$scratch/outputs.bag" \
+  /occupied_cells_vis_array /free_cells_vis_array \
   /occupied_cells /octomap_point_cloud_centers /projected_map /frontiers /frontier_cells \
   /frustum /fragg_map/stats > "$out/record.log" 2>&1 &
 pids+=($!)
@@ -103,7 +106,8 @@ kill -INT "$node_pid" 2>/dev/null || true
 wait "$node_pid" 2>/dev/null || true
 echo "card: $(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -1)"
 echo "commit: $(git -C "$top" rev-parse --short HEAD 2>/dev/null), W1 street, $clouds clouds at $rate/s, $resolution m, max range $max_range m, backend $backend ${params[*]+"${params[*]}"}"
-echo "outputs recorded by the subscriber: $(du -h "$scratch/outputs.bag"* 2>/dev/null | cut -f1 | head -1)"
+echo "outputs received by the subscriber (the last <= 2 GB kept): $(du -ch "$scratch"/outputs* 2>/dev/null | tail -1 | cut -f1)"
+echo "node parameters: default.yaml's marker_rate $(grep -m1 '^marker_rate' "$top/config/default.yaml" | awk '{print $2}'), map_rate $(grep -m1 '^map_rate' "$top/config/default.yaml" | awk '{print $2}') unless given above"
 python3 - "$out/trace.csv" "$clouds" <<'PY'
 import csv, sys
 rows = list(csv.DictReader(open(sys.argv[1])))
