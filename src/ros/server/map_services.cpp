@@ -10,6 +10,7 @@
 #include "file_root.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/map_image.h"
+#include "map_copy.h"
 #include "map_file_loader.h"
 #include "process_memory.h"
 #if FRAGG_HAVE_OCTOMAP
@@ -39,20 +40,6 @@ bool answer(const char* service, Response& res, Fn&& fn) {
 }
 
 Eigen::Vector3d toEigen(const geometry_msgs::Point& p) { return {p.x, p.y, p.z}; }
-
-#if FRAGG_HAVE_OCTOMAP
-// Every observed cell of `map` in a new CPU map of the same resolution and occupancy model
-// (Map::extract over the observed key bounds; an empty map gives an empty copy). Hold the read
-// lock.
-fragg::Map observedCopy(const fragg::Map& map) {
-  const fragg::KeyBounds bounds = map.bounds();
-  if (bounds.empty) return map.extract(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
-  const double r = map.resolution();
-  const Eigen::Vector3d lo = map.centerOf(bounds.min) - Eigen::Vector3d::Constant(0.25 * r);
-  const Eigen::Vector3d hi = map.centerOf(bounds.max) + Eigen::Vector3d::Constant(0.25 * r);
-  return map.extract(lo, hi);
-}
-#endif
 
 }  // namespace
 
