@@ -127,9 +127,6 @@ if(FRAGG_HAVE_ROS AND FRAGG_SMOKE_BAG)
   # cloud in one count, latency and trace_csv, incremental markers equal to a full rebuild.
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_rate.test
     ARGS bag:=${FRAGG_SMOKE_BAG})
-  # Issue 35, item 4: while a long ~get_frontiers runs, ~get_stats and ~save_map answer and
-  # clouds are inserted (services on threads of their own, the query on a copy of the map).
-  add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_side_by_side.test)
   if(EXISTS ${FRAGG_REAL_DATA}/small_gicp_pair/target.ply)
     set(_fragg_velodyne_bag ${CMAKE_BINARY_DIR}/bags/velodyne.bag)
     add_custom_command(OUTPUT ${_fragg_velodyne_bag}
