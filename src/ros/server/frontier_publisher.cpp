@@ -8,9 +8,9 @@
 #include <optional>
 #include <vector>
 
-#include "fragg_map/planning/coarse_map.h"
 #include "fragg_map/planning/viewpoints.h"
 #include "fragg_map/ros/frontier_markers.h"
+#include "map_copy.h"
 
 namespace fragg::ros {
 
@@ -71,12 +71,12 @@ void FrontierPublisher::onTimer(const ::ros::SteadyTimerEvent&) {
     if (changes) update = tracker_.apply(*changes);
     cells = tracker_.cells();
     if (marker_subs > 0) {
-      // Clusters and viewpoints read cell states around the frontier: on a copy of the states
-      // (planning::coarseStateMap at 1 cell: they answer as on the map), taken under the lock.
+      // Clusters and viewpoints read the cells around the frontier: on a copy of the observed
+      // cells (map_copy.h: they answer as on the map), taken under the lock.
       std::optional<Map> states;
       {
         const SharedMap::ReadGuard state = shared_->read();
-        states.emplace(planning::coarseStateMap(state->map, 1));
+        states.emplace(observedCopy(state->map));
       }
       clusters = clusterer_.cluster(*states, cells);
       if (fp.viewpoints > 0) {

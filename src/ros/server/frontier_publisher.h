@@ -7,8 +7,8 @@
 // the same while a cluster's cells do (one FrontierClusterer for the topic's lifetime). The
 // tracker's input (the changed-block list with masks: FrontierTracker::collect) is copied under
 // the map's read lock and the tracker updated without it (but with the obstacle distance filter,
-// which reads cells); the clusters and viewpoints (markers only) on a copy of the cell states
-// (planning::coarseStateMap at 1 cell) taken under the lock;
+// which reads cells); the clusters and viewpoints (markers only) on a copy of the observed cells
+// (map_copy.h) taken under the lock;
 // at most frontiers/max_marker_cells cells go out (an even subsample beyond it, logged). The
 // timer runs on a thread of its own (service_threads.h).
 #pragma once

@@ -14,6 +14,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/planning/coarse_map.h"
 #include "fragg_map/planning/query_control.h"
+#include "map_copy.h"
 
 namespace fragg::ros {
 namespace {
@@ -175,16 +176,19 @@ bool FrontierService::get(fragg_map::GetFrontiers::Request& req,
         views[i] = planning::clusterViewpoints(map, clusters[i], q.views);
       }
     };
-    // The query runs on its own copy of the cell states (frontiers/coarse_cells > 1: the coarse
-    // map; else the states as they are, coarseStateMap at 1 cell, which answers as the map:
-    // frontiers, clusters and gains read cell states only). The map's read lock is held only
-    // while the copy is made: insertion and the other services go on meanwhile.
+    // The query runs on a copy (frontiers/coarse_cells > 1: the coarse state map; else the
+    // observed cells as they are, map_copy.h: the same answer, gains of cells in the unknown
+    // band included). The map's read lock is held only while the copy is made: insertion and
+    // the other services go on meanwhile.
     const int coarse_cells = std::max(1, params_.frontiers.coarse_cells);
     std::optional<Map> copy;
     {
       const SharedMap::ReadGuard state = shared_->read();
       res.revision = state->map.revision();
-      copy.emplace(planning::coarseStateMap(state->map, coarse_cells, control));
+      if (coarse_cells > 1)
+        copy.emplace(planning::coarseStateMap(state->map, coarse_cells, control));
+      else
+        copy.emplace(observedCopy(state->map));
     }
     answer(*copy);
     const bool coarse = coarse_cells > 1;
