@@ -1,6 +1,7 @@
 # ROS-free planning queries over a map (fragg_map_planning): collision checks of boxes, spheres,
 # capsules and triangle meshes (single poses, OpenMP or CUDA batches, paths), waypoint files;
-# frontier cells (full and incremental), clusters, viewpoints and information gain.
+# frontier cells (full and incremental), coarse frontier grids and the beam spacing that sizes
+# them, clusters, viewpoints and information gain or coverage.
 set(FRAGG_PLANNING_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/collision_shape.cpp
   ${CMAKE_CURRENT_LIST_DIR}/collision_batch.cpp
@@ -13,6 +14,7 @@ set(FRAGG_PLANNING_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/frontier_tracker.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frontier_clusters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/coarse_map.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/beam_spacing.cpp
   ${CMAKE_CURRENT_LIST_DIR}/viewpoints.cpp
 )
 

@@ -295,50 +295,210 @@ std::vector<double> viewpointGainsBits(const Map& map,
   return gains;
 }
 
-std::vector<Viewpoint> clusterViewpoints(const Map& map, const FrontierCluster& cluster,
-                                         const ViewpointOptions& options) {
-  options.validate();
-  const BlockView view = map.blockView();
+const char* viewpointGainName(ViewpointGain gain) {
+  return gain == ViewpointGain::kCoverage ? "coverage" : "entropy";
+}
+
+ViewpointGain viewpointGainFromName(const std::string& name) {
+  if (name == "entropy") return ViewpointGain::kEntropy;
+  if (name == "coverage") return ViewpointGain::kCoverage;
+  throw InvalidArgument(
+      fmt::format("viewpoint gain must be \"entropy\" or \"coverage\", got \"{}\"", name));
+}
+
+namespace {
+
+// Whether the sensor at the origin looking along yaw (cos c, sin s) has `d_m` (map frame,
+// relative to the sensor) inside its field of view: the pinhole's image rectangle (as
+// sensorRays spans it: |y / x| <= tan(hfov / 2), |z / x| <= tan(vfov / 2), x > 0) or the
+// LiDAR's elevation band.
+// `tan_half_h`, `tan_half_v`: tan(hfov / 2), tan(vfov / 2) (pinhole).
+bool inFieldOfView(const GainSensor& sensor, double tan_half_h, double tan_half_v, double c,
+                   double s, const Eigen::Vector3d& d_m) {
+  const double x = c * d_m.x() + s * d_m.y(), y = -s * d_m.x() + c * d_m.y(), z = d_m.z();
+  if (sensor.kind == GainSensor::Kind::kPinhole) {
+    if (x <= 0.0) return false;
+    return std::abs(y) <= x * tan_half_h && std::abs(z) <= x * tan_half_v;
+  }
+  const double elevation = std::atan2(z, std::hypot(x, y));
+  return elevation >= sensor.min_elevation_rad && elevation <= sensor.max_elevation_rad;
+}
+
+// Whether every cell the segment from `from_v` to the centre of `target` (voxel units) enters
+// before `target` is free: an exact DDA (gain_walk.h) from the viewpoint's cell.
+bool lineOfSight(const Map& map, NearBlocks& blocks, const double* from_v, const VoxelKey& target) {
+  const double to_v[3] = {target.x + 0.5, target.y + 0.5, target.z + 0.5};
+  double dir[3] = {to_v[0] - from_v[0], to_v[1] - from_v[1], to_v[2] - from_v[2]};
+  const double length_v = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+  if (length_v <= 0.0) return true;
+  for (double& d : dir) d /= length_v;
+  GainDda dda(from_v, dir);
+  // Each step enters one cell; the target is reached after at most |dx| + |dy| + |dz| steps
+  // (rounding can only end the walk next to it, which the bound stops).
+  const VoxelKey start = dda.cell();
+  const int64_t max_steps = std::llabs(int64_t(target.x) - start.x) +
+                            std::llabs(int64_t(target.y) - start.y) +
+                            std::llabs(int64_t(target.z) - start.z);
+  BlockKey last_block{INT32_MIN, INT32_MIN, INT32_MIN};
+  const Block* block = nullptr;
+  for (int64_t step = 0; step < max_steps; ++step) {
+    dda.next();
+    const VoxelKey k = dda.cell();
+    if (k == target) return true;
+    const BlockKey b = blockKeyOf(k);
+    if (b != last_block) {
+      block = blocks.find(b);
+      last_block = b;
+    }
+    if (!block || map.state(block->cells[cellIndexOf(k)]) != CellState::kFree) return false;
+  }
+  return true;
+}
+
+double coverageGain(const Map& map, NearBlocks& blocks, const FrontierCluster& cluster,
+                    const Eigen::Vector3d& position_m, double yaw_rad, const GainSensor& sensor) {
+  const double res = map.resolution();
+  const double from_v[3] = {position_m.x() / res, position_m.y() / res, position_m.z() / res};
+  const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
+  const double tan_half_h = std::tan(0.5 * sensor.horizontal_fov_rad);
+  const double tan_half_v = std::tan(0.5 * sensor.vertical_fov_rad);
+  const double range2 = sensor.max_range_m * sensor.max_range_m;
+  double seen = 0.0;
+  for (const VoxelKey& k : cluster.cells) {
+    const Eigen::Vector3d d_m = map.centerOf(k) - position_m;
+    if (d_m.squaredNorm() > range2 || !inFieldOfView(sensor, tan_half_h, tan_half_v, c, s, d_m))
+      continue;
+    if (lineOfSight(map, blocks, from_v, k)) seen += 1.0;
+  }
+  return seen;
+}
+
+struct Candidate {
+  size_t cluster = 0;
+  Viewpoint view;
+};
+
+// Every cluster's ring candidates whose own cell is free, facing the cluster's centroid.
+std::vector<Candidate> ringCandidates(const Map& map, const BlockView& view,
+                                      const std::vector<FrontierCluster>& clusters,
+                                      const ViewpointOptions& options) {
+  std::vector<Candidate> candidates;
+  for (size_t ci = 0; ci < clusters.size(); ++ci) {
+    const FrontierCluster& cluster = clusters[ci];
+    for (double h : options.heights_m)
+      for (double r : options.radii_m)
+        for (int a = 0; a < options.angles; ++a) {
+          const double phi = 2.0 * kPi * a / options.angles;
+          Candidate cand;
+          cand.cluster = ci;
+          Viewpoint& v = cand.view;
+          v.position_m =
+              cluster.centroid_m + Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), h);
+          const Cell* own = view.findCell(map.keyOf(v.position_m));
+          if (!own || map.state(*own) != CellState::kFree) continue;
+          const Eigen::Vector3d to_centroid = cluster.centroid_m - v.position_m;
+          v.yaw_rad = std::atan2(to_centroid.y(), to_centroid.x());
+          candidates.push_back(cand);
+        }
+  }
+  return candidates;
+}
+
+// The candidates with `options.clearance_m` of free space around them (one collision batch).
+std::vector<Candidate> clearCandidates(const Map& map, std::vector<Candidate> candidates,
+                                       const ViewpointOptions& options) {
+  if (options.clearance_m <= 0.0 || candidates.empty()) return candidates;
   CollisionOptions clearance;
   clearance.unknown_is_occupied = true;
-  const CollisionShape sphere = CollisionShape::sphere(std::max(options.clearance_m, 1e-9));
-  std::vector<Viewpoint> candidates;
-  for (double h : options.heights_m)
-    for (double r : options.radii_m)
-      for (int a = 0; a < options.angles; ++a) {
-        const double phi = 2.0 * kPi * a / options.angles;
-        Viewpoint v;
-        v.position_m =
-            cluster.centroid_m + Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), h);
-        const Cell* own = view.findCell(map.keyOf(v.position_m));
-        if (!own || map.state(*own) != CellState::kFree) continue;
-        const Eigen::Vector3d to_centroid = cluster.centroid_m - v.position_m;
-        v.yaw_rad = std::atan2(to_centroid.y(), to_centroid.x());
-        candidates.push_back(v);
+  const CollisionShape sphere = CollisionShape::sphere(options.clearance_m);
+  std::vector<Eigen::Isometry3d> poses;
+  poses.reserve(candidates.size());
+  for (const Candidate& c : candidates) {
+    poses.push_back(Eigen::Isometry3d::Identity());
+    poses.back().translation() = c.view.position_m;
+  }
+  const std::vector<CollisionResult> hits = checkPoses(map, sphere, poses, clearance);
+  std::vector<Candidate> clear;
+  for (size_t i = 0; i < candidates.size(); ++i)
+    if (!hits[i].collides) clear.push_back(candidates[i]);
+  return clear;
+}
+
+// Gains of every candidate, in pieces of kGainPiece candidates with `control` checked between.
+std::vector<double> candidateGains(const Map& map, const BlockView& view,
+                                   const std::vector<FrontierCluster>& clusters,
+                                   const std::vector<Candidate>& candidates,
+                                   const ViewpointOptions& options, int threads,
+                                   const QueryControl* control) {
+  constexpr size_t kGainPiece = 512;
+  std::vector<double> gains(candidates.size());
+  const int n_threads = threadCount(threads);
+  for (size_t begin = 0; begin < candidates.size(); begin += kGainPiece) {
+    checkQuery(control, "frontier viewpoints");
+    const size_t end = std::min(candidates.size(), begin + kGainPiece);
+    if (options.gain == ViewpointGain::kCoverage) {
+      const int64_t n = int64_t(end - begin);
+#pragma omp parallel num_threads(n_threads)
+      {
+        NearBlocks blocks(view);
+#pragma omp for schedule(dynamic, 4)
+        for (int64_t i = 0; i < n; ++i) {
+          const Candidate& c = candidates[begin + size_t(i)];
+          gains[begin + size_t(i)] = coverageGain(
+              map, blocks, clusters[c.cluster], c.view.position_m, c.view.yaw_rad, options.sensor);
+        }
       }
-  if (options.clearance_m > 0.0) {  // one collision batch for every candidate
-    std::vector<Eigen::Isometry3d> poses;
-    for (const Viewpoint& v : candidates) {
-      poses.push_back(Eigen::Isometry3d::Identity());
-      poses.back().translation() = v.position_m;
+    } else {
+      std::vector<Eigen::Vector3d> positions;
+      std::vector<double> yaws;
+      for (size_t i = begin; i < end; ++i) {
+        positions.push_back(candidates[i].view.position_m);
+        yaws.push_back(candidates[i].view.yaw_rad);
+      }
+      const std::vector<double> piece =
+          viewpointGainsBits(map, positions, yaws, options.sensor, threads, options.backend);
+      std::copy(piece.begin(), piece.end(), gains.begin() + ptrdiff_t(begin));
     }
-    const std::vector<CollisionResult> hits = checkPoses(map, sphere, poses, clearance);
-    std::vector<Viewpoint> clear;
-    for (size_t i = 0; i < candidates.size(); ++i)
-      if (!hits[i].collides) clear.push_back(candidates[i]);
-    candidates = std::move(clear);
   }
-  std::vector<Eigen::Vector3d> positions;
-  std::vector<double> yaws;
-  for (const Viewpoint& v : candidates) {
-    positions.push_back(v.position_m);
-    yaws.push_back(v.yaw_rad);
-  }
+  return gains;
+}
+
+}  // namespace
+
+double viewpointReachM(const ViewpointOptions& options) {
+  double radius = 0.0, height = 0.0;
+  for (double r : options.radii_m) radius = std::max(radius, r);
+  for (double h : options.heights_m) height = std::max(height, std::abs(h));
+  // The centroid lies within the cluster's bounds; a candidate within radius + height of it.
+  return radius + height + options.clearance_m +
+         (options.gain == ViewpointGain::kEntropy ? options.sensor.max_range_m : 0.0);
+}
+
+double coverageGainCells(const Map& map, const BlockView& view, const FrontierCluster& cluster,
+                         const Eigen::Vector3d& position_m, double yaw_rad,
+                         const GainSensor& sensor) {
+  sensor.validate();
+  if (!position_m.allFinite() || !std::isfinite(yaw_rad))
+    throw InvalidArgument("viewpoint position and yaw must be finite");
+  NearBlocks blocks(view);
+  return coverageGain(map, blocks, cluster, position_m, yaw_rad, sensor);
+}
+
+std::vector<std::vector<Viewpoint>> clustersViewpoints(const Map& map,
+                                                       const std::vector<FrontierCluster>& clusters,
+                                                       const ViewpointOptions& options, int threads,
+                                                       const QueryControl* control) {
+  options.validate();
+  if (threads < 0) throw InvalidArgument(fmt::format("threads must be >= 0, got {}", threads));
+  const BlockView view = map.blockView();
+  std::vector<Candidate> candidates = ringCandidates(map, view, clusters, options);
+  checkQuery(control, "frontier viewpoints");
+  candidates = clearCandidates(map, std::move(candidates), options);
   const std::vector<double> gains =
-      viewpointGainsBits(map, positions, yaws, options.sensor, 0, options.backend);
-  std::vector<Viewpoint> out;
-  for (size_t i = 0; i < candidates.size(); ++i) {
-    Viewpoint v = candidates[i];
+      candidateGains(map, view, clusters, candidates, options, threads, control);
+  std::vector<std::vector<Viewpoint>> out(clusters.size());
+  for (size_t i = 0; i < candidates.size(); ++i) {  // in each cluster's candidate order
+    Viewpoint v = candidates[i].view;
     v.gain_bits = gains[i];
     if (v.gain_bits <= 0.0) continue;
     v.score = v.gain_bits;
@@ -346,12 +506,19 @@ std::vector<Viewpoint> clusterViewpoints(const Map& map, const FrontierCluster& 
       v.distance_m = (v.position_m - *options.robot_m).norm();
       v.score = v.gain_bits / std::max(v.distance_m, map.resolution());
     }
-    out.push_back(v);
+    out[candidates[i].cluster].push_back(v);
   }
-  std::stable_sort(out.begin(), out.end(),
-                   [](const Viewpoint& a, const Viewpoint& b) { return a.score > b.score; });
-  if (out.size() > size_t(options.top_k)) out.resize(options.top_k);
+  for (std::vector<Viewpoint>& views : out) {
+    std::stable_sort(views.begin(), views.end(),
+                     [](const Viewpoint& a, const Viewpoint& b) { return a.score > b.score; });
+    if (views.size() > size_t(options.top_k)) views.resize(options.top_k);
+  }
   return out;
+}
+
+std::vector<Viewpoint> clusterViewpoints(const Map& map, const FrontierCluster& cluster,
+                                         const ViewpointOptions& options) {
+  return clustersViewpoints(map, std::vector<FrontierCluster>{cluster}, options).front();
 }
 
 }  // namespace fragg::planning

@@ -329,8 +329,14 @@ void readFrontiers(const XmlRpcValue& root, FrontierParams& f) {
   readInt(root, "frontiers/max_marker_cells", &f.max_marker_cells);
   if (f.max_marker_cells < 0) badParam("frontiers/max_marker_cells", "must be >= 0");
   readInt(root, "frontiers/coarse_cells", &f.coarse_cells);
-  if (!planning::validCoarseCells(f.coarse_cells))
-    badParam("frontiers/coarse_cells", "must be 1, 2, 4 or 8 map cells");
+  if (f.coarse_cells != 0 && !planning::validCoarseCells(f.coarse_cells))
+    badParam("frontiers/coarse_cells",
+             "must be 1, 2, 4 or 8 map cells (0: from the LiDAR's beam spacing)");
+  std::string gain = "auto";
+  readString(root, "frontiers/gain", &gain);
+  if (gain != "auto")
+    asFrontierParameters("frontiers/gain", [&] { f.gain = planning::viewpointGainFromName(gain); });
+  if (f.gain) f.views.gain = *f.gain;  // the topics' gain too (auto: entropy on the map's cells)
   readDouble(root, "frontiers/deadline_s", &f.deadline_s);
   if (!std::isfinite(f.deadline_s) || f.deadline_s < 0.0)
     badParam("frontiers/deadline_s", "must be a finite time in s >= 0 (0: none)");

@@ -12,6 +12,7 @@
 #include "fragg_map/internal/backend_factory.h"
 #include "fragg_map/map.h"
 #include "fragg_map/planning/frontier_cells.h"
+#include "fragg_map/planning/frontier_clusters.h"
 #include "fragg_map/planning/frontier_tracker.h"
 #include "fragg_map/planning/viewpoints.h"
 #include "fragg_map/sim/lidar_sensor.h"
@@ -103,6 +104,31 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
       total += cpu[i];
     }
     EXPECT_GT(total, 1000.0);
+  }
+
+  // Every cluster's viewpoints in one batch (clustersViewpoints): entropy gains on the device
+  // for the CUDA map, coverage on the host for both; the same candidates, ranks and gains.
+  const std::vector<FrontierCluster> clusters =
+      FrontierClusterer().cluster(cpu_map, cpu_tracker.cells());
+  ASSERT_GT(clusters.size(), 10u);
+  for (const ViewpointGain gain : {ViewpointGain::kEntropy, ViewpointGain::kCoverage}) {
+    ViewpointOptions o;
+    o.gain = gain;
+    o.top_k = 3;
+    const auto cpu = clustersViewpoints(cpu_map, clusters, o, 0);
+    const auto gpu = clustersViewpoints(cuda_map, clusters, o, 0);
+    ASSERT_EQ(gpu.size(), cpu.size());
+    size_t views = 0;
+    for (size_t c = 0; c < cpu.size(); ++c) {
+      ASSERT_EQ(gpu[c].size(), cpu[c].size()) << viewpointGainName(gain) << " cluster " << c;
+      for (size_t j = 0; j < cpu[c].size(); ++j) {
+        EXPECT_EQ(gpu[c][j].position_m, cpu[c][j].position_m) << "cluster " << c;
+        EXPECT_NEAR(gpu[c][j].gain_bits, cpu[c][j].gain_bits,
+                    1e-9 * std::max(1.0, cpu[c][j].gain_bits));
+      }
+      views += cpu[c].size();
+    }
+    EXPECT_GT(views, 10u) << viewpointGainName(gain);
   }
 }
 

@@ -29,9 +29,11 @@ else()
 endif()
 
 # Frontier cells against a brute force, incremental against full over a simulated drive,
-# clusters, viewpoints and gains against a brute-force ray count.
+# clusters, viewpoints and gains against a brute-force ray count; coverage gains against a
+# brute-force visibility count, coarse copies of a box, beam spacings of simulated LiDARs.
 fragg_add_test(fragg_frontier_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/frontier_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/coarse_query_test.cpp
   LIBS fragg_map_planning fragg_map_sim_lib
   LABELS planning)
 if(TARGET fragg_frontier_test)

@@ -473,7 +473,8 @@ TEST(ServerParams, FrontierDefaultsValuesAndRefusals) {
   EXPECT_EQ(f.views.sensor.rows, 48);
   EXPECT_EQ(f.views.sensor.max_range_m, 10.0);
   EXPECT_EQ(f.max_marker_cells, 200000);
-  EXPECT_EQ(f.coarse_cells, 1) << "the map's cells, as the CLI's default";
+  EXPECT_EQ(f.coarse_cells, 0) << "from the LiDAR's beam spacing";
+  EXPECT_FALSE(f.gain.has_value()) << "auto: coverage on a coarse grid, entropy on map cells";
   EXPECT_EQ(f.deadline_s, 0.0);
 
   XmlRpcValue root;
@@ -497,6 +498,7 @@ TEST(ServerParams, FrontierDefaultsValuesAndRefusals) {
   set(root, "frontiers/sensor/max_range", 20.0);
   set(root, "frontiers/max_marker_cells", 1000);
   set(root, "frontiers/coarse_cells", 4);
+  set(root, "frontiers/gain", std::string("entropy"));
   set(root, "frontiers/deadline_s", 2.5);
   const fragg::ros::FrontierParams p = fragg::ros::parseParameters(root).frontiers;
   EXPECT_EQ(p.rate_hz, 5.0);
@@ -520,11 +522,14 @@ TEST(ServerParams, FrontierDefaultsValuesAndRefusals) {
   EXPECT_EQ(p.views.sensor.max_range_m, 20.0);
   EXPECT_EQ(p.max_marker_cells, 1000);
   EXPECT_EQ(p.coarse_cells, 4);
+  ASSERT_TRUE(p.gain.has_value());
+  EXPECT_EQ(*p.gain, fragg::planning::ViewpointGain::kEntropy);
   EXPECT_EQ(p.deadline_s, 2.5);
 
   expectRejected("frontiers/rate_hz", 0.0);
   expectRejected("frontiers/coarse_cells", 3);
-  expectRejected("frontiers/coarse_cells", 0);
+  expectRejected("frontiers/coarse_cells", -1);
+  expectRejected("frontiers/gain", std::string("bits"));
   expectRejected("frontiers/deadline_s", -1.0);
   expectRejected("frontiers/deadline_s", std::numeric_limits<double>::quiet_NaN());
   expectRejected("frontiers/rate_hz", std::numeric_limits<double>::infinity());

@@ -21,6 +21,7 @@ test_5: unsubscribed again, a map change makes no update."""
 import json
 import math
 import os
+import re
 import shutil
 import subprocess
 import tempfile
@@ -146,10 +147,26 @@ class MapServerFrontiersTest(unittest.TestCase):
         queries = self.stats().frontier_queries
 
         views = rospy.get_param("~cli_views").split()
+        # The defaults: a LiDAR map, so a coarse grid sized from the beam spacing and the
+        # coverage gain (the message says which); the CLI given the same grid and gain.
         res = self.call(k=2)
+        self.assertTrue(res.success, res.message)
+        grid = re.search(r"coarse cells of ([0-9.]+) m, from beams", res.message)
+        self.assertIsNotNone(grid, "a LiDAR map gets a coarse grid: " + res.message)
+        coarse = int(round(float(grid.group(1)) / rospy.get_param("/fragg_map/resolution", 0.05)))
+        self.assertIn(coarse, (2, 4, 8), res.message)
+        self.assertIn("viewpoint gain coverage", res.message)
+        cli = self.cli_frontiers(map_path, "--viewpoints", "2", *views, "--coarse-cells",
+                                 str(coarse), "--gain", "coverage",
+                                 *rospy.get_param("~cli_sensor").split())
+        self.assert_same(res, cli, "defaults (coarse %d, coverage)" % coarse)
+        self.assertGreater(res.frontier_cells, 100)
+        self.assertTrue(any(c.viewpoints for c in res.clusters), "no viewpoint at all")
+        # The map's own cells and the entropy gain, asked in the request.
+        res = self.call(k=2, coarse_cells=1, gain="entropy")
         cli = self.cli_frontiers(map_path, "--viewpoints", "2", *views,
                                  *rospy.get_param("~cli_sensor").split())
-        self.assert_same(res, cli, "defaults")
+        self.assert_same(res, cli, "map cells")
         rospy.loginfo("defaults: %d frontier cells, %d clusters, %.1f ms (CLI %.1f + %.1f ms)",
                       res.frontier_cells, len(res.clusters), res.ms, cli["ms_cells"],
                       cli["ms_clusters_viewpoints"])
@@ -163,7 +180,7 @@ class MapServerFrontiersTest(unittest.TestCase):
         box_max = Point(robot.x + 15.0, robot.y + 15.0, robot.z + 10.0)
         res = self.call(k=3, min_cluster=20, use_box=True, box_min=box_min, box_max=box_max,
                         use_robot_position=True, robot_position=robot, sensor="lidar",
-                        rays=[90, 8], max_range=8.0)
+                        rays=[90, 8], max_range=8.0, coarse_cells=1)
         cli = self.cli_frontiers(map_path, *views, "--viewpoints", "3", "--min-cluster", "20",
                                  "--box",
                                  *[repr(v) for v in xyz(box_min) + xyz(box_max)], "--robot",
@@ -176,9 +193,20 @@ class MapServerFrontiersTest(unittest.TestCase):
 
         # The robot as a tf frame: base_link's latest pose (the last scan's).
         res_tf = self.call(k=3, min_cluster=20, use_box=True, box_min=box_min, box_max=box_max,
-                           robot_frame="base_link", sensor="lidar", rays=[90, 8], max_range=8.0)
+                           robot_frame="base_link", sensor="lidar", rays=[90, 8], max_range=8.0,
+                           coarse_cells=1)
         self.assert_same(res_tf, cli, "robot frame base_link", robot=True)
-        self.assertEqual(self.stats().frontier_queries, queries + 3)
+
+        # The box on a coarse grid (only the box's part of the map copied): as the CLI.
+        res = self.call(k=3, min_cluster=4, use_box=True, box_min=box_min, box_max=box_max,
+                        coarse_cells=2, gain="coverage")
+        cli = self.cli_frontiers(map_path, *views, "--viewpoints", "3", "--min-cluster", "4",
+                                 "--box", *[repr(v) for v in xyz(box_min) + xyz(box_max)],
+                                 "--coarse-cells", "2", "--gain", "coverage",
+                                 *rospy.get_param("~cli_sensor").split())
+        self.assert_same(res, cli, "box on a coarse grid")
+        self.assertGreater(len(res.clusters), 0)
+        self.assertEqual(self.stats().frontier_queries, queries + 5)
 
     # --- bad requests ----------------------------------------------------------------------
     def test_3_bad_requests_are_refused(self):
@@ -198,6 +226,9 @@ class MapServerFrontiersTest(unittest.TestCase):
             (dict(k=1, fov=[4.0, 1.0]), "a field of view beyond pi", "sensor"),
             (dict(k=1, max_range=-1.0), "a negative range", "max_range"),
             (dict(k=1, robot_frame="nowhere"), "an unknown frame", "nowhere"),
+            (dict(k=1, coarse_cells=3), "a coarse edge of 3 cells", "coarse_cells"),
+            (dict(k=1, coarse_cells=-1), "a negative coarse edge", "coarse_cells"),
+            (dict(k=1, gain="bits"), "an unknown gain", "gain"),
             (dict(k=1, robot_frame="base_link", use_robot_position=True), "position and frame",
              "not both"),
             (dict(k=1, use_robot_position=True, robot_position=Point(nan, 0, 0)),
@@ -225,7 +256,7 @@ class MapServerFrontiersTest(unittest.TestCase):
                  "frontier topics (%s)" % what)
         k = rospy.get_param(NS + "frontiers/viewpoints")
         cap = rospy.get_param(NS + "frontiers/max_marker_cells")
-        res = self.call(k=k)
+        res = self.call(k=k, coarse_cells=1)  # the topics are on the map's own cells
         self.assertTrue(res.success, res.message)
         cloud = self.clouds[-1]
         n = res.frontier_cells

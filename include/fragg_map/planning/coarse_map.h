@@ -18,6 +18,7 @@
 // (CPU backend), built from the state masks (no cell is read).
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 
 #include "fragg_map/map.h"
@@ -32,6 +33,16 @@ namespace fragg::planning {
 /// as they are). Throws InvalidArgument for another edge; QueryStopped when `control` fires.
 /// Hold the map's read lock.
 [[nodiscard]] Map coarseStateMap(const Map& map, int cells, const QueryControl* control = nullptr);
+
+/// The coarse map of the part of `map` a query in the box [lo_m, hi_m] (map frame) can see:
+/// the blocks within `margin_m` plus one coarse cell of the box, coarsened as coarseStateMap
+/// does. Coarse cells inside the box hold the same states, with the same neighbours, as in
+/// coarseStateMap(map, cells); `margin_m` is how far beyond the box the query looks (viewpoint
+/// rings, clearance and gain rays). InvalidArgument for a non-finite or inverted box, a negative
+/// margin or a bad edge; QueryStopped when `control` fires. Hold the map's read lock.
+[[nodiscard]] Map coarseStateMapIn(const Map& map, int cells, const Eigen::Vector3d& lo_m,
+                                   const Eigen::Vector3d& hi_m, double margin_m,
+                                   const QueryControl* control = nullptr);
 
 /// The coarse cell edge (map cells, a power of two <= 8) nearest below the spacing of a
 /// sensor's beams at `range_m`: `angle_rad` between neighbouring beams (the larger of the

@@ -8,10 +8,12 @@
 
 #include <Eigen/Core>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "fragg_map/map.h"
 #include "fragg_map/planning/frontier_clusters.h"
+#include "fragg_map/planning/query_control.h"
 
 namespace fragg::planning {
 
@@ -50,6 +52,24 @@ std::vector<double> viewpointGainsBits(const Map& map,
 /// unknown band, 0 for free and occupied cells.
 double cellEntropyBits(const Map& map, const Cell* cell);
 
+/// What a viewpoint's gain counts.
+enum class ViewpointGain {
+  /// The expected entropy reduction (bits) of the unknown cells the sensor's rays cross, the
+  /// paper's gain (viewpointGainsBits): every ray walked to its end, so its cost grows with the
+  /// rays, the range and 1 / resolution.
+  kEntropy,
+  /// Coverage, as FUEL ranks viewpoints: the number of the cluster's own frontier cells the
+  /// sensor would see, i.e. within its range and field of view with every cell between the
+  /// viewpoint and the cell free (an occupied or unknown cell hides it). One short walk per
+  /// cluster cell: cheap enough for thousands of clusters of a LiDAR map.
+  kCoverage,
+};
+
+/// "entropy" or "coverage" (the names the CLI and the node take).
+[[nodiscard]] const char* viewpointGainName(ViewpointGain gain);
+/// The gain named `name` ("entropy" | "coverage"); InvalidArgument for another name.
+[[nodiscard]] ViewpointGain viewpointGainFromName(const std::string& name);
+
 struct ViewpointOptions {
   std::vector<double> radii_m = {1.5, 3.0};  ///< ring radii around the cluster centroid, > 0
   int angles = 12;                           ///< candidates per ring, >= 1
@@ -61,6 +81,8 @@ struct ViewpointOptions {
   GainSensor sensor;
   /// Where the gains are computed (viewpointGainsBits): kAuto follows the map's backend.
   Backend backend = Backend::kAuto;
+  /// What the gain counts; kCoverage is always computed on the host.
+  ViewpointGain gain = ViewpointGain::kEntropy;
   /// Ranks by gain per metre of straight-line distance from this position (else by gain).
   std::optional<Eigen::Vector3d> robot_m;
   /// Throws InvalidArgument naming the bad field.
@@ -70,14 +92,37 @@ struct ViewpointOptions {
 struct Viewpoint {
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
   double yaw_rad = 0.0;  ///< facing the cluster centroid
+  /// The gain: entropy bits (ViewpointGain::kEntropy) or frontier cells seen (kCoverage).
   double gain_bits = 0.0;
   double distance_m = 0.0;  ///< from the robot (0 without one)
   double score = 0.0;       ///< gain, or gain per metre with a robot position
 };
 
+/// How far from a cluster's cells its viewpoints look into the map (m): the farthest ring
+/// candidate from the centroid plus the clearance sphere, plus the sensor's range for the
+/// entropy gain (coverage walks only towards the cluster's own cells).
+[[nodiscard]] double viewpointReachM(const ViewpointOptions& options);
+
+/// The coverage gain (ViewpointGain::kCoverage) of the sensor at `position_m` with `yaw_rad`:
+/// how many of `cluster`'s cells it sees. Hold the map's read lock.
+[[nodiscard]] double coverageGainCells(const Map& map, const BlockView& view,
+                                       const FrontierCluster& cluster,
+                                       const Eigen::Vector3d& position_m, double yaw_rad,
+                                       const GainSensor& sensor);
+
 /// The best `top_k` viewpoints of a cluster (highest score first; candidates with zero gain
 /// are dropped). Hold the map's read lock.
-std::vector<Viewpoint> clusterViewpoints(const Map& map, const FrontierCluster& cluster,
-                                         const ViewpointOptions& options);
+[[nodiscard]] std::vector<Viewpoint> clusterViewpoints(const Map& map,
+                                                       const FrontierCluster& cluster,
+                                                       const ViewpointOptions& options);
+
+/// clusterViewpoints for every cluster at once (element i belongs to cluster i, equal to
+/// clusterViewpoints(map, clusters[i], options)): the candidates of all clusters share one
+/// clearance batch and one gain batch (`threads` CPU threads, 0 = every core). `control`:
+/// QueryStopped when it fires (checked between the steps and every few hundred candidates).
+/// Hold the map's read lock.
+[[nodiscard]] std::vector<std::vector<Viewpoint>> clustersViewpoints(
+    const Map& map, const std::vector<FrontierCluster>& clusters, const ViewpointOptions& options,
+    int threads = 0, const QueryControl* control = nullptr);
 
 }  // namespace fragg::planning

@@ -7,6 +7,7 @@
 #include <xmlrpcpp/XmlRpcValue.h>
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -61,8 +62,15 @@ struct FrontierParams {
   /// frontiers/coarse_cells: ~get_frontiers on a grid of N x N x N map cells (1, 2, 4 or 8;
   /// planning/coarse_map.h: a coarse cell is free when a cell is, unknown when all are), so
   /// that the gaps between a LiDAR's beams are not frontiers; the map's lock is held only while
-  /// the coarse copy is made. 1: the map's own cells (the CLI's default).
-  int coarse_cells = 1;
+  /// the coarse copy is made (of the query's box, when it has one). 1: the map's own cells (the
+  /// CLI's default). 0 (the default): from the beam spacing of the first clouds received
+  /// (planning/beam_spacing.h) at their far range, capped by sensor_model/max_range
+  /// (coarseCellsForBeams); 1 until a LiDAR-like cloud came.
+  int coarse_cells = 0;
+  /// frontiers/gain: the viewpoints' gain, "entropy" or "coverage" (planning::ViewpointGain);
+  /// nullopt ("auto", the default): coverage on a coarse grid, entropy on the map's own cells
+  /// (the topics, always on the map's cells, use views.gain: this one when given, else entropy).
+  std::optional<planning::ViewpointGain> gain;
   /// frontiers/deadline_s: ~get_frontiers gives up after this long (success false, saying so);
   /// 0: no deadline.
   double deadline_s = 0.0;

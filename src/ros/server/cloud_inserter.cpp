@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <thread>
 
 #include "fragg_map/errors.h"
@@ -172,6 +173,12 @@ bool CloudInserter::insert(const fragg::PointCloud& cloud, const Eigen::Isometry
     return false;
   }
   const auto start = std::chrono::steady_clock::now();
+  // The first clouds' beam spacing, outside the lock (a few ms, first clouds only).
+  std::optional<planning::BeamSpacing> beams;
+  if (beam_estimates_.load(std::memory_order_relaxed) < planning::BeamSpacingTracker::kClouds) {
+    ++beam_estimates_;
+    beams = planning::estimateBeamSpacing(cloud.points_S);
+  }
   bool fell_back = false;
   try {
     // One scan per lock: a query waits for this scan at most. The map drops points outside
@@ -183,6 +190,7 @@ bool CloudInserter::insert(const fragg::PointCloud& cloud, const Eigen::Isometry
     if (state->map.scanStore().contains(inserted->scan_id))
       state->stamps.add(stamp_ns, inserted->scan_id, frame);
     fell_back = state->map.backendName() != backend_before;
+    if (beams) state->beams.add(*beams);
   } catch (const std::exception& e) {
     stats_->addFault(CloudFault::kInsertFailed);
     ROS_ERROR_THROTTLE(5.0, "fragg_map: cloud from '%s' not inserted: %s (%lu such so far)",

@@ -76,6 +76,9 @@ class CloudInserter {
   const ServerParams params_;
   SharedMap* shared_;
   ServerStats* stats_;
+  /// Clouds whose beam spacing was estimated (MapState::beams), at most BeamSpacingTracker's
+  /// kClouds: later clouds cost nothing.
+  mutable std::atomic<size_t> beam_estimates_{0};
 };
 
 }  // namespace fragg::ros

@@ -135,6 +135,23 @@ FrontierService::Query FrontierService::queryFrom(const fragg_map::GetFrontiers:
   return q;
 }
 
+int FrontierService::autoCoarseCells(const MapState& state, std::string* note) const {
+  const std::optional<planning::BeamSpacing> beams = state.beams.estimate();
+  if (!beams) {
+    *note = ", map cells: no LiDAR beam spacing known yet";
+    return 1;
+  }
+  double range_m = beams->range_m;
+  if (params_.sensor.max_range_m > 0.0) range_m = std::min(range_m, params_.sensor.max_range_m);
+  const int cells =
+      planning::coarseCellsForBeams(state.map.resolution(), beams->angle_rad, range_m);
+  char buf[96];
+  std::snprintf(buf, sizeof buf, ", from beams %.2f deg apart at %.0f m",
+                beams->angle_rad * 57.29578, range_m);
+  *note = buf;
+  return cells;
+}
+
 Eigen::Vector3d FrontierService::robotPosition(const std::string& frame_in) const {
   const std::string frame = !frame_in.empty() && frame_in[0] == '/' ? frame_in.substr(1) : frame_in;
   if (frame == params_.frame_id) return Eigen::Vector3d::Zero();
@@ -166,29 +183,43 @@ bool FrontierService::get(fragg_map::GetFrontiers::Request& req,
     if (params_.frontiers.deadline_s > 0.0)
       deadline = planning::QueryControl::within(params_.frontiers.deadline_s);
     const planning::QueryControl* control = deadline ? &*deadline : nullptr;
+    // frontiers/coarse_cells 0: from the LiDAR's beam spacing (MapState::beams).
+    if (req.coarse_cells != 0 && !planning::validCoarseCells(req.coarse_cells))
+      throw fragg::InvalidArgument("coarse_cells must be 0 (the parameter), 1, 2, 4 or 8, got " +
+                                   std::to_string(req.coarse_cells));
+    std::optional<planning::ViewpointGain> gain = params_.frontiers.gain;
+    if (!req.gain.empty())
+      asField("gain", [&] { gain = planning::viewpointGainFromName(req.gain); });
+    int coarse_cells = req.coarse_cells != 0 ? req.coarse_cells : params_.frontiers.coarse_cells;
+    std::string grid_note;
     const auto answer = [&](const Map& map) {
       cells = planning::findFrontierCells(map, q.filter, params_.map.threads, control);
       planning::FrontierClusterer clusterer(q.clusters);
       clusters = clusterer.cluster(map, cells, control);
-      views.resize(clusters.size());
-      for (size_t i = 0; i < clusters.size(); ++i) {
-        planning::checkQuery(control, "frontier viewpoints");
-        views[i] = planning::clusterViewpoints(map, clusters[i], q.views);
-      }
+      views = planning::clustersViewpoints(map, clusters, q.views, params_.map.threads, control);
     };
-    // The query runs on a copy (frontiers/coarse_cells > 1: the coarse state map; else the
-    // observed cells as they are, map_copy.h: the same answer, gains of cells in the unknown
-    // band included). The map's read lock is held only while the copy is made: insertion and
-    // the other services go on meanwhile.
-    const int coarse_cells = std::max(1, params_.frontiers.coarse_cells);
+    // The query runs on a copy: the coarse state map (coarse_cells > 1; with a box, the box and
+    // the query's reach only), else the observed cells as they are (map_copy.h: the same answer,
+    // the entropy of cells in the unknown band included). The map's read lock is held only while
+    // the copy is made: insertion and the other services go on meanwhile.
     std::optional<Map> copy;
     {
       const SharedMap::ReadGuard state = shared_->read();
       res.revision = state->map.revision();
-      if (coarse_cells > 1)
-        copy.emplace(planning::coarseStateMap(state->map, coarse_cells, control));
-      else
+      if (coarse_cells == 0) coarse_cells = autoCoarseCells(*state, &grid_note);
+      q.views.gain = gain               ? *gain
+                     : coarse_cells > 1 ? planning::ViewpointGain::kCoverage
+                                        : planning::ViewpointGain::kEntropy;
+      if (coarse_cells > 1) {
+        if (q.filter.use_box)  // only what a query in the box sees: the same answer
+          copy.emplace(planning::coarseStateMapIn(
+              state->map, coarse_cells, q.filter.box_min_m, q.filter.box_max_m,
+              q.filter.min_obstacle_distance_m + planning::viewpointReachM(q.views), control));
+        else
+          copy.emplace(planning::coarseStateMap(state->map, coarse_cells, control));
+      } else {
         copy.emplace(observedCopy(state->map));
+      }
     }
     answer(*copy);
     const bool coarse = coarse_cells > 1;
@@ -202,12 +233,14 @@ bool FrontierService::get(fragg_map::GetFrontiers::Request& req,
     }
     res.success = true;
     stats_->addFrontierQuery();
-    res.message = std::to_string(cells.size()) + " frontier cells" +
-                  (coarse ? " (coarse cells of " + std::to_string(copy->resolution()) + " m)"
-                          : std::string()) +
-                  " in " + std::to_string(clusters.size()) + " clusters (" +
-                  std::to_string(with_views) + " with viewpoints), " + std::to_string(res.ms) +
-                  " ms";
+    res.message =
+        std::to_string(cells.size()) + " frontier cells" +
+        (coarse ? " (coarse cells of " + std::to_string(copy->resolution()) + " m" + grid_note + ")"
+         : grid_note.empty() ? std::string()
+                             : " (" + grid_note.substr(2) + ")") +
+        ", viewpoint gain " + planning::viewpointGainName(q.views.gain) + "," + " in " +
+        std::to_string(clusters.size()) + " clusters (" + std::to_string(with_views) +
+        " with viewpoints), " + std::to_string(res.ms) + " ms";
   } catch (const std::exception& e) {
     res = fragg_map::GetFrontiers::Response();
     res.success = false;

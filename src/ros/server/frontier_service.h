@@ -43,6 +43,9 @@ class FrontierService {
 
  private:
   bool get(fragg_map::GetFrontiers::Request& req, fragg_map::GetFrontiers::Response& res);
+  /// frontiers/coarse_cells 0: the coarse cell edge for the map's LiDAR (its beam spacing at
+  /// the far range, capped by the sensor's max range), 1 while none is known; `note` says why.
+  [[nodiscard]] int autoCoarseCells(const MapState& state, std::string* note) const;
   /// The origin of `frame` in the map frame now (the latest transform); throws
   /// fragg::InvalidArgument when tf cannot place it.
   Eigen::Vector3d robotPosition(const std::string& frame) const;

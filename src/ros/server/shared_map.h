@@ -12,6 +12,7 @@
 
 #include "fragg_map/map.h"
 #include "fragg_map/map_lock.h"
+#include "fragg_map/planning/beam_spacing.h"
 #include "fragg_map/ros/scan_stamp_index.h"
 
 namespace fragg::ros {
@@ -20,6 +21,9 @@ struct MapState {
   explicit MapState(fragg::Map m) : map(std::move(m)) {}
   fragg::Map map;
   ScanStampIndex stamps;  ///< kept scans by stamp (empty when the map keeps none)
+  /// The LiDAR's beam spacing from the first clouds (frontiers/coarse_cells 0 sizes the
+  /// frontier grid from it); kept across ~reset and ~load_map (the sensor stays the same).
+  planning::BeamSpacingTracker beams;
 };
 
 using SharedMap = fragg::Locked<MapState>;

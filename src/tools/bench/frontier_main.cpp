@@ -7,7 +7,9 @@
 //
 //   fragg_map_frontier_bench (--workloads DIR | --map MAP.fgm) [--max-scans 100]
 //       [--resolution 0.05] [--max-range 30] [--backend cpu|cuda|auto] [--viewpoints 1000]
-//       [--threads N] [--json FILE]
+//       [--threads N] [--json FILE] [--lidar-query K --box X0 Y0 Z0 X1 Y1 Z1]
+// --lidar-query K times only the node's ~get_frontiers on a LiDAR map (a coarse grid of K cells,
+// the coverage gain, k = 8) for the whole map and for the box, step by step.
 #include <fmt/format.h>
 #include <sys/resource.h>
 
@@ -23,6 +25,7 @@
 #include "bench/workloads.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/map.h"
+#include "fragg_map/planning/coarse_map.h"
 #include "fragg_map/planning/frontier_cells.h"
 #include "fragg_map/planning/frontier_clusters.h"
 #include "fragg_map/planning/frontier_tracker.h"
@@ -44,6 +47,8 @@ struct Options {
   size_t max_scans = 100, viewpoints = 1000;
   double resolution_m = 0.05, max_range_m = 30.0;
   int threads = 0;
+  int coarse_cells = 0;     ///< > 0: also time the node's LiDAR query on this grid
+  std::vector<double> box;  ///< its box (6 values), else around the map's centre
 };
 
 /// Process CPU time (user + system), ms: with other work on the machine, the steadier figure.
@@ -52,6 +57,66 @@ double cpuMs() {
   getrusage(RUSAGE_SELF, &u);
   return (u.ru_utime.tv_sec + u.ru_stime.tv_sec) * 1e3 +
          (u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-3;
+}
+
+/// The node's ~get_frontiers on a LiDAR map (its defaults: a coarse grid, the coverage gain,
+/// k = 8), for the whole map and for a box: each step's median wall and CPU time of 3 runs.
+void lidarQuery(const Map& map, const Options& o) {
+  planning::ViewpointOptions views;
+  views.gain = planning::ViewpointGain::kCoverage;
+  views.top_k = 8;
+  for (const bool in_box : {false, true}) {
+    planning::FrontierFilter filter;
+    if (in_box) {
+      filter.use_box = true;
+      filter.box_min_m = Eigen::Vector3d(o.box[0], o.box[1], o.box[2]);
+      filter.box_max_m = Eigen::Vector3d(o.box[3], o.box[4], o.box[5]);
+    }
+    std::vector<double> wall[4], cpu[4];
+    size_t cells = 0, clusters = 0, with_views = 0;
+    for (int run = 0; run < 3; ++run) {
+      auto t0 = Clock::now();
+      double c0 = cpuMs();
+      const Map coarse =
+          in_box ? planning::coarseStateMapIn(map, o.coarse_cells, filter.box_min_m,
+                                              filter.box_max_m, planning::viewpointReachM(views))
+                 : planning::coarseStateMap(map, o.coarse_cells);
+      const auto lap = [&](int step) {
+        wall[step].push_back(msSince(t0));
+        cpu[step].push_back(cpuMs() - c0);
+        t0 = Clock::now();
+        c0 = cpuMs();
+      };
+      lap(0);
+      const auto listed = planning::findFrontierCells(coarse, filter, o.threads);
+      lap(1);
+      const auto found = planning::FrontierClusterer().cluster(coarse, listed);
+      lap(2);
+      const auto best = planning::clustersViewpoints(coarse, found, views, o.threads);
+      lap(3);
+      cells = listed.size(), clusters = found.size(), with_views = 0;
+      for (const auto& v : best) with_views += v.empty() ? 0 : 1;
+    }
+    double total_wall = 0.0, total_cpu = 0.0;
+    for (int step = 0; step < 4; ++step) {
+      total_wall += percentile(wall[step], 0.5);
+      total_cpu += percentile(cpu[step], 0.5);
+    }
+    std::printf(
+        "%s\n",
+        fmt::format("LiDAR query, {} (coarse cells of {}, coverage gain, k 8): {} frontier cells, "
+                    "{} clusters ({} with viewpoints); medians of 3, wall / CPU ms: coarse copy "
+                    "{:.1f} / {:.1f}, cells {:.1f} / {:.1f}, clusters {:.1f} / {:.1f}, viewpoints "
+                    "{:.1f} / {:.1f}; total {:.1f} / {:.1f}",
+                    in_box ? fmt::format("box {} {} {} .. {} {} {} m", o.box[0], o.box[1], o.box[2],
+                                         o.box[3], o.box[4], o.box[5])
+                           : std::string("whole map"),
+                    o.coarse_cells, cells, clusters, with_views, percentile(wall[0], 0.5),
+                    percentile(cpu[0], 0.5), percentile(wall[1], 0.5), percentile(cpu[1], 0.5),
+                    percentile(wall[2], 0.5), percentile(cpu[2], 0.5), percentile(wall[3], 0.5),
+                    percentile(cpu[3], 0.5), total_wall, total_cpu)
+            .c_str());
+  }
 }
 
 int run(const Options& o) {
@@ -72,6 +137,10 @@ int run(const Options& o) {
   bool states_on_device = false;
   const std::vector<Scan> no_scans;
   const std::vector<Scan>& scans = loads.empty() ? no_scans : loads.front().scans;
+  if (o.coarse_cells > 0) {  // the LiDAR query only
+    lidarQuery(map, o);
+    return 0;
+  }
   if (scans.empty()) tracker.update(map);
   for (const Scan& s : scans) {
     auto t0 = Clock::now();
@@ -228,11 +297,18 @@ int main(int argc, char** argv) {
   app.add_option("--viewpoints", o.viewpoints, "Candidate viewpoints to score")
       ->capture_default_str();
   app.add_option("--threads", o.threads, "CPU threads (0 = every core)")->capture_default_str();
+  app.add_option("--lidar-query", o.coarse_cells,
+                 "Only time the node's LiDAR query (coarse grid of N cells, coverage, k 8) on "
+                 "the whole map and in --box")
+      ->check(CLI::IsMember({1, 2, 4, 8}));
+  app.add_option("--box", o.box, "The LiDAR query's box X0 Y0 Z0 X1 Y1 Z1 (m)")->expected(6);
   app.add_option("--json", o.json_path, "Write the figures as JSON");
   try {
     app.parse(argc, argv);
     if (o.workloads.empty() && o.map_path.empty())
       throw fragg::InvalidArgument("give --workloads DIR or --map MAP.fgm");
+    if (o.coarse_cells > 0 && o.box.size() != 6)
+      throw fragg::InvalidArgument("--lidar-query needs --box X0 Y0 Z0 X1 Y1 Z1");
     return fragg::bench::run(o);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);

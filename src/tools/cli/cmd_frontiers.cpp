@@ -2,6 +2,7 @@
 // clusters and each cluster's best viewpoints by information gain.
 #include <fmt/format.h>
 
+#include <chrono>
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -37,7 +38,18 @@ void runFrontiers(const FrontierCommandOptions& o) {
   // With --coarse-cells the frontiers, clusters and viewpoints are those of the coarse map:
   // their cells are coarse cells (keys and centres at its resolution).
   std::optional<Map> coarse;
-  if (o.coarse_cells > 1) coarse.emplace(planning::coarseStateMap(loaded, o.coarse_cells));
+  const auto t0 = std::chrono::steady_clock::now();
+  if (o.coarse_cells > 1) {
+    if (settings.filter.use_box)  // only the part the query sees (same answer, less work)
+      coarse.emplace(planning::coarseStateMapIn(
+          loaded, o.coarse_cells, settings.filter.box_min_m, settings.filter.box_max_m,
+          settings.filter.min_obstacle_distance_m +
+              (settings.viewpoints > 0 ? planning::viewpointReachM(settings.views) : 0.0)));
+    else
+      coarse.emplace(planning::coarseStateMap(loaded, o.coarse_cells));
+  }
+  const double coarse_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   const Map& map = coarse ? *coarse : loaded;
   const FrontierResult r = computeFrontiers(map, settings);
   const auto& cells = r.cells;
@@ -70,9 +82,12 @@ void runFrontiers(const FrontierCommandOptions& o) {
                         {"clusters", js},
                         {"ms_cells", r.cells_ms},
                         {"ms_clusters_viewpoints", r.clusters_viewpoints_ms}};
+    if (settings.views.gain != planning::ViewpointGain::kEntropy)  // only when asked, as below
+      j["gain"] = planning::viewpointGainName(settings.views.gain);
     if (o.coarse_cells > 1) {  // keys only when asked: the default JSON is unchanged
       j["coarse_cells"] = o.coarse_cells;
       j["frontier_resolution_m"] = map.resolution();
+      j["ms_coarse_map"] = coarse_ms;
     }
     std::printf("%s\n", j.dump().c_str());
     return;
@@ -88,9 +103,10 @@ void runFrontiers(const FrontierCommandOptions& o) {
     const auto& c = clusters[i];
     std::string best = "-";
     if (!views[i].empty())
-      best = fmt::format("{:.2f} {:.2f} {:.2f} {:.0f} bit", views[i][0].position_m.x(),
-                         views[i][0].position_m.y(), views[i][0].position_m.z(),
-                         views[i][0].gain_bits);
+      best =
+          fmt::format("{:.2f} {:.2f} {:.2f} {:.0f} {}", views[i][0].position_m.x(),
+                      views[i][0].position_m.y(), views[i][0].position_m.z(), views[i][0].gain_bits,
+                      settings.views.gain == planning::ViewpointGain::kCoverage ? "cells" : "bit");
     std::printf("%s\n",
                 fmt::format("{:6} {:7} {:8.2f} {:8.2f} {:8.2f} {:6.2f} {:6.2f} {:6.2f}   {}", c.id,
                             c.cells.size(), c.centroid_m.x(), c.centroid_m.y(), c.centroid_m.z(),

@@ -18,6 +18,7 @@ namespace fragg::cli {
 /// The flags as given (degrees and whole numbers as the user types them).
 struct FrontierFlags {
   std::string sensor = "pinhole";
+  std::string gain = "entropy";  ///< planning::ViewpointGain by name
   std::vector<double> box, height, robot, rays, fov_deg, elevation_deg;
   std::vector<double> radii = {1.5, 3.0}, heights = {0.0};
   double min_obstacle_distance_m = 0.0, max_extent_m = 3.0, clearance_m = 0.3;
@@ -43,8 +44,8 @@ struct FrontierResult {
 };
 
 /// Registers --box, --height, --min-obstacle-distance, --min-cluster, --max-extent,
-/// --viewpoints, --sensor, --rays, --fov, --elevation, --max-range, --radii, --heights,
-/// --angles, --clearance, --robot and --threads on `cmd` (defaults from `*flags`). With
+/// --viewpoints, --gain, --sensor, --rays, --fov, --elevation, --max-range, --radii,
+/// --heights, --angles, --clearance, --robot and --threads on `cmd` (defaults from `*flags`). With
 /// `needs` every one of them requires that flag (render: --frontiers).
 void addFrontierFlags(CLI::App* cmd, FrontierFlags* flags, CLI::Option* needs = nullptr);
 
