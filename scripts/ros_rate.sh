@@ -6,15 +6,18 @@
 # rate. Starts its own master on a free loopback port and stops everything it started.
 # Usage: bash scripts/ros_rate.sh [--workload DIR] [--scans N] [--resolution M]
 #          [--max-range M] [--rates "1 2 3"] [--queue-size N] [--markers] [--marker-rate HZ]
-#          [--out DIR] [common options]
+#          [--map-rate HZ] [--no-build] [--out DIR] [common options]
 #   --markers       subscribe to occupied_cells_vis_array (rostopic hz, raw bytes) so the node
 #                   builds and sends its markers; without it nobody subscribes and it does not
 #   --marker-rate   the node's marker_rate parameter (0: an update after every cloud)
+#   --map-rate      the node's map_rate parameter (whole-map outputs; default.yaml's when absent)
+#   --no-build      use the workspace as it is (no catkin build first)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 workload="${FRAGG_WORKLOADS:-$HOME/.cache/fragg_map/workloads}/w1_lidar360"
 scans=100 resolution=0.05 max_range=30 rates="1 2 3" queue_size=5 markers=0 marker_rate=0
+map_rate="" build=1
 out="$FRAGG_REPO/out/ros_rate"
 args=()
 while [ $# -gt 0 ]; do
@@ -27,12 +30,14 @@ while [ $# -gt 0 ]; do
     --queue-size) queue_size="$2"; shift 2 ;;
     --markers) markers=1; shift ;;
     --marker-rate) marker_rate="$2"; shift 2 ;;
+    --map-rate) map_rate="$2"; shift 2 ;;
+    --no-build) build=0; shift ;;
     --out) out="$2"; shift 2 ;;
     *) args+=("$1"); shift ;;
   esac
 done
 fragg_usage() {
-  sed -n '7,12p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
+  sed -n '7,14p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
   fragg_usage_common
 }
 fragg_parse_common "${args[@]+"${args[@]}"}"
@@ -40,8 +45,10 @@ if [ ! -f "$workload/poses.txt" ]; then
   echo "ros_rate: no KITTI folder at $workload (bash scripts/make_workloads.sh --only w1)" >&2
   exit 1
 fi
-fragg_install_deps
-fragg_build_ws >/dev/null
+if [ "$build" = 1 ]; then
+  fragg_install_deps
+  fragg_build_ws >/dev/null
+fi
 mkdir -p "$out"
 out="$(cd "$out" && pwd -P)"
 
@@ -101,6 +108,7 @@ for rate in $rates; do
   rosparam set /fragg_map/sensor_model/max_range "$max_range"
   rosparam set /fragg_map/queue_size "$queue_size"
   rosparam set /fragg_map/marker_rate "$marker_rate"
+  [ -z "$map_rate" ] || rosparam set /fragg_map/map_rate "$map_rate"
   # Unlatched, as the figures in docs/benchmarks.md were measured (latched, the default since
   # issue 16, builds every output after every cloud even without subscribers).
   rosparam set /fragg_map/latch false

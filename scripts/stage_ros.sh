@@ -4,7 +4,7 @@
 # (default .device/ros under the checkout), the way ../shared/tools/stage-octomap.sh stages
 # liboctomap:
 #   bin/      the node (fragg_map_server, which loads fragg_map/MapServerNodelet through
-#             pluginlib), rosbag's C++ player and recorder, the master's script
+#             pluginlib), rosbag's C++ player and recorder, the master's script, fragg_map_sim
 #   lib/      the nodelet library and every shared library these load (ldd), but the C/C++
 #             runtime the other machine has newer (glibc, libstdc++, libgcc_s)
 #   share/    package.xml of fragg_map and its dependencies, nodelet_plugins.xml (the package
@@ -14,6 +14,7 @@
 #   env.sh    PATH, LD_LIBRARY_PATH, PYTHONPATH, ROS_PACKAGE_PATH, CMAKE_PREFIX_PATH,
 #             ROS_MASTER_URI (loopback, port ROS_PORT or 11311) for a shell there
 #   run_rate.sh  master + node + bag at a rate; the trace_csv rows by outcome at the end
+#   (scripts/device_node_rate.sh: W1 at sensor rate with every output subscribed, on it)
 # Checked on this machine (Debian 12) from a bare environment (env -i, only env.sh): the smoke
 # bag played through the staged node, 10 of 10 clouds inserted. Not run on the GPU machine.
 # The node must be built with CUDA for the GPU (nvcc is here: FRAGG_CUDA=on, sm_90) first;
@@ -36,6 +37,11 @@ done
 rm -rf "$dest" && mkdir -p "$dest/bin" "$dest/lib" "$dest/python"
 cp -L "$node" "$dest/bin/fragg_map_server"
 cp -L /usr/lib/rosbag/play /usr/lib/rosbag/record "$dest/bin/"
+# The workspace's simulator (bag output), so that the GPU machine records W1 bags itself
+# (scripts/device_node_rate.sh): a 600-cloud W1 bag is ~2 GB, too big to carry.
+sim=${SIM:-$(dirname "$node")/fragg_map_sim}
+if [ -x "$sim" ]; then cp -L "$sim" "$dest/bin/fragg_map_sim"; else
+  echo "stage_ros: no $sim: device_node_rate.sh needs --bag then" >&2; fi
 # Shared libraries: everything ldd resolves, but the runtime the newer machine brings.
 skip='^(libc|libm|libdl|libpthread|librt|libresolv|ld-linux-x86-64|libstdc\+\+|libgcc_s)\.so'
 for exe in "$dest"/bin/* "$nodelet_lib"; do

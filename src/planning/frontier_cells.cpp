@@ -48,11 +48,14 @@ void FrontierFilter::validate() const {
                                       min_obstacle_distance_m));
 }
 
-bool FrontierFilter::keeps(const Map& map, const BlockView& view, const VoxelKey& key) const {
-  const Eigen::Vector3d c = map.centerOf(key);
+bool FrontierFilter::keepsCentre(const Eigen::Vector3d& c) const {
   if (use_box && ((c.array() < box_min_m.array()).any() || (c.array() > box_max_m.array()).any()))
     return false;
-  if (use_height && (c.z() < min_z_m || c.z() > max_z_m)) return false;
+  return !(use_height && (c.z() < min_z_m || c.z() > max_z_m));
+}
+
+bool FrontierFilter::keeps(const Map& map, const BlockView& view, const VoxelKey& key) const {
+  if (!keepsCentre(map.centerOf(key))) return false;
   if (min_obstacle_distance_m > 0.0 && obstacleWithin(map, view, key, min_obstacle_distance_m))
     return false;
   return true;

@@ -23,6 +23,19 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// A cell's centre and a point's cell at `resolution_m`, as Map::centerOf and Map::keyOf.
+Eigen::Vector3d centreOf(const VoxelKey& key, double resolution_m) {
+  return (Eigen::Vector3d(key.x, key.y, key.z) + Eigen::Vector3d::Constant(0.5)) * resolution_m;
+}
+
+VoxelKey keyAt(const Eigen::Vector3d& p_map, double resolution_m) {
+  const Eigen::Vector3d v = p_map / resolution_m;
+  if (!v.allFinite() || v.cwiseAbs().maxCoeff() >= 2147483647.0)
+    throw InvalidArgument("frontier filter box: a corner is outside the map's key range");
+  return {static_cast<int32_t>(std::floor(v.x())), static_cast<int32_t>(std::floor(v.y())),
+          static_cast<int32_t>(std::floor(v.z()))};
+}
+
 // One block of the map as the tracker knows it.
 struct BlockRecord {
   BlockKey key;
@@ -70,7 +83,10 @@ struct FrontierTracker::State {
   const QueryControl* control = nullptr;
   static constexpr int64_t kCheckEvery = 4096;
 
-  void examine(const Map& map, const BlockView* view, const std::vector<uint32_t>& which) {
+  /// `map` and `view`: needed by the obstacle distance filter only (null otherwise); the box
+  /// and height tests place cells with `resolution_m`.
+  void examine(const Map* map, const BlockView* view, double resolution_m,
+               const std::vector<uint32_t>& which) {
     const int64_t n = static_cast<int64_t>(which.size());
     std::vector<uint32_t> old_counts(which.size());
     for (int64_t i = 0; i < n; ++i) old_counts[i] = records[which[i]].count;
@@ -88,7 +104,7 @@ struct FrontierTracker::State {
             around[j] = k == BlockKeyTable::kNone ? nullptr : &records[k].state;
           }
       r.frontier = frontierBitsOf(around);
-      if (filter.any()) applyFilter(map, view, r);
+      if (filter.any()) applyFilter(map, view, resolution_m, r);
       uint32_t count = 0;
       for (int w = 0; w < kMaskWords; ++w) count += __builtin_popcountll(r.frontier.words[w]);
       r.count = count;
@@ -97,31 +113,40 @@ struct FrontierTracker::State {
     for (int64_t i = 0; i < n; ++i) total = total - old_counts[i] + records[which[i]].count;
   }
 
-  /// `view`: the host view, needed by the obstacle distance filter only.
-  void applyFilter(const Map& map, const BlockView* view, BlockRecord& r) const {
-    static const BlockMap kNoBlocks;  // the box and height tests read no block
-    const BlockView none(kNoBlocks);
-    const BlockView& cells = view ? *view : none;
+  /// `map`, `view`: the map and its host view, needed by the obstacle distance filter only.
+  void applyFilter(const Map* map, const BlockView* view, double resolution_m,
+                   BlockRecord& r) const {
+    const bool cells = filter.min_obstacle_distance_m > 0.0;
     for (int w = 0; w < kMaskWords; ++w)
       for (uint64_t bits = r.frontier.words[w]; bits; bits &= bits - 1) {
         const int b = __builtin_ctzll(bits);
-        if (!filter.keeps(map, cells, voxelKeyOf(r.key, w * 64 + b)))
-          r.frontier.words[w] &= ~(uint64_t(1) << b);
+        const VoxelKey key = voxelKeyOf(r.key, w * 64 + b);
+        const bool keep = cells ? filter.keeps(*map, *view, key)
+                                : filter.keepsCentre(centreOf(key, resolution_m));
+        if (!keep) r.frontier.words[w] &= ~(uint64_t(1) << b);
       }
   }
 
   /// Every block read again; returns the number of records examined.
   uint64_t full(const Map& map, const BlockView& view) {
-    clear();
     std::vector<BlockKey> keys;
     keys.reserve(view.size());
     view.forEach([&](const BlockKey& key, const Block&) { keys.push_back(key); });
+    std::vector<const BlockStateMasks*> masks(keys.size());
+    for (size_t i = 0; i < keys.size(); ++i) masks[i] = view.findMasks(keys[i]);
+    return fullFrom(keys, masks.data(), &map, &view, map.resolution());
+  }
+
+  /// Every block of `keys` (masks[i] its masks) read again: the set from scratch.
+  uint64_t fullFrom(const std::vector<BlockKey>& keys, const BlockStateMasks* const* masks,
+                    const Map* map, const BlockView* view, double resolution_m) {
+    clear();
     const int64_t n = static_cast<int64_t>(keys.size());
     records.resize(keys.size());
 #pragma omp parallel for schedule(static) num_threads(threadCount())
     for (int64_t i = 0; i < n; ++i) {
       records[i].key = keys[i];
-      records[i].state = statesOf(*view.findMasks(keys[i]));
+      records[i].state = statesOf(*masks[i]);
     }
     index.reserve(keys.size());
     std::vector<uint32_t> which;
@@ -130,7 +155,7 @@ struct FrontierTracker::State {
       index.insert(records[i].key, i);
       if (inRange(records[i].key)) which.push_back(i);
     }
-    examine(map, &view, which);
+    examine(map, view, resolution_m, which);
     return which.size();
   }
 
@@ -138,14 +163,22 @@ struct FrontierTracker::State {
   /// the neighbourhoods their changes reach examined again. False when the list no longer
   /// reaches back to the last update (the caller recomputes in full).
   bool incremental(const Map& map, const BlockView* view, FrontierUpdateStats& stats) {
-    auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = std::chrono::steady_clock::now();
     std::vector<BlockKey> changed;
     std::vector<BlockStateMasks> masks;
     if (!map.masksChangedSince(revision, &changed, &masks)) return false;
+    stats.states_seconds = secondsSince(t0);
+    incrementalFrom(changed, masks, &map, view, map.resolution(), stats);
+    return true;
+  }
+
+  /// The incremental update from the changed-block list (`changed`, their `masks`).
+  void incrementalFrom(const std::vector<BlockKey>& changed,
+                       const std::vector<BlockStateMasks>& masks, const Map* map,
+                       const BlockView* view, double resolution_m, FrontierUpdateStats& stats) {
     const int64_t n = static_cast<int64_t>(changed.size());
     stats.blocks_changed = changed.size();
-    stats.states_seconds = secondsSince(t0);
-    t0 = std::chrono::steady_clock::now();
+    auto t0 = std::chrono::steady_clock::now();
     // Compare in parallel (each changed key has its own record), then add the new blocks. A
     // block's unknown cells decide its neighbours' frontier cells across the faces, edges and
     // corners they share, so only the neighbours whose side saw an unknown cell come or go are
@@ -174,7 +207,7 @@ struct FrontierTracker::State {
     // every block within that distance. Marked in parallel: the first thread to stamp a record
     // lists it.
     const int reach_cells =
-        static_cast<int>(std::ceil(filter.min_obstacle_distance_m / map.resolution()));
+        static_cast<int>(std::ceil(filter.min_obstacle_distance_m / resolution_m));
     const int reach = reach_cells > 0 ? 1 + (reach_cells + kBlockMask) / kBlockSize : 1;
     if (++update_number == 0) {
       for (BlockRecord& r : records) r.mark = 0;
@@ -207,10 +240,16 @@ struct FrontierTracker::State {
     }
     stats.compare_seconds = secondsSince(t0);
     t0 = std::chrono::steady_clock::now();
-    examine(map, view, which);
+    examine(map, view, resolution_m, which);
     stats.examine_seconds = secondsSince(t0);
     stats.blocks_examined = which.size();
-    return true;
+  }
+
+  /// The filter box's block range at `resolution_m` (as Map::keyOf places its corners).
+  void setBox(double resolution_m) {
+    if (!filter.use_box) return;
+    box_lo = blockKeyOf(keyAt(filter.box_min_m, resolution_m));
+    box_hi = blockKeyOf(keyAt(filter.box_max_m, resolution_m));
   }
 };
 
@@ -250,10 +289,7 @@ FrontierUpdateStats FrontierTracker::updateChecked(const Map& map) {
   const auto t0 = std::chrono::steady_clock::now();
   State& s = *state_;
   FrontierUpdateStats stats;
-  if (s.filter.use_box) {
-    s.box_lo = blockKeyOf(map.keyOf(s.filter.box_min_m));
-    s.box_hi = blockKeyOf(map.keyOf(s.filter.box_max_m));
-  }
+  s.setBox(map.resolution());
   // The host view syncs a device backend's blocks into the host map: taken only for a full
   // recompute and for the obstacle distance filter, which reads cells.
   std::optional<BlockView> view;
@@ -274,6 +310,72 @@ FrontierUpdateStats FrontierTracker::updateChecked(const Map& map) {
   stats.cells = s.total;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;
+}
+
+FrontierMapChanges FrontierTracker::collect(const Map& map) const {
+  if (state_->filter.min_obstacle_distance_m > 0.0)
+    throw InvalidArgument(
+        "frontier tracker: a filter with min_obstacle_distance_m reads cells: update() under "
+        "the map's lock instead of collect() and apply()");
+  const State& s = *state_;
+  FrontierMapChanges c;
+  c.base_revision = s.revision;
+  c.base_valid = s.valid;
+  c.revision = map.revision();
+  c.view_epoch = map.viewEpoch();
+  c.resolution_m = map.resolution();
+  c.full = !s.valid || map.viewEpoch() != s.epoch || map.revision() < s.revision;
+  if (!c.full && map.revision() == s.revision) return c;  // nothing changed
+  if (!c.full && map.masksChangedSince(s.revision, &c.keys, &c.masks)) return c;
+  c.full = true;
+  c.keys.clear();
+  c.masks.clear();
+  const BlockView view = map.blockView();
+  c.keys.reserve(view.size());
+  view.forEach([&](const BlockKey& key, const Block&) { c.keys.push_back(key); });
+  c.masks.resize(c.keys.size());
+  for (size_t i = 0; i < c.keys.size(); ++i) c.masks[i] = *view.findMasks(c.keys[i]);
+  return c;
+}
+
+FrontierUpdateStats FrontierTracker::apply(const FrontierMapChanges& changes,
+                                           const QueryControl* control) {
+  State& s = *state_;
+  if (!changes.full && (changes.base_revision != s.revision || changes.base_valid != s.valid))
+    throw InvalidArgument(
+        "frontier tracker: changes collected at another revision than the tracker's (collect "
+        "and apply in pairs)");
+  if (changes.keys.size() != changes.masks.size())
+    throw InvalidArgument("frontier tracker: changes with " + std::to_string(changes.keys.size()) +
+                          " keys and " + std::to_string(changes.masks.size()) + " masks");
+  try {
+    s.control = control;
+    checkQuery(control, "frontier update");
+    const auto t0 = std::chrono::steady_clock::now();
+    FrontierUpdateStats stats;
+    s.setBox(changes.resolution_m);
+    stats.full = changes.full;
+    if (changes.full) {
+      std::vector<const BlockStateMasks*> masks(changes.masks.size());
+      for (size_t i = 0; i < masks.size(); ++i) masks[i] = &changes.masks[i];
+      stats.blocks_examined =
+          s.fullFrom(changes.keys, masks.data(), nullptr, nullptr, changes.resolution_m);
+      stats.blocks_changed = changes.keys.size();
+    } else if (changes.revision != s.revision) {
+      s.incrementalFrom(changes.keys, changes.masks, nullptr, nullptr, changes.resolution_m, stats);
+    }
+    s.valid = true;
+    s.revision = changes.revision;
+    s.epoch = changes.view_epoch;
+    stats.cells = s.total;
+    stats.seconds = secondsSince(t0);
+    s.control = nullptr;
+    return stats;
+  } catch (...) {
+    s.control = nullptr;
+    s.clear();  // a stopped or failed update leaves no half-updated set behind
+    throw;
+  }
 }
 
 void FrontierTracker::forEachBlock(

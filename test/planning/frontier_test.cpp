@@ -212,6 +212,78 @@ TEST(FrontierTracker, IncrementalEqualsFullOverAHundredScans) {
   EXPECT_EQ(tracker.cells(), bruteForceFrontiers(map));
 }
 
+// collect() under the lock and apply() without it (the server's frontier topics): the same set
+// as update() on the same map after every scan of a short drive, under a box filter too; a
+// clear box makes it a full copy; a pair broken by another update, and a filter that reads
+// cells, are refused.
+TEST(FrontierTracker, CollectThenApplyEqualsUpdate) {
+  sim::Scene scene = sim::loadScene(std::string(FRAGG_SOURCE_DIR) + "/config/scenes/campus.json");
+  const sim::Terrain terrain = scene.terrain;
+  const auto poses = sim::sampleTrajectory(
+      scene.trajectories.at("street"),
+      [&terrain](double x, double y) { return terrain.heightAt(x, y); }, sim::DriftSpec(), 7, 15);
+  const geometry::MeshBvh bvh(std::move(scene.mesh));
+  sim::LidarSpec spec;
+  spec.beams = 16;
+  spec.azimuth_steps = 360;
+  spec.max_range_m = 60;
+  Eigen::Isometry3d T_base_sensor = Eigen::Isometry3d::Identity();
+  T_base_sensor.translation().z() = 1.8;
+  MapParams p;
+  p.resolution_m = 0.2;
+  Map map(p);
+  FrontierFilter box;
+  box.use_box = true;
+  box.box_min_m = poses[0].T_map_base.translation() - Eigen::Vector3d(20, 20, 1);
+  box.box_max_m = poses[0].T_map_base.translation() + Eigen::Vector3d(20, 20, 4);
+  FrontierTracker updated, copied, updated_box(box), copied_box(box);
+  const SensorModel sensor = SensorModel::autoFromCloud(0.0, 30.0);
+  uint64_t incremental = 0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const Eigen::Isometry3d T = poses[i].T_map_base * T_base_sensor;
+    map.insert(sim::simulateLidar(bvh, spec, T, 7, i), T, sensor);
+    updated.update(map);
+    updated_box.update(map);
+    const FrontierMapChanges changes = copied.collect(map);
+    EXPECT_EQ(changes.full, i == 0) << "scan " << i;
+    const FrontierUpdateStats st = copied.apply(changes);
+    copied_box.apply(copied_box.collect(map));
+    if (!st.full) ++incremental;
+    ASSERT_EQ(copied.cells(), updated.cells()) << "after scan " << i;
+    ASSERT_EQ(copied_box.cells(), updated_box.cells()) << "after scan " << i;
+    EXPECT_EQ(copied.revision(), map.revision());
+  }
+  EXPECT_EQ(incremental, poses.size() - 1);
+  EXPECT_GT(copied.size(), 1000u);
+  EXPECT_EQ(copied_box.cells(), findFrontierCells(map, box));
+  // Nothing changed: an empty incremental copy, the set unchanged.
+  const FrontierMapChanges none = copied.collect(map);
+  EXPECT_FALSE(none.full);
+  EXPECT_TRUE(none.keys.empty());
+  EXPECT_EQ(copied.apply(none).cells, updated.size());
+  // Blocks erased: a full copy of every block's masks; the set stays exact.
+  const Eigen::Vector3d c = poses[12].T_map_base.translation();
+  map.clearBox(c - Eigen::Vector3d(4, 4, 1), c + Eigen::Vector3d(4, 4, 3));
+  const FrontierMapChanges after_clear = copied.collect(map);
+  EXPECT_TRUE(after_clear.full);
+  EXPECT_EQ(after_clear.keys.size(), map.blockCount());
+  copied.apply(after_clear);
+  EXPECT_EQ(copied.cells(), findFrontierCells(map));
+  // A pair broken by an update in between is refused, the set untouched.
+  const Eigen::Isometry3d T = poses[0].T_map_base * T_base_sensor;
+  map.insert(sim::simulateLidar(bvh, spec, T, 7, 99), T, sensor);
+  const FrontierMapChanges stale = copied.collect(map);
+  ASSERT_FALSE(stale.full);
+  copied.update(map);
+  const std::vector<VoxelKey> before = copied.cells();
+  EXPECT_THROW(copied.apply(stale), InvalidArgument);
+  EXPECT_EQ(copied.cells(), before);
+  // The obstacle distance filter reads cells: collect() refuses it.
+  FrontierFilter near;
+  near.min_obstacle_distance_m = 0.5;
+  EXPECT_THROW((void)FrontierTracker(near).collect(map), InvalidArgument);
+}
+
 TEST(FrontierClusters, ComponentsSplitsDropsAndStableIds) {
   MapParams p;
   p.resolution_m = 0.1;

@@ -1,7 +1,7 @@
 # rostests that need no recorded bag: roslaunch by package name, the node killed on a page store,
-# service calls during long insertions, map_rate on a cloud stream, and fragg_map as a drop-in for
-# octomap_server (an octomap_server YAML through launch/octomap_compat.launch, every row of
-# the compatibility table of docs/ros.md).
+# service calls during long insertions and during a long query, map_rate on a cloud stream, and
+# fragg_map as a drop-in for octomap_server (an octomap_server YAML through
+# launch/octomap_compat.launch, every row of the compatibility table of docs/ros.md).
 if(FRAGG_HAVE_ROS)
   find_package(rostest REQUIRED)
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/roslaunch_by_name.test)
@@ -10,6 +10,9 @@ if(FRAGG_HAVE_ROS)
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/map_server_store_kill.test)
   # ~get_stats, ~save_map and ~clear_bbox called while big clouds are inserted (issue 18).
   add_rostest(${CMAKE_CURRENT_LIST_DIR}/map_server_busy.test)
+  # Issue 35, item 4: while a long ~get_frontiers runs, ~get_stats and ~save_map answer and
+  # clouds are inserted (services on threads of their own, the query on a copy of the map).
+  add_rostest(${CMAKE_CURRENT_LIST_DIR}/map_server_side_by_side.test)
   # The server's insertion path (CloudInput: subscriber, queue, insertion thread) leaves the map
   # unlocked between every two clouds: a query from another thread gets in each time.
   add_rostest_gtest(cloud_input_lock_test ${CMAKE_CURRENT_LIST_DIR}/cloud_input_lock.test

@@ -29,6 +29,8 @@ struct FrontierFilter {
   void validate() const;
   /// Whether a frontier cell passes (the distance test reads `map`).
   bool keeps(const Map& map, const BlockView& view, const VoxelKey& key) const;
+  /// The box and height tests alone, for a cell centred at `centre_m` (map frame).
+  [[nodiscard]] bool keepsCentre(const Eigen::Vector3d& centre_m) const;
   bool any() const { return use_box || use_height || min_obstacle_distance_m > 0.0; }
 };
 

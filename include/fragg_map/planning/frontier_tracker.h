@@ -16,6 +16,7 @@
 
 #include "fragg_map/planning/frontier_cells.h"
 #include "fragg_map/planning/query_control.h"
+#include "fragg_map/state_masks.h"
 
 namespace fragg::planning {
 
@@ -34,6 +35,21 @@ struct FrontierUpdateStats {
   double states_seconds = 0.0, compare_seconds = 0.0, examine_seconds = 0.0;
 };
 
+/// What an update reads from the map, copied under the map's read lock (FrontierTracker::
+/// collect) so that the update itself (FrontierTracker::apply) runs without the lock: the
+/// changed-block list with masks since the tracker's revision, or, when the update must be
+/// full, every block's masks.
+struct FrontierMapChanges {
+  bool full = false;                   ///< keys/masks are every block (else the blocks changed)
+  uint64_t base_revision = 0;          ///< the tracker's revision at collect()
+  bool base_valid = false;             ///< whether the tracker held a set at collect()
+  uint64_t revision = 0;               ///< the map's revision at collect()
+  uint64_t view_epoch = 0;             ///< the map's Map::viewEpoch() at collect()
+  double resolution_m = 0.0;           ///< the map's resolution
+  std::vector<BlockKey> keys;          ///< the blocks
+  std::vector<BlockStateMasks> masks;  ///< their state masks, in the order of keys
+};
+
 class FrontierTracker {
  public:
   /// Throws InvalidArgument for a bad filter or negative thread count.
@@ -46,6 +62,16 @@ class FrontierTracker {
   /// deadline passes or that is cancelled, throws QueryStopped and forgets the set (the next
   /// update is a full one).
   FrontierUpdateStats update(const Map& map, const QueryControl* control = nullptr);
+  /// What update(map) would read, copied (hold the map's read lock; the tracker is not
+  /// changed): the changed-block list with masks (the change log: no cell read), or every
+  /// block's masks when the update must be full. Throws InvalidArgument for a filter with
+  /// min_obstacle_distance_m > 0 (it reads cells: use update()).
+  [[nodiscard]] FrontierMapChanges collect(const Map& map) const;
+  /// The update from what collect() copied, without the map: the same set as update(map) at
+  /// that revision. Pairs with the collect() just before it (InvalidArgument when the tracker
+  /// changed in between: nothing changes). `control` as update()'s.
+  FrontierUpdateStats apply(const FrontierMapChanges& changes,
+                            const QueryControl* control = nullptr);
   /// Forgets everything: the next update is a full one.
   void reset();
 

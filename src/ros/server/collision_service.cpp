@@ -1,4 +1,5 @@
-// ~check_collision: validate, transform, check under the read lock, answer, draw.
+// ~check_collision: validate, transform, copy the reachable cells under the read lock, check
+// the copy, answer, draw.
 #include "collision_service.h"
 
 #include <ros/console.h>
@@ -7,6 +8,9 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <chrono>
+#include <cmath>
+#include <optional>
+#include <vector>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/geometry/obj_file.h"
@@ -27,6 +31,22 @@ void clearAnswer(fragg_map::CheckCollision::Response& res) {
   res = fragg_map::CheckCollision::Response();
   res.first_collision = -1;
   res.path_first_segment = -1;
+}
+
+// The observed cells of `map` a shape can overlap at any of the poses, or on the straight
+// segments between them: every cell whose centre lies in the poses' box grown by the shape's
+// bounding radius, sqrt(3) margins and two cells (a cell the grown shape overlaps has its
+// centre within half a cell diagonal of it), as Map::extract copies them (exact cells, so
+// checks on the copy answer as on the map). Hold the map's read lock.
+Map reachableCopy(const Map& map, const planning::CollisionShape& shape,
+                  const std::vector<Eigen::Isometry3d>& T_map_shape, double margin_m) {
+  Eigen::Vector3d lo = T_map_shape.front().translation(), hi = lo;
+  for (const Eigen::Isometry3d& T : T_map_shape) {
+    lo = lo.cwiseMin(T.translation());
+    hi = hi.cwiseMax(T.translation());
+  }
+  const double grow = shape.boundingRadius() + std::sqrt(3.0) * margin_m + 2.0 * map.resolution();
+  return map.extract(lo.array() - grow, hi.array() + grow);
 }
 
 }  // namespace
@@ -104,12 +124,19 @@ bool CollisionService::check(fragg_map::CheckCollision::Request& req,
     std::vector<planning::CollisionResult> results;
     std::optional<planning::PathResult> path;
     {
-      const SharedMap::ReadGuard state = shared_->read();
-      results = planning::checkPoses(state->map, shape, poses, options);
-      if (req.path_mode) path = planning::checkPath(state->map, shape, poses, options);
+      // The cells the shape can reach at any pose (and along the path between them), copied
+      // under the read lock; the checks run on the copy without it, so that a large batch
+      // holds neither insertion nor the other services back.
+      std::optional<Map> reach;
+      {
+        const SharedMap::ReadGuard state = shared_->read();
+        reach.emplace(reachableCopy(state->map, shape, poses, options.margin_m));
+      }
+      results = planning::checkPoses(*reach, shape, poses, options);
+      if (req.path_mode) path = planning::checkPath(*reach, shape, poses, options);
       for (size_t i = 0; i < results.size(); ++i) {
         if (!results[i].collides) continue;
-        const Eigen::Vector3d c = state->map.centerOf(results[i].first_cell);
+        const Eigen::Vector3d c = reach->centerOf(results[i].first_cell);
         res.first_cell.x = c.x();
         res.first_cell.y = c.y();
         res.first_cell.z = c.z();

@@ -1,5 +1,7 @@
 // ~check_collision: a shape checked against the map at poses, or along the path through them
-// (fragg_map/planning: checkPoses, checkPath on the CPU), under the map's read lock. Poses come
+// (fragg_map/planning: checkPoses, checkPath on the CPU) on a copy of the cells the shape can
+// reach, taken under the map's read lock (the checks run without it, on a thread of the
+// service's own: service_threads.h). Poses come
 // through tf into the map frame; the request's options or the collision/* parameters apply.
 // After each answered call the `collisions` topic shows the shape at the checked poses
 // (collision_markers.h). Bad arguments (no poses, NaN, a quaternion off unit, a shape the core

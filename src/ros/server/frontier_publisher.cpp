@@ -5,10 +5,12 @@
 #include <ros/console.h>
 
 #include <chrono>
+#include <optional>
 #include <vector>
 
 #include "fragg_map/planning/viewpoints.h"
 #include "fragg_map/ros/frontier_markers.h"
+#include "map_copy.h"
 
 namespace fragg::ros {
 
@@ -49,19 +51,38 @@ void FrontierPublisher::onTimer(const ::ros::SteadyTimerEvent&) {
   double resolution_m = 0.0;
   uint64_t revision = 0;
   planning::FrontierUpdateStats update;
+  // The tracker's input (the changed-block list with masks, or every block's masks for a full
+  // update) is copied under the map's read lock and the tracker updated without it, so that a
+  // long update (the first one on a big map) never holds insertion back. The obstacle distance
+  // filter reads cells: with it the update runs under the lock.
+  const bool copy_first = fp.filter.min_obstacle_distance_m <= 0.0;
   try {
-    const SharedMap::ReadGuard state = shared_->read();
-    revision = state->map.revision();
-    if (published_ && revision == published_revision_ && !joined) return;
-    update = tracker_.update(state->map);
-    resolution_m = state->map.resolution();
+    std::optional<planning::FrontierMapChanges> changes;
+    {
+      const SharedMap::ReadGuard state = shared_->read();
+      revision = state->map.revision();
+      if (published_ && revision == published_revision_ && !joined) return;
+      resolution_m = state->map.resolution();
+      if (copy_first)
+        changes.emplace(tracker_.collect(state->map));
+      else
+        update = tracker_.update(state->map);
+    }
+    if (changes) update = tracker_.apply(*changes);
     cells = tracker_.cells();
     if (marker_subs > 0) {
-      clusters = clusterer_.cluster(state->map, cells);
+      // Clusters and viewpoints read the cells around the frontier: on a copy of the observed
+      // cells (map_copy.h: they answer as on the map), taken under the lock.
+      std::optional<Map> states;
+      {
+        const SharedMap::ReadGuard state = shared_->read();
+        states.emplace(observedCopy(state->map));
+      }
+      clusters = clusterer_.cluster(*states, cells);
       if (fp.viewpoints > 0) {
         views.resize(clusters.size());
         for (size_t i = 0; i < clusters.size(); ++i)
-          views[i] = planning::clusterViewpoints(state->map, clusters[i], fp.views);
+          views[i] = planning::clusterViewpoints(*states, clusters[i], fp.views);
       }
     }
   } catch (const std::exception& e) {

@@ -5,8 +5,12 @@
 // publishes, but only while one of the topics has a subscriber and only when the map changed
 // or a subscriber joined: with nobody listening the timer does no work at all. Cluster ids stay
 // the same while a cluster's cells do (one FrontierClusterer for the topic's lifetime). The
-// tracker, the clusters and the viewpoints are computed under the map's read lock; at most
-// frontiers/max_marker_cells cells go out (an even subsample beyond it, logged).
+// tracker's input (the changed-block list with masks: FrontierTracker::collect) is copied under
+// the map's read lock and the tracker updated without it (but with the obstacle distance filter,
+// which reads cells); the clusters and viewpoints (markers only) on a copy of the observed cells
+// (map_copy.h) taken under the lock;
+// at most frontiers/max_marker_cells cells go out (an even subsample beyond it, logged). The
+// timer runs on a thread of its own (service_threads.h).
 #pragma once
 
 #include <ros/node_handle.h>

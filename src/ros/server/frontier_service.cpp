@@ -5,6 +5,7 @@
 #include <tf2/exceptions.h>
 #include <tf2_eigen/tf2_eigen.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -13,6 +14,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/planning/coarse_map.h"
 #include "fragg_map/planning/query_control.h"
+#include "map_copy.h"
 
 namespace fragg::ros {
 namespace {
@@ -196,7 +198,11 @@ bool FrontierService::get(fragg_map::GetFrontiers::Request& req,
       clusters = clusterer.cluster(map, cells, control);
       views = planning::clustersViewpoints(map, clusters, q.views, params_.map.threads, control);
     };
-    std::optional<Map> coarse;  // coarse_cells > 1: the query's own coarse copy
+    // The query runs on a copy: the coarse state map (coarse_cells > 1; with a box, the box and
+    // the query's reach only), else the observed cells as they are (map_copy.h: the same answer,
+    // the entropy of cells in the unknown band included). The map's read lock is held only while
+    // the copy is made: insertion and the other services go on meanwhile.
+    std::optional<Map> copy;
     {
       const SharedMap::ReadGuard state = shared_->read();
       res.revision = state->map.revision();
@@ -206,16 +212,17 @@ bool FrontierService::get(fragg_map::GetFrontiers::Request& req,
                                         : planning::ViewpointGain::kEntropy;
       if (coarse_cells > 1) {
         if (q.filter.use_box)  // only what a query in the box sees: the same answer
-          coarse.emplace(planning::coarseStateMapIn(
+          copy.emplace(planning::coarseStateMapIn(
               state->map, coarse_cells, q.filter.box_min_m, q.filter.box_max_m,
               q.filter.min_obstacle_distance_m + planning::viewpointReachM(q.views), control));
         else
-          coarse.emplace(planning::coarseStateMap(state->map, coarse_cells, control));
+          copy.emplace(planning::coarseStateMap(state->map, coarse_cells, control));
       } else {
-        answer(state->map);
+        copy.emplace(observedCopy(state->map));
       }
     }
-    if (coarse) answer(*coarse);  // the map's lock released: insertion and services go on
+    answer(*copy);
+    const bool coarse = coarse_cells > 1;
     res.ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     res.frontier_cells = cells.size();
@@ -226,14 +233,14 @@ bool FrontierService::get(fragg_map::GetFrontiers::Request& req,
     }
     res.success = true;
     stats_->addFrontierQuery();
-    res.message = std::to_string(cells.size()) + " frontier cells" +
-                  (coarse ? " (coarse cells of " + std::to_string(coarse->resolution()) + " m" +
-                                grid_note + ")"
-                   : grid_note.empty() ? std::string()
-                                       : " (" + grid_note.substr(2) + ")") +
-                  ", viewpoint gain " + planning::viewpointGainName(q.views.gain) + "," + " in " +
-                  std::to_string(clusters.size()) + " clusters (" + std::to_string(with_views) +
-                  " with viewpoints), " + std::to_string(res.ms) + " ms";
+    res.message =
+        std::to_string(cells.size()) + " frontier cells" +
+        (coarse ? " (coarse cells of " + std::to_string(copy->resolution()) + " m" + grid_note + ")"
+         : grid_note.empty() ? std::string()
+                             : " (" + grid_note.substr(2) + ")") +
+        ", viewpoint gain " + planning::viewpointGainName(q.views.gain) + "," + " in " +
+        std::to_string(clusters.size()) + " clusters (" + std::to_string(with_views) +
+        " with viewpoints), " + std::to_string(res.ms) + " ms";
   } catch (const std::exception& e) {
     res = fragg_map::GetFrontiers::Response();
     res.success = false;

@@ -1,11 +1,13 @@
 // ~get_frontiers (the exploration service): the map's frontier cells, their clusters and each
-// cluster's best k viewpoints by information gain, computed in full on the map's current state
-// under its read lock (fragg_map/planning: findFrontierCells, FrontierClusterer,
-// clusterViewpoints), with the frontiers/* parameters where the request leaves an option out.
-// A fresh clusterer per call numbers the clusters 1, 2, ... by first cell, as
-// `fragg_map frontiers` does on the saved map. Bad arguments (k < 1, a NaN or inverted box, an
-// unknown sensor, a robot frame tf cannot place now ...) answer success=false with the reason;
-// nothing is computed and the map is untouched.
+// cluster's best k viewpoints by information gain, computed in full on a copy of the map
+// (planning::coarseStateMap at frontiers/coarse_cells > 1, else the observed cells as they are:
+// map_copy.h) taken under its read lock, the query itself without the lock (fragg_map/planning:
+// findFrontierCells, FrontierClusterer, clusterViewpoints), with the frontiers/* parameters where
+// the request leaves an option out. The service has a thread of its own (service_threads.h). A
+// fresh clusterer per call numbers the clusters 1, 2, ... by first cell, as `fragg_map frontiers`
+// does on the saved map. Bad arguments (k < 1, a NaN or inverted box, an unknown sensor, a robot
+// frame tf cannot place now ...) answer success=false with the reason; nothing is computed and the
+// map is untouched.
 #pragma once
 
 #include <ros/node_handle.h>

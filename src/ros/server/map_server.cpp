@@ -16,6 +16,15 @@ namespace fragg::ros {
 MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
                      const std::string& map_file_arg)
     : params_(readParameters(private_nh)), tf_listener_(tf_buffer_, nh) {
+  // Should a part throw (the node does not start), the service threads stop before the parts
+  // built so far (whose callbacks they may be running) are destroyed.
+  struct StopThreadsOnThrow {
+    ServiceThreads* threads;
+    bool armed = true;
+    ~StopThreadsOnThrow() {
+      if (armed) threads->stop();
+    }
+  } stop_on_throw{&threads_};
   if (!map_file_arg.empty()) params_.octomap.map_file = map_file_arg;
   logOctomapCompatNotes(params_);
   // Throws (the node does not start) when the folder cannot be created.
@@ -37,13 +46,17 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
   shared_ = std::make_unique<SharedMap>(MapState(makeServerMap(params_.map, paging_)));
   nh_ = nh;
   private_nh_ = private_nh;
+  // The outputs stay on the node's own queue (with the reconfigure server, which makes them
+  // again): a callback of theirs cannot run while applyParams replaces them.
   startOutputs();
-  services_ = std::make_unique<MapServices>(private_nh, params_, shared_.get(), &stats_, [this] {
-    const std::shared_lock<std::shared_mutex> outputs(outputs_mutex_);
-    publishers_->publishFull(::ros::Time::now());
-    publishOctomaps(::ros::Time::now(), false);
-  });
-  octomap_services_ = std::make_unique<OctomapCompatServices>(private_nh, services_.get(),
+  services_ =
+      std::make_unique<MapServices>(private_nh, &threads_, params_, shared_.get(), &stats_, [this] {
+        const std::shared_lock<std::shared_mutex> outputs(outputs_mutex_);
+        publishers_->publishFull(::ros::Time::now());
+        publishOctomaps(::ros::Time::now(), false);
+      });
+  ::ros::NodeHandle edit_nh = threads_.handle(private_nh, "map_edits");
+  octomap_services_ = std::make_unique<OctomapCompatServices>(edit_nh, services_.get(),
                                                               params_.octomap.clear_bbx_free);
   loadStartMap();  // throws (the node does not start) when a file is unreadable
   auto publish_changed = [this] {
@@ -55,15 +68,22 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
       ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
     }
   };
-  correction_service_ = std::make_unique<CorrectionService>(private_nh, params_, shared_.get(),
+  ::ros::NodeHandle correct_nh = threads_.handle(private_nh, "correct_poses");
+  correction_service_ = std::make_unique<CorrectionService>(correct_nh, params_, shared_.get(),
                                                             &stats_, publish_changed);
+  ::ros::NodeHandle submap_nh = threads_.handle(private_nh, "submaps");
   submap_services_ =
-      std::make_unique<SubmapServices>(private_nh, params_, shared_.get(), publish_changed);
-  collision_service_ = std::make_unique<CollisionService>(nh, private_nh, params_, tf_buffer_,
-                                                          shared_.get(), &stats_);
+      std::make_unique<SubmapServices>(submap_nh, params_, shared_.get(), publish_changed);
+  ::ros::NodeHandle collision_nh = threads_.handle(nh, "check_collision");
+  ::ros::NodeHandle collision_private_nh = threads_.handle(private_nh, "check_collision");
+  collision_service_ = std::make_unique<CollisionService>(
+      collision_nh, collision_private_nh, params_, tf_buffer_, shared_.get(), &stats_);
+  ::ros::NodeHandle frontier_nh = threads_.handle(private_nh, "get_frontiers");
   frontier_service_ =
-      std::make_unique<FrontierService>(private_nh, params_, tf_buffer_, shared_.get(), &stats_);
-  frontier_publisher_ = std::make_unique<FrontierPublisher>(nh, params_, shared_.get(), &stats_);
+      std::make_unique<FrontierService>(frontier_nh, params_, tf_buffer_, shared_.get(), &stats_);
+  ::ros::NodeHandle frontier_topics_nh = threads_.handle(nh, "frontier_topics");
+  frontier_publisher_ =
+      std::make_unique<FrontierPublisher>(frontier_topics_nh, params_, shared_.get(), &stats_);
   if (params_.correction.subscribe_path)
     path_corrector_ = std::make_unique<PathCorrector>(nh, params_, tf_buffer_, shared_.get(),
                                                       &stats_, publish_changed);
@@ -108,6 +128,7 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
              params_.correction.subscribe_path ? " and corrected_path" : "", budget.c_str(),
              beyond.c_str());
   }
+  stop_on_throw.armed = false;
 }
 
 void MapServer::loadStartMap() {
@@ -206,6 +227,7 @@ MapServer::~MapServer() {
 #if FRAGG_HAVE_DYNAMIC_RECONFIGURE
   reconfigure_.reset();  // no change arrives while the parts go
 #endif
+  threads_.stop();     // no service or timer callback runs from here on
   input_.reset();      // stop the insertion thread before the rest goes
   autosaver_.reset();  // then the last save
   fragg::setLogSink(fragg::LogSink());

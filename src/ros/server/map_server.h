@@ -2,7 +2,10 @@
 // loop-closure correction through ~correct_poses and corrected_path, sub-maps through ~truncate
 // and ~merge, collision checks through ~check_collision, frontiers through ~get_frontiers and
 // the frontiers / frontier_cells topics, the autosave (autosave.h). MapServerNodelet::onInit
-// builds one; it holds no logic of its own.
+// builds one; it holds no logic of its own. The services, the frontier topics' timer and the
+// octomap outputs run on threads of their own, one per group (service_threads.h), the cloud
+// input on its own (cloud_input.h); the node's queue keeps the marker and map flush timers
+// and corrected_path.
 #pragma once
 
 #include <ros/node_handle.h>
@@ -31,6 +34,7 @@
 #include "reconfigure.h"
 #endif
 #include "server_stats.h"
+#include "service_threads.h"
 #include "shared_map.h"
 #include "submap_services.h"
 
@@ -67,6 +71,9 @@ class MapServer {
   ServerStats stats_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
+  /// Before the parts whose services and timers use its queues (they go first); its threads
+  /// are stopped first of all in ~MapServer.
+  ServiceThreads threads_;
   std::unique_ptr<MapPublishers> publishers_;
   std::unique_ptr<MapServices> services_;
   std::unique_ptr<OctomapCompatServices> octomap_services_;

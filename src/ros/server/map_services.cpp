@@ -5,10 +5,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "file_root.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/map_image.h"
+#include "map_copy.h"
 #include "map_file_loader.h"
 #include "process_memory.h"
 #if FRAGG_HAVE_OCTOMAP
@@ -41,18 +43,22 @@ Eigen::Vector3d toEigen(const geometry_msgs::Point& p) { return {p.x, p.y, p.z};
 
 }  // namespace
 
-MapServices::MapServices(::ros::NodeHandle& private_nh, const ServerParams& params,
-                         SharedMap* shared, ServerStats* stats,
+MapServices::MapServices(::ros::NodeHandle& private_nh, ServiceThreads* threads,
+                         const ServerParams& params, SharedMap* shared, ServerStats* stats,
                          std::function<void()> on_map_replaced)
     : params_(params),
       shared_(shared),
       stats_(stats),
       on_map_replaced_(std::move(on_map_replaced)) {
-  save_ = private_nh.advertiseService("save_map", &MapServices::saveMap, this);
-  load_ = private_nh.advertiseService("load_map", &MapServices::loadMap, this);
-  reset_ = private_nh.advertiseService("reset_map", &MapServices::reset, this);
-  clear_ = private_nh.advertiseService("clear_bbox", &MapServices::clearBox, this);
-  stats_srv_ = private_nh.advertiseService("get_stats", &MapServices::getStats, this);
+  ::ros::NodeHandle save_nh = threads->handle(private_nh, "save_map");
+  ::ros::NodeHandle load_nh = threads->handle(private_nh, "load_map");
+  ::ros::NodeHandle edit_nh = threads->handle(private_nh, "map_edits");
+  ::ros::NodeHandle stats_nh = threads->handle(private_nh, "get_stats");
+  save_ = save_nh.advertiseService("save_map", &MapServices::saveMap, this);
+  load_ = load_nh.advertiseService("load_map", &MapServices::loadMap, this);
+  reset_ = edit_nh.advertiseService("reset_map", &MapServices::reset, this);
+  clear_ = edit_nh.advertiseService("clear_bbox", &MapServices::clearBox, this);
+  stats_srv_ = stats_nh.advertiseService("get_stats", &MapServices::getStats, this);
 }
 
 bool MapServices::saveMap(fragg_map::SaveMap::Request& req, fragg_map::SaveMap::Response& res) {
@@ -82,9 +88,20 @@ bool MapServices::saveMap(fragg_map::SaveMap::Request& req, fragg_map::SaveMap::
     if (!endsWith(path, ".bt"))
       throw fragg::InvalidArgument("unknown extension of '" + path + "': use .fgm or .bt");
 #if FRAGG_HAVE_OCTOMAP
-    const SharedMap::ReadGuard state = shared_->read();  // the export reads the map
-    fragg::exportOctomap(state->map, path);
-    return saved(state->map.knownVoxelCount());
+    // A copy of the observed cells under the read lock (insertion waits for the copy only);
+    // the tree is built and written from the copy. A paged map has no whole copy in RAM: its
+    // export reads the resident blocks under the lock.
+    std::optional<fragg::Map> copy;
+    {
+      const SharedMap::ReadGuard state = shared_->read();
+      if (state->map.paging()) {
+        fragg::exportOctomap(state->map, path);
+        return saved(state->map.knownVoxelCount());
+      }
+      copy.emplace(observedCopy(state->map));
+    }
+    fragg::exportOctomap(*copy, path);
+    return saved(copy->knownVoxelCount());
 #else
     throw fragg::InvalidArgument("this build has no liboctomap: .bt is not available");
 #endif

@@ -6,7 +6,11 @@
 // ~save_map and ~load_map paths are confined to params.file_root (file_root.h); loadMap(path),
 // the start-up map_file's way in, is not. ~save_map of a .fgm holds the read lock only for the
 // map's copy (Map::image) and compresses and writes it (writeMapImage) without the lock, as the
-// autosave does; a paged map (no image) and a .bt are written under the read lock.
+// autosave does; a .bt is exported from a copy of the map's cells (Map::extract of its observed
+// bounds) taken under the read lock; a paged map (no image, no whole copy) is written under it.
+// Threads (service_threads.h): ~get_stats, ~save_map, ~load_map and the edits (~reset_map,
+// ~clear_bbox) each have a callback queue and thread of their own, so that a long save never
+// holds ~get_stats back.
 #pragma once
 
 #include <ros/node_handle.h>
@@ -23,15 +27,17 @@
 #include "fragg_map/SaveMap.h"
 #include "fragg_map/ros/server_params.h"
 #include "server_stats.h"
+#include "service_threads.h"
 #include "shared_map.h"
 
 namespace fragg::ros {
 
 class MapServices {
  public:
-  /// `on_map_replaced` runs (map unlocked) after reset, load and clear_bbox.
-  MapServices(::ros::NodeHandle& private_nh, const ServerParams& params, SharedMap* shared,
-              ServerStats* stats, std::function<void()> on_map_replaced);
+  /// `on_map_replaced` runs (map unlocked) after reset, load and clear_bbox. The services are
+  /// advertised on private_nh's namespace, on queues of `threads` (which must outlive them).
+  MapServices(::ros::NodeHandle& private_nh, ServiceThreads* threads, const ServerParams& params,
+              SharedMap* shared, ServerStats* stats, std::function<void()> on_map_replaced);
 
   /// Replaces the map by an empty one (the old one's memory goes back to the system), zeroes
   /// the statistics and republishes. Returns what it did (resident memory before and after).

@@ -12,6 +12,7 @@
 
 #include "flush_without_waiting.h"
 #include "fragg_map/interop/octomap_io.h"
+#include "map_copy.h"
 
 namespace fragg::ros {
 namespace {
@@ -66,8 +67,11 @@ OctomapOutputs::OctomapOutputs(::ros::NodeHandle& nh, const ServerParams& params
     return [this, binary](octomap_msgs::GetOctomap::Request&,
                           octomap_msgs::GetOctomap::Response& res) {
       try {
-        res.map = octomapMsg(shared_->read()->map, binary, params_.octomap.compress_map,
-                             params_.frame_id, ::ros::Time::now());
+        // The tree is built from a copy of the observed cells, taken under the read lock:
+        // insertion waits for the copy only (the service has a thread of its own).
+        const fragg::Map copy = observedCopy(shared_->read()->map);
+        res.map = octomapMsg(copy, binary, params_.octomap.compress_map, params_.frame_id,
+                             ::ros::Time::now());
         return true;
       } catch (const std::exception& e) {
         ROS_WARN("fragg_map: %s refused: %s", binary ? "octomap_binary" : "octomap_full", e.what());

@@ -1,0 +1,127 @@
+#!/usr/bin/env bash
+# The map server at sensor rate on the GPU machine (issue 35's goal): the node staged by
+# scripts/stage_ros.sh (built with CUDA) fed W1's LiDAR (128 beams x 1,406 columns, ~180,000
+# points, config/workloads/w1_lidar360.args) along the campus street, recorded at 10 clouds/s
+# sensor time (--clouds clouds, 0.14 m apart, generated on the machine by the staged
+# fragg_map_sim: the bag is ~2 GB, too big to carry) and played at --rate clouds/s, with every
+# output subscribed (the staged rosbag recorder on occupied and free markers, occupied cloud,
+# centres, projected map, frontiers, frontier cells, frustum and ~stats). Prints the card, the
+# trace_csv rows by outcome (drops included), and the receive-to-published latency p50/p99
+# with each stage's p99. Parameters: config/default.yaml with backend, resolution and
+# sensor_model/max_range set, plus any `name:=value` arguments (e.g. marker_rate:=1
+# map_rate:=1; publish_free_space:=true adds the free-space markers, huge on a LiDAR map).
+# Usage (on the device, in the checkout; .device/ros or .device/ros.tar.zst carried):
+#   bash scripts/device_node_rate.sh [--rate HZ] [--clouds N] [--resolution M] [--max-range M]
+#     [--backend cuda|cpu|auto] [--bag FILE] [--out DIR] [name:=value ...]
+set -euo pipefail
+rate=10 clouds=620 resolution=0.05 max_range=30 backend=cuda bag="" out="${OUT:-/tmp/node_rate}"
+params=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --rate) rate="$2"; shift 2 ;;
+    --clouds) clouds="$2"; shift 2 ;;
+    --resolution) resolution="$2"; shift 2 ;;
+    --max-range) max_range="$2"; shift 2 ;;
+    --backend) backend="$2"; shift 2 ;;
+    --bag) bag="$2"; shift 2 ;;
+    --out) out="$2"; shift 2 ;;
+    *:=*) params+=("$1"); shift ;;
+    *) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; exit 2 ;;
+  esac
+done
+top=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)
+ros="$top/.device/ros"
+if [ ! -d "$ros" ]; then
+  [ -f "$ros.tar.zst" ] || { echo "device_node_rate: no $ros (bash scripts/stage_ros.sh)" >&2; exit 2; }
+  tar -C "$top/.device" -I zstd -xf "$ros.tar.zst"
+fi
+# shellcheck disable=SC1091
+source "$ros/env.sh"
+mkdir -p "$out"
+scratch=$(mktemp -d /tmp/node_rate.XXXXXX)
+bag=${bag:-/tmp/w1_street_${clouds}.bag}
+if [ ! -f "$bag" ]; then
+  # W1's sensor and seed; 1.4 m/s at 10 Hz keeps --clouds frames (<= 640) on the 90 m street.
+  echo "device_node_rate: recording $clouds W1 clouds into $bag"
+  fragg_map_sim record "$top/config/scenes/campus.json" --trajectory street --sensor lidar \
+    --seed 101 --beams 128 --azimuth-steps 1406 --elevation-min -25 --elevation-max 15 \
+    --lidar-max-range 80 --range-noise 0.02 --lidar-dropout 0.0 --speed 1.4 --rate 10 \
+    --frames "$clouds" --bag "$bag.part" > "$out/sim.log" 2>&1
+  mv "$bag.part" "$bag"
+fi
+pids=()
+cleanup() {
+  for pid in "${pids[@]+"${pids[@]}"}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  sleep 2
+  for pid in "${pids[@]+"${pids[@]}"}"; do kill -KILL "$pid" 2>/dev/null || true; done
+  rm -rf "$scratch"
+}
+trap cleanup EXIT
+port=${ROS_MASTER_URI##*:}
+rosmaster --core -p "${port%/}" > "$out/master.log" 2>&1 &
+pids+=($!)
+# Parameters through the master (the staged Python: rosgraph, yaml): default.yaml under
+# /fragg_map, then this run's settings; /use_sim_time for the bag's clock.
+python3 - "$top/config/default.yaml" "$backend" "$resolution" "$max_range" "$out/trace.csv" \
+  "${params[@]+"${params[@]}"}" <<'PY'
+import sys, time, yaml, rosgraph.masterapi
+m = rosgraph.masterapi.Master("/device_node_rate")
+for _ in range(100):
+    try:
+        m.getPid(); break
+    except Exception:
+        time.sleep(0.2)
+m.setParam("/fragg_map", yaml.safe_load(open(sys.argv[1])))
+m.setParam("/use_sim_time", True)
+for name, value in [("backend", sys.argv[2]), ("resolution", float(sys.argv[3])),
+                    ("sensor_model/max_range", float(sys.argv[4])), ("trace_csv", sys.argv[5])]:
+    m.setParam("/fragg_map/" + name, value)
+for arg in sys.argv[6:]:
+    name, value = arg.split(":=", 1)
+    m.setParam("/fragg_map/" + name, yaml.safe_load(value))
+PY
+fragg_map_server __name:=fragg_map cloud_in:=/points > "$out/node.log" 2>&1 &
+node_pid=$!
+pids+=("$node_pid")
+for _ in $(seq 300); do grep -q "map at" "$out/node.log" && break; sleep 0.2; done
+grep -q "map at" "$out/node.log" || { echo "device_node_rate: the node did not start" >&2; tail "$out/node.log" >&2; exit 1; }
+grep -m1 "map at" "$out/node.log"
+# The recorder writes what it receives: split at 1 GB, at most 2 files kept, so that a long run
+# at every-cloud output rates (tens of GB) cannot fill the disk.
+record -q --split --size 1024 --max-splits 2 -O "$scratch/outputs.bag" \
+  /occupied_cells_vis_array /free_cells_vis_array \
+  /occupied_cells /octomap_point_cloud_centers /projected_map /frontiers /frontier_cells \
+  /frustum /fragg_map/stats > "$out/record.log" 2>&1 &
+pids+=($!)
+sleep 3
+factor=$(python3 -c "print($rate / 10.0)")
+play --clock -q -d 2 -r "$factor" "$bag" > "$out/play.log" 2>&1
+# Every cloud received has its trace row (inserted, or the count it landed in); wait for them.
+for _ in $(seq 600); do
+  [ "$(($(wc -l < "$out/trace.csv") - 1))" -ge "$clouds" ] && break
+  sleep 0.2
+done
+sleep 3
+kill -INT "$node_pid" 2>/dev/null || true
+wait "$node_pid" 2>/dev/null || true
+echo "card: $(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -1)"
+echo "commit: $(git -C "$top" rev-parse --short HEAD 2>/dev/null), W1 street, $clouds clouds at $rate/s, $resolution m, max range $max_range m, backend $backend ${params[*]+"${params[*]}"}"
+echo "outputs received by the subscriber (the last <= 2 GB kept): $(du -ch "$scratch"/outputs* 2>/dev/null | tail -1 | cut -f1)"
+echo "node parameters: default.yaml's marker_rate $(grep -m1 '^marker_rate' "$top/config/default.yaml" | awk '{print $2}'), map_rate $(grep -m1 '^map_rate' "$top/config/default.yaml" | awk '{print $2}') unless given above"
+python3 - "$out/trace.csv" "$clouds" <<'PY'
+import csv, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+by = {}
+for r in rows:
+    by[r["outcome"]] = by.get(r["outcome"], 0) + 1
+print("trace rows: %d of %d clouds; by outcome: %s" % (len(rows), int(sys.argv[2]), by))
+print("dropped (every outcome but inserted): %d" % (len(rows) - by.get("inserted", 0)))
+ok = [r for r in rows if r["outcome"] == "inserted"]
+def pct(col, q):
+    v = sorted(float(r[col]) for r in ok)
+    return v[min(len(v) - 1, int(q * len(v)))] if v else float("nan")
+print("receive-to-published ms: p50 %.2f, p99 %.2f, max %.2f" %
+      (pct("total_ms", 0.5), pct("total_ms", 0.99), pct("total_ms", 1.0)))
+print("p99 by stage ms: queue %.2f, tf %.2f, insert %.2f, publish %.2f" %
+      tuple(pct(c, 0.99) for c in ("queue_ms", "tf_ms", "insert_ms", "publish_ms")))
+PY
