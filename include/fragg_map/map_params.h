@@ -91,23 +91,24 @@ struct HeightFilterParams {
   }
 };
 
-/// Dynamic scenes (DESIGN §12), off by default (OctoMap's rule unchanged). When enabled, each
-/// scan's hits are classified against the map as it was before the scan: a hit whose cell is
-/// void -- observed free with confidence (probability <= void_probability) -- and whose every
-/// neighbour within known_radius_cells (Chebyshev) has been observed is dynamic: it is not
-/// inserted, its ray clears up to it as a free-only ray would (the hit's own cell is left as
-/// it was), and it is counted (InsertStats::rays_dynamic) and handed back (Map's last dynamic
-/// points). And a ray passing through an occupied cell whose neighbourhood has been observed
-/// makes it void at once (what stood there has moved) instead of taking one miss. The
-/// neighbourhood keeps surfaces static where the map has not seen around them (the ground's
-/// cells border unobserved cells below it, a wall's its inside), as DUFOMap's unknown
-/// inflation does. Blocks that are paged out read as unobserved.
+/// Dynamic scenes (DESIGN §12), off by default (OctoMap's rule unchanged). When enabled, space
+/// becomes void by DUFOMap's surround test: a cell a scan's rays pass through (none ending
+/// there) whose every neighbour within known_radius_cells (Chebyshev) is seen free -- passed
+/// through by the same scan and hit by none of its rays, or free with confidence
+/// (probability <= void_probability) before it -- is set to the lower clamp, which marks it
+/// void (an ordinary miss stops one unit above the clamp); an occupied cell that passes the
+/// test is what has moved, and its ghost is cleared at once. A hit in a void cell (the map as
+/// it was before the scan) is dynamic: it is not inserted, its ray clears up to it as a
+/// free-only ray would (the hit's own cell is left as it was), and it is counted
+/// (InsertStats::rays_dynamic) and handed back (Map's last dynamic points). A static surface
+/// always has a neighbour that is hit or never seen (the ground's cells below it, a wall's
+/// inside), so grazing rays do not make it void. Blocks that are paged out read as unseen.
 struct DynamicParams {
   bool enabled = false;
-  /// A cell is void at or below this occupancy probability; in (0, 0.5 - unknown band), and
-  /// at least occupancy.clamp_min (below it no cell could be void).
+  /// A neighbour seen free before the scan is one at or below this occupancy probability; in
+  /// (0, 0.5 - unknown band), and at least occupancy.clamp_min.
   double void_probability = 0.25;
-  /// Neighbours (Chebyshev radius, cells) that must be observed around a void hit: 0 to 2.
+  /// The surround test's radius (Chebyshev, cells): 0 to 2.
   int known_radius_cells = 2;
 };
 
