@@ -13,6 +13,7 @@ namespace fragg {
 DynamicRule DynamicRule::fromParams(const DynamicParams& p, const OccupancyParams& occupancy) {
   DynamicRule r;
   r.enabled = p.enabled;
+  r.surround = p.rule == VoidSpaceRule::kSurround;
   r.void_fx = logOddsFxOf(occupancy.clamp_min);
   r.seen_free_at_or_below_fx = logOddsFxOf(p.void_probability);
   r.known_radius_cells = p.known_radius_cells;
@@ -45,8 +46,22 @@ class CellReader {
   bool valid_ = false;
 };
 
+// kPassThrough: every cell within the rule's radius of `v` (Chebyshev, `v` included) has
+// been observed.
+bool observedAround(const VoxelKey& v, CellReader& cells, const DynamicRule& rule) {
+  const int r = rule.known_radius_cells;
+  for (int dz = -r; dz <= r; ++dz)
+    for (int dy = -r; dy <= r; ++dy)
+      for (int dx = -r; dx <= r; ++dx) {
+        const Cell* n = cells.find({v.x + dx, v.y + dy, v.z + dz});
+        if (!n || !n->observed()) return false;
+      }
+  return true;
+}
+
 bool dynamicAt(const VoxelKey& end, CellReader& cells, const DynamicRule& rule) {
   const Cell* c = cells.find(end);
+  if (!rule.surround) return c && rule.isVoid(*c) && observedAround(end, cells, rule);
   if (!c || !rule.seenFreeBefore(*c)) return false;
   if (rule.isVoid(*c)) return true;
   // Free with confidence all around (over earlier scans): space that no static surface borders.
@@ -86,6 +101,21 @@ bool bitAt(const uint64_t* mask, int x, int y, int z) {
 bool isDynamicHit(const VoxelKey& end, const BlockMap& blocks, const DynamicRule& rule) {
   CellReader cells(blocks);
   return dynamicAt(end, cells, rule);
+}
+
+void passThroughResets(const BlockKey& key, const uint64_t* free_marks, const uint64_t* hit_marks,
+                       const BlockMap& blocks, const DynamicRule& rule, uint64_t* resets) {
+  for (int w = 0; w < kStateMaskWords; ++w) resets[w] = 0;
+  const BlockIndex i = blocks.find(key);
+  if (i == kNoBlock) return;
+  const BlockStateMasks& masks = blocks.masks(i);
+  CellReader cells(blocks);
+  for (int w = 0; w < kStateMaskWords; ++w)
+    for (uint64_t bits = free_marks[w] & ~hit_marks[w] & masks.occupied[w]; bits != 0;
+         bits &= bits - 1) {
+      const int c = w * 64 + __builtin_ctzll(bits);
+      if (observedAround(voxelKeyOf(key, c), cells, rule)) resets[w] |= uint64_t{1} << (c & 63);
+    }
 }
 
 void surroundedCells(const ScanScratch& marks, const BlockMap& blocks, const DynamicRule& rule,

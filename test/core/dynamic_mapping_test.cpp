@@ -1,4 +1,6 @@
-// Dynamic-aware mapping (MapParams::dynamic): bad option values refused; the first scan, and any
+// Dynamic-aware mapping (MapParams::dynamic) under DUFOMap's surround rule
+// (VoidSpaceRule::kSurround; the pass-through rule has dynamic_pass_through_test.cpp): bad
+// option values refused, the rule's among them; the first scan, and any
 // scan with nothing void, integrates as OctoMap's rule does; over a sequence with a person
 // walking through space the sensor sees all around, every scan equals a brute-force reference
 // (each point dynamic when its cell is void in the reference map; the scan inserted with those
@@ -33,6 +35,7 @@ MapParams dynamicParams(bool enabled, int known_radius_cells = 1) {
   p.threads = 2;
   p.dynamic.enabled = enabled;
   p.dynamic.known_radius_cells = known_radius_cells;
+  p.dynamic.rule = VoidSpaceRule::kSurround;
   return p;
 }
 
@@ -152,6 +155,13 @@ TEST(DynamicMappingTest, BadOptionValuesAreRefused) {
   refused([](MapParams& p) { p.dynamic.known_radius_cells = 3; });
   refused([](MapParams& p) { p.scans.keep = true; });
   refused([](MapParams& p) { p.backend = Backend::kCuda; });
+  refused([](MapParams& p) { p.dynamic.rule = static_cast<VoidSpaceRule>(2); });
+  EXPECT_THROW((void)voidSpaceRuleFromString("sideways"), InvalidArgument);
+  EXPECT_THROW((void)voidSpaceRuleFromString(""), InvalidArgument);
+  EXPECT_THROW((void)voidSpaceRuleFromString("Surround"), InvalidArgument);
+  for (VoidSpaceRule r : {VoidSpaceRule::kPassThrough, VoidSpaceRule::kSurround})
+    EXPECT_EQ(voidSpaceRuleFromString(toString(r)), r);
+  EXPECT_EQ(MapParams().dynamic.rule, VoidSpaceRule::kPassThrough);  // main's rule by default
   // Off, the values are not looked at (the default path is OctoMap's).
   MapParams off = dynamicParams(false);
   off.dynamic.void_probability = 0.0;
