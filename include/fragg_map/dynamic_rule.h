@@ -1,6 +1,6 @@
 // The dynamic-scene rule (MapParams::dynamic) in the form both backends evaluate: plain data
 // and __host__ __device__ tests, so that the CPU update and the CUDA kernels classify the same
-// hits.
+// hits and make the same cells void.
 #pragma once
 
 #include <cstdint>
@@ -11,18 +11,42 @@
 namespace fragg {
 
 struct DynamicParams;
+struct OccupancyParams;
 
+/// Under VoidSpaceRule::kPassThrough (main's rule) a cell is void when observed and at or
+/// below seen_free_at_or_below_fx (dynamic.void_probability). Under kSurround void cells sit
+/// exactly at the lower clamp (log-odds occupancy.clamp_min): only the surround test takes a
+/// cell there; an ordinary miss stops one unit (1/1024) above it. A neighbour counts as seen
+/// free when this scan's rays passed through it (none ended there) or when it was free with
+/// confidence before the scan (log-odds at or below seen_free_at_or_below_fx, void included).
 struct DynamicRule {
   bool enabled = false;
-  int16_t void_at_or_below_fx = 0;  ///< a cell is void at or below this log-odds
-  int known_radius_cells = 2;
+  bool surround = false;                 ///< VoidSpaceRule::kSurround (else kPassThrough)
+  int16_t void_fx = 0;                   ///< kSurround: the log-odds of a void cell (lower clamp)
+  int16_t seen_free_at_or_below_fx = 0;  ///< confident free space (dynamic.void_probability)
+  int known_radius_cells = 2;            ///< the neighbourhood's Chebyshev radius
 
   /// From the map's (validated) parameters.
-  static DynamicRule fromParams(const DynamicParams& p);
+  static DynamicRule fromParams(const DynamicParams& p, const OccupancyParams& occupancy);
 
-  /// Whether a cell is void: observed, and free with confidence.
+  /// Whether a cell is void: hits there are dynamic (kPassThrough: when its neighbourhood has
+  /// been observed too).
   [[nodiscard]] FRAGG_HD bool isVoid(const Cell& c) const {
-    return c.observed() && c.log_odds_fx <= void_at_or_below_fx;
+    if (!surround) return c.observed() && c.log_odds_fx <= seen_free_at_or_below_fx;
+    return c.observed() && c.log_odds_fx == void_fx;
+  }
+  /// Whether a cell counted as free with confidence before the scan.
+  [[nodiscard]] FRAGG_HD bool seenFreeBefore(const Cell& c) const {
+    return c.observed() && c.log_odds_fx <= seen_free_at_or_below_fx;
+  }
+  /// kSurround: the log-odds a miss leaves in a cell that was `before` and is `updated_fx`
+  /// after the ordinary update: void when the surround test passed, else never void by misses
+  /// alone (one unit above the clamp) unless it was void already.
+  [[nodiscard]] FRAGG_HD int16_t afterMiss(const Cell& before, int16_t updated_fx,
+                                           bool surrounded) const {
+    if (surrounded) return void_fx;
+    if (!isVoid(before) && updated_fx <= void_fx) return static_cast<int16_t>(void_fx + 1);
+    return updated_fx;
   }
 };
 

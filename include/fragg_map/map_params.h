@@ -91,23 +91,46 @@ struct HeightFilterParams {
   }
 };
 
+/// How MapParams::dynamic makes space void (DESIGN §12).
+enum class VoidSpaceRule {
+  /// main's rule (the default): a cell is void when observed free with confidence
+  /// (probability <= void_probability); a hit there is dynamic when every neighbour within
+  /// known_radius_cells has been observed; a ray passing through an occupied cell whose
+  /// neighbourhood has been observed makes it void at once.
+  kPassThrough,
+  /// DUFOMap's surround test: a cell a scan's rays pass through (none ending there) becomes
+  /// void (the lower clamp) when every neighbour within known_radius_cells is seen free --
+  /// passed through by the same scan and hit by none of its rays, or free with confidence
+  /// before it; an ordinary miss stops one unit above the clamp.
+  kSurround,
+};
+
+/// The rule's name as the CLI spells it ("pass-through", "surround").
+[[nodiscard]] const char* toString(VoidSpaceRule rule);
+/// The rule named `name` ("pass-through" or "surround"); throws InvalidArgument otherwise.
+[[nodiscard]] VoidSpaceRule voidSpaceRuleFromString(const std::string& name);
+
 /// Dynamic scenes (DESIGN §12), off by default (OctoMap's rule unchanged). When enabled, each
-/// scan's hits are classified against the map as it was before the scan: a hit whose cell is
-/// void -- observed free with confidence (probability <= void_probability) -- and whose every
-/// neighbour within known_radius_cells (Chebyshev) has been observed is dynamic: it is not
-/// inserted, its ray clears up to it as a free-only ray would (the hit's own cell is left as
-/// it was), and it is counted (InsertStats::rays_dynamic) and handed back (Map's last dynamic
-/// points). And a ray passing through an occupied cell whose neighbourhood has been observed
-/// makes it void at once (what stood there has moved) instead of taking one miss. The
-/// neighbourhood keeps surfaces static where the map has not seen around them (the ground's
-/// cells border unobserved cells below it, a wall's its inside), as DUFOMap's unknown
-/// inflation does. Blocks that are paged out read as unobserved.
+/// scan's hits are classified against the map as it was before the scan: a hit in void space
+/// (see `rule`) is dynamic: it is not inserted, its ray clears up to it as a free-only ray
+/// would (the hit's own cell is left as it was), and it is counted (InsertStats::rays_dynamic)
+/// and handed back (Map's last dynamic points). Under kPassThrough (the default) a hit is
+/// dynamic when its cell is observed free with confidence (probability <= void_probability)
+/// and every neighbour within known_radius_cells (Chebyshev) has been observed, and a ray
+/// passing through an occupied cell whose neighbourhood has been observed makes it void at
+/// once (what stood there has moved) instead of taking one miss. Under kSurround space becomes
+/// void by DUFOMap's surround test (VoidSpaceRule::kSurround); a hit is dynamic in a void cell
+/// or in a cell free with confidence whose every neighbour is too. Either way a static surface
+/// keeps unseen or hit cells around it (the ground's below it, a wall's inside), as DUFOMap's
+/// unknown inflation does. Blocks that are paged out read as unobserved.
 struct DynamicParams {
   bool enabled = false;
-  /// A cell is void at or below this occupancy probability; in (0, 0.5 - unknown band), and
-  /// at least occupancy.clamp_min (below it no cell could be void).
+  /// How space becomes void; kPassThrough (main's rule) unless chosen.
+  VoidSpaceRule rule = VoidSpaceRule::kPassThrough;
+  /// Free with confidence at or below this occupancy probability (kPassThrough: void); in
+  /// (0, 0.5 - unknown band), and at least occupancy.clamp_min.
   double void_probability = 0.25;
-  /// Neighbours (Chebyshev radius, cells) that must be observed around a void hit: 0 to 2.
+  /// The neighbourhood's Chebyshev radius (cells): 0 to 2.
   int known_radius_cells = 2;
 };
 

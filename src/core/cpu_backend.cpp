@@ -114,7 +114,8 @@ void CpuBackend::update(const ScanInput& in, ScanUpdate what, const UpdateSettin
   dynamic_points_S_.clear();
   if (how.params.dynamic.enabled && what == ScanUpdate::kIntegrate) {
     // Hits in void space become free-only rays before any cell changes (the map as it was).
-    classifyDynamicHits(prepared_, blocks, DynamicRule::fromParams(how.params.dynamic),
+    classifyDynamicHits(prepared_, blocks,
+                        DynamicRule::fromParams(how.params.dynamic, how.params.occupancy),
                         threadCount(threads_), dynamic_rays_);
     dynamic_points_S_.reserve(dynamic_rays_.size());
     for (uint32_t r : dynamic_rays_)
@@ -179,10 +180,13 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
   // 3. Apply: find or create the host blocks, then update the marked cells.
   t0 = std::chrono::steady_clock::now();
   const long touched = static_cast<long>(merged.touchedCount());
-  // MapParams::dynamic: occupied cells the rays passed through become void (read before any
-  // cell changes).
-  const bool pass_through = how.params.dynamic.enabled && !remove;
-  const DynamicRule rule = DynamicRule::fromParams(how.params.dynamic);
+  // MapParams::dynamic: the passed-through cells that become void (read before any cell
+  // changes): occupied ones with an observed neighbourhood (pass-through rule) or those the
+  // surround test passes.
+  const DynamicRule rule = DynamicRule::fromParams(how.params.dynamic, how.params.occupancy);
+  const bool dynamic = how.params.dynamic.enabled && !remove;
+  const bool pass_through = dynamic && !rule.surround;
+  const bool surround = dynamic && rule.surround;
   std::vector<uint64_t> resets(pass_through ? static_cast<size_t>(touched) * kStateMaskWords : 0);
   if (pass_through) {
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 64)
@@ -191,6 +195,7 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
       passThroughResets(b.key, b.free, b.hit, blocks, rule, &resets[j * kStateMaskWords]);
     }
   }
+  if (surround) surroundedCells(merged, blocks, rule, threads, surrounded_);
   std::vector<BlockIndex> target(static_cast<size_t>(touched), kNoBlock);
   // A scratch block without marks was only entered by misses in a skipped block: nothing to do.
   std::vector<char> marked(static_cast<size_t>(touched), 0);
@@ -249,10 +254,15 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
         const int bit = __builtin_ctzll(bits);
         Cell& cell = block.cells[w * 64 + bit];
         const Cell before = cell;
-        if (pass_through && (resets[j * kStateMaskWords + w] >> bit) & 1)
-          cell.log_odds_fx = rule.void_at_or_below_fx;
-        else
-          model.update(cell, (marks.hit[w] >> bit) & 1, remove);
+        const bool hit = (marks.hit[w] >> bit) & 1;
+        if (pass_through && (resets[j * kStateMaskWords + w] >> bit) & 1) {
+          cell.log_odds_fx = rule.seen_free_at_or_below_fx;
+        } else {
+          model.update(cell, hit, remove);
+          if (surround && !hit)
+            cell.log_odds_fx = rule.afterMiss(before, cell.log_odds_fx,
+                                              (surrounded_[j * kStateMaskWords + w] >> bit) & 1);
+        }
         changed |= before.log_odds_fx != cell.log_odds_fx || before.hits != cell.hits;
         const CellState was = model.state(before), is = model.state(cell);
         occupancy_changed |= (was == CellState::kOccupied) != (is == CellState::kOccupied);

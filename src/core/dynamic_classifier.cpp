@@ -5,21 +5,26 @@
 #include <algorithm>
 
 #include "fragg_map/map_params.h"
+#include "fragg_map/occupancy.h"
 #include "fragg_map/raycast.h"
 
 namespace fragg {
 
-DynamicRule DynamicRule::fromParams(const DynamicParams& p) {
+DynamicRule DynamicRule::fromParams(const DynamicParams& p, const OccupancyParams& occupancy) {
   DynamicRule r;
   r.enabled = p.enabled;
-  r.void_at_or_below_fx = logOddsFxOf(p.void_probability);
+  r.surround = p.rule == VoidSpaceRule::kSurround;
+  r.void_fx = logOddsFxOf(occupancy.clamp_min);
+  r.seen_free_at_or_below_fx = logOddsFxOf(p.void_probability);
   r.known_radius_cells = p.known_radius_cells;
   return r;
 }
 
 namespace {
 
-// Cell lookups that remember the last block (a hit's neighbours share few blocks).
+constexpr int kWords = kCellsPerBlock / 64;
+
+// Cell lookups that remember the last block (a scan's hits share few blocks).
 class CellReader {
  public:
   explicit CellReader(const BlockMap& blocks) : blocks_(blocks) {}
@@ -41,12 +46,14 @@ class CellReader {
   bool valid_ = false;
 };
 
-bool observedAround(const VoxelKey& end, CellReader& cells, const DynamicRule& rule) {
+// kPassThrough: every cell within the rule's radius of `v` (Chebyshev, `v` included) has
+// been observed.
+bool observedAround(const VoxelKey& v, CellReader& cells, const DynamicRule& rule) {
   const int r = rule.known_radius_cells;
   for (int dz = -r; dz <= r; ++dz)
     for (int dy = -r; dy <= r; ++dy)
       for (int dx = -r; dx <= r; ++dx) {
-        const Cell* n = cells.find({end.x + dx, end.y + dy, end.z + dz});
+        const Cell* n = cells.find({v.x + dx, v.y + dy, v.z + dz});
         if (!n || !n->observed()) return false;
       }
   return true;
@@ -54,8 +61,39 @@ bool observedAround(const VoxelKey& end, CellReader& cells, const DynamicRule& r
 
 bool dynamicAt(const VoxelKey& end, CellReader& cells, const DynamicRule& rule) {
   const Cell* c = cells.find(end);
-  if (!c || !rule.isVoid(*c)) return false;
-  return observedAround(end, cells, rule);
+  if (!rule.surround) return c && rule.isVoid(*c) && observedAround(end, cells, rule);
+  if (!c || !rule.seenFreeBefore(*c)) return false;
+  if (rule.isVoid(*c)) return true;
+  // Free with confidence all around (over earlier scans): space that no static surface borders.
+  const int r = rule.known_radius_cells;
+  for (int dz = -r; dz <= r; ++dz)
+    for (int dy = -r; dy <= r; ++dy)
+      for (int dx = -r; dx <= r; ++dx) {
+        const Cell* n = cells.find({end.x + dx, end.y + dy, end.z + dz});
+        if (!n || !rule.seenFreeBefore(*n)) return false;
+      }
+  return true;
+}
+
+// The seen-free mask of block `key`: passed through by the scan and not hit, or free with
+// confidence before the scan and not hit. `marks_of`: the scan's marks of the block (or null).
+void seenFreeMask(const BlockKey& key, const ScratchBlock* marks_of, const BlockMap& blocks,
+                  const DynamicRule& rule, uint64_t* out) {
+  for (int w = 0; w < kWords; ++w) out[w] = marks_of ? marks_of->free[w] & ~marks_of->hit[w] : 0;
+  const BlockIndex i = blocks.find(key);
+  if (i == kNoBlock) return;
+  const Block& block = blocks.block(i);
+  for (int w = 0; w < kWords; ++w) {
+    uint64_t before = 0;
+    for (int bit = 0; bit < 64; ++bit)
+      before |= uint64_t{rule.seenFreeBefore(block.cells[w * 64 + bit])} << bit;
+    out[w] |= before & (marks_of ? ~marks_of->hit[w] : ~uint64_t{0});
+  }
+}
+
+bool bitAt(const uint64_t* mask, int x, int y, int z) {
+  const int c = x | (y << kBlockBits) | (z << (2 * kBlockBits));
+  return (mask[c >> 6] >> (c & 63)) & 1;
 }
 
 }  // namespace
@@ -63,11 +101,6 @@ bool dynamicAt(const VoxelKey& end, CellReader& cells, const DynamicRule& rule) 
 bool isDynamicHit(const VoxelKey& end, const BlockMap& blocks, const DynamicRule& rule) {
   CellReader cells(blocks);
   return dynamicAt(end, cells, rule);
-}
-
-bool neighbourhoodObserved(const VoxelKey& v, const BlockMap& blocks, const DynamicRule& rule) {
-  CellReader cells(blocks);
-  return observedAround(v, cells, rule);
 }
 
 void passThroughResets(const BlockKey& key, const uint64_t* free_marks, const uint64_t* hit_marks,
@@ -83,6 +116,58 @@ void passThroughResets(const BlockKey& key, const uint64_t* free_marks, const ui
       const int c = w * 64 + __builtin_ctzll(bits);
       if (observedAround(voxelKeyOf(key, c), cells, rule)) resets[w] |= uint64_t{1} << (c & 63);
     }
+}
+
+void surroundedCells(const ScanScratch& marks, const BlockMap& blocks, const DynamicRule& rule,
+                     int threads, std::vector<uint64_t>& surrounded) {
+  const long touched = static_cast<long>(marks.touchedCount());
+  surrounded.assign(static_cast<size_t>(touched) * kWords, 0);
+  // 1. The seen-free mask of every touched block (neighbours' masks are read many times).
+  std::vector<uint64_t> seen(static_cast<size_t>(touched) * kWords);
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 64)
+  for (long j = 0; j < touched; ++j)
+    seenFreeMask(marks.touched(j).key, &marks.touched(j), blocks, rule, &seen[j * kWords]);
+  // 2. Each passed-through cell against its neighbourhood (r <= 2 < a block: the 27 blocks
+  // around its own hold every neighbour).
+  const int r = rule.known_radius_cells;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 64)
+  for (long j = 0; j < touched; ++j) {
+    const ScratchBlock& b = marks.touched(j);
+    uint64_t candidates[kWords];
+    uint64_t any = 0;
+    for (int w = 0; w < kWords; ++w) any |= candidates[w] = b.free[w] & ~b.hit[w];
+    if (any == 0) continue;
+    const uint64_t* around[27];
+    uint64_t untouched[27][kWords];
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int n = (dz + 1) * 9 + (dy + 1) * 3 + (dx + 1);
+          const BlockKey k{b.key.x + dx, b.key.y + dy, b.key.z + dz};
+          if (const ScratchBlock* s = marks.find(k)) {
+            around[n] = &seen[size_t{s->index} * kWords];
+          } else {
+            seenFreeMask(k, nullptr, blocks, rule, untouched[n]);
+            around[n] = untouched[n];
+          }
+        }
+    uint64_t* out = &surrounded[j * kWords];
+    for (int w = 0; w < kWords; ++w)
+      for (uint64_t bits = candidates[w]; bits != 0; bits &= bits - 1) {
+        const int c = w * 64 + __builtin_ctzll(bits);
+        const int x = c & kBlockMask, y = (c >> kBlockBits) & kBlockMask, z = c >> (2 * kBlockBits);
+        bool all = true;
+        for (int dz = -r; dz <= r && all; ++dz)
+          for (int dy = -r; dy <= r && all; ++dy)
+            for (int dx = -r; dx <= r && all; ++dx) {
+              const int nx = x + dx + kBlockSize, ny = y + dy + kBlockSize,
+                        nz = z + dz + kBlockSize;
+              const int n = (nz >> kBlockBits) * 9 + (ny >> kBlockBits) * 3 + (nx >> kBlockBits);
+              all = bitAt(around[n], nx & kBlockMask, ny & kBlockMask, nz & kBlockMask);
+            }
+        if (all) out[w] |= uint64_t{1} << (c & 63);
+      }
+  }
 }
 
 void classifyDynamicHits(PreparedScan& scan, const BlockMap& blocks, const DynamicRule& rule,

@@ -77,6 +77,9 @@ void MapParams::validate() const {
       throw InvalidArgument("dynamic.void_probability (" + std::to_string(v) +
                             ") is below occupancy.clamp_min (" +
                             std::to_string(occupancy.clamp_min) + "): no cell could be void");
+    if (dynamic.rule != VoidSpaceRule::kPassThrough && dynamic.rule != VoidSpaceRule::kSurround)
+      throw InvalidArgument("dynamic.rule must be pass-through or surround, got value " +
+                            std::to_string(static_cast<int>(dynamic.rule)));
     if (dynamic.known_radius_cells < 0 || dynamic.known_radius_cells > 2)
       throw InvalidArgument("dynamic.known_radius_cells must be in [0, 2] cells, got " +
                             std::to_string(dynamic.known_radius_cells));
@@ -85,6 +88,22 @@ void MapParams::validate() const {
           "dynamic.enabled cannot be combined with scans.keep: removing a scan would not know "
           "which of its hits were dynamic");
   }
+}
+
+const char* toString(VoidSpaceRule rule) {
+  switch (rule) {
+    case VoidSpaceRule::kPassThrough:
+      return "pass-through";
+    case VoidSpaceRule::kSurround:
+      return "surround";
+  }
+  return "invalid";
+}
+
+VoidSpaceRule voidSpaceRuleFromString(const std::string& name) {
+  if (name == "pass-through") return VoidSpaceRule::kPassThrough;
+  if (name == "surround") return VoidSpaceRule::kSurround;
+  throw InvalidArgument("dynamic.rule must be pass-through or surround, got '" + name + "'");
 }
 
 }  // namespace fragg

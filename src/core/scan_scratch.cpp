@@ -46,8 +46,21 @@ ScratchBlock& ScanScratch::blockFor(const BlockKey& key) {
     block = blocks_[used_blocks_++].get();
     *block = ScratchBlock{};
     block->key = key;
+    block->index = static_cast<uint32_t>(used_blocks_ - 1);
   }
   return *block;
+}
+
+const ScratchBlock* ScanScratch::find(const BlockKey& key) const {
+  const int64_t sx = (key.x >> kSuperBits) - super_lo_.x;
+  const int64_t sy = (key.y >> kSuperBits) - super_lo_.y;
+  const int64_t sz = (key.z >> kSuperBits) - super_lo_.z;
+  if (sx < 0 || sy < 0 || sz < 0 || sx >= dim_x_ || sy >= dim_y_ || sz >= dim_z_) return nullptr;
+  const Node* node = table_[static_cast<size_t>((sz * dim_y_ + sy) * dim_x_ + sx)];
+  if (!node) return nullptr;
+  const int local = (key.x & kSuperMask) | ((key.y & kSuperMask) << kSuperBits) |
+                    ((key.z & kSuperMask) << (2 * kSuperBits));
+  return node->blocks[local];
 }
 
 void ScanScratch::end() {

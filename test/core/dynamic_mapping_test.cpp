@@ -1,10 +1,14 @@
-// Dynamic-aware mapping (MapParams::dynamic): bad option values refused; the first scan, and any
+// Dynamic-aware mapping (MapParams::dynamic) under DUFOMap's surround rule
+// (VoidSpaceRule::kSurround; the pass-through rule has dynamic_pass_through_test.cpp): bad
+// option values refused, the rule's among them; the first scan, and any
 // scan with nothing void, integrates as OctoMap's rule does; over a sequence with a person
-// walking through confidently free space, every scan equals a brute-force reference (each
-// point classified from the reference map's cells, then inserted with the dynamic points
-// marked free-only into a map with the option off, then the occupied cells with an observed
-// neighbourhood that took a miss made void), masks included; the dynamic points are handed
-// back.
+// walking through space the sensor sees all around, every scan equals a brute-force reference
+// (each point dynamic when its cell is void in the reference map; the scan inserted with those
+// points free-only into a map with the option off; then each cell the scan passed through
+// (taken from the same scan inserted into an empty map) set by the surround test: void when
+// every neighbour is passed through by the scan or free with confidence before it, and hit by
+// none of its rays, else one unit above the clamp unless void already), masks included; no
+// floor or wall point is ever dynamic; the dynamic points are handed back.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -31,6 +35,7 @@ MapParams dynamicParams(bool enabled, int known_radius_cells = 1) {
   p.threads = 2;
   p.dynamic.enabled = enabled;
   p.dynamic.known_radius_cells = known_radius_cells;
+  p.dynamic.rule = VoidSpaceRule::kSurround;
   return p;
 }
 
@@ -68,30 +73,73 @@ PointCloud sceneCloud(int person_y) {
 // (OctoMap's rule makes those cells occupied, and one scan after does not clear them).
 constexpr int kPersonY[] = {0, 0, 0, -100, -100, -100, -100, -8, -4, 0, 4, 4, 4, 4, 4, 4, 8};
 
-// Brute force: point i is dynamic when its cell is void and every cell within the radius has
-// been observed, in `ref` as it is now.
-bool observedAround(const Map& ref, const VoxelKey& k, int r) {
-  for (int dz = -r; dz <= r; ++dz)
-    for (int dy = -r; dy <= r; ++dy)
-      for (int dx = -r; dx <= r; ++dx) {
-        const Cell* n = ref.findCell({k.x + dx, k.y + dy, k.z + dz});
-        if (!n || !n->observed()) return false;
-      }
-  return true;
-}
+// Floor and wall points come first in sceneCloud: these many are static.
+constexpr size_t kStaticPoints = 38 * 31 + 31 * 20;
 
-std::vector<uint8_t> referenceDynamic(const Map& ref, const PointCloud& cloud,
-                                      const DynamicParams& d) {
-  const int16_t void_fx = logOddsFxOf(d.void_probability);
+// Brute force: point i is dynamic when its cell is void (exactly at the lower clamp), or when it
+// and every cell within r are free with confidence (log-odds <= seen_fx), in `ref` as it is now.
+std::vector<uint8_t> referenceDynamic(const Map& ref, const PointCloud& cloud, int r,
+                                      int16_t seen_fx) {
+  const int16_t clamp_fx = ref.model().min_fx;
+  auto seenFree = [&](const VoxelKey& k) {
+    const Cell* c = ref.findCell(k);
+    return c && c->observed() && c->log_odds_fx <= seen_fx;
+  };
   std::vector<uint8_t> dynamic(cloud.size(), 0);
   for (size_t i = 0; i < cloud.size(); ++i) {
     const VoxelKey k = ref.keyOf(sensorPose() * cloud.points_S[i].cast<double>());
     const Cell* c = ref.findCell(k);
-    if (!c || !c->observed() || c->log_odds_fx > void_fx) continue;
-    dynamic[i] = observedAround(ref, k, d.known_radius_cells) ? 1 : 0;
+    if (!seenFree(k)) continue;
+    bool all = true;  // void, or free all around
+    if (c->log_odds_fx != clamp_fx)
+      for (int dz = -r; dz <= r; ++dz)
+        for (int dy = -r; dy <= r; ++dy)
+          for (int dx = -r; dx <= r; ++dx) all = all && seenFree({k.x + dx, k.y + dy, k.z + dz});
+    dynamic[i] = all ? 1 : 0;
   }
   return dynamic;
 }
+
+// Brute force, the surround test: `marks` holds the scan alone (inserted into an empty map);
+// a cell is seen free when the scan does not hit it and passes through it or it was free with
+// confidence in `ref` before the scan; a cell passes when every cell within r is seen free.
+// (Seen-free flags are tabulated over the scene's box once a scan: the test stays cheap.)
+class SurroundReference {
+ public:
+  SurroundReference(const Map& ref, const Map& marks, int16_t seen_fx)
+      : ref_(ref), marks_(marks), seen_fx_(seen_fx) {
+    table_.resize(size_t{kX} * kY * kZ);
+    for (int z = 0; z < kZ; ++z)
+      for (int y = 0; y < kY; ++y)
+        for (int x = 0; x < kX; ++x)
+          table_[(static_cast<size_t>(z) * kY + y) * kX + x] = lookUp({x + kX0, y + kY0, z + kZ0});
+  }
+  bool surrounded(const VoxelKey& k, int r) const {
+    for (int dz = -r; dz <= r; ++dz)
+      for (int dy = -r; dy <= r; ++dy)
+        for (int dx = -r; dx <= r; ++dx)
+          if (!seenFree({k.x + dx, k.y + dy, k.z + dz})) return false;
+    return true;
+  }
+
+ private:
+  static constexpr int kX0 = -4, kY0 = -20, kZ0 = -14, kX = 50, kY = 41, kZ = 29;
+  bool seenFree(const VoxelKey& n) const {
+    const int x = n.x - kX0, y = n.y - kY0, z = n.z - kZ0;
+    if (x < 0 || y < 0 || z < 0 || x >= kX || y >= kY || z >= kZ) return lookUp(n);
+    return table_[(static_cast<size_t>(z) * kY + y) * kX + x];
+  }
+  bool lookUp(const VoxelKey& n) const {
+    const Cell* m = marks_.findCell(n);
+    if (m && m->observed()) return m->hits == 0;  // hit, or passed through
+    const Cell* c = ref_.findCell(n);
+    return c && c->observed() && c->log_odds_fx <= seen_fx_;
+  }
+  const Map& ref_;
+  const Map& marks_;
+  int16_t seen_fx_;
+  std::vector<char> table_;
+};
 
 TEST(DynamicMappingTest, BadOptionValuesAreRefused) {
   auto refused = [](auto edit) {
@@ -107,6 +155,13 @@ TEST(DynamicMappingTest, BadOptionValuesAreRefused) {
   refused([](MapParams& p) { p.dynamic.known_radius_cells = 3; });
   refused([](MapParams& p) { p.scans.keep = true; });
   refused([](MapParams& p) { p.backend = Backend::kCuda; });
+  refused([](MapParams& p) { p.dynamic.rule = static_cast<VoidSpaceRule>(2); });
+  EXPECT_THROW((void)voidSpaceRuleFromString("sideways"), InvalidArgument);
+  EXPECT_THROW((void)voidSpaceRuleFromString(""), InvalidArgument);
+  EXPECT_THROW((void)voidSpaceRuleFromString("Surround"), InvalidArgument);
+  for (VoidSpaceRule r : {VoidSpaceRule::kPassThrough, VoidSpaceRule::kSurround})
+    EXPECT_EQ(voidSpaceRuleFromString(toString(r)), r);
+  EXPECT_EQ(MapParams().dynamic.rule, VoidSpaceRule::kPassThrough);  // main's rule by default
   // Off, the values are not looked at (the default path is OctoMap's).
   MapParams off = dynamicParams(false);
   off.dynamic.void_probability = 0.0;
@@ -121,54 +176,83 @@ TEST(DynamicMappingTest, NothingVoidIntegratesAsWithTheOptionOff) {
   EXPECT_EQ(s_on.rays_dynamic, 0u);
   EXPECT_EQ(s_on.rays_hit, s_off.rays_hit);
   EXPECT_TRUE(on.lastDynamicPoints_S().empty());
-  test::expectSameMap(on, off, "first scan");
+  // The same cells in the same states; the only other difference: the cells the surround test
+  // made void (at the clamp, below one miss's log-odds).
+  const int16_t clamp_fx = on.model().min_fx;
+  uint64_t cells = 0, made_void = 0;
+  off.forEachBlock([&](const BlockKey& bk, const Block& block) {
+    for (int ci = 0; ci < kCellsPerBlock; ++ci) {
+      const Cell& o = block.cells[ci];
+      const Cell* n = on.findCell(voxelKeyOf(bk, ci));
+      ASSERT_NE(n, nullptr);
+      ASSERT_EQ(n->observed(), o.observed());
+      if (!o.observed()) continue;
+      ++cells;
+      EXPECT_EQ(on.state(*n), off.state(o));
+      EXPECT_EQ(n->hits, o.hits);
+      if (n->log_odds_fx == o.log_odds_fx) continue;
+      EXPECT_EQ(n->log_odds_fx, clamp_fx);
+      ++made_void;
+    }
+  });
+  EXPECT_GT(made_void, 0u);
+  EXPECT_LT(made_void, cells);
 }
 
 // The sequence through a map with the option on and through the brute-force reference, both
 // with the neighbourhood radius `r`; checks every scan, returns the counts.
 struct PersonRun {
-  uint64_t dynamic_total = 0, void_but_static = 0, resets = 0;
+  uint64_t dynamic_total = 0, static_dynamic = 0, free_but_static = 0, made_void = 0;
 };
 
 void walkPerson(int r, Map* out_map, PersonRun* run) {
   const MapParams params = dynamicParams(true, r);
+  const int16_t seen_fx = logOddsFxOf(params.dynamic.void_probability);
   Map& map = *out_map;
   Map ref(dynamicParams(false));
-  uint64_t& dynamic_total = run->dynamic_total;
-  uint64_t& void_but_static = run->void_but_static;
-  uint64_t& resets = run->resets;
+  const int16_t clamp_fx = ref.model().min_fx;
   for (size_t step = 0; step < std::size(kPersonY); ++step) {
     const PointCloud cloud = sceneCloud(kPersonY[step]);
-    const std::vector<uint8_t> expected = referenceDynamic(ref, cloud, params.dynamic);
-    // Points in void cells that the neighbourhood keeps static (the edge point).
+    const std::vector<uint8_t> expected = referenceDynamic(ref, cloud, r, seen_fx);
     for (size_t i = 0; i < cloud.size(); ++i) {
+      run->static_dynamic += i < kStaticPoints && expected[i] ? 1 : 0;
+      // Points in confidently free cells that are not void stay static (the edge point).
       const Cell* c = ref.findCell(ref.keyOf(sensorPose() * cloud.points_S[i].cast<double>()));
-      if (!expected[i] && c && c->observed() &&
-          c->log_odds_fx <= logOddsFxOf(params.dynamic.void_probability))
-        ++void_but_static;
+      if (!expected[i] && c && c->observed() && c->log_odds_fx <= seen_fx) ++run->free_but_static;
     }
-    // Pass-through candidates: the reference's occupied cells whose neighbourhood has been
-    // observed, before the scan.
-    std::vector<std::pair<VoxelKey, Cell>> occupied_before;
-    ref.forEachBlock([&](const BlockKey& bk, const Block& block) {
-      for (int ci = 0; ci < kCellsPerBlock; ++ci)
-        if (ref.state(block.cells[ci]) == CellState::kOccupied &&
-            observedAround(ref, voxelKeyOf(bk, ci), params.dynamic.known_radius_cells))
-          occupied_before.emplace_back(voxelKeyOf(bk, ci), block.cells[ci]);
-    });
     PointCloud marked = cloud;
     marked.free_only.assign(expected.begin(), expected.end());
+    // The scan's marks alone, and the surround test on the reference before the scan.
+    Map marks(dynamicParams(false));
+    marks.insert(marked, sensorPose(), SensorModel::autoFromCloud());
+    struct Passed {
+      VoxelKey key;
+      Cell before;
+      bool surrounded;
+    };
+    std::vector<Passed> passed;
+    const SurroundReference surround(ref, marks, seen_fx);
+    marks.forEachBlock([&](const BlockKey& bk, const Block& block) {
+      for (int ci = 0; ci < kCellsPerBlock; ++ci) {
+        const Cell& m = block.cells[ci];
+        if (!m.observed() || m.hits > 0) continue;
+        const VoxelKey k = voxelKeyOf(bk, ci);
+        const Cell* before = ref.findCell(k);
+        passed.push_back({k, before ? *before : Cell(), surround.surrounded(k, r)});
+      }
+    });
     ref.insert(marked, sensorPose(), SensorModel::autoFromCloud());
-    // Those that took a miss (a ray passed through, none ended there) become void.
-    const OccupancyModel model = OccupancyModel::fromParams(params.occupancy);
     ref.writeCells([&](CellWriter& w) {
-      for (const auto& [key, before] : occupied_before) {
-        const Cell* now = ref.findCell(key);
-        if (now->hits == before.hits &&
-            now->log_odds_fx == model.updated(before.log_odds_fx, false)) {
-          w.set(key, Cell{before.hits, logOddsFxOf(params.dynamic.void_probability)});
-          ++resets;
+      for (const Passed& p : passed) {
+        Cell now = *ref.findCell(p.key);
+        const bool was_void = p.before.observed() && p.before.log_odds_fx == clamp_fx;
+        if (p.surrounded) {
+          now.log_odds_fx = clamp_fx;
+          run->made_void += was_void ? 0 : 1;
+        } else if (!was_void && now.log_odds_fx <= clamp_fx) {
+          now.log_odds_fx = static_cast<int16_t>(clamp_fx + 1);
         }
+        w.set(p.key, now);
       }
     });
     const InsertStats s = map.insert(cloud, sensorPose(), SensorModel::autoFromCloud());
@@ -181,7 +265,7 @@ void walkPerson(int r, Map* out_map, PersonRun* run) {
     EXPECT_EQ(map.lastDynamicPoints_S(), expected_points) << "scan " << step;
     test::expectSameMap(map, ref, "scan");
     EXPECT_EQ(test::blocksWithStaleMasks(map), 0u) << "scan " << step;
-    dynamic_total += s.rays_dynamic;
+    run->dynamic_total += s.rays_dynamic;
   }
 }
 
@@ -193,12 +277,11 @@ TEST(DynamicMappingTest, PersonWalkingThroughVoidSpaceMatchesBruteForce) {
   Map map(dynamicParams(true, 1));
   PersonRun run;
   walkPerson(1, &map, &run);
-  const uint64_t dynamic_total = run.dynamic_total, void_but_static = run.void_but_static,
-                 resets = run.resets;
-  EXPECT_GT(dynamic_total, wide_run.dynamic_total);
-  EXPECT_GT(dynamic_total, 50u);  // the person's columns, after the room became void
-  EXPECT_GT(void_but_static, 0u);
-  EXPECT_GE(resets, 10u);  // the first standing place, cleared by the rays through it
+  EXPECT_GE(run.dynamic_total, wide_run.dynamic_total);
+  EXPECT_GT(run.dynamic_total, 50u);  // the person's columns, after the room became void
+  EXPECT_EQ(run.static_dynamic + wide_run.static_dynamic, 0u);  // the floor and the wall
+  EXPECT_GT(run.free_but_static, 0u);
+  EXPECT_GE(run.made_void, 1000u);  // the room in front of the wall
   // No ghost: no cell of the person's path that the empty room's rays had cleared (y within
   // +-7.5 and z within -9..5 at x = 20, a cell's neighbours included) is occupied at the end.
   for (int y = -4; y <= 4; y += 4)

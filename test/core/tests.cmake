@@ -38,8 +38,10 @@ if(TARGET fragg_core_map_image_test)
     FRAGG_SAVE_LOOP="$<TARGET_FILE:fragg_map_save_loop>")
 endif()
 
-# Dynamic-aware mapping (MapParams::dynamic) on the CPU backend against a brute-force reference.
+# Dynamic-aware mapping (MapParams::dynamic) on the CPU backend against a brute-force reference,
+# both rules (surround; pass-through, the default).
 fragg_add_test(fragg_dynamic_mapping_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/dynamic_mapping_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/dynamic_pass_through_test.cpp
   LIBS fragg_map_core
   LABELS core)

@@ -89,6 +89,8 @@ TEST(CliBuild, BadArgumentsAndInputsFailCleanly) {
        "--min-z (2.000000 m) must not exceed --max-z"},
       {"build '" + kPly + "' -o '" + out + "/m.fgm' --clamp-min 0.98", 2,
        "--clamp-min must be below --clamp-max"},
+      {"build '" + kPly + "' -o '" + out + "/m.fgm' --dynamic --dynamic-rule sideways", 2,
+       "--dynamic-rule must be pass-through or surround, got 'sideways'"},
       {"build '" + kPly + "'", 2, "output"},
       {"stats '" + dir + "/missing.fgm'", 1, "missing.fgm"},
       {"stats '" + dir + "/corrupt.fgm'", 1, "corrupt.fgm"},

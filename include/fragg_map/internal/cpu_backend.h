@@ -40,6 +40,7 @@ class CpuBackend : public MapBackend {
   PreparedScan prepared_;
   std::vector<uint32_t> dynamic_rays_;             // MapParams::dynamic, last scan
   std::vector<Eigen::Vector3f> dynamic_points_S_;  // their points
+  std::vector<uint64_t> surrounded_;               // MapParams::dynamic: void-to-be cells
 };
 
 }  // namespace fragg

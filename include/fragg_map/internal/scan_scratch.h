@@ -18,6 +18,7 @@ struct ScratchBlock {
   uint64_t hit[kCellsPerBlock / 64];   ///< bit c: a ray ended in cell c
   ScratchBlock* neighbour[6];          ///< face neighbours found so far (see raycast.h)
   BlockKey key;
+  uint32_t index = 0;  ///< its place in the scan's touched order (ScanScratch::touched)
   /// Whether misses may skip the block (every cell of the map's block at the lower clamp, so a
   /// miss changes nothing); -1 until the ray pass has looked the block up.
   int8_t skip_free = -1;
@@ -44,10 +45,13 @@ class ScanScratch {
 
   /// Scratch block for `key` (inside the box), created zeroed on first use.
   ScratchBlock& blockFor(const BlockKey& key);
+  /// Scratch block for `key` when this scan touched it (null otherwise, or outside the box).
+  [[nodiscard]] const ScratchBlock* find(const BlockKey& key) const;
 
   /// Blocks touched since begin(), in creation order.
   size_t touchedCount() const { return used_blocks_; }
   ScratchBlock& touched(size_t i) { return *blocks_[i]; }
+  const ScratchBlock& touched(size_t i) const { return *blocks_[i]; }
 
   /// Returns everything to zero for the next scan (cost follows what was touched).
   void end();

@@ -50,7 +50,8 @@ struct BuildOptions {
   double scan_budget_mib = 0.0;
   HeightFilterParams height_filter;
   DynamicParams dynamic;
-  std::string page_store;  ///< out-of-core paging: the store is the map
+  std::string dynamic_rule = "pass-through";  ///< DynamicParams::rule by name
+  std::string page_store;                     ///< out-of-core paging: the store is the map
   PagingPolicy paging;
 };
 
@@ -71,6 +72,7 @@ const std::vector<FieldName>& flagNames() {
       {"height_filter.max_z_m", "--max-z"},
       {"dynamic.void_probability", "--void-probability"},
       {"dynamic.known_radius_cells", "--known-radius"},
+      {"dynamic.rule", "--dynamic-rule"},
       {"dynamic.enabled", "--dynamic"},
       {"sensor.type", "--sensor"},
       {"sensor.hfov_rad", "--hfov"},
@@ -131,6 +133,7 @@ void runBuild(const BuildOptions& o) {
         params.scans = o.scans;
         params.height_filter = o.height_filter;
         params.dynamic = o.dynamic;
+        params.dynamic.rule = voidSpaceRuleFromString(o.dynamic_rule);
         params.validate();
         sensor = sensorFrom(o);
       },
@@ -296,7 +299,8 @@ void runBuild(const BuildOptions& o) {
           {"saved_by_rotation", total.culling.saved_by_rotation},
           {"saved_by_translation", total.culling.saved_by_translation}}}};
     if (params.dynamic.enabled)
-      j["dynamic"] = {{"void_probability", params.dynamic.void_probability},
+      j["dynamic"] = {{"rule", toString(params.dynamic.rule)},
+                      {"void_probability", params.dynamic.void_probability},
                       {"known_radius_cells", params.dynamic.known_radius_cells},
                       {"rays_dynamic_per_scan", dynamic_per_scan}};
     if (paging.enabled)
@@ -416,6 +420,11 @@ void addBuildCommand(CLI::App& app) {
   c->add_flag("--dynamic", o->dynamic.enabled,
               "Dynamic scenes: hits in void space (observed free with confidence) are dynamic, "
               "not inserted; counted per scan in --json (CPU backend)");
+  c->add_option("--dynamic-rule", o->dynamic_rule,
+                "With --dynamic: how space becomes void: pass-through (a ray through an occupied "
+                "cell whose neighbourhood is observed voids it) | surround (DUFOMap's: a "
+                "passed-through cell whose every neighbour is seen free)")
+      ->capture_default_str();
   c->add_option("--void-probability", o->dynamic.void_probability,
                 "With --dynamic: a cell is void at or below this probability")
       ->capture_default_str();
