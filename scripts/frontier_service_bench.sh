@@ -8,12 +8,13 @@
 # ms, cells, clusters, the slowest ~get_stats, scans inserted meanwhile). Starts its own master
 # on a free loopback port and stops everything it started.
 # Usage: bash scripts/frontier_service_bench.sh [--workload DIR] [--scans N] [--more N]
-#          [--resolution M] [--max-range M] [--k K] [--box-edge M] [--out DIR] [common options]
+#          [--resolution M] [--max-range M] [--k K] [--box-edge M] [--out DIR] [--no-build]
+#          [common options]   (--no-build: the workspace's node as it is)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 workload="${FRAGG_WORKLOADS:-$HOME/.cache/fragg_map/workloads}/w1_lidar360"
-scans=10 more=10 resolution=0.05 max_range=80 k=8 box_edge=40
+scans=10 more=10 resolution=0.05 max_range=80 k=8 box_edge=40 build=1
 out="$FRAGG_REPO/out/frontier_service"
 args=()
 while [ $# -gt 0 ]; do
@@ -26,11 +27,12 @@ while [ $# -gt 0 ]; do
     --k) k="$2"; shift 2 ;;
     --box-edge) box_edge="$2"; shift 2 ;;
     --out) out="$2"; shift 2 ;;
+    --no-build) build=0; shift ;;
     *) args+=("$1"); shift ;;
   esac
 done
 fragg_usage() {
-  sed -n '10,11p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
+  sed -n '10,12p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
   fragg_usage_common
 }
 fragg_parse_common "${args[@]+"${args[@]}"}"
@@ -39,7 +41,7 @@ if [ ! -f "$workload/poses.txt" ]; then
   exit 1
 fi
 fragg_install_deps
-fragg_build_ws >/dev/null
+[ "$build" -eq 0 ] || fragg_build_ws >/dev/null
 mkdir -p "$out"
 out="$(cd "$out" && pwd -P)"
 

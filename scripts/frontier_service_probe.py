@@ -52,43 +52,48 @@ def main():
     out = {"scans": before.scans, "known_voxels": before.known_voxels, "queries": []}
 
     player = None
-    for name, req in (("whole map", GetFrontiersRequest(k=a.k)), ("box", None)):
-        if req is None:
-            c = a.box_center
-            half, height = 0.5 * a.box_edge, 0.5 * a.box_height
-            req = GetFrontiersRequest(k=a.k, use_box=True,
-                                      box_min=Point(c[0] - half, c[1] - half, c[2] - height),
-                                      box_max=Point(c[0] + half, c[1] + half, c[2] + height))
-            name = "box %.0f x %.0f x %.0f m" % (a.box_edge, a.box_edge, a.box_height)
-        if player is None:  # insertion goes on during the queries
-            player = subprocess.Popen(["rosbag", "play", "--clock", "-q", "--keep-alive", a.more_bag],
-                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        slowest = [0.0]
-        running = threading.Event()
-        running.set()
+    c = a.box_center
+    half, height = 0.5 * a.box_edge, 0.5 * a.box_height
+    box = GetFrontiersRequest(k=a.k, use_box=True,
+                              box_min=Point(c[0] - half, c[1] - half, c[2] - height),
+                              box_max=Point(c[0] + half, c[1] + half, c[2] + height))
+    box_name = "box %.0f x %.0f x %.0f m" % (a.box_edge, a.box_edge, a.box_height)
+    # First on an idle node (the query's own time), then while the second bag is inserted
+    # (the query waits for the scan being inserted, shares the cores, and ~get_stats is asked).
+    for inserting in (False, True):
+        for name, req in (("whole map", GetFrontiersRequest(k=a.k)), (box_name, box)):
+            if inserting and player is None:
+                player = subprocess.Popen(
+                    ["rosbag", "play", "--clock", "-q", "--keep-alive", a.more_bag],
+                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                time.sleep(1.0)
+            slowest = [0.0]
+            running = threading.Event()
+            running.set()
 
-        def ask_stats():
-            while running.is_set():
-                t0 = time.monotonic()
-                stats()
-                slowest[0] = max(slowest[0], time.monotonic() - t0)
-                time.sleep(0.05)
+            def ask_stats():
+                while running.is_set():
+                    t0 = time.monotonic()
+                    stats()
+                    slowest[0] = max(slowest[0], time.monotonic() - t0)
+                    time.sleep(0.05)
 
-        scans_before = stats().stats.scans
-        asker = threading.Thread(target=ask_stats)
-        asker.start()
-        t0 = time.monotonic()
-        res = frontiers(req)
-        wall = time.monotonic() - t0
-        running.clear()
-        asker.join()
-        out["queries"].append({
-            "query": name, "success": res.success, "client_s": round(wall, 4),
-            "node_ms": round(res.ms, 1), "frontier_cells": res.frontier_cells,
-            "clusters": len(res.clusters),
-            "clusters_with_viewpoints": sum(1 for c in res.clusters if c.viewpoints),
-            "message": res.message, "slowest_get_stats_s": round(slowest[0], 4),
-            "scans_inserted_meanwhile": stats().stats.scans - scans_before})
+            scans_before = stats().stats.scans
+            asker = threading.Thread(target=ask_stats)
+            asker.start()
+            t0 = time.monotonic()
+            res = frontiers(req)
+            wall = time.monotonic() - t0
+            running.clear()
+            asker.join()
+            out["queries"].append({
+                "query": name + (", while scans are inserted" if inserting else ", idle node"),
+                "success": res.success, "client_s": round(wall, 4),
+                "node_ms": round(res.ms, 1), "frontier_cells": res.frontier_cells,
+                "clusters": len(res.clusters),
+                "clusters_with_viewpoints": sum(1 for c in res.clusters if c.viewpoints),
+                "message": res.message, "slowest_get_stats_s": round(slowest[0], 4),
+                "scans_inserted_meanwhile": stats().stats.scans - scans_before})
     if player is not None:
         player.terminate()
         player.wait()
