@@ -154,3 +154,34 @@ fragg_elapsed() {
   local s=$SECONDS
   printf '%dm%02ds' $((s / 60)) $((s % 60))
 }
+
+# Processes a script started beside its node (a master, players, listeners):
+# fragg_stop_started stops each (TERM, then KILL after 10 s); scripts trap it on EXIT.
+FRAGG_STARTED=()
+# Stops PID with signal SIG, waiting up to 10 s before KILL.
+fragg_stop_pid() {
+  local pid="$1" sig="$2"
+  kill -0 "$pid" 2>/dev/null || return 0
+  kill "-$sig" "$pid" 2>/dev/null || true
+  for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || return 0; sleep 0.2; done
+  kill -KILL "$pid" 2>/dev/null || true
+}
+fragg_stop_started() {
+  for pid in "${FRAGG_STARTED[@]+"${FRAGG_STARTED[@]}"}"; do fragg_stop_pid "$pid" TERM; done
+}
+
+# A ROS master of the script's own on a free loopback port (ROS_MASTER_URI exported), its output
+# appended to LOG, the workspace sourced; returns once it answers. Its pid goes to
+# FRAGG_STARTED (a bare rosmaster ignores SIGINT: fragg_stop_started TERMs it).
+fragg_start_master() {
+  local log="$1" port
+  port="$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')"
+  export ROS_MASTER_URI="http://127.0.0.1:$port"
+  set +u
+  # shellcheck disable=SC1091
+  source "$FRAGG_WS/devel/setup.bash"
+  set -u
+  rosmaster --core -p "$port" >>"$log" 2>&1 &
+  FRAGG_STARTED+=("$!")
+  for _ in $(seq 50); do rosparam list >/dev/null 2>&1 && break; sleep 0.2; done
+}

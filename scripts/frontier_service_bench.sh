@@ -60,28 +60,10 @@ import rosbag; b = rosbag.Bag('$all'); print(b.get_start_time() + $split_at - 1e
 # The box's centre: the last sensor position of the first bag (poses.txt row scans - 1).
 center="$(awk -v n="$scans" 'NR == n { print $4, $8, $12 }' "$workload/poses.txt")"
 
-port="$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')"
-export ROS_MASTER_URI="http://127.0.0.1:$port"
-set +u
-# shellcheck disable=SC1091
-source "$FRAGG_WS/devel/setup.bash"
-set -u
-pids=()
-stop_pid() {
-  local pid="$1" sig="$2"
-  kill -0 "$pid" 2>/dev/null || return 0
-  kill "-$sig" "$pid" 2>/dev/null || true
-  for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || return 0; sleep 0.2; done
-  kill -KILL "$pid" 2>/dev/null || true
-}
-cleanup() { for pid in "${pids[@]+"${pids[@]}"}"; do stop_pid "$pid" TERM; done; }
-trap cleanup EXIT
-
+trap fragg_stop_started EXIT
 log="$out/frontier_service.log"
 : >"$log"
-rosmaster --core -p "$port" >>"$log" 2>&1 &  # a bare rosmaster ignores SIGINT: TERM it
-pids+=("$!")
-for _ in $(seq 50); do rosparam list >/dev/null 2>&1 && break; sleep 0.2; done
+fragg_start_master "$log"
 rosparam set /use_sim_time true
 rosparam load "$FRAGG_REPO/config/default.yaml" /fragg_map
 rosparam set /fragg_map/resolution "$resolution"
@@ -91,13 +73,13 @@ rosparam set /fragg_map/queue_size 100  # every cloud inserted, however slowly
 rosparam set /fragg_map/latch false     # no subscriber: no output built
 rosrun nodelet nodelet standalone fragg_map/MapServerNodelet __name:=fragg_map \
   cloud_in:=/points >>"$log" 2>&1 &
-pids+=("$!")
+FRAGG_STARTED+=("$!")
 for _ in $(seq 100); do rosservice list 2>/dev/null | grep -q /fragg_map/get_stats && break; sleep 0.2; done
 # Kept alive past the bag's end (an exiting player can lose its last message); the probe waits
 # for the node to hold every cloud of it.
 rosbag play --clock -q -r 0.5 --keep-alive "$first" >>"$log" 2>&1 &
 player_pid=$!
-pids+=("$player_pid")
+FRAGG_STARTED+=("$player_pid")
 # shellcheck disable=SC2086
 /usr/bin/python3 "$FRAGG_REPO/scripts/frontier_service_probe.py" --scans "$scans" \
   --more-bag "$rest" --k "$k" --box-edge "$box_edge" --box-center $center \

@@ -60,32 +60,10 @@ bag_hz="$(/usr/bin/python3 -c 'import sys
 t = [float(l) for l in open(sys.argv[1]) if l.strip()][:int(sys.argv[2])]
 print((len(t) - 1) / (t[-1] - t[0]))' "$workload/times.txt" "$scans")"
 
-port="$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')"
-export ROS_MASTER_URI="http://127.0.0.1:$port"
-set +u
-# shellcheck disable=SC1091
-source "$FRAGG_WS/devel/setup.bash"
-set -u
-
-pids=()
-stop_pid() {
-  local pid="$1" sig="$2"
-  kill -0 "$pid" 2>/dev/null || return 0
-  kill "-$sig" "$pid" 2>/dev/null || true
-  for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || return 0; sleep 0.2; done
-  kill -KILL "$pid" 2>/dev/null || true
-}
-cleanup() {
-  for pid in "${pids[@]+"${pids[@]}"}"; do stop_pid "$pid" TERM; done
-}
-trap cleanup EXIT
-
+trap fragg_stop_started EXIT
 log="$out/ros_rate.log"
 : >"$log"
-rosmaster --core -p "$port" >>"$log" 2>&1 &  # a bare rosmaster ignores SIGINT: TERM it
-master_pid=$!
-pids+=("$master_pid")
-for _ in $(seq 50); do rosparam list >/dev/null 2>&1 && break; sleep 0.2; done
+fragg_start_master "$log"
 rosparam set /use_sim_time true
 
 # One field of a `rosservice call .../get_stats` answer (0 when absent).
@@ -115,12 +93,12 @@ for rate in $rates; do
   rosrun nodelet nodelet standalone fragg_map/MapServerNodelet __name:=fragg_map \
     cloud_in:=/points >>"$log" 2>&1 &
   node_pid=$!
-  pids+=("$node_pid")
+  FRAGG_STARTED+=("$node_pid")
   hz_pid=""
   if [ "$markers" -eq 1 ]; then
     rostopic hz /occupied_cells_vis_array >"$out/hz_$rate.log" 2>&1 &
     hz_pid=$!
-    pids+=("$hz_pid")
+    FRAGG_STARTED+=("$hz_pid")
   fi
   for _ in $(seq 100); do rosservice list 2>/dev/null | grep -q /fragg_map/get_stats && break; sleep 0.2; done
   factor="$(/usr/bin/python3 -c "print($rate / $bag_hz)")"
@@ -140,12 +118,12 @@ for rate in $rates; do
   arrays="-"
   if [ -n "$hz_pid" ]; then
     sleep 2  # pending markers (marker_rate) go out within a period
-    stop_pid "$hz_pid" INT
+    fragg_stop_pid "$hz_pid" INT
     arrays="$(sed -n 's/.*average rate.*//p; s/^.*min: .*window: \([0-9]*\).*$/\1/p' \
       "$out/hz_$rate.log" | tail -n 1)"
   fi
   printf '| %s | %s | %s | %.0f | %.0f | %s |\n' "$rate" "$(field "$s" scans)" \
     "$(field "$s" dropped_queue_full)" "$(field "$s" insertion_ms_mean)" \
     "$(field "$s" insertion_ms_p99)" "${arrays:--}"
-  stop_pid "$node_pid" INT
+  fragg_stop_pid "$node_pid" INT
 done
