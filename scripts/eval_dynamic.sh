@@ -10,11 +10,13 @@
 # (the noise is fragg's clearing margin: cells just in front of a hit are not cleared, so
 # they do not become void under noisy static hits; OctoMap has no such model)
 # Usage: bash scripts/eval_dynamic.sh [--workloads DIR] [--out DIR] [--bin DIR] [--only w5|w6]
-#                                     [--reuse]   (--reuse keeps OctoMap's .bt when present)
+#                                     [--rule pass-through|surround] [--reuse]
+#   --rule    the "on" map's void rule (fragg_map build --dynamic-rule; default pass-through)
+#   --reuse   keeps OctoMap's .bt when present
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
 workloads="${FRAGG_WORKLOADS:-$HOME/.cache/fragg_map/workloads}"
-out="" bin="" only="w5,w6" reuse=0
+out="" bin="" only="w5,w6" reuse=0 rule=pass-through
 while [ $# -gt 0 ]; do
   case "$1" in
     --workloads) workloads="$2"; shift 2 ;;
@@ -22,7 +24,8 @@ while [ $# -gt 0 ]; do
     --bin) bin="$2"; shift 2 ;;
     --only) only="$2"; shift 2 ;;
     --reuse) reuse=1; shift ;;
-    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+    --rule) rule="$2"; shift 2 ;;
+    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
     *) echo "eval_dynamic: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
@@ -41,7 +44,7 @@ run() {  # name dataset static_obj resolution range [fragg build args: the senso
   [ -d "$data/labels" ] || { echo "eval_dynamic: $data has no labels/ (make_workloads.sh --only $name)" >&2; exit 1; }
   for mode in off on; do
     local flag=()
-    [ "$mode" = on ] && flag=(--dynamic)
+    [ "$mode" = on ] && flag=(--dynamic --dynamic-rule "$rule")
     "$fm" build "$data" -o "$out/${name}_$mode.fgm" --resolution "$res" --max-range "$range" \
       --backend cpu --threads 1 "$@" "${flag[@]}" --json > "$out/${name}_$mode.build.json"
   done
