@@ -144,7 +144,7 @@ if(FRAGG_HAVE_ROS AND FRAGG_SMOKE_BAG)
     # by that name.
     add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_bag.test
       ARGS topic:=/velodyne_points bag:=${_fragg_velodyne_bag} scans:=2 no_tf:=1
-           octomap:=0.99998)
+           octomap:=0.99998 name:=map_server_bag_velodyne)
   endif()
   # The real RGB-D frames as organised depth clouds (make_rgbd_bag.py: 49 MB, made at build
   # time, never committed).
@@ -167,7 +167,7 @@ if(FRAGG_HAVE_ROS AND FRAGG_SMOKE_BAG)
     if(octomap_FOUND)
       add_rostest(${CMAKE_CURRENT_LIST_DIR}/../rostest/map_server_bag.test
         ARGS topic:=/camera/depth_registered/points bag:=${_fragg_rgbd_bag} scans:=5
-             rate:=0.5 octomap:=0.9999)
+             rate:=0.5 octomap:=0.9999 name:=map_server_bag_rgbd)
     endif()
   endif()
 else()
