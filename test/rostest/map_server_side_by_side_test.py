@@ -11,7 +11,6 @@ Checks (orders and counts, not timings):
   - a ~get_stats answer returned before the long call did counts more scans than the map held
     when it started (insertion not held back by the query's read of the map);
   - every cloud sent is inserted, none dropped, and the counters sum to the clouds received."""
-import array
 import math
 import os
 import random
@@ -23,30 +22,13 @@ import unittest
 
 import rospy
 import rostest
-from sensor_msgs.msg import PointCloud2, PointField
+from sensor_msgs.msg import PointCloud2
 
-from map_server_checks import NS, wait_for
+from map_server_checks import NS, map_cloud, wait_for
 from fragg_map.srv import GetFrontiers, GetFrontiersRequest, GetStats, SaveMap
 
 TOPIC = "/side_points"
 LONG_S = 3.0  # the long call lasts at least this long (calibrated on the machine at hand)
-
-
-def cloud(points_xyz, stamp):
-    """An unorganised float32 x, y, z cloud in the map frame from a flat list x0 y0 z0 x1..."""
-    msg = PointCloud2()
-    msg.header.frame_id = "map"
-    msg.header.stamp = stamp
-    msg.fields = [PointField(name=n, offset=4 * k, datatype=PointField.FLOAT32, count=1)
-                  for k, n in enumerate("xyz")]
-    msg.point_step = 12
-    msg.width = len(points_xyz) // 3
-    msg.height = 1
-    msg.row_step = 12 * msg.width
-    msg.is_bigendian = False
-    msg.is_dense = True
-    msg.data = array.array("f", points_xyz).tobytes()
-    return msg
 
 
 def holed_sphere(radius, n, seed):
@@ -98,7 +80,7 @@ class SideBySide(unittest.TestCase):
         shutil.rmtree(cls.tmp, ignore_errors=True)
 
     def send(self, points):
-        self.pub.publish(cloud(points, rospy.Time.now()))
+        self.pub.publish(map_cloud(list(zip(points[0::3], points[1::3], points[2::3]))))
         type(self).sent += 1
 
     def frontiers(self, columns, rows):
