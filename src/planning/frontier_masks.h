@@ -102,16 +102,25 @@ FRAGG_HD uint32_t neighboursReached(const StateMasks* old, const StateMasks& fre
   return bits;
 }
 
+/// Word `w` of a block's unknown and free masks, from the tracker's copy (StateMasks) or the
+/// map's layer (BlockStateMasks): frontierBitsOf reads either.
+FRAGG_HD uint64_t unknownWordOf(const StateMasks& m, int w) { return m.unknown[w]; }
+FRAGG_HD uint64_t unknownWordOf(const BlockStateMasks& m, int w) { return m.unknownWord(w); }
+FRAGG_HD uint64_t freeWordOf(const StateMasks& m, int w) { return m.free[w]; }
+FRAGG_HD uint64_t freeWordOf(const BlockStateMasks& m, int w) { return m.free[w]; }
+
 /// Frontier cells of the centre block given the state masks of the 27 blocks around it,
 /// index (dz + 1) * 9 + (dy + 1) * 3 + (dx + 1) (13: the centre); nullptr = missing block
-/// (all unknown; a missing centre has no free cell, so no frontier).
-FRAGG_HD FrontierBits frontierBitsOf(const StateMasks* const around[27]) {
+/// (all unknown; a missing centre has no free cell, so no frontier). `Masks`: StateMasks or
+/// BlockStateMasks (the same bits from either).
+template <class Masks>
+FRAGG_HD FrontierBits frontierBitsOf(const Masks* const around[27]) {
   using namespace mask_detail;
   FrontierBits out{};
-  const StateMasks* centre = around[13];
+  const Masks* centre = around[13];
   if (!centre) return out;
   uint64_t any_free = 0;
-  for (int w = 0; w < kMaskWords; ++w) any_free |= centre->free[w];
+  for (int w = 0; w < kMaskWords; ++w) any_free |= freeWordOf(*centre, w);
   if (!any_free) return out;
   // planes[i]: the unknown cells of slab z = i - 1 (z = -1 and 8 from the blocks below and
   // above) dilated along x and y.
@@ -121,16 +130,16 @@ FRAGG_HD FrontierBits frontierBitsOf(const StateMasks* const around[27]) {
     const int slab = i == 0 ? kMaskWords - 1 : (i == kMaskWords + 1 ? 0 : i - 1);
     uint64_t rows[3];
     for (int dy = 0; dy < 3; ++dy) {
-      const StateMasks* const* row = around + layer * 9 + dy * 3;
-      const uint64_t l = row[0] ? row[0]->unknown[slab] : ~uint64_t(0);
-      const uint64_t c = row[1] ? row[1]->unknown[slab] : ~uint64_t(0);
-      const uint64_t r = row[2] ? row[2]->unknown[slab] : ~uint64_t(0);
+      const Masks* const* row = around + layer * 9 + dy * 3;
+      const uint64_t l = row[0] ? unknownWordOf(*row[0], slab) : ~uint64_t(0);
+      const uint64_t c = row[1] ? unknownWordOf(*row[1], slab) : ~uint64_t(0);
+      const uint64_t r = row[2] ? unknownWordOf(*row[2], slab) : ~uint64_t(0);
       rows[dy] = dilateX(c, l, r);
     }
     planes[i] = dilateY(rows[1], rows[0], rows[2]);
   }
   for (int z = 0; z < kMaskWords; ++z)
-    out.words[z] = centre->free[z] & (planes[z] | planes[z + 1] | planes[z + 2]);
+    out.words[z] = freeWordOf(*centre, z) & (planes[z] | planes[z + 1] | planes[z + 2]);
   return out;
 }
 

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -14,6 +15,9 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/thread_count.h"
 #include "frontier_masks.h"
+#if FRAGG_HAVE_CUDA
+#include "cuda/device_frontiers.h"
+#endif
 
 namespace fragg::planning {
 
@@ -57,6 +61,13 @@ struct FrontierTracker::State {
   uint32_t update_number = 0;
   std::vector<BlockRecord> records;
   BlockKeyTable index;  ///< key -> records index
+  /// The set lives on the map's device (updateOnDevice): `records` hold no masks then, and
+  /// hold the frontier bits only once downloaded (`records_current`).
+  bool on_device = false;
+  bool records_current = true;
+#if FRAGG_HAVE_CUDA
+  std::unique_ptr<DeviceFrontiers> device;
+#endif
 
   int threadCount() const { return fragg::threadCount(threads); }
 
@@ -66,6 +77,78 @@ struct FrontierTracker::State {
     total = 0;
     records.clear();
     index.clear();
+    on_device = false;
+    records_current = true;
+  }
+
+  /// The frontier bits into `records` when the set lives on the device (no masks, no index:
+  /// what forEachBlock reads).
+  void download() {
+#if FRAGG_HAVE_CUDA
+    if (!on_device || records_current) return;
+    std::vector<BlockKey> keys;
+    std::vector<FrontierBits> bits;
+    device->download(&keys, &bits);
+    records.clear();
+    index.clear();
+    records.resize(keys.size());
+    for (size_t i = 0; i < keys.size(); ++i) {
+      records[i].key = keys[i];
+      records[i].frontier = bits[i];
+      uint32_t count = 0;
+      for (int w = 0; w < kMaskWords; ++w) count += __builtin_popcountll(bits[i].words[w]);
+      records[i].count = count;
+    }
+    records_current = true;
+#endif
+  }
+
+  /// The update on the map's device (a CUDA map: the whole map's device layer view, compared
+  /// slot by slot with what the tracker saw there, examined there; only counts come back).
+  /// False when the map has no device view or the state does not fit there: the host update.
+  bool updateOnDevice(const Map& map, FrontierUpdateStats& stats) {
+#if FRAGG_HAVE_CUDA
+    if (filter.min_obstacle_distance_m > 0.0 || std::string(map.backendName()) != "cuda")
+      return false;
+    const auto t0 = std::chrono::steady_clock::now();
+    constexpr int32_t kLo = INT32_MIN, kHi = INT32_MAX;
+    const std::unique_ptr<DeviceViewLease> lease =
+        map.deviceView(BlockKey{kLo, kLo, kLo}, BlockKey{kHi, kHi, kHi});
+    if (!lease) return false;
+    const DeviceLayerView& view = lease->view();
+    stats.states_seconds = secondsSince(t0);
+    const bool full = !valid || !on_device || map.revision() < revision || !device ||
+                      device->device() != view.device;
+    stats.full = full;
+    stats.states_on_device = true;
+    if (!full && map.revision() == revision) return true;  // nothing changed
+    try {
+      if (!device || device->device() != view.device)
+        device = std::make_unique<DeviceFrontiers>(filter, view.device);
+      checkQuery(control, "frontier update");
+      const DeviceFrontierUpdate r = device->update(view, map.resolution(), full);
+      if (full) {
+        records.clear();
+        index.clear();
+        total = 0;
+      }
+      total = static_cast<uint64_t>(static_cast<int64_t>(total) + r.delta);
+      on_device = true;
+      records_current = false;
+      stats.blocks_changed = r.changed;
+      stats.blocks_examined = r.examined;
+      stats.compare_seconds = r.compare_seconds;
+      stats.examine_seconds = r.examine_seconds;
+    } catch (const CudaOutOfMemory&) {
+      clear();
+      device.reset();
+      return false;  // the host update (a full one) instead
+    }
+    return true;
+#else
+    (void)map, (void)stats;
+    return false;
+#endif
   }
 
   /// The blocks the filter's box reaches (set by update() for the map at hand).
@@ -290,6 +373,15 @@ FrontierUpdateStats FrontierTracker::updateChecked(const Map& map) {
   State& s = *state_;
   FrontierUpdateStats stats;
   s.setBox(map.resolution());
+  if (s.updateOnDevice(map, stats)) {
+    s.valid = true;
+    s.revision = map.revision();
+    s.epoch = map.viewEpoch();
+    stats.cells = s.total;
+    stats.seconds = secondsSince(t0);
+    return stats;
+  }
+  if (s.on_device) s.clear();  // the host set was not kept: a full host update
   // The host view syncs a device backend's blocks into the host map: taken only for a full
   // recompute and for the obstacle distance filter, which reads cells.
   std::optional<BlockView> view;
@@ -324,7 +416,7 @@ FrontierMapChanges FrontierTracker::collect(const Map& map) const {
   c.revision = map.revision();
   c.view_epoch = map.viewEpoch();
   c.resolution_m = map.resolution();
-  c.full = !s.valid || map.viewEpoch() != s.epoch || map.revision() < s.revision;
+  c.full = !s.valid || s.on_device || map.viewEpoch() != s.epoch || map.revision() < s.revision;
   if (!c.full && map.revision() == s.revision) return c;  // nothing changed
   if (!c.full && map.masksChangedSince(s.revision, &c.keys, &c.masks)) return c;
   c.full = true;
@@ -380,6 +472,7 @@ FrontierUpdateStats FrontierTracker::apply(const FrontierMapChanges& changes,
 
 void FrontierTracker::forEachBlock(
     const std::function<void(const BlockKey&, const uint64_t* bits)>& fn) const {
+  state_->download();
   std::vector<uint32_t> with_cells;
   for (uint32_t i = 0; i < state_->records.size(); ++i)
     if (state_->records[i].count) with_cells.push_back(i);

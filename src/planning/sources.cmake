@@ -18,13 +18,15 @@ set(FRAGG_PLANNING_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/viewpoints.cpp
 )
 
-# Planning's CUDA part (fragg_map_planning_cuda, CUDA builds only): the collision and gain
-# kernels over the map's device layer view (or an uploaded obstacle index).
+# Planning's CUDA part (fragg_map_planning_cuda, CUDA builds only): the collision, gain and
+# frontier-tracker kernels over the map's device layer view (or an uploaded obstacle index).
 set(FRAGG_PLANNING_CUDA_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/cuda/cuda_collision.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cuda/collision_kernels.cu
   ${CMAKE_CURRENT_LIST_DIR}/cuda/viewpoint_gains.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cuda/gain_kernels.cu
+  ${CMAKE_CURRENT_LIST_DIR}/cuda/device_frontiers.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/cuda/frontier_kernels.cu
 )
 # Eigen in device code (collision kernels): its defaulted special members draw warning 20012,
 # its constexpr helpers need relaxed constexpr, its nvcc pragmas are unknown to g++.

@@ -1,6 +1,7 @@
 // Frontiers on the CUDA backend against the CPU backend: the same W1-like drive integrated by
-// each; after every scan the CUDA map's incremental tracker (fed by the changed-block list
-// compacted on the device) equals the CPU map's, and full recomputes agree. Needs a
+// each (with two boxes cleared on the way); after every scan the CUDA map's tracker (updated on
+// the device: masks compared per pool slot, neighbourhoods examined there) equals the CPU map's,
+// with and without a box and height filter, and full recomputes agree. Needs a
 // device (skips without one). Then viewpoint gains: the CUDA kernel against the CPU walk.
 #include <gtest/gtest.h>
 
@@ -52,31 +53,65 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
   band.min_z_m = 0.5;
   band.max_z_m = 2.5;
   FrontierTracker cuda_banded(band);
+  // A box (cell centres tested one by one at its faces) and a band together.
+  FrontierFilter boxed = band;
+  boxed.use_box = true;
+  boxed.box_min_m = Eigen::Vector3d(-20.05, -13.3, -5.0);
+  boxed.box_max_m = Eigen::Vector3d(31.7, 18.25, 4.05);
+  FrontierTracker cuda_boxed(boxed), cpu_boxed(boxed);
   const SensorModel sensor = SensorModel::autoFromCloud(0.0, 30.0);
-  uint64_t device_updates = 0;
+  uint64_t device_updates = 0, full_updates = 0;
   for (size_t i = 0; i < poses.size(); ++i) {
     const Eigen::Isometry3d T = poses[i].T_map_base * T_base_sensor;
     const PointCloud cloud = sim::simulateLidar(bvh, spec, T, 7, i);
     cpu_map.insert(cloud, T, sensor);
     cuda_map.insert(cloud, T, sensor);
+    if (i == 25 || i == 40) {
+      // Erased blocks leave the device pool: the device tracker must drop what it saw there
+      // and examine their neighbours again.
+      const Eigen::Vector3d c = T.translation();
+      cpu_map.clearBox(c - Eigen::Vector3d(6.0, 4.0, 3.0), c + Eigen::Vector3d(2.0, 5.0, 1.0));
+      cuda_map.clearBox(c - Eigen::Vector3d(6.0, 4.0, 3.0), c + Eigen::Vector3d(2.0, 5.0, 1.0));
+    }
     const FrontierUpdateStats cpu_st = cpu_tracker.update(cpu_map);
     const FrontierUpdateStats cuda_st = cuda_tracker.update(cuda_map);
     cuda_banded.update(cuda_map);
+    cuda_boxed.update(cuda_map);
+    cpu_boxed.update(cpu_map);
     EXPECT_FALSE(cpu_st.states_on_device);
     device_updates += cuda_st.states_on_device ? 1 : 0;
-    EXPECT_EQ(cuda_st.full, i == 0);
+    full_updates += cuda_st.full ? 1 : 0;
     ASSERT_EQ(cuda_tracker.size(), cpu_tracker.size()) << "after scan " << i;
-    if (i % 10 == 9 || i < 3) {
+    ASSERT_EQ(cuda_boxed.size(), cpu_boxed.size()) << "after scan " << i;
+    if (i % 10 == 9 || i < 3 || i == 25 || i == 40) {
       const std::vector<VoxelKey> expected = cpu_tracker.cells();
       ASSERT_EQ(cuda_tracker.cells(), expected) << "after scan " << i;
       ASSERT_EQ(findFrontierCells(cuda_map), expected) << "full, after scan " << i;
       ASSERT_EQ(cuda_banded.cells(), findFrontierCells(cpu_map, band)) << "after scan " << i;
+      ASSERT_EQ(cuda_boxed.cells(), findFrontierCells(cpu_map, boxed)) << "after scan " << i;
     }
   }
-  // The first update is a full one (from the host view); every later one read the changed
-  // blocks' masks from the device (the changed-block list compacted there).
-  EXPECT_EQ(device_updates, poses.size() - 1) << "every incremental update read the device";
+  // Every update ran on the device (the whole map fits its pool); the pool grows during the
+  // drive (each growth starts the device state again), so a few updates are full ones.
+  EXPECT_EQ(device_updates, poses.size()) << "every update ran on the device";
+  EXPECT_LT(full_updates, poses.size() / 2);
   EXPECT_GT(cpu_tracker.size(), 10000u);
+  EXPECT_GT(cpu_boxed.size(), 100u);
+  EXPECT_LT(cpu_boxed.size(), cpu_tracker.size());
+
+  // A tracker moved from the device to the host and back (the collect/apply pair reads the
+  // host): the same set either way.
+  {
+    FrontierTracker t;
+    t.update(cuda_map);
+    const FrontierMapChanges changes = t.collect(cuda_map);
+    EXPECT_TRUE(changes.full) << "a set on the device is not kept on the host";
+    t.apply(changes);
+    EXPECT_EQ(t.cells(), cpu_tracker.cells());
+    const FrontierUpdateStats back = t.update(cuda_map);
+    EXPECT_TRUE(back.full && back.states_on_device);
+    EXPECT_EQ(t.cells(), cpu_tracker.cells());
+  }
 
   // Viewpoint gains: the CUDA kernel walks the same cells as the CPU walk (the sums may differ
   // by rounding only), for a pinhole camera and a LiDAR.

@@ -513,7 +513,9 @@ TEST(CoarseFrontiers, CoarseStatesMatchBruteForce) {
                     2 * static_cast<int>(want == CellState::kOccupied)];
         }
     EXPECT_GT(counted[1], 0u) << k;  // some free
-    if (k == 1) EXPECT_GT(counted[2], 0u);
+    if (k == 1) {
+      EXPECT_GT(counted[2], 0u);
+    }
     EXPECT_GT(counted[0], 0u) << k;  // some unknown (the corner without blocks, the margin)
     // Its frontiers are those of a map like any other.
     EXPECT_EQ(findFrontierCells(coarse), bruteForceFrontiers(coarse)) << k;

@@ -6,7 +6,11 @@
 // equals findFrontierCells() on the same map and filter. A map whose blocks left or joined its
 // view since the last update (clearBox, truncate, reset, paging: Map::viewEpoch), or another
 // map, is recomputed in full. On a paged map only resident blocks are seen: page the region of
-// interest in first (Map::ensureResident).
+// interest in first (Map::ensureResident). On a CUDA map (no obstacle distance filter) the
+// whole update runs on the map's device: the tracker keeps what it saw per slot of the pool
+// there, compares every slot of the map's device layer view with it, examines the
+// neighbourhoods that changed there, and brings back the count only; cells() and
+// forEachBlock() download the blocks with frontier cells when asked.
 #pragma once
 
 #include <cstdint>
@@ -25,8 +29,9 @@ struct FrontierUpdateStats {
   uint64_t blocks_changed = 0;   ///< changed blocks whose cell states were read again
   uint64_t blocks_examined = 0;  ///< blocks whose frontier cells were recomputed
   uint64_t cells = 0;            ///< frontier cells after the update
-  /// An incremental update on a map keeping its layers on a device: the changed blocks' masks
-  /// came from the device (compacted there), the host map was not written back.
+  /// The update ran on the map's device (a CUDA map): masks compared and blocks examined
+  /// there, the host map not written back; blocks_changed counts the pool slots whose masks
+  /// changed (or whose block left).
   bool states_on_device = false;
   double seconds = 0.0;
   /// Where the time went: the changed-block list with masks (on the device or the host),
