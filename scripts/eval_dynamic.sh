@@ -10,13 +10,15 @@
 # (the noise is fragg's clearing margin: cells just in front of a hit are not cleared, so
 # they do not become void under noisy static hits; OctoMap has no such model)
 # Usage: bash scripts/eval_dynamic.sh [--workloads DIR] [--out DIR] [--bin DIR] [--only w5|w6]
-#                                     [--rule pass-through|surround] [--reuse]
+#                                     [--rule pass-through|surround] [--known-radius N] [--reuse]
 #   --rule    the "on" map's void rule (fragg_map build --dynamic-rule; default pass-through)
+#   --known-radius  the "on" map's neighbourhood radius in cells (fragg_map build --known-radius;
+#             default: the map's, 2)
 #   --reuse   keeps OctoMap's .bt when present
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
 workloads="${FRAGG_WORKLOADS:-$HOME/.cache/fragg_map/workloads}"
-out="" bin="" only="w5,w6" reuse=0 rule=pass-through
+out="" bin="" only="w5,w6" reuse=0 rule=pass-through radius=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --workloads) workloads="$2"; shift 2 ;;
@@ -25,7 +27,8 @@ while [ $# -gt 0 ]; do
     --only) only="$2"; shift 2 ;;
     --reuse) reuse=1; shift ;;
     --rule) rule="$2"; shift 2 ;;
-    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
+    --known-radius) radius="$2"; shift 2 ;;
+    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
     *) echo "eval_dynamic: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
@@ -45,6 +48,7 @@ run() {  # name dataset static_obj resolution range [fragg build args: the senso
   for mode in off on; do
     local flag=()
     [ "$mode" = on ] && flag=(--dynamic --dynamic-rule "$rule")
+    [ "$mode" = on ] && [ -n "$radius" ] && flag+=(--known-radius "$radius")
     "$fm" build "$data" -o "$out/${name}_$mode.fgm" --resolution "$res" --max-range "$range" \
       --backend cpu --threads 1 "$@" "${flag[@]}" --json > "$out/${name}_$mode.build.json"
   done

@@ -17,8 +17,9 @@ struct OccupancyParams;
 /// below seen_free_at_or_below_fx (dynamic.void_probability). Under kSurround void cells sit
 /// exactly at the lower clamp (log-odds occupancy.clamp_min): only the surround test takes a
 /// cell there; an ordinary miss stops one unit (1/1024) above it. A neighbour counts as seen
-/// free when this scan's rays passed through it (none ended there) or when it was free with
-/// confidence before the scan (log-odds at or below seen_free_at_or_below_fx, void included).
+/// free when no ray of this scan ended there and the scan passed through it or it was known
+/// (occupied or free in the state masks) before the scan: only unknown space and the scan's own
+/// hits keep a cell from becoming void, as DUFOMap's unknown inflation does.
 struct DynamicRule {
   bool enabled = false;
   bool surround = false;                 ///< VoidSpaceRule::kSurround (else kPassThrough)

@@ -99,9 +99,9 @@ enum class VoidSpaceRule {
   /// neighbourhood has been observed makes it void at once.
   kPassThrough,
   /// DUFOMap's surround test: a cell a scan's rays pass through (none ending there) becomes
-  /// void (the lower clamp) when every neighbour within known_radius_cells is seen free --
-  /// passed through by the same scan and hit by none of its rays, or free with confidence
-  /// before it; an ordinary miss stops one unit above the clamp.
+  /// void (the lower clamp) when no neighbour within known_radius_cells is unknown or hit by
+  /// the same scan (occupied cells left by earlier hits do not count against it); an ordinary
+  /// miss stops one unit above the clamp.
   kSurround,
 };
 

@@ -75,25 +75,63 @@ bool dynamicAt(const VoxelKey& end, CellReader& cells, const DynamicRule& rule) 
   return true;
 }
 
-// The seen-free mask of block `key`: passed through by the scan and not hit, or free with
-// confidence before the scan and not hit. `marks_of`: the scan's marks of the block (or null).
+// The seen-free mask of block `key`: not hit by the scan, and passed through by it or known
+// (occupied or free in the block's state masks) before it: DUFOMap's unknown inflation, where
+// only unknown space and the scan's own hits keep a cell from becoming void (an occupied cell
+// left by a mover's earlier hits does not). `marks_of`: the scan's marks of the block (or null).
 void seenFreeMask(const BlockKey& key, const ScratchBlock* marks_of, const BlockMap& blocks,
-                  const DynamicRule& rule, uint64_t* out) {
-  for (int w = 0; w < kWords; ++w) out[w] = marks_of ? marks_of->free[w] & ~marks_of->hit[w] : 0;
+                  uint64_t* out) {
+  for (int w = 0; w < kWords; ++w) out[w] = marks_of ? marks_of->free[w] : 0;
   const BlockIndex i = blocks.find(key);
-  if (i == kNoBlock) return;
-  const Block& block = blocks.block(i);
+  if (i != kNoBlock) {
+    const BlockStateMasks& masks = blocks.masks(i);
+    for (int w = 0; w < kWords; ++w) out[w] |= masks.occupied[w] | masks.free[w];
+  }
+  if (marks_of)
+    for (int w = 0; w < kWords; ++w) out[w] &= ~marks_of->hit[w];
+}
+
+// Bitwise erosion of a block's 512-bit mask (word w = the layer z = w; bit x + 8 y) by a cube
+// of radius r <= 2 < a block, from the masks of the block (mid) and its neighbours below (lo)
+// and above (hi) along one axis: out bit = AND of the mask over [-r, r] along that axis.
+static_assert(kWords == kBlockSize && kBlockSize == 8, "a word is one z layer of 8 x 8 cells");
+constexpr uint64_t kColumns = 0x0101010101010101ull;  // x = 0 in every row
+
+// Columns x < k of every row.
+constexpr uint64_t columnsBelow(int k) { return ((uint64_t{1} << k) - 1) * kColumns; }
+
+void erodeX(const uint64_t* lo, const uint64_t* mid, const uint64_t* hi, int r, uint64_t* out) {
   for (int w = 0; w < kWords; ++w) {
-    uint64_t before = 0;
-    for (int bit = 0; bit < 64; ++bit)
-      before |= uint64_t{rule.seenFreeBefore(block.cells[w * 64 + bit])} << bit;
-    out[w] |= before & (marks_of ? ~marks_of->hit[w] : ~uint64_t{0});
+    uint64_t e = mid[w];
+    for (int d = 1; d <= r; ++d) {
+      const uint64_t below = columnsBelow(8 - d);
+      e &= ((mid[w] >> d) & below) | ((hi[w] << (8 - d)) & ~below);                      // x + d
+      e &= ((mid[w] << d) & ~columnsBelow(d)) | ((lo[w] >> (8 - d)) & columnsBelow(d));  // x - d
+    }
+    out[w] = e;
   }
 }
 
-bool bitAt(const uint64_t* mask, int x, int y, int z) {
-  const int c = x | (y << kBlockBits) | (z << (2 * kBlockBits));
-  return (mask[c >> 6] >> (c & 63)) & 1;
+void erodeY(const uint64_t* lo, const uint64_t* mid, const uint64_t* hi, int r, uint64_t* out) {
+  for (int w = 0; w < kWords; ++w) {
+    uint64_t e = mid[w];
+    for (int d = 1; d <= r; ++d) {
+      e &= (mid[w] >> (8 * d)) | (hi[w] << (8 * (8 - d)));  // y + d
+      e &= (mid[w] << (8 * d)) | (lo[w] >> (8 * (8 - d)));  // y - d
+    }
+    out[w] = e;
+  }
+}
+
+void erodeZ(const uint64_t* lo, const uint64_t* mid, const uint64_t* hi, int r, uint64_t* out) {
+  for (int w = 0; w < kWords; ++w) {
+    uint64_t e = mid[w];
+    for (int d = 1; d <= r; ++d) {
+      e &= w + d < kWords ? mid[w + d] : hi[w + d - kWords];
+      e &= w - d >= 0 ? mid[w - d] : lo[w - d + kWords];
+    }
+    out[w] = e;
+  }
 }
 
 }  // namespace
@@ -126,7 +164,7 @@ void surroundedCells(const ScanScratch& marks, const BlockMap& blocks, const Dyn
   std::vector<uint64_t> seen(static_cast<size_t>(touched) * kWords);
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 64)
   for (long j = 0; j < touched; ++j)
-    seenFreeMask(marks.touched(j).key, &marks.touched(j), blocks, rule, &seen[j * kWords]);
+    seenFreeMask(marks.touched(j).key, &marks.touched(j), blocks, &seen[j * kWords]);
   // 2. Each passed-through cell against its neighbourhood (r <= 2 < a block: the 27 blocks
   // around its own hold every neighbour).
   const int r = rule.known_radius_cells;
@@ -147,26 +185,20 @@ void surroundedCells(const ScanScratch& marks, const BlockMap& blocks, const Dyn
           if (const ScratchBlock* s = marks.find(k)) {
             around[n] = &seen[size_t{s->index} * kWords];
           } else {
-            seenFreeMask(k, nullptr, blocks, rule, untouched[n]);
+            seenFreeMask(k, nullptr, blocks, untouched[n]);
             around[n] = untouched[n];
           }
         }
+    // The cube's minimum filter is separable: along x for the 3 x 3 block columns around the
+    // block, then along y for the 3 layers, then along z.
+    uint64_t along_x[9][kWords], along_y[3][kWords], eroded[kWords];
+    for (int n = 0; n < 9; ++n)
+      erodeX(around[n * 3], around[n * 3 + 1], around[n * 3 + 2], r, along_x[n]);
+    for (int n = 0; n < 3; ++n)
+      erodeY(along_x[n * 3], along_x[n * 3 + 1], along_x[n * 3 + 2], r, along_y[n]);
+    erodeZ(along_y[0], along_y[1], along_y[2], r, eroded);
     uint64_t* out = &surrounded[j * kWords];
-    for (int w = 0; w < kWords; ++w)
-      for (uint64_t bits = candidates[w]; bits != 0; bits &= bits - 1) {
-        const int c = w * 64 + __builtin_ctzll(bits);
-        const int x = c & kBlockMask, y = (c >> kBlockBits) & kBlockMask, z = c >> (2 * kBlockBits);
-        bool all = true;
-        for (int dz = -r; dz <= r && all; ++dz)
-          for (int dy = -r; dy <= r && all; ++dy)
-            for (int dx = -r; dx <= r && all; ++dx) {
-              const int nx = x + dx + kBlockSize, ny = y + dy + kBlockSize,
-                        nz = z + dz + kBlockSize;
-              const int n = (nz >> kBlockBits) * 9 + (ny >> kBlockBits) * 3 + (nx >> kBlockBits);
-              all = bitAt(around[n], nx & kBlockMask, ny & kBlockMask, nz & kBlockMask);
-            }
-        if (all) out[w] |= uint64_t{1} << (c & 63);
-      }
+    for (int w = 0; w < kWords; ++w) out[w] = candidates[w] & eroded[w];
   }
 }
 

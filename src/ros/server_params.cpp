@@ -127,6 +127,7 @@ const std::vector<fragg::FieldName>& parameterNames() {
       {"dynamic.void_probability", "dynamic/void_probability"},
       {"dynamic.known_radius_cells", "dynamic/known_radius"},
       {"dynamic.enabled", "dynamic/enabled"},
+      {"dynamic.rule", "dynamic/rule"},
       {"sensor.type", "sensor/type"},
       {"sensor.hfov_rad", "sensor/hfov"},
       {"sensor.vfov_rad", "sensor/vfov"},
@@ -472,6 +473,9 @@ ServerParams parseKnown(const XmlRpcValue& root) {
   readBool(root, "dynamic/enabled", &m.dynamic.enabled);
   readDouble(root, "dynamic/void_probability", &m.dynamic.void_probability);
   readInt(root, "dynamic/known_radius", &m.dynamic.known_radius_cells);
+  std::string void_rule = fragg::toString(m.dynamic.rule);
+  readString(root, "dynamic/rule", &void_rule);
+  asParameters([&] { m.dynamic.rule = fragg::voidSpaceRuleFromString(void_rule); });
   asParameters([&] { m.validate(); });
 
   readSensor(root, p);

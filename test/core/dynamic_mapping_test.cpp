@@ -6,9 +6,10 @@
 // (each point dynamic when its cell is void in the reference map; the scan inserted with those
 // points free-only into a map with the option off; then each cell the scan passed through
 // (taken from the same scan inserted into an empty map) set by the surround test: void when
-// every neighbour is passed through by the scan or free with confidence before it, and hit by
-// none of its rays, else one unit above the clamp unless void already), masks included; no
-// floor or wall point is ever dynamic; the dynamic points are handed back.
+// every neighbour is passed through by the scan or known (occupied or free) before it (occupied
+// ones left by earlier hits included), and hit by none of its rays, else one unit above the clamp
+// unless void already), masks included; no floor or wall point is ever dynamic; the dynamic points
+// are handed back.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -101,13 +102,13 @@ std::vector<uint8_t> referenceDynamic(const Map& ref, const PointCloud& cloud, i
 }
 
 // Brute force, the surround test: `marks` holds the scan alone (inserted into an empty map);
-// a cell is seen free when the scan does not hit it and passes through it or it was free with
-// confidence in `ref` before the scan; a cell passes when every cell within r is seen free.
+// a cell is seen free when the scan does not hit it and passes through it or it was known
+// (occupied or free) in `ref` before the scan; a cell passes when every cell within r is seen
+// free.
 // (Seen-free flags are tabulated over the scene's box once a scan: the test stays cheap.)
 class SurroundReference {
  public:
-  SurroundReference(const Map& ref, const Map& marks, int16_t seen_fx)
-      : ref_(ref), marks_(marks), seen_fx_(seen_fx) {
+  SurroundReference(const Map& ref, const Map& marks) : ref_(ref), marks_(marks) {
     table_.resize(size_t{kX} * kY * kZ);
     for (int z = 0; z < kZ; ++z)
       for (int y = 0; y < kY; ++y)
@@ -133,11 +134,10 @@ class SurroundReference {
     const Cell* m = marks_.findCell(n);
     if (m && m->observed()) return m->hits == 0;  // hit, or passed through
     const Cell* c = ref_.findCell(n);
-    return c && c->observed() && c->log_odds_fx <= seen_fx_;
+    return c && ref_.state(*c) != CellState::kUnknown;
   }
   const Map& ref_;
   const Map& marks_;
-  int16_t seen_fx_;
   std::vector<char> table_;
 };
 
@@ -231,7 +231,7 @@ void walkPerson(int r, Map* out_map, PersonRun* run) {
       bool surrounded;
     };
     std::vector<Passed> passed;
-    const SurroundReference surround(ref, marks, seen_fx);
+    const SurroundReference surround(ref, marks);
     marks.forEachBlock([&](const BlockKey& bk, const Block& block) {
       for (int ci = 0; ci < kCellsPerBlock; ++ci) {
         const Cell& m = block.cells[ci];

@@ -268,6 +268,24 @@ TEST(ServerParams, ReadsEveryName) {
   EXPECT_EQ(p.map_rate_hz, 0.5);
 }
 
+TEST(ServerParams, DynamicRuleIsReadAndBadNamesRefused) {
+  XmlRpcValue root;
+  set(root, "keep_scans", false);  // the node keeps scans by default; dynamic mapping cannot
+  set(root, "dynamic/enabled", true);
+  set(root, "dynamic/rule", std::string("surround"));
+  set(root, "dynamic/known_radius", 1);
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(root);
+  EXPECT_TRUE(p.map.dynamic.enabled);
+  EXPECT_EQ(p.map.dynamic.rule, fragg::VoidSpaceRule::kSurround);
+  EXPECT_EQ(p.map.dynamic.known_radius_cells, 1);
+  EXPECT_TRUE(p.unknown_parameters.empty());
+  XmlRpcValue bad;
+  set(bad, "dynamic/rule", std::string("dufomap"));
+  EXPECT_EQ(rejection(bad),
+            "parameter 'dynamic/rule' must be pass-through or surround, got 'dufomap'");
+  expectRejected("dynamic/rule", 1);
+}
+
 TEST(ServerParams, LidarSensor) {
   XmlRpcValue root;
   set(root, "sensor/type", std::string("lidar"));
@@ -411,6 +429,7 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.map.dynamic.enabled, d.map.dynamic.enabled);
   EXPECT_EQ(p.map.dynamic.void_probability, d.map.dynamic.void_probability);
   EXPECT_EQ(p.map.dynamic.known_radius_cells, d.map.dynamic.known_radius_cells);
+  EXPECT_EQ(p.map.dynamic.rule, d.map.dynamic.rule);
   EXPECT_EQ(p.correction.thresholds.min_translation_m, d.correction.thresholds.min_translation_m);
   EXPECT_EQ(p.correction.thresholds.min_rotation_rad, d.correction.thresholds.min_rotation_rad);
   EXPECT_EQ(p.correction.stamp_tolerance_s, d.correction.stamp_tolerance_s);

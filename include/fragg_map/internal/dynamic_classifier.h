@@ -39,11 +39,12 @@ void passThroughResets(const BlockKey& key, const uint64_t* free_marks, const ui
 
 /// The surround test (VoidSpaceRule::kSurround), DUFOMap's rule for void space: a cell this scan's
 /// rays passed through (none ended there) becomes void when every cell within
-/// rule.known_radius_cells of it (Chebyshev) is seen free: passed through by this scan and ended in
-/// by none of its rays, or free with confidence in `blocks` before the scan
-/// (DynamicRule::seenFreeBefore) and not hit by this scan. A static surface always has a neighbour
-/// that is hit or never seen (the ground's cells below it, a wall's inside, a pole's next cell), so
-/// grazing rays do not make it void; what stood in space seen free all around has moved. `marks`:
+/// rule.known_radius_cells of it (Chebyshev) is seen free: ended in by none of this scan's rays,
+/// and passed through by it or known (occupied or free) in `blocks` before the scan (an occupied
+/// cell left by earlier hits of a mover does not keep its neighbours from becoming void). A static
+/// surface always has a neighbour that is hit or never seen (the ground's cells below it, a
+/// wall's inside, a pole's next cell), so grazing rays do not make it void; what stood in space
+/// seen all around has moved. `marks`:
 /// the scan's merged marks; `surrounded` gets 8 words per block of marks.touched() order (bit c =
 /// cell index c), read from `blocks` as they are before the scan; `threads` workers (OpenMP).
 void surroundedCells(const ScanScratch& marks, const BlockMap& blocks, const DynamicRule& rule,
