@@ -3,6 +3,7 @@
 #include "fragg_map/ros/output_cache.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 
@@ -13,6 +14,15 @@
 #include "fragg_map/ros/speckles.h"
 
 namespace fragg::ros {
+namespace {
+
+double msSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+}  // namespace
+
 using grid_value::kFree;
 using grid_value::kOccupied;
 using grid_value::kUnknown;
@@ -186,6 +196,7 @@ fragg::BlockChange MapOutputCache::refreshOn(const fragg::OccupancyModel& model)
 
 OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
   OutputCacheUpdate out;
+  auto t0 = std::chrono::steady_clock::now();
   const fragg::BlockView blocks = map.blockView();
   const uint64_t revision = map.revision();
   out.full = !valid_ || map.viewEpoch() != epoch_ || revision < revision_ ||
@@ -229,6 +240,8 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
         dropPiece(k, &dirty);  // only through the ring: erased blocks change the view epoch
     }
   }
+  out.list_ms = msSince(t0);
+  t0 = std::chrono::steady_clock::now();
   // Each block's piece (new ones registered in their columns first: stable addresses), then
   // the pieces in parallel (read-only map, one piece per iteration), then the sums in order.
   std::vector<Piece*> slots(refresh.size());
@@ -255,6 +268,8 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
   }
   occupied_cells_ = static_cast<size_t>(static_cast<int64_t>(occupied_cells_) + occupied_delta);
   out.blocks_read = refresh.size();
+  out.pieces_ms = msSince(t0);
+  t0 = std::chrono::steady_clock::now();
   for (const ColumnKey& ck : dirty) {
     const auto it = columns_.find(ck);
     if (it->second.pieces.empty()) {
@@ -270,6 +285,7 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
   revision_ = revision;
   epoch_ = map.viewEpoch();
   resolution_m_ = map.resolution();
+  out.grid_ms = msSince(t0);
   return out;
 }
 

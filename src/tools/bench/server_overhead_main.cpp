@@ -76,9 +76,10 @@ struct Times {
   // The markers' share (the same on both paths).
   double marker_serialise = 0;
   size_t marker_bytes = 0;
-  size_t blocks_read = 0;   ///< blocks the output cache recomputed (after path)
-  size_t cells_read = 0;    ///< of those, blocks whose cells it read (the others: masks)
-  double cache_update = 0;  ///< of `cloud`: MapOutputCache::update alone (after path)
+  size_t blocks_read = 0;  ///< blocks the output cache recomputed (after path)
+  size_t cells_read = 0;   ///< of those, blocks whose cells it read (the others: masks)
+  fragg::ros::OutputCacheUpdate stages;  ///< the cache update's own account (wall times)
+  double cache_update = 0;               ///< of `cloud`: MapOutputCache::update alone (after path)
   double total() const { return markers + cloud + grid + serialise; }
   /// One marker update: built and serialised.
   double markerUpdate() const { return markers + marker_serialise; }
@@ -128,6 +129,7 @@ class Outputs {
       const fragg::ros::OutputCacheUpdate u = cache_.update(map);
       t.blocks_read = u.blocks_read;
       t.cells_read = u.blocks_cells_read;
+      t.stages = u;
       t.cache_update = msSince(t0);
       cloud = &cache_.occupiedCloud("map", ros::Time());
       t.cloud = msSince(t0);
@@ -307,11 +309,11 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
     if (pending.maps)
       std::printf(
           "  the flush: markers %.2f (serialised %.2f), cache update %.2f (%zu blocks read, %zu "
-          "of them from their cells), occupied cloud message %.2f, grid %.2f, whole-map messages "
-          "serialised %.2f ms\n",
+          "of them from their cells; wall ms: list %.2f, pieces %.2f, columns and grid %.2f), "
+          "occupied cloud message %.2f, grid %.2f, whole-map messages serialised %.2f ms\n",
           flush.markers, flush.marker_serialise, flush.cache_update, flush.blocks_read,
-          flush.cells_read, flush.cloud - flush.cache_update, flush.grid,
-          flush.serialise - flush.marker_serialise);
+          flush.cells_read, flush.stages.list_ms, flush.stages.pieces_ms, flush.stages.grid_ms,
+          flush.cloud - flush.cache_update, flush.grid, flush.serialise - flush.marker_serialise);
   }
   printAmortised(rates, converts, after_times, dues, flush);
 }
