@@ -316,7 +316,7 @@ TEST_P(OutputCacheRandom, EqualsARebuildAfterManyRandomChanges) {
   const fragg::OccupancyModel& model = map.model();
   const int16_t values[] = {model.max_fx, model.min_fx, 0, static_cast<int16_t>(model.max_fx / 2)};
   size_t cells_read = 0, blocks_read = 0;
-  for (int round = 0; round < 30; ++round) {
+  for (int round = 0; round < 20; ++round) {
     for (int w = 0; w < 25; ++w) {
       const fragg::VoxelKey v{xy(rng), xy(rng), z(rng)};
       const fragg::Cell* c = map.findCell(v);
