@@ -3,6 +3,7 @@
 #include "fragg_map/ros/output_cache.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 
@@ -13,6 +14,15 @@
 #include "fragg_map/ros/speckles.h"
 
 namespace fragg::ros {
+namespace {
+
+double msSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+}  // namespace
+
 using grid_value::kFree;
 using grid_value::kOccupied;
 using grid_value::kUnknown;
@@ -23,25 +33,50 @@ MapOutputCache::MapOutputCache(const OutputCacheOptions& options) : options_(opt
     throw fragg::InvalidArgument("output cache: refresh_on kOccupied would miss free cells");
 }
 
+bool MapOutputCache::boundsSettled(const fragg::BlockKey& key, const Piece& piece) const {
+  if (piece.min_x == 0 && piece.min_y == 0 && piece.max_x == fragg::kBlockMask &&
+      piece.max_y == fragg::kBlockMask)
+    return true;  // every column of the block observed already: nothing can widen them
+  if (!seen_valid_) return false;
+  const int64_t x0 = int64_t{key.x} * fragg::kBlockSize, y0 = int64_t{key.y} * fragg::kBlockSize;
+  return x0 >= seen_lo_x_ && x0 + fragg::kBlockMask <= seen_hi_x_ && y0 >= seen_lo_y_ &&
+         y0 + fragg::kBlockMask <= seen_hi_y_;
+}
+
 MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
                                                         const fragg::BlockView& blocks,
-                                                        const fragg::BlockKey& key,
-                                                        const fragg::Block& block,
+                                                        const Source& source, bool masks_suffice,
                                                         Piece* piece) const {
-  // One 64-bit word per z layer of the block (cell index x + 8 y + 64 z): occupied, free and
-  // observed masks (layer_masks.h); the columns and bounds from OR-ed layers; the cell centres
-  // only when the shown occupied cells changed (most state changes are cells seen for the
-  // first time or turning free).
+  // One 64-bit word per z layer of the block (cell index x + 8 y + 64 z): occupied and free
+  // from the block's state masks (no cell read) where the observed bounds need no cells
+  // (boundsSettled), else occupied, free and observed from the cells (layer_masks.h); the
+  // columns and bounds from OR-ed layers; the cell centres only when the shown occupied cells
+  // changed (most state changes are cells seen for the first time or turning free).
+  const fragg::BlockKey& key = source.key;
+  PieceDelta delta;
+  const bool from_masks = source.masks && masks_suffice && boundsSettled(key, *piece);
+  const fragg::Block* block = source.block;
+  if (!from_masks) {
+    if (!block) block = blocks.findBlock(key);  // listed with its masks: it exists
+    delta.cells_read = true;
+  }
   const fragg::OccupancyModel& model = map.model();
   const int16_t above = model.occupied_above_fx, below = model.free_below_fx;
   const uint8_t shown_layers = heights().blockLayers(key.z, map.resolution());
   std::array<uint64_t, fragg::kBlockSize> shown{};
   uint64_t observed_xy = 0, band_occupied = 0, band_free = 0;
   for (int z = 0; z < fragg::kBlockSize; ++z) {
-    const LayerMasks layer = layerMasks(block.cells + 64 * z, above, below);
-    uint64_t o = layer.occupied;
-    const uint64_t f = layer.free;
-    observed_xy |= layer.observed;
+    uint64_t o, f;
+    if (from_masks) {
+      o = source.masks->occupied[z];
+      f = source.masks->free[z];
+      observed_xy |= o | f;  // widens the kept bounds only (see below)
+    } else {
+      const LayerMasks layer = layerMasks(block->cells + 64 * z, above, below);
+      o = layer.occupied;
+      f = layer.free;
+      observed_xy |= layer.observed;
+    }
     if (!(shown_layers >> z & 1)) continue;  // outside occupancy_min_z / max_z: not shown
     if (options_.hide_speckles) {
       for (uint64_t m = o; m; m &= m - 1) {
@@ -53,7 +88,6 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
     band_occupied |= o;  // a speckle counts neither as occupied nor as free
     band_free |= f;
   }
-  PieceDelta delta;
   if (shown != piece->shown) {
     const int64_t before = static_cast<int64_t>(piece->xyz.size() / 3);
     piece->shown = shown;
@@ -80,6 +114,15 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
     max_x = std::max(max_x, lx);
     min_y = std::min(min_y, ly);
     max_y = std::max(max_y, ly);
+  }
+  if (from_masks && piece->max_x >= 0) {
+    // The masks miss observed cells in the unknown band: the kept bounds (exact when last
+    // read from the cells, and observed cells stay observed until a rebuild) widened by them.
+    // Where they are short of the cells', the block lies inside the grid's bounds anyway.
+    min_x = std::min(min_x, piece->min_x);
+    max_x = std::max(max_x, piece->max_x);
+    min_y = std::min(min_y, piece->min_y);
+    max_y = std::max(max_y, piece->max_y);
   }
   const bool in_band = (band_occupied | band_free) != 0;
   if (columns != piece->columns || in_band != piece->in_band || min_x != piece->min_x ||
@@ -153,25 +196,37 @@ fragg::BlockChange MapOutputCache::refreshOn(const fragg::OccupancyModel& model)
 
 OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
   OutputCacheUpdate out;
+  auto t0 = std::chrono::steady_clock::now();
   const fragg::BlockView blocks = map.blockView();
   const uint64_t revision = map.revision();
   out.full = !valid_ || map.viewEpoch() != epoch_ || revision < revision_ ||
              map.resolution() != resolution_m_;
-  // The blocks to recompute, and those that left the map.
-  std::vector<fragg::BlockRef> refresh;
+  // The blocks to recompute, and those that left the map. With the change log (kMasks) a block
+  // comes with its state masks (its cells are read only where the grid's bounds need them).
+  const fragg::BlockChange refresh_on = refreshOn(map.model());
+  const bool masks_suffice =
+      !out.full && refresh_on == fragg::BlockChange::kMasks && options_.masks_where_settled;
+  std::vector<Source> refresh;
   std::unordered_set<ColumnKey, ColumnKeyHash> dirty;
   if (out.full) {
     pieces_.clear();
     with_cells_.clear();
     columns_.clear();
     occupied_cells_ = 0;
-    refresh = blocks.all();
+    seen_valid_ = false;
+    for (const fragg::BlockRef& r : blocks.all()) refresh.push_back({r.key, nullptr, r.block});
   } else if (!options_.hide_speckles) {
-    refresh = blocks.changedRefsSince(revision_, refreshOn(map.model()));
+    if (masks_suffice) {
+      const std::vector<fragg::BlockKey> changed = blocks.changedSince(revision_, refresh_on);
+      refresh.reserve(changed.size());
+      for (const fragg::BlockKey& k : changed) refresh.push_back({k, blocks.findMasks(k), nullptr});
+    } else {
+      for (const fragg::BlockRef& r : blocks.changedRefsSince(revision_, refresh_on))
+        refresh.push_back({r.key, nullptr, r.block});
+    }
   } else {
     // A cell's speckle state follows its neighbours: the blocks around a change too.
-    const std::vector<fragg::BlockKey> changed =
-        blocks.changedSince(revision_, refreshOn(map.model()));
+    const std::vector<fragg::BlockKey> changed = blocks.changedSince(revision_, refresh_on);
     std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around(changed.begin(), changed.end());
     for (const fragg::BlockKey& k : changed)
       for (int dz = -1; dz <= 1; ++dz)
@@ -179,12 +234,14 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
           for (int dx = -1; dx <= 1; ++dx) around.insert({k.x + dx, k.y + dy, k.z + dz});
     refresh.reserve(around.size());
     for (const fragg::BlockKey& k : around) {
-      if (const fragg::Block* b = blocks.findBlock(k))
-        refresh.push_back({k, b});
+      if (const fragg::BlockStateMasks* m = blocks.findMasks(k))
+        refresh.push_back({k, m, nullptr});
       else
         dropPiece(k, &dirty);  // only through the ring: erased blocks change the view epoch
     }
   }
+  out.list_ms = msSince(t0);
+  t0 = std::chrono::steady_clock::now();
   // Each block's piece (new ones registered in their columns first: stable addresses), then
   // the pieces in parallel (read-only map, one piece per iteration), then the sums in order.
   std::vector<Piece*> slots(refresh.size());
@@ -201,15 +258,18 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
   const int64_t n = static_cast<int64_t>(refresh.size());
 #pragma omp parallel for schedule(dynamic, 64) if (n > 256)
   for (int64_t j = 0; j < n; ++j)
-    deltas[j] = computePiece(map, blocks, refresh[j].key, *refresh[j].block, slots[j]);
+    deltas[j] = computePiece(map, blocks, refresh[j], masks_suffice, slots[j]);
   int64_t occupied_delta = 0;
   for (size_t j = 0; j < refresh.size(); ++j) {
     relist(slots[j]);
     occupied_delta += deltas[j].occupied;
+    out.blocks_cells_read += deltas[j].cells_read;
     if (deltas[j].column) dirty.insert(ColumnKey{refresh[j].key.x, refresh[j].key.y});
   }
   occupied_cells_ = static_cast<size_t>(static_cast<int64_t>(occupied_cells_) + occupied_delta);
   out.blocks_read = refresh.size();
+  out.pieces_ms = msSince(t0);
+  t0 = std::chrono::steady_clock::now();
   for (const ColumnKey& ck : dirty) {
     const auto it = columns_.find(ck);
     if (it->second.pieces.empty()) {
@@ -225,6 +285,7 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
   revision_ = revision;
   epoch_ = map.viewEpoch();
   resolution_m_ = map.resolution();
+  out.grid_ms = msSince(t0);
   return out;
 }
 
@@ -260,6 +321,9 @@ void MapOutputCache::refreshGrid(const std::unordered_set<ColumnKey, ColumnKeyHa
     lo_y = std::min(lo_y, y0 + col.min_y);
     hi_y = std::max(hi_y, y0 + col.max_y);
   }
+  // The observed cells' bounds, for the next update's boundsSettled.
+  seen_valid_ = !empty;
+  seen_lo_x_ = lo_x, seen_hi_x_ = hi_x, seen_lo_y_ = lo_y, seen_hi_y_ = hi_y;
   if (empty) {
     grid_empty_ = true;
     grid_.clear();

@@ -2,7 +2,8 @@
 // merge, removal of a kept scan, load, reset) the incrementally kept occupied cloud and
 // projected map equal a from-scratch build of the same map (occupiedCloud, projectedMap),
 // with and without speckle hiding and a height band; insertions are incremental. Updates
-// skipped (map_rate) lose nothing.
+// skipped (map_rate) lose nothing. Blocks are read from their state masks where no cell of
+// theirs can widen the projected map, from their cells elsewhere.
 #include "fragg_map/ros/output_cache.h"
 
 #include <gtest/gtest.h>
@@ -46,8 +47,8 @@ void expectSameAsRebuild(const fragg::Map& map, const MapOutputCache& cache,
   EXPECT_TRUE(got == want);
   EXPECT_EQ(cache.occupiedCells(), want.size());
   const nav_msgs::OccupancyGrid g = cache.projectedMap("map", stamp);
-  const nav_msgs::OccupancyGrid w =
-      projectedMap(map, o.occupancy_min_z_m, o.occupancy_max_z_m, "map", stamp, o.hide_speckles);
+  const nav_msgs::OccupancyGrid w = projectedMap(map, o.occupancy_min_z_m, o.occupancy_max_z_m,
+                                                 "map", stamp, o.hide_speckles, o.octomap_bounds);
   EXPECT_EQ(g.info.width, w.info.width);
   EXPECT_EQ(g.info.height, w.info.height);
   EXPECT_DOUBLE_EQ(g.info.origin.position.x, w.info.origin.position.x);
@@ -255,6 +256,95 @@ TEST_P(OutputCacheSkipping, OneUpdateAfterManyEditsEqualsARebuild) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Options, OutputCacheSkipping, ::testing::Values(0, 1, 2, 3));
+
+/// Writes `log_odds_fx` (observed) into cell `v`.
+void setLogOdds(fragg::Map& map, const fragg::VoxelKey& v, int16_t log_odds_fx) {
+  fragg::Cell c;
+  c.log_odds_fx = log_odds_fx;
+  map.writeCells([&](fragg::CellWriter& cells) { cells.set(v, c); });
+}
+
+// The masks miss observed cells in the unknown band, which still widen the projected map's
+// bounds: a block that could widen them is read from its cells, the others from their masks.
+TEST(OutputCache, CellsInTheUnknownBandAtTheEdgeWidenTheGrid) {
+  fragg::Map map(test::cpuParams(0.1));
+  MapOutputCache cache;
+  test::insertWall(map, Eigen::Vector3d(0.0, 0.0, 0.0), 2.0);
+  EXPECT_TRUE(cache.update(map).full);
+  const fragg::VoxelKey edge{90, -70, 0};  // far outside the wall's bounds
+  // Occupied, then back in the band before the next update: the block is listed (its masks
+  // changed twice) but its masks show nothing.
+  test::setCell(map, edge, fragg::CellState::kOccupied);
+  setLogOdds(map, edge, 0);
+  ASSERT_EQ(map.state(*map.findCell(edge)), fragg::CellState::kUnknown);
+  OutputCacheUpdate u = cache.update(map);
+  EXPECT_FALSE(u.full);
+  EXPECT_EQ(u.blocks_read, 1u);
+  EXPECT_EQ(u.blocks_cells_read, 1u);
+  expectSameAsRebuild(map, cache, OutputCacheOptions(), "a band cell at the edge");
+  // The same inside the bounds: its masks suffice.
+  const fragg::VoxelKey inside{40, -30, 0};
+  test::setCell(map, inside, fragg::CellState::kFree);
+  setLogOdds(map, inside, 0);
+  u = cache.update(map);
+  EXPECT_EQ(u.blocks_read, 1u);
+  EXPECT_EQ(u.blocks_cells_read, 0u);
+  expectSameAsRebuild(map, cache, OutputCacheOptions(), "a band cell inside");
+  // The wall seen from elsewhere: most of its blocks lie inside the bounds.
+  test::insertWall(map, Eigen::Vector3d(0.4, 0.3, 0.0), 2.0);
+  u = cache.update(map);
+  EXPECT_GT(u.blocks_read, 0u);
+  EXPECT_LT(u.blocks_cells_read, u.blocks_read);
+  expectSameAsRebuild(map, cache, OutputCacheOptions(), "the wall again");
+}
+
+// Many random changes between updates (cells turning occupied, free or back into the unknown
+// band anywhere around the map, scans), with and without speckles hidden: the incrementally
+// kept cloud and grid equal a rebuild after every update.
+class OutputCacheRandom : public ::testing::TestWithParam<int> {};
+
+TEST_P(OutputCacheRandom, EqualsARebuildAfterManyRandomChanges) {
+  OutputCacheOptions o;
+  o.hide_speckles = GetParam() & 1;
+  o.octomap_bounds = GetParam() & 2;
+  fragg::Map map(test::cpuParams(0.1));
+  MapOutputCache cache(o);
+  std::mt19937 rng(101 + GetParam());
+  test::insertWall(map, Eigen::Vector3d(0.0, 0.0, 0.0), 2.0);
+  EXPECT_TRUE(cache.update(map).full);
+  std::uniform_int_distribution<int> xy(-60, 60), z(-4, 4), pick(0, 3);
+  const fragg::OccupancyModel& model = map.model();
+  const int16_t values[] = {model.max_fx, model.min_fx, 0, static_cast<int16_t>(model.max_fx / 2)};
+  size_t cells_read = 0, blocks_read = 0;
+  for (int round = 0; round < 20; ++round) {
+    for (int w = 0; w < 25; ++w) {
+      const fragg::VoxelKey v{xy(rng), xy(rng), z(rng)};
+      const fragg::Cell* c = map.findCell(v);
+      // A cell seen for the first time leaves the unknown band (as an insertion's first
+      // update does: the change log lists its block); an observed cell may go back into it.
+      const bool seen = c && map.state(*c) != fragg::CellState::kUnknown;
+      const int16_t value = values[seen ? pick(rng) : pick(rng) % 2];
+      setLogOdds(map, v, value);
+    }
+    if (round % 4 == 0) {
+      Eigen::Isometry3d T_map_sensor = Eigen::Isometry3d::Identity();
+      T_map_sensor.translation() = Eigen::Vector3d(0.2 * round - 3.0, 0.1 * (round % 5), 0.0);
+      T_map_sensor.rotate(Eigen::AngleAxisd(0.5 * round, Eigen::Vector3d::UnitZ()));
+      map.insert(scatteredScan(&rng, 150), T_map_sensor,
+                 fragg::SensorModel::autoFromCloud(0.0, -1.0));
+    }
+    const OutputCacheUpdate u = cache.update(map);
+    EXPECT_FALSE(u.full) << round;
+    blocks_read += u.blocks_read;
+    cells_read += u.blocks_cells_read;
+    expectSameAsRebuild(map, cache, o, "round " + std::to_string(round));
+  }
+  // Both ways of reading a block were taken.
+  EXPECT_GT(cells_read, 0u);
+  EXPECT_LT(cells_read, blocks_read);
+}
+
+INSTANTIATE_TEST_SUITE_P(Options, OutputCacheRandom, ::testing::Values(0, 1, 2, 3));
 
 TEST(OutputCache, RefreshingOnOccupiedChangesOnlyIsRefused) {
   OutputCacheOptions o;

@@ -26,6 +26,7 @@
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
 #include "fragg_map/ros/height_band.h"
+#include "fragg_map/state_masks.h"
 
 namespace fragg::ros {
 
@@ -47,6 +48,10 @@ struct OutputCacheOptions {
   /// unknown band (observed without a mask change: the projected map's bounds would miss it).
   /// kOccupied would miss free cells: refused.
   fragg::BlockChange refresh_on = fragg::BlockChange::kMasks;
+  /// With kMasks in effect, a block whose cells cannot widen the projected map's bounds is
+  /// recomputed from its state masks alone; false: every block from its cells (the behaviour
+  /// before, kept for same-run comparisons in fragg_map_server_overhead --cells-always).
+  bool masks_where_settled = true;
 };
 
 /// What an update did.
@@ -54,6 +59,11 @@ struct OutputCacheUpdate {
   bool full = false;          ///< rebuilt from every block
   size_t blocks_read = 0;     ///< blocks whose pieces were recomputed
   size_t columns_merged = 0;  ///< 8 x 8 column groups of the grid recomputed
+  /// Of blocks_read, those whose cells were read (the others from their state masks alone).
+  size_t blocks_cells_read = 0;
+  /// Wall milliseconds of its stages: the blocks to refresh listed (change log, look-ups), the
+  /// pieces found or made and recomputed, the columns merged and the grid drawn.
+  double list_ms = 0.0, pieces_ms = 0.0, grid_ms = 0.0;
 };
 
 class MapOutputCache {
@@ -97,8 +107,16 @@ class MapOutputCache {
   };
   /// What recomputing a piece changed.
   struct PieceDelta {
-    int64_t occupied = 0;  ///< shown occupied cells gained (negative: lost)
-    bool column = false;   ///< its columns or bounds changed: the column must be merged
+    int64_t occupied = 0;     ///< shown occupied cells gained (negative: lost)
+    bool column = false;      ///< its columns or bounds changed: the column must be merged
+    bool cells_read = false;  ///< the block's cells were read (not its masks alone)
+  };
+  /// A block to recompute: its state masks (nullptr: read the cells) and, where at hand, its
+  /// cells (nullptr: looked up when they must be read).
+  struct Source {
+    fragg::BlockKey key;
+    const fragg::BlockStateMasks* masks = nullptr;
+    const fragg::Block* block = nullptr;
   };
   /// A column of blocks (same x, y block key): its pieces, the merged 8 x 8 grid patch and the
   /// xy bounds. The pieces live in pieces_ (node-based: their addresses never move).
@@ -117,10 +135,15 @@ class MapOutputCache {
     }
   };
 
-  /// Brings `piece` (new: default-constructed) up to date with `block`.
+  /// Brings `piece` (new: default-constructed) up to date with `source`'s block. With
+  /// `masks_suffice` (the change log lists every block where a cell became observed: refreshOn
+  /// is kMasks) and source.masks, the masks alone serve where boundsSettled.
   PieceDelta computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
-                          const fragg::BlockKey& key, const fragg::Block& block,
-                          Piece* piece) const;
+                          const Source& source, bool masks_suffice, Piece* piece) const;
+  /// Whether no cell of the block can widen the projected map's bounds: the piece's observed
+  /// bounds span the whole block, or the block lies inside the observed bounds of the last
+  /// update (observed cells stay observed until the view's epoch changes, which rebuilds).
+  bool boundsSettled(const fragg::BlockKey& key, const Piece& piece) const;
   /// Lists `piece` in with_cells_ when it holds cells, takes it out when it does not.
   void relist(Piece* piece);
   void unlist(Piece* piece);
@@ -145,6 +168,9 @@ class MapOutputCache {
   mutable sensor_msgs::PointCloud2 cloud_msg_;  ///< occupiedCloud()'s message and buffer
   std::unordered_map<ColumnKey, Column, ColumnKeyHash> columns_;
   size_t occupied_cells_ = 0;
+  /// The observed cells' xy key bounds at the last update (seen_valid_: some cell observed).
+  bool seen_valid_ = false;
+  int64_t seen_lo_x_ = 0, seen_hi_x_ = -1, seen_lo_y_ = 0, seen_hi_y_ = -1;
   // The grid: cells [grid_min_x, +width) x [grid_min_y, +height), row-major (y rows).
   bool grid_empty_ = true;
   int32_t grid_min_x_ = 0, grid_min_y_ = 0;

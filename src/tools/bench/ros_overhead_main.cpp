@@ -7,7 +7,8 @@
 // server's timer does); the insertion itself is timed for reference. The last line is what the
 // server's path (conversion + insertion, + marker updates unless --no-markers) sustains on this
 // machine in clouds per second, with the process's CPU time over that wall time (the share of
-// the cores it got: other programs count against it on a shared machine).
+// the cores it got: other programs count against it on a shared machine). Map::memory(), which
+// the server's ~stats reads after every cloud, is timed beside them (not in the path).
 //   fragg_map_ros_overhead [--scans N] [--resolution M] [--max-range M]
 //                          [--cloud-rate HZ] [--marker-rate HZ] [--no-markers]
 //                          [--beams N --columns N]   (128 x 1406 = 179,968 points a cloud)
@@ -75,9 +76,9 @@ int main(int argc, char** argv) {
   fragg::ros::MarkerLedger ledger;
   const fragg::ros::MarkerStyle style;
   fragg::ros::RateThrottle throttle(marker_rate_hz);
-  std::vector<double> convert_ms, update_ms, insert_ms, overhead_ms;
+  std::vector<double> convert_ms, update_ms, insert_ms, overhead_ms, memory_ms;
   double markers_total_ms = 0.0;
-  size_t points = 0, markers_sent = 0, blocks_changed = 0;
+  size_t points = 0, markers_sent = 0, blocks_changed = 0, known_voxels = 0;
   // One marker update: the blocks changed since the last one, counted and converted.
   auto markerUpdate = [&]() {
     const uint64_t before = ledger.publishedRevision();
@@ -101,6 +102,12 @@ int main(int argc, char** argv) {
     t0 = std::chrono::steady_clock::now();
     map.insert(cloud, scan.T_map_sensor, fragg::SensorModel::autoFromCloud(0.0, max_range_m));
     insert_ms.push_back(msSince(t0));
+    // What ~stats reads after every cloud when it is latched (the default) or subscribed:
+    // Map::memory() (known voxels, blocks, bytes). Timed, not counted in the path.
+    t0 = std::chrono::steady_clock::now();
+    const fragg::MemoryStats memory = map.memory();
+    memory_ms.push_back(msSince(t0));
+    known_voxels = memory.known_voxels;
     const double now_s = i / cloud_rate_hz;  // the cloud's arrival, in sensor time
     double markers_ms = 0.0;
     if (!no_markers && throttle.due(now_s)) {
@@ -115,8 +122,10 @@ int main(int argc, char** argv) {
   if (!no_markers && ledger.publishedRevision() != map.revision()) markerUpdate();
   const size_t updates = std::max<size_t>(update_ms.size(), 1);
   using fragg::tools::percentile;
-  std::printf("%d scans of %zu points, %.3f m, max range %.0f m, CPU backend, %zu blocks\n", scans,
-              points, resolution_m, max_range_m, map.blockCount());
+  std::printf(
+      "%d scans of %zu points, %.3f m, max range %.0f m, CPU backend, %zu blocks, %zu known "
+      "voxels\n",
+      scans, points, resolution_m, max_range_m, map.blockCount(), known_voxels);
   std::printf("clouds at %.1f Hz, marker_rate %.1f Hz: %zu marker updates\n", cloud_rate_hz,
               marker_rate_hz, updates);
   std::printf("%-28s %10s %10s %10s\n", "ms per cloud", "median", "p99", "max");
@@ -128,6 +137,7 @@ int main(int argc, char** argv) {
   if (!update_ms.empty()) row("marker update (per update)", update_ms);
   row("overhead (per cloud)", overhead_ms);
   row("insertion (reference)", insert_ms);
+  row("Map::memory (~stats)", memory_ms);
   double convert_total_ms = 0.0;
   for (double ms : convert_ms) convert_total_ms += ms;
   std::printf("mean per cloud: conversion %.2f ms + markers %.2f ms = overhead %.2f ms\n",

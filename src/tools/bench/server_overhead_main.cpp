@@ -22,6 +22,7 @@
 // not due).
 //   fragg_map_server_overhead --workloads DIR [--scans N] [--big-map FILE] [--big-scans K]
 //                             [--cloud-rate HZ] [--marker-rate HZ] [--map-rate HZ]
+//                             [--marker-chunk N] [--after-only] [--cells-always]
 #include <ros/serialization.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/PointField.h>
@@ -75,8 +76,10 @@ struct Times {
   // The markers' share (the same on both paths).
   double marker_serialise = 0;
   size_t marker_bytes = 0;
-  size_t blocks_read = 0;   ///< blocks the output cache recomputed (after path)
-  double cache_update = 0;  ///< of `cloud`: MapOutputCache::update alone (after path)
+  size_t blocks_read = 0;  ///< blocks the output cache recomputed (after path)
+  size_t cells_read = 0;   ///< of those, blocks whose cells it read (the others: masks)
+  fragg::ros::OutputCacheUpdate stages;  ///< the cache update's own account (wall times)
+  double cache_update = 0;               ///< of `cloud`: MapOutputCache::update alone (after path)
   double total() const { return markers + cloud + grid + serialise; }
   /// One marker update: built and serialised.
   double markerUpdate() const { return markers + marker_serialise; }
@@ -86,6 +89,9 @@ struct Times {
 
 /// Blocks per side of a marker chunk (--marker-chunk; the server's markers/chunk_blocks).
 int g_marker_chunk_blocks = 4;
+/// --cells-always: the after path's cache reads every refreshed block's cells (as before it
+/// read the state masks where they suffice).
+bool g_cells_always = false;
 
 /// Which outputs of the after path go out after a cloud.
 struct Due {
@@ -120,7 +126,10 @@ class Outputs {
       grid = fragg::ros::projectedMap(map, kMinZ, kMaxZ, "map", ros::Time());
       t.grid = msSince(t0);
     } else if (due.maps) {
-      t.blocks_read = cache_.update(map).blocks_read;
+      const fragg::ros::OutputCacheUpdate u = cache_.update(map);
+      t.blocks_read = u.blocks_read;
+      t.cells_read = u.blocks_cells_read;
+      t.stages = u;
       t.cache_update = msSince(t0);
       cloud = &cache_.occupiedCloud("map", ros::Time());
       t.cloud = msSince(t0);
@@ -141,6 +150,7 @@ class Outputs {
   static fragg::ros::OutputCacheOptions optionsWith(fragg::BlockChange refresh_on) {
     fragg::ros::OutputCacheOptions o;
     o.refresh_on = refresh_on;
+    o.masks_where_settled = !g_cells_always;
     return o;
   }
   static constexpr double kMinZ = -std::numeric_limits<double>::infinity();
@@ -298,9 +308,11 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
     if (pending.markers || pending.maps) flush = after.publish(map, pending);
     if (pending.maps)
       std::printf(
-          "  the flush: markers %.2f (serialised %.2f), cache update %.2f (%zu blocks read), "
+          "  the flush: markers %.2f (serialised %.2f), cache update %.2f (%zu blocks read, %zu "
+          "of them from their cells; wall ms: list %.2f, pieces %.2f, columns and grid %.2f), "
           "occupied cloud message %.2f, grid %.2f, whole-map messages serialised %.2f ms\n",
           flush.markers, flush.marker_serialise, flush.cache_update, flush.blocks_read,
+          flush.cells_read, flush.stages.list_ms, flush.stages.pieces_ms, flush.stages.grid_ms,
           flush.cloud - flush.cache_update, flush.grid, flush.serialise - flush.marker_serialise);
   }
   printAmortised(rates, converts, after_times, dues, flush);
@@ -333,6 +345,9 @@ int main(int argc, char** argv) {
                  "blocks per side of one marker, as the server's markers/chunk_blocks (1: one "
                  "marker per block)")
       ->check(CLI::Range(1, 64));
+  app.add_flag("--cells-always", g_cells_always,
+               "the output cache reads every refreshed block's cells, none from its state masks "
+               "alone (the behaviour before, for same-run comparisons)");
   bool after_only = false;
   app.add_flag("--after-only", after_only,
                "only the server's path (no whole-map rebuild, no cache refreshing every changed "
