@@ -10,6 +10,7 @@
 // version is refused on open with a one-line message naming the command that converts it.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -105,13 +106,21 @@ class PageStore {
   /// its file (they stay in the system's page cache), once they pass a bound; the map calls
   /// it after paging out.
   virtual void releaseMappedPages() {}
+  /// RAM the store takes while it commits records of `record_bytes` bytes in all, besides the
+  /// records themselves (what the paging budget counts for a commit in flight); 0 where it is
+  /// bounded by a fixed cache.
+  [[nodiscard]] virtual size_t commitMemoryBytes(size_t record_bytes) const {
+    (void)record_bytes;
+    return 0;
+  }
 };
 
 /// When blocks leave RAM (Map::attachPageStore).
 struct PagingPolicy {
-  /// Resident blocks' memory (cells, metadata, index) and the resident regions' last records
-  /// (kept so that a commit compresses only the blocks that changed) above which blocks are
-  /// paged out; 0: never page out (the store still receives every commit).
+  /// Resident blocks' memory (cells, metadata, state masks, index), the resident regions' last
+  /// records (kept so that a commit compresses only the blocks that changed), the records held
+  /// for the next commit and the commit in flight, above which blocks are paged out; 0: never
+  /// page out (the store still receives every commit).
   double budget_mb = 0.0;
   /// Blocks whose centre lies within this distance of the last sensor position are paged
   /// out last (farthest first), only when the others cannot bring the map within the budget:

@@ -246,8 +246,9 @@ void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
   // next scan, reaching as many new blocks as this one, would not fit: most rounds then run
   // here, between scans, rather than inside the next scan (Map::pageInKeys).
   const size_t next_scan = pager_->lastScanIncoming();
-  const bool over = pager_->excessOverBudget(blocks_.size() + next_scan) > 0;
+  // After the commit: its batch, on the writer until written, counts against the budget.
   if (due) pager_->commit(blocks_, revision_, metaOf(params_, scans_));
+  const bool over = pager_->excessOverBudget(blocks_.size() + next_scan) > 0;
   if (!over) return;
   t0 = Clock::now();
   // Blocks unchanged since the last commit leave first; when they cannot make the room, the

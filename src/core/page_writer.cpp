@@ -77,6 +77,7 @@ void PageWriter::run() {
       failed_ = std::move(in_flight_);
     }
     in_flight_.reset();
+    pending_bytes_ = failed_ ? bytesOf(*failed_) : 0;
     cv_.notify_all();
   }
 }
@@ -111,6 +112,7 @@ void PageWriter::submit(Batch batch) {
     failure_.clear();
   }
   in_flight_ = std::make_unique<Batch>(std::move(batch));
+  pending_bytes_ = bytesOf(*in_flight_);
   cv_.notify_all();
 }
 
@@ -118,6 +120,13 @@ void PageWriter::wait() {
   std::unique_lock<std::mutex> lock(mutex_);
   cv_.wait(lock, [&] { return !in_flight_; });
   if (failed_) throw IoError("paging: commit failed: " + failure_);
+}
+
+size_t PageWriter::bytesOf(const Batch& batch) {
+  size_t n = batch.puts.capacity() * sizeof(batch.puts[0]) +
+             batch.erases.capacity() * sizeof(BlockKey) + batch.meta.capacity();
+  for (const auto& p : batch.puts) n += p.second.capacity();
+  return n;
 }
 
 const BlockRecord* PageWriter::findIn(const Batch& batch, const BlockKey& key) {

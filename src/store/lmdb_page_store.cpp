@@ -144,6 +144,12 @@ class LmdbPageStore final : public RegionRecordStore {
 
   void releaseMappedPages() override { dropMappedPages(); }
 
+  /// A write transaction holds a copy of every page it writes in its own memory until it
+  /// commits (the map is read-only): the records' bytes, and the tree pages above them.
+  size_t commitMemoryBytes(size_t record_bytes) const override {
+    return record_bytes + record_bytes / 8;
+  }
+
   uint64_t diskBytes() const override {
     std::error_code ec;
     const auto s = std::filesystem::file_size(path_, ec);

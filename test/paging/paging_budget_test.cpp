@@ -48,7 +48,8 @@ TEST_P(PagingBudget, ResidentBlocksAndKeptRecordsNeverExceedTheBudget) {
   Map memory(corridorParams());
   insertScans(memory, 0, kScans);
   Map paged(corridorParams());
-  // 10 MB: about 4,800 blocks of the corridor's 8,359; one scan reaches up to ~3,900 (8.1 MB).
+  // 10 MB: about 4,040 blocks of the corridor's 8,359 (2,592 bytes each,
+  // Pager::residentBlockBytes); one scan reaches up to ~3,900 (9.6 MiB).
   paged.attachPageStore(openPageStore(storePath(dir), false), budgetOf(10.0));
   const PagingStats at_start = paged.pagingStats();
   ASSERT_GT(at_start.budget_blocks, 0u);
@@ -78,7 +79,7 @@ TEST_P(PagingBudget, ResidentBlocksAndKeptRecordsNeverExceedTheBudget) {
 TEST_P(PagingBudget, AScanThatCannotFitTheBudgetIsRefusedAndTheMapStaysAsItWas) {
   const std::string dir = testDir();
   Map paged(corridorParams());
-  // 0.25 MB: 119 blocks, fewer than one corridor scan reaches.
+  // 0.25 MB: 101 blocks, fewer than one corridor scan reaches.
   paged.attachPageStore(openPageStore(storePath(dir), false), budgetOf(0.25));
   const Eigen::Isometry3d T = corridorPose(0, kScans);
   try {

@@ -5,6 +5,7 @@
 // is read from that batch (findPending), so the map never reads an older record from the store.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <memory>
@@ -48,6 +49,13 @@ class PageWriter {
   };
   /// Block `key` from the record of its region in a batch not yet written.
   Pending findPending(const BlockKey& key, Block* out);
+  /// RAM of the batches not yet in the store (the one in flight and a failed one): their
+  /// records' bytes and entries. Lock-free (the budget reads it often).
+  [[nodiscard]] size_t pendingBytes() const {
+    return pending_bytes_.load(std::memory_order_relaxed);
+  }
+  /// The same for one batch.
+  [[nodiscard]] static size_t bytesOf(const Batch& batch);
   /// Seconds the thread spent writing, and batches written.
   double secondsWriting() const;
   uint64_t batchesWritten() const;
@@ -66,6 +74,8 @@ class PageWriter {
   std::unique_ptr<Batch> failed_;
   std::string failure_;
   bool stop_ = false;
+  /// bytesOf(in_flight_) + bytesOf(failed_), changed under mutex_.
+  std::atomic<size_t> pending_bytes_{0};
   double seconds_writing_ = 0;
   uint64_t batches_written_ = 0;
   std::thread thread_;

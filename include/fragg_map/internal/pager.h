@@ -68,8 +68,9 @@ class Pager {
   /// Blocks about to be created (a scan's fresh blocks): the records kept meanwhile leave
   /// room for them. 0 once they exist.
   void reserveBlocks(size_t blocks) { reserved_blocks_ = blocks; }
-  /// Drops kept records (regions in key order) until `resident` blocks and the records fit the
-  /// budget; returns whether they do (false: the blocks alone exceed it).
+  /// Waits for the commit in flight, then drops kept records (regions in key order), until
+  /// `resident` blocks and the records fit the budget; returns whether they do (false: the
+  /// blocks alone exceed it).
   bool dropRecordsToFit(size_t resident);
   /// A paged-out block's cells (from a commit not yet written, else the store); false when
   /// the store has no record of it.
@@ -147,7 +148,11 @@ class Pager {
   void removePagedOut(const BlockKey& key);
   size_t budgetBlocks() const;
   size_t budgetBytes() const;
-  /// What the budget counts with `resident` blocks: their bytes and the records kept.
+  /// RAM of the commit in flight on the background writer: its records and the store's copy
+  /// while it writes them (PageStore::commitMemoryBytes); 0 without a writer or a commit.
+  size_t writerBytes() const;
+  /// What the budget counts with `resident` blocks: their bytes, the records kept and held,
+  /// and the commit in flight.
   size_t countedBytes(size_t resident) const;
   /// The resident blocks the budget holds at `fraction` of it, with as many bytes of kept
   /// records a block as now.
