@@ -147,7 +147,9 @@ void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
                                 bool throttle_maps) {
   publishMarkerTopics(map, stamp, full_markers);
   publishMapOutputs(map, stamp, throttle_maps);
-  if (wanted(stats_pub_)) stats_pub_.publish(stats_->toMsg(map, params_.frame_id, stamp));
+  if (wanted(stats_pub_))
+    stats_pub_.publish(
+        stats_->toMsg(map, params_.frame_id, stamp, ServerStats::MapFigures::kRecent));
 }
 
 void MapPublishers::publishMapOutputs(const fragg::Map& map, const ::ros::Time& stamp,

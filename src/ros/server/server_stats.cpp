@@ -138,13 +138,29 @@ uint64_t ServerStats::droppedNoTf() const {
 }
 
 fragg_map::MapStats ServerStats::toMsg(const fragg::Map& map, const std::string& frame_id,
-                                       const ::ros::Time& stamp) const {
+                                       const ::ros::Time& stamp, MapFigures figures) const {
   fragg_map::MapStats msg;
   msg.header.frame_id = frame_id;
   msg.header.stamp = stamp;
   msg.backend = map.backendName();
   msg.resolution = map.resolution();
-  const fragg::MemoryStats memory = map.memory();
+  fragg::MemoryStats memory;
+  {
+    // Map::memory() walks every cell (182 ms at W1 5 cm after 20 clouds): ~stats, published
+    // after every cloud, takes it at most every kMapFiguresPeriodSeconds.
+    std::lock_guard<std::mutex> lock(memory_mutex_);
+    const auto now = std::chrono::steady_clock::now();
+    const bool stale = !memory_valid_ || (map.revision() != memory_revision_ &&
+                                          std::chrono::duration<double>(now - memory_at_).count() >=
+                                              kMapFiguresPeriodSeconds);
+    if (figures == MapFigures::kExact || stale) {
+      memory_ = map.memory();
+      memory_valid_ = true;
+      memory_revision_ = map.revision();
+      memory_at_ = now;
+    }
+    memory = memory_;
+  }
   msg.known_voxels = memory.known_voxels;
   msg.blocks = memory.blocks;
   const fragg::PagingStats paging = map.pagingStats();

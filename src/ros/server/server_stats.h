@@ -4,6 +4,7 @@
 // thread and read from service and publisher threads.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <mutex>
 #include <string>
@@ -61,9 +62,18 @@ class ServerStats {
   /// 0; after ~load_map or the start-up map: the file's count).
   void restart(uint64_t scans);
 
+  /// How toMsg fills the map's size figures (known voxels, blocks, bytes: Map::memory() walks
+  /// every cell, and on a device backend writes its blocks back first).
+  enum class MapFigures {
+    kExact,   ///< computed now (~get_stats)
+    kRecent,  ///< computed at most every kMapFiguresPeriodSeconds, else the last ones (~stats)
+  };
+  static constexpr double kMapFiguresPeriodSeconds = 5.0;
+
   /// The statistics message; `map` must be locked by the caller.
   fragg_map::MapStats toMsg(const fragg::Map& map, const std::string& frame_id,
-                            const ::ros::Time& stamp) const;
+                            const ::ros::Time& stamp,
+                            MapFigures figures = MapFigures::kExact) const;
   uint64_t droppedNoTf() const;
   uint64_t faults(CloudFault fault) const;
 
@@ -71,6 +81,13 @@ class ServerStats {
   mutable std::mutex mutex_;
   /// One cloud out of flight (an outcome counted); the caller holds mutex_.
   void settle();
+
+  /// The last Map::memory() (kRecent): when and at which map revision it was taken.
+  mutable std::mutex memory_mutex_;
+  mutable fragg::MemoryStats memory_;
+  mutable bool memory_valid_ = false;
+  mutable uint64_t memory_revision_ = 0;
+  mutable std::chrono::steady_clock::time_point memory_at_;
 
   uint64_t scans_ = 0;
   uint64_t points_ = 0;
