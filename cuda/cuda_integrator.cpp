@@ -110,6 +110,9 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
     args.num_rays = c.rays;
     args.ref = scan_.ref();
     std::copy(scan_.startV(), scan_.startV() + 3, args.start_v);
+    std::copy(scan_.originM(), scan_.originM() + 3, args.origin_m);
+    args.resolution_m = how.params.resolution_m;
+    args.inv_res = scan_.invRes();
     args.window = window_.window();
     args.slots = cache_.arrays();
     args.miss_list = scan_.missList();

@@ -122,10 +122,10 @@ void DeviceScan::prepareOnHost(const ScanInput& in, const MapParams& params, Ins
               stats);
   ScanCounters& c = counters();
   c.rays = static_cast<uint32_t>(prepared_.rays.size());
-  for (const RayEnd& r : prepared_.rays)
+  for (size_t i = 0; i < prepared_.rays.size(); ++i)
     for (int a = 0; a < 3; ++a) {
-      c.lo_v[a] = std::min(c.lo_v[a], floorToInt(r.end_v[a]));
-      c.hi_v[a] = std::max(c.hi_v[a], floorToInt(r.end_v[a]));
+      c.lo_v[a] = std::min(c.lo_v[a], prepared_.endCell(i, a));
+      c.hi_v[a] = std::max(c.hi_v[a], prepared_.endCell(i, a));
     }
   rays_.reserve(c.rays);
   copyToDevice(rays_.get(), prepared_.rays.data(), c.rays, stream_);

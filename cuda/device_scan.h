@@ -57,6 +57,9 @@ class DeviceScan {
 
   VoxelKey ref() const { return prepared_.ref; }
   const float* startV() const { return prepared_.start_v; }
+  /// The sensor origin in float metres and 1 / resolution (RayCast::kOctomap's rays).
+  const float* originM() const { return prepared_.origin_m; }
+  double invRes() const { return prepared_.inv_res; }
   const RayEnd* rays() const { return rays_.get(); }
   size_t deviceBytes() const {
     return rays_.bytes() + points_.deviceBytes() + free_only_.deviceBytes() + misses_.deviceBytes();

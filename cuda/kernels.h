@@ -31,6 +31,11 @@ struct RaycastArgs {
   uint32_t num_rays;
   VoxelKey ref;
   float start_v[3];
+  /// RayCast::kOctomap: the sensor origin in float metres and the resolution (the rays end in
+  /// float metres, PreparedScan::rayMetres).
+  float origin_m[3] = {0.f, 0.f, 0.f};
+  double resolution_m = 0.0;
+  double inv_res = 0.0;
   Window window;
   SlotArrays slots;
   int32_t* miss_list;  ///< window indices of host-only blocks the rays needed
@@ -45,7 +50,7 @@ struct RaycastArgs {
   /// Misses skip blocks whose cells are all at the lower clamp (never when removing).
   bool skip_saturated = true;
   /// > 0: rays cut into pieces of this many steps of their major axis, shared by the CTA's
-  /// threads (CudaParams::ray_piece_steps); 0: one thread a ray. DDA only.
+  /// threads (CudaParams::ray_piece_steps); 0: one thread a ray. RayCast::kDda only.
   int piece_steps = 0;
 };
 /// One thread a ray, or pieces of rays (piece_steps): marks FREE / HIT scratch bits, allocating

@@ -49,7 +49,8 @@ __global__ void prepareKernel(const float* __restrict__ points_S,
   // Bounds of the kept rays' end cells.
   int lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {
-    const int v = keep ? floorToInt(ray.end_v[a]) : 0;
+    const int v =
+        keep ? rayEndCell(ray, a, p.octomap_keys, p.inv_res, static_cast<int>(p.ref_v[a])) : 0;
     lo[a] = warpMin(keep ? v : INT_MAX);
     hi[a] = warpMax(keep ? v : INT_MIN);
   }

@@ -4,6 +4,7 @@
 // them.
 #include "cuda_check.h"
 #include "fragg_map/raycast.h"
+#include "fragg_map/raycast_octomap.h"
 #include "kernels.h"
 #include "warp_reduce.cuh"
 
@@ -170,6 +171,18 @@ __device__ RayVox rayOf(const RaycastArgs& a, const float4& end) {
                 hit == kFreeEndCode};
 }
 
+/// The same ray for traverseOctomapKeys (RayCast::kOctomap: `end` in float metres).
+__device__ RayMetres rayMetresOf(const RaycastArgs& a, const float4& end) {
+  const uint32_t hit = __float_as_uint(end.w);
+  return RayMetres{{a.origin_m[0], a.origin_m[1], a.origin_m[2]},
+                   {end.x, end.y, end.z},
+                   a.resolution_m,
+                   a.inv_res,
+                   isHitCode(hit),
+                   marginOfHitCode(hit),
+                   hit == kFreeEndCode};
+}
+
 __device__ void clearFilter(unsigned long long* filter) {
   for (int k = threadIdx.x; k < kFilterEntries; k += blockDim.x) filter[k] = ~0ull << 32;
 }
@@ -180,7 +193,7 @@ __device__ void addVisits(const RaycastArgs& a, unsigned long long visits) {
 }
 
 /// One thread a ray.
-template <bool kReadOnly, bool kBresenham>
+template <bool kReadOnly, RayCast kMode>
 __global__ void __launch_bounds__(kThreads) raycastKernel(RaycastArgs a) {
   __shared__ unsigned long long filter[kFilterEntries];
   clearFilter(filter);
@@ -188,9 +201,15 @@ __global__ void __launch_bounds__(kThreads) raycastKernel(RaycastArgs a) {
   const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   unsigned long long visits = 0;
   if (i < a.num_rays) {
-    const RayVox ray = rayOf(a, loadRay<kReadOnly>(a, i));
+    const float4 end = loadRay<kReadOnly>(a, i);
     DeviceMarker mark{a, MarkFilter{filter}};
-    visits = kBresenham ? traverseBresenham(ray, mark) : traverseDda(ray, mark);
+    if constexpr (kMode == RayCast::kOctomap) {
+      const RayMetres ray = rayMetresOf(a, end);
+      visits = traverseOctomapKeys(ray, mark);
+    } else {
+      const RayVox ray = rayOf(a, end);
+      visits = kMode == RayCast::kBresenham ? traverseBresenham(ray, mark) : traverseDda(ray, mark);
+    }
     mark.flush();
   }
   addVisits(a, visits);
@@ -292,20 +311,26 @@ void launchRaycast(const RaycastArgs& args, RayCast mode, bool readonly_loads,
                    cudaStream_t stream) {
   if (args.num_rays == 0) return;
   const unsigned grid = blocksFor(args.num_rays, kThreads);
-  const bool bresenham = mode == RayCast::kBresenham;
-  if (!bresenham && args.piece_steps > 0) {
+  if (mode == RayCast::kDda && args.piece_steps > 0) {
     if (readonly_loads)
       raycastPiecesKernel<true><<<grid, kThreads, 0, stream>>>(args);
     else
       raycastPiecesKernel<false><<<grid, kThreads, 0, stream>>>(args);
-  } else if (readonly_loads && !bresenham)
-    raycastKernel<true, false><<<grid, kThreads, 0, stream>>>(args);
-  else if (readonly_loads)
-    raycastKernel<true, true><<<grid, kThreads, 0, stream>>>(args);
-  else if (!bresenham)
-    raycastKernel<false, false><<<grid, kThreads, 0, stream>>>(args);
-  else
-    raycastKernel<false, true><<<grid, kThreads, 0, stream>>>(args);
+  } else if (mode == RayCast::kOctomap) {  // its walk accumulates: one thread a ray
+    if (readonly_loads)
+      raycastKernel<true, RayCast::kOctomap><<<grid, kThreads, 0, stream>>>(args);
+    else
+      raycastKernel<false, RayCast::kOctomap><<<grid, kThreads, 0, stream>>>(args);
+  } else if (mode == RayCast::kBresenham) {
+    if (readonly_loads)
+      raycastKernel<true, RayCast::kBresenham><<<grid, kThreads, 0, stream>>>(args);
+    else
+      raycastKernel<false, RayCast::kBresenham><<<grid, kThreads, 0, stream>>>(args);
+  } else if (readonly_loads) {
+    raycastKernel<true, RayCast::kDda><<<grid, kThreads, 0, stream>>>(args);
+  } else {
+    raycastKernel<false, RayCast::kDda><<<grid, kThreads, 0, stream>>>(args);
+  }
   FRAGG_CUDA_CHECK_LAUNCH("raycastKernel");
 }
 

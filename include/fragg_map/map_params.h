@@ -13,9 +13,12 @@ enum class Backend : uint8_t { kAuto = 0, kCpu = 1, kCuda = 2 };
 const char* toString(Backend b);
 Backend backendFromString(const std::string& s);  ///< "auto" | "cpu" | "cuda"
 
-enum class RayCast : uint8_t { kDda = 0, kBresenham = 1 };
+/// kDda: exact DDA in voxel units relative to the sensor (precise anywhere on an int32 map);
+/// kBresenham: 26-connected lines; kOctomap: liboctomap's computeRayKeys arithmetic step for
+/// step (float metres, raycast_octomap.h), so that the cells match OctoMap's at long range.
+enum class RayCast : uint8_t { kDda = 0, kBresenham = 1, kOctomap = 2 };
 const char* toString(RayCast r);
-RayCast rayCastFromString(const std::string& s);  ///< "dda" | "bresenham"
+RayCast rayCastFromString(const std::string& s);  ///< "dda" | "bresenham" | "octomap"
 
 struct CullingParams {
   bool plane_memory = true;           ///< test the plane that rejected a block last time first

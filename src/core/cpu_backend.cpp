@@ -10,6 +10,7 @@
 #include "fragg_map/internal/dynamic_classifier.h"
 #include "fragg_map/internal/thread_count.h"
 #include "fragg_map/raycast.h"
+#include "fragg_map/raycast_octomap.h"
 
 namespace fragg {
 
@@ -88,18 +89,19 @@ bool allAtLowerClamp(const Block& block, const BlockStateMasks& masks,
 
 /// Bounding box, in blocks, of every cell the scan's rays can touch.
 void scanBlockBounds(const PreparedScan& scan, BlockKey* lo, BlockKey* hi) {
-  float mn[3], mx[3];
-  for (int a = 0; a < 3; ++a) mn[a] = mx[a] = scan.start_v[a];
-  for (const RayEnd& r : scan.rays)
+  int mn[3], mx[3];  // cells relative to ref
+  for (int a = 0; a < 3; ++a) mn[a] = mx[a] = floorToInt(scan.start_v[a]);
+  for (size_t i = 0; i < scan.rays.size(); ++i)
     for (int a = 0; a < 3; ++a) {
-      mn[a] = std::min(mn[a], r.end_v[a]);
-      mx[a] = std::max(mx[a], r.end_v[a]);
+      const int c = scan.endCell(i, a);
+      mn[a] = std::min(mn[a], c);
+      mx[a] = std::max(mx[a], c);
     }
   const int32_t ref[3] = {scan.ref.x, scan.ref.y, scan.ref.z};
   int32_t l[3], h[3];
   for (int a = 0; a < 3; ++a) {
-    l[a] = (ref[a] + floorToInt(mn[a]) - 1) >> kBlockBits;
-    h[a] = (ref[a] + floorToInt(mx[a]) + 1) >> kBlockBits;
+    l[a] = (ref[a] + mn[a] - 1) >> kBlockBits;
+    h[a] = (ref[a] + mx[a] + 1) >> kBlockBits;
   }
   *lo = {l[0], l[1], l[2]};
   *hi = {h[0], h[1], h[2]};
@@ -160,7 +162,13 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
     mark.paged_out_saturated = page_in ? how.paged_out_saturated : nullptr;
 #pragma omp for schedule(dynamic, 512)
     for (long i = 0; i < n; ++i) {
-      const RayVox ray = scan.ray(static_cast<size_t>(i));
+      const size_t r = static_cast<size_t>(i);
+      if (raycast == RayCast::kOctomap) {
+        const RayMetres ray = scan.rayMetres(r);
+        visits += traverseOctomapKeys(ray, mark);
+        continue;
+      }
+      const RayVox ray = scan.ray(r);
       visits +=
           raycast == RayCast::kBresenham ? traverseBresenham(ray, mark) : traverseDda(ray, mark);
     }

@@ -215,9 +215,9 @@ void classifyDynamicHits(PreparedScan& scan, const BlockMap& blocks, const Dynam
     for (long i = 0; i < n; ++i) {
       const RayEnd& ray = scan.rays[i];
       if (!isHitCode(ray.hit)) continue;
-      const VoxelKey end{scan.ref.x + floorToInt(ray.end_v[0]),
-                         scan.ref.y + floorToInt(ray.end_v[1]),
-                         scan.ref.z + floorToInt(ray.end_v[2])};
+      const size_t r = static_cast<size_t>(i);
+      const VoxelKey end{scan.ref.x + scan.endCell(r, 0), scan.ref.y + scan.endCell(r, 1),
+                         scan.ref.z + scan.endCell(r, 2)};
       if (dynamicAt(end, cells, rule)) local.push_back(static_cast<uint32_t>(i));
     }
   }

@@ -26,12 +26,15 @@ Backend backendFromString(const std::string& s) {
   throw InvalidArgument("backend must be auto, cpu or cuda, got '" + s + "'");
 }
 
-const char* toString(RayCast r) { return r == RayCast::kBresenham ? "bresenham" : "dda"; }
+const char* toString(RayCast r) {
+  return r == RayCast::kBresenham ? "bresenham" : r == RayCast::kOctomap ? "octomap" : "dda";
+}
 
 RayCast rayCastFromString(const std::string& s) {
   if (s == "dda") return RayCast::kDda;
   if (s == "bresenham") return RayCast::kBresenham;
-  throw InvalidArgument("raycast must be dda or bresenham, got '" + s + "'");
+  if (s == "octomap") return RayCast::kOctomap;
+  throw InvalidArgument("raycast must be dda, bresenham or octomap, got '" + s + "'");
 }
 
 void MapParams::validate() const {

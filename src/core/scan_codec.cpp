@@ -164,7 +164,7 @@ void readScan(ByteReader& rd, ScanRecord& r, EncodedPoints& p, uint32_t file_ver
   if (type != uint8_t(SensorType::kSpinningLidar) && type != uint8_t(SensorType::kPinhole))
     rd.fail("scan " + std::to_string(r.id) + ": unknown sensor type " + std::to_string(type));
   if (axis > uint8_t(OpticalAxis::kXForward) || explicit_model > 1 ||
-      raycast > uint8_t(RayCast::kBresenham) || no_return > 3 || removable > 1)
+      raycast > uint8_t(RayCast::kOctomap) || no_return > 3 || removable > 1)
     rd.fail("scan " + std::to_string(r.id) + ": bad sensor or insertion flags");
   m.type = static_cast<SensorType>(type);
   m.optical_axis = static_cast<OpticalAxis>(axis);

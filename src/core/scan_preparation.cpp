@@ -68,6 +68,11 @@ RayPrepParams rayPrepParams(const Eigen::Isometry3d& T_map_sensor, const SensorM
   p.explicit_model = explicit_model;
   p.slack_m = static_cast<float>(1e-3 + params.resolution_m);
   p.free_cut_cell = params.free_cut_cell;
+  p.octomap_keys = params.raycast == RayCast::kOctomap;
+  out.octomap_keys = p.octomap_keys;
+  out.resolution_m = params.resolution_m;
+  out.inv_res = p.inv_res;
+  for (int a = 0; a < 3; ++a) out.origin_m[a] = p.origin_f[a] = static_cast<float>(o[a]);
   return p;
 }
 
@@ -104,7 +109,7 @@ void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                                  static_cast<uint32_t>(i % cloud.width), &dir_S)) {
           const double s[3] = {dir_S.x() * prep.max_range_m, dir_S.y() * prep.max_range_m,
                                dir_S.z() * prep.max_range_m};
-          if (rayEndFromSensor(prep, s, 0u, &ray)) {
+          if (freeRayEnd(prep, s, &ray)) {
             local.push_back(ray);
             if (local_index) local_index->push_back(static_cast<uint32_t>(i));
             ++no_return;

@@ -1,7 +1,7 @@
 // MapParams::free_cut_cell: octomap_server's rule for rays cut at max range (the cell at the
 // cut point is freed too) against liboctomap's insertPointCloud rule (that cell is left as it
-// was), on both traversals; a hit in that cell wins; free-only points keep their end cell;
-// the rule travels with a kept scan through a saved map.
+// was), on every traversal (DDA, Bresenham, computeRayKeys's arithmetic); a hit in that cell wins;
+// free-only points keep their end cell; the rule travels with a kept scan through a saved map.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -33,8 +33,8 @@ bool observed(const Map& m, int x) {
   return c != nullptr && c->observed();
 }
 
-TEST(FreeCutCellTest, CutCellFreeOnlyUnderTheRuleOnBothTraversals) {
-  for (RayCast raycast : {RayCast::kDda, RayCast::kBresenham}) {
+TEST(FreeCutCellTest, CutCellFreeOnlyUnderTheRuleOnEveryTraversal) {
+  for (RayCast raycast : {RayCast::kDda, RayCast::kBresenham, RayCast::kOctomap}) {
     Map liboctomap(paramsWith(false, raycast)), server(paramsWith(true, raycast));
     for (Map* m : {&liboctomap, &server}) {
       const InsertStats s = m->insert(cloudOf({{10.f, 0.f, 0.f}}), sensorAtVoxelCentre(), kRange2);

@@ -274,6 +274,29 @@ TEST(CudaBackendTest, OptionsMatchTheCpu) {
     }
 }
 
+/// RayCast::kOctomap (computeRayKeys's arithmetic, one thread a ray whatever ray_piece_steps
+/// says): the same bytes as the CPU on W1 at 5 cm, with the cut cell rule, with no-return
+/// clearing (rays prepared on the host) and with skipping saturated blocks off.
+TEST(CudaBackendTest, OctomapRaycastIsByteIdentical) {
+  REQUIRE_DEVICE();
+  const auto w1 = simulatedW1(5);
+  MapParams p = paramsFor(Backend::kCuda, 0.05);
+  p.raycast = RayCast::kOctomap;
+  expectBackendsAgree(w1, p, SensorModel::autoFromCloud(0.0, 30.0), "octomap raycast, W1 30 m");
+  const auto scans = syntheticLidar(3, 3.0);
+  p = paramsFor(Backend::kCuda, 0.1);
+  p.raycast = RayCast::kOctomap;
+  p.free_cut_cell = true;
+  p.cuda.ray_piece_steps = 0;
+  expectBackendsAgree(scans, p, SensorModel::autoFromCloud(0.0, 8.0), "octomap raycast, cut cell");
+  p = paramsFor(Backend::kCuda, 0.1);
+  p.raycast = RayCast::kOctomap;
+  p.clear_no_return_rays = true;
+  p.skip_saturated_blocks = false;
+  expectBackendsAgree(scans, p, SensorModel::autoFromCloud(0.0, 30.0),
+                      "octomap raycast, no-return clearing, no saturated skip");
+}
+
 TEST(CudaBackendTest, InsertSequenceStagesTheNextCloudAndIsByteIdentical) {
   REQUIRE_DEVICE();
   const SensorModel auto30 = SensorModel::autoFromCloud(0.0, 30.0);

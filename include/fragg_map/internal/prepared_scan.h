@@ -21,6 +21,18 @@ struct PreparedScan {
   std::vector<RayEnd> rays;
   /// With MapParams::dynamic enabled: the cloud index of each ray's point (else empty).
   std::vector<uint32_t> point_index;
+  /// RayCast::kOctomap: the rays end in float metres (RayEnd::end_v) and are walked from
+  /// `origin_m` by traverseOctomapKeys.
+  bool octomap_keys = false;
+  float origin_m[3] = {0, 0, 0};  ///< the sensor origin as float metres, map frame
+  double resolution_m = 0.0;
+  double inv_res = 0.0;  ///< 1.0 / resolution_m
+
+  /// The end cell of ray `i` on axis `a`, relative to `ref`.
+  int endCell(size_t i, int a) const {
+    const int32_t ref_a = a == 0 ? ref.x : a == 1 ? ref.y : ref.z;
+    return rayEndCell(rays[i], a, octomap_keys, inv_res, ref_a);
+  }
 
   RayVox ray(size_t i) const {
     const RayEnd& e = rays[i];
@@ -30,6 +42,17 @@ struct PreparedScan {
                   isHitCode(e.hit),
                   marginOfHitCode(e.hit),
                   e.hit == kFreeEndCode};
+  }
+  /// Ray `i` for traverseOctomapKeys (RayCast::kOctomap).
+  RayMetres rayMetres(size_t i) const {
+    const RayEnd& e = rays[i];
+    return RayMetres{{origin_m[0], origin_m[1], origin_m[2]},
+                     {e.end_v[0], e.end_v[1], e.end_v[2]},
+                     resolution_m,
+                     inv_res,
+                     isHitCode(e.hit),
+                     marginOfHitCode(e.hit),
+                     e.hit == kFreeEndCode};
   }
 };
 

@@ -8,11 +8,14 @@
 
 #include "fragg_map/frustum.h"
 #include "fragg_map/hd.h"
+#include "fragg_map/raycast_octomap.h"
 
 namespace fragg {
 
 struct RayEnd {
-  float end_v[3];  ///< relative to the scan's reference voxel, voxel units
+  /// Relative to the scan's reference voxel, voxel units; with RayCast::kOctomap the end in
+  /// float metres in the map frame instead (rayEndCell reads either).
+  float end_v[3];
   /// 0: free-only ray (clipped or no return); kFreeEndCode: a ray cut at max range whose end
   /// cell is free too (MapParams::free_cut_cell); otherwise the end cell is a hit and
   /// (hit - 1) / kMarginSteps is its clearing margin in voxels (see RayVox::keep_v).
@@ -67,6 +70,10 @@ struct RayPrepParams {
   /// A ray cut at max range also frees the cell at the cut point (octomap_server's rule; off:
   /// liboctomap's insertPointCloud, that cell is left as it was).
   bool free_cut_cell;
+  /// RayCast::kOctomap: rays end in float metres, cut at max range in float as OctoMap cuts
+  /// them (octomapRayEnd).
+  bool octomap_keys = false;
+  float origin_f[3] = {0.f, 0.f, 0.f};  ///< origin_m as float (OctoMap's point3d)
 };
 
 enum class RayPrep : uint8_t { kHit, kFreeOnly, kInvalid, kTooClose, kOutside };
@@ -90,6 +97,54 @@ FRAGG_HD bool rayEndFromSensor(const RayPrepParams& p, const double s[3], uint32
   return true;
 }
 
+/// The end cell of a ray on axis `a`, relative to the reference voxel `ref_a`.
+FRAGG_HD int rayEndCell(const RayEnd& r, int a, bool octomap_keys, double inv_res, int ref_a) {
+  return octomap_keys ? octomapKey(r.end_v[a], inv_res) - ref_a : floorToInt(r.end_v[a]);
+}
+
+/// RayCast::kOctomap's end of the ray with sensor-frame direction and length `s` (not cut):
+/// the point in float metres in the map frame, cut at max range as liboctomap's
+/// insertPointCloud and octomap_server cut it (float difference, its norm in double, the
+/// normalised direction times the float max range). Sets `clipped`; false when the end
+/// leaves the key range or lies farther than kMaxRayV from the reference voxel.
+FRAGG_HD bool octomapRayEnd(const RayPrepParams& p, const double s[3], bool* clipped,
+                            float end_m[3]) {
+  float d[3];
+  for (int a = 0; a < 3; ++a) {
+    const double rel = p.R[3 * a] * s[0] + p.R[3 * a + 1] * s[1] + p.R[3 * a + 2] * s[2];
+    end_m[a] = static_cast<float>(p.origin_m[a] + rel);
+    d[a] = end_m[a] - p.origin_f[a];
+  }
+  const float dd0 = d[0] * d[0], dd1 = d[1] * d[1], dd2 = d[2] * d[2];  // no contraction
+  const double norm = sqrt(static_cast<double>(dd0 + dd1 + dd2));
+  *clipped = norm > p.max_range_m;
+  if (*clipped) {
+    const float len = static_cast<float>(norm), max_range = static_cast<float>(p.max_range_m);
+    for (int a = 0; a < 3; ++a) {
+      const float dir = d[a] / len;
+      const float reach = dir * max_range;
+      end_m[a] = p.origin_f[a] + reach;
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (!finiteFloat(end_m[a])) return false;
+    const double end_v = static_cast<double>(end_m[a]) * p.inv_res;
+    if (!(fabs(end_v) <= kMaxAbsVoxel)) return false;
+    if (!(fabs(end_v - p.ref_v[a]) <= kMaxRayV)) return false;
+  }
+  return true;
+}
+
+/// A free-only ray with sensor-frame direction and length `s` (a no-return ray), in the
+/// units RayEnd::end_v has for this scan; false as rayEndFromSensor / octomapRayEnd.
+FRAGG_HD bool freeRayEnd(const RayPrepParams& p, const double s[3], RayEnd* ray) {
+  if (!p.octomap_keys) return rayEndFromSensor(p, s, 0u, ray);
+  bool clipped = false;
+  if (!octomapRayEnd(p, s, &clipped, ray->end_v)) return false;
+  ray->hit = 0u;
+  return true;
+}
+
 /// OctoMap semantics: NaN/Inf and (0,0,0) points are invalid, points closer than min range
 /// dropped, points beyond max range become free-only rays ending at max range (with
 /// `free_cut_cell`, rays whose end cell is free too: kFreeEndCode). A point marked
@@ -103,7 +158,10 @@ FRAGG_HD RayPrep prepareRay(const RayPrepParams& p, const Frustum& f, float x_S,
   const double range = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
   if (range == 0.0) return RayPrep::kInvalid;  // a common "no return" marker
   if (range < p.min_range_m) return RayPrep::kTooClose;
-  const bool clipped = range > p.max_range_m;
+  float end_m[3] = {0.f, 0.f, 0.f};
+  bool octomap_clipped = false;
+  if (p.octomap_keys && !octomapRayEnd(p, s, &octomap_clipped, end_m)) return RayPrep::kInvalid;
+  const bool clipped = p.octomap_keys ? octomap_clipped : range > p.max_range_m;
   if (clipped) {
     const double k = p.max_range_m / range;
     for (double& v : s) v = v * k;
@@ -121,7 +179,12 @@ FRAGG_HD RayPrep prepareRay(const RayPrepParams& p, const Frustum& f, float x_S,
     const double noise_m = p.noise_m + p.noise_quadratic_per_m * range * range;
     hit = hitCode(noise_m * p.inv_res);
   }
-  if (!rayEndFromSensor(p, s, hit, ray)) return RayPrep::kInvalid;
+  if (p.octomap_keys) {
+    for (int a = 0; a < 3; ++a) ray->end_v[a] = end_m[a];
+    ray->hit = hit;
+  } else if (!rayEndFromSensor(p, s, hit, ray)) {
+    return RayPrep::kInvalid;
+  }
   return no_hit ? RayPrep::kFreeOnly : RayPrep::kHit;
 }
 

@@ -56,6 +56,8 @@ MapParams engineParams(const std::string& engine, const MapParams& base) {
       p.culling.translation_coherence = false;
     } else if (token == "bresenham") {
       p.raycast = RayCast::kBresenham;
+    } else if (token == "octomap-raycast") {
+      p.raycast = RayCast::kOctomap;
     } else if (token == "no-skip") {
       p.skip_saturated_blocks = false;
     } else if (token == "no-coalesce") {
@@ -79,7 +81,7 @@ MapParams engineParams(const std::string& engine, const MapParams& base) {
     } else {
       throw InvalidArgument(
           "unknown engine option '" + token + "' in '" + engine +
-          "' (pageable, plain-loads, no-coherence, bresenham, no-skip, "
+          "' (pageable, plain-loads, no-coherence, bresenham, octomap-raycast, no-skip, "
           "no-coalesce, host-auto, block-apply, all-host-threads, no-staging, pieces=N, sequence)");
     }
   }

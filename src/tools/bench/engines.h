@@ -24,14 +24,15 @@ struct Figures {
 
 /// An engine name: a backend, then options joined by '+': cpu, cuda, cuda+pageable (host
 /// blocks in pageable memory), cuda+plain-loads (no read-only cache path for rays),
-/// cuda+no-coherence (frustum coherence off), cuda+bresenham, cpu+no-skip / cuda+no-skip (the
-/// ray pass visits blocks at the lower clamp too), cuda+no-coalesce (a ray's marks issued per
-/// cell, not per scratch word), cuda+host-auto (the auto sensor model's statistics gathered on
-/// the host), cuda+block-apply (the apply kernel updates a block with a thread block, not a
-/// warp), cuda+no-staging (no next cloud staged in a batch), cuda+pieces=N (rays cut into pieces of
-/// N cells of their major axis; 0: one thread a ray), +sequence (the scans inserted by one
-/// Map::insertSequence call, each scan's time its InsertStats::seconds_total; the map params are
-/// the backend's). Throws InvalidArgument.
+/// cuda+no-coherence (frustum coherence off), cuda+bresenham, cpu+octomap-raycast /
+/// cuda+octomap-raycast (RayCast::kOctomap: computeRayKeys's arithmetic), cpu+no-skip /
+/// cuda+no-skip (the ray pass visits blocks at the lower clamp too), cuda+no-coalesce (a ray's
+/// marks issued per cell, not per scratch word), cuda+host-auto (the auto sensor model's statistics
+/// gathered on the host), cuda+block-apply (the apply kernel updates a block with a thread block,
+/// not a warp), cuda+no-staging (no next cloud staged in a batch), cuda+pieces=N (rays cut into
+/// pieces of N cells of their major axis; 0: one thread a ray), +sequence (the scans inserted by
+/// one Map::insertSequence call, each scan's time its InsertStats::seconds_total; the map params
+/// are the backend's). Throws InvalidArgument.
 MapParams engineParams(const std::string& engine, const MapParams& base);
 
 /// Inserts the first `count` scans into an empty map `repeats` times; the last map is moved

@@ -194,7 +194,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--backends", o.backends,
                  "fragg engines, one row each: cpu, cuda, and CUDA ablations cuda+pageable, "
-                 "cuda+plain-loads, cuda+no-coherence, cuda+bresenham")
+                 "cuda+plain-loads, cuda+no-coherence, cuda+bresenham, cpu+octomap-raycast")
       ->capture_default_str();
   app.add_option("--synthetic-scans", o.synthetic_scans, "Synthetic 180k-point scans")
       ->capture_default_str();

@@ -395,7 +395,9 @@ void addBuildCommand(CLI::App& app) {
   c->add_option("--elevation-max", o->elevation_max_deg, "LiDAR highest beam (degrees)")
       ->capture_default_str();
   c->add_option("--backend", o->backend, "auto | cpu | cuda")->capture_default_str();
-  c->add_option("--raycast", o->raycast, "dda | bresenham")->capture_default_str();
+  c->add_option("--raycast", o->raycast,
+                "dda | bresenham | octomap (liboctomap's computeRayKeys arithmetic)")
+      ->capture_default_str();
   c->add_option("--topic", o->topic, "Bag: PointCloud2 topic (default: the only one)");
   c->add_option("--frame", o->frame, "Bag: fixed frame of the map")->capture_default_str();
   c->add_option("--hit", o->occupancy.prob_hit, "Hit probability")->capture_default_str();
