@@ -65,6 +65,7 @@ struct FrontierTracker::State {
   /// hold the frontier bits only once downloaded (`records_current`).
   bool on_device = false;
   bool records_current = true;
+  bool device_updates = false;  ///< useDevice()
 #if FRAGG_HAVE_CUDA
   std::unique_ptr<DeviceFrontiers> device;
 #endif
@@ -108,7 +109,8 @@ struct FrontierTracker::State {
   /// False when the map has no device view or the state does not fit there: the host update.
   bool updateOnDevice(const Map& map, FrontierUpdateStats& stats) {
 #if FRAGG_HAVE_CUDA
-    if (filter.min_obstacle_distance_m > 0.0 || std::string(map.backendName()) != "cuda")
+    if (!device_updates || filter.min_obstacle_distance_m > 0.0 ||
+        std::string(map.backendName()) != "cuda")
       return false;
     const auto t0 = std::chrono::steady_clock::now();
     constexpr int32_t kLo = INT32_MIN, kHi = INT32_MAX;
@@ -349,6 +351,12 @@ FrontierTracker::FrontierTracker(FrontierTracker&&) noexcept = default;
 FrontierTracker& FrontierTracker::operator=(FrontierTracker&&) noexcept = default;
 
 void FrontierTracker::reset() { state_->clear(); }
+
+void FrontierTracker::useDevice(bool on) {
+  if (on == state_->device_updates) return;
+  state_->device_updates = on;
+  state_->clear();  // the next update is a full one on the path chosen
+}
 
 uint64_t FrontierTracker::size() const { return state_->total; }
 uint64_t FrontierTracker::revision() const { return state_->revision; }

@@ -47,18 +47,21 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
   Map cpu_map(p);
   p.backend = Backend::kCuda;
   Map cuda_map(p);
-  FrontierTracker cpu_tracker, cuda_tracker;
+  FrontierTracker cpu_tracker, cuda_tracker, cuda_host_tracker;
+  cuda_tracker.useDevice(true);
   FrontierFilter band;
   band.use_height = true;
   band.min_z_m = 0.5;
   band.max_z_m = 2.5;
   FrontierTracker cuda_banded(band);
+  cuda_banded.useDevice(true);
   // A box (cell centres tested one by one at its faces) and a band together.
   FrontierFilter boxed = band;
   boxed.use_box = true;
   boxed.box_min_m = Eigen::Vector3d(-20.05, -13.3, -5.0);
   boxed.box_max_m = Eigen::Vector3d(31.7, 18.25, 4.05);
   FrontierTracker cuda_boxed(boxed), cpu_boxed(boxed);
+  cuda_boxed.useDevice(true);
   const SensorModel sensor = SensorModel::autoFromCloud(0.0, 30.0);
   uint64_t device_updates = 0, full_updates = 0;
   for (size_t i = 0; i < poses.size(); ++i) {
@@ -75,6 +78,9 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
     }
     const FrontierUpdateStats cpu_st = cpu_tracker.update(cpu_map);
     const FrontierUpdateStats cuda_st = cuda_tracker.update(cuda_map);
+    // The host update fed by the changed-block list compacted on the device.
+    const FrontierUpdateStats host_st = cuda_host_tracker.update(cuda_map);
+    EXPECT_EQ(host_st.full, i == 0 || i == 25 || i == 40) << "after scan " << i;
     cuda_banded.update(cuda_map);
     cuda_boxed.update(cuda_map);
     cpu_boxed.update(cpu_map);
@@ -82,10 +88,12 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
     device_updates += cuda_st.states_on_device ? 1 : 0;
     full_updates += cuda_st.full ? 1 : 0;
     ASSERT_EQ(cuda_tracker.size(), cpu_tracker.size()) << "after scan " << i;
+    ASSERT_EQ(cuda_host_tracker.size(), cpu_tracker.size()) << "after scan " << i;
     ASSERT_EQ(cuda_boxed.size(), cpu_boxed.size()) << "after scan " << i;
     if (i % 10 == 9 || i < 3 || i == 25 || i == 40) {
       const std::vector<VoxelKey> expected = cpu_tracker.cells();
       ASSERT_EQ(cuda_tracker.cells(), expected) << "after scan " << i;
+      ASSERT_EQ(cuda_host_tracker.cells(), expected) << "after scan " << i;
       ASSERT_EQ(findFrontierCells(cuda_map), expected) << "full, after scan " << i;
       ASSERT_EQ(cuda_banded.cells(), findFrontierCells(cpu_map, band)) << "after scan " << i;
       ASSERT_EQ(cuda_boxed.cells(), findFrontierCells(cpu_map, boxed)) << "after scan " << i;
@@ -103,6 +111,7 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
   // host): the same set either way.
   {
     FrontierTracker t;
+    t.useDevice(true);
     t.update(cuda_map);
     const FrontierMapChanges changes = t.collect(cuda_map);
     EXPECT_TRUE(changes.full) << "a set on the device is not kept on the host";

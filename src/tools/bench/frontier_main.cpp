@@ -47,8 +47,9 @@ struct Options {
   size_t max_scans = 100, viewpoints = 1000;
   double resolution_m = 0.05, max_range_m = 30.0;
   int threads = 0;
-  int coarse_cells = 0;     ///< > 0: also time the node's LiDAR query on this grid
-  std::vector<double> box;  ///< its box (6 values), else around the map's centre
+  int coarse_cells = 0;         ///< > 0: also time the node's LiDAR query on this grid
+  bool device_tracker = false;  ///< FrontierTracker::useDevice
+  std::vector<double> box;      ///< its box (6 values), else around the map's centre
 };
 
 /// Process CPU time (user + system), ms: with other work on the machine, the steadier figure.
@@ -133,6 +134,7 @@ int run(const Options& o) {
   Map map = o.map_path.empty() ? Map(params) : Map::load(o.map_path, params.backend);
   const SensorModel sensor = SensorModel::autoFromCloud(0.0, o.max_range_m);
   planning::FrontierTracker tracker({}, o.threads);
+  tracker.useDevice(o.device_tracker);
   std::vector<double> insert_ms, update_ms, examined, changed, states_ms, compare_ms, examine_ms;
   bool states_on_device = false;
   const std::vector<Scan> no_scans;
@@ -163,6 +165,7 @@ int run(const Options& o) {
     const auto t0 = Clock::now();
     const double c0 = cpuMs();
     planning::FrontierTracker fresh({}, o.threads);  // a full recompute, set as block masks
+    fresh.useDevice(o.device_tracker);
     fresh.update(map);
     full_ms.push_back(msSince(t0));
     full_cpu_ms.push_back(cpuMs() - c0);
@@ -297,6 +300,8 @@ int main(int argc, char** argv) {
   app.add_option("--viewpoints", o.viewpoints, "Candidate viewpoints to score")
       ->capture_default_str();
   app.add_option("--threads", o.threads, "CPU threads (0 = every core)")->capture_default_str();
+  app.add_flag("--device-tracker", o.device_tracker,
+               "the frontier tracker's update on a CUDA map's device (FrontierTracker::useDevice)");
   app.add_option("--lidar-query", o.coarse_cells,
                  "Only time the node's LiDAR query (coarse grid of N cells, coverage, k 8) on "
                  "the whole map and in --box")
