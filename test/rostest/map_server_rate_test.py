@@ -133,8 +133,14 @@ class MapServerRateTest(unittest.TestCase):
         self.assertGreater(s.latency_ms_p50, 0.0)
         self.assertGreaterEqual(s.latency_ms_p99, s.latency_ms_p50)
         self.assertGreaterEqual(s.latency_ms_p99, s.insertion_ms_p50)
-        with open(rospy.get_param("~trace_csv")) as f:
-            rows = f.read().splitlines()
+        # A cloud's row is written once its outcome is counted (the pipeline settles the
+        # counters, then writes the row): the last row may follow ~get_stats' settled answer.
+        def trace_rows():
+            with open(rospy.get_param("~trace_csv")) as f:
+                return f.read().splitlines()
+        wait_for(lambda: len(trace_rows()) - 1 >= self.scans, 10, "every cloud's trace row",
+                 period_s=0.1)
+        rows = trace_rows()
         self.assertEqual(rows[0].split(",")[:3], ["stamp_s", "points", "outcome"])
         self.assertEqual(len(rows) - 1, self.scans)
         self.assertTrue(all(r.split(",")[2] == "inserted" for r in rows[1:]), rows)
