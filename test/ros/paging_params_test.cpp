@@ -102,7 +102,8 @@ TEST(PagingParams, TheServerMapPagesToANewStoreAndContinuesAnExistingOne) {
   const std::string dir = fragg::test::testDir();
   fragg::ros::PagingParams p;
   p.store = dir + "/server.db";
-  p.policy.budget_mb = 10.0;  // holds one corridor scan's reach (~3,900 blocks, 8.1 MB)
+  // One corridor scan's reach: ~3,900 blocks, 9.6 MiB at 2,592 B a block (4,045 fit).
+  p.policy.budget_mb = 10.0;
   p.policy.radius_m = 4.0;
   p.policy.commit_every_scans = 7;
   p.policy.commit_every_s = 0;
