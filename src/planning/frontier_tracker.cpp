@@ -128,7 +128,7 @@ struct FrontierTracker::State {
       if (!device || device->device() != view.device)
         device = std::make_unique<DeviceFrontiers>(filter, view.device);
       checkQuery(control, "frontier update");
-      const DeviceFrontierUpdate r = device->update(view, map.resolution(), full);
+      const DeviceFrontierUpdate r = device->update(view, map.resolution(), box_lo, box_hi, full);
       if (full) {
         records.clear();
         index.clear();

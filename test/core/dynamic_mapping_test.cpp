@@ -17,6 +17,7 @@
 #include <limits>
 #include <vector>
 
+#include "dynamic_scene.h"
 #include "fragg_map/cell_writer.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/map.h"
@@ -27,55 +28,15 @@
 namespace fragg {
 namespace {
 
-constexpr double kRes = 0.1;
+using test::kDynamicScenePersonY;
 
+// The shared scene (dynamic_scene.h) under the surround rule.
 MapParams dynamicParams(bool enabled, int known_radius_cells = 1) {
-  MapParams p;
-  p.resolution_m = kRes;
-  p.backend = Backend::kCpu;
-  p.threads = 2;
-  p.dynamic.enabled = enabled;
-  p.dynamic.known_radius_cells = known_radius_cells;
-  p.dynamic.rule = VoidSpaceRule::kSurround;
-  return p;
+  return test::dynamicSceneParams(enabled, VoidSpaceRule::kSurround, known_radius_cells);
 }
-
-// The centre of voxel (x, y, z) relative to the sensor, which sits at voxel (0, 0, 0)'s centre.
-Eigen::Vector3f cellCentre(int x, int y, int z) {
-  return Eigen::Vector3f(float(x * kRes), float(y * kRes), float(z * kRes));
-}
-
-Eigen::Isometry3d sensorPose() {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.translation() = Eigen::Vector3d::Constant(0.5 * kRes);
-  return T;
-}
-
-// A floor (z = -10) and a back wall (x = 40) in front of the sensor; `person_y` >= -12 adds a
-// standing person (a column of cells at x = 20) and one point at the edge of the observed
-// space (y = 15, beside never-observed cells), both inside space the earlier scans cleared.
-PointCloud sceneCloud(int person_y) {
-  PointCloud c;
-  for (int x = 2; x < 40; ++x)
-    for (int y = -15; y <= 15; ++y) c.points_S.push_back(cellCentre(x, y, -10));
-  for (int y = -15; y <= 15; ++y)
-    for (int z = -9; z <= 10; ++z) c.points_S.push_back(cellCentre(40, y, z));
-  if (person_y >= -12) {
-    for (int z = -9; z <= 7; ++z) c.points_S.push_back(cellCentre(20, person_y, z));
-    c.points_S.push_back(cellCentre(30, 15, 2));
-  }
-  return c;
-}
-
-// Where the person stands at each scan: first for three scans at y = 0, before anything is
-// void (inserted as OctoMap would; when the person has left, the rays through those cells make
-// them void: the pass-through rule); then four scans of the empty room make the space in front
-// of the wall void; then the person walks across and stands still for six scans at y = 4
-// (OctoMap's rule makes those cells occupied, and one scan after does not clear them).
-constexpr int kPersonY[] = {0, 0, 0, -100, -100, -100, -100, -8, -4, 0, 4, 4, 4, 4, 4, 4, 8};
-
-// Floor and wall points come first in sceneCloud: these many are static.
-constexpr size_t kStaticPoints = 38 * 31 + 31 * 20;
+PointCloud sceneCloud(int person_y) { return test::dynamicSceneCloud(person_y); }
+Eigen::Isometry3d sensorPose() { return test::dynamicScenePose(); }
+Eigen::Vector3f cellCentre(int x, int y, int z) { return test::dynamicSceneCell(x, y, z); }
 
 // Brute force: point i is dynamic when its cell is void (exactly at the lower clamp), or when it
 // and every cell within r are free with confidence (log-odds <= seen_fx), in `ref` as it is now.
@@ -211,11 +172,11 @@ void walkPerson(int r, Map* out_map, PersonRun* run) {
   Map& map = *out_map;
   Map ref(dynamicParams(false));
   const int16_t clamp_fx = ref.model().min_fx;
-  for (size_t step = 0; step < std::size(kPersonY); ++step) {
-    const PointCloud cloud = sceneCloud(kPersonY[step]);
+  for (size_t step = 0; step < std::size(kDynamicScenePersonY); ++step) {
+    const PointCloud cloud = sceneCloud(kDynamicScenePersonY[step]);
     const std::vector<uint8_t> expected = referenceDynamic(ref, cloud, r, seen_fx);
     for (size_t i = 0; i < cloud.size(); ++i) {
-      run->static_dynamic += i < kStaticPoints && expected[i] ? 1 : 0;
+      run->static_dynamic += i < test::kDynamicSceneStaticPoints && expected[i] ? 1 : 0;
       // Points in confidently free cells that are not void stay static (the edge point).
       const Cell* c = ref.findCell(ref.keyOf(sensorPose() * cloud.points_S[i].cast<double>()));
       if (!expected[i] && c && c->observed() && c->log_odds_fx <= seen_fx) ++run->free_but_static;
@@ -294,7 +255,8 @@ TEST(DynamicMappingTest, PersonWalkingThroughVoidSpaceMatchesBruteForce) {
 
 TEST(DynamicMappingTest, WithoutTheOptionThePersonLeavesATrail) {
   Map map(dynamicParams(false));
-  for (int y : kPersonY) map.insert(sceneCloud(y), sensorPose(), SensorModel::autoFromCloud());
+  for (int y : kDynamicScenePersonY)
+    map.insert(sceneCloud(y), sensorPose(), SensorModel::autoFromCloud());
   int occupied = 0;
   for (int y = -4; y <= 4; y += 4)
     for (int z = -8; z <= 4; ++z) {

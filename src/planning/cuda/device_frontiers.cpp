@@ -1,7 +1,6 @@
 #include "device_frontiers.h"
 
 #include <chrono>
-#include <cmath>
 
 #include "cuda_check.h"
 #include "cuda_stream.h"
@@ -32,14 +31,18 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-BlockKey blockAt(double v_x, double v_y, double v_z, double resolution_m) {
-  const auto cell = [&](double v) {
-    const double c = std::floor(v / resolution_m);
-    if (!std::isfinite(c) || std::fabs(c) >= 2147483647.0)
-      throw InvalidArgument("frontier filter box: a corner is outside the map's key range");
-    return static_cast<int32_t>(c);
-  };
-  return blockKeyOf(VoxelKey{cell(v_x), cell(v_y), cell(v_z)});
+/// The state's arrays for a pool of `n` slots, in `scratch` (kept between calls at one size).
+cuda::FrontierSlots slotsIn(DeviceScratch& scratch, int32_t n) {
+  cuda::FrontierSlots s;
+  s.slots = n;
+  s.seen = scratch.device<StateMasks>(kSeen, n);
+  s.keys = scratch.device<BlockKey>(kKeys, n);
+  s.valid = scratch.device<uint8_t>(kValid, n);
+  s.bits = scratch.device<FrontierBits>(kBits, n);
+  s.counts = scratch.device<uint32_t>(kCounts, n);
+  s.marks = scratch.device<uint32_t>(kMarks, n);
+  s.examine = scratch.device<int32_t>(kExamine, n);
+  return s;
 }
 
 }  // namespace
@@ -53,19 +56,12 @@ DeviceFrontiers::DeviceFrontiers(const FrontierFilter& filter, int device)
 int DeviceFrontiers::device() const { return scratch_->device(); }
 
 DeviceFrontierUpdate DeviceFrontiers::update(const DeviceLayerView& view, double resolution_m,
+                                             const BlockKey& box_lo, const BlockKey& box_hi,
                                              bool full) {
   FRAGG_CUDA_CHECK(cudaSetDevice(scratch_->device()));
   const cudaStream_t stream = static_cast<cudaStream_t>(scratch_->stream());
   const int32_t n = view.slots;
-  cuda::FrontierSlots s;
-  s.slots = n;
-  s.seen = scratch_->device<StateMasks>(kSeen, n);
-  s.keys = scratch_->device<BlockKey>(kKeys, n);
-  s.valid = scratch_->device<uint8_t>(kValid, n);
-  s.bits = scratch_->device<FrontierBits>(kBits, n);
-  s.counts = scratch_->device<uint32_t>(kCounts, n);
-  s.marks = scratch_->device<uint32_t>(kMarks, n);
-  s.examine = scratch_->device<int32_t>(kExamine, n);
+  const cuda::FrontierSlots s = slotsIn(*scratch_, n);
   // A pool of another size renumbers nothing, but the buffers above were grown (their
   // contents lost): start again. Likewise when the update number wraps.
   if (n != slots_ || update_number_ == UINT32_MAX) full = true;
@@ -87,8 +83,8 @@ DeviceFrontierUpdate DeviceFrontiers::update(const DeviceLayerView& view, double
       f.box_min_m[a] = filter_.box_min_m[a];
       f.box_max_m[a] = filter_.box_max_m[a];
     }
-    f.box_lo = blockAt(f.box_min_m[0], f.box_min_m[1], f.box_min_m[2], resolution_m);
-    f.box_hi = blockAt(f.box_max_m[0], f.box_max_m[1], f.box_max_m[2], resolution_m);
+    f.box_lo = box_lo;
+    f.box_hi = box_hi;
   }
   f.use_height = filter_.use_height;
   f.min_z_m = filter_.min_z_m;
@@ -122,12 +118,7 @@ void DeviceFrontiers::download(std::vector<BlockKey>* keys, std::vector<Frontier
   FRAGG_CUDA_CHECK(cudaSetDevice(scratch_->device()));
   const cudaStream_t stream = static_cast<cudaStream_t>(scratch_->stream());
   const int32_t n = slots_;
-  cuda::FrontierSlots s;
-  s.slots = n;
-  s.keys = scratch_->device<BlockKey>(kKeys, n);
-  s.valid = scratch_->device<uint8_t>(kValid, n);
-  s.bits = scratch_->device<FrontierBits>(kBits, n);
-  s.counts = scratch_->device<uint32_t>(kCounts, n);
+  const cuda::FrontierSlots s = slotsIn(*scratch_, n);
   BlockKey* out_keys = scratch_->device<BlockKey>(kOutKeys, n);
   FrontierBits* out_bits = scratch_->device<FrontierBits>(kOutBits, n);
   uint32_t* count = scratch_->device<uint32_t>(kOutCount, 1);

@@ -32,9 +32,11 @@ class DeviceFrontiers {
   DeviceFrontiers(const FrontierFilter& filter, int device);
 
   /// Brings the state up to date with `view` (the whole map's device layer view, held by the
-  /// caller's lease) at `resolution_m`. `full`: forget what was seen first (also done when the
-  /// view's pool changed size). CudaOutOfMemory when the state does not fit.
-  DeviceFrontierUpdate update(const DeviceLayerView& view, double resolution_m, bool full);
+  /// caller's lease) at `resolution_m`; with the filter's box, [box_lo, box_hi] are the blocks
+  /// it reaches (the host tracker's range). `full`: forget what was seen first (also done when
+  /// the view's pool changed size). CudaOutOfMemory when the state does not fit.
+  DeviceFrontierUpdate update(const DeviceLayerView& view, double resolution_m,
+                              const BlockKey& box_lo, const BlockKey& box_hi, bool full);
 
   /// Every block with frontier cells and its bits, in unspecified order.
   void download(std::vector<BlockKey>* keys, std::vector<FrontierBits>* bits);
