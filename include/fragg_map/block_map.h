@@ -95,6 +95,15 @@ class BlockMap {
   BlockIndex findOrCreate(const BlockKey& key, bool* created = nullptr, bool initialise = true);
   /// Makes room for `n` more blocks in the index.
   void reserve(size_t n) { index_.reserve(index_.size() + n); }
+  /// Sizes the per-block arrays (metadata, state masks, free list) and the index once for
+  /// `n` blocks, so that they do not grow while the map holds at most `n` blocks. Growth by
+  /// doubling leaves the old arrays with the allocator (resident in a long-running process):
+  /// a map under a paging budget reserves its budget's block count instead. Untouched
+  /// capacity costs address space, not resident memory (except the index, whose slots are
+  /// written when it is sized). Returns the block count the arrays now hold without growing.
+  size_t reserveSlots(size_t n);
+  /// The block count the per-block arrays hold without growing (their capacity).
+  [[nodiscard]] size_t reservedSlots() const { return meta_.capacity(); }
   void erase(const BlockKey& key);
   /// Erases every block of `keys` (missing ones are skipped): the same as erasing them one by
   /// one, with each coarse-index list rewritten once (a paging round erases tens of

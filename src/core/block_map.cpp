@@ -119,6 +119,15 @@ BlockIndex BlockMap::findOrCreate(const BlockKey& key, bool* created, bool initi
   return i;
 }
 
+size_t BlockMap::reserveSlots(size_t n) {
+  // masks_ first: a throw leaves the arrays as they were or masks_ larger, never meta_ alone.
+  masks_.reserve(n);
+  meta_.reserve(n);
+  free_.reserve(n);
+  index_.reserve(n);
+  return std::min(meta_.capacity(), masks_.capacity());
+}
+
 void BlockMap::erase(const BlockKey& key) {
   const BlockIndex i = index_.find(key);
   if (i == kNoBlock) return;

@@ -56,6 +56,7 @@ void Map::attachPageStore(std::shared_ptr<PageStore> store, const PagingPolicy& 
                             "(Map::openPageStore)");
     backend_->cache().invalidateAll(blocks_);
     pager_ = std::make_unique<Pager>(std::move(store), policy, params_.resolution_m);
+    pager_->reserveSlots(blocks_);  // the arrays never grow under the budget
     pager_->setCommitted(meta.scans, revision_);
     scans_ = meta.scans;
     next_scan_id_ = meta.scans;
@@ -69,6 +70,7 @@ void Map::attachPageStore(std::shared_ptr<PageStore> store, const PagingPolicy& 
     backend_->cache().sync(blocks_);
   }
   auto pager = std::make_unique<Pager>(std::move(store), policy, params_.resolution_m);
+  pager->reserveSlots(blocks_);  // the arrays never grow under the budget
   pager->markAllDirty();
   pager->commit(blocks_, revision_, metaOf(params_, scans_));
   pager->flush();
@@ -145,8 +147,9 @@ void Map::pageInKeys(const std::vector<BlockKey>& keys) {
   size_t fresh = 0;
   std::vector<BlockKey> wanted = pager_->pagedOutOfRegions(keys, blocks_, &fresh);
   const size_t incoming = wanted.size() + fresh;
-  if (pager_->excessOverBudget(blocks_.size() + incoming) > 0) {
-    const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = std::chrono::steady_clock::now();
+  const bool round = pager_->excessOverBudget(blocks_.size() + incoming) > 0;
+  if (round) {
     const Eigen::Vector3d sensor = pager_->lastSensor();
     std::vector<BlockIndex> out =
         pager_->victims(blocks_, sensor, /*clean_only=*/true, incoming, &keys);
@@ -154,19 +157,20 @@ void Map::pageInKeys(const std::vector<BlockKey>& keys) {
       out = pager_->victims(blocks_, sensor, /*clean_only=*/false, incoming, &keys);
     backend_->cache().forget(out, blocks_);  // the insertion holds sync_mutex_ already
     pager_->pageOut(out, blocks_);
-    if (!pager_->dropRecordsToFit(blocks_.size() + incoming)) {
-      const size_t needed = blocks_.size() + incoming;
-      const double needed_mb =
-          static_cast<double>(needed * Pager::residentBlockBytes()) / (1024.0 * 1024.0);
-      throw InvalidArgument("paging: one scan needs " + std::to_string(needed) +
-                            " blocks resident (the regions its rays reach, " +
-                            std::to_string(needed_mb) + " MB) but the paging budget is " +
-                            std::to_string(pager_->policy().budget_mb) +
-                            " MB: raise the budget; the scan was not integrated");
-    }
+  }
+  // The kept records make way for the blocks (they never push a block out).
+  if (!pager_->dropRecordsToFit(blocks_.size() + incoming)) {
+    const size_t needed = blocks_.size() + incoming;
+    const double needed_mb = static_cast<double>(needed * pager_->blockBytes()) / (1024.0 * 1024.0);
+    throw InvalidArgument("paging: one scan needs " + std::to_string(needed) +
+                          " blocks resident (the regions its rays reach, " +
+                          std::to_string(needed_mb) + " MB) but the paging budget is " +
+                          std::to_string(pager_->policy().budget_mb) +
+                          " MB: raise the budget; the scan was not integrated");
+  }
+  if (round)
     pager_->notePageOutSeconds(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-  }
   pager_->noteScanIncoming(incoming);
   pager_->reserveBlocks(fresh);
   std::vector<BlockIndex> read;
@@ -227,6 +231,8 @@ void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
   // blocks: the device's changes are written back only when a commit or a paging round
   // needs the host map complete (every scan, that was most of the CUDA path's paging time).
   const size_t resident = blocks_.size() + backend_->cache().blocksNotInHostMap();
+  // The kept records make way for the blocks a device backend made during the scan.
+  (void)pager_->dropRecordsToFit(resident);
   pager_->noteResident(resident);
   pager_->noteSensor(sensor_map);  // for the room the next scan makes
   const bool due = pager_->commitDue(scans_);
@@ -249,7 +255,10 @@ void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
   // After the commit: its batch, on the writer until written, counts against the budget.
   if (due) pager_->commit(blocks_, revision_, metaOf(params_, scans_));
   const bool over = pager_->excessOverBudget(blocks_.size() + next_scan) > 0;
-  if (!over) return;
+  if (!over) {
+    (void)pager_->dropRecordsToFit(blocks_.size());  // room for the batch just submitted
+    return;
+  }
   t0 = Clock::now();
   // Blocks unchanged since the last commit leave first; when they cannot make the room, the
   // changed regions leave too, held as records for the next commit (Pager::pageOut): a
@@ -264,6 +273,7 @@ void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
     backend_->cache().forget(out, blocks_);
   }
   pager_->pageOut(out, blocks_);
+  (void)pager_->dropRecordsToFit(blocks_.size());
   releasePagedOutMemory();
   bumpViewEpoch();
   pager_->notePageOutSeconds(std::chrono::duration<double>(Clock::now() - t0).count());

@@ -25,6 +25,14 @@ constexpr uint32_t kStoreMetaVersion = 1;
 constexpr size_t kResidentBlockBytes =
     sizeof(Block) + 2 * (sizeof(BlockMeta) + sizeof(BlockStateMasks)) +
     2 * 4 * (sizeof(BlockKey) + sizeof(BlockIndex)) + 4 * sizeof(BlockIndex);
+/// The same in a host map whose per-block arrays were sized once for the budget's block count
+/// (BlockMap::reserveSlots, Pager::reserveSlots): no array grows, so nothing is left behind:
+/// its cells, metadata and state masks once, its index slots at the reserved index's lowest
+/// load (a quarter) once, its entry in the coarse index's lists with their growth, and its
+/// free-list entry. Checked by paging_memory_test.
+constexpr size_t kReservedBlockBytes = sizeof(Block) + sizeof(BlockMeta) + sizeof(BlockStateMasks) +
+                                       4 * (sizeof(BlockKey) + sizeof(BlockIndex)) +
+                                       4 * sizeof(BlockIndex) + sizeof(BlockIndex);
 /// RAM a kept record takes besides its bytes (its hash node and vector header).
 constexpr size_t kKeptRecordOverhead = 64;
 
@@ -99,7 +107,10 @@ StoreMapMeta decodeStoreMeta(const std::vector<uint8_t>& bytes, const std::strin
 }
 
 Pager::Pager(std::shared_ptr<PageStore> store, const PagingPolicy& policy, double resolution_m)
-    : store_(std::move(store)), policy_(policy), block_m_(resolution_m * kBlockSize) {
+    : store_(std::move(store)),
+      policy_(policy),
+      block_m_(resolution_m * kBlockSize),
+      block_bytes_(kResidentBlockBytes) {
   policy_.validate();
   for (const BlockKey& k : store_->keys()) addPagedOut(k);
   counters_.enabled = true;
@@ -374,17 +385,11 @@ void Pager::keepRecord(const BlockKey& region, BlockRecord record, size_t reside
 
 bool Pager::dropRecordsToFit(size_t resident) {
   if (policy_.budget_mb <= 0) return true;
-  if (resident * kResidentBlockBytes > budgetBytes()) return false;
-  // A commit in flight is waited for before records are dropped: its records leave RAM once
-  // written, and a dropped record costs its region's blocks compressed again.
-  if (countedBytes(resident) > budgetBytes() && writerBytes() > 0) {
-    try {
-      flush();
-    } catch (const IoError&) {
-      // The failed batch stays in RAM (counted) and goes with the next commit.
-    }
-  }
+  if (resident * block_bytes_ > budgetBytes()) return false;
   if (countedBytes(resident) <= budgetBytes()) return true;
+  // Kept records go first (a dropped record costs its region's changed blocks compressed
+  // whole at their next commit); the commit in flight is waited for only when they are not
+  // enough: waiting stalls the map's thread for the rest of the writer's transaction.
   std::vector<BlockKey> regions;
   regions.reserve(records_.size());
   for (const auto& r : records_) regions.push_back(r.first);
@@ -392,6 +397,13 @@ bool Pager::dropRecordsToFit(size_t resident) {
   for (const BlockKey& r : regions) {
     if (countedBytes(resident) <= budgetBytes()) break;
     dropRecord(r);
+  }
+  if (countedBytes(resident) > budgetBytes() && writerBytes() > 0) {
+    try {
+      flush();  // its records leave RAM once written
+    } catch (const IoError&) {
+      // The failed batch stays in RAM (counted) and goes with the next commit.
+    }
   }
   return true;
 }
@@ -416,7 +428,19 @@ size_t Pager::budgetBytes() const {
 
 size_t Pager::residentBlockBytes() { return kResidentBlockBytes; }
 
-size_t Pager::budgetBlocks() const { return budgetBytes() / kResidentBlockBytes; }
+size_t Pager::reservedBlockBytes() { return kReservedBlockBytes; }
+
+size_t Pager::reserveSlots(BlockMap& blocks) {
+  if (policy_.budget_mb <= 0) return 0;
+  const size_t wanted = budgetBytes() / kReservedBlockBytes;
+  const size_t reserved = blocks.reserveSlots(wanted);
+  // The arrays hold the budget's blocks without growing: a block costs the reserved figure.
+  // (A map already larger than its arrays' reservation keeps the growth figure.)
+  if (reserved >= wanted && blocks.slots() <= wanted) block_bytes_ = kReservedBlockBytes;
+  return reserved;
+}
+
+size_t Pager::budgetBlocks() const { return budgetBytes() / block_bytes_; }
 
 size_t Pager::writerBytes() const {
   if (!writer_) return 0;
@@ -425,24 +449,25 @@ size_t Pager::writerBytes() const {
 }
 
 size_t Pager::countedBytes(size_t resident) const {
-  return resident * kResidentBlockBytes + record_bytes_ + held_bytes_ + writerBytes();
+  return resident * block_bytes_ + record_bytes_ + held_bytes_ + writerBytes();
 }
 
-size_t Pager::blocksWithin(double fraction, size_t resident) const {
-  // A block that leaves takes its share of the kept records with it; the held records and the
-  // commit in flight stay whatever leaves.
-  const double per_block =
-      kResidentBlockBytes + static_cast<double>(record_bytes_) / std::max<size_t>(resident, 1);
+size_t Pager::blocksWithin(double fraction) const {
+  // Kept records are a saving, never a reason to page a block out: they fill the room the
+  // blocks leave and are dropped when blocks need it (dropRecordsToFit). The held records and
+  // the commit in flight stay whatever leaves.
   const double room = fraction * static_cast<double>(budgetBytes()) -
                       static_cast<double>(held_bytes_ + writerBytes());
-  return room <= 0 ? 0 : static_cast<size_t>(room / per_block);
+  return room <= 0 ? 0 : static_cast<size_t>(room / static_cast<double>(block_bytes_));
 }
 
 bool Pager::overBudget(const BlockMap& blocks) const { return excessOverBudget(blocks.size()) > 0; }
 
 size_t Pager::excessOverBudget(size_t resident) const {
-  if (policy_.budget_mb <= 0 || countedBytes(resident) <= budgetBytes()) return 0;
-  const size_t within = blocksWithin(1.0, resident);
+  if (policy_.budget_mb <= 0) return 0;
+  // Without the kept records: they are dropped to fit (dropRecordsToFit) before any block leaves.
+  if (resident * block_bytes_ + held_bytes_ + writerBytes() <= budgetBytes()) return 0;
+  const size_t within = blocksWithin(1.0);
   return resident > within ? resident - within : 1;
 }
 
@@ -551,7 +576,7 @@ std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vect
                                        bool clean_only, size_t incoming,
                                        const std::vector<BlockKey>* pinned) {
   last_sensor_m_ = sensor_m;
-  const size_t target = blocksWithin(policy_.low_water, blocks.size() + incoming);
+  const size_t target = blocksWithin(policy_.low_water);
   if (blocks.size() + incoming <= target) return {};
   std::unordered_map<BlockKey, bool, BlockKeyHash> pinned_regions;
   if (pinned)

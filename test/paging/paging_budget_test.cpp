@@ -5,10 +5,12 @@
 // back to the map.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 
 #include "fragg_map/cell_writer.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/pager.h"
 #include "fragg_map/store/page_stores.h"
 #include "paging_scenes.h"
 
@@ -48,8 +50,8 @@ TEST_P(PagingBudget, ResidentBlocksAndKeptRecordsNeverExceedTheBudget) {
   Map memory(corridorParams());
   insertScans(memory, 0, kScans);
   Map paged(corridorParams());
-  // 10 MB: about 4,040 blocks of the corridor's 8,359 (2,592 bytes each,
-  // Pager::residentBlockBytes); one scan reaches up to ~3,900 (9.6 MiB).
+  // 10 MB: about 4,496 blocks of the corridor's 8,359 (2,332 bytes each: the map's arrays are
+  // reserved for the budget, Pager::reservedBlockBytes); one scan reaches up to ~3,900.
   paged.attachPageStore(openPageStore(storePath(dir), false), budgetOf(10.0));
   const PagingStats at_start = paged.pagingStats();
   ASSERT_GT(at_start.budget_blocks, 0u);
@@ -105,6 +107,46 @@ TEST_P(PagingBudget, AScanThatCannotFitTheBudgetIsRefusedAndTheMapStaysAsItWas) 
   EXPECT_EQ(paged.scanCount(), 1u);
   std::string why;
   EXPECT_TRUE(sameBlocks(paged, memory, &why)) << why;
+}
+
+TEST_P(PagingBudget, KeptRecordsMakeWayForBlocksInsteadOfPushingThemOut) {
+  // 64 blocks (one 4x4x4-block region, each with 64 cells observed) under a budget of 80
+  // blocks (79 after rounding); a commit keeps the records that fit beside them. 79 blocks then
+  // fit the budget without the records: none has to leave (the records are dropped for them),
+  // where counting the records would page blocks out to keep them.
+  const std::string dir = testDir();
+  constexpr size_t kBlocks = 64, kRoom = 16;
+  PagingPolicy policy = budgetOf(0);
+  policy.background_writer = false;  // no commit in flight to count: deterministic
+  policy.budget_mb =
+      static_cast<double>((kBlocks + kRoom) * Pager::reservedBlockBytes()) / 1048576.0;
+  BlockMap blocks;
+  Pager pager(openPageStore(storePath(dir), false), policy, 0.05);
+  EXPECT_GE(pager.reserveSlots(blocks), kBlocks + kRoom - 1);
+  ASSERT_EQ(pager.blockBytes(), Pager::reservedBlockBytes());
+  for (int32_t j = 0; j < static_cast<int32_t>(kBlocks); ++j) {
+    const BlockIndex i = blocks.findOrCreate({j % 4, (j / 4) % 4, j / 16});
+    // 64 cells a block with scattered values: the records weigh more than one block.
+    for (int c = 0; c < 64; ++c)
+      blocks.block(i).cells[(j * 7 + c * 131) % kCellsPerBlock] =
+          Cell{static_cast<int16_t>(c % 3), static_cast<int16_t>(-400 + (j * 131 + c * 17) % 800)};
+    blocks.meta(i).changed_at = 1;
+  }
+  StoreMapMeta meta;
+  meta.resolution_m = 0.05;
+  pager.commit(blocks, 1, meta);
+  PagingStats st = pager.stats(blocks);
+  ASSERT_GT(st.record_cache_bytes, 0u);  // the region's record was kept
+  const size_t full = (kBlocks + kRoom - 1) * Pager::reservedBlockBytes() + st.record_cache_bytes;
+  ASSERT_GT(full, st.budget_bytes) << "the records must not fit beside 79 blocks";
+  EXPECT_EQ(pager.excessOverBudget(kBlocks + kRoom - 1), 0u);
+  EXPECT_GT(pager.excessOverBudget(kBlocks + kRoom + 1), 0u);  // blocks alone over: excess
+  // Room for 79 blocks: the records are dropped until everything counted fits.
+  EXPECT_TRUE(pager.dropRecordsToFit(kBlocks + kRoom - 1));
+  st = pager.stats(blocks);
+  EXPECT_LE((kBlocks + kRoom - 1) * Pager::reservedBlockBytes() + st.record_cache_bytes,
+            st.budget_bytes);
+  EXPECT_FALSE(pager.dropRecordsToFit(kBlocks + kRoom + 1));
 }
 
 TEST_P(PagingBudget, ACommitCompressesOnlyTheBlocksThatChanged) {

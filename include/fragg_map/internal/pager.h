@@ -68,9 +68,9 @@ class Pager {
   /// Blocks about to be created (a scan's fresh blocks): the records kept meanwhile leave
   /// room for them. 0 once they exist.
   void reserveBlocks(size_t blocks) { reserved_blocks_ = blocks; }
-  /// Waits for the commit in flight, then drops kept records (regions in key order), until
-  /// `resident` blocks and the records fit the budget; returns whether they do (false: the
-  /// blocks alone exceed it).
+  /// Drops kept records (regions in key order), then, when they were not enough, waits for the
+  /// commit in flight, until `resident` blocks and the records fit the budget; returns whether
+  /// the blocks fit (false: the blocks alone exceed it).
   bool dropRecordsToFit(size_t resident);
   /// A paged-out block's cells (from a commit not yet written, else the store); false when
   /// the store has no record of it.
@@ -119,10 +119,24 @@ class Pager {
   /// Blocks the last scan read back or created (CPU backend; 0 for the others).
   size_t lastScanIncoming() const { return last_incoming_; }
   void noteScanIncoming(size_t blocks) { last_incoming_ = blocks; }
-  /// RAM the budget counts for one resident block.
+  /// RAM the budget counts for one resident block of a host map whose per-block arrays grow
+  /// as it grows (by doubling).
   static size_t residentBlockBytes();
-  /// The resident blocks to page out for the budget to hold `resident` blocks with the
-  /// records kept (0 when within it).
+  /// RAM the budget counts for one resident block of a host map whose per-block arrays were
+  /// sized once for the budget (reserveSlots).
+  static size_t reservedBlockBytes();
+  /// RAM the budget counts for one resident block of this pager's map: reservedBlockBytes()
+  /// after reserveSlots() sized its arrays, else residentBlockBytes().
+  [[nodiscard]] size_t blockBytes() const { return block_bytes_; }
+  /// Sizes `blocks`' per-block arrays and index once for the block count the budget holds at
+  /// reservedBlockBytes() (no-op without a budget), so that they never grow under the budget
+  /// and leave nothing behind: a block then counts reservedBlockBytes(). Returns the block
+  /// count reserved (0 without a budget). Call it on the map this pager pages, before its
+  /// blocks come and go.
+  size_t reserveSlots(BlockMap& blocks);
+  /// The resident blocks to page out for the budget to hold `resident` blocks, the records
+  /// held for the next commit and the commit in flight (0 when within it). Kept records do
+  /// not count here: they are dropped to fit (dropRecordsToFit) rather than push blocks out.
   size_t excessOverBudget(size_t resident) const;
   /// Drops the blocks (whole regions) from RAM; they are paged out. A region with a change
   /// since the last commit leaves as its record, encoded here and held in RAM (counted against
@@ -154,9 +168,9 @@ class Pager {
   /// What the budget counts with `resident` blocks: their bytes, the records kept and held,
   /// and the commit in flight.
   size_t countedBytes(size_t resident) const;
-  /// The resident blocks the budget holds at `fraction` of it, with as many bytes of kept
-  /// records a block as now.
-  size_t blocksWithin(double fraction, size_t resident) const;
+  /// The resident blocks the budget holds at `fraction` of it beside the held records and the
+  /// commit in flight (the kept records make way for blocks).
+  size_t blocksWithin(double fraction) const;
   /// Keeps `record` as the region's last, when it fits the budget beside `resident` blocks
   /// (and the reserved ones); else the region has none kept.
   void keepRecord(const BlockKey& region, BlockRecord record, size_t resident);
@@ -206,6 +220,9 @@ class Pager {
   /// (clean by stamp), so the next commit writes them.
   std::unordered_map<BlockKey, bool, BlockKeyHash> stale_;
   size_t reserved_blocks_ = 0;
+  /// What a resident block counts (kResidentBlockBytes, or kReservedBlockBytes once
+  /// reserveSlots() sized the map's arrays).
+  size_t block_bytes_;
   size_t last_incoming_ = 0;
   Eigen::Vector3d last_sensor_m_ = Eigen::Vector3d::Zero();
   std::vector<BlockKey> erased_;
