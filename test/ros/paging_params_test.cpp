@@ -102,7 +102,8 @@ TEST(PagingParams, TheServerMapPagesToANewStoreAndContinuesAnExistingOne) {
   const std::string dir = fragg::test::testDir();
   fragg::ros::PagingParams p;
   p.store = dir + "/server.db";
-  // One corridor scan's reach: ~3,900 blocks, 9.6 MiB at 2,592 B a block (4,045 fit).
+  // One corridor scan's reach: ~3,900 blocks, 8.7 MiB at 2,332 B a block (4,496 fit: the
+  // map's arrays reserved for the budget, Pager::reservedBlockBytes).
   p.policy.budget_mb = 10.0;
   p.policy.radius_m = 4.0;
   p.policy.commit_every_scans = 7;
