@@ -44,29 +44,26 @@ __global__ void viewpointGainsKernel(GainKernelArgs a) {
     double dir[3];
     yawRotate(a.cos_yaw[vp], a.sin_yaw[vp], a.rays + 3 * r, dir);
     const double* origin = a.origins_v + 3 * vp;
-    GainDda dda(origin, dir);
+    GainWalk walk = GainWalk::along(origin, dir, a.length_v);
     const int64_t bx = a.box_lo[3 * vp], by = a.box_lo[3 * vp + 1], bz = a.box_lo[3 * vp + 2];
     const int64_t sx = a.box_dims[0], sy = a.box_dims[1], sz = a.box_dims[2];
     unsigned long long* seen = a.seen + vp * a.words_per_viewpoint;
-    BlockKey last{INT32_MIN, INT32_MIN, INT32_MIN};
     const Block* block = nullptr;
-    for (double t = 0.0; t <= a.length_v; t = dda.next()) {
-      const VoxelKey k = dda.cell();
-      const BlockKey b = blockKeyOf(k);
-      if (!(b == last)) {
-        block = gainBlock(a, b);
-        last = b;
-      }
+    for (int entry = kUnknownBlock;; entry = walk.next()) {
+      const VoxelKey k = walk.cell();
+      if (entry != kSameBlock) block = gainBlock(a, blockKeyOf(k));
       const Cell* cell = block ? &block->cells[cellIndexOf(k)] : nullptr;
       const CellState s = cell ? a.model.state(*cell) : CellState::kUnknown;
       if (s == CellState::kOccupied) break;
-      if (s != CellState::kUnknown) continue;
-      const int64_t lx = k.x - bx, ly = k.y - by, lz = k.z - bz;
-      if (lx < 0 || ly < 0 || lz < 0 || lx >= sx || ly >= sy || lz >= sz) continue;
-      const uint64_t bit = uint64_t((lz * sy + ly) * sx + lx);
-      const unsigned long long mask = 1ULL << (bit & 63);
-      if (atomicOr(&seen[bit >> 6], mask) & mask) continue;
-      gain += cellGainBits(a.model, cell);
+      if (s == CellState::kUnknown) {
+        const int64_t lx = k.x - bx, ly = k.y - by, lz = k.z - bz;
+        if (lx >= 0 && ly >= 0 && lz >= 0 && lx < sx && ly < sy && lz < sz) {
+          const uint64_t bit = uint64_t((lz * sy + ly) * sx + lx);
+          const unsigned long long mask = 1ULL << (bit & 63);
+          if (!(atomicOr(&seen[bit >> 6], mask) & mask)) gain += cellGainBits(a.model, cell);
+        }
+      }
+      if (walk.done()) break;
     }
   }
   // Rays of one viewpoint are consecutive: sum within the warp where all lanes share it.
