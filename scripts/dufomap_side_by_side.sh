@@ -33,7 +33,7 @@ while [ $# -gt 0 ]; do
     --dufomap-git) dufomap_git="$2"; shift 2 ;;
     --fragg) fragg_maps="$2"; shift 2 ;;
     --only) only="$2"; shift 2 ;;
-    -h|--help) sed -n '2,23p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,21p' "$0"; exit 0 ;;
     *) echo "dufomap_side_by_side: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
