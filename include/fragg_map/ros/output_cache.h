@@ -41,8 +41,10 @@ struct OutputCacheOptions {
   /// cells' bounds) instead of those bounds.
   bool octomap_bounds = false;
   /// Which blocks an update recomputes: those whose state masks changed (kMasks: from the
-  /// map's change log, no walk over the blocks), those where a cell's state changed (kState,
-  /// found by a walk over the blocks' stamps), or every changed block (kAny: the behaviour
+  /// map's change log, no walk over the blocks, while the last update is at most two revisions
+  /// behind; further behind, on the CPU backend, from a walk over the blocks' kState stamps,
+  /// cheaper than de-duplicating many revisions' records), those where a cell's state changed
+  /// (kState, found by a walk over the blocks' stamps), or every changed block (kAny: the behaviour
   /// before BlockMeta::state_at, kept for same-run comparisons in fragg_map_server_overhead).
   /// kMasks falls back to kState for a model where a cell's first update can leave it in the
   /// unknown band (observed without a mask change: the projected map's bounds would miss it).
