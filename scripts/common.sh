@@ -63,7 +63,8 @@ fragg_parse_common() {
   fi
 }
 
-fragg_step() { printf '\n==== %s ====\n' "$*"; }
+# A step's heading, with the time since the script started (where a first run spends it).
+fragg_step() { printf '\n==== %s [%s] ====\n' "$*" "$(fragg_elapsed)"; }
 
 fragg_install_deps() {
   if [ "$FRAGG_DEPS" -eq 1 ]; then
