@@ -66,10 +66,13 @@ fragg_parse_common() {
 # A step's heading, with the time since the script started (where a first run spends it).
 fragg_step() { printf '\n==== %s [%s] ====\n' "$*" "$(fragg_elapsed)"; }
 
+# install_deps.sh's options: the demo scripts set (--demo), which leaves out the packages only
+# the tests, the format check, the benchmarks and the docs need.
+FRAGG_DEPS_ARGS=()
 fragg_install_deps() {
   if [ "$FRAGG_DEPS" -eq 1 ]; then
     fragg_step "Debian packages"
-    bash "$FRAGG_REPO/scripts/install_deps.sh"
+    bash "$FRAGG_REPO/scripts/install_deps.sh" "${FRAGG_DEPS_ARGS[@]+"${FRAGG_DEPS_ARGS[@]}"}"
   fi
 }
 

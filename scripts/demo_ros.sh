@@ -10,6 +10,7 @@ set -euo pipefail
 # First-run speed: CUDA kernels for the GPU present only, none without a GPU (common.sh).
 FRAGG_CUDA="${FRAGG_CUDA:-machine}"
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+FRAGG_DEPS_ARGS=(--demo)  # no test, format or benchmark packages: the demo builds no tests
 
 out="$FRAGG_REPO/out/demo"
 build=1
