@@ -283,10 +283,17 @@ bool BlockMap::masksChangedSince(uint64_t revision, std::vector<BlockKey>* out) 
 bool BlockMap::masksChangedSince(uint64_t revision, std::vector<BlockIndex>* out) const {
   if (!changes_.reaches(revision)) return false;
   out->clear();
-  // A block erased and made again within one revision is recorded twice: each index once.
+  // The keys' blocks looked up in parallel (a scan changes tens of thousands: the lookups are
+  // the list's cost), then each index kept once in the log's order (a block erased and made
+  // again within one revision is recorded twice).
+  const std::vector<BlockKey> keys = changes_.keysAfter(revision);
+  const int64_t n = static_cast<int64_t>(keys.size());
+  std::vector<BlockIndex> found(keys.size());
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (int64_t j = 0; j < n; ++j) found[j] = index_.find(keys[j]);
   std::vector<uint8_t> listed(meta_.size(), 0);
-  for (const BlockKey& key : changes_.keysAfter(revision)) {
-    const BlockIndex i = index_.find(key);
+  out->reserve(found.size());
+  for (const BlockIndex i : found) {
     if (i == kNoBlock || listed[i]) continue;
     listed[i] = 1;
     out->push_back(i);

@@ -578,6 +578,17 @@ bool Map::masksChangedSince(uint64_t revision, std::vector<BlockKey>* keys,
     listed.reserve(keys->size() + host.size());
     for (uint32_t i = 0; i < keys->size(); ++i) listed.insert((*keys)[i], i);
   }
+  if (keys->empty()) {  // every changed block is on the host (a CPU map): copied in parallel
+    const int64_t n = static_cast<int64_t>(host.size());
+    keys->resize(host.size());
+    masks->resize(host.size());
+#pragma omp parallel for schedule(static) if (n > 4096)
+    for (int64_t j = 0; j < n; ++j) {
+      (*keys)[j] = blocks_.meta(host[j]).key;
+      (*masks)[j] = blocks_.masks(host[j]);
+    }
+    return true;
+  }
   keys->reserve(keys->size() + host.size());
   masks->reserve(masks->size() + host.size());
   for (const BlockIndex b : host) {

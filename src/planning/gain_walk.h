@@ -1,7 +1,7 @@
 // Information gain along one ray (internal; shared by the CPU gain code in fragg_map_planning
-// and the CUDA gain kernel, FRAGG_HD, so both walk the same cells): an exact DDA in voxel
-// units, the yaw rotation of a sensor ray, and the entropy a cell adds. A batch of viewpoints
-// as a backend gets it (MapBackend::viewpointGains).
+// and the CUDA gain kernel, FRAGG_HD, so both walk the same cells): the walk on the insertion's
+// DDA (raycast.h), the yaw rotation of a sensor ray, and the entropy a cell adds. A batch of
+// viewpoints as a backend gets it (MapBackend::viewpointGains).
 #pragma once
 
 #include <cmath>
@@ -12,6 +12,7 @@
 #include "fragg_map/hd.h"
 #include "fragg_map/key.h"
 #include "fragg_map/occupancy.h"
+#include "fragg_map/raycast.h"
 
 namespace fragg {
 
@@ -43,38 +44,37 @@ FRAGG_HD double cellGainBits(const OccupancyModel& model, const Cell* cell) {
   return -(p * log2(p) + (1.0 - p) * log2(1.0 - p));
 }
 
-/// Exact voxel traversal from `origin_v` along unit `dir`: cell() is the current voxel;
-/// next() steps to the following one and returns the ray parameter (voxels) where it enters.
-struct GainDda {
-  int cur[3], step[3];
-  double t_max[3], t_delta[3];
+/// One ray's walk on the insertion's traversal (raycast.h's DdaAxis and ddaStep: float voxel
+/// units relative to the start's cell, ties to the later axis, the step counts fixed up front),
+/// from the cell of `start_v` to the cell of `end_v` (voxel units, the map frame), both
+/// visited. cell() is the current cell; next() steps to the following one and returns its
+/// entry code (kSameBlock, or the block face crossed); done() says the end cell is reached.
+struct GainWalk {
+  DdaAxis x, y, z;
 
-  FRAGG_HD GainDda(const double* origin_v, const double* dir) {
+  FRAGG_HD GainWalk(const double* start_v, const double* end_v) {
+    int ref[3];
+    float s[3], e[3];
     for (int a = 0; a < 3; ++a) {
-      cur[a] = static_cast<int>(floor(origin_v[a]));
-      if (dir[a] > 0.0) {
-        step[a] = 1;
-        t_delta[a] = 1.0 / dir[a];
-        t_max[a] = (cur[a] + 1 - origin_v[a]) / dir[a];
-      } else if (dir[a] < 0.0) {
-        step[a] = -1;
-        t_delta[a] = -1.0 / dir[a];
-        t_max[a] = (origin_v[a] - cur[a]) / -dir[a];
-      } else {
-        step[a] = 0;
-        t_delta[a] = t_max[a] = INFINITY;
-      }
+      ref[a] = static_cast<int>(floor(start_v[a]));
+      s[a] = static_cast<float>(start_v[a] - ref[a]);
+      e[a] = static_cast<float>(end_v[a] - ref[a]);
     }
+    x.init(ref[0], s[0], e[0]);
+    y.init(ref[1], s[1], e[1]);
+    z.init(ref[2], s[2], e[2]);
   }
-  FRAGG_HD VoxelKey cell() const { return VoxelKey{cur[0], cur[1], cur[2]}; }
-  FRAGG_HD double next() {
-    const int a =
-        t_max[0] < t_max[1] ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
-    const double t = t_max[a];
-    t_max[a] += t_delta[a];
-    cur[a] += step[a];
-    return t;
+  /// A ray of `length_v` voxels from `origin_v` along unit `dir`.
+  FRAGG_HD static GainWalk along(const double* origin_v, const double* dir, double length_v) {
+    const double end_v[3] = {origin_v[0] + length_v * dir[0], origin_v[1] + length_v * dir[1],
+                             origin_v[2] + length_v * dir[2]};
+    return GainWalk(origin_v, end_v);
   }
+  [[nodiscard]] FRAGG_HD VoxelKey cell() const { return VoxelKey{x.cur, y.cur, z.cur}; }
+  [[nodiscard]] FRAGG_HD bool done() const {
+    return x.remaining == 0 && y.remaining == 0 && z.remaining == 0;
+  }
+  FRAGG_HD int next() { return ddaStep(x, y, z); }
 };
 
 }  // namespace fragg

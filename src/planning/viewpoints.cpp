@@ -94,9 +94,6 @@ class SeenCube {
   int64_t side_ = 0;
 };
 
-// Walks one ray (exact DDA in voxel units, internal/gain_walk.h: the CUDA kernel walks the
-// same cells) from `origin_v` along unit `dir` for `length_v` voxels, adding the entropy of each
-// unknown cell not seen before; stops after an occupied cell.
 // The blocks a viewpoint's rays visit, remembered in a small direct-mapped table: the rays
 // of one viewpoint fan out from one cell and cross the same blocks near it again and again,
 // where the map's hash lookup is the walk's dearest step.
@@ -124,23 +121,22 @@ class NearBlocks {
   Entry entries_[kMask + 1];
 };
 
+// Walks one ray (the insertion's DDA, gain_walk.h: the CUDA kernel walks the same
+// cells) from `origin_v` along unit `dir` for `length_v` voxels, adding the entropy of each
+// unknown cell not seen before; stops after an occupied cell.
 double walkRay(const Map& map, NearBlocks& blocks, const double* origin_v, const double* dir,
                double length_v, SeenCube& seen) {
-  GainDda dda(origin_v, dir);
+  GainWalk walk = GainWalk::along(origin_v, dir, length_v);
   double gain = 0.0;
-  BlockKey last_block{INT32_MIN, INT32_MIN, INT32_MIN};
   const Block* block = nullptr;
-  for (double t = 0.0; t <= length_v; t = dda.next()) {
-    const VoxelKey k = dda.cell();
-    const BlockKey b = blockKeyOf(k);
-    if (b != last_block) {
-      block = blocks.find(b);
-      last_block = b;
-    }
+  for (int entry = kUnknownBlock;; entry = walk.next()) {
+    const VoxelKey k = walk.cell();
+    if (entry != kSameBlock) block = blocks.find(blockKeyOf(k));
     const Cell* cell = block ? &block->cells[cellIndexOf(k)] : nullptr;
     const CellState s = cell ? map.state(*cell) : CellState::kUnknown;
     if (s == CellState::kOccupied) break;
     if (s == CellState::kUnknown && seen.insert(k)) gain += cellGainBits(map.model(), cell);
+    if (walk.done()) break;
   }
   return gain;
 }
@@ -325,31 +321,16 @@ bool inFieldOfView(const GainSensor& sensor, double tan_half_h, double tan_half_
 }
 
 // Whether every cell the segment from `from_v` to the centre of `target` (voxel units) enters
-// before `target` is free: an exact DDA (gain_walk.h) from the viewpoint's cell.
+// before `target` is free: the insertion's DDA (gain_walk.h), which ends in the target's cell.
 bool lineOfSight(const Map& map, NearBlocks& blocks, const double* from_v, const VoxelKey& target) {
   const double to_v[3] = {target.x + 0.5, target.y + 0.5, target.z + 0.5};
-  double dir[3] = {to_v[0] - from_v[0], to_v[1] - from_v[1], to_v[2] - from_v[2]};
-  const double length_v = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
-  if (length_v <= 0.0) return true;
-  for (double& d : dir) d /= length_v;
-  GainDda dda(from_v, dir);
-  // Each step enters one cell; the target is reached after at most |dx| + |dy| + |dz| steps
-  // (rounding can only end the walk next to it, which the bound stops).
-  const VoxelKey start = dda.cell();
-  const int64_t max_steps = std::llabs(int64_t(target.x) - start.x) +
-                            std::llabs(int64_t(target.y) - start.y) +
-                            std::llabs(int64_t(target.z) - start.z);
-  BlockKey last_block{INT32_MIN, INT32_MIN, INT32_MIN};
+  GainWalk walk(from_v, to_v);
   const Block* block = nullptr;
-  for (int64_t step = 0; step < max_steps; ++step) {
-    dda.next();
-    const VoxelKey k = dda.cell();
+  while (!walk.done()) {
+    const int entry = walk.next();
+    const VoxelKey k = walk.cell();
     if (k == target) return true;
-    const BlockKey b = blockKeyOf(k);
-    if (b != last_block) {
-      block = blocks.find(b);
-      last_block = b;
-    }
+    if (entry != kSameBlock || !block) block = blocks.find(blockKeyOf(k));
     if (!block || map.state(block->cells[cellIndexOf(k)]) != CellState::kFree) return false;
   }
   return true;

@@ -1,8 +1,8 @@
 // Viewpoints for frontier clusters, scored by information gain: the expected entropy reduction
 // of the cells a sensor at the viewpoint would observe. Rays of the sensor model are cast from
-// the viewpoint through the map (exact DDA) until they reach an occupied cell or the maximum
-// range; every distinct unknown cell they cross (never observed, or inside the unknown band)
-// adds its entropy in bits (1 bit for a never-observed cell, H(p) for a cell in the band).
+// the viewpoint through the map (the insertion's DDA) until they reach an occupied cell or the
+// maximum range; every distinct unknown cell they cross (never observed, or inside the unknown
+// band) adds its entropy in bits (1 bit for a never-observed cell, H(p) for a cell in the band).
 // Known cells add nothing: observing them again cannot reduce their entropy by much.
 #pragma once
 

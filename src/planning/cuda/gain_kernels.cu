@@ -6,6 +6,33 @@ namespace fragg::cuda {
 
 namespace {
 
+/// The block of key `b`: the dense table where the batch has one (and b lies in it), else the
+/// view's hash.
+__device__ const Block* gainBlock(const GainKernelArgs& a, const BlockKey& b) {
+  if (a.dense) {
+    const int64_t x = int64_t(b.x) - a.dense_lo.x, y = int64_t(b.y) - a.dense_lo.y,
+                  z = int64_t(b.z) - a.dense_lo.z;
+    if (x >= 0 && y >= 0 && z >= 0 && x < a.dense_dims[0] && y < a.dense_dims[1] &&
+        z < a.dense_dims[2]) {
+      const int32_t s = a.dense[(z * a.dense_dims[1] + y) * a.dense_dims[0] + x];
+      return s == kNoViewSlot ? nullptr : a.view.cells + s;
+    }
+  }
+  return a.view.findBlock(b);
+}
+
+__global__ void denseBlockTableKernel(DeviceLayerView view, BlockKey lo, int32_t dx, int32_t dy,
+                                      int32_t dz, int32_t* table) {
+  const uint64_t i = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (i > view.table_mask) return;
+  const int32_t s = view.table[i];
+  if (s == kNoViewSlot) return;
+  const BlockKey k = view.slot_keys[s];
+  const int64_t x = int64_t(k.x) - lo.x, y = int64_t(k.y) - lo.y, z = int64_t(k.z) - lo.z;
+  if (x < 0 || y < 0 || z < 0 || x >= dx || y >= dy || z >= dz) return;
+  table[(z * dy + y) * dx + x] = s;
+}
+
 __global__ void viewpointGainsKernel(GainKernelArgs a) {
   const uint64_t idx = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
   const uint64_t total = uint64_t(a.viewpoints) * a.rays_per_viewpoint;
@@ -17,30 +44,26 @@ __global__ void viewpointGainsKernel(GainKernelArgs a) {
     double dir[3];
     yawRotate(a.cos_yaw[vp], a.sin_yaw[vp], a.rays + 3 * r, dir);
     const double* origin = a.origins_v + 3 * vp;
-    GainDda dda(origin, dir);
-    const VoxelKey centre = dda.cell();
-    const int64_t side = 2 * a.half + 1;
+    GainWalk walk = GainWalk::along(origin, dir, a.length_v);
+    const int64_t bx = a.box_lo[3 * vp], by = a.box_lo[3 * vp + 1], bz = a.box_lo[3 * vp + 2];
+    const int64_t sx = a.box_dims[0], sy = a.box_dims[1], sz = a.box_dims[2];
     unsigned long long* seen = a.seen + vp * a.words_per_viewpoint;
-    BlockKey last{INT32_MIN, INT32_MIN, INT32_MIN};
     const Block* block = nullptr;
-    for (double t = 0.0; t <= a.length_v; t = dda.next()) {
-      const VoxelKey k = dda.cell();
-      const BlockKey b = blockKeyOf(k);
-      if (!(b == last)) {
-        block = a.view.findBlock(b);
-        last = b;
-      }
+    for (int entry = kUnknownBlock;; entry = walk.next()) {
+      const VoxelKey k = walk.cell();
+      if (entry != kSameBlock) block = gainBlock(a, blockKeyOf(k));
       const Cell* cell = block ? &block->cells[cellIndexOf(k)] : nullptr;
       const CellState s = cell ? a.model.state(*cell) : CellState::kUnknown;
       if (s == CellState::kOccupied) break;
-      if (s != CellState::kUnknown) continue;
-      const int64_t lx = k.x - centre.x + a.half, ly = k.y - centre.y + a.half,
-                    lz = k.z - centre.z + a.half;
-      if (lx < 0 || ly < 0 || lz < 0 || lx >= side || ly >= side || lz >= side) continue;
-      const uint64_t bit = uint64_t((lz * side + ly) * side + lx);
-      const unsigned long long mask = 1ULL << (bit & 63);
-      if (atomicOr(&seen[bit >> 6], mask) & mask) continue;
-      gain += cellGainBits(a.model, cell);
+      if (s == CellState::kUnknown) {
+        const int64_t lx = k.x - bx, ly = k.y - by, lz = k.z - bz;
+        if (lx >= 0 && ly >= 0 && lz >= 0 && lx < sx && ly < sy && lz < sz) {
+          const uint64_t bit = uint64_t((lz * sy + ly) * sx + lx);
+          const unsigned long long mask = 1ULL << (bit & 63);
+          if (!(atomicOr(&seen[bit >> 6], mask) & mask)) gain += cellGainBits(a.model, cell);
+        }
+      }
+      if (walk.done()) break;
     }
   }
   // Rays of one viewpoint are consecutive: sum within the warp where all lanes share it.
@@ -63,6 +86,18 @@ void launchViewpointGains(const GainKernelArgs& args, cudaStream_t stream) {
   constexpr int kThreads = 128;
   const uint64_t grid = (total + kThreads - 1) / kThreads;
   viewpointGainsKernel<<<static_cast<unsigned>(grid), kThreads, 0, stream>>>(args);
+  FRAGG_CUDA_CHECK(cudaGetLastError());
+}
+
+void launchDenseBlockTable(const DeviceLayerView& view, BlockKey lo, const int32_t dims[3],
+                           int32_t* table, cudaStream_t stream) {
+  const size_t entries = size_t(dims[0]) * dims[1] * dims[2];
+  FRAGG_CUDA_CHECK(cudaMemsetAsync(table, 0xff, entries * sizeof(int32_t), stream));
+  if (view.table == nullptr) return;
+  constexpr int kThreads = 256;
+  const uint64_t grid = (uint64_t(view.table_mask) + kThreads) / kThreads;
+  denseBlockTableKernel<<<static_cast<unsigned>(grid), kThreads, 0, stream>>>(
+      view, lo, dims[0], dims[1], dims[2], table);
   FRAGG_CUDA_CHECK(cudaGetLastError());
 }
 
