@@ -122,7 +122,7 @@ grep -v '^\[' "$out/octomap_saver.log" || true
 import json, sys
 c = json.load(sys.stdin)
 if c["known_in_either"] == 0 or c["agreeing"] != c["known_in_either"]:
-    sys.exit("demo_ros: octomap_saver's map and save_map's differ in %d of %d cells" %
+    sys.exit("demo_ros: the map octomap_saver wrote and the saved map differ in %d of %d cells" %
              (c["known_in_either"] - c["agreeing"], c["known_in_either"]))'
 
 fragg_step "outputs"
