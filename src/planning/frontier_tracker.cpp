@@ -65,7 +65,7 @@ struct FrontierTracker::State {
   /// hold the frontier bits only once downloaded (`records_current`).
   bool on_device = false;
   bool records_current = true;
-  bool device_updates = false;  ///< useDevice()
+  bool device_updates = true;  ///< useDevice()
 #if FRAGG_HAVE_CUDA
   std::unique_ptr<DeviceFrontiers> device;
 #endif

@@ -110,9 +110,9 @@ namespace {
 /// Appends the cells `cells` of block `key` to `m` (points and their colours).
 void appendCells(const fragg::Map& map, const fragg::BlockKey& key, const CellMask& cells,
                  const MarkerStyle& style, visualization_msgs::Marker* m) {
+  // The caller reserves the marker's points (chunkMarker: once for the whole chunk; a reserve
+  // per block here would copy the chunk's points again with every block).
   const double res_m = map.resolution();
-  m->points.reserve(m->points.size() + cells.count());
-  m->colors.reserve(m->colors.size() + cells.count());
   // Colours depend on the height only: one per z layer of the block.
   std_msgs::ColorRGBA layer_color[fragg::kBlockSize];
   for (int z = 0; z < fragg::kBlockSize; ++z) {
@@ -163,6 +163,8 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
                                        const CellMask& cells, const MarkerStyle& style,
                                        const ::ros::Time& stamp, int32_t id) {
   visualization_msgs::Marker m = emptyCubeList(map, style, stamp, id);
+  m.points.reserve(cells.count());
+  m.colors.reserve(cells.count());
   appendCells(map, key, cells, style, &m);
   return m;
 }
@@ -178,7 +180,11 @@ visualization_msgs::Marker chunkMarker(const fragg::Map& map, const Blocks& bloc
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::sort(order.begin(), order.end(),
             [&](size_t a, size_t b) { return byKey(blocks[a].key, blocks[b].key); });
+  size_t cells = 0;
+  for (size_t i = 0; i < blocks.size(); ++i) cells += blocks[i].cells.count();
   visualization_msgs::Marker m = emptyCubeList(map, style, stamp, id);
+  m.points.reserve(cells);
+  m.colors.reserve(cells);
   for (size_t i : order) appendCells(map, blocks[i].key, blocks[i].cells, style, &m);
   return m;
 }

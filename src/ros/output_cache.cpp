@@ -16,6 +16,10 @@
 namespace fragg::ros {
 namespace {
 
+/// Revisions since the last update up to which the change log lists the blocks to refresh;
+/// beyond, the blocks' stamps are walked (MapOutputCache::update).
+constexpr uint64_t kLogRevisions = 2;
+
 double msSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
       .count();
@@ -103,84 +107,137 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
     }
     delta.occupied = static_cast<int64_t>(piece->xyz.size() / 3) - before;
   }
-  std::array<int8_t, 64> columns;
-  for (int i = 0; i < 64; ++i)
-    columns[i] = (band_occupied >> i & 1) ? kOccupied : (band_free >> i & 1) ? kFree : kUnknown;
+  // A column is occupied where a cell of it is, else free where one is (the grid's values).
+  band_free &= ~band_occupied;
   int32_t min_x = fragg::kBlockSize, min_y = fragg::kBlockSize, max_x = -1, max_y = -1;
-  for (uint64_t m = observed_xy; m; m &= m - 1) {
-    const int i = __builtin_ctzll(m);
-    const int lx = i & fragg::kBlockMask, ly = i >> fragg::kBlockBits;
-    min_x = std::min(min_x, lx);
-    max_x = std::max(max_x, lx);
-    min_y = std::min(min_y, ly);
-    max_y = std::max(max_y, ly);
+  if (observed_xy) {
+    // Rows (y) and columns (x) holding an observed cell: the first and last of each.
+    uint64_t rows = 0, xs = 0;
+    for (int ly = 0; ly < fragg::kBlockSize; ++ly) {
+      const uint64_t row = observed_xy >> (fragg::kBlockSize * ly) & 0xff;
+      rows |= uint64_t{row != 0} << ly;
+      xs |= row;
+    }
+    min_x = __builtin_ctzll(xs);
+    max_x = 63 - __builtin_clzll(xs);
+    min_y = __builtin_ctzll(rows);
+    max_y = 63 - __builtin_clzll(rows);
   }
   if (from_masks && piece->max_x >= 0) {
     // The masks miss observed cells in the unknown band: the kept bounds (exact when last
     // read from the cells, and observed cells stay observed until a rebuild) widened by them.
     // Where they are short of the cells', the block lies inside the grid's bounds anyway.
-    min_x = std::min(min_x, piece->min_x);
-    max_x = std::max(max_x, piece->max_x);
-    min_y = std::min(min_y, piece->min_y);
-    max_y = std::max(max_y, piece->max_y);
+    min_x = std::min<int32_t>(min_x, piece->min_x);
+    max_x = std::max<int32_t>(max_x, piece->max_x);
+    min_y = std::min<int32_t>(min_y, piece->min_y);
+    max_y = std::max<int32_t>(max_y, piece->max_y);
   }
-  const bool in_band = (band_occupied | band_free) != 0;
-  if (columns != piece->columns || in_band != piece->in_band || min_x != piece->min_x ||
-      max_x != piece->max_x || min_y != piece->min_y || max_y != piece->max_y) {
-    piece->columns = columns;
-    piece->in_band = in_band;
-    piece->min_x = min_x, piece->max_x = max_x, piece->min_y = min_y, piece->max_y = max_y;
+  if (band_occupied != piece->band_occupied || band_free != piece->band_free ||
+      min_x != piece->min_x || max_x != piece->max_x || min_y != piece->min_y ||
+      max_y != piece->max_y) {
+    piece->band_occupied = band_occupied;
+    piece->band_free = band_free;
+    piece->min_x = static_cast<int8_t>(min_x), piece->max_x = static_cast<int8_t>(max_x);
+    piece->min_y = static_cast<int8_t>(min_y), piece->max_y = static_cast<int8_t>(max_y);
     delta.column = true;
   }
   return delta;
 }
 
 void MapOutputCache::mergeColumn(Column* col) const {
-  col->merged.fill(kUnknown);
+  col->occupied = col->free = 0;
   col->min_x = col->min_y = fragg::kBlockSize;
   col->max_x = col->max_y = -1;
-  for (const Piece* p : col->pieces) {
-    if (p->max_x >= 0) {
-      col->min_x = std::min(col->min_x, p->min_x);
-      col->max_x = std::max(col->max_x, p->max_x);
-      col->min_y = std::min(col->min_y, p->min_y);
-      col->max_y = std::max(col->max_y, p->max_y);
+  for (const uint32_t i : col->pieces) {
+    const Piece& p = pieces_[i];
+    if (p.max_x >= 0) {
+      col->min_x = std::min(col->min_x, p.min_x);
+      col->max_x = std::max(col->max_x, p.max_x);
+      col->min_y = std::min(col->min_y, p.min_y);
+      col->max_y = std::max(col->max_y, p.max_y);
     }
-    if (!p->in_band) continue;
-    for (int i = 0; i < 64; ++i) col->merged[i] = std::max(col->merged[i], p->columns[i]);
+    col->occupied |= p.band_occupied;
+    col->free |= p.band_free;
   }
+  col->free &= ~col->occupied;
 }
 
-void MapOutputCache::relist(Piece* piece) {
-  const bool has_cells = !piece->xyz.empty();
-  if (has_cells == (piece->listed >= 0)) return;
-  if (!has_cells) return unlist(piece);
-  piece->listed = static_cast<int64_t>(with_cells_.size());
-  with_cells_.push_back(piece);
+void MapOutputCache::relist(uint32_t i) {
+  Piece& piece = pieces_[i];
+  const bool has_cells = !piece.xyz.empty();
+  if (has_cells == (piece.listed >= 0)) return;
+  if (!has_cells) return unlist(i);
+  piece.listed = static_cast<int64_t>(with_cells_.size());
+  with_cells_.push_back(i);
 }
 
-void MapOutputCache::unlist(Piece* piece) {
-  if (piece->listed < 0) return;
-  Piece* last = with_cells_.back();
-  with_cells_[static_cast<size_t>(piece->listed)] = last;
-  last->listed = piece->listed;
+void MapOutputCache::unlist(uint32_t i) {
+  Piece& piece = pieces_[i];
+  if (piece.listed < 0) return;
+  const uint32_t last = with_cells_.back();
+  with_cells_[static_cast<size_t>(piece.listed)] = last;
+  pieces_[last].listed = piece.listed;
   with_cells_.pop_back();
-  piece->listed = -1;
+  piece.listed = -1;
 }
 
-void MapOutputCache::dropPiece(const fragg::BlockKey& k,
-                               std::unordered_set<ColumnKey, ColumnKeyHash>* dirty) {
-  const auto it = pieces_.find(k);
-  if (it == pieces_.end()) return;
-  occupied_cells_ -= it->second.xyz.size() / 3;
-  unlist(&it->second);
-  const ColumnKey ck{k.x, k.y};
-  auto& list = columns_[ck].pieces;
-  list.erase(
-      std::remove_if(list.begin(), list.end(), [&](const Piece* p) { return p == &it->second; }),
-      list.end());
-  pieces_.erase(it);
-  dirty->insert(ck);
+void MapOutputCache::markDirty(uint32_t c) {
+  if (columns_[c].dirty) return;
+  columns_[c].dirty = true;
+  dirty_.push_back(c);
+}
+
+uint32_t MapOutputCache::pieceFor(const fragg::BlockKey& key) {
+  const uint32_t found = piece_index_.find(key);
+  if (found != fragg::BlockKeyTable::kNone) return found;
+  const fragg::BlockKey column_key{key.x, key.y, 0};
+  uint32_t c = column_index_.find(column_key);
+  if (c == fragg::BlockKeyTable::kNone) {
+    c = static_cast<uint32_t>(columns_.size());
+    columns_.emplace_back();
+    columns_.back().x = key.x;
+    columns_.back().y = key.y;
+    column_index_.insert(column_key, c);
+  }
+  const uint32_t i = static_cast<uint32_t>(pieces_.size());
+  pieces_.emplace_back();
+  pieces_.back().key = key;
+  pieces_.back().column = c;
+  piece_index_.insert(key, i);
+  columns_[c].pieces.push_back(i);
+  markDirty(c);  // a new piece's column is always merged
+  return i;
+}
+
+void MapOutputCache::dropPiece(const fragg::BlockKey& k) {
+  const uint32_t i = piece_index_.find(k);
+  if (i == fragg::BlockKeyTable::kNone) return;
+  occupied_cells_ -= pieces_[i].xyz.size() / 3;
+  unlist(i);
+  const auto drop = [](std::vector<uint32_t>* list, uint32_t from, uint32_t to) {
+    // Replaces `from` by `to` in a column's list (to == kNone: removes it).
+    const auto it = std::find(list->begin(), list->end(), from);
+    if (to == fragg::BlockKeyTable::kNone)
+      list->erase(it);
+    else
+      *it = to;
+  };
+  const uint32_t c = pieces_[i].column;
+  drop(&columns_[c].pieces, i, fragg::BlockKeyTable::kNone);
+  markDirty(c);
+  piece_index_.erase(k);
+  // The last piece moves into the hole: its index changes in the table, its column and the list
+  // of pieces with cells.
+  const uint32_t last = static_cast<uint32_t>(pieces_.size() - 1);
+  if (i != last) {
+    Piece& moved = pieces_[last];
+    piece_index_.erase(moved.key);
+    piece_index_.insert(moved.key, i);
+    drop(&columns_[moved.column].pieces, last, i);
+    if (moved.listed >= 0) with_cells_[static_cast<size_t>(moved.listed)] = i;
+    pieces_[i] = std::move(moved);
+  }
+  pieces_.pop_back();
 }
 
 fragg::BlockChange MapOutputCache::refreshOn(const fragg::OccupancyModel& model) const {
@@ -207,16 +264,33 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
   const bool masks_suffice =
       !out.full && refresh_on == fragg::BlockChange::kMasks && options_.masks_where_settled;
   std::vector<Source> refresh;
-  std::unordered_set<ColumnKey, ColumnKeyHash> dirty;
+  for (const uint32_t c : dirty_) columns_[c].dirty = false;
+  dirty_.clear();
   if (out.full) {
     pieces_.clear();
+    piece_index_.clear();
     with_cells_.clear();
     columns_.clear();
+    column_index_.clear();
     occupied_cells_ = 0;
     seen_valid_ = false;
     for (const fragg::BlockRef& r : blocks.all()) refresh.push_back({r.key, nullptr, r.block});
   } else if (!options_.hide_speckles) {
-    if (masks_suffice) {
+    // Several revisions since the last update (a throttled map_rate): the change log names a
+    // block once per revision it changed in (ten W1 clouds at 5 cm: 48-54 k blocks each, 87 k
+    // distinct), and de-duplicating the records costs more than a walk over the blocks'
+    // stamps. kState lists the blocks of kMasks and those whose cells moved within the
+    // unknown band (recomputed from their masks all the same). The CUDA backend stamps
+    // state_at with every change, so there the log serves.
+    const bool walk = masks_suffice && revision - revision_ > kLogRevisions &&
+                      std::strcmp(map.backendName(), "cpu") == 0;
+    if (walk) {
+      const std::vector<fragg::BlockRef> changed =
+          blocks.changedRefsSince(revision_, fragg::BlockChange::kState);
+      refresh.reserve(changed.size());
+      for (const fragg::BlockRef& r : changed)
+        refresh.push_back({r.key, blocks.findMasks(r.key), r.block});
+    } else if (masks_suffice) {
       const std::vector<fragg::BlockKey> changed = blocks.changedSince(revision_, refresh_on);
       refresh.reserve(changed.size());
       for (const fragg::BlockKey& k : changed) refresh.push_back({k, blocks.findMasks(k), nullptr});
@@ -227,90 +301,84 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
   } else {
     // A cell's speckle state follows its neighbours: the blocks around a change too.
     const std::vector<fragg::BlockKey> changed = blocks.changedSince(revision_, refresh_on);
-    std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around(changed.begin(), changed.end());
-    for (const fragg::BlockKey& k : changed)
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) around.insert({k.x + dx, k.y + dy, k.z + dz});
-    refresh.reserve(around.size());
-    for (const fragg::BlockKey& k : around) {
-      if (const fragg::BlockStateMasks* m = blocks.findMasks(k))
-        refresh.push_back({k, m, nullptr});
-      else
-        dropPiece(k, &dirty);  // only through the ring: erased blocks change the view epoch
+    fragg::BlockKeyTable around;
+    around.reserve(changed.size() * 4);
+    for (const fragg::BlockKey& k : changed) {
+      for (int dz = -1; dz <= 1; ++dz) {
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            const fragg::BlockKey n{k.x + dx, k.y + dy, k.z + dz};
+            if (around.find(n) != fragg::BlockKeyTable::kNone) continue;
+            around.insert(n, 0);
+            if (const fragg::BlockStateMasks* m = blocks.findMasks(n))
+              refresh.push_back({n, m, nullptr});
+            else
+              dropPiece(n);  // only through the ring: erased blocks change the view epoch
+          }
+        }
+      }
     }
   }
   out.list_ms = msSince(t0);
   t0 = std::chrono::steady_clock::now();
-  // Each block's piece (new ones registered in their columns first: stable addresses), then
-  // the pieces in parallel (read-only map, one piece per iteration), then the sums in order.
-  std::vector<Piece*> slots(refresh.size());
-  for (size_t j = 0; j < refresh.size(); ++j) {
-    const fragg::BlockKey& k = refresh[j].key;
-    const auto [it, added] = pieces_.try_emplace(k);
-    slots[j] = &it->second;
-    if (!added) continue;
-    const ColumnKey ck{k.x, k.y};
-    columns_[ck].pieces.push_back(&it->second);
-    dirty.insert(ck);
-  }
+  // Each block's piece (new ones made first: pieces_ does not change while the pieces are
+  // computed), then the pieces in parallel (read-only map, one piece per iteration), then the
+  // sums in order.
+  if (out.full) piece_index_.reserve(refresh.size());
+  std::vector<uint32_t> slots(refresh.size());
+  for (size_t j = 0; j < refresh.size(); ++j) slots[j] = pieceFor(refresh[j].key);
   std::vector<PieceDelta> deltas(refresh.size());
   const int64_t n = static_cast<int64_t>(refresh.size());
-#pragma omp parallel for schedule(dynamic, 64) if (n > 256)
+#pragma omp parallel for schedule(dynamic, 256) if (n > 1024)
   for (int64_t j = 0; j < n; ++j)
-    deltas[j] = computePiece(map, blocks, refresh[j], masks_suffice, slots[j]);
+    deltas[j] = computePiece(map, blocks, refresh[j], masks_suffice, &pieces_[slots[j]]);
   int64_t occupied_delta = 0;
   for (size_t j = 0; j < refresh.size(); ++j) {
+    const PieceDelta& d = deltas[j];
     relist(slots[j]);
-    occupied_delta += deltas[j].occupied;
-    out.blocks_cells_read += deltas[j].cells_read;
-    if (deltas[j].column) dirty.insert(ColumnKey{refresh[j].key.x, refresh[j].key.y});
+    occupied_delta += d.occupied;
+    out.blocks_cells_read += d.cells_read;
+    if (d.column) markDirty(pieces_[slots[j]].column);
   }
   occupied_cells_ = static_cast<size_t>(static_cast<int64_t>(occupied_cells_) + occupied_delta);
   out.blocks_read = refresh.size();
   out.pieces_ms = msSince(t0);
   t0 = std::chrono::steady_clock::now();
-  for (const ColumnKey& ck : dirty) {
-    const auto it = columns_.find(ck);
-    if (it->second.pieces.empty()) {
-      columns_.erase(it);
-      continue;
-    }
-    mergeColumn(&it->second);
-  }
-  out.columns_merged = dirty.size();
+  for (const uint32_t c : dirty_) mergeColumn(&columns_[c]);
+  out.columns_merged = dirty_.size();
   resolution_m_ = map.resolution();  // refreshGrid's octomap bounds need it
-  refreshGrid(dirty, out.full);
+  refreshGrid(out.full);
   valid_ = true;
   revision_ = revision;
   epoch_ = map.viewEpoch();
-  resolution_m_ = map.resolution();
   out.grid_ms = msSince(t0);
   return out;
 }
 
-void MapOutputCache::drawColumn(const ColumnKey& ck, const Column& col) {
-  const int64_t x0 = int64_t{ck.x} * fragg::kBlockSize - grid_min_x_;
-  const int64_t y0 = int64_t{ck.y} * fragg::kBlockSize - grid_min_y_;
+void MapOutputCache::drawColumn(const Column& col) {
+  const int64_t x0 = int64_t{col.x} * fragg::kBlockSize - grid_min_x_;
+  const int64_t y0 = int64_t{col.y} * fragg::kBlockSize - grid_min_y_;
   for (int ly = 0; ly < fragg::kBlockSize; ++ly) {
     const int64_t gy = y0 + ly;
     if (gy < 0 || gy >= grid_height_) continue;
     for (int lx = 0; lx < fragg::kBlockSize; ++lx) {
       const int64_t gx = x0 + lx;
       if (gx < 0 || gx >= grid_width_) continue;
-      grid_[static_cast<size_t>(gy * grid_width_ + gx)] = col.merged[lx + fragg::kBlockSize * ly];
+      const int bit = lx + fragg::kBlockSize * ly;
+      grid_[static_cast<size_t>(gy * grid_width_ + gx)] = (col.occupied >> bit & 1) ? kOccupied
+                                                          : (col.free >> bit & 1)   ? kFree
+                                                                                    : kUnknown;
     }
   }
 }
 
-void MapOutputCache::refreshGrid(const std::unordered_set<ColumnKey, ColumnKeyHash>& dirty,
-                                 bool all) {
-  // Bounds over the columns (one pass over the columns, not the cells).
+void MapOutputCache::refreshGrid(bool all) {
+  // Bounds over the columns (one pass over the flat column table, not the cells).
   bool empty = true;
   int64_t lo_x = 0, hi_x = -1, lo_y = 0, hi_y = -1;
-  for (const auto& [ck, col] : columns_) {
+  for (const Column& col : columns_) {
     if (col.max_x < 0) continue;
-    const int64_t x0 = int64_t{ck.x} * fragg::kBlockSize, y0 = int64_t{ck.y} * fragg::kBlockSize;
+    const int64_t x0 = int64_t{col.x} * fragg::kBlockSize, y0 = int64_t{col.y} * fragg::kBlockSize;
     if (empty) {
       lo_x = x0 + col.min_x, hi_x = x0 + col.max_x, lo_y = y0 + col.min_y, hi_y = y0 + col.max_y;
       empty = false;
@@ -344,19 +412,11 @@ void MapOutputCache::refreshGrid(const std::unordered_set<ColumnKey, ColumnKeyHa
     grid_width_ = hi_x - lo_x + 1;
     grid_height_ = hi_y - lo_y + 1;
     grid_.assign(static_cast<size_t>(grid_width_ * grid_height_), kUnknown);
-    for (const auto& [ck, col] : columns_) drawColumn(ck, col);
+    for (const Column& col : columns_) drawColumn(col);
     return;
   }
-  // Same bounds: patch the changed columns (a column that left is drawn unknown).
-  static const Column kGone = [] {
-    Column c;
-    c.merged.fill(kUnknown);
-    return c;
-  }();
-  for (const ColumnKey& ck : dirty) {
-    const auto it = columns_.find(ck);
-    drawColumn(ck, it == columns_.end() ? kGone : it->second);
-  }
+  // Same bounds: patch the changed columns (an emptied column merged to unknown).
+  for (const uint32_t c : dirty_) drawColumn(columns_[c]);
 }
 
 const sensor_msgs::PointCloud2& MapOutputCache::occupiedCloud(const std::string& frame_id,
@@ -376,9 +436,10 @@ const sensor_msgs::PointCloud2& MapOutputCache::occupiedCloud(const std::string&
   }
   data.resize(bytes);
   uint8_t* dst = data.data();
-  for (const Piece* piece : with_cells_) {
-    const size_t piece_bytes = piece->xyz.size() * sizeof(float);
-    std::memcpy(dst, piece->xyz.data(), piece_bytes);
+  for (const uint32_t i : with_cells_) {
+    const std::vector<float>& xyz = pieces_[i].xyz;
+    const size_t piece_bytes = xyz.size() * sizeof(float);
+    std::memcpy(dst, xyz.data(), piece_bytes);
     dst += piece_bytes;
   }
   cloud_msg_.data = std::move(data);

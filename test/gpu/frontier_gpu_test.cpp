@@ -48,7 +48,8 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
   p.backend = Backend::kCuda;
   Map cuda_map(p);
   FrontierTracker cpu_tracker, cuda_tracker, cuda_host_tracker;
-  cuda_tracker.useDevice(true);
+  cuda_tracker.useDevice(true);  // the default
+  cuda_host_tracker.useDevice(false);
   FrontierFilter band;
   band.use_height = true;
   band.min_z_m = 0.5;

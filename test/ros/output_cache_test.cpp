@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <random>
@@ -345,6 +346,51 @@ TEST_P(OutputCacheRandom, EqualsARebuildAfterManyRandomChanges) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Options, OutputCacheRandom, ::testing::Values(0, 1, 2, 3));
+
+/// A LiDAR-like ring: `points` returns at 1.5-9 m around the sensor, on a ground plane 1.2 m
+/// below it and on a wall of scattered posts.
+fragg::PointCloud ringScan(std::mt19937* rng, int points) {
+  std::uniform_real_distribution<float> angle(0.0f, 6.2832f), range(1.5f, 9.0f), h(-1.2f, 1.5f);
+  fragg::PointCloud cloud;
+  for (int i = 0; i < points; ++i) {
+    const float a = angle(*rng), r = range(*rng);
+    const bool ground = i % 3 != 0;
+    cloud.points_S.emplace_back(r * std::cos(a), r * std::sin(a), ground ? -1.2f : h(*rng));
+  }
+  return cloud;
+}
+
+// Thousands of blocks a step (the pieces recomputed in parallel, the flat piece and column
+// tables growing as the sensor moves on), a height band, octomap bounds or not, several scans
+// between two updates: the kept cloud and grid equal a rebuild after every update.
+class OutputCacheManyBlocks : public ::testing::TestWithParam<int> {};
+
+TEST_P(OutputCacheManyBlocks, EqualsARebuildAsTheSensorMovesOn) {
+  OutputCacheOptions o;
+  o.occupancy_min_z_m = -1.0;
+  o.occupancy_max_z_m = 0.8;
+  o.octomap_bounds = GetParam() & 1;
+  fragg::Map map(test::cpuParams(0.05));
+  MapOutputCache cache(o);
+  std::mt19937 rng(29 + GetParam());
+  EXPECT_TRUE(cache.update(map).full);
+  size_t most_read = 0;
+  for (int step = 0; step < 5; ++step) {
+    for (int scan = 0; scan < 2; ++scan) {
+      Eigen::Isometry3d T_map_sensor = Eigen::Isometry3d::Identity();
+      T_map_sensor.translation() = Eigen::Vector3d(2.5 * step + 0.7 * scan, 0.3 * scan, 0.0);
+      T_map_sensor.rotate(Eigen::AngleAxisd(0.2 * step, Eigen::Vector3d::UnitZ()));
+      map.insert(ringScan(&rng, 4000), T_map_sensor, fragg::SensorModel::autoFromCloud(0.0, 12.0));
+    }
+    const OutputCacheUpdate u = cache.update(map);
+    EXPECT_FALSE(u.full) << step;
+    most_read = std::max(most_read, u.blocks_read);
+    expectSameAsRebuild(map, cache, o, "step " + std::to_string(step));
+  }
+  EXPECT_GT(most_read, 1024u);  // the parallel recompute ran
+}
+
+INSTANTIATE_TEST_SUITE_P(Options, OutputCacheManyBlocks, ::testing::Values(0, 1));
 
 TEST(OutputCache, RefreshingOnOccupiedChangesOnlyIsRefused) {
   OutputCacheOptions o;

@@ -6,7 +6,7 @@
 // equals findFrontierCells() on the same map and filter. A map whose blocks left or joined its
 // view since the last update (clearBox, truncate, reset, paging: Map::viewEpoch), or another
 // map, is recomputed in full. On a paged map only resident blocks are seen: page the region of
-// interest in first (Map::ensureResident). With useDevice(true), on a CUDA map (no obstacle
+// interest in first (Map::ensureResident). By default (useDevice(true)), on a CUDA map (no obstacle
 // distance filter) the whole update runs on the map's device: the tracker keeps what it saw per
 // slot of the pool there, compares every slot of the map's device layer view with it, examines the
 // neighbourhoods that changed there, and brings back the count only; cells() and
@@ -79,10 +79,10 @@ class FrontierTracker {
                             const QueryControl* control = nullptr);
   /// Forgets everything: the next update is a full one.
   void reset();
-  /// Whether update() on a CUDA map runs on the map's device (frontier_kernels.cu; off by
-  /// default: written and compiled, not yet run on a GPU -- test/gpu/frontier_gpu_test.cpp
-  /// checks it against the CPU). Off: the host update, fed by the changed-block list
-  /// compacted on the device. A change takes effect with a full update.
+  /// Whether update() on a CUDA map runs on the map's device (frontier_kernels.cu; on by
+  /// default; test/gpu/frontier_gpu_test.cpp checks it against the CPU). Off: the host update,
+  /// fed by the changed-block list compacted on the device. A change takes effect with a full
+  /// update.
   void useDevice(bool on);
 
   /// The frontier cells, sorted by frontierOrder.

@@ -17,12 +17,12 @@
 
 #include <array>
 #include <cstdint>
+#include <deque>
 #include <limits>
 #include <string>
-#include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
+#include "fragg_map/block_key_table.h"
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
 #include "fragg_map/ros/height_band.h"
@@ -41,8 +41,10 @@ struct OutputCacheOptions {
   /// cells' bounds) instead of those bounds.
   bool octomap_bounds = false;
   /// Which blocks an update recomputes: those whose state masks changed (kMasks: from the
-  /// map's change log, no walk over the blocks), those where a cell's state changed (kState,
-  /// found by a walk over the blocks' stamps), or every changed block (kAny: the behaviour
+  /// map's change log, no walk over the blocks, while the last update is at most two revisions
+  /// behind; further behind, on the CPU backend, from a walk over the blocks' kState stamps,
+  /// cheaper than de-duplicating many revisions' records), those where a cell's state changed
+  /// (kState, found by a walk over the blocks' stamps), or every changed block (kAny: the behaviour
   /// before BlockMeta::state_at, kept for same-run comparisons in fragg_map_server_overhead).
   /// kMasks falls back to kState for a model where a cell's first update can leave it in the
   /// unknown band (observed without a mask change: the projected map's bounds would miss it).
@@ -91,19 +93,21 @@ class MapOutputCache {
   fragg::BlockChange refreshOn(const fragg::OccupancyModel& model) const;
   HeightBand heights() const { return {options_.occupancy_min_z_m, options_.occupancy_max_z_m}; }
 
+  /// A block's outputs. Pieces live in one deque (pieces_: indexed, never moved as it grows),
+  /// found through a flat key table (piece_index_): no node per block, so the tens of
+  /// thousands of blocks a LiDAR second lists cost a probe of one table each.
   struct Piece {
+    fragg::BlockKey key;
     /// The occupied cells shown (in the band, speckles left out when hidden), one word per z
     /// layer: xyz is rebuilt only when these change.
     std::array<uint64_t, fragg::kBlockSize> shown{};
-    std::vector<float> xyz;  ///< their cell centres
-    /// The block's columns in the height band (-1 unknown, 0 free, 100 occupied), x fastest;
-    /// set by the first computePiece (a new piece's column is always merged).
-    std::array<int8_t, 64> columns{};
-    bool in_band = false;  ///< some cell of the block lies in the band
+    /// The block's columns in the height band (bit lx + 8 ly): some cell occupied, some free.
+    uint64_t band_occupied = 0, band_free = 0;
     /// Observed cells' xy key bounds within the block (lo > hi: none observed).
-    int32_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
-    /// Its place in with_cells_; -1 while xyz is empty.
-    int64_t listed = -1;
+    int8_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
+    uint32_t column = 0;     ///< its place in columns_
+    int64_t listed = -1;     ///< its place in with_cells_; -1 while xyz is empty
+    std::vector<float> xyz;  ///< the shown cells' centres
   };
   /// What recomputing a piece changed.
   struct PieceDelta {
@@ -118,21 +122,15 @@ class MapOutputCache {
     const fragg::BlockStateMasks* masks = nullptr;
     const fragg::Block* block = nullptr;
   };
-  /// A column of blocks (same x, y block key): its pieces, the merged 8 x 8 grid patch and the
-  /// xy bounds. The pieces live in pieces_ (node-based: their addresses never move).
+  /// A column of blocks (same x, y block key): its pieces, the merged 8 x 8 grid patch (bit
+  /// lx + 8 ly: occupied in some block, free in some block) and the xy bounds. Columns stay in
+  /// columns_ once made (an emptied one merges to unknown and no bounds) until a rebuild.
   struct Column {
-    std::vector<const Piece*> pieces;  ///< one per block of the column
-    std::array<int8_t, 64> merged;
-    int32_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
-  };
-  struct ColumnKey {
-    int32_t x, y;
-    bool operator==(const ColumnKey& o) const { return x == o.x && y == o.y; }
-  };
-  struct ColumnKeyHash {
-    size_t operator()(const ColumnKey& k) const {
-      return std::hash<uint64_t>()((uint64_t(uint32_t(k.x)) << 32) | uint32_t(k.y));
-    }
+    int32_t x = 0, y = 0;
+    std::vector<uint32_t> pieces;  ///< indices into pieces_
+    uint64_t occupied = 0, free = 0;
+    int8_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
+    bool dirty = false;  ///< listed in the update's dirty columns
   };
 
   /// Brings `piece` (new: default-constructed) up to date with `source`'s block. With
@@ -144,29 +142,36 @@ class MapOutputCache {
   /// bounds span the whole block, or the block lies inside the observed bounds of the last
   /// update (observed cells stay observed until the view's epoch changes, which rebuilds).
   bool boundsSettled(const fragg::BlockKey& key, const Piece& piece) const;
+  /// The piece of block `key`, made (and registered in its column, marked dirty) when new.
+  uint32_t pieceFor(const fragg::BlockKey& key);
   /// Lists `piece` in with_cells_ when it holds cells, takes it out when it does not.
-  void relist(Piece* piece);
-  void unlist(Piece* piece);
+  void relist(uint32_t piece);
+  void unlist(uint32_t piece);
+  /// Marks column `c` dirty (once per update).
+  void markDirty(uint32_t c);
   /// Drops the piece of a block that left the map; its column becomes dirty.
-  void dropPiece(const fragg::BlockKey& key, std::unordered_set<ColumnKey, ColumnKeyHash>* dirty);
+  void dropPiece(const fragg::BlockKey& key);
   /// Recomputes `col`'s merged patch and bounds from its blocks' pieces.
   void mergeColumn(Column* col) const;
   /// Grid bounds from the columns; reallocates and redraws the grid when they moved, else
-  /// draws the columns in `dirty`.
-  void refreshGrid(const std::unordered_set<ColumnKey, ColumnKeyHash>& dirty, bool all);
-  void drawColumn(const ColumnKey& ck, const Column& col);
+  /// draws the dirty columns.
+  void refreshGrid(bool all);
+  void drawColumn(const Column& col);
 
   OutputCacheOptions options_;
   bool valid_ = false;
   uint64_t revision_ = 0;
   uint64_t epoch_ = 0;
   double resolution_m_ = 0.0;
-  std::unordered_map<fragg::BlockKey, Piece, fragg::BlockKeyHash> pieces_;
+  std::deque<Piece> pieces_;
+  fragg::BlockKeyTable piece_index_;  ///< block key -> index into pieces_
   /// The pieces with occupied cells shown (a small part of pieces_: most blocks hold free
   /// space only), so that the cloud is gathered without walking the others.
-  std::vector<Piece*> with_cells_;
+  std::vector<uint32_t> with_cells_;
   mutable sensor_msgs::PointCloud2 cloud_msg_;  ///< occupiedCloud()'s message and buffer
-  std::unordered_map<ColumnKey, Column, ColumnKeyHash> columns_;
+  std::vector<Column> columns_;
+  fragg::BlockKeyTable column_index_;  ///< {x, y, 0} block key -> index into columns_
+  std::vector<uint32_t> dirty_;        ///< columns to merge and draw in this update
   size_t occupied_cells_ = 0;
   /// The observed cells' xy key bounds at the last update (seen_valid_: some cell observed).
   bool seen_valid_ = false;

@@ -47,9 +47,9 @@ struct Options {
   size_t max_scans = 100, viewpoints = 1000;
   double resolution_m = 0.05, max_range_m = 30.0;
   int threads = 0;
-  int coarse_cells = 0;         ///< > 0: also time the node's LiDAR query on this grid
-  bool device_tracker = false;  ///< FrontierTracker::useDevice
-  std::vector<double> box;      ///< its box (6 values), else around the map's centre
+  int coarse_cells = 0;        ///< > 0: also time the node's LiDAR query on this grid
+  bool device_tracker = true;  ///< FrontierTracker::useDevice
+  std::vector<double> box;     ///< its box (6 values), else around the map's centre
 };
 
 /// Process CPU time (user + system), ms: with other work on the machine, the steadier figure.
@@ -300,8 +300,9 @@ int main(int argc, char** argv) {
   app.add_option("--viewpoints", o.viewpoints, "Candidate viewpoints to score")
       ->capture_default_str();
   app.add_option("--threads", o.threads, "CPU threads (0 = every core)")->capture_default_str();
-  app.add_flag("--device-tracker", o.device_tracker,
-               "the frontier tracker's update on a CUDA map's device (FrontierTracker::useDevice)");
+  app.add_flag("--device-tracker,!--host-tracker", o.device_tracker,
+               "the frontier tracker's update on a CUDA map's device (FrontierTracker::useDevice; "
+               "the default), or on the host");
   app.add_option("--lidar-query", o.coarse_cells,
                  "Only time the node's LiDAR query (coarse grid of N cells, coverage, k 8) on "
                  "the whole map and in --box")
