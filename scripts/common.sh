@@ -18,6 +18,10 @@ FRAGG_JOBS="${FRAGG_JOBS:-2}"
 # CUDA kernels: "all" (every supported architecture: build.sh, test.sh, CI) or "machine" (the
 # demo scripts: only the GPU present, native, and no CUDA at all without a GPU).
 FRAGG_CUDA="${FRAGG_CUDA:-all}"
+# The tests (FRAGG_BUILD_TESTS): ON for build.sh, test.sh and CI; OFF for the demo scripts, whose
+# first run builds only what it runs. Passed on every catkin_make, so a workspace the demo
+# configured builds its tests again under build.sh.
+FRAGG_TESTS="${FRAGG_TESTS:-ON}"
 FRAGG_DEPS=1
 
 fragg_usage_common() {
@@ -59,17 +63,22 @@ fragg_parse_common() {
   fi
 }
 
-fragg_step() { printf '\n==== %s ====\n' "$*"; }
+# A step's heading, with the time since the script started (where a first run spends it).
+fragg_step() { printf '\n==== %s [%s] ====\n' "$*" "$(fragg_elapsed)"; }
 
+# install_deps.sh's options: the demo scripts set (--demo), which leaves out the packages only
+# the tests, the format check, the benchmarks and the docs need.
+FRAGG_DEPS_ARGS=()
 fragg_install_deps() {
   if [ "$FRAGG_DEPS" -eq 1 ]; then
     fragg_step "Debian packages"
-    bash "$FRAGG_REPO/scripts/install_deps.sh"
+    bash "$FRAGG_REPO/scripts/install_deps.sh" "${FRAGG_DEPS_ARGS[@]+"${FRAGG_DEPS_ARGS[@]}"}"
   fi
 }
 
 # Links the repository into $FRAGG_WS/src/fragg_map (once) and builds the workspace in
-# Release with Debian's python3. Returns catkin_make's status.
+# Release with Debian's python3: the make targets given, or every target. Returns catkin_make's
+# status.
 fragg_build_ws() {
   fragg_step "catkin build in $FRAGG_WS (-j$FRAGG_JOBS)"
   mkdir -p "$FRAGG_WS/src"
@@ -85,7 +94,17 @@ fragg_build_ws() {
   else
     ln -s "$FRAGG_REPO" "$link"
   fi
-  fragg_catkin_make
+  fragg_catkin_make "$@"
+}
+
+# What the demo scripts run (demo.sh, demo_ros.sh), and nothing else: the CLI, the simulator's
+# smoke workload (fragg_map_sim and its bag), the nodelet and the messages and services that
+# rosservice calls. With tests off, one configure.
+FRAGG_DEMO_TARGETS=(fragg_map_cli fragg_map_smoke_workload fragg_map_nodelet
+  fragg_map_generate_messages)
+fragg_build_demo() {
+  FRAGG_TESTS=OFF
+  fragg_build_ws "${FRAGG_DEMO_TARGETS[@]}"
 }
 
 # The CMake arguments for FRAGG_CUDA (set once by fragg_cuda_choice).
@@ -119,7 +138,8 @@ fragg_cuda_choice() {
 fragg_catkin_make() {
   fragg_cuda_choice
   (cd "$FRAGG_WS" && catkin_make -j"$FRAGG_JOBS" "$@" -DCMAKE_BUILD_TYPE=Release \
-    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+    -DFRAGG_BUILD_TESTS="$FRAGG_TESTS" -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+    -DPython3_EXECUTABLE=/usr/bin/python3 \
     "${FRAGG_CUDA_ARGS[@]}")
 }
 

@@ -10,6 +10,7 @@ set -euo pipefail
 # First-run speed: CUDA kernels for the GPU present only, none without a GPU (common.sh).
 FRAGG_CUDA="${FRAGG_CUDA:-machine}"
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+FRAGG_DEPS_ARGS=(--demo)  # no test, format or benchmark packages: the demo builds no tests
 
 fragg_usage() {
   echo "usage: bash scripts/demo.sh [options]"
@@ -32,7 +33,7 @@ velodyne="$data/small_gicp_pair/target.ply"
 
 fragg_install_deps
 fragg_octomap_msgs_standin  # octomap_binary / octomap_full without a packaged octomap_msgs
-fragg_build_ws
+fragg_build_demo
 fragg="$FRAGG_WS/devel/lib/fragg_map/fragg_map"
 out="$FRAGG_REPO/out/demo"
 mkdir -p "$out"
@@ -76,7 +77,7 @@ run "$fragg" render "$out/smoke.fgm" -o "$out/smoke_top.png" --view top
 # 4. The ROS map server (fragg_map/MapServerNodelet) on the smoke bag, headless: a master on
 #    loopback, the nodelet, the bag; the map saved through /fragg_map/save_map, rendered, and
 #    compared with `fragg_map build` on the same bag. scripts/demo_ros.sh stops what it starts.
-bash "$FRAGG_REPO/scripts/demo_ros.sh" --no-deps --ws "$FRAGG_WS" --jobs "$FRAGG_JOBS" --out "$out"
+bash "$FRAGG_REPO/scripts/demo_ros.sh" --no-deps --no-build --ws "$FRAGG_WS" --jobs "$FRAGG_JOBS" --out "$out"
 
 fragg_step "outputs ($(fragg_elapsed))"
 cat <<EOF

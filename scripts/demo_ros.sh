@@ -2,30 +2,35 @@
 # The ROS part of the demo: starts a ROS master on loopback (a free port), the map server
 # nodelet and the smoke bag (launch/demo.launch, headless), waits until every scan is
 # inserted, saves the map through /fragg_map/save_map, renders it to PNG, checks it against
-# `fragg_map build` on the same bag, and stops everything it started.
-# Usage: bash scripts/demo_ros.sh [--out DIR] [common options]
-# (scripts/demo.sh runs it after building the workspace: --no-deps and the same --ws.)
+# `fragg_map build` on the same bag, reads the map back with octomap_server's octomap_saver (a
+# GetOctomap client), and stops everything it started.
+# Usage: bash scripts/demo_ros.sh [--out DIR] [--no-build] [common options]
+# (scripts/demo.sh runs it after building the workspace: --no-deps --no-build, the same --ws.)
 set -euo pipefail
 # First-run speed: CUDA kernels for the GPU present only, none without a GPU (common.sh).
 FRAGG_CUDA="${FRAGG_CUDA:-machine}"
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+FRAGG_DEPS_ARGS=(--demo)  # no test, format or benchmark packages: the demo builds no tests
 
 out="$FRAGG_REPO/out/demo"
+build=1
 args=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --out) out="$2"; shift 2 ;;
+    --no-build) build=0; shift ;;
     *) args+=("$1"); shift ;;
   esac
 done
 fragg_usage() {
-  echo "usage: bash scripts/demo_ros.sh [--out DIR]"
+  echo "usage: bash scripts/demo_ros.sh [--out DIR] [--no-build]"
   fragg_usage_common
+  echo "  --no-build    the workspace is built already (demo.sh)"
 }
 fragg_parse_common "${args[@]+"${args[@]}"}"
 fragg_install_deps
 fragg_octomap_msgs_standin  # octomap_binary / octomap_full without a packaged octomap_msgs
-fragg_build_ws
+[ "$build" -eq 0 ] || fragg_build_demo
 mkdir -p "$out"
 out="$(cd "$out" && pwd -P)"
 fragg="$FRAGG_WS/devel/lib/fragg_map/fragg_map"
@@ -70,6 +75,19 @@ until stats | grep -Eq '^  scans: 10$'; do
 done
 stats | grep -E '^  (backend|scans|points|dropped_clouds|insertion_ms_mean|known_voxels|host_bytes):'
 rosservice call /fragg_map/save_map "path: 'node_smoke.fgm'"  # relative: under file_root
+# octomap_server's own client reads the map through GetOctomap (the octomap_binary service):
+# octomap_saver where octomap_server is installed; scripts/octomap_saver.py (the same call, the
+# same .bt) where it is not (Debian packages no octomap_server).
+saver=(/usr/bin/python3 "$FRAGG_REPO/scripts/octomap_saver.py")
+if real="$(catkin_find --first-only octomap_server octomap_saver 2>/dev/null)" &&
+  [ -x "$real" ]; then
+  saver=("$real")
+fi
+if ! (cd "$out" && timeout 60 "${saver[@]}" node_smoke.bt) >"$out/octomap_saver.log" 2>&1; then
+  cat "$out/octomap_saver.log" >&2
+  echo "demo_ros: octomap_saver could not read the node's map; see $log" >&2
+  exit 1
+fi
 stop
 
 fragg_step "the node's map"
@@ -93,6 +111,20 @@ same_map "$out/cli_smoke.fgm" "$out/node_smoke.fgm"
   >/dev/null
 same_map "$out/cli_smoke_kept.fgm" "$out/node_smoke.fgm"
 
+fragg_step "octomap_saver read the node's map: $(basename "${saver[-1]}") node_smoke.bt"
+grep -v '^\[' "$out/octomap_saver.log" || true
+"$fragg" stats "$out/node_smoke.bt"
+# The .bt holds what an OctoMap holds (occupied iff p >= 0.5, every observed cell known): the
+# same cells as the node's own save_map under that rule.
+"$fragg" compare "$out/node_smoke.fgm" "$out/node_smoke.bt" --octomap-threshold
+"$fragg" compare "$out/node_smoke.fgm" "$out/node_smoke.bt" --octomap-threshold --json |
+  /usr/bin/python3 -c '
+import json, sys
+c = json.load(sys.stdin)
+if c["known_in_either"] == 0 or c["agreeing"] != c["known_in_either"]:
+    sys.exit("demo_ros: the map octomap_saver wrote and the saved map differ in %d of %d cells" %
+             (c["known_in_either"] - c["agreeing"], c["known_in_either"]))'
+
 fragg_step "outputs"
 cat <<EOT
 In $out:
@@ -100,5 +132,6 @@ In $out:
   node_smoke_top.png  its top-down height image
   cli_smoke.fgm       fragg_map build on the same bag (compared above: the same map)
   cli_smoke_kept.fgm  the same with --keep-scans (the same map too)
+  node_smoke.bt       the node's map as octomap_saver wrote it (GetOctomap: octomap_binary)
   demo_ros.log        roslaunch's log
 EOT

@@ -6,7 +6,9 @@
 # way (e.g. `rviz xvfb` to look at the map in rviz without a screen).
 # When another apt or dpkg holds its lock (common on a fresh machine: unattended upgrades), it
 # waits for it, at most FRAGG_APT_LOCK_WAIT_S seconds (default 600), saying so once.
-# Usage: bash scripts/install_deps.sh [--dry-run] [EXTRA_PACKAGE...]
+# Usage: bash scripts/install_deps.sh [--dry-run] [--demo] [EXTRA_PACKAGE...]
+# --demo: only what scripts/demo.sh builds and runs (tests off): none of test_packages below
+# (about 35 MB of the download: clang-format brings LLVM).
 # Fuzzing and the clang sanitizer builds (optional, not needed by CI: scripts/fuzz.sh,
 # scripts/sanitize.sh): bash scripts/install_deps.sh clang-14 libfuzzer-14-dev libomp-14-dev
 # (Sourced, it only defines its functions: test/scripts/ tests the lock wait that way.)
@@ -17,20 +19,25 @@ packages=(
   ros-core-dev catkin libnodeletlib-dev libnodelet-dev libnodeletlib-tools rosbash
   libtf2-ros-dev libtf2-eigen-dev libtf2-sensor-msgs-dev libpcl-ros-dev libpcl-conversions-dev
   libpcl-dev libeigen3-dev libvisualization-msgs-dev libnav-msgs-dev libstd-srvs-dev
-  libsensor-msgs-dev librosbag-dev librostest-dev python3-rostest python3-rosbag
+  libsensor-msgs-dev librosbag-dev python3-rosbag
   python3-roslaunch python3-rosservice python3-rosnode python3-rostopic ros-message-generation
   python3-geometry-msgs python3-sensor-msgs python3-visualization-msgs python3-tf2-msgs
-  python3-std-srvs python3-nav-msgs liboctomap-dev libgtest-dev
+  python3-std-srvs python3-nav-msgs liboctomap-dev
   # ~check_collision takes a shape_msgs/Mesh
   libshape-msgs-dev python3-shape-msgs
   # ~set_parameters (octomap_server's dynamic_reconfigure names; rostest client)
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
-  # core, CLI, benchmark, tests, format check
-  libcli11-dev nlohmann-json3-dev libpng-dev libfmt-dev libbenchmark-dev zlib1g-dev
-  clang-format octomap-tools libgmock-dev bzip2
+  # core, CLI
+  libcli11-dev nlohmann-json3-dev libpng-dev libfmt-dev zlib1g-dev bzip2
   # page stores (optional in CMake): SQLite (the default), LMDB, zstd for the records; zstd
   # also packs the .fgm block chunks (zlib without it); the zstd tool reads them in rostests
   libsqlite3-dev liblmdb-dev libzstd-dev zstd
+)
+# The tests, the format check, the benchmarks and the docs' figures: everything but the demo
+# (whose build has the tests off) needs them; --demo leaves them out.
+test_packages=(
+  libgtest-dev libgmock-dev librostest-dev python3-rostest libbenchmark-dev clang-format
+  octomap-tools
   # collision checking: FCL as an oracle in the tests (optional in CMake)
   libfcl-dev
   # docs: the benchmark figure (scripts/plot_fig5b.sh)
@@ -102,13 +109,18 @@ print_install_plan() {
 
 main() {
   dry_run=0
+  demo=0
+  extra=()
   for arg in "$@"; do
     case "$arg" in
       --dry-run) dry_run=1 ;;
-      -*) echo "install_deps: unknown option $arg (usage: [--dry-run] [EXTRA_PACKAGE...])" >&2; exit 2 ;;
-      *) packages+=("$arg") ;;
+      --demo) demo=1 ;;
+      -*) echo "install_deps: unknown option $arg (usage: [--dry-run] [--demo] [EXTRA_PACKAGE...])" >&2; exit 2 ;;
+      *) extra+=("$arg") ;;
     esac
   done
+  [ "$demo" -eq 1 ] || packages+=("${test_packages[@]}")
+  packages+=("${extra[@]+"${extra[@]}"}")
 
   missing=()
   for p in "${packages[@]}"; do

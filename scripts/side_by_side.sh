@@ -138,6 +138,14 @@ compare_bag() {
         echo "octomap_saver $f: missing (octomap_server: $(stat -c %s "$a/$f" 2>/dev/null || echo none), fragg_map: $(stat -c %s "$b/$f" 2>/dev/null || echo none))"
       fi
     done
+    # octomap_saver prunes the tree it received to its max-likelihood states before writing a
+    # .bt, so the files are equal where the cells are, whatever tree each node sent (the
+    # "Map received" counts below: octomap_server sends its log-odds tree).
+    if [ -s "$a/map.bt" ] && cmp -s "$a/map.bt" "$b/map.bt"; then
+      echo "octomap_saver map.bt: byte-identical ($(stat -c %s "$a/map.bt") bytes)"
+    else
+      echo "octomap_saver map.bt: the files differ"
+    fi
     for who in octomap_server fragg_map; do
       echo "octomap_saver (GetOctomap) against $who: $(grep -h -o 'Map received.*' "$OUT/run/$name/$who"/saver_*.log |
         sed 's/\x1b\[[0-9;]*m//g' | tr '\n' ' ')"
@@ -232,10 +240,16 @@ resolution: 0.05
 sensor_model: {max_range: 6.0}
 EOF
 
-[ -n "${SBS_ONLY:-}" ] || {
-  echo "## octomap_server (octomap_mapping efa61ca) beside fragg_map ($(git -C "$FRAGG_REPO" rev-parse --short HEAD)), $(date -u +%F)"
-  echo
-} >"$OUT/results.md"
+# Every run starts with a header naming the commit (a run of SBS_ONLY bags appends its own).
+commit="$(git -C "$FRAGG_REPO" rev-parse --short HEAD)"
+[ -z "$(git -C "$FRAGG_REPO" status --porcelain --untracked-files=no)" ] ||
+  commit="$commit + uncommitted changes"
+header="## octomap_server (octomap_mapping efa61ca) beside fragg_map ($commit), $(date -u '+%F %H:%M UTC')"
+if [ -n "${SBS_ONLY:-}" ]; then
+  printf '%s, only: %s\n\n' "$header" "$SBS_ONLY" >>"$OUT/results.md"
+else
+  printf '%s\n\n' "$header" >"$OUT/results.md"
+fi
 compare_bag velodyne_pair "$bags/velodyne_pair_f32.bag" /velodyne_points "$bags/velodyne.yaml"
 cat >"$bags/nebula.yaml" <<'EOF'
 frame_id: map

@@ -50,14 +50,19 @@ if fragg_octomap_msgs_standin && fragg_build_ws; then
     run_tests_rc=$?
   fi
   fragg_step "test results"
-  # catkin_test_results is the gate (non-zero on any failure or missing result). Its counts
-  # add up gtest's <testsuites> and <testsuite> totals, i.e. twice the test cases, so the
-  # counts below come from the <testcase> elements of the result files themselves.
-  if catkin_test_results "$FRAGG_WS/build/test_results"; then
+  # catkin_test_results is the gate (non-zero on any failure or missing result). Its summary
+  # and per-file lines add up gtest's <testsuites> and <testsuite> totals, i.e. twice the test
+  # cases: they go to build/catkin_test_results.log (only files with errors or failures shown),
+  # and the one total printed comes from the <testcase> elements of the result files
+  # themselves (test_counts.py).
+  if catkin_test_results "$FRAGG_WS/build/test_results" >"$FRAGG_WS/build/catkin_test_results.log"
+  then
     results_rc=0
   else
     results_rc=$?
   fi
+  grep -v '^Summary:' "$FRAGG_WS/build/catkin_test_results.log" |
+    grep -Ev ': [0-9]+ tests, 0 errors, 0 failures' || true
   if counts="$(/usr/bin/python3 "$FRAGG_REPO/scripts/test_counts.py" \
     "$FRAGG_WS/build/test_results" "${require_args[@]}")"; then
     required_rc=0

@@ -35,6 +35,8 @@ RenderInfo infoOf(const RenderLayout& layout) {
   info.scale = layout.scale;
   info.min_key = layout.lo;
   info.max_key = layout.hi;
+  info.map_width_px = info.width_px;
+  info.map_height_px = info.height_px;
   return info;
 }
 
@@ -56,7 +58,8 @@ Rgb heightColor(double t) {
 
 RenderInfo renderTopDown(const Map& map, const std::string& path_png,
                          const RenderOptions& options) {
-  const RenderImage image = renderTopDownImage(map, options);
+  RenderImage image = renderTopDownImage(map, options);
+  if (options.legend) appendLegend(image, RenderView::kTop, options);
   writePng(image, path_png);
   return image.info;
 }
@@ -149,6 +152,13 @@ RenderImage renderTopDownImage(const Map& map, const RenderOptions& options) {
 
 RenderInfo renderSlice(const Map& map, double z_m, const std::string& path_png,
                        const RenderOptions& options) {
+  RenderImage image = renderSliceImage(map, z_m, options);
+  if (options.legend) appendLegend(image, RenderView::kSlice, options);
+  writePng(image, path_png);
+  return image.info;
+}
+
+RenderImage renderSliceImage(const Map& map, double z_m, const RenderOptions& options) {
   if (!std::isfinite(z_m))
     throw InvalidArgument("render: the slice height must be a finite number of metres");
   RenderLayout layout = internal::renderLayout(map, options);
@@ -173,9 +183,11 @@ RenderInfo renderSlice(const Map& map, double z_m, const std::string& path_png,
     }
   }
   info.z_min_m = info.z_max_m = map.centerOf(layout.lo).z();
-  internal::writePngRgb(path_png, info.width_px, info.height_px,
-                        internal::scaleToImage(layout, grid));
-  return info;
+  RenderImage image;
+  image.info = info;
+  image.rgb = internal::scaleToImage(layout, grid);
+  image.resolution_m = map.resolution();
+  return image;
 }
 
 }  // namespace fragg

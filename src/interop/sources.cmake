@@ -6,6 +6,8 @@ set(FRAGG_INTEROP_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/png_write.cpp
   ${CMAKE_CURRENT_LIST_DIR}/render_layout.cpp
   ${CMAKE_CURRENT_LIST_DIR}/render.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/render_legend.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/glyphs.cpp
 )
 set(FRAGG_OCTOMAP_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/octomap_export.cpp

@@ -70,7 +70,14 @@ TEST_F(Cli, RendersTopViewAndSlice) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err, "");  // nothing on stderr (liboctomap's debug lines included)
   EXPECT_NE(r.out.find("32 x 18 px"), std::string::npos) << r.out;  // x -4..11, y -3..5
+  EXPECT_NE(r.out.find("with the legend below, the PNG is"), std::string::npos) << r.out;
   EXPECT_EQ(readBytes(out("top.png")).substr(1, 3), "PNG");
+  const std::string with_legend = readBytes(out("top.png"));
+  r = run("render " + in("map.fgm") + " -o " + out("bare.png") + " --scale 2 --no-legend");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("32 x 18 px"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("legend"), std::string::npos) << r.out;
+  EXPECT_LT(readBytes(out("bare.png")).size(), with_legend.size());
 
   r = run("render " + in("map.fgm") + " -o " + out("slice.png") + " --view slice --z 0.01");
   EXPECT_EQ(r.exit_code, 0) << r.err;

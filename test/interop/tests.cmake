@@ -3,9 +3,14 @@
 fragg_add_test(interop_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/export_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/render_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/render_legend_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/compare_test.cpp
   LIBS fragg_map_interop PNG::PNG
   LABELS interop)
+if(TARGET interop_test)
+  # The legend's font (src/interop/glyphs.h) is tested directly.
+  target_include_directories(interop_test PRIVATE ${PROJECT_SOURCE_DIR}/src/interop)
+endif()
 
 if(TARGET fragg_map_octomap)
   fragg_add_test(interop_octomap_test

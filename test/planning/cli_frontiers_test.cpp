@@ -148,10 +148,10 @@ TEST(CliRenderFrontiers, FrontierColoursOnFrontierColumnsAndViewpoints) {
   const std::string path = roomMap(dir);
   const std::string options = " --viewpoints 1 --radii 0.5 1 --clearance 0";
   const int scale = 8;
-  auto r = runCli(dir, "render '" + path + "' -o '" + dir + "/plain.png' --scale 8");
+  auto r = runCli(dir, "render '" + path + "' -o '" + dir + "/plain.png' --scale 8 --no-legend");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = runCli(
-      dir, "render '" + path + "' -o '" + dir + "/frontiers.png' --scale 8 --frontiers" + options);
+  r = runCli(dir, "render '" + path + "' -o '" + dir +
+                      "/frontiers.png' --scale 8 --no-legend --frontiers" + options);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("frontiers: 860 cells"), std::string::npos) << r.out;
   r = runCli(dir, "frontiers '" + path + "' --json" + options);

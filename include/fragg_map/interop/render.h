@@ -33,6 +33,9 @@ struct RenderOptions {
   Rgb free_color{200, 200, 200};    ///< free (and no occupied) cells: light grey
   Rgb unknown_color{24, 24, 24};    ///< never observed or inside the unknown band: near black
   Rgb occupied_color{230, 60, 30};  ///< slice view; the top view colours by height instead
+  /// A legend strip below the map (renderTopDown, renderSlice): what each colour means, the
+  /// heights at the ends of the colour ramp, what a pixel spans. `fragg_map render` draws it.
+  bool legend = false;
 };
 
 /// What was drawn.
@@ -44,6 +47,10 @@ struct RenderInfo {
   VoxelKey min_key, max_key;        ///< inclusive voxel range drawn (x, y; z of the cells counted)
   size_t occupied_columns = 0;      ///< pixels showing an occupied cell
   double z_min_m = 0, z_max_m = 0;  ///< top view: heights at the ends of the colour ramp
+  /// The map's part of the image, from its top-left corner: width_px x height_px without a
+  /// legend; with one (appendLegend) the legend's rows lie below, its padding to the right.
+  int map_width_px = 0, map_height_px = 0;
+  int legend_height_px = 0;  ///< rows of the legend strip at the bottom (0: none)
 };
 
 /// A rendered image in memory: packed RGB rows, top to bottom, and where map points fall on it
@@ -68,19 +75,34 @@ Rgb heightColor(double t);
 /// Top-down height image: a pixel whose column holds an occupied cell takes the ramp colour
 /// of the highest one (the ramp spans the lowest to the highest such top cell; a single
 /// height takes the middle), a column with free cells only is free_color, one with neither
-/// is unknown_color. Writes `path_png` atomically. Throws InvalidArgument for bad options or
+/// is unknown_color. With options.legend, a legend below (appendLegend). Writes `path_png`
+/// atomically. Throws InvalidArgument for bad options or
 /// an empty map without a crop box, IoError when the file cannot be written.
 RenderInfo renderTopDown(const Map& map, const std::string& path_png,
                          const RenderOptions& options = RenderOptions());
-/// The same image in memory.
+/// The same image in memory (no legend: appendLegend adds one).
 RenderImage renderTopDownImage(const Map& map, const RenderOptions& options = RenderOptions());
 /// Writes an image as PNG, atomically (IoError when it cannot).
 void writePng(const RenderImage& image, const std::string& path_png);
+
+/// The kind of image a legend describes.
+enum class RenderView { kTop, kSlice };
+
+/// Appends a legend strip below `image` (rendered as `view` with `options`): white, black
+/// capitals of a built-in 5 x 7 font (scaled with the image), a swatch per colour with its
+/// meaning, the height ramp with its end heights (top view; "no occupied cell" without one),
+/// the slice height (slice view), what a pixel spans and the axes. Where the legend is wider
+/// than the map the image is widened with the legend's white; the map's pixels keep their
+/// positions (pixelOf). Updates info's width_px, height_px and legend_height_px.
+void appendLegend(RenderImage& image, RenderView view, const RenderOptions& options);
 
 /// Horizontal slice through the voxel layer that holds height `z_m`: occupied_color,
 /// free_color and unknown_color per cell state (map's own occupancy model). Same image
 /// geometry and errors as renderTopDown; the crop box's z extent is ignored.
 RenderInfo renderSlice(const Map& map, double z_m, const std::string& path_png,
                        const RenderOptions& options = RenderOptions());
+/// The same slice in memory (no legend: appendLegend adds one).
+RenderImage renderSliceImage(const Map& map, double z_m,
+                             const RenderOptions& options = RenderOptions());
 
 }  // namespace fragg

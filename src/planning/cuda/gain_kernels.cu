@@ -6,19 +6,18 @@ namespace fragg::cuda {
 
 namespace {
 
-/// The block of key `b`: the dense table where the batch has one (and b lies in it), else the
-/// view's hash.
-__device__ const Block* gainBlock(const GainKernelArgs& a, const BlockKey& b) {
+/// The slot of block `b` (kNoViewSlot: none): the dense table where the batch has one (and b
+/// lies in it), else the view's hash.
+__device__ int32_t gainSlot(const GainKernelArgs& a, const BlockKey& b) {
   if (a.dense) {
     const int64_t x = int64_t(b.x) - a.dense_lo.x, y = int64_t(b.y) - a.dense_lo.y,
                   z = int64_t(b.z) - a.dense_lo.z;
     if (x >= 0 && y >= 0 && z >= 0 && x < a.dense_dims[0] && y < a.dense_dims[1] &&
         z < a.dense_dims[2]) {
-      const int32_t s = a.dense[(z * a.dense_dims[1] + y) * a.dense_dims[0] + x];
-      return s == kNoViewSlot ? nullptr : a.view.cells + s;
+      return a.dense[(z * a.dense_dims[1] + y) * a.dense_dims[0] + x];
     }
   }
-  return a.view.findBlock(b);
+  return a.view.findSlot(b);
 }
 
 __global__ void denseBlockTableKernel(DeviceLayerView view, BlockKey lo, int32_t dx, int32_t dy,
@@ -48,19 +47,23 @@ __global__ void viewpointGainsKernel(GainKernelArgs a) {
     const int64_t bx = a.box_lo[3 * vp], by = a.box_lo[3 * vp + 1], bz = a.box_lo[3 * vp + 2];
     const int64_t sx = a.box_dims[0], sy = a.box_dims[1], sz = a.box_dims[2];
     unsigned long long* seen = a.seen + vp * a.words_per_viewpoint;
-    const Block* block = nullptr;
+    // States from the slot's masks (128 bytes a block, shared by every ray crossing it); a
+    // cell itself is read only when an unknown one is first seen (its entropy).
+    int32_t slot = kNoViewSlot;
     for (int entry = kUnknownBlock;; entry = walk.next()) {
       const VoxelKey k = walk.cell();
-      if (entry != kSameBlock) block = gainBlock(a, blockKeyOf(k));
-      const Cell* cell = block ? &block->cells[cellIndexOf(k)] : nullptr;
-      const CellState s = cell ? a.model.state(*cell) : CellState::kUnknown;
+      if (entry != kSameBlock) slot = gainSlot(a, blockKeyOf(k));
+      const int c = cellIndexOf(k);
+      const CellState s = slot == kNoViewSlot ? CellState::kUnknown : a.view.masks[slot].state(c);
       if (s == CellState::kOccupied) break;
       if (s == CellState::kUnknown) {
         const int64_t lx = k.x - bx, ly = k.y - by, lz = k.z - bz;
         if (lx >= 0 && ly >= 0 && lz >= 0 && lx < sx && ly < sy && lz < sz) {
           const uint64_t bit = uint64_t((lz * sy + ly) * sx + lx);
           const unsigned long long mask = 1ULL << (bit & 63);
-          if (!(atomicOr(&seen[bit >> 6], mask) & mask)) gain += cellGainBits(a.model, cell);
+          if (!(atomicOr(&seen[bit >> 6], mask) & mask))
+            gain +=
+                cellGainBits(a.model, slot == kNoViewSlot ? nullptr : &a.view.cells[slot].cells[c]);
         }
       }
       if (walk.done()) break;

@@ -25,6 +25,7 @@ struct RenderArgs {
   std::vector<double> crop;  // zero or six values
   int max_size = RenderOptions().max_side_px;
   bool no_downscale = false;
+  bool no_legend = false;
   bool frontiers = false;
   /// The options of `fragg_map frontiers`, but the best viewpoint of each cluster by default.
   FrontierFlags frontier_flags = [] {
@@ -39,6 +40,7 @@ RenderOptions optionsOf(const RenderArgs& args) {
   options.scale = args.scale;
   options.max_side_px = args.max_size;
   options.auto_downscale = !args.no_downscale;
+  options.legend = !args.no_legend;
   if (!args.crop.empty()) {
     options.crop = Eigen::AlignedBox3d(Eigen::Vector3d(args.crop[0], args.crop[1], args.crop[2]),
                                        Eigen::Vector3d(args.crop[3], args.crop[4], args.crop[5]));
@@ -66,6 +68,7 @@ void runRender(const RenderArgs& args) {
     RenderImage image = renderTopDownImage(map, options);
     fadeForOverlay(image);
     const FrontierDrawStats drawn = drawFrontiers(image, map, frontiers, options.crop);
+    if (options.legend) appendLegend(image, RenderView::kTop, options);
     writePng(image, args.output);
     info = image.info;
     fmt::print("frontiers: {} cells, {} clusters ({} cells drawn), {} viewpoints drawn\n",
@@ -81,12 +84,16 @@ void runRender(const RenderArgs& args) {
   if (info.voxels_per_pixel > 1)
     detail = fmt::format("downscaled to fit --max-size {}: {} x {} voxels per pixel", args.max_size,
                          info.voxels_per_pixel, info.voxels_per_pixel);
+  if (info.legend_height_px > 0)
+    detail += fmt::format("; with the legend below, the PNG is {} x {} px", info.width_px,
+                          info.height_px);
   if (slice) {
     fmt::print("rendered the slice at z = {:.3f} m to {}: {} x {} px ({})\n", info.z_min_m,
-               args.output, info.width_px, info.height_px, detail);
+               args.output, info.map_width_px, info.map_height_px, detail);
   } else {
     fmt::print("rendered the top view to {}: {} x {} px ({}), heights {:.2f} .. {:.2f} m\n",
-               args.output, info.width_px, info.height_px, detail, info.z_min_m, info.z_max_m);
+               args.output, info.map_width_px, info.map_height_px, detail, info.z_min_m,
+               info.z_max_m);
   }
 }
 
@@ -111,6 +118,8 @@ void addRenderCommand(CLI::App& app) {
   cmd->add_flag("--no-downscale", args->no_downscale,
                 "Fail when the image exceeds --max-size instead of drawing several voxels per "
                 "pixel");
+  cmd->add_flag("--no-legend", args->no_legend,
+                "Leave out the legend strip below the map (colours, height ramp, pixel size)");
   CLI::Option* frontiers = cmd->add_flag(
       "--frontiers", args->frontiers,
       "Draw frontier clusters (cells coloured by cluster) and their best viewpoints (white "
