@@ -10,7 +10,7 @@
 # with each stage's p99. Parameters: config/default.yaml with backend, resolution and
 # sensor_model/max_range set, plus any `name:=value` arguments (e.g. marker_rate:=1
 # map_rate:=1; publish_free_space:=true adds the free-space markers, huge on a LiDAR map).
-# Usage (on the device, in the checkout; .device/ros or .device/ros.tar.zst carried):
+# Usage (on the device, in the checkout; .device/ros or .device/ros.tar.xz carried):
 #   bash scripts/device_node_rate.sh [--rate HZ] [--clouds N] [--resolution M] [--max-range M]
 #     [--backend cuda|cpu|auto] [--bag FILE] [--out DIR] [name:=value ...]
 set -euo pipefail
@@ -32,8 +32,8 @@ done
 top=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)
 ros="$top/.device/ros"
 if [ ! -d "$ros" ]; then
-  [ -f "$ros.tar.zst" ] || { echo "device_node_rate: no $ros (bash scripts/stage_ros.sh)" >&2; exit 2; }
-  tar -C "$top/.device" -I zstd -xf "$ros.tar.zst"
+  [ -f "$ros.tar.xz" ] || { echo "device_node_rate: no $ros (bash scripts/stage_ros.sh)" >&2; exit 2; }
+  tar -C "$top/.device" -xJf "$ros.tar.xz"
 fi
 # shellcheck disable=SC1091
 source "$ros/env.sh"

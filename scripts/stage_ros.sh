@@ -20,8 +20,8 @@
 # The node must be built with CUDA for the GPU (nvcc is here: FRAGG_CUDA=on, sm_90) first;
 # NODE names it (default: <checkout>_ws/devel/lib/fragg_map/fragg_map_server).
 #   bash scripts/stage_ros.sh [DEST]
-# On the GPU machine (run's carry: .device/ros.tar.zst; the folder is over 64 MiB):
-#   tar -C .device -I zstd -xf .device/ros.tar.zst && source .device/ros/env.sh &&
+# On the GPU machine (run's carry: .device/ros.tar.xz; the folder is over 64 MiB):
+#   tar -C .device -xJf .device/ros.tar.xz && source .device/ros/env.sh &&
 #   OUT=$OUT bash .device/ros/run_rate.sh BAG RATE _backend:=cuda _resolution:=0.05
 set -euo pipefail
 top=$(git rev-parse --show-toplevel 2>/dev/null || pwd)
@@ -68,6 +68,22 @@ for dep in $(grep -o '<[a-z_]*depend>[^<]*' "$top/package.xml" | sed 's/.*>//' |
     [ -f "/usr/share/$dep/nodelet_plugins.xml" ] || continue  # pcl_ros declares its own
   fi
 done
+# A bag writer (fragg_map_sim record, rosbag's recorder) loads rosbag_storage's default
+# encryptor through pluginlib: its package index, plugin description and library (with the
+# libraries it needs), which the ldd pass above does not see.
+enc=$(find /usr/lib -name 'librosbag_default_encryption_plugins.so' 2>/dev/null | head -1)
+if [ -f /usr/share/rosbag_storage/encryptor_plugins.xml ] && [ -n "$enc" ]; then
+  mkdir -p "$dest/share/rosbag_storage"
+  cp /usr/share/rosbag_storage/package.xml /usr/share/rosbag_storage/encryptor_plugins.xml \
+    "$dest/share/rosbag_storage/"
+  cp -L "$enc" "$dest/lib/"
+  ldd "$enc" | awk '/=> \//{print $3}' | while read -r lib; do
+    base=$(basename "$lib")
+    [[ "$base" =~ $skip ]] || [ -e "$dest/lib/$base" ] || cp -L "$lib" "$dest/lib/$base"
+  done
+else
+  echo "stage_ros: rosbag_storage's encryptor plugin not found: bags cannot be written there" >&2
+fi
 # The master: rosmaster and the pure-Python modules it imports (checked below by importing
 # them from the staged folder alone).
 py=/usr/lib/python3/dist-packages
@@ -113,6 +129,8 @@ RUN
 chmod +x "$dest/run_rate.sh"
 echo "staged the ROS runtime in $dest ($(du -sh "$dest" | cut -f1); lib $(du -sh "$dest/lib" | cut -f1))"
 # The device run carries at most 64 MiB of ignored files: the folder also as one archive
-# (there: tar -C .device -I zstd -xf .device/ros.tar.zst), carried instead of the folder.
-tar -C "$(dirname "$dest")" -I 'zstd -19 -T0 -q' -cf "$dest.tar.zst" "$(basename "$dest")"
-echo "and as $dest.tar.zst ($(du -sh "$dest.tar.zst" | cut -f1))"
+# (there: tar -C .device -xJf .device/ros.tar.xz), carried instead of the folder. xz, not
+# zstd: the GPU machine's Ubuntu has no zstd.
+rm -f "$dest.tar.zst"
+tar -C "$(dirname "$dest")" -I 'xz -6 -T0' -cf "$dest.tar.xz" "$(basename "$dest")"
+echo "and as $dest.tar.xz ($(du -sh "$dest.tar.xz" | cut -f1))"
