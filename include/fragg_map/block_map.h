@@ -102,8 +102,6 @@ class BlockMap {
   /// capacity costs address space, not resident memory (except the index, whose slots are
   /// written when it is sized). Returns the block count the arrays now hold without growing.
   size_t reserveSlots(size_t n);
-  /// The block count the per-block arrays hold without growing (their capacity).
-  [[nodiscard]] size_t reservedSlots() const { return meta_.capacity(); }
   void erase(const BlockKey& key);
   /// Erases every block of `keys` (missing ones are skipped): the same as erasing them one by
   /// one, with each coarse-index list rewritten once (a paging round erases tens of

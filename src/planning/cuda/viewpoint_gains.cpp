@@ -52,7 +52,6 @@ SeenBoxes seenBoxes(const GainBatch& batch) {
   const double length = batch.length_v;
   SeenBoxes boxes;
   boxes.lo.resize(3 * n);
-  std::vector<int32_t> hi(3 * n);
   for (size_t i = 0; i < n; ++i) {
     const double c = batch.cos_yaw[i], s = batch.sin_yaw[i];
     double lo_d[3] = {0.0, 0.0, rmin[2]}, hi_d[3] = {0.0, 0.0, rmax[2]};
@@ -72,7 +71,6 @@ SeenBoxes seenBoxes(const GainBatch& batch) {
       const int64_t top = std::min<int64_t>(
           centre + half, static_cast<int64_t>(std::floor(o + length * hi_d[a])) + 2);
       boxes.lo[3 * i + a] = static_cast<int32_t>(lo);
-      hi[3 * i + a] = static_cast<int32_t>(top);
       boxes.dims[a] = std::max(boxes.dims[a], static_cast<int32_t>(top - lo + 1));
     }
   }
