@@ -9,6 +9,7 @@
 
 #include "fragg_map/ros/height_color.h"
 #include "fragg_map/ros/layer_masks.h"
+#include "fragg_map/ros/marker_wire.h"
 #include "fragg_map/ros/speckles.h"
 #include "fragg_map/state_masks.h"
 
@@ -110,8 +111,7 @@ namespace {
 /// Appends the cells `cells` of block `key` to `m` (points and their colours).
 void appendCells(const fragg::Map& map, const fragg::BlockKey& key, const CellMask& cells,
                  const MarkerStyle& style, visualization_msgs::Marker* m) {
-  // The caller reserves the marker's points (chunkMarker: once for the whole chunk; a reserve
-  // per block here would copy the chunk's points again with every block).
+  // The caller reserves the marker's points.
   const double res_m = map.resolution();
   // Colours depend on the height only: one per z layer of the block.
   std_msgs::ColorRGBA layer_color[fragg::kBlockSize];
@@ -171,34 +171,80 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
 
 namespace {
 
-/// The marker of a chunk: its blocks' cells, blocks in key order.
+/// Writes the cells `cells` of block `key` as points first .. of `w` (as appendCells draws
+/// them); returns the next point's index.
+uint32_t writeCells(const fragg::Map& map, const fragg::BlockKey& key, const CellMask& cells,
+                    const MarkerStyle& style, CubeListWriter* w, uint32_t first) {
+  const double res_m = map.resolution();
+  float layer_rgba[fragg::kBlockSize][4];
+  for (int z = 0; z < fragg::kBlockSize; ++z) {
+    if (style.height_colors) {
+      const std_msgs::ColorRGBA c =
+          heightColor((key.z * fragg::kBlockSize + z + 0.5) * res_m, style.color_min_z_m,
+                      style.color_max_z_m, style.alpha);
+      layer_rgba[z][0] = c.r, layer_rgba[z][1] = c.g, layer_rgba[z][2] = c.b,
+      layer_rgba[z][3] = c.a;
+    } else {
+      for (int k = 0; k < 3; ++k) layer_rgba[z][k] = style.flat_rgb[k];
+      layer_rgba[z][3] = style.alpha;
+    }
+  }
+  uint32_t i = first;
+  for (size_t c = cells._Find_first(); c < cells.size(); c = cells._Find_next(c), ++i) {
+    const fragg::VoxelKey v = fragg::voxelKeyOf(key, static_cast<int>(c));
+    w->setPoint(i, (v.x + 0.5) * res_m, (v.y + 0.5) * res_m, (v.z + 0.5) * res_m);
+    const float* rgba = layer_rgba[c >> (2 * fragg::kBlockBits)];
+    if (style.colors) {
+      if (const std::optional<Rgb8> rgb = style.colors->find(v)) {
+        const float own[4] = {rgb->r / 255.0f, rgb->g / 255.0f, rgb->b / 255.0f, rgba[3]};
+        w->setColor(i, own);
+        continue;
+      }
+    }
+    w->setColor(i, rgba);
+  }
+  return i;
+}
+
+/// The marker of a chunk (its blocks' cells, blocks in key order) in roscpp's wire layout,
+/// points and colours written in place.
 template <typename Blocks>
-visualization_msgs::Marker chunkMarker(const fragg::Map& map, const Blocks& blocks,
-                                       const MarkerStyle& style, const ::ros::Time& stamp,
-                                       int32_t id) {
+std::shared_ptr<WireMarker> chunkWire(const fragg::Map& map, const Blocks& blocks,
+                                      const MarkerStyle& style, int32_t id,
+                                      std::shared_ptr<WireMarker> reuse = nullptr) {
   std::vector<size_t> order(blocks.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::sort(order.begin(), order.end(),
             [&](size_t a, size_t b) { return byKey(blocks[a].key, blocks[b].key); });
   size_t cells = 0;
   for (size_t i = 0; i < blocks.size(); ++i) cells += blocks[i].cells.count();
-  visualization_msgs::Marker m = emptyCubeList(map, style, stamp, id);
-  m.points.reserve(cells);
-  m.colors.reserve(cells);
-  for (size_t i : order) appendCells(map, blocks[i].key, blocks[i].cells, style, &m);
-  return m;
+  CubeListWriter w(emptyCubeList(map, style, ::ros::Time(), id), static_cast<uint32_t>(cells),
+                   std::move(reuse));
+  uint32_t next = 0;
+  for (size_t i : order) next = writeCells(map, blocks[i].key, blocks[i].cells, style, &w, next);
+  return w.finish();
+}
+
+/// Encodes the kept wire of every chunk in `chunks` (in parallel where no colour table is read).
+void encodeChunks(const fragg::Map& map, const MarkerStyle& style,
+                  const std::vector<MarkerLedger::Chunk*>& chunks) {
+  const int64_t n = static_cast<int64_t>(chunks.size());
+#pragma omp parallel for schedule(dynamic, 8) if (n > 16 && !style.colors)
+  for (int64_t j = 0; j < n; ++j)
+    chunks[j]->wire =
+        chunkWire(map, chunks[j]->blocks, style, chunks[j]->id, std::move(chunks[j]->wire));
 }
 
 }  // namespace
 
-visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
-                                                    const ::ros::Time& stamp,
-                                                    MarkerLedger* ledger) {
+SerializedMarkerArray changedBlockMarkersWire(const fragg::Map& map, const MarkerStyle& style,
+                                              const ::ros::Time& stamp, MarkerLedger* ledger) {
   if (std::max(1, style.chunk_blocks) != ledger->chunk_blocks_ && !ledger->chunks_.empty())
-    return allBlockMarkers(map, style, stamp, ledger);  // a new chunk size: redraw all
+    return allBlockMarkersWire(map, style, stamp, ledger);  // a new chunk size: redraw all
   ledger->chunk_blocks_ = std::max(1, style.chunk_blocks);
   const int32_t chunk_blocks = ledger->chunk_blocks_;
-  visualization_msgs::MarkerArray out;
+  SerializedMarkerArray out;
+  out.stamp = stamp;
   const fragg::BlockView blocks = map.blockView();
   const uint64_t since = ledger->published_revision_;
   std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> dirty;  // chunk keys
@@ -282,32 +328,42 @@ visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const
       dirty.insert(chunk_key);
     }
   }
-  // One entry per changed chunk: its whole marker, or DELETE when it draws nothing now.
+  // One entry per changed chunk: its whole marker (encoded again and kept), or DELETE when it
+  // draws nothing now.
   std::vector<fragg::BlockKey> order(dirty.begin(), dirty.end());
   std::sort(order.begin(), order.end(), byKey);
+  std::vector<MarkerLedger::Chunk*> redrawn;
+  redrawn.reserve(order.size());
   out.markers.reserve(order.size());
   for (const fragg::BlockKey& chunk_key : order) {
     const auto chunk = ledger->chunks_.find(chunk_key);
     if (chunk->second.blocks.empty()) {
       if (chunk->second.id >= 0)
-        out.markers.push_back(
-            markerHeader(style, stamp, chunk->second.id, visualization_msgs::Marker::DELETE));
+        out.markers.push_back(wireOf(
+            markerHeader(style, stamp, chunk->second.id, visualization_msgs::Marker::DELETE)));
       ledger->chunks_.erase(chunk);
       continue;
     }
     if (chunk->second.id < 0) chunk->second.id = ledger->next_id_++;
-    out.markers.push_back(chunkMarker(map, chunk->second.blocks, style, stamp, chunk->second.id));
+    redrawn.push_back(&chunk->second);
+    out.markers.emplace_back();  // its wire, once encoded
   }
+  encodeChunks(map, style, redrawn);
+  size_t next = 0;
+  for (WireMarkerPtr& m : out.markers)
+    if (!m) m = redrawn[next++]->wire;
   ledger->published_revision_ = map.revision();
   ledger->view_epoch_ = map.viewEpoch();
   if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
   return out;
 }
 
-visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
-                                                const ::ros::Time& stamp, MarkerLedger* ledger) {
-  visualization_msgs::MarkerArray out;
-  out.markers.push_back(markerHeader(style, stamp, 0, visualization_msgs::Marker::DELETEALL));
+SerializedMarkerArray allBlockMarkersWire(const fragg::Map& map, const MarkerStyle& style,
+                                          const ::ros::Time& stamp, MarkerLedger* ledger) {
+  SerializedMarkerArray out;
+  out.stamp = stamp;
+  out.markers.push_back(
+      wireOf(markerHeader(style, stamp, 0, visualization_msgs::Marker::DELETEALL)));
   ledger->clear(style.chunk_blocks);
   const fragg::BlockView blocks = map.blockView();
   const std::vector<fragg::BlockRef> all = blocks.all();
@@ -326,37 +382,66 @@ visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const Mar
   order.reserve(ledger->chunks_.size());
   for (const auto& [chunk_key, chunk] : ledger->chunks_) order.push_back(chunk_key);
   std::sort(order.begin(), order.end(), byKey);
+  std::vector<MarkerLedger::Chunk*> chunks;
+  chunks.reserve(order.size());
   for (const fragg::BlockKey& chunk_key : order) {
     MarkerLedger::Chunk& chunk = ledger->chunks_[chunk_key];
     chunk.id = ledger->next_id_++;
-    out.markers.push_back(chunkMarker(map, chunk.blocks, style, stamp, chunk.id));
+    chunks.push_back(&chunk);
   }
+  encodeChunks(map, style, chunks);
+  for (const MarkerLedger::Chunk* chunk : chunks) out.markers.push_back(chunk->wire);
   ledger->published_revision_ = map.revision();
   ledger->view_epoch_ = map.viewEpoch();
   if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
   return out;
 }
 
-visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
-                                                  const ::ros::Time& stamp,
-                                                  const MarkerLedger& ledger) {
-  visualization_msgs::MarkerArray out;
-  out.markers.push_back(markerHeader(style, stamp, 0, visualization_msgs::Marker::DELETEALL));
+SerializedMarkerArray shownBlockMarkersWire(const fragg::Map& map, const MarkerStyle& style,
+                                            const ::ros::Time& stamp, const MarkerLedger& ledger) {
+  SerializedMarkerArray out;
+  out.stamp = stamp;
+  out.markers.push_back(
+      wireOf(markerHeader(style, stamp, 0, visualization_msgs::Marker::DELETEALL)));
   const fragg::BlockView blocks = map.blockView();
   std::vector<fragg::BlockKey> order;
   order.reserve(ledger.chunks_.size());
   for (const auto& [chunk_key, chunk] : ledger.chunks_) order.push_back(chunk_key);
   std::sort(order.begin(), order.end(), byKey);
+  // The kept wire is what the subscribers were sent, unless blocks may have left the map since
+  // (the view moved) or colours may have changed (colored_map): then the chunk is drawn again.
+  const bool kept = map.viewEpoch() == ledger.view_epoch_ && !style.colors;
   for (const fragg::BlockKey& chunk_key : order) {
     const MarkerLedger::Chunk& chunk = ledger.chunks_.at(chunk_key);
+    if (kept && chunk.wire) {
+      out.markers.push_back(chunk.wire);
+      continue;
+    }
     // An erased block is still shown until the next increment redraws its chunk: its cells
     // stand nowhere else, so it is left out (a chunk left empty is not sent).
     std::vector<MarkerLedger::ShownBlock> present;
     for (const MarkerLedger::ShownBlock& b : chunk.blocks)
       if (blocks.findBlock(b.key)) present.push_back(b);
-    if (!present.empty()) out.markers.push_back(chunkMarker(map, present, style, stamp, chunk.id));
+    if (!present.empty()) out.markers.push_back(chunkWire(map, present, style, chunk.id));
   }
   return out;
+}
+
+visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
+                                                    const ::ros::Time& stamp,
+                                                    MarkerLedger* ledger) {
+  return toMarkerArray(changedBlockMarkersWire(map, style, stamp, ledger));
+}
+
+visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
+                                                const ::ros::Time& stamp, MarkerLedger* ledger) {
+  return toMarkerArray(allBlockMarkersWire(map, style, stamp, ledger));
+}
+
+visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
+                                                  const ::ros::Time& stamp,
+                                                  const MarkerLedger& ledger) {
+  return toMarkerArray(shownBlockMarkersWire(map, style, stamp, ledger));
 }
 
 }  // namespace fragg::ros

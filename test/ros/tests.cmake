@@ -7,6 +7,7 @@ if(FRAGG_HAVE_ROS)
   fragg_add_test(ros_map_to_msgs_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/block_markers_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/marker_chunks_test.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/marker_wire_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/map_msgs_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/speckles_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/output_cache_test.cpp

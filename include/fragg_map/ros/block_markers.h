@@ -21,6 +21,7 @@
 #include "fragg_map/map.h"
 #include "fragg_map/ros/cell_colors.h"
 #include "fragg_map/ros/height_band.h"
+#include "fragg_map/ros/marker_wire.h"
 
 namespace fragg::ros {
 
@@ -72,23 +73,30 @@ class MarkerLedger {
   /// Chunks shown (markers a subscriber holds).
   size_t shownChunks() const { return chunks_.size(); }
   /// The id of the marker that draws block `key`, or -1 when the block is not shown.
-  int32_t idOf(const fragg::BlockKey& key) const;
+  [[nodiscard]] int32_t idOf(const fragg::BlockKey& key) const;
 
- private:
-  friend visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map&, const MarkerStyle&,
-                                                             const ::ros::Time&, MarkerLedger*);
-  friend visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map&, const MarkerStyle&,
-                                                         const ::ros::Time&, MarkerLedger*);
-  friend visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map&, const MarkerStyle&,
-                                                           const ::ros::Time&, const MarkerLedger&);
+  /// A block drawn in a chunk, with its drawn cells.
   struct ShownBlock {
     fragg::BlockKey key;
     CellMask cells;
   };
+  /// What the ledger keeps of a shown chunk.
   struct Chunk {
     int32_t id = -1;
     std::vector<ShownBlock> blocks;  ///< those with drawn cells
+    /// The chunk's marker as last sent, in roscpp's wire layout (its stamp rewritten when
+    /// sent): sent again as is in a late subscriber's snapshot; its buffer is written over
+    /// when the chunk is drawn again and nothing else holds it.
+    std::shared_ptr<WireMarker> wire;
   };
+
+ private:
+  friend SerializedMarkerArray changedBlockMarkersWire(const fragg::Map&, const MarkerStyle&,
+                                                       const ::ros::Time&, MarkerLedger*);
+  friend SerializedMarkerArray allBlockMarkersWire(const fragg::Map&, const MarkerStyle&,
+                                                   const ::ros::Time&, MarkerLedger*);
+  friend SerializedMarkerArray shownBlockMarkersWire(const fragg::Map&, const MarkerStyle&,
+                                                     const ::ros::Time&, const MarkerLedger&);
   void clear(int32_t chunk_blocks);
   std::unordered_map<fragg::BlockKey, Chunk, fragg::BlockKeyHash> chunks_;  ///< by chunk key
   int32_t chunk_blocks_ = 1;
@@ -113,20 +121,45 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
 /// chunk where a block's drawn cells changed and that still draws some, DELETE for a shown
 /// chunk that lost them all. The blocks looked at are those whose drawn state changed (with
 /// hidden speckles, their 26 neighbours too), and, when the map's view moved, the shown ones
-/// that left the map. Updates the ledger to the map's revision.
-visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
-                                                    const ::ros::Time& stamp, MarkerLedger* ledger);
+/// that left the map. Updates the ledger to the map's revision; each redrawn chunk's marker is
+/// encoded once in roscpp's wire layout and kept in the ledger (what a publisher sends).
+[[nodiscard]] SerializedMarkerArray changedBlockMarkersWire(const fragg::Map& map,
+                                                            const MarkerStyle& style,
+                                                            const ::ros::Time& stamp,
+                                                            MarkerLedger* ledger);
 
 /// A full republish (after reset or load, or for a late subscriber): a DELETEALL marker in
-/// `style.ns`, then one ADD per chunk with drawn cells. Rebuilds the ledger.
-visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
-                                                const ::ros::Time& stamp, MarkerLedger* ledger);
+/// `style.ns`, then one ADD per chunk with drawn cells. Rebuilds the ledger (and its kept
+/// wire).
+[[nodiscard]] SerializedMarkerArray allBlockMarkersWire(const fragg::Map& map,
+                                                        const MarkerStyle& style,
+                                                        const ::ros::Time& stamp,
+                                                        MarkerLedger* ledger);
 
 /// What a topic's subscribers see now, for a late subscriber of a latched topic: a DELETEALL,
-/// then every chunk the ledger shows, with the ledger's ids and cells, so that the topic's
-/// next increments apply to it as to everyone else. The ledger is not changed.
-visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map& map, const MarkerStyle& style,
-                                                  const ::ros::Time& stamp,
-                                                  const MarkerLedger& ledger);
+/// then every chunk the ledger shows, with the ledger's ids and cells (its kept wire, unless
+/// the map's view moved or colours are drawn: then drawn again without the blocks that left),
+/// so that the topic's next increments apply to it as to everyone else. The ledger is not
+/// changed.
+[[nodiscard]] SerializedMarkerArray shownBlockMarkersWire(const fragg::Map& map,
+                                                          const MarkerStyle& style,
+                                                          const ::ros::Time& stamp,
+                                                          const MarkerLedger& ledger);
+
+/// changedBlockMarkersWire as the MarkerArray a subscriber receives (tests, tools).
+[[nodiscard]] visualization_msgs::MarkerArray changedBlockMarkers(const fragg::Map& map,
+                                                                  const MarkerStyle& style,
+                                                                  const ::ros::Time& stamp,
+                                                                  MarkerLedger* ledger);
+/// allBlockMarkersWire as the MarkerArray a subscriber receives.
+[[nodiscard]] visualization_msgs::MarkerArray allBlockMarkers(const fragg::Map& map,
+                                                              const MarkerStyle& style,
+                                                              const ::ros::Time& stamp,
+                                                              MarkerLedger* ledger);
+/// shownBlockMarkersWire as the MarkerArray a subscriber receives.
+[[nodiscard]] visualization_msgs::MarkerArray shownBlockMarkers(const fragg::Map& map,
+                                                                const MarkerStyle& style,
+                                                                const ::ros::Time& stamp,
+                                                                const MarkerLedger& ledger);
 
 }  // namespace fragg::ros

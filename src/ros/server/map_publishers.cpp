@@ -219,9 +219,11 @@ void MapPublishers::publishMarkers(const fragg::Map& map, MarkerTopic& topic,
   const bool joined = subscribers > topic.subscribers;
   topic.subscribers = subscribers;
   const bool first = topic.ledger.publishedRevision() == 0;
-  visualization_msgs::MarkerArray markers =
-      full || first || joined ? allBlockMarkers(map, topic.style, stamp, &topic.ledger)
-                              : changedBlockMarkers(map, topic.style, stamp, &topic.ledger);
+  // Kept wire bytes of the chunks (marker_wire.h): roscpp copies them, nothing is serialised
+  // again.
+  const SerializedMarkerArray markers =
+      full || first || joined ? allBlockMarkersWire(map, topic.style, stamp, &topic.ledger)
+                              : changedBlockMarkersWire(map, topic.style, stamp, &topic.ledger);
   if (!markers.markers.empty()) topic.pub.publish(markers);
 }
 
@@ -234,11 +236,11 @@ void MapPublishers::sendAllMarkersTo(MarkerTopic& topic,
   topic.subscribers = std::min(topic.subscribers + 1, topic.pub.getNumSubscribers());
   if (topic.ledger.publishedRevision() == 0 && topic.ledger.shownChunks() == 0) {
     // Nobody subscribed before: the ledger starts here, from the whole map.
-    sub.publish(allBlockMarkers(state->map, topic.style, now, &topic.ledger));
+    sub.publish(allBlockMarkersWire(state->map, topic.style, now, &topic.ledger));
     return;
   }
   // The chunks the topic's subscribers see, under the ids its increments will use.
-  sub.publish(shownBlockMarkers(state->map, topic.style, now, topic.ledger));
+  sub.publish(shownBlockMarkersWire(state->map, topic.style, now, topic.ledger));
 }
 
 }  // namespace fragg::ros

@@ -9,6 +9,7 @@
 
 #include "file_root.h"
 #include "fragg_map/log.h"
+#include "fragg_map/ros/publish_buffers.h"
 #include "octomap_compat_notes.h"
 
 namespace fragg::ros {
@@ -27,6 +28,9 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
   } stop_on_throw{&threads_};
   if (!map_file_arg.empty()) params_.octomap.map_file = map_file_arg;
   logOctomapCompatNotes(params_);
+  // Each publication's serialised buffer reuses the last one's pages (publish_buffers.h).
+  if (!keepPublicationBuffers(kKeptPublicationBytes))
+    ROS_WARN("fragg_map: malloc thresholds not raised: each publication maps fresh pages");
   // Throws (the node does not start) when the folder cannot be created.
   params_.file_root =
       prepareFileRoot(params_.file_root.empty() ? defaultFileRoot() : params_.file_root);

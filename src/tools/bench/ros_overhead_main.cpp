@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
     const uint64_t before = ledger.publishedRevision();
     blocks_changed += map.changedBlocksSince(before, fragg::BlockChange::kOccupied).size();
     const auto t0 = std::chrono::steady_clock::now();
-    const auto markers = fragg::ros::changedBlockMarkers(map, style, ros::Time(), &ledger);
+    const auto markers = fragg::ros::changedBlockMarkersWire(map, style, ros::Time(), &ledger);
     update_ms.push_back(msSince(t0));
     markers_total_ms += update_ms.back();
     markers_sent += markers.markers.size();

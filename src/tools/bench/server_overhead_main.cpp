@@ -26,6 +26,7 @@
 #include <ros/serialization.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/PointField.h>
+#include <sys/resource.h>
 #include <time.h>
 
 #include <CLI/CLI.hpp>
@@ -45,6 +46,7 @@
 #include "fragg_map/ros/occupied_cloud.h"
 #include "fragg_map/ros/output_cache.h"
 #include "fragg_map/ros/projected_map.h"
+#include "fragg_map/ros/publish_buffers.h"
 #include "fragg_map/ros/rate_throttle.h"
 #include "percentile.h"
 
@@ -63,6 +65,13 @@ struct Clock {
 
 double msSince(double start_ms) { return Clock::now() - start_ms; }
 
+/// Minor page faults of the process so far (a fresh page costs ~15 us on the 2-core VM).
+long minorFaults() {
+  rusage usage;
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_minflt;
+}
+
 /// One subscriber in another process: the message serialised once.
 template <typename M>
 size_t serialised(const M& msg) {
@@ -76,6 +85,8 @@ struct Times {
   // The markers' share (the same on both paths).
   double marker_serialise = 0;
   size_t marker_bytes = 0;
+  long marker_faults = 0;  ///< minor page faults while the markers were built and serialised
+  long map_faults = 0;     ///< the same for the whole-map outputs
   size_t blocks_read = 0;  ///< blocks the output cache recomputed (after path)
   size_t cells_read = 0;   ///< of those, blocks whose cells it read (the others: masks)
   fragg::ros::OutputCacheUpdate stages;  ///< the cache update's own account (wall times)
@@ -110,11 +121,14 @@ class Outputs {
   Times publish(const fragg::Map& map, Due due = Due()) {
     Times t;
     auto t0 = Clock::now();
-    visualization_msgs::MarkerArray markers;
+    long faults = minorFaults(), marker_faults = 0;
+    fragg::ros::SerializedMarkerArray markers;  // as the server publishes them
     if (!before_ && due.markers) {
-      markers = fragg::ros::changedBlockMarkers(map, style_, ros::Time(), &ledger_);
+      markers = fragg::ros::changedBlockMarkersWire(map, style_, ros::Time(), &ledger_);
       t.markers = msSince(t0);
     }
+    marker_faults = minorFaults() - faults;
+    faults = minorFaults();
     t0 = Clock::now();
     sensor_msgs::PointCloud2 rebuilt;
     const sensor_msgs::PointCloud2* cloud = &rebuilt;  // the after path's is the cache's own
@@ -137,12 +151,17 @@ class Outputs {
       grid = cache_.projectedMap("map", ros::Time());
       t.grid = msSince(t0);
     }
+    t.map_faults = minorFaults() - faults;
+    faults = minorFaults();
     t0 = Clock::now();
     t.marker_bytes = before_ || !due.markers ? 0 : serialised(markers);
     t.marker_serialise = msSince(t0);
+    t.marker_faults = marker_faults + minorFaults() - faults;
+    faults = minorFaults();
     t.bytes = t.marker_bytes;
     if (before_ || due.maps) t.bytes += serialised(*cloud) + serialised(grid);
     t.serialise = msSince(t0);
+    t.map_faults += minorFaults() - faults;
     return t;
   }
 
@@ -308,12 +327,15 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
     if (pending.markers || pending.maps) flush = after.publish(map, pending);
     if (pending.maps)
       std::printf(
-          "  the flush: markers %.2f (serialised %.2f), cache update %.2f (%zu blocks read, %zu "
+          "  the flush: markers %.2f (serialised %.2f; %.2f MB, %ld page faults), cache update "
+          "%.2f (%zu blocks read, %zu "
           "of them from their cells; wall ms: list %.2f, pieces %.2f, columns and grid %.2f), "
-          "occupied cloud message %.2f, grid %.2f, whole-map messages serialised %.2f ms\n",
-          flush.markers, flush.marker_serialise, flush.cache_update, flush.blocks_read,
-          flush.cells_read, flush.stages.list_ms, flush.stages.pieces_ms, flush.stages.grid_ms,
-          flush.cloud - flush.cache_update, flush.grid, flush.serialise - flush.marker_serialise);
+          "occupied cloud message %.2f, grid %.2f, whole-map messages serialised %.2f ms (%ld "
+          "page faults)\n",
+          flush.markers, flush.marker_serialise, flush.marker_bytes / 1e6, flush.marker_faults,
+          flush.cache_update, flush.blocks_read, flush.cells_read, flush.stages.list_ms,
+          flush.stages.pieces_ms, flush.stages.grid_ms, flush.cloud - flush.cache_update,
+          flush.grid, flush.serialise - flush.marker_serialise, flush.map_faults);
   }
   printAmortised(rates, converts, after_times, dues, flush);
 }
@@ -352,7 +374,13 @@ int main(int argc, char** argv) {
   app.add_flag("--after-only", after_only,
                "only the server's path (no whole-map rebuild, no cache refreshing every changed "
                "block): for profiles and long runs");
+  bool fresh_buffers = false;
+  app.add_flag("--fresh-buffers", fresh_buffers,
+               "leave glibc's mmap and trim thresholds as they are (the server raises them: "
+               "keepPublicationBuffers), so that each serialised message maps fresh pages");
   CLI11_PARSE(app, argc, argv);
+  if (!fresh_buffers && !fragg::ros::keepPublicationBuffers(fragg::ros::kKeptPublicationBytes))
+    std::printf("keepPublicationBuffers: refused (not glibc?): fresh pages per message\n");
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows as they come (long runs)
 
   const auto want = [](const std::string& name) { return name == "W1 lidar360 30 m"; };
