@@ -6,11 +6,14 @@
 // conversion (cloudFromMsg), the incremental markers (changedBlockMarkers, as the server publishes
 // them), the occupied cloud (occupied_cells and octomap_point_cloud_centers share one message), the
 // projected map, and each message serialised once as roscpp does for a subscriber in another
-// process (ros::serialization::serializeMessage). No ROS master: the builders are called
-// directly. Markers are the same incremental update on both paths (timed once); the whole-map
-// rebuilds of the old path run only after the scans whose rows are printed. Times are CPU
-// milliseconds of the process (the machine is shared).
-// With --marker-rate / --map-rate (the server's marker_rate and map_rate) the clouds arrive at
+// process (ros::serialization::serializeMessage; the markers as the server sends them, their
+// changed chunks' kept wire bytes: marker_wire.h). As the server, glibc's thresholds are raised
+// first so that message buffers are reused (publish_buffers.h; --fresh-buffers: not), and the
+// page faults of the flush are counted. No ROS master: the builders are called directly. Markers
+// are the same incremental update on both paths (timed once); the whole-map rebuilds of the old
+// path run only after the scans whose rows are printed. Times are CPU milliseconds of the process
+// (the machine is shared). With --marker-rate / --map-rate (the server's marker_rate and map_rate)
+// the clouds arrive at
 // --cloud-rate of sensor time and the after path runs the marker update, or the cache update +
 // occupied cloud + projected map + their serialisation, only after the clouds where the
 // server's RateThrottle lets one out (the skipped clouds' changes go out with the next); its
@@ -23,6 +26,7 @@
 //   fragg_map_server_overhead --workloads DIR [--scans N] [--big-map FILE] [--big-scans K]
 //                             [--cloud-rate HZ] [--marker-rate HZ] [--map-rate HZ]
 //                             [--marker-chunk N] [--after-only] [--cells-always]
+//                             [--fresh-buffers]
 #include <ros/serialization.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/PointField.h>
