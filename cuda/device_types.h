@@ -90,6 +90,7 @@ struct ScanCounters {
   uint32_t touched;         ///< slots in the touched list
   uint32_t changed;         ///< touched slots with a changed cell
   uint32_t applied;         ///< 1 when the apply kernel ran (no miss, no overflow)
+  uint32_t dynamic;         ///< MapParams::dynamic: hits classified dynamic
 };
 
 }  // namespace fragg::cuda

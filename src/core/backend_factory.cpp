@@ -40,16 +40,6 @@ BackendChoice makeBackend(const MapParams& p) {
     c.reason = "cpu: requested";
     return c;
   }
-  if (p.dynamic.enabled) {  // the classification runs on the host map (CPU backend) for now
-    if (p.backend == Backend::kCuda)
-      throw InvalidArgument(
-          "dynamic.enabled: the CUDA backend does not classify dynamic hits yet; use backend "
-          "cpu or auto");
-    c.backend = std::make_unique<CpuBackend>(p.threads);
-    c.reason = "auto: CPU backend (dynamic.enabled runs on the CPU backend)";
-    logAutoChoiceOnce(LogLevel::kInfo, "backend " + c.reason);
-    return c;
-  }
 #if FRAGG_HAVE_CUDA
   std::string why_not;
   const std::string name = cudaDeviceName(p.cuda.device, &why_not);
