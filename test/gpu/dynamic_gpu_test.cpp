@@ -128,7 +128,7 @@ W6Slice w6Slice(size_t frames) {
 /// The slice through both backends under the surround rule at 5 cm (W6's resolution), the CUDA
 /// map with `pool_slots` slots (0: its default pool).
 void w6OnBothBackends(size_t pool_slots) {
-  const W6Slice w6 = w6Slice(30);
+  const W6Slice w6 = w6Slice(40);
   ASSERT_GT(w6.dynamic_labels, 0u) << "the slice shows no mover";
   MapParams p = dynamicSceneParams(true, VoidSpaceRule::kSurround, 2);
   p.resolution_m = 0.05;
