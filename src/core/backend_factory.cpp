@@ -40,6 +40,16 @@ BackendChoice makeBackend(const MapParams& p) {
     c.reason = "cpu: requested";
     return c;
   }
+  if (p.dynamic.decay_log_odds_per_scan > 0.0) {  // a map-wide pass over the host map
+    if (p.backend == Backend::kCuda)
+      throw InvalidArgument(
+          "dynamic.decay_log_odds_per_scan: the CUDA backend does not decay cells; use backend "
+          "cpu or auto");
+    c.backend = std::make_unique<CpuBackend>(p.threads);
+    c.reason = "auto: CPU backend (dynamic.decay_log_odds_per_scan runs on the CPU backend)";
+    logAutoChoiceOnce(LogLevel::kInfo, "backend " + c.reason);
+    return c;
+  }
 #if FRAGG_HAVE_CUDA
   std::string why_not;
   const std::string name = cudaDeviceName(p.cuda.device, &why_not);
