@@ -139,6 +139,7 @@ void CudaIntegrator::classifyDynamicHits(const ScanInput& in, const UpdateSettin
     resolveMissesAndOverflow(blocks);
     host_only = hostOnlyInWindow(blocks);
     c.misses = 0;
+    c.void_misses = 0;
   }
   // The dynamic hits become free-only rays; their points are listed in cloud order.
   c.dynamic = 0;
@@ -162,6 +163,10 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
                                      std::vector<BlockKey> host_only) {
   ScanCounters& c = scan_.counters();
   uint32_t created = 0;
+  const bool dynamic_on = how.params.dynamic.enabled && what != ScanUpdate::kRemove;
+  // MapParams::dynamic: only the void test lacked blocks, the rays' marks and touched list are
+  // complete: the next attempt runs the void test and the apply, not the ray pass again.
+  bool marks_complete = false;
   for (int attempt = 0;; ++attempt) {
     if (attempt > 8) throw CudaError("ray pass did not converge (residency bug)");
     window_.fill(cache_.arrays(), host_only);
@@ -187,12 +192,14 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
     args.piece_steps = how.params.cuda.ray_piece_steps;
     args.counters = scan_.countersOnDevice();
     ray_start_.record(stream_);
-    launchRaycast(args, how.params.raycast, how.params.cuda.readonly_ray_loads, stream_);
-    launchCompactTouched(args.slots, args.scan, args.counters, stream_);
+    if (!marks_complete) {
+      launchRaycast(args, how.params.raycast, how.params.cuda.readonly_ray_loads, stream_);
+      launchCompactTouched(args.slots, args.scan, args.counters, stream_);
+    }
     // MapParams::dynamic: the void cells of the touched slots, from the cells and marks as
-    // they are before the apply (a host-only block read is a miss: the pass is redone).
+    // they are before the apply (a host-only block read is a miss: uploaded, then redone).
     DynamicApply dynamic;
-    if (how.params.dynamic.enabled && !args.remove) {
+    if (dynamic_on) {
       dynamic.rule = DynamicRule::fromParams(how.params.dynamic, how.params.occupancy);
       void_bits_.reserve(size_t(args.slots.capacity) * (kCellsPerBlock / 64));
       dynamic.void_bits = void_bits_.get();
@@ -215,13 +222,18 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
     // The slots the rays took are resident blocks, device-only until written back.
     created += cache_.adoptDeviceSlots(c.free_top);
     if (c.applied) return created;
-    // The pass is redone from a clean count: the marks and allocations stay.
+    // The pass is redone from a clean count: the marks and allocations stay (touched slots
+    // are stamped: never evicted to make room).
+    marks_complete = dynamic_on && c.overflow == 0 && c.misses == c.void_misses;
     resolveMissesAndOverflow(blocks);
     host_only = hostOnlyInWindow(blocks);  // evictions may have touched the window's blocks
     c.misses = 0;
+    c.void_misses = 0;
     c.overflow = 0;
-    c.visits = 0;
-    c.touched = 0;  // listed again after the next pass
+    if (!marks_complete) {
+      c.visits = 0;
+      c.touched = 0;  // listed again after the next pass
+    }
   }
 }
 

@@ -44,6 +44,7 @@ struct WindowBlocks {
     if (v == kWindowHostOnly &&
         atomicCAS(entry, kWindowHostOnly, kWindowMissed) == kWindowHostOnly) {
       const uint32_t k = atomicAdd(&a.counters->misses, 1u);
+      atomicAdd(&a.counters->void_misses, 1u);  // not the rays': their marks are complete
       if (k < a.miss_capacity) a.miss_list[k] = static_cast<int32_t>(idx);
     }
     if (v == kWindowHostOnly || v == kWindowMissed) {
