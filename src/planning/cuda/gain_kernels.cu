@@ -46,27 +46,7 @@ __global__ void viewpointGainsKernel(GainKernelArgs a) {
     GainWalk walk = GainWalk::along(origin, dir, a.length_v);
     const int64_t bx = a.box_lo[3 * vp], by = a.box_lo[3 * vp + 1], bz = a.box_lo[3 * vp + 2];
     const int64_t sx = a.box_dims[0], sy = a.box_dims[1], sz = a.box_dims[2];
-    const int64_t wx = sx >> 2, wy = sy >> 2;
     unsigned long long* seen = a.seen + vp * a.words_per_viewpoint;
-    // The bitmap holds one 64-bit word per brick of 4 x 4 x 4 cells (aligned, so a brick lies
-    // in one block): the unknown cells a ray enters in one brick are gathered in `pending` and
-    // marked with one atomic when the ray leaves the brick (a straight ray never comes back);
-    // the bits it set first are the cells this viewpoint sees for the first time.
-    uint64_t word = ~uint64_t(0);
-    unsigned long long pending = 0;
-    int32_t pending_slot = kNoViewSlot;
-    VoxelKey brick{0, 0, 0};
-    const auto flush = [&]() {
-      if (!pending) return;
-      for (unsigned long long m = pending & ~atomicOr(&seen[word], pending); m; m &= m - 1) {
-        const int bit = __ffsll(static_cast<long long>(m)) - 1;
-        const VoxelKey k{brick.x + (bit & 3), brick.y + ((bit >> 2) & 3), brick.z + (bit >> 4)};
-        gain += cellGainBits(a.model, pending_slot == kNoViewSlot
-                                          ? nullptr
-                                          : &a.view.cells[pending_slot].cells[cellIndexOf(k)]);
-      }
-      pending = 0;
-    };
     // States from the slot's masks (128 bytes a block, shared by every ray crossing it); a
     // cell itself is read only when an unknown one is first seen (its entropy).
     int32_t slot = kNoViewSlot;
@@ -79,21 +59,15 @@ __global__ void viewpointGainsKernel(GainKernelArgs a) {
       if (s == CellState::kUnknown) {
         const int64_t lx = k.x - bx, ly = k.y - by, lz = k.z - bz;
         if (lx >= 0 && ly >= 0 && lz >= 0 && lx < sx && ly < sy && lz < sz) {
-          const uint64_t w = uint64_t(((lz >> 2) * wy + (ly >> 2)) * wx + (lx >> 2));
-          if (w != word) {
-            flush();
-            word = w;
-            pending_slot = slot;
-            brick = VoxelKey{static_cast<int32_t>(bx + (lx & ~int64_t(3))),
-                             static_cast<int32_t>(by + (ly & ~int64_t(3))),
-                             static_cast<int32_t>(bz + (lz & ~int64_t(3)))};
-          }
-          pending |= 1ULL << (((lz & 3) << 4) | ((ly & 3) << 2) | (lx & 3));
+          const uint64_t bit = uint64_t((lz * sy + ly) * sx + lx);
+          const unsigned long long mask = 1ULL << (bit & 63);
+          if (!(atomicOr(&seen[bit >> 6], mask) & mask))
+            gain +=
+                cellGainBits(a.model, slot == kNoViewSlot ? nullptr : &a.view.cells[slot].cells[c]);
         }
       }
       if (walk.done()) break;
     }
-    flush();
   }
   // Rays of one viewpoint are consecutive: sum within the warp where all lanes share it.
   const uint32_t first_vp = __shfl_sync(0xffffffffu, vp, 0);

@@ -20,14 +20,12 @@ struct GainKernelArgs {
   uint32_t rays_per_viewpoint;
   uint32_t viewpoints;
   double length_v;
-  /// Viewpoint i's cell bitmap covers the cells box_lo[3i..3i+2] + [0, box_dims) (voxel keys;
-  /// box_lo and box_dims multiples of 4): every cell its rays can enter (seenBoxes).
+  /// Viewpoint i's cell bitmap covers the cells box_lo[3i..3i+2] + [0, box_dims) (voxel keys):
+  /// every cell its rays can enter (seenBoxes).
   const int32_t* box_lo;
   int32_t box_dims[3];
   uint64_t words_per_viewpoint;
-  /// Bitmaps, words_per_viewpoint each: the word of brick (x, y, z) of 4 x 4 x 4 cells at
-  /// (z * box_dims[1] / 4 + y) * box_dims[0] / 4 + x, cell (i, j, k) of it at bit 16k + 4j + i.
-  unsigned long long* seen;
+  unsigned long long* seen;  ///< bitmaps, words_per_viewpoint each
   double* gains;
   /// Optional dense block table over the batch's reach: the slot of block dense_lo + (x, y, z)
   /// at ((z * dims[1]) + y) * dims[0] + x, kNoViewSlot where none; nullptr: the view's hash.

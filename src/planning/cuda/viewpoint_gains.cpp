@@ -27,8 +27,7 @@ enum Buffer : int { kOrigins = 200, kCos, kSin, kRays, kGains, kSeen, kBoxLo, kD
 /// Half the side of the cube around a viewpoint's cell that holds every cell its rays enter.
 int halfSideOf(const GainBatch& batch) { return static_cast<int>(std::ceil(batch.length_v)) + 2; }
 
-/// Each viewpoint's cell bitmap box (voxel keys, corners and sides multiples of 4), all of one
-/// size.
+/// Each viewpoint's cell bitmap box (voxel keys), all of one size.
 struct SeenBoxes {
   std::vector<int32_t> lo;  ///< 3 per viewpoint
   int32_t dims[3] = {0, 0, 0};
@@ -71,15 +70,12 @@ SeenBoxes seenBoxes(const GainBatch& batch) {
           centre - half, static_cast<int64_t>(std::floor(o + length * lo_d[a])) - 2);
       const int64_t top = std::min<int64_t>(
           centre + half, static_cast<int64_t>(std::floor(o + length * hi_d[a])) + 2);
-      // Bricks of 4 x 4 x 4 cells, aligned on the key grid (so in one block): the box starts on
-      // a multiple of 4 and spans whole bricks.
-      const int64_t lo4 = lo & ~int64_t(3);
-      boxes.lo[3 * i + a] = static_cast<int32_t>(lo4);
-      boxes.dims[a] = std::max(boxes.dims[a], static_cast<int32_t>((top - lo4 + 4) & ~int64_t(3)));
+      boxes.lo[3 * i + a] = static_cast<int32_t>(lo);
+      boxes.dims[a] = std::max(boxes.dims[a], static_cast<int32_t>(top - lo + 1));
     }
   }
-  // One 64-bit word a brick.
-  boxes.words = (uint64_t(boxes.dims[0]) * uint64_t(boxes.dims[1]) * uint64_t(boxes.dims[2])) / 64;
+  boxes.words =
+      (uint64_t(boxes.dims[0]) * uint64_t(boxes.dims[1]) * uint64_t(boxes.dims[2]) + 63) / 64;
   return boxes;
 }
 
