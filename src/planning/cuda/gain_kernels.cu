@@ -32,75 +32,51 @@ __global__ void denseBlockTableKernel(DeviceLayerView view, BlockKey lo, int32_t
   table[(z * dy + y) * dx + x] = s;
 }
 
-/// Rays a thread walks one after the other (consecutive rays of one viewpoint: neighbouring
-/// pixels or beams). A warp's lanes would otherwise idle from the end of their own ray to the
-/// end of the warp's longest (rays stop at the first occupied cell); a lane that finishes one
-/// ray starts its next in the same loop, so the lanes' loads even out over kRaysPerThread rays.
-constexpr uint32_t kRaysPerThread = 16;
-
 __global__ void viewpointGainsKernel(GainKernelArgs a) {
+  const uint64_t idx = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
   const uint64_t total = uint64_t(a.viewpoints) * a.rays_per_viewpoint;
-  const uint64_t first = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) * kRaysPerThread;
-  const uint64_t end = first < total ? min(first + kRaysPerThread, total) : first;
-  double gain = 0.0;  // of viewpoint vp, not yet added to gains[vp]
-  uint32_t vp = first < total ? static_cast<uint32_t>(first / a.rays_per_viewpoint) : 0;
-  // The current ray's walk (set by start()), its viewpoint's bitmap box, the slot of its block.
-  GainWalk walk = GainWalk::along(a.origins_v, a.rays, 0.0);
-  int64_t bx = 0, by = 0, bz = 0;
-  unsigned long long* seen = nullptr;
-  const int64_t sx = a.box_dims[0], sy = a.box_dims[1], sz = a.box_dims[2];
-  int32_t slot = kNoViewSlot;
-  int entry = kUnknownBlock;
-  const auto start = [&](uint64_t ray) {
-    const uint32_t v = static_cast<uint32_t>(ray / a.rays_per_viewpoint);
-    if (v != vp) {
-      if (gain != 0.0) atomicAdd(&a.gains[vp], gain);
-      gain = 0.0;
-      vp = v;
-    }
-    const uint32_t r = static_cast<uint32_t>(ray % a.rays_per_viewpoint);
+  double gain = 0.0;
+  uint32_t vp = 0;
+  if (idx < total) {
+    vp = static_cast<uint32_t>(idx / a.rays_per_viewpoint);
+    const uint32_t r = static_cast<uint32_t>(idx % a.rays_per_viewpoint);
     double dir[3];
     yawRotate(a.cos_yaw[vp], a.sin_yaw[vp], a.rays + 3 * r, dir);
-    walk = GainWalk::along(a.origins_v + 3 * vp, dir, a.length_v);
-    bx = a.box_lo[3 * vp];
-    by = a.box_lo[3 * vp + 1];
-    bz = a.box_lo[3 * vp + 2];
-    seen = a.seen + vp * a.words_per_viewpoint;
-    entry = kUnknownBlock;
-  };
-  uint64_t ray = first;
-  if (ray < end) start(ray);
-  while (ray < end) {
+    const double* origin = a.origins_v + 3 * vp;
+    GainWalk walk = GainWalk::along(origin, dir, a.length_v);
+    const int64_t bx = a.box_lo[3 * vp], by = a.box_lo[3 * vp + 1], bz = a.box_lo[3 * vp + 2];
+    const int64_t sx = a.box_dims[0], sy = a.box_dims[1], sz = a.box_dims[2];
+    unsigned long long* seen = a.seen + vp * a.words_per_viewpoint;
     // States from the slot's masks (128 bytes a block, shared by every ray crossing it); a
     // cell itself is read only when an unknown one is first seen (its entropy).
-    const VoxelKey k = walk.cell();
-    if (entry != kSameBlock) slot = gainSlot(a, blockKeyOf(k));
-    const int c = cellIndexOf(k);
-    const CellState s = slot == kNoViewSlot ? CellState::kUnknown : a.view.masks[slot].state(c);
-    if (s == CellState::kUnknown) {
-      const int64_t lx = k.x - bx, ly = k.y - by, lz = k.z - bz;
-      if (lx >= 0 && ly >= 0 && lz >= 0 && lx < sx && ly < sy && lz < sz) {
-        const uint64_t bit = uint64_t((lz * sy + ly) * sx + lx);
-        const unsigned long long mask = 1ULL << (bit & 63);
-        if (!(atomicOr(&seen[bit >> 6], mask) & mask))
-          gain +=
-              cellGainBits(a.model, slot == kNoViewSlot ? nullptr : &a.view.cells[slot].cells[c]);
+    int32_t slot = kNoViewSlot;
+    for (int entry = kUnknownBlock;; entry = walk.next()) {
+      const VoxelKey k = walk.cell();
+      if (entry != kSameBlock) slot = gainSlot(a, blockKeyOf(k));
+      const int c = cellIndexOf(k);
+      const CellState s = slot == kNoViewSlot ? CellState::kUnknown : a.view.masks[slot].state(c);
+      if (s == CellState::kOccupied) break;
+      if (s == CellState::kUnknown) {
+        const int64_t lx = k.x - bx, ly = k.y - by, lz = k.z - bz;
+        if (lx >= 0 && ly >= 0 && lz >= 0 && lx < sx && ly < sy && lz < sz) {
+          const uint64_t bit = uint64_t((lz * sy + ly) * sx + lx);
+          const unsigned long long mask = 1ULL << (bit & 63);
+          if (!(atomicOr(&seen[bit >> 6], mask) & mask))
+            gain +=
+                cellGainBits(a.model, slot == kNoViewSlot ? nullptr : &a.view.cells[slot].cells[c]);
+        }
       }
-    }
-    if (s == CellState::kOccupied || walk.done()) {
-      if (++ray < end) start(ray);
-    } else {
-      entry = walk.next();
+      if (walk.done()) break;
     }
   }
-  // A warp's rays are consecutive: where all its lanes end on one viewpoint, sum in the warp.
-  const uint32_t warp_vp = __shfl_sync(0xffffffffu, vp, 0);
-  const bool shared = __all_sync(0xffffffffu, vp == warp_vp && first < total);
+  // Rays of one viewpoint are consecutive: sum within the warp where all lanes share it.
+  const uint32_t first_vp = __shfl_sync(0xffffffffu, vp, 0);
+  const bool shared = __all_sync(0xffffffffu, vp == first_vp);
   if (shared) {
     for (int offset = 16; offset > 0; offset /= 2)
       gain += __shfl_down_sync(0xffffffffu, gain, offset);
     if ((threadIdx.x & 31) == 0 && gain != 0.0) atomicAdd(&a.gains[vp], gain);
-  } else if (first < total && gain != 0.0) {
+  } else if (idx < total && gain != 0.0) {
     atomicAdd(&a.gains[vp], gain);
   }
 }
@@ -111,8 +87,7 @@ void launchViewpointGains(const GainKernelArgs& args, cudaStream_t stream) {
   const uint64_t total = uint64_t(args.viewpoints) * args.rays_per_viewpoint;
   if (total == 0) return;
   constexpr int kThreads = 128;
-  const uint64_t threads = (total + kRaysPerThread - 1) / kRaysPerThread;
-  const uint64_t grid = (threads + kThreads - 1) / kThreads;
+  const uint64_t grid = (total + kThreads - 1) / kThreads;
   viewpointGainsKernel<<<static_cast<unsigned>(grid), kThreads, 0, stream>>>(args);
   FRAGG_CUDA_CHECK(cudaGetLastError());
 }
