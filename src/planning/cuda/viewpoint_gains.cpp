@@ -15,8 +15,10 @@ namespace fragg::planning {
 
 namespace {
 
-/// Device memory for the bitmaps of one round of viewpoints.
-constexpr uint64_t kSeenBudgetBytes = uint64_t(1) << 30;
+/// Device memory for the bitmaps of one round of viewpoints: a quarter of what the device has
+/// free, within these bounds (fewer rounds, fewer kernel tails).
+constexpr uint64_t kSeenBudgetMinBytes = uint64_t(1) << 30;
+constexpr uint64_t kSeenBudgetMaxBytes = uint64_t(4) << 30;
 constexpr uint64_t kMaxSeenBytesPerViewpoint = uint64_t(4) << 30;
 /// The largest dense block table over a batch's reach (entries of 4 bytes); a larger reach
 /// looks blocks up in the view's hash.
@@ -137,7 +139,11 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
     dense = scratch.device<int32_t>(kDense, dense_entries);
     cuda::launchDenseBlockTable(view, reach_lo, dense_dims, dense, stream);
   }
-  const size_t per_round = std::max<size_t>(1, std::min<size_t>(n, kSeenBudgetBytes / (words * 8)));
+  size_t free_bytes = 0, total_bytes = 0;
+  FRAGG_CUDA_CHECK(cudaMemGetInfo(&free_bytes, &total_bytes));
+  const uint64_t budget =
+      std::clamp<uint64_t>(free_bytes / 4, kSeenBudgetMinBytes, kSeenBudgetMaxBytes);
+  const size_t per_round = std::max<size_t>(1, std::min<size_t>(n, budget / (words * 8)));
   unsigned long long* seen = scratch.device<unsigned long long>(kSeen, per_round * words);
   auto t_walk = t_start;
   if (tables_seconds) {
