@@ -4,7 +4,8 @@
 # (default .device/ros under the checkout), the way ../shared/tools/stage-octomap.sh stages
 # liboctomap:
 #   bin/      the node (fragg_map_server, which loads fragg_map/MapServerNodelet through
-#             pluginlib), rosbag's C++ player and recorder, the master's script, fragg_map_sim
+#             pluginlib), rosbag's C++ player and recorder, the master's script, fragg_map_sim,
+#             fragg_map_server_overhead (the outputs' harness; `--backend cuda` there)
 #   lib/      the nodelet library and every shared library these load (ldd), but the C/C++
 #             runtime the other machine has newer (glibc, libstdc++, libgcc_s)
 #   share/    package.xml of fragg_map and its dependencies, nodelet_plugins.xml (the package
@@ -42,6 +43,11 @@ cp -L /usr/lib/rosbag/play /usr/lib/rosbag/record "$dest/bin/"
 sim=${SIM:-$(dirname "$node")/fragg_map_sim}
 if [ -x "$sim" ]; then cp -L "$sim" "$dest/bin/fragg_map_sim"; else
   echo "stage_ros: no $sim: device_node_rate.sh needs --bag then" >&2; fi
+# The server overhead harness (issue 35's outputs-per-cloud goal "on both machines": it needs
+# roscpp's serialisation and message headers, so it is not in the GPU machine's ROS-less build).
+overhead=${OVERHEAD:-$(dirname "$node")/fragg_map_server_overhead}
+if [ -x "$overhead" ]; then cp -L "$overhead" "$dest/bin/"; else
+  echo "stage_ros: no $overhead: the overhead harness is not staged" >&2; fi
 # Shared libraries: everything ldd resolves, but the runtime the newer machine brings.
 skip='^(libc|libm|libdl|libpthread|librt|libresolv|ld-linux-x86-64|libstdc\+\+|libgcc_s)\.so'
 for exe in "$dest"/bin/* "$nodelet_lib"; do

@@ -1,14 +1,15 @@
 // fragg_map_ros_overhead: what the map server spends per cloud outside insertion, on the
 // synthetic 128 x 1406 LiDAR (179,968 points): PointCloud2 -> points (a Velodyne-like layout:
 // x y z intensity, point_step 16, organised) and the incremental marker update
-// (changedBlockMarkers) after each insertion, or, with --marker-rate, when the server's
-// RateThrottle lets one out for clouds arriving at --cloud-rate (the skipped clouds' changes
-// go out with the next update, and a last update flushes what is pending at the end, as the
-// server's timer does); the insertion itself is timed for reference. The last line is what the
-// server's path (conversion + insertion, + marker updates unless --no-markers) sustains on this
-// machine in clouds per second, with the process's CPU time over that wall time (the share of
-// the cores it got: other programs count against it on a shared machine). Map::memory(), which
-// the server's ~stats reads after every cloud, is timed beside them (not in the path).
+// (changedBlockMarkersWire: the changed chunks encoded in the wire layout) after each insertion,
+// or, with --marker-rate, when the server's RateThrottle lets one out for clouds arriving at
+// --cloud-rate (the skipped clouds' changes go out with the next update, and a last update flushes
+// what is pending at the end, as the server's timer does); the insertion itself is timed for
+// reference. The last line is what the server's path (conversion + insertion, + marker updates
+// unless --no-markers) sustains on this machine in clouds per second, with the process's CPU time
+// over that wall time (the share of the cores it got: other programs count against it on a shared
+// machine). Map::memory(), which the server's ~stats reads after every cloud, is timed beside them
+// (not in the path).
 //   fragg_map_ros_overhead [--scans N] [--resolution M] [--max-range M]
 //                          [--cloud-rate HZ] [--marker-rate HZ] [--no-markers]
 //                          [--beams N --columns N]   (128 x 1406 = 179,968 points a cloud)
