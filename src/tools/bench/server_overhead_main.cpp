@@ -89,10 +89,11 @@ struct Times {
   // The markers' share (the same on both paths).
   double marker_serialise = 0;
   size_t marker_bytes = 0;
-  long marker_faults = 0;  ///< minor page faults while the markers were built and serialised
-  long map_faults = 0;     ///< the same for the whole-map outputs
-  size_t blocks_read = 0;  ///< blocks the output cache recomputed (after path)
-  size_t cells_read = 0;   ///< of those, blocks whose cells it read (the others: masks)
+  long marker_faults = 0;        ///< minor page faults while the markers were built and serialised
+  long marker_build_faults = 0;  ///< of those, while they were built
+  long map_faults = 0;           ///< the same for the whole-map outputs
+  size_t blocks_read = 0;        ///< blocks the output cache recomputed (after path)
+  size_t cells_read = 0;         ///< of those, blocks whose cells it read (the others: masks)
   fragg::ros::OutputCacheUpdate stages;  ///< the cache update's own account (wall times)
   double cache_update = 0;               ///< of `cloud`: MapOutputCache::update alone (after path)
   double total() const { return markers + cloud + grid + serialise; }
@@ -132,6 +133,7 @@ class Outputs {
       t.markers = msSince(t0);
     }
     marker_faults = minorFaults() - faults;
+    t.marker_build_faults = marker_faults;
     faults = minorFaults();
     t0 = Clock::now();
     sensor_msgs::PointCloud2 rebuilt;
@@ -331,15 +333,17 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
     if (pending.markers || pending.maps) flush = after.publish(map, pending);
     if (pending.maps)
       std::printf(
-          "  the flush: markers %.2f (serialised %.2f; %.2f MB, %ld page faults), cache update "
+          "  the flush: markers %.2f (serialised %.2f; %.2f MB, %ld page faults, %ld in the "
+          "build), cache update "
           "%.2f (%zu blocks read, %zu "
           "of them from their cells; wall ms: list %.2f, pieces %.2f, columns and grid %.2f), "
           "occupied cloud message %.2f, grid %.2f, whole-map messages serialised %.2f ms (%ld "
           "page faults)\n",
           flush.markers, flush.marker_serialise, flush.marker_bytes / 1e6, flush.marker_faults,
-          flush.cache_update, flush.blocks_read, flush.cells_read, flush.stages.list_ms,
-          flush.stages.pieces_ms, flush.stages.grid_ms, flush.cloud - flush.cache_update,
-          flush.grid, flush.serialise - flush.marker_serialise, flush.map_faults);
+          flush.marker_build_faults, flush.cache_update, flush.blocks_read, flush.cells_read,
+          flush.stages.list_ms, flush.stages.pieces_ms, flush.stages.grid_ms,
+          flush.cloud - flush.cache_update, flush.grid, flush.serialise - flush.marker_serialise,
+          flush.map_faults);
   }
   printAmortised(rates, converts, after_times, dues, flush);
 }
