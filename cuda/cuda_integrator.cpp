@@ -40,7 +40,17 @@ bool CudaIntegrator::update(const ScanInput& in, ScanUpdate what, const UpdateSe
   stats.add(prep_stats);
 
   std::vector<BlockKey> host_only = makeWindowResident(in, how.params.resolution_m, blocks, stats);
-  const uint32_t created = rayAndApply(what, how, blocks, std::move(host_only));
+  uint32_t created = 0;
+  try {
+    created = rayAndApply(what, how, blocks, std::move(host_only));
+  } catch (const CudaOutOfMemory&) {
+    throw;  // the map drops the cache and runs the scan on the CPU
+  } catch (...) {
+    // A scan refused by the paging budget (or a store that failed to read) leaves its marks
+    // unapplied in the pool: they go with the cache, which is written back first.
+    cache_.invalidateAll(blocks);
+    throw;
+  }
 
   const ScanCounters& c = scan_.counters();
   const double ray_s = apply_start_.secondsSince(ray_start_);
@@ -98,12 +108,21 @@ std::vector<BlockKey> CudaIntegrator::hostOnlyInWindow(const BlockMap& blocks) {
 uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how, BlockMap& blocks,
                                      std::vector<BlockKey> host_only) {
   ScanCounters& c = scan_.counters();
+  // Paging: the regions paged out are missed like host-only blocks (paged in when a ray
+  // reaches them), and the rays create no more blocks than the budget has room for.
+  const DevicePaging* paging = what == ScanUpdate::kRemove ? nullptr : how.device_paging;
   uint32_t created = 0;
   for (int attempt = 0;; ++attempt) {
     if (attempt > 8) throw CudaError("ray pass did not converge (residency bug)");
-    window_.fill(cache_.arrays(), host_only);
-    scan_.reserveMisses(host_only.size());
+    std::vector<std::pair<BlockKey, BlockKey>> paged_out;
+    if (paging) paged_out = paging->paged_out_regions(window_.lo(), window_.hi());
+    scan_.reserveMisses(window_.fill(cache_.arrays(), host_only, paged_out));
     c.free_top = cache_.freeSlots();
+    int32_t floor = 0;
+    if (paging) {
+      const size_t room = paging->room();
+      if (room < size_t(c.free_top)) floor = c.free_top - static_cast<int32_t>(room);
+    }
     scan_.countersToDevice();
     RaycastArgs args;
     args.rays = scan_.rays();
@@ -122,6 +141,7 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
     args.coalesce = how.params.cuda.coalesce_ray_marks;
     args.skip_saturated = how.params.skip_saturated_blocks && !args.remove;
     args.piece_steps = how.params.cuda.ray_piece_steps;
+    args.free_floor = floor;
     args.counters = scan_.countersOnDevice();
     ray_start_.record(stream_);
     launchRaycast(args, how.params.raycast, how.params.cuda.readonly_ray_loads, stream_);
@@ -140,10 +160,10 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
       throw CudaError("ray left the window table (" + std::to_string(c.outside_window) +
                       " cells): residency bug");
     // The slots the rays took are resident blocks, device-only until written back.
-    created += cache_.adoptDeviceSlots(c.free_top);
+    created += cache_.adoptDeviceSlots(std::max(c.free_top, floor));
     if (c.applied) return created;
     // The pass is redone from a clean count: the marks and allocations stay.
-    resolveMissesAndOverflow(blocks);
+    resolveMissesAndOverflow(blocks, paging);
     host_only = hostOnlyInWindow(blocks);  // evictions may have touched the window's blocks
     c.misses = 0;
     c.overflow = 0;
@@ -160,14 +180,35 @@ void CudaIntegrator::stageNext(const PointCloud& cloud, bool auto_stats) {
   }
 }
 
-void CudaIntegrator::resolveMissesAndOverflow(BlockMap& blocks) {
+void CudaIntegrator::resolveMissesAndOverflow(BlockMap& blocks, const DevicePaging* paging) {
   const ScanCounters& c = scan_.counters();
-  if (c.misses > 0) {
+  std::vector<BlockKey> missed;
+  if (c.misses > 0)
+    for (int32_t entry : scan_.misses(c.misses)) missed.push_back(window_.window().keyOf(entry));
+  if (paging) {
+    // The missed blocks the host map lacks are in paged-out regions: read back, with room made
+    // under the budget for them and for the blocks the overflowed rays create; the regions of
+    // the blocks this scan holds stay.
+    std::vector<BlockKey> reached;
+    for (const BlockKey& k : missed)
+      if (blocks.find(k) == kNoBlock) reached.push_back(k);
+    const size_t new_blocks = c.overflow;
+    if (!reached.empty() || paging->room() < new_blocks) {
+      std::vector<BlockKey> pinned = cache_.keysHeld();
+      pinned.insert(pinned.end(), missed.begin(), missed.end());
+      paging->make_room(reached, pinned, new_blocks);
+    }
+  }
+  if (!missed.empty()) {
     std::vector<BlockIndex> needed;
-    for (int32_t entry : scan_.misses(c.misses)) {
-      const BlockIndex i = blocks.find(window_.window().keyOf(entry));
-      if (i == kNoBlock) throw CudaError("missed block is not on the host (residency bug)");
-      needed.push_back(i);
+    for (const BlockKey& k : missed) {
+      const BlockIndex i = blocks.find(k);
+      if (i == kNoBlock) {
+        // Paged in with its region and not in the store: a ray creates it next pass.
+        if (paging) continue;
+        throw CudaError("missed block is not on the host (residency bug)");
+      }
+      if (cache_.slotOf(i) < 0) needed.push_back(i);
     }
     const int32_t n = static_cast<int32_t>(needed.size());
     cache_.makeRoom(n, n, blocks);

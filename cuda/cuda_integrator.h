@@ -41,8 +41,10 @@ class CudaIntegrator {
   /// DeviceScan::stageAhead(), skipped when the device has no room for it.
   void stageNext(const PointCloud& cloud, bool auto_stats);
   /// After a pass that missed host-only blocks or ran out of slots: uploads the missed blocks
-  /// and makes room for the others.
-  void resolveMissesAndOverflow(BlockMap& blocks);
+  /// and makes room for the others. With `paging`: first reads back the missed blocks of
+  /// paged-out regions and makes the budget's room for the overflowed blocks (both may page
+  /// other regions out; InvalidArgument when the scan cannot fit).
+  void resolveMissesAndOverflow(BlockMap& blocks, const DevicePaging* paging);
   int32_t expectedNewBlocks() const {
     return std::max<int32_t>(1024, last_created_ + last_created_ / 4);
   }

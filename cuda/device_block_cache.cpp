@@ -112,6 +112,22 @@ uint32_t DeviceBlockCache::adoptDeviceSlots(int32_t new_free_top) {
   return static_cast<uint32_t>(pool_.takenByDevice(new_free_top).size());
 }
 
+std::vector<BlockKey> DeviceBlockCache::keysHeld() {
+  const int32_t cap = pool_.capacity();
+  std::vector<BlockKey> keys;
+  if (cap == 0) return keys;
+  last_used_host_.reserve(size_t(cap));
+  keys_host_.reserve(size_t(cap));
+  copyToHost(last_used_host_.get(), pool_.arrays().last_used, size_t(cap), stream_);
+  copyToHost(keys_host_.get(), pool_.arrays().keys, size_t(cap), stream_);
+  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  const SlotTable& table = pool_.table();
+  for (int32_t s = 0; s < cap; ++s)
+    if (table.resident(s) && (last_used_host_[s] == scan_ || table.blockOf(s) == kNoBlock))
+      keys.push_back(keys_host_[s]);
+  return keys;
+}
+
 void DeviceBlockCache::forEachHostOnlyIn(const BlockMap& blocks, const BlockKey& lo,
                                          const BlockKey& hi,
                                          const std::function<void(BlockIndex)>& fn) {

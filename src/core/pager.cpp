@@ -195,6 +195,20 @@ bool Pager::anyPagedOut(BlockKey lo, BlockKey hi) const {
   return any;
 }
 
+std::vector<BlockKey> Pager::pagedOutRegionsIn(const BlockKey& lo, const BlockKey& hi) const {
+  std::vector<BlockKey> regions;
+  if (paged_count_ == 0) return regions;
+  BlockKey rlo = lo, rhi = hi;
+  regionBox(&rlo, &rhi);
+  forEachPagedOutIn(rlo, rhi, [&](const BlockKey& k) {
+    regions.push_back(regionOf(k));
+    return true;
+  });
+  std::sort(regions.begin(), regions.end(), storeOrder);
+  regions.erase(std::unique(regions.begin(), regions.end()), regions.end());
+  return regions;
+}
+
 bool Pager::readPagedOut(const BlockKey& key, Block* out) {
   auto held = held_.find(regionOf(key));
   if (held != held_.end()) return store_->decode(held->second.record, key, out);
@@ -469,6 +483,12 @@ size_t Pager::excessOverBudget(size_t resident) const {
   if (resident * block_bytes_ + held_bytes_ + writerBytes() <= budgetBytes()) return 0;
   const size_t within = blocksWithin(1.0);
   return resident > within ? resident - within : 1;
+}
+
+size_t Pager::roomFor(size_t resident) const {
+  if (policy_.budget_mb <= 0) return SIZE_MAX;
+  const size_t within = blocksWithin(1.0);
+  return within > resident ? within - resident : 0;
 }
 
 void Pager::flush() {
