@@ -198,8 +198,8 @@ DevicePaging Map::devicePaging(size_t* read) {
     std::vector<std::pair<BlockKey, BlockKey>> boxes;
     for (const BlockKey& r : pager_->pagedOutRegionsIn(lo, hi)) {
       const BlockKey first = firstBlockOf(r);
-      boxes.emplace_back(first, BlockKey{first.x | kRegionMask, first.y | kRegionMask,
-                                         first.z | kRegionMask});
+      boxes.emplace_back(
+          first, BlockKey{first.x | kRegionMask, first.y | kRegionMask, first.z | kRegionMask});
     }
     return boxes;
   };
