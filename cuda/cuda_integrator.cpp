@@ -111,6 +111,7 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
   // Paging: the regions paged out are missed like host-only blocks (paged in when a ray
   // reaches them), and the rays create no more blocks than the budget has room for.
   const DevicePaging* paging = what == ScanUpdate::kRemove ? nullptr : how.device_paging;
+  missed_this_scan_.clear();
   uint32_t created = 0;
   for (int attempt = 0;; ++attempt) {
     if (attempt > 8) throw CudaError("ray pass did not converge (residency bug)");
@@ -188,14 +189,19 @@ void CudaIntegrator::resolveMissesAndOverflow(BlockMap& blocks, const DevicePagi
   if (paging) {
     // The missed blocks the host map lacks are in paged-out regions: read back, with room made
     // under the budget for them and for the blocks the overflowed rays create; the regions of
-    // the blocks this scan holds stay.
+    // the blocks this scan marked stay.
     std::vector<BlockKey> reached;
     for (const BlockKey& k : missed)
       if (blocks.find(k) == kNoBlock) reached.push_back(k);
+    // The blocks missed in the scan's passes stay while it runs: a ray that skips a saturated
+    // block marks nothing there, and paging it out again would miss it again.
+    missed_this_scan_.insert(missed_this_scan_.end(), missed.begin(), missed.end());
     const size_t new_blocks = c.overflow;
     if (!reached.empty() || paging->room() < new_blocks) {
-      std::vector<BlockKey> pinned = cache_.keysHeld();
-      pinned.insert(pinned.end(), missed.begin(), missed.end());
+      // The blocks the rays marked stay (a ray passes through every block it reaches in one
+      // pass, so the next pass reaches no other); the frustum's other blocks may leave.
+      std::vector<BlockKey> pinned = cache_.keysHeld(c.touched);
+      pinned.insert(pinned.end(), missed_this_scan_.begin(), missed_this_scan_.end());
       paging->make_room(reached, pinned, new_blocks);
     }
   }

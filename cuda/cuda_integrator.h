@@ -57,6 +57,8 @@ class CudaIntegrator {
   CudaEvent ray_start_, apply_start_, apply_end_;
   CudaEvent pass_done_;  ///< the pass's counters are back (staging of the next cloud may follow)
   int32_t last_created_ = 0;  ///< blocks the rays created last scan (sizes the room made)
+  /// Paging: the blocks the scan's passes missed so far (kept resident while it runs).
+  std::vector<BlockKey> missed_this_scan_;
 };
 
 }  // namespace fragg::cuda

@@ -55,10 +55,11 @@ class DeviceBlockCache : public BlockCache {
   uint32_t adoptDeviceSlots(int32_t new_free_top);
   /// The device changed slots: sync() has work.
   void markDirty() { any_dirty_ = true; }
-  /// Paging: the keys of the blocks this scan holds (slots it stamped: visible, uploaded,
-  /// touched) and of every block that exists on the device only (its region must stay
-  /// resident until it is written back). Reads the pool's stamps and keys back.
-  std::vector<BlockKey> keysHeld();
+  /// Paging: the keys of the blocks this scan's rays marked (the first `touched` slots of the
+  /// pool's touched list, as the last ray pass listed them) and of every block that exists on
+  /// the device only (its region must stay resident until it is written back). Reads the
+  /// touched list and the pool's keys back.
+  std::vector<BlockKey> keysHeld(uint32_t touched);
   /// Calls fn(i) for every host block without a slot whose key lies in [lo, hi].
   void forEachHostOnlyIn(const BlockMap& blocks, const BlockKey& lo, const BlockKey& hi,
                          const std::function<void(BlockIndex)>& fn);
@@ -90,6 +91,7 @@ class DeviceBlockCache : public BlockCache {
   PinnedArray<uint32_t> last_used_host_;
   PinnedArray<uint8_t> dirty_host_;
   PinnedArray<BlockKey> keys_host_;
+  PinnedArray<int32_t> touched_host_;
 };
 
 }  // namespace fragg::cuda
