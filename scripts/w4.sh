@@ -44,7 +44,7 @@ while [ $# -gt 0 ]; do
     --compare) compare=1; shift ;;
     --cmp) cmp_files=1; shift ;;
     --disk) disk=1; shift ;;
-    -h|--help) sed -n '2,27p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
     *) echo "w4: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
