@@ -199,8 +199,9 @@ void CudaIntegrator::resolveMissesAndOverflow(BlockMap& blocks, const DevicePagi
     const size_t new_blocks = c.overflow;
     if (!reached.empty() || paging->room() < new_blocks) {
       // The blocks the rays marked stay (a ray passes through every block it reaches in one
-      // pass, so the next pass reaches no other); the frustum's other blocks may leave.
-      std::vector<BlockKey> pinned = cache_.keysHeld(c.touched);
+      // pass, so the next pass reaches no other); the frustum's other blocks may leave, and
+      // the blocks earlier scans made on the device (written back first: Map::devicePaging).
+      std::vector<BlockKey> pinned = cache_.keysMarked(c.touched);
       pinned.insert(pinned.end(), missed_this_scan_.begin(), missed_this_scan_.end());
       paging->make_room(reached, pinned, new_blocks);
     }

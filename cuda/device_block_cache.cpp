@@ -112,22 +112,18 @@ uint32_t DeviceBlockCache::adoptDeviceSlots(int32_t new_free_top) {
   return static_cast<uint32_t>(pool_.takenByDevice(new_free_top).size());
 }
 
-std::vector<BlockKey> DeviceBlockCache::keysHeld(uint32_t touched) {
+std::vector<BlockKey> DeviceBlockCache::keysMarked(uint32_t touched) {
   const int32_t cap = pool_.capacity();
   std::vector<BlockKey> keys;
-  if (cap == 0) return keys;
   touched = std::min<uint32_t>(touched, static_cast<uint32_t>(cap));
+  if (touched == 0) return keys;
   keys_host_.reserve(size_t(cap));
-  touched_host_.reserve(std::max<size_t>(touched, 1));
+  touched_host_.reserve(touched);
   copyToHost(keys_host_.get(), pool_.arrays().keys, size_t(cap), stream_);
-  if (touched > 0)
-    copyToHost(touched_host_.get(), pool_.arrays().touched_list, size_t(touched), stream_);
+  copyToHost(touched_host_.get(), pool_.arrays().touched_list, size_t(touched), stream_);
   FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
-  const SlotTable& table = pool_.table();
-  keys.reserve(touched + size_t(table.deviceOnlyCount()));
+  keys.reserve(touched);
   for (uint32_t j = 0; j < touched; ++j) keys.push_back(keys_host_[touched_host_[j]]);
-  for (int32_t s = 0; s < cap; ++s)
-    if (table.resident(s) && table.blockOf(s) == kNoBlock) keys.push_back(keys_host_[s]);
   return keys;
 }
 

@@ -56,10 +56,9 @@ class DeviceBlockCache : public BlockCache {
   /// The device changed slots: sync() has work.
   void markDirty() { any_dirty_ = true; }
   /// Paging: the keys of the blocks this scan's rays marked (the first `touched` slots of the
-  /// pool's touched list, as the last ray pass listed them) and of every block that exists on
-  /// the device only (its region must stay resident until it is written back). Reads the
-  /// touched list and the pool's keys back.
-  std::vector<BlockKey> keysHeld(uint32_t touched);
+  /// pool's touched list, as the last ray pass listed them; the blocks they created among
+  /// them). Reads the touched list and the pool's keys back.
+  std::vector<BlockKey> keysMarked(uint32_t touched);
   /// Calls fn(i) for every host block without a slot whose key lies in [lo, hi].
   void forEachHostOnlyIn(const BlockMap& blocks, const BlockKey& lo, const BlockKey& hi,
                          const std::function<void(BlockIndex)>& fn);

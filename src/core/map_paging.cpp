@@ -210,12 +210,17 @@ DevicePaging Map::devicePaging(size_t* read) {
                                   const std::vector<BlockKey>& pinned, size_t new_blocks) {
     // As pageInKeys, with the backend's own blocks counted and its scan's blocks pinned: the
     // scan runs on (the insertion holds sync_mutex_), nothing of it is applied yet.
-    const size_t own = backend_->cache().blocksNotInHostMap();
+    size_t own = backend_->cache().blocksNotInHostMap();
     std::vector<BlockKey> wanted = pager_->pagedOutOfRegions(reached, blocks_, nullptr);
     const size_t incoming = wanted.size() + new_blocks;
     const auto t0 = std::chrono::steady_clock::now();
     const bool round = pager_->excessOverBudget(blocks_.size() + own + incoming) > 0;
     if (round) {
+      // The blocks earlier scans made on the device get their host blocks first, so that they
+      // can leave too (between commits they would fill the budget); this scan's, not applied
+      // yet, stay on the device.
+      backend_->cache().sync(blocks_);
+      own = backend_->cache().blocksNotInHostMap();
       std::vector<BlockKey> held = pinned;
       held.insert(held.end(), reached.begin(), reached.end());
       const Eigen::Vector3d sensor = pager_->lastSensor();
