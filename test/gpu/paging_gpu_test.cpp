@@ -24,12 +24,15 @@ constexpr int kScans = 80;
     if (cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "skipped: " << why; \
   } while (0)
 
-/// Returns the blocks the scans uploaded to the device.
-uint64_t insertScans(Map& map, int from, int to) {
+/// Returns the blocks the scans uploaded to the device; adds the blocks the device cache
+/// evicted to `*evicted` when given.
+uint64_t insertScans(Map& map, int from, int to, uint64_t* evicted = nullptr) {
   uint64_t uploaded = 0;
   for (int i = from; i < to; ++i) {
     const Eigen::Isometry3d T = corridorPose(i, kScans);
-    uploaded += map.insert(corridorScan(T), T, corridorSensor()).blocks_uploaded;
+    const InsertStats s = map.insert(corridorScan(T), T, corridorSensor());
+    uploaded += s.blocks_uploaded;
+    if (evicted) *evicted += s.blocks_evicted;
   }
   return uploaded;
 }
@@ -63,9 +66,9 @@ void pagedCudaBuildMatchesCpu(const std::string& store_path, size_t pool_max_byt
   Map paged(params);
   ASSERT_STREQ(paged.backendName(), "cuda");
   paged.attachPageStore(openPageStore(store_path, false), budgetOf(budget_mb));
-  uint64_t uploaded = 0;
+  uint64_t uploaded = 0, evicted = 0;
   for (int i = 0; i < kScans; ++i) {
-    uploaded += insertScans(paged, i, i + 1);
+    uploaded += insertScans(paged, i, i + 1, &evicted);
     // The peak counts the host map and the device's own blocks at every page-in and after
     // every scan: the most the map held, not a sample.
     const PagingStats st = paged.pagingStats();
@@ -82,6 +85,8 @@ void pagedCudaBuildMatchesCpu(const std::string& store_path, size_t pool_max_byt
   // paging round uploaded every block of the scans again).
   if (pool_max_bytes == 0) {
     EXPECT_LE(uploaded, st.pages_read);
+  } else {
+    EXPECT_GT(evicted, 0u) << "the pool held every resident block: not a tiny pool";
   }
   paged.commitPages();
   std::string why;
