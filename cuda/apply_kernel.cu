@@ -26,11 +26,18 @@ struct SlotUpdate {
   unsigned long long updated = 0;  ///< cells marked (summed over every slot of the thread)
 };
 
-/// One cell of a touched slot: its marks applied (or undone), written back. Returns the cell's
-/// state after the update.
+/// Whether cell `cell` of `slot` is void this scan (DynamicApply; false when off).
+__device__ __forceinline__ bool voidCell(const DynamicApply& d, int32_t slot, int cell) {
+  return d.void_bits &&
+         (d.void_bits[int64_t(slot) * (kCellsPerBlock / 64) + (cell >> 6)] >> (cell & 63)) & 1;
+}
+
+/// One cell of a touched slot: its marks applied (or undone), written back. `void_cell`: the
+/// dynamic rule made it void (DynamicApply). Returns the cell's state after the update.
 __device__ __forceinline__ CellState updateCell(Block& block, int cell, bool hit, bool marked,
                                                 bool fresh, const OccupancyModel& model,
-                                                bool remove, SlotUpdate& u) {
+                                                bool remove, const DynamicApply& dynamic,
+                                                bool void_cell, SlotUpdate& u) {
   if (!marked && !fresh) {
     const Cell value = block.cells[cell];
     u.at_lower_clamp &= value.log_odds_fx == model.min_fx;
@@ -39,7 +46,13 @@ __device__ __forceinline__ CellState updateCell(Block& block, int cell, bool hit
   Cell value = fresh ? Cell() : block.cells[cell];
   if (marked) {
     const Cell before = value;
-    model.update(value, hit, remove);
+    if (dynamic.void_bits && !dynamic.rule.surround && void_cell) {
+      value.log_odds_fx = dynamic.rule.seen_free_at_or_below_fx;  // kPassThrough's reset
+    } else {
+      model.update(value, hit, remove);
+      if (dynamic.void_bits && dynamic.rule.surround && !hit)
+        value.log_odds_fx = dynamic.rule.afterMiss(before, value.log_odds_fx, void_cell);
+    }
     u.changed |= before.log_odds_fx != value.log_odds_fx || before.hits != value.hits;
     u.occupancy_changed |= (model.state(before) == CellState::kOccupied) !=
                            (model.state(value) == CellState::kOccupied);
@@ -105,7 +118,7 @@ __device__ __forceinline__ void finishSlot(const SlotArrays& s, int32_t slot, bo
 /// A thread block a slot (CudaParams::warp_per_slot_apply off).
 __global__ void __launch_bounds__(kThreads)
     applyKernel(SlotArrays s, OccupancyModel model, uint64_t revision, uint32_t scan, bool remove,
-                ScanCounters* c) {
+                DynamicApply dynamic, ScanCounters* c) {
   if (passIncomplete(c)) return;
   const uint32_t touched = c->touched;
   unsigned long long updated = 0;
@@ -125,8 +138,9 @@ __global__ void __launch_bounds__(kThreads)
       const int cell = threadIdx.x + k * kThreads;
       const uint32_t bit = 1u << (cell & 31);
       const bool hit = marks.hit[cell >> 5] & bit;
-      const CellState state = updateCell(
-          s.cells[slot], cell, hit, hit || (marks.free[cell >> 5] & bit), fresh, model, remove, u);
+      const bool marked = hit || (marks.free[cell >> 5] & bit);
+      const CellState state = updateCell(s.cells[slot], cell, hit, marked, fresh, model, remove,
+                                         dynamic, marked && voidCell(dynamic, slot, cell), u);
       halves.vote(state, lane, unsigned(k));
     }
     if (lane < kCellsPerThread) u.masks_changed = halves.store(s.masks[slot], my_half);
@@ -154,7 +168,7 @@ __global__ void __launch_bounds__(kThreads)
 /// loads (touched list -> slot -> scratch and cells).
 __global__ void __launch_bounds__(kThreads)
     applyWarpKernel(SlotArrays s, OccupancyModel model, uint64_t revision, uint32_t scan,
-                    bool remove, ScanCounters* c) {
+                    bool remove, DynamicApply dynamic, ScanCounters* c) {
   if (passIncomplete(c)) return;
   static_assert(kCellsPerBlock == 32 * kScratchWords, "one scratch word a lane-row of cells");
   const uint32_t touched = c->touched;
@@ -177,8 +191,10 @@ __global__ void __launch_bounds__(kThreads)
       const uint32_t free_word = __shfl_sync(kFullMask, word, k);
       const uint32_t hit_word = __shfl_sync(kFullMask, word, kScratchWords + k);
       const bool hit = hit_word & bit;
-      const CellState state = updateCell(s.cells[slot], lane + 32 * k, hit,
-                                         hit || (free_word & bit), fresh, model, remove, u);
+      const int cell = lane + 32 * k;
+      const bool marked = hit || (free_word & bit);
+      const CellState state = updateCell(s.cells[slot], cell, hit, marked, fresh, model, remove,
+                                         dynamic, marked && voidCell(dynamic, slot, cell), u);
       halves.vote(state, lane, unsigned(k));
     }
     if (lane < kScratchWords) u.masks_changed = halves.store(s.masks[slot], int(lane));
@@ -199,14 +215,16 @@ __global__ void __launch_bounds__(kThreads)
 }  // namespace
 
 void launchApply(const SlotArrays& slots, const OccupancyModel& model, uint64_t revision,
-                 uint32_t scan, bool remove, ScanCounters* counters, int grid, bool warp_per_slot,
-                 cudaStream_t stream) {
+                 uint32_t scan, bool remove, const DynamicApply& dynamic, ScanCounters* counters,
+                 int grid, bool warp_per_slot, cudaStream_t stream) {
   if (warp_per_slot) {
-    applyWarpKernel<<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, counters);
+    applyWarpKernel<<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, dynamic,
+                                                   counters);
     FRAGG_CUDA_CHECK_LAUNCH("applyWarpKernel");
     return;
   }
-  applyKernel<<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, counters);
+  applyKernel<<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, dynamic,
+                                             counters);
   FRAGG_CUDA_CHECK_LAUNCH("applyKernel");
 }
 

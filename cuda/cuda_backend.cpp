@@ -100,7 +100,9 @@ void CudaBackend::update(const ScanInput& scan, ScanUpdate what, const UpdateSet
     settings.stage_next = nullptr;
   settings.stage_next_auto_stats =
       settings.stage_next && how.stage_next_auto_stats && params_.cuda.device_auto_sensor;
+  last_on_cpu_ = false;
   if (integrator_.update(scan, what, settings, blocks, stats)) return;
+  last_on_cpu_ = true;
   static bool said = false;
   if (!said) {
     logMessage(LogLevel::kWarning,

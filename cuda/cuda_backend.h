@@ -39,6 +39,11 @@ class CudaBackend : public MapBackend {
     if (!scratch_) scratch_ = makeDeviceScratch(device_);
     return scratch_.get();
   }
+  /// MapParams::dynamic: classified on the device (or by the CPU backend for a scan that ran
+  /// there).
+  const std::vector<Eigen::Vector3f>& lastDynamicPoints() const override {
+    return last_on_cpu_ ? cpu_.lastDynamicPoints() : integrator_.lastDynamicPoints();
+  }
   bool masksChangedSince(uint64_t revision, std::vector<BlockKey>* keys,
                          std::vector<BlockStateMasks>* masks) override {
     views_.masksChangedSince(cache_, revision, keys, masks);
@@ -65,6 +70,7 @@ class CudaBackend : public MapBackend {
   LayerViews views_{stream_.get(), device_};
   std::unique_ptr<DeviceScratch> scratch_;  ///< readers' buffers (planning), made when asked
   int64_t estimate_blocks_ = 0;
+  bool last_on_cpu_ = false;  ///< the last scan ran on cpu_ (its dynamic points are there)
 };
 
 }  // namespace fragg::cuda

@@ -25,6 +25,8 @@ CudaIntegrator::CudaIntegrator(cudaStream_t stream, DeviceBlockCache& cache, int
 bool CudaIntegrator::update(const ScanInput& in, ScanUpdate what, const UpdateSettings& how,
                             BlockMap& blocks, InsertStats& stats) {
   cache_.beginScan();
+  dynamic_points_S_.clear();
+  const bool dynamic = how.params.dynamic.enabled && what == ScanUpdate::kIntegrate;
   const uint64_t uploaded_before = cache_.uploadedCount();
   const uint64_t evicted_before = cache_.evictedCount();
   InsertStats prep_stats;
@@ -36,10 +38,15 @@ bool CudaIntegrator::update(const ScanInput& in, ScanUpdate what, const UpdateSe
   const auto t_ray = std::chrono::steady_clock::now();
   BlockKey lo, hi;
   scan_.rayBlockBox(&lo, &hi);
+  if (dynamic) {  // the void tests read every block around a touched one: one block more
+    lo = {lo.x - 1, lo.y - 1, lo.z - 1};
+    hi = {hi.x + 1, hi.y + 1, hi.z + 1};
+  }
   if (!window_.shape(lo, hi)) return false;
   stats.add(prep_stats);
 
   std::vector<BlockKey> host_only = makeWindowResident(in, how.params.resolution_m, blocks, stats);
+  if (dynamic) classifyDynamicHits(in, how, blocks, host_only, stats);
   const uint32_t created = rayAndApply(what, how, blocks, std::move(host_only));
 
   const ScanCounters& c = scan_.counters();
@@ -95,10 +102,71 @@ std::vector<BlockKey> CudaIntegrator::hostOnlyInWindow(const BlockMap& blocks) {
   return keys;
 }
 
+DynamicPassArgs CudaIntegrator::dynamicArgs(const UpdateSettings& how) const {
+  DynamicPassArgs a;
+  a.window = window_.window();
+  a.slots = cache_.arrays();
+  a.counters = scan_.countersOnDevice();
+  a.miss_list = scan_.missList();
+  a.miss_capacity = scan_.missCapacity();
+  a.scan = cache_.currentScan();
+  a.rule = DynamicRule::fromParams(how.params.dynamic, how.params.occupancy);
+  a.ref = scan_.ref();
+  a.octomap_keys = scan_.octomapKeys();
+  a.inv_res = scan_.invRes();
+  return a;
+}
+
+void CudaIntegrator::classifyDynamicHits(const ScanInput& in, const UpdateSettings& how,
+                                         BlockMap& blocks, std::vector<BlockKey>& host_only,
+                                         InsertStats& stats) {
+  ScanCounters& c = scan_.counters();
+  const uint32_t n = c.rays;
+  dynamic_flags_.reserve(n);
+  // The cells as they are before the scan, every block read resident: a pass that read a
+  // host-only block listed it; it is uploaded and the pass runs again.
+  for (int attempt = 0;; ++attempt) {
+    if (attempt > 8) throw CudaError("dynamic classification did not converge (residency bug)");
+    window_.fill(cache_.arrays(), host_only);
+    scan_.reserveMisses(host_only.size());
+    scan_.countersToDevice();
+    launchClassifyDynamic(dynamicArgs(how), scan_.rays(), n, dynamic_flags_.get(), stream_);
+    scan_.countersToHost();
+    FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+    if (c.outside_window != 0)
+      throw CudaError("dynamic classification left the window table: residency bug");
+    if (c.misses == 0) break;
+    resolveMissesAndOverflow(blocks);
+    host_only = hostOnlyInWindow(blocks);
+    c.misses = 0;
+    c.void_misses = 0;
+  }
+  // The dynamic hits become free-only rays; their points are listed in cloud order.
+  c.dynamic = 0;
+  dynamic_indices_.reserve(n);
+  scan_.countersToDevice();
+  launchDropDynamic(scan_.mutableRays(), n, dynamic_flags_.get(), scan_.rayPoints(),
+                    dynamic_indices_.device(), scan_.countersOnDevice(), stream_);
+  scan_.countersToHost();
+  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  dynamic_indices_.toHost(c.dynamic, stream_);
+  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  std::sort(dynamic_indices_.host(), dynamic_indices_.host() + c.dynamic);
+  dynamic_points_S_.reserve(c.dynamic);
+  for (uint32_t k = 0; k < c.dynamic; ++k)
+    dynamic_points_S_.push_back(in.cloud.points_S[dynamic_indices_.host()[k]]);
+  stats.rays_dynamic += c.dynamic;
+  stats.rays_hit -= c.dynamic;
+}
+
 uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how, BlockMap& blocks,
                                      std::vector<BlockKey> host_only) {
   ScanCounters& c = scan_.counters();
   uint32_t created = 0;
+  const bool dynamic_on = how.params.dynamic.enabled && what != ScanUpdate::kRemove;
+  // MapParams::dynamic: only the void test lacked blocks, the rays' marks and touched list are
+  // complete: the next attempt runs the void test and the apply, not the ray pass again.
+  bool marks_complete = false;
   for (int attempt = 0;; ++attempt) {
     if (attempt > 8) throw CudaError("ray pass did not converge (residency bug)");
     window_.fill(cache_.arrays(), host_only);
@@ -124,10 +192,22 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
     args.piece_steps = how.params.cuda.ray_piece_steps;
     args.counters = scan_.countersOnDevice();
     ray_start_.record(stream_);
-    launchRaycast(args, how.params.raycast, how.params.cuda.readonly_ray_loads, stream_);
-    launchCompactTouched(args.slots, args.scan, args.counters, stream_);
+    if (!marks_complete) {
+      launchRaycast(args, how.params.raycast, how.params.cuda.readonly_ray_loads, stream_);
+      launchCompactTouched(args.slots, args.scan, args.counters, stream_);
+    }
+    // MapParams::dynamic: the void cells of the touched slots, from the cells and marks as
+    // they are before the apply (a host-only block read is a miss: uploaded, then redone).
+    DynamicApply dynamic;
+    if (dynamic_on) {
+      dynamic.rule = DynamicRule::fromParams(how.params.dynamic, how.params.occupancy);
+      void_bits_.reserve(size_t(args.slots.capacity) * (kCellsPerBlock / 64));
+      dynamic.void_bits = void_bits_.get();
+      launchVoidCells(dynamicArgs(how), static_cast<uint32_t>(args.slots.capacity),
+                      void_bits_.get(), stream_);
+    }
     apply_start_.record(stream_);
-    launchApply(args.slots, how.model, how.revision, args.scan, args.remove, args.counters,
+    launchApply(args.slots, how.model, how.revision, args.scan, args.remove, dynamic, args.counters,
                 16 * sm_count_, how.params.cuda.warp_per_slot_apply, stream_);
     apply_end_.record(stream_);
     scan_.countersToHost();
@@ -142,13 +222,18 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
     // The slots the rays took are resident blocks, device-only until written back.
     created += cache_.adoptDeviceSlots(c.free_top);
     if (c.applied) return created;
-    // The pass is redone from a clean count: the marks and allocations stay.
+    // The pass is redone from a clean count: the marks and allocations stay (touched slots
+    // are stamped: never evicted to make room).
+    marks_complete = dynamic_on && c.overflow == 0 && c.misses == c.void_misses;
     resolveMissesAndOverflow(blocks);
     host_only = hostOnlyInWindow(blocks);  // evictions may have touched the window's blocks
     c.misses = 0;
+    c.void_misses = 0;
     c.overflow = 0;
-    c.visits = 0;
-    c.touched = 0;  // listed again after the next pass
+    if (!marks_complete) {
+      c.visits = 0;
+      c.touched = 0;  // listed again after the next pass
+    }
   }
 }
 

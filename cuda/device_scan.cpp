@@ -44,6 +44,11 @@ void DeviceScan::prepare(const ScanInput& in, const MapParams& params, int32_t f
   const size_t n = in.cloud.size();
   if (!staged) uploadPoints(in.cloud);
   rays_.reserve(n);
+  uint32_t* ray_points = nullptr;  // MapParams::dynamic: the dynamic points come from them
+  if (params.dynamic.enabled) {
+    ray_points_.reserve(n);
+    ray_points = ray_points_.get();
+  }
   const uint8_t* free_only = nullptr;  // the device's flags, when the cloud has any
   if (in.cloud.hasFreeOnly()) {
     free_only_.reserve(n);
@@ -52,7 +57,7 @@ void DeviceScan::prepare(const ScanInput& in, const MapParams& params, int32_t f
     free_only = free_only_.device();
   }
   countersToDevice();
-  launchPrepare(points_.device(), free_only, uint32_t(n), prep, in.frustum, rays_.get(),
+  launchPrepare(points_.device(), free_only, uint32_t(n), prep, in.frustum, rays_.get(), ray_points,
                 counters_.device(), stream_);
   countersToHost();
   FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
@@ -129,6 +134,10 @@ void DeviceScan::prepareOnHost(const ScanInput& in, const MapParams& params, Ins
     }
   rays_.reserve(c.rays);
   copyToDevice(rays_.get(), prepared_.rays.data(), c.rays, stream_);
+  if (params.dynamic.enabled) {  // prepareScan listed each ray's point
+    ray_points_.reserve(c.rays);
+    copyToDevice(ray_points_.get(), prepared_.point_index.data(), c.rays, stream_);
+  }
   countersToDevice();
   FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
 }

@@ -61,8 +61,15 @@ class DeviceScan {
   const float* originM() const { return prepared_.origin_m; }
   double invRes() const { return prepared_.inv_res; }
   const RayEnd* rays() const { return rays_.get(); }
+  /// The rays, to be changed in place (MapParams::dynamic makes dynamic hits free-only).
+  RayEnd* mutableRays() { return rays_.get(); }
+  /// MapParams::dynamic: the cloud index of each ray's point (device memory).
+  const uint32_t* rayPoints() const { return ray_points_.get(); }
+  /// RayCast::kOctomap: the rays end in float metres (rayEndCell).
+  bool octomapKeys() const { return prepared_.octomap_keys; }
   size_t deviceBytes() const {
-    return rays_.bytes() + points_.deviceBytes() + free_only_.deviceBytes() + misses_.deviceBytes();
+    return rays_.bytes() + ray_points_.bytes() + points_.deviceBytes() + free_only_.deviceBytes() +
+           misses_.deviceBytes();
   }
 
  private:
@@ -88,6 +95,7 @@ class DeviceScan {
   MirroredBuffer<AutoStatsAccum> auto_stats_;
   MirroredBuffer<uint8_t> free_only_;  ///< PointCloud::free_only, when the cloud has flags
   DeviceArray<RayEnd> rays_;
+  DeviceArray<uint32_t> ray_points_;  ///< MapParams::dynamic: each ray's point index
   MirroredBuffer<ScanCounters> counters_;
   MirroredBuffer<int32_t> misses_;
 };

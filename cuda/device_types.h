@@ -83,13 +83,16 @@ struct ScanCounters {
   int32_t lo_v[3], hi_v[3];  ///< voxel bounds of the rays, relative to the reference voxel
   unsigned long long visits;
   unsigned long long cells_updated;
-  int32_t free_top;         ///< free slots left on the stack (negative: the pool overflowed)
-  uint32_t overflow;        ///< blocks that found no free slot
-  uint32_t misses;          ///< host-only blocks a ray needed (their entries in the miss list)
+  int32_t free_top;   ///< free slots left on the stack (negative: the pool overflowed)
+  uint32_t overflow;  ///< blocks that found no free slot
+  uint32_t misses;    ///< host-only blocks a ray (or a dynamic kernel) needed, in the miss list
+  /// MapParams::dynamic: of `misses`, those the dynamic kernels listed (not the rays)
+  uint32_t void_misses;
   uint32_t outside_window;  ///< cells outside the window (a bug if ever > 0)
   uint32_t touched;         ///< slots in the touched list
   uint32_t changed;         ///< touched slots with a changed cell
   uint32_t applied;         ///< 1 when the apply kernel ran (no miss, no overflow)
+  uint32_t dynamic;         ///< MapParams::dynamic: hits classified dynamic
 };
 
 }  // namespace fragg::cuda

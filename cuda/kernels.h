@@ -6,6 +6,7 @@
 
 #include "auto_stats_accum.h"
 #include "device_types.h"
+#include "fragg_map/dynamic_rule.h"
 #include "fragg_map/frustum.h"
 #include "fragg_map/internal/ray_prep.h"
 #include "fragg_map/map_params.h"
@@ -15,10 +16,10 @@ namespace fragg::cuda {
 
 /// Points (x, y, z float triples, sensor frame) -> compacted rays; counts points by outcome
 /// and bounds the rays (ScanCounters::lo_v / hi_v). `free_only`: nullptr, or one flag per
-/// point (PointCloud::free_only).
+/// point (PointCloud::free_only). `ray_points`: nullptr, or gets each ray's point index.
 void launchPrepare(const float* points_S, const uint8_t* free_only, uint32_t n,
-                   const RayPrepParams& p, const Frustum& f, RayEnd* rays, ScanCounters* counters,
-                   cudaStream_t stream);
+                   const RayPrepParams& p, const Frustum& f, RayEnd* rays, uint32_t* ray_points,
+                   ScanCounters* counters, cudaStream_t stream);
 
 /// Merges the statistics of the auto sensor model of points (x, y, z float triples, sensor
 /// frame) into `out` (AutoStatsAccum::empty() for a fresh gather): the bits of
@@ -61,12 +62,53 @@ void launchRaycast(const RaycastArgs& args, RayCast mode, bool readonly_loads, c
 void launchCompactTouched(const SlotArrays& slots, uint32_t scan, ScanCounters* counters,
                           cudaStream_t stream);
 
+/// MapParams::dynamic in the apply: the void cells voidCells found (8 words a slot, bit c =
+/// cell c) replace a miss's update as the CPU backend's apply does (kPassThrough: the cell is
+/// set to rule.seen_free_at_or_below_fx; kSurround: rule.afterMiss()). Off: `void_bits` null.
+struct DynamicApply {
+  DynamicRule rule;
+  const uint64_t* void_bits = nullptr;
+};
+
 /// Over the touched slots (only when the ray pass had no miss and no overflow): applies the
 /// marks (or undoes them: `remove`), clears the scratch, sets dirty / changed_at / last_used.
 /// `warp_per_slot`: one warp a slot (CudaParams::warp_per_slot_apply), else a thread block.
 void launchApply(const SlotArrays& slots, const OccupancyModel& model, uint64_t revision,
-                 uint32_t scan, bool remove, ScanCounters* counters, int grid, bool warp_per_slot,
-                 cudaStream_t stream);
+                 uint32_t scan, bool remove, const DynamicApply& dynamic, ScanCounters* counters,
+                 int grid, bool warp_per_slot, cudaStream_t stream);
+
+/// The dynamic kernels' view of the scan: the window (after its fill), the slots, the rule.
+struct DynamicPassArgs {
+  Window window;
+  SlotArrays slots;
+  ScanCounters* counters;
+  int32_t* miss_list;  ///< host-only blocks read (as RaycastArgs::miss_list)
+  uint32_t miss_capacity;
+  uint32_t scan;
+  DynamicRule rule;
+  VoxelKey ref;  ///< the rays' reference voxel
+  bool octomap_keys = false;
+  double inv_res = 0.0;
+};
+
+/// Before the ray pass: flags[i] = 1 when ray i is a hit in void space (the CPU's
+/// isDynamicHit on the cells as they are before the scan). A host-only block read is listed
+/// as a miss (its flags are then not to be used: the host uploads it and launches again).
+void launchClassifyDynamic(const DynamicPassArgs& args, const RayEnd* rays, uint32_t num_rays,
+                           uint8_t* flags, cudaStream_t stream);
+
+/// The flagged rays become free-only (RayEnd::hit = 0); their point indices (ray_points) go
+/// to `points` in any order, ScanCounters::dynamic of them (0 before).
+void launchDropDynamic(RayEnd* rays, uint32_t num_rays, const uint8_t* flags,
+                       const uint32_t* ray_points, uint32_t* points, ScanCounters* counters,
+                       cudaStream_t stream);
+
+/// Between the ray pass's touched list and the apply: the void cells of every touched slot (8
+/// words at void_bits[slot * 8]): passThroughResets or surroundedCells of the CPU backend.
+/// Host-only blocks read are listed as misses (the apply then skips, the pass is redone).
+/// `max_touched`: a bound on ScanCounters::touched (the pool's capacity).
+void launchVoidCells(const DynamicPassArgs& args, uint32_t max_touched, uint64_t* void_bits,
+                     cudaStream_t stream);
 
 /// free_saturated[slots[j]] = 0 for j < n.
 void launchClearSaturated(const SlotArrays& s, const int32_t* slots, uint32_t n,

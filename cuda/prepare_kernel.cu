@@ -14,7 +14,7 @@ constexpr unsigned kThreads = 256;
 __global__ void prepareKernel(const float* __restrict__ points_S,
                               const uint8_t* __restrict__ free_only_flags, uint32_t n,
                               RayPrepParams p, Frustum f, RayEnd* __restrict__ rays,
-                              ScanCounters* c) {
+                              uint32_t* __restrict__ ray_points, ScanCounters* c) {
   const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   RayEnd ray{};
   RayPrep outcome = RayPrep::kInvalid;
@@ -30,7 +30,11 @@ __global__ void prepareKernel(const float* __restrict__ points_S,
   uint32_t base = 0;
   if (lane == 0 && kept) base = atomicAdd(&c->rays, __popc(kept));
   base = __shfl_sync(kFullMask, base, 0);
-  if (keep) rays[base + __popc(kept & ((1u << lane) - 1u))] = ray;
+  if (keep) {
+    const uint32_t r = base + __popc(kept & ((1u << lane) - 1u));
+    rays[r] = ray;
+    if (ray_points) ray_points[r] = i;
+  }
 
   // Counters.
   const unsigned hits = __ballot_sync(kFullMask, valid && outcome == RayPrep::kHit);
@@ -64,11 +68,11 @@ __global__ void prepareKernel(const float* __restrict__ points_S,
 }  // namespace
 
 void launchPrepare(const float* points_S, const uint8_t* free_only_flags, uint32_t n,
-                   const RayPrepParams& p, const Frustum& f, RayEnd* rays, ScanCounters* counters,
-                   cudaStream_t stream) {
+                   const RayPrepParams& p, const Frustum& f, RayEnd* rays, uint32_t* ray_points,
+                   ScanCounters* counters, cudaStream_t stream) {
   if (n == 0) return;
   prepareKernel<<<blocksFor(n, kThreads), kThreads, 0, stream>>>(points_S, free_only_flags, n, p, f,
-                                                                 rays, counters);
+                                                                 rays, ray_points, counters);
   FRAGG_CUDA_CHECK_LAUNCH("prepareKernel");
 }
 

@@ -19,6 +19,7 @@ set(FRAGG_CUDA_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/auto_sensor_kernel.cu
   ${CMAKE_CURRENT_LIST_DIR}/raycast_kernel.cu
   ${CMAKE_CURRENT_LIST_DIR}/apply_kernel.cu
+  ${CMAKE_CURRENT_LIST_DIR}/dynamic_kernels.cu
   ${CMAKE_CURRENT_LIST_DIR}/residency_kernels.cu
   ${CMAKE_CURRENT_LIST_DIR}/device_scratch.cpp
   ${CMAKE_CURRENT_LIST_DIR}/layer_view.cpp

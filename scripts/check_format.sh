@@ -20,13 +20,21 @@ if [ "${#files[@]}" -eq 0 ]; then
   exit 0
 fi
 
-bad=()
-for f in "${files[@]}"; do
-  [ -f "$f" ] || continue  # deleted in the working tree but still tracked
-  if ! "$CLANG_FORMAT" --dry-run --Werror "$f" >/dev/null 2>&1; then
-    bad+=("$f")
-  fi
-done
+# Files that exist (a file deleted in the working tree may still be tracked), checked in batches
+# of 40 on every core (one clang-format per file took a minute of CI); a batch that fails is
+# checked file by file to name its badly formatted files.
+present=()
+for f in "${files[@]}"; do [ -f "$f" ] && present+=("$f"); done
+export CLANG_FORMAT
+check_batch() {
+  "$CLANG_FORMAT" --dry-run --Werror "$@" >/dev/null 2>&1 && return 0
+  for f in "$@"; do
+    "$CLANG_FORMAT" --dry-run --Werror "$f" >/dev/null 2>&1 || echo "$f"
+  done
+}
+export -f check_batch
+mapfile -t bad < <(printf '%s\0' "${present[@]}" |
+  xargs -0 -n 40 -P "$(nproc)" bash -c 'check_batch "$@"' check_batch | sort)
 
 if [ "${#bad[@]}" -ne 0 ]; then
   echo "check_format: ${#bad[@]} of ${#files[@]} files are not clang-formatted:" >&2

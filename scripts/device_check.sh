@@ -57,7 +57,7 @@ while [ $# -gt 0 ]; do
       : >"$sdir/jobs"
       for bin in fragg_gpu_test fragg_gpu_cache_test fragg_gpu_paging_test \
         fragg_gpu_collision_test fragg_gpu_frontier_test fragg_gpu_submap_test \
-        fragg_gpu_state_masks_test; do
+        fragg_gpu_state_masks_test fragg_gpu_dynamic_test; do
         if [ ! -x "$build/test/$bin" ]; then echo "compute-sanitizer: $bin not built: skipped"; continue; fi
         "$build/test/$bin" --gtest_list_tests | awk '
           /^[^ ]/ { suite = $1; next }

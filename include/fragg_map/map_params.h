@@ -135,6 +135,15 @@ struct DynamicParams {
   double void_probability = 0.25;
   /// The neighbourhood's Chebyshev radius (cells): 0 to 2.
   int known_radius_cells = 2;
+  /// Forgetting, off at 0 (the default; independent of `enabled`): after each integrated scan
+  /// every observed cell's log-odds moves this much toward 0 (probability 0.5), stopping at 0,
+  /// so that what is not seen again fades into the unknown band (a person who stood still
+  /// long enough to be mapped, a parked car that left unseen). In [0, 4] (log-odds per scan;
+  /// 4 takes a cell from either clamp to 0 in one scan). A map-wide pass over the host map:
+  /// the CPU backend only (backend cuda is refused, auto takes the CPU), not with scans.keep,
+  /// not with a page store (its blocks would miss the scans they were paged out for). Void
+  /// cells (either rule) fade like the others: they stop being void after one scan.
+  double decay_log_odds_per_scan = 0.0;
 };
 
 struct MapParams {

@@ -40,13 +40,13 @@ BackendChoice makeBackend(const MapParams& p) {
     c.reason = "cpu: requested";
     return c;
   }
-  if (p.dynamic.enabled) {  // the classification runs on the host map (CPU backend) for now
+  if (p.dynamic.decay_log_odds_per_scan > 0.0) {  // a map-wide pass over the host map
     if (p.backend == Backend::kCuda)
       throw InvalidArgument(
-          "dynamic.enabled: the CUDA backend does not classify dynamic hits yet; use backend "
+          "dynamic.decay_log_odds_per_scan: the CUDA backend does not decay cells; use backend "
           "cpu or auto");
     c.backend = std::make_unique<CpuBackend>(p.threads);
-    c.reason = "auto: CPU backend (dynamic.enabled runs on the CPU backend)";
+    c.reason = "auto: CPU backend (dynamic.decay_log_odds_per_scan runs on the CPU backend)";
     logAutoChoiceOnce(LogLevel::kInfo, "backend " + c.reason);
     return c;
   }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <iterator>
 
+#include "fragg_map/internal/decay.h"
 #include "fragg_map/internal/dynamic_classifier.h"
 #include "fragg_map/internal/seconds_since.h"
 #include "fragg_map/internal/thread_count.h"
@@ -125,6 +126,13 @@ void CpuBackend::update(const ScanInput& in, ScanUpdate what, const UpdateSettin
   stats.seconds_prepare += secondsSince(t0);
   updatePrepared(prepared_, what, how.model, how.params.raycast, how.params.skip_saturated_blocks,
                  how, blocks, stats);
+  if (how.params.dynamic.decay_log_odds_per_scan > 0.0 && what == ScanUpdate::kIntegrate) {
+    // Forgetting: the whole map one step toward unknown, after the scan (its cells too).
+    const auto t_decay = std::chrono::steady_clock::now();
+    decayCells(blocks, how.model, decayStepFx(how.params.dynamic.decay_log_odds_per_scan),
+               how.revision, threadCount(threads_));
+    stats.seconds_apply += secondsSince(t_decay);
+  }
 }
 
 void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,

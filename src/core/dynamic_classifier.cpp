@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "fragg_map/internal/dynamic_eval.h"
 #include "fragg_map/map_params.h"
 #include "fragg_map/occupancy.h"
 #include "fragg_map/raycast.h"
@@ -22,7 +23,7 @@ DynamicRule DynamicRule::fromParams(const DynamicParams& p, const OccupancyParam
 
 namespace {
 
-constexpr int kWords = kCellsPerBlock / 64;
+using dynamic_eval::kWords;
 
 // Cell lookups that remember the last block (a scan's hits share few blocks).
 class CellReader {
@@ -46,99 +47,24 @@ class CellReader {
   bool valid_ = false;
 };
 
-// kPassThrough: every cell within the rule's radius of `v` (Chebyshev, `v` included) has
-// been observed.
-bool observedAround(const VoxelKey& v, CellReader& cells, const DynamicRule& rule) {
-  const int r = rule.known_radius_cells;
-  for (int dz = -r; dz <= r; ++dz)
-    for (int dy = -r; dy <= r; ++dy)
-      for (int dx = -r; dx <= r; ++dx) {
-        const Cell* n = cells.find({v.x + dx, v.y + dy, v.z + dz});
-        if (!n || !n->observed()) return false;
-      }
-  return true;
-}
-
-bool dynamicAt(const VoxelKey& end, CellReader& cells, const DynamicRule& rule) {
-  const Cell* c = cells.find(end);
-  if (!rule.surround) return c && rule.isVoid(*c) && observedAround(end, cells, rule);
-  if (!c || !rule.seenFreeBefore(*c)) return false;
-  if (rule.isVoid(*c)) return true;
-  // Free with confidence all around (over earlier scans): space that no static surface borders.
-  const int r = rule.known_radius_cells;
-  for (int dz = -r; dz <= r; ++dz)
-    for (int dy = -r; dy <= r; ++dy)
-      for (int dx = -r; dx <= r; ++dx) {
-        const Cell* n = cells.find({end.x + dx, end.y + dy, end.z + dz});
-        if (!n || !rule.seenFreeBefore(*n)) return false;
-      }
-  return true;
-}
-
 // The seen-free mask of block `key`: not hit by the scan, and passed through by it or known
 // (occupied or free in the block's state masks) before it: DUFOMap's unknown inflation, where
 // only unknown space and the scan's own hits keep a cell from becoming void (an occupied cell
 // left by a mover's earlier hits does not). `marks_of`: the scan's marks of the block (or null).
 void seenFreeMask(const BlockKey& key, const ScratchBlock* marks_of, const BlockMap& blocks,
                   uint64_t* out) {
-  for (int w = 0; w < kWords; ++w) out[w] = marks_of ? marks_of->free[w] : 0;
   const BlockIndex i = blocks.find(key);
-  if (i != kNoBlock) {
-    const BlockStateMasks& masks = blocks.masks(i);
-    for (int w = 0; w < kWords; ++w) out[w] |= masks.occupied[w] | masks.free[w];
-  }
-  if (marks_of)
-    for (int w = 0; w < kWords; ++w) out[w] &= ~marks_of->hit[w];
-}
-
-// Bitwise erosion of a block's 512-bit mask (word w = the layer z = w; bit x + 8 y) by a cube
-// of radius r <= 2 < a block, from the masks of the block (mid) and its neighbours below (lo)
-// and above (hi) along one axis: out bit = AND of the mask over [-r, r] along that axis.
-static_assert(kWords == kBlockSize && kBlockSize == 8, "a word is one z layer of 8 x 8 cells");
-constexpr uint64_t kColumns = 0x0101010101010101ull;  // x = 0 in every row
-
-// Columns x < k of every row.
-constexpr uint64_t columnsBelow(int k) { return ((uint64_t{1} << k) - 1) * kColumns; }
-
-void erodeX(const uint64_t* lo, const uint64_t* mid, const uint64_t* hi, int r, uint64_t* out) {
-  for (int w = 0; w < kWords; ++w) {
-    uint64_t e = mid[w];
-    for (int d = 1; d <= r; ++d) {
-      const uint64_t below = columnsBelow(8 - d);
-      e &= ((mid[w] >> d) & below) | ((hi[w] << (8 - d)) & ~below);                      // x + d
-      e &= ((mid[w] << d) & ~columnsBelow(d)) | ((lo[w] >> (8 - d)) & columnsBelow(d));  // x - d
-    }
-    out[w] = e;
-  }
-}
-
-void erodeY(const uint64_t* lo, const uint64_t* mid, const uint64_t* hi, int r, uint64_t* out) {
-  for (int w = 0; w < kWords; ++w) {
-    uint64_t e = mid[w];
-    for (int d = 1; d <= r; ++d) {
-      e &= (mid[w] >> (8 * d)) | (hi[w] << (8 * (8 - d)));  // y + d
-      e &= (mid[w] << (8 * d)) | (lo[w] >> (8 * (8 - d)));  // y - d
-    }
-    out[w] = e;
-  }
-}
-
-void erodeZ(const uint64_t* lo, const uint64_t* mid, const uint64_t* hi, int r, uint64_t* out) {
-  for (int w = 0; w < kWords; ++w) {
-    uint64_t e = mid[w];
-    for (int d = 1; d <= r; ++d) {
-      e &= w + d < kWords ? mid[w + d] : hi[w + d - kWords];
-      e &= w - d >= 0 ? mid[w - d] : lo[w - d + kWords];
-    }
-    out[w] = e;
-  }
+  const BlockStateMasks* masks = i == kNoBlock ? nullptr : &blocks.masks(i);
+  dynamic_eval::seenFreeMask(marks_of ? marks_of->free : nullptr,
+                             marks_of ? marks_of->hit : nullptr, masks ? masks->occupied : nullptr,
+                             masks ? masks->free : nullptr, out);
 }
 
 }  // namespace
 
 bool isDynamicHit(const VoxelKey& end, const BlockMap& blocks, const DynamicRule& rule) {
   CellReader cells(blocks);
-  return dynamicAt(end, cells, rule);
+  return dynamic_eval::dynamicAt(end, cells, rule);
 }
 
 void passThroughResets(const BlockKey& key, const uint64_t* free_marks, const uint64_t* hit_marks,
@@ -152,7 +78,8 @@ void passThroughResets(const BlockKey& key, const uint64_t* free_marks, const ui
     for (uint64_t bits = free_marks[w] & ~hit_marks[w] & masks.occupied[w]; bits != 0;
          bits &= bits - 1) {
       const int c = w * 64 + __builtin_ctzll(bits);
-      if (observedAround(voxelKeyOf(key, c), cells, rule)) resets[w] |= uint64_t{1} << (c & 63);
+      if (dynamic_eval::observedAround(voxelKeyOf(key, c), cells, rule))
+        resets[w] |= uint64_t{1} << (c & 63);
     }
 }
 
@@ -189,16 +116,7 @@ void surroundedCells(const ScanScratch& marks, const BlockMap& blocks, const Dyn
             around[n] = untouched[n];
           }
         }
-    // The cube's minimum filter is separable: along x for the 3 x 3 block columns around the
-    // block, then along y for the 3 layers, then along z.
-    uint64_t along_x[9][kWords], along_y[3][kWords], eroded[kWords];
-    for (int n = 0; n < 9; ++n)
-      erodeX(around[n * 3], around[n * 3 + 1], around[n * 3 + 2], r, along_x[n]);
-    for (int n = 0; n < 3; ++n)
-      erodeY(along_x[n * 3], along_x[n * 3 + 1], along_x[n * 3 + 2], r, along_y[n]);
-    erodeZ(along_y[0], along_y[1], along_y[2], r, eroded);
-    uint64_t* out = &surrounded[j * kWords];
-    for (int w = 0; w < kWords; ++w) out[w] = candidates[w] & eroded[w];
+    dynamic_eval::surroundedMask(around, r, candidates, &surrounded[j * kWords]);
   }
 }
 
@@ -218,7 +136,7 @@ void classifyDynamicHits(PreparedScan& scan, const BlockMap& blocks, const Dynam
       const size_t r = static_cast<size_t>(i);
       const VoxelKey end{scan.ref.x + scan.endCell(r, 0), scan.ref.y + scan.endCell(r, 1),
                          scan.ref.z + scan.endCell(r, 2)};
-      if (dynamicAt(end, cells, rule)) local.push_back(static_cast<uint32_t>(i));
+      if (dynamic_eval::dynamicAt(end, cells, rule)) local.push_back(static_cast<uint32_t>(i));
     }
   }
   // Static schedule: thread t's rays come before thread t + 1's, so the list is ascending.

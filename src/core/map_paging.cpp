@@ -44,6 +44,10 @@ void Map::attachPageStore(std::shared_ptr<PageStore> store, const PagingPolicy& 
   policy.validate();
   if (params_.scans.keep || scan_store_->size() > 0)
     throw InvalidArgument("a map that keeps its scans cannot page (the store holds no scans)");
+  if (params_.dynamic.decay_log_odds_per_scan > 0.0)
+    throw InvalidArgument(
+        "a map with dynamic.decay_log_odds_per_scan cannot page (paged-out blocks would not "
+        "decay)");
   const std::vector<uint8_t> meta_bytes = store->readMeta();
   if (!meta_bytes.empty()) {
     const StoreMapMeta meta = decodeStoreMeta(meta_bytes, store->path());

@@ -91,6 +91,16 @@ void MapParams::validate() const {
           "dynamic.enabled cannot be combined with scans.keep: removing a scan would not know "
           "which of its hits were dynamic");
   }
+  const double decay = dynamic.decay_log_odds_per_scan;
+  if (!std::isfinite(decay) || decay < 0.0 || decay > 4.0)
+    throw InvalidArgument(
+        "dynamic.decay_log_odds_per_scan must be in [0, 4] (log-odds per scan, "
+        "0 = off), got " +
+        std::to_string(decay));
+  if (decay > 0.0 && scans.keep)
+    throw InvalidArgument(
+        "dynamic.decay_log_odds_per_scan cannot be combined with scans.keep: removing a scan "
+        "after cells decayed would not give back the map without it");
 }
 
 const char* toString(VoidSpaceRule rule) {

@@ -18,6 +18,7 @@ set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/scan_preparation.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scan_scratch.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cpu_backend.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/decay.cpp
   ${CMAKE_CURRENT_LIST_DIR}/dynamic_classifier.cpp
   ${CMAKE_CURRENT_LIST_DIR}/insert_stats.cpp
   ${CMAKE_CURRENT_LIST_DIR}/log.cpp

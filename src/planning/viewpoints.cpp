@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <string>
 #include <unordered_set>
@@ -224,7 +225,8 @@ namespace {
 // one log line when the device cannot take the batch.
 bool gainsOnBackend(const Map& map, const std::vector<Eigen::Vector3d>& positions_m,
                     const std::vector<double>& yaws_rad, const std::vector<Eigen::Vector3d>& rays,
-                    double max_range_m, Backend backend, std::vector<double>& gains) {
+                    double max_range_m, Backend backend, std::vector<double>& gains,
+                    GainTimings* timings) {
   const bool on_cuda = std::string(map.backendName()) == "cuda";
   if (!on_cuda) {
     if (backend == Backend::kCuda)
@@ -247,10 +249,20 @@ bool gainsOnBackend(const Map& map, const std::vector<Eigen::Vector3d>& position
 #if FRAGG_HAVE_CUDA
     BlockKey lo, hi;
     gainReach(batch, &lo, &hi);
+    const auto t0 = std::chrono::steady_clock::now();
     const std::unique_ptr<DeviceViewLease> lease = map.deviceView(lo, hi);
     if (!lease)
       throw CudaOutOfMemory("the device cannot hold every block the viewpoints' rays reach");
-    viewpointGainsOnDevice(lease->view(), lease->scratch(), batch, map.model(), gains.data());
+    if (timings) {
+      *timings = GainTimings{};
+      timings->view_seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      viewpointGainsOnDevice(lease->view(), lease->scratch(), batch, map.model(), gains.data(),
+                             &timings->tables_seconds, &timings->walk_seconds, &timings->rounds);
+      timings->on_device = true;
+    } else {
+      viewpointGainsOnDevice(lease->view(), lease->scratch(), batch, map.model(), gains.data());
+    }
     return true;
 #else
     throw InvalidArgument("viewpoint gains on CUDA: built without CUDA");
@@ -267,7 +279,8 @@ bool gainsOnBackend(const Map& map, const std::vector<Eigen::Vector3d>& position
 std::vector<double> viewpointGainsBits(const Map& map,
                                        const std::vector<Eigen::Vector3d>& positions_m,
                                        const std::vector<double>& yaws_rad,
-                                       const GainSensor& sensor, int threads, Backend backend) {
+                                       const GainSensor& sensor, int threads, Backend backend,
+                                       GainTimings* timings) {
   sensor.validate();
   if (positions_m.size() != yaws_rad.size())
     throw InvalidArgument(
@@ -279,7 +292,8 @@ std::vector<double> viewpointGainsBits(const Map& map,
   const std::vector<Eigen::Vector3d> rays = sensorRays(sensor);
   std::vector<double> gains(positions_m.size());
   if (backend != Backend::kCpu && !positions_m.empty()) {
-    if (gainsOnBackend(map, positions_m, yaws_rad, rays, sensor.max_range_m, backend, gains))
+    if (gainsOnBackend(map, positions_m, yaws_rad, rays, sensor.max_range_m, backend, gains,
+                       timings))
       return gains;
   }
   const BlockView view = map.blockView();

@@ -125,6 +125,7 @@ const std::vector<fragg::FieldName>& parameterNames() {
       {"dynamic.known_radius_cells", "dynamic/known_radius"},
       {"dynamic.enabled", "dynamic/enabled"},
       {"dynamic.rule", "dynamic/rule"},
+      {"dynamic.decay_log_odds_per_scan", "dynamic/decay_per_scan"},
       {"sensor.type", "sensor/type"},
       {"sensor.hfov_rad", "sensor/hfov"},
       {"sensor.vfov_rad", "sensor/vfov"},
@@ -470,6 +471,7 @@ ServerParams parseKnown(const XmlRpcValue& root) {
   readBool(root, "dynamic/enabled", &m.dynamic.enabled);
   readDouble(root, "dynamic/void_probability", &m.dynamic.void_probability);
   readInt(root, "dynamic/known_radius", &m.dynamic.known_radius_cells);
+  readDouble(root, "dynamic/decay_per_scan", &m.dynamic.decay_log_odds_per_scan);
   std::string void_rule = fragg::toString(m.dynamic.rule);
   readString(root, "dynamic/rule", &void_rule);
   asParameters([&] { m.dynamic.rule = fragg::voidSpaceRuleFromString(void_rule); });

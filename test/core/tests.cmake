@@ -43,5 +43,6 @@ endif()
 fragg_add_test(fragg_dynamic_mapping_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/dynamic_mapping_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/dynamic_pass_through_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/dynamic_decay_test.cpp
   LIBS fragg_map_core
   LABELS core)

@@ -57,3 +57,11 @@ if(TARGET fragg_map_store AND TARGET fragg_gpu_state_masks_test)
   target_link_libraries(fragg_gpu_state_masks_test fragg_map_store)
   target_compile_definitions(fragg_gpu_state_masks_test PRIVATE FRAGG_HAVE_STORE)
 endif()
+
+# Dynamic-aware mapping (MapParams::dynamic) on the CUDA backend against the CPU backend: the
+# labelled room under both rules, a W6 slice with a small pool; skips without a device.
+fragg_add_test(fragg_gpu_dynamic_test
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/dynamic_gpu_test.cpp
+  LIBS fragg_map_core fragg_map_sim_lib
+  LABELS gpu)
+target_compile_definitions(fragg_gpu_dynamic_test PRIVATE FRAGG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")

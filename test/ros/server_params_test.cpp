@@ -284,6 +284,16 @@ TEST(ServerParams, DynamicRuleIsReadAndBadNamesRefused) {
   EXPECT_EQ(rejection(bad),
             "parameter 'dynamic/rule' must be pass-through or surround, got 'dufomap'");
   expectRejected("dynamic/rule", 1);
+  // Forgetting: read as a rate, refused out of [0, 4] naming the parameter.
+  XmlRpcValue decay;
+  set(decay, "keep_scans", false);
+  set(decay, "dynamic/decay_per_scan", 0.5);
+  EXPECT_EQ(fragg::ros::parseParameters(decay).map.dynamic.decay_log_odds_per_scan, 0.5);
+  XmlRpcValue negative;
+  set(negative, "keep_scans", false);
+  set(negative, "dynamic/decay_per_scan", -1.0);
+  EXPECT_NE(rejection(negative).find("dynamic/decay_per_scan"), std::string::npos)
+      << rejection(negative);
 }
 
 TEST(ServerParams, LidarSensor) {
@@ -430,6 +440,7 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.map.dynamic.void_probability, d.map.dynamic.void_probability);
   EXPECT_EQ(p.map.dynamic.known_radius_cells, d.map.dynamic.known_radius_cells);
   EXPECT_EQ(p.map.dynamic.rule, d.map.dynamic.rule);
+  EXPECT_EQ(p.map.dynamic.decay_log_odds_per_scan, d.map.dynamic.decay_log_odds_per_scan);
   EXPECT_EQ(p.correction.thresholds.min_translation_m, d.correction.thresholds.min_translation_m);
   EXPECT_EQ(p.correction.thresholds.min_rotation_rad, d.correction.thresholds.min_rotation_rad);
   EXPECT_EQ(p.correction.stamp_tolerance_s, d.correction.stamp_tolerance_s);

@@ -36,17 +36,30 @@ struct GainSensor {
 double viewpointGainBits(const Map& map, const BlockView& view, const Eigen::Vector3d& position_m,
                          double yaw_rad, const GainSensor& sensor);
 
+/// Where a batch of gains spent its time on the device (viewpointGainsBits with `timings`;
+/// all zero when the batch ran on the CPU): the map's device view over the batch's reach
+/// (residency and its block table), the batch's own tables (inputs copied, the dense block
+/// table, the cell bitmaps cleared) and the walk kernels with the gains copied back, seconds.
+/// Timing adds a stream synchronisation between the stages.
+struct GainTimings {
+  bool on_device = false;
+  double view_seconds = 0.0, tables_seconds = 0.0, walk_seconds = 0.0;
+  size_t rounds = 0;  ///< kernel launches (bitmaps of one round fit 1 GiB)
+};
+
 /// Gains of many viewpoints at once; result i belongs to position i and yaw i (the two must
 /// have the same length). `backend`: kCpu walks the host blocks (OpenMP, `threads` 0 = every
 /// core); kAuto uses the map's backend where it has a gain path (a map integrating on CUDA:
 /// one device thread per ray over its block cache, the same cells as the CPU walk; sums equal
 /// to rounding), else the CPU, falling back to the CPU with one log line when the device
-/// cannot take the batch; kCuda insists (InvalidArgument for a map not on CUDA).
+/// cannot take the batch; kCuda insists (InvalidArgument for a map not on CUDA). `timings`
+/// (optional): where the device's time went.
 std::vector<double> viewpointGainsBits(const Map& map,
                                        const std::vector<Eigen::Vector3d>& positions_m,
                                        const std::vector<double>& yaws_rad,
                                        const GainSensor& sensor, int threads = 0,
-                                       Backend backend = Backend::kCpu);
+                                       Backend backend = Backend::kCpu,
+                                       GainTimings* timings = nullptr);
 
 /// Entropy (bits) of a cell as the gain counts it: 1 for never observed, H(p) inside the
 /// unknown band, 0 for free and occupied cells.

@@ -47,14 +47,29 @@ __global__ void viewpointGainsKernel(GainKernelArgs a) {
     const int64_t bx = a.box_lo[3 * vp], by = a.box_lo[3 * vp + 1], bz = a.box_lo[3 * vp + 2];
     const int64_t sx = a.box_dims[0], sy = a.box_dims[1], sz = a.box_dims[2];
     unsigned long long* seen = a.seen + vp * a.words_per_viewpoint;
-    // States from the slot's masks (128 bytes a block, shared by every ray crossing it); a
-    // cell itself is read only when an unknown one is first seen (its entropy).
+    // States from the slot's masks (128 bytes a block, shared by every ray crossing it), the
+    // occupied and free words of the cell's z slice of the block kept while the ray stays in it
+    // (a near-horizontal ray loads them once a block); a cell itself is read only when an
+    // unknown one is first seen (its entropy).
     int32_t slot = kNoViewSlot;
+    int slice = -1;
+    uint64_t occupied_word = 0, free_word = 0;
     for (int entry = kUnknownBlock;; entry = walk.next()) {
       const VoxelKey k = walk.cell();
-      if (entry != kSameBlock) slot = gainSlot(a, blockKeyOf(k));
+      if (entry != kSameBlock) {
+        slot = gainSlot(a, blockKeyOf(k));
+        slice = -1;
+      }
       const int c = cellIndexOf(k);
-      const CellState s = slot == kNoViewSlot ? CellState::kUnknown : a.view.masks[slot].state(c);
+      if ((c >> 6) != slice) {
+        slice = c >> 6;
+        occupied_word = slot == kNoViewSlot ? 0 : a.view.masks[slot].occupied[slice];
+        free_word = slot == kNoViewSlot ? 0 : a.view.masks[slot].free[slice];
+      }
+      const uint64_t cell_bit = uint64_t{1} << (c & 63);
+      const CellState s = (occupied_word & cell_bit) ? CellState::kOccupied
+                          : (free_word & cell_bit)   ? CellState::kFree
+                                                     : CellState::kUnknown;
       if (s == CellState::kOccupied) break;
       if (s == CellState::kUnknown) {
         const int64_t lx = k.x - bx, ly = k.y - by, lz = k.z - bz;

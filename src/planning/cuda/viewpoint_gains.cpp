@@ -1,6 +1,7 @@
 #include "viewpoint_gains.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -14,8 +15,10 @@ namespace fragg::planning {
 
 namespace {
 
-/// Device memory for the bitmaps of one round of viewpoints.
-constexpr uint64_t kSeenBudgetBytes = uint64_t(1) << 30;
+/// Device memory for the bitmaps of one round of viewpoints: a quarter of what the device has
+/// free, within these bounds (fewer rounds, fewer kernel tails).
+constexpr uint64_t kSeenBudgetMinBytes = uint64_t(1) << 30;
+constexpr uint64_t kSeenBudgetMaxBytes = uint64_t(4) << 30;
 constexpr uint64_t kMaxSeenBytesPerViewpoint = uint64_t(4) << 30;
 /// The largest dense block table over a batch's reach (entries of 4 bytes); a larger reach
 /// looks blocks up in the view's hash.
@@ -98,9 +101,11 @@ void gainReach(const GainBatch& batch, BlockKey* lo_key, BlockKey* hi_key) {
 }
 
 void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
-                            const GainBatch& batch, const OccupancyModel& model, double* out) {
+                            const GainBatch& batch, const OccupancyModel& model, double* out,
+                            double* tables_seconds, double* walk_seconds, size_t* rounds) {
   const size_t n = batch.viewpoints();
   if (n == 0) return;
+  const auto t_start = std::chrono::steady_clock::now();
   const SeenBoxes boxes = seenBoxes(batch);
   const uint64_t words = boxes.words;
   if (words * 8 > kMaxSeenBytesPerViewpoint)
@@ -134,8 +139,19 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
     dense = scratch.device<int32_t>(kDense, dense_entries);
     cuda::launchDenseBlockTable(view, reach_lo, dense_dims, dense, stream);
   }
-  const size_t per_round = std::max<size_t>(1, std::min<size_t>(n, kSeenBudgetBytes / (words * 8)));
+  size_t free_bytes = 0, total_bytes = 0;
+  FRAGG_CUDA_CHECK(cudaMemGetInfo(&free_bytes, &total_bytes));
+  const uint64_t budget =
+      std::clamp<uint64_t>(free_bytes / 4, kSeenBudgetMinBytes, kSeenBudgetMaxBytes);
+  const size_t per_round = std::max<size_t>(1, std::min<size_t>(n, budget / (words * 8)));
   unsigned long long* seen = scratch.device<unsigned long long>(kSeen, per_round * words);
+  auto t_walk = t_start;
+  if (tables_seconds) {
+    FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream));
+    t_walk = std::chrono::steady_clock::now();
+    *tables_seconds = std::chrono::duration<double>(t_walk - t_start).count();
+    *rounds = (n + per_round - 1) / per_round;
+  }
   for (size_t first = 0; first < n; first += per_round) {
     const size_t m = std::min(per_round, n - first);
     FRAGG_CUDA_CHECK(cudaMemsetAsync(seen, 0, m * words * 8, stream));
@@ -162,6 +178,9 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
   }
   cuda::copyToHost(out, gains, n, stream);
   FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream));
+  if (walk_seconds)
+    *walk_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_walk).count();
 }
 
 }  // namespace fragg::planning

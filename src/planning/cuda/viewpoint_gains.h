@@ -13,8 +13,12 @@ namespace fragg::planning {
 /// One gain per viewpoint of `batch` into `out`. Every block the rays can reach must be in
 /// `view` (Map::deviceView over the batch's reach). Throws InvalidArgument when one viewpoint's
 /// cell bitmap would pass 4 GiB, CudaOutOfMemory when the scratch cannot grow.
+/// `tables_seconds`/`walk_seconds`/`rounds` (all or none): the stages' times, with a stream
+/// synchronisation between them.
 void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
-                            const GainBatch& batch, const OccupancyModel& model, double* out);
+                            const GainBatch& batch, const OccupancyModel& model, double* out,
+                            double* tables_seconds = nullptr, double* walk_seconds = nullptr,
+                            size_t* rounds = nullptr);
 
 /// The blocks a batch's rays can reach: [lo, hi] (inclusive).
 void gainReach(const GainBatch& batch, BlockKey* lo, BlockKey* hi);

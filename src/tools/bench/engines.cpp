@@ -70,6 +70,9 @@ MapParams engineParams(const std::string& engine, const MapParams& base) {
       p.cuda.host_threads = 0;
     } else if (token == "no-staging") {
       p.cuda.stage_next_cloud = false;
+    } else if (token == "dynamic-surround" || token == "dynamic-pass-through") {
+      p.dynamic.enabled = true;  // MapParams::dynamic under that rule (issue 37's cost)
+      p.dynamic.rule = voidSpaceRuleFromString(token.substr(8));
     } else if (token.rfind("pieces=", 0) == 0) {
       try {
         p.cuda.ray_piece_steps = std::stoi(token.substr(7));
@@ -82,7 +85,8 @@ MapParams engineParams(const std::string& engine, const MapParams& base) {
       throw InvalidArgument(
           "unknown engine option '" + token + "' in '" + engine +
           "' (pageable, plain-loads, no-coherence, bresenham, octomap-raycast, no-skip, "
-          "no-coalesce, host-auto, block-apply, all-host-threads, no-staging, pieces=N, sequence)");
+          "no-coalesce, host-auto, block-apply, all-host-threads, no-staging, dynamic-surround, "
+          "dynamic-pass-through, pieces=N, sequence)");
     }
   }
   return p;

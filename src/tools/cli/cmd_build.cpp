@@ -74,6 +74,7 @@ const std::vector<FieldName>& flagNames() {
       {"dynamic.known_radius_cells", "--known-radius"},
       {"dynamic.rule", "--dynamic-rule"},
       {"dynamic.enabled", "--dynamic"},
+      {"dynamic.decay_log_odds_per_scan", "--decay"},
       {"sensor.type", "--sensor"},
       {"sensor.hfov_rad", "--hfov"},
       {"sensor.vfov_rad", "--vfov"},
@@ -298,6 +299,8 @@ void runBuild(const BuildOptions& o) {
           {"saved_by_plane_memory", total.culling.saved_by_plane_memory},
           {"saved_by_rotation", total.culling.saved_by_rotation},
           {"saved_by_translation", total.culling.saved_by_translation}}}};
+    if (params.dynamic.decay_log_odds_per_scan > 0.0)
+      j["decay_log_odds_per_scan"] = params.dynamic.decay_log_odds_per_scan;
     if (params.dynamic.enabled)
       j["dynamic"] = {{"rule", toString(params.dynamic.rule)},
                       {"void_probability", params.dynamic.void_probability},
@@ -421,7 +424,7 @@ void addBuildCommand(CLI::App& app) {
               "rule; off: liboctomap's insertPointCloud leaves it)");
   c->add_flag("--dynamic", o->dynamic.enabled,
               "Dynamic scenes: hits in void space (observed free with confidence) are dynamic, "
-              "not inserted; counted per scan in --json (CPU backend)");
+              "not inserted; counted per scan in --json");
   c->add_option("--dynamic-rule", o->dynamic_rule,
                 "With --dynamic: how space becomes void: pass-through (a ray through an occupied "
                 "cell whose neighbourhood is observed voids it) | surround (DUFOMap's: a "
@@ -433,6 +436,10 @@ void addBuildCommand(CLI::App& app) {
   c->add_option("--known-radius", o->dynamic.known_radius_cells,
                 "With --dynamic: cells around a void hit that must have been observed "
                 "(Chebyshev radius, 0-2)")
+      ->capture_default_str();
+  c->add_option("--decay", o->dynamic.decay_log_odds_per_scan,
+                "Forgetting: after each scan every observed cell's log-odds moves this much "
+                "toward 0 (0 = off, up to 4; CPU backend; with or without --dynamic)")
       ->capture_default_str();
   c->add_option("--threads", o->threads, "CPU threads (0 = every core)")->capture_default_str();
   c->add_option("--scans", o->max_scans, "Integrate only the first N scans (0 = all)")
