@@ -85,15 +85,15 @@ wait_for_apt_lock() {
 
 # What the first build will take, scaled from measured figures: ~11 min at -j2 on a fresh
 # 2-core machine without a GPU, CUDA kernels for every architecture included (issue 16); the
-# demo's (--demo: its targets only, unity batches, no tests, no CUDA without a GPU) about 400
-# CPU seconds (issue 38: 492 CPU s for its whole first run, demo steps included).
+# demo's (--demo: its targets only, unity batches, no tests, no CUDA without a GPU) about 360
+# CPU seconds (issue 38: 492 CPU s for its whole first run, 128 of them the demo steps).
 print_build_estimate() {
   local cores demo="${1:-0}"
   cores="$(nproc 2>/dev/null || echo 2)"
   [ "$cores" -ge 1 ] 2>/dev/null || cores=2
   if [ "$demo" -eq 1 ]; then
-    echo "install_deps: next, the demo's first build: about $(((7 + cores - 1) / cores)) min" \
-      "on $cores core(s) (about 7 CPU minutes: its targets only, in unity batches)"
+    echo "install_deps: next, the demo's first build: about $(((6 + cores - 1) / cores)) min" \
+      "on $cores core(s) (about 6 CPU minutes: its targets only, in unity batches)"
     return
   fi
   echo "install_deps: next, the first build: about $(((11 * 2 + cores - 1) / cores)) min on" \
