@@ -21,6 +21,8 @@ class CudaBackend : public MapBackend {
   const char* name() const override { return "cuda"; }
   BlockCache& cache() override { return cache_; }
   bool cullsOnItsOwn() const override { return true; }
+  /// Paging: its rays report the paged-out blocks they reach (UpdateSettings::device_paging).
+  bool reportsReachedBlocks() const override { return true; }
   size_t deviceBytes() const override {
     return cache_.deviceBytes() + integrator_.deviceBytes() + views_.deviceBytes() +
            (scratch_ ? scratch_->deviceBytes() : 0);

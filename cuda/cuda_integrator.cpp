@@ -46,8 +46,19 @@ bool CudaIntegrator::update(const ScanInput& in, ScanUpdate what, const UpdateSe
   stats.add(prep_stats);
 
   std::vector<BlockKey> host_only = makeWindowResident(in, how.params.resolution_m, blocks, stats);
-  if (dynamic) classifyDynamicHits(in, how, blocks, host_only, stats);
-  const uint32_t created = rayAndApply(what, how, blocks, std::move(host_only));
+  missed_this_scan_.clear();
+  uint32_t created = 0;
+  try {
+    if (dynamic) classifyDynamicHits(in, how, blocks, host_only, stats);
+    created = rayAndApply(what, how, blocks, std::move(host_only));
+  } catch (const CudaOutOfMemory&) {
+    throw;  // the map drops the cache and runs the scan on the CPU
+  } catch (...) {
+    // A scan refused by the paging budget (or a store that failed to read) leaves its marks
+    // unapplied in the pool: they go with the cache, which is written back first.
+    cache_.invalidateAll(blocks);
+    throw;
+  }
 
   const ScanCounters& c = scan_.counters();
   const double ray_s = apply_start_.secondsSince(ray_start_);
@@ -125,10 +136,13 @@ void CudaIntegrator::classifyDynamicHits(const ScanInput& in, const UpdateSettin
   dynamic_flags_.reserve(n);
   // The cells as they are before the scan, every block read resident: a pass that read a
   // host-only block listed it; it is uploaded and the pass runs again.
+  // Paging: the regions paged out are read like host-only blocks (read back when missed).
+  const DevicePaging* paging = how.device_paging;
   for (int attempt = 0;; ++attempt) {
     if (attempt > 8) throw CudaError("dynamic classification did not converge (residency bug)");
-    window_.fill(cache_.arrays(), host_only);
-    scan_.reserveMisses(host_only.size());
+    std::vector<std::pair<BlockKey, BlockKey>> paged_out;
+    if (paging) paged_out = paging->paged_out_regions(window_.lo(), window_.hi());
+    scan_.reserveMisses(window_.fill(cache_.arrays(), host_only, paged_out));
     scan_.countersToDevice();
     launchClassifyDynamic(dynamicArgs(how), scan_.rays(), n, dynamic_flags_.get(), stream_);
     scan_.countersToHost();
@@ -136,7 +150,7 @@ void CudaIntegrator::classifyDynamicHits(const ScanInput& in, const UpdateSettin
     if (c.outside_window != 0)
       throw CudaError("dynamic classification left the window table: residency bug");
     if (c.misses == 0) break;
-    resolveMissesAndOverflow(blocks);
+    resolveMissesAndOverflow(blocks, paging);
     host_only = hostOnlyInWindow(blocks);
     c.misses = 0;
     c.void_misses = 0;
@@ -162,6 +176,9 @@ void CudaIntegrator::classifyDynamicHits(const ScanInput& in, const UpdateSettin
 uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how, BlockMap& blocks,
                                      std::vector<BlockKey> host_only) {
   ScanCounters& c = scan_.counters();
+  // Paging: the regions paged out are missed like host-only blocks (paged in when a ray
+  // reaches them), and the rays create no more blocks than the budget has room for.
+  const DevicePaging* paging = what == ScanUpdate::kRemove ? nullptr : how.device_paging;
   uint32_t created = 0;
   const bool dynamic_on = how.params.dynamic.enabled && what != ScanUpdate::kRemove;
   // MapParams::dynamic: only the void test lacked blocks, the rays' marks and touched list are
@@ -169,9 +186,15 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
   bool marks_complete = false;
   for (int attempt = 0;; ++attempt) {
     if (attempt > 8) throw CudaError("ray pass did not converge (residency bug)");
-    window_.fill(cache_.arrays(), host_only);
-    scan_.reserveMisses(host_only.size());
+    std::vector<std::pair<BlockKey, BlockKey>> paged_out;
+    if (paging) paged_out = paging->paged_out_regions(window_.lo(), window_.hi());
+    scan_.reserveMisses(window_.fill(cache_.arrays(), host_only, paged_out));
     c.free_top = cache_.freeSlots();
+    int32_t floor = 0;
+    if (paging) {
+      const size_t room = paging->room();
+      if (room < size_t(c.free_top)) floor = c.free_top - static_cast<int32_t>(room);
+    }
     scan_.countersToDevice();
     RaycastArgs args;
     args.rays = scan_.rays();
@@ -190,6 +213,7 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
     args.coalesce = how.params.cuda.coalesce_ray_marks;
     args.skip_saturated = how.params.skip_saturated_blocks && !args.remove;
     args.piece_steps = how.params.cuda.ray_piece_steps;
+    args.free_floor = floor;
     args.counters = scan_.countersOnDevice();
     ray_start_.record(stream_);
     if (!marks_complete) {
@@ -220,12 +244,12 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
       throw CudaError("ray left the window table (" + std::to_string(c.outside_window) +
                       " cells): residency bug");
     // The slots the rays took are resident blocks, device-only until written back.
-    created += cache_.adoptDeviceSlots(c.free_top);
+    created += cache_.adoptDeviceSlots(std::max(c.free_top, floor));
     if (c.applied) return created;
     // The pass is redone from a clean count: the marks and allocations stay (touched slots
     // are stamped: never evicted to make room).
     marks_complete = dynamic_on && c.overflow == 0 && c.misses == c.void_misses;
-    resolveMissesAndOverflow(blocks);
+    resolveMissesAndOverflow(blocks, paging);
     host_only = hostOnlyInWindow(blocks);  // evictions may have touched the window's blocks
     c.misses = 0;
     c.void_misses = 0;
@@ -245,14 +269,41 @@ void CudaIntegrator::stageNext(const PointCloud& cloud, bool auto_stats) {
   }
 }
 
-void CudaIntegrator::resolveMissesAndOverflow(BlockMap& blocks) {
+void CudaIntegrator::resolveMissesAndOverflow(BlockMap& blocks, const DevicePaging* paging) {
   const ScanCounters& c = scan_.counters();
-  if (c.misses > 0) {
+  std::vector<BlockKey> missed;
+  if (c.misses > 0)
+    for (int32_t entry : scan_.misses(c.misses)) missed.push_back(window_.window().keyOf(entry));
+  if (paging) {
+    // The missed blocks the host map lacks are in paged-out regions: read back, with room made
+    // under the budget for them and for the blocks the overflowed rays create; the regions of
+    // the blocks this scan marked stay.
+    std::vector<BlockKey> reached;
+    for (const BlockKey& k : missed)
+      if (blocks.find(k) == kNoBlock) reached.push_back(k);
+    // The blocks missed in the scan's passes stay while it runs: a ray that skips a saturated
+    // block marks nothing there, and paging it out again would miss it again.
+    missed_this_scan_.insert(missed_this_scan_.end(), missed.begin(), missed.end());
+    const size_t new_blocks = c.overflow;
+    if (!reached.empty() || paging->room() < new_blocks) {
+      // The blocks the rays marked stay (a ray passes through every block it reaches in one
+      // pass, so the next pass reaches no other); the frustum's other blocks may leave, and
+      // the blocks earlier scans made on the device (written back first: Map::devicePaging).
+      std::vector<BlockKey> pinned = cache_.keysMarked(c.touched);
+      pinned.insert(pinned.end(), missed_this_scan_.begin(), missed_this_scan_.end());
+      paging->make_room(reached, pinned, new_blocks);
+    }
+  }
+  if (!missed.empty()) {
     std::vector<BlockIndex> needed;
-    for (int32_t entry : scan_.misses(c.misses)) {
-      const BlockIndex i = blocks.find(window_.window().keyOf(entry));
-      if (i == kNoBlock) throw CudaError("missed block is not on the host (residency bug)");
-      needed.push_back(i);
+    for (const BlockKey& k : missed) {
+      const BlockIndex i = blocks.find(k);
+      if (i == kNoBlock) {
+        // Paged in with its region and not in the store: a ray creates it next pass.
+        if (paging) continue;
+        throw CudaError("missed block is not on the host (residency bug)");
+      }
+      if (cache_.slotOf(i) < 0) needed.push_back(i);
     }
     const int32_t n = static_cast<int32_t>(needed.size());
     cache_.makeRoom(n, n, blocks);

@@ -55,8 +55,10 @@ class CudaIntegrator {
   /// DeviceScan::stageAhead(), skipped when the device has no room for it.
   void stageNext(const PointCloud& cloud, bool auto_stats);
   /// After a pass that missed host-only blocks or ran out of slots: uploads the missed blocks
-  /// and makes room for the others.
-  void resolveMissesAndOverflow(BlockMap& blocks);
+  /// and makes room for the others. With `paging`: first reads back the missed blocks of
+  /// paged-out regions and makes the budget's room for the overflowed blocks (both may page
+  /// other regions out; InvalidArgument when the scan cannot fit).
+  void resolveMissesAndOverflow(BlockMap& blocks, const DevicePaging* paging);
   int32_t expectedNewBlocks() const {
     return std::max<int32_t>(1024, last_created_ + last_created_ / 4);
   }
@@ -69,6 +71,8 @@ class CudaIntegrator {
   CudaEvent ray_start_, apply_start_, apply_end_;
   CudaEvent pass_done_;  ///< the pass's counters are back (staging of the next cloud may follow)
   int32_t last_created_ = 0;  ///< blocks the rays created last scan (sizes the room made)
+  /// Paging: the blocks the scan's passes missed so far (kept resident while it runs).
+  std::vector<BlockKey> missed_this_scan_;
   // MapParams::dynamic.
   DeviceArray<uint8_t> dynamic_flags_;        ///< per ray: a dynamic hit
   MirroredBuffer<uint32_t> dynamic_indices_;  ///< point indices of the dynamic hits

@@ -112,6 +112,21 @@ uint32_t DeviceBlockCache::adoptDeviceSlots(int32_t new_free_top) {
   return static_cast<uint32_t>(pool_.takenByDevice(new_free_top).size());
 }
 
+std::vector<BlockKey> DeviceBlockCache::keysMarked(uint32_t touched) {
+  const int32_t cap = pool_.capacity();
+  std::vector<BlockKey> keys;
+  touched = std::min<uint32_t>(touched, static_cast<uint32_t>(cap));
+  if (touched == 0) return keys;
+  keys_host_.reserve(size_t(cap));
+  touched_host_.reserve(touched);
+  copyToHost(keys_host_.get(), pool_.arrays().keys, size_t(cap), stream_);
+  copyToHost(touched_host_.get(), pool_.arrays().touched_list, size_t(touched), stream_);
+  FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  keys.reserve(touched);
+  for (uint32_t j = 0; j < touched; ++j) keys.push_back(keys_host_[touched_host_[j]]);
+  return keys;
+}
+
 void DeviceBlockCache::forEachHostOnlyIn(const BlockMap& blocks, const BlockKey& lo,
                                          const BlockKey& hi,
                                          const std::function<void(BlockIndex)>& fn) {

@@ -55,6 +55,10 @@ class DeviceBlockCache : public BlockCache {
   uint32_t adoptDeviceSlots(int32_t new_free_top);
   /// The device changed slots: sync() has work.
   void markDirty() { any_dirty_ = true; }
+  /// Paging: the keys of the blocks this scan's rays marked (the first `touched` slots of the
+  /// pool's touched list, as the last ray pass listed them; the blocks they created among
+  /// them). Reads the touched list and the pool's keys back.
+  std::vector<BlockKey> keysMarked(uint32_t touched);
   /// Calls fn(i) for every host block without a slot whose key lies in [lo, hi].
   void forEachHostOnlyIn(const BlockMap& blocks, const BlockKey& lo, const BlockKey& hi,
                          const std::function<void(BlockIndex)>& fn);
@@ -85,6 +89,8 @@ class DeviceBlockCache : public BlockCache {
   uint64_t uploaded_ = 0, evicted_ = 0;
   PinnedArray<uint32_t> last_used_host_;
   PinnedArray<uint8_t> dirty_host_;
+  PinnedArray<BlockKey> keys_host_;
+  PinnedArray<int32_t> touched_host_;
 };
 
 }  // namespace fragg::cuda

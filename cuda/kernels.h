@@ -53,6 +53,9 @@ struct RaycastArgs {
   /// > 0: rays cut into pieces of this many steps of their major axis, shared by the CTA's
   /// threads (CudaParams::ray_piece_steps); 0: one thread a ray. RayCast::kDda only.
   int piece_steps = 0;
+  /// Slots below this position of the free stack are not taken (an overflow instead): the
+  /// paging budget's room for new blocks (0: the whole stack).
+  int32_t free_floor = 0;
 };
 /// One thread a ray, or pieces of rays (piece_steps): marks FREE / HIT scratch bits, allocating
 /// slots for new blocks.
@@ -120,6 +123,11 @@ void launchWindowFill(const Window& w, const SlotArrays& slots, cudaStream_t str
 void launchWindowSet(const Window& w, const int64_t* index, const int32_t* value, uint32_t n,
                      cudaStream_t stream);
 
+/// Paging: the kWindowEmpty entries of the boxes of edge^3 blocks starting at first[j]
+/// (j < n; regions with a paged-out block) become kWindowHostOnly, so that a ray reaching one
+/// records a miss (the region is paged in) rather than creating a block there.
+void launchWindowMarkBoxes(const Window& w, const BlockKey* first, uint32_t n, int32_t edge,
+                           cudaStream_t stream);
 /// Copies block j from src[j] (device-visible: device staging or mapped pinned host memory)
 /// and its state masks from masks[j] (device memory) into slot slots[j]; sets its key, clears
 /// dirty and fresh, stamps last_used.

@@ -50,7 +50,7 @@ __device__ int32_t resolveEntry(const RaycastArgs& a, const BlockKey& b) {
         continue;
       }
       const int32_t pos = atomicSub(&a.counters->free_top, 1) - 1;
-      if (pos < 0) {
+      if (pos < a.free_floor) {
         atomicAdd(&a.counters->overflow, 1u);
         atomicExch(entry, kWindowOverflow);
         return -1;

@@ -21,6 +21,17 @@ __global__ void windowSetKernel(Window w, const int64_t* index, const int32_t* v
   if (j < n) w.entries[index[j]] = value[j];
 }
 
+__global__ void windowMarkBoxesKernel(Window w, const BlockKey* first, uint32_t n, int32_t edge) {
+  const int64_t per_box = int64_t(edge) * edge * edge;
+  const int64_t j = int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (j >= per_box * n) return;
+  const BlockKey f = first[j / per_box];
+  const int32_t r = static_cast<int32_t>(j % per_box);
+  const BlockKey k{f.x + r % edge, f.y + (r / edge) % edge, f.z + r / (edge * edge)};
+  const int64_t idx = w.indexOf(k);
+  if (idx >= 0 && w.entries[idx] == kWindowEmpty) w.entries[idx] = kWindowHostOnly;
+}
+
 constexpr int kMaskInt4s = sizeof(BlockStateMasks) / sizeof(int4);
 static_assert(kMaskInt4s <= kCopyThreads, "a thread a 16-byte piece of the masks");
 
@@ -103,6 +114,14 @@ void launchWindowSet(const Window& w, const int64_t* index, const int32_t* value
   if (n == 0) return;
   windowSetKernel<<<blocksFor(n, kThreads), kThreads, 0, stream>>>(w, index, value, n);
   FRAGG_CUDA_CHECK_LAUNCH("windowSetKernel");
+}
+
+void launchWindowMarkBoxes(const Window& w, const BlockKey* first, uint32_t n, int32_t edge,
+                           cudaStream_t stream) {
+  if (n == 0) return;
+  const int64_t threads = int64_t(n) * edge * edge * edge;
+  windowMarkBoxesKernel<<<blocksFor(threads, kThreads), kThreads, 0, stream>>>(w, first, n, edge);
+  FRAGG_CUDA_CHECK_LAUNCH("windowMarkBoxesKernel");
 }
 
 void launchUpload(const SlotArrays& s, const Block* const* src, const BlockStateMasks* masks,

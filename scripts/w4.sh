@@ -4,9 +4,10 @@
 # four times, ~1.5 GB) and builds its map at 5 cm with a 30 m max range
 #   - in memory:  fragg_map build W4 -o mem.fgm --resolution 0.05 --max-range 30
 #   - paged:      the same with --page-store FILE --page-budget-mb N, when the CLI has paging
-# each under /usr/bin/time -v, then prints a table: wall time, scans/s (scans over the build
-# loop's seconds, reading and insertion; the map file's write excluded), peak RSS, the map's
-# host memory (Map::memory()) and, for the paged build, what its --json says about pages.
+# each under /usr/bin/time -v (else Python's rusage), then prints a table: wall time, scans/s
+# (scans over the build loop's seconds, reading and insertion; the map file's write excluded),
+# peak RSS, the map's host memory (Map::memory()) and, for the paged build, what its --json
+# says about pages.
 # Usage: bash scripts/w4.sh [--workloads DIR] [--out DIR] [--bin DIR] [--budget-mb N]
 #                           [--backend cpu|cuda|auto] [--scans N] [--no-paged] [--keep-maps]
 #   --workloads DIR  workload cache (default: $FRAGG_WORKLOADS or ~/.cache/fragg_map/workloads)
@@ -53,7 +54,7 @@ if [ -z "$bin" ]; then
 fi
 fm="$bin/fragg_map"
 [ -x "$fm" ] || { echo "w4: no fragg_map in $bin (build first)" >&2; exit 1; }
-[ -x /usr/bin/time ] || { echo "w4: needs /usr/bin/time (Debian package 'time')" >&2; exit 1; }
+command -v python3 >/dev/null || { echo "w4: needs python3" >&2; exit 1; }
 mkdir -p "$workloads"
 workloads="$(cd "$workloads" && pwd -P)"
 out="${out:-$workloads/w4_runs}"
@@ -67,14 +68,36 @@ if [ ! -f "$w4/poses.txt" ] || [ "$(find "$w4/velodyne" -name '*.bin' | wc -l)" 
   bash "$repo/scripts/make_workloads.sh" --out "$workloads" --only w4 "${sim_args[@]}"
 fi
 
-# name, build arguments...: runs the build under /usr/bin/time -v, keeps its JSON and time log.
+# LOG COMMAND...: runs COMMAND under /usr/bin/time -v into LOG; where that is missing (the GPU
+# machine may lack Debian's 'time'), Python writes the two lines read below (peak RSS of the
+# child, wall time) in the same form.
+timed() {
+  local log="$1"; shift
+  if [ -x /usr/bin/time ]; then
+    /usr/bin/time -v -o "$log" "$@"
+    return
+  fi
+  python3 -c '
+import resource, subprocess, sys, time
+log, cmd = sys.argv[1], sys.argv[2:]
+t0 = time.monotonic()
+rc = subprocess.call(cmd)
+wall = time.monotonic() - t0
+rss_kib = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss  # KiB on Linux
+with open(log, "w") as f:
+    f.write(f"\tMaximum resident set size (kbytes): {rss_kib}\n")
+    f.write(f"\tElapsed (wall clock) time (h:mm:ss or m:ss): {int(wall // 60)}:{wall % 60:05.2f}\n")
+sys.exit(rc)' "$log" "$@"
+}
+
+# name, build arguments...: runs the build under timed(), keeps its JSON and time log.
 build() {
   local name="$1"; shift
   echo "w4: $name build ($*)" >&2
   # The previous build's map file (406 MB for W4) is on disk first: its writeback would
   # otherwise run during this build, sharing the disk with this build's page store commits.
   sync
-  /usr/bin/time -v -o "$out/$name.time" "$fm" build "$w4" --resolution 0.05 --max-range 30 \
+  timed "$out/$name.time" "$fm" build "$w4" --resolution 0.05 --max-range 30 \
     --backend "$backend" --scans "$scans" --json "$@" > "$out/$name.json"
 }
 

@@ -41,6 +41,7 @@ namespace fragg {
 
 class MapBackend;
 struct ViewScope;
+struct DevicePaging;
 class Culler;
 class Pager;
 struct ScanRecord;
@@ -328,6 +329,9 @@ class Map {
   void pageInAllBlocks();
   /// Pages in the blocks of `keys` that are paged out (the backend's exact page-in).
   void pageInKeys(const std::vector<BlockKey>& keys);
+  /// Paging for a backend that reports the blocks its rays reach (DevicePaging, map_paging.cpp);
+  /// `*read` counts the blocks it reads back.
+  DevicePaging devicePaging(size_t* read);
   /// Paging after a scan (or removal): commits when due or over budget, then pages out.
   void pageAfterScan(const Eigen::Vector3d& sensor_map);
   /// After paging out: the memory of the blocks that left goes back to the system.

@@ -240,19 +240,24 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   InsertStats stats;
   PageInKeys page_in;
   PagedOutSaturated paged_out_saturated;
+  DevicePaging device_paging;  // set for a backend that reports the blocks its rays reach
+  size_t device_read = 0;
   if (pager_) {
     // Every block the rays can reach is resident before the backend creates one: the CPU
-    // backend asks for exactly the blocks its rays mark; any other backend (and a removal,
-    // which creates none) gets the scan's whole box first.
+    // backend asks for exactly the blocks its rays mark, the CUDA backend for the blocks its
+    // rays reach; any other backend (and a removal, which creates none) gets the scan's whole
+    // box first.
     BlockKey lo, hi;
     rayBlockBounds(cloud, how, params_.resolution_m, &lo, &hi);
-    if (!remove && backend_->pagesInMarkedBlocks()) {
+    const bool reports = backend_->reportsReachedBlocks();
+    if (!remove && (backend_->pagesInMarkedBlocks() || reports)) {
       pager_->touch(lo, hi, scans_ + 1);
       page_in = [this](const std::vector<BlockKey>& keys) { pageInKeys(keys); };
       const Pager* pager = pager_.get();
       paged_out_saturated = [pager](const BlockKey& key) {
         return pager->isPagedOutSaturated(key);
       };
+      if (reports) device_paging = devicePaging(&device_read);
     } else {
       pageInBlocks(lo, hi);
     }
@@ -276,6 +281,7 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
                        cull,  cloud_staged};
   UpdateSettings settings{params, model_, revision_ + 1, page_in ? &page_in : nullptr,
                           page_in ? &paged_out_saturated : nullptr};
+  if (device_paging.make_room) settings.device_paging = &device_paging;
   settings.stage_next = stage_next;
   settings.stage_next_auto_stats = stage_next_auto_stats;
   const ScanUpdate what = remove ? ScanUpdate::kRemove : ScanUpdate::kIntegrate;
@@ -292,12 +298,15 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   } catch (const CudaOutOfMemory& e) {
     // The device backend applies a scan all at once or not at all: the map is intact.
     fallBackToCpu(e.what());
+    settings.device_paging = nullptr;  // the CPU backend pages in what its rays mark
     InsertStats cpu_stats;
     cpu_stats.culling = stats.culling;
     cpu_stats.seconds_cull = stats.seconds_cull;
     run(cpu_stats);
     stats = cpu_stats;
   }
+  // The room the next scan makes ahead (Map::pageAfterScan), as the CPU backend's page-in notes.
+  if (settings.device_paging) pager_->noteScanIncoming(device_read + stats.blocks_created);
   ++revision_;
   stats.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   return stats;

@@ -30,6 +30,15 @@ StoreMapMeta metaOf(const MapParams& p, uint64_t scans) {
   return m;
 }
 
+InvalidArgument scanTooLarge(size_t needed, size_t block_bytes, double budget_mb) {
+  const double needed_mb = static_cast<double>(needed * block_bytes) / (1024.0 * 1024.0);
+  return InvalidArgument("paging: one scan needs " + std::to_string(needed) +
+                         " blocks resident (the regions its rays reach, " +
+                         std::to_string(needed_mb) + " MB) but the paging budget is " +
+                         std::to_string(budget_mb) +
+                         " MB: raise the budget; the scan was not integrated");
+}
+
 BlockKey clampedBlockOf(const Eigen::Vector3d& p_map, double resolution_m) {
   const Eigen::Vector3d v =
       (p_map / resolution_m).array().floor().cwiseMax(-2147483648.0).cwiseMin(2147483647.0);
@@ -163,15 +172,8 @@ void Map::pageInKeys(const std::vector<BlockKey>& keys) {
     pager_->pageOut(out, blocks_);
   }
   // The kept records make way for the blocks (they never push a block out).
-  if (!pager_->dropRecordsToFit(blocks_.size() + incoming)) {
-    const size_t needed = blocks_.size() + incoming;
-    const double needed_mb = static_cast<double>(needed * pager_->blockBytes()) / (1024.0 * 1024.0);
-    throw InvalidArgument("paging: one scan needs " + std::to_string(needed) +
-                          " blocks resident (the regions its rays reach, " +
-                          std::to_string(needed_mb) + " MB) but the paging budget is " +
-                          std::to_string(pager_->policy().budget_mb) +
-                          " MB: raise the budget; the scan was not integrated");
-  }
+  if (!pager_->dropRecordsToFit(blocks_.size() + incoming))
+    throw scanTooLarge(blocks_.size() + incoming, pager_->blockBytes(), pager_->policy().budget_mb);
   if (round)
     pager_->notePageOutSeconds(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
@@ -190,6 +192,75 @@ void Map::pageInKeys(const std::vector<BlockKey>& keys) {
   if (read.empty()) return;
   backend_->cache().added(read, blocks_);
   bumpViewEpoch();
+}
+
+DevicePaging Map::devicePaging(size_t* read) {
+  // The budget counts the host map and the blocks the backend holds that the host map lacks
+  // (created on the device since the last write-back): both are resident.
+  DevicePaging paging;
+  paging.paged_out_regions = [this](const BlockKey& lo, const BlockKey& hi) {
+    std::vector<std::pair<BlockKey, BlockKey>> boxes;
+    for (const BlockKey& r : pager_->pagedOutRegionsIn(lo, hi)) {
+      const BlockKey first = firstBlockOf(r);
+      boxes.emplace_back(
+          first, BlockKey{first.x | kRegionMask, first.y | kRegionMask, first.z | kRegionMask});
+    }
+    return boxes;
+  };
+  paging.room = [this] {
+    return pager_->roomFor(blocks_.size() + backend_->cache().blocksNotInHostMap());
+  };
+  paging.make_room = [this, read](const std::vector<BlockKey>& reached,
+                                  const std::vector<BlockKey>& pinned, size_t new_blocks) {
+    // As pageInKeys, with the backend's own blocks counted and its scan's blocks pinned: the
+    // scan runs on (the insertion holds sync_mutex_), nothing of it is applied yet.
+    size_t own = backend_->cache().blocksNotInHostMap();
+    std::vector<BlockKey> wanted = pager_->pagedOutOfRegions(reached, blocks_, nullptr);
+    const size_t incoming = wanted.size() + new_blocks;
+    const auto t0 = std::chrono::steady_clock::now();
+    const bool round = pager_->excessOverBudget(blocks_.size() + own + incoming) > 0;
+    if (round) {
+      // The blocks earlier scans made on the device get their host blocks first, so that they
+      // can leave too (between commits they would fill the budget); this scan's, not applied
+      // yet, stay on the device.
+      backend_->cache().sync(blocks_);
+      own = backend_->cache().blocksNotInHostMap();
+      std::vector<BlockKey> held = pinned;
+      held.insert(held.end(), reached.begin(), reached.end());
+      const Eigen::Vector3d sensor = pager_->lastSensor();
+      std::vector<BlockIndex> out =
+          pager_->victims(blocks_, sensor, /*clean_only=*/true, own + incoming, &held);
+      if (pager_->excessOverBudget(blocks_.size() - out.size() + own + incoming) > 0)
+        out = pager_->victims(blocks_, sensor, /*clean_only=*/false, own + incoming, &held);
+      backend_->cache().forget(out, blocks_);
+      pager_->pageOut(out, blocks_);
+    }
+    const size_t needed = blocks_.size() + own + incoming;
+    // The rays stop at the budget's room (the pass is redone after this): a scan that still
+    // has no room for its new blocks beside the held records would never finish.
+    if (!pager_->dropRecordsToFit(needed) ||
+        pager_->roomFor(blocks_.size() + own + wanted.size()) < new_blocks)
+      throw scanTooLarge(needed, pager_->blockBytes(), pager_->policy().budget_mb);
+    if (round)
+      pager_->notePageOutSeconds(
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    pager_->reserveBlocks(own + new_blocks);
+    std::vector<BlockIndex> back;
+    try {
+      back = pager_->readBack(std::move(wanted), blocks_);
+    } catch (...) {
+      pager_->reserveBlocks(0);
+      throw;
+    }
+    pager_->reserveBlocks(0);
+    pager_->noteResident(blocks_.size() + own);
+    *read += back.size();
+    if (back.empty()) return;
+    blocks_.recomputeMasks(back, model_);  // the store keeps cells only
+    backend_->cache().added(back, blocks_);
+    bumpViewEpoch();
+  };
+  return paging;
 }
 
 void Map::pageInAllBlocks() {

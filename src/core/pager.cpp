@@ -189,6 +189,56 @@ bool Pager::anyPagedOut(BlockKey lo, BlockKey hi) const {
   return any;
 }
 
+std::vector<BlockKey> Pager::pagedOutRegionsIn(const BlockKey& lo, const BlockKey& hi) const {
+  std::vector<BlockKey> regions;
+  if (paged_count_ == 0) return regions;
+  // Asked before every ray pass of a device scan, over its whole window: a paged-out bitset
+  // (kBlockBits coarser than a block) is tested a region at a time against the region's
+  // mask, not a bit at a time.
+  static_assert(kRegionBits <= kBlockBits, "a region lies within one paged-out bitset");
+  constexpr int kSub = 1 << (kBlockBits - kRegionBits);  // regions per bitset edge
+  static const std::vector<RegionBits> masks = [] {
+    std::vector<RegionBits> m(size_t{kSub} * kSub * kSub);
+    constexpr int32_t n = 1 << kBlockBits;
+    for (int32_t z = 0; z < n; ++z)
+      for (int32_t y = 0; y < n; ++y)
+        for (int32_t x = 0; x < n; ++x) {
+          const BlockKey b{x, y, z};
+          const BlockKey r = regionOf(b);
+          m[size_t((r.z * kSub + r.y) * kSub + r.x)].set(bitOf(b));
+        }
+    return m;
+  }();
+  const BlockKey rlo = regionOf(lo), rhi = regionOf(hi);
+  auto visit = [&](const BlockKey& super, const RegionBits& bits) {
+    for (int32_t z = 0; z < kSub; ++z)
+      for (int32_t y = 0; y < kSub; ++y)
+        for (int32_t x = 0; x < kSub; ++x) {
+          const BlockKey r{super.x * kSub + x, super.y * kSub + y, super.z * kSub + z};
+          if (r.x < rlo.x || r.x > rhi.x || r.y < rlo.y || r.y > rhi.y || r.z < rlo.z ||
+              r.z > rhi.z)
+            continue;
+          if ((bits & masks[size_t((z * kSub + y) * kSub + x)]).any()) regions.push_back(r);
+        }
+  };
+  const BlockKey slo = superOf(lo), shi = superOf(hi);
+  if (regionCount(slo, shi) > static_cast<double>(paged_super_.size())) {
+    for (const auto& [super, bits] : paged_super_)
+      if (super.x >= slo.x && super.x <= shi.x && super.y >= slo.y && super.y <= shi.y &&
+          super.z >= slo.z && super.z <= shi.z)
+        visit(super, bits);
+  } else {
+    for (int32_t z = slo.z; z <= shi.z; ++z)
+      for (int32_t y = slo.y; y <= shi.y; ++y)
+        for (int32_t x = slo.x; x <= shi.x; ++x) {
+          auto it = paged_super_.find({x, y, z});
+          if (it != paged_super_.end()) visit(it->first, it->second);
+        }
+  }
+  std::sort(regions.begin(), regions.end(), storeOrder);
+  return regions;
+}
+
 bool Pager::readPagedOut(const BlockKey& key, Block* out) {
   auto held = held_.find(regionOf(key));
   if (held != held_.end()) return store_->decode(held->second.record, key, out);
@@ -463,6 +513,12 @@ size_t Pager::excessOverBudget(size_t resident) const {
   if (resident * block_bytes_ + held_bytes_ + writerBytes() <= budgetBytes()) return 0;
   const size_t within = blocksWithin(1.0);
   return resident > within ? resident - within : 1;
+}
+
+size_t Pager::roomFor(size_t resident) const {
+  if (policy_.budget_mb <= 0) return SIZE_MAX;
+  const size_t within = blocksWithin(1.0);
+  return within > resident ? within - resident : 0;
 }
 
 void Pager::flush() {

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <exception>
 #include <mutex>
+#include <string>
 #include <utility>
 
 #include "collision_batch.h"
@@ -19,6 +20,29 @@
 namespace fragg::planning {
 
 namespace {
+
+/// Why `T_map_shape` is not a rigid pose (empty: it is one).
+std::string poseError(const Eigen::Isometry3d& T_map_shape) {
+  if (!T_map_shape.matrix().allFinite()) return "shape pose is not finite";
+  const Eigen::Matrix3d R = T_map_shape.linear();
+  const double err = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (err > 1e-6 || R.determinant() < 0.0)
+    return fmt::format("shape pose rotation is not a rotation (orthonormality error {})", err);
+  return {};
+}
+
+/// validatePose() for every pose of a batch, on `threads` threads: the first bad pose (by
+/// index, whatever the threads) throws.
+void validatePoses(const std::vector<Eigen::Isometry3d>& T_map_shape, int threads) {
+  const int64_t n = static_cast<int64_t>(T_map_shape.size());
+  int64_t first_bad = n;
+#pragma omp parallel for schedule(static) reduction(min          \
+                                                    : first_bad) \
+    num_threads(threadCount(threads)) if (n > 4096)
+  for (int64_t i = 0; i < n; ++i)
+    if (i < first_bad && !poseError(T_map_shape[i]).empty()) first_bad = i;
+  if (first_bad < n) throw InvalidArgument(poseError(T_map_shape[first_bad]));
+}
 
 // Box, sphere, capsule: every obstacle cell of the shape's cell range gets the exact test
 // against its cube shrunk by the touching epsilon.
@@ -158,7 +182,7 @@ void pageInForCollision(Map& map, const CollisionShape& shape,
                         const std::vector<Eigen::Isometry3d>& T_map_shape,
                         const CollisionOptions& options) {
   validate(options);
-  for (const Eigen::Isometry3d& T : T_map_shape) validatePose(T);
+  validatePoses(T_map_shape, options.threads);
   if (T_map_shape.empty() || !map.pagingStats().enabled) return;
   Eigen::Vector3d lo = T_map_shape.front().translation(), hi = lo;
   for (const Eigen::Isometry3d& T : T_map_shape) {
@@ -174,12 +198,8 @@ void pageInForCollision(Map& map, const CollisionShape& shape,
 }
 
 void validatePose(const Eigen::Isometry3d& T_map_shape) {
-  if (!T_map_shape.matrix().allFinite()) throw InvalidArgument("shape pose is not finite");
-  const Eigen::Matrix3d R = T_map_shape.linear();
-  const double err = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (err > 1e-6 || R.determinant() < 0.0)
-    throw InvalidArgument(
-        fmt::format("shape pose rotation is not a rotation (orthonormality error {})", err));
+  const std::string error = poseError(T_map_shape);
+  if (!error.empty()) throw InvalidArgument(error);
 }
 
 Backend resolveCollisionBackend(Backend requested, std::string* why) {
@@ -219,7 +239,7 @@ std::vector<CollisionResult> checkPoses(const Map& map, const CollisionShape& sh
                                         const std::vector<Eigen::Isometry3d>& T_map_shape,
                                         const CollisionOptions& options, Backend backend) {
   validate(options);
-  for (const Eigen::Isometry3d& T : T_map_shape) validatePose(T);
+  validatePoses(T_map_shape, options.threads);
   return checkValidated(map, shape, T_map_shape, options, backend);
 }
 
@@ -237,7 +257,7 @@ std::vector<CollisionResult> checkPoses(const PreparedMap& prepared, const Colli
                                         const std::vector<Eigen::Isometry3d>& T_map_shape,
                                         const CollisionOptions& options, Backend backend) {
   validate(options);
-  for (const Eigen::Isometry3d& T : T_map_shape) validatePose(T);
+  validatePoses(T_map_shape, options.threads);
   if (options.unknown_is_occupied != prepared.unknownIsOccupied())
     throw InvalidArgument("the prepared map was classified for the other unknown_is_occupied");
   if (prepared.map().revision() != prepared.revision())

@@ -149,6 +149,74 @@ TEST_P(PagingBudget, KeptRecordsMakeWayForBlocksInsteadOfPushingThemOut) {
   EXPECT_FALSE(pager.dropRecordsToFit(kBlocks + kRoom + 1));
 }
 
+TEST_P(PagingBudget, PagedOutRegionsInABoxAndTheRoomLeftForNewBlocks) {
+  // What the CUDA backend asks the pager before each ray pass (DevicePaging): the regions with a
+  // paged-out block that meet the scan's window (their blocks are missed, not created), and how
+  // many blocks the rays may still create.
+  const std::string dir = testDir();
+  PagingPolicy policy = budgetOf(0);
+  policy.background_writer = false;  // no commit in flight to count: deterministic
+  policy.budget_mb = static_cast<double>(200 * Pager::reservedBlockBytes()) / 1048576.0;
+  BlockMap blocks;
+  Pager pager(openPageStore(storePath(dir), false), policy, 0.05);
+  pager.reserveSlots(blocks);
+  const size_t budget = pager.stats(blocks).budget_blocks;
+  ASSERT_GE(budget, 199u);
+  EXPECT_EQ(pager.roomFor(0), budget);
+  EXPECT_EQ(pager.roomFor(budget - 5), 5u);
+  EXPECT_EQ(pager.roomFor(budget + 5), 0u);
+
+  // Blocks in region (0,0,0), in region (3,0,0) and in region (-3,-1,-1).
+  constexpr int32_t e = 1 << kRegionBits;
+  const std::vector<BlockKey> near = {{0, 0, 0}, {1, 0, 0}};
+  const std::vector<BlockKey> far = {{3 * e, 0, 0}, {3 * e, 1, 0}};
+  const std::vector<BlockKey> below = {{-3 * e, -1, -1}};
+  for (const auto* keys : {&near, &far, &below})
+    for (const BlockKey& k : *keys) {
+      const BlockIndex i = blocks.findOrCreate(k);
+      blocks.block(i).cells[0] = Cell{1, 100};
+      blocks.meta(i).changed_at = 1;
+    }
+  StoreMapMeta meta;
+  meta.resolution_m = 0.05;
+  pager.commit(blocks, 1, meta);
+  EXPECT_TRUE(pager.pagedOutRegionsIn({-8 * e, -8 * e, -8 * e}, {8 * e, 8 * e, 8 * e}).empty());
+
+  // Region (3,0,0) leaves with a change the store lacks (held for the next commit), region
+  // (-3,-1,-1) clean.
+  blocks.block(blocks.find(far[1])).cells[1] = Cell{1, 200};
+  blocks.meta(blocks.find(far[1])).changed_at = 2;
+  std::vector<BlockIndex> out;
+  for (const auto* keys : {&far, &below})
+    for (const BlockKey& k : *keys) out.push_back(blocks.find(k));
+  pager.pageOut(out, blocks);
+  ASSERT_EQ(blocks.size(), near.size());
+  ASSERT_GT(pager.heldBytes(), 0u);
+
+  const BlockKey r3{3, 0, 0}, rm{-3, -1, -1};
+  // A box that meets region 3 at one block where none was paged out still names it (the
+  // region comes back whole); the regions in store order (z, y, x).
+  const BlockKey corner{3 * e + e - 1, e - 1, e - 1};
+  ASSERT_FALSE(pager.isPagedOut(corner));
+  EXPECT_EQ(pager.pagedOutRegionsIn(corner, corner), (std::vector<BlockKey>{r3}));
+  EXPECT_EQ(pager.pagedOutRegionsIn({-4 * e, -4 * e, -4 * e}, {4 * e, 4 * e, 4 * e}),
+            (std::vector<BlockKey>{rm, r3}));
+  EXPECT_TRUE(pager.pagedOutRegionsIn({0, 0, 0}, {3 * e - 1, e - 1, e - 1}).empty());
+  EXPECT_TRUE(pager.pagedOutRegionsIn({-3 * e + e, -e, -e}, {-1, -1, -1}).empty());
+
+  // The held record takes room from new blocks (it stays whatever leaves).
+  const size_t budget_bytes = pager.stats(blocks).budget_bytes;
+  EXPECT_EQ(pager.roomFor(0), (budget_bytes - pager.heldBytes()) / Pager::reservedBlockBytes());
+  EXPECT_LT(pager.roomFor(0), budget);
+
+  // Read back, region 3 is no longer paged out.
+  const std::vector<BlockIndex> back = pager.pageIn(std::vector<BlockKey>{far[0]}, blocks);
+  EXPECT_EQ(back.size(), far.size());
+  EXPECT_EQ(pager.pagedOutRegionsIn({0, 0, 0}, {4 * e, 4 * e, 4 * e}).size(), 0u);
+  EXPECT_EQ(pager.pagedOutRegionsIn({-4 * e, -4 * e, -4 * e}, {0, 0, 0}),
+            (std::vector<BlockKey>{rm}));
+}
+
 TEST_P(PagingBudget, ACommitCompressesOnlyTheBlocksThatChanged) {
   const std::string dir = testDir();
   Map paged(corridorParams());

@@ -215,6 +215,22 @@ TEST(CollisionInputs, BadShapesOptionsAndPosesAreRefused) {
   EXPECT_THROW(checkPoses(map, sphere, {at(0, 0, 0), sheared}, CollisionOptions()),
                InvalidArgument);
   EXPECT_THROW(checkPath(map, sphere, {}, CollisionOptions()), InvalidArgument);
+
+  // A large batch is validated on several threads: the first bad pose by index is the one
+  // named (the shear at 7,000, not the NaN at 9,000), whatever the threads.
+  std::vector<Eigen::Isometry3d> many(10000, at(0, 0, 0));
+  many[9000] = at(NAN, 0, 0);
+  many[7000] = sheared;
+  for (const int threads : {1, 4}) {
+    CollisionOptions o;
+    o.threads = threads;
+    try {
+      (void)checkPoses(map, sphere, many, o);
+      ADD_FAILURE() << "a batch with bad poses was accepted";
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find("not a rotation"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(CollisionInputs, PreparedMapRefusesAChangedMapAndOtherOptions) {

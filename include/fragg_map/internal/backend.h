@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "fragg_map/block_map.h"
@@ -106,6 +107,29 @@ using PageInKeys = std::function<void(const std::vector<BlockKey>& keys)>;
 /// such a resident block. Called from every ray-casting thread at once.
 using PagedOutSaturated = std::function<bool(const BlockKey& key)>;
 
+/// Out-of-core paging for a backend that keeps blocks of its own (MapBackend::reportsReachedBlocks,
+/// the CUDA backend): the map pages nothing in before the scan; the backend's rays report the
+/// blocks they reach that the host map lacks, and the blocks they create count against the
+/// budget as they are made.
+struct DevicePaging {
+  /// The regions with a paged-out block that meet [lo, hi], as block-key boxes (a region's
+  /// first and last block): no block may be created there before the region is paged in.
+  std::function<std::vector<std::pair<BlockKey, BlockKey>>(const BlockKey& lo, const BlockKey& hi)>
+      paged_out_regions;
+  /// Blocks that may still be created (on the device, or read back) before the budget is
+  /// full, beside the host map and the blocks the backend holds that the host map lacks.
+  std::function<size_t()> room;
+  /// Reads back the paged-out blocks of the regions of `reached` (blocks the rays reached),
+  /// after making room under the budget for them and `new_blocks` more: regions other than
+  /// those of `reached` and `pinned` (blocks the scan in progress holds) are paged out, their
+  /// cached copies forgotten (BlockCache::forget). Host block indices found before are stale.
+  /// Throws InvalidArgument (the same message as PageInKeys) when they cannot fit, IoError when
+  /// the store fails; nothing of the scan is applied then.
+  std::function<void(const std::vector<BlockKey>& reached, const std::vector<BlockKey>& pinned,
+                     size_t new_blocks)>
+      make_room;
+};
+
 /// The map's settings a scan update needs.
 struct UpdateSettings {
   const MapParams& params;  ///< ray cast mode and no-return setting are the scan's own
@@ -116,6 +140,10 @@ struct UpdateSettings {
   const PageInKeys* page_in = nullptr;
   /// With page_in: see PagedOutSaturated (null: no such block is known).
   const PagedOutSaturated* paged_out_saturated = nullptr;
+  /// Paging on a backend that reports the blocks its rays reach (null: no paging, or the map
+  /// paged in the scan's whole box first). Set beside page_in, which such a backend ignores but
+  /// for the scans it hands to the CPU backend.
+  const DevicePaging* device_paging = nullptr;
   /// A batch's next cloud (Map::insertSequence, Map::correctPoses): the backend may stage it
   /// while it works on this scan (the CUDA backend copies it into pinned memory while the
   /// device ray casts, then uploads it), for the next update, which gets that very cloud
@@ -162,6 +190,10 @@ class MapBackend {
   /// Whether the backend pages in exactly the blocks its rays mark (UpdateSettings::page_in),
   /// so that the map need not page in the scan's whole box first.
   virtual bool pagesInMarkedBlocks() const { return false; }
+  /// Whether the backend pages in what its rays reach itself through
+  /// UpdateSettings::device_paging (keeping blocks of its own), so that the map need not page
+  /// in the scan's whole box first.
+  virtual bool reportsReachedBlocks() const { return false; }
   /// Whether the backend culls the blocks it needs itself (else the map's host culler runs
   /// over the host blocks in the frustum's box).
   virtual bool cullsOnItsOwn() const { return false; }

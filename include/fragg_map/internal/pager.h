@@ -51,6 +51,10 @@ class Pager {
   bool isPagedOutSaturated(const BlockKey& key) const;
   size_t pagedOutCount() const { return paged_count_; }
   std::vector<BlockKey> pagedOutKeys() const;
+  /// The regions holding a paged-out block that meet [lo, hi], in store order (no store access;
+  /// such a region has no resident block).
+  [[nodiscard]] std::vector<BlockKey> pagedOutRegionsIn(const BlockKey& lo,
+                                                        const BlockKey& hi) const;
   /// Reads the paged-out blocks of the regions of [lo, hi] back into `blocks` (clean: stamped
   /// 0); returns their indices in `blocks`.
   std::vector<BlockIndex> pageIn(BlockKey lo, BlockKey hi, BlockMap& blocks);
@@ -138,6 +142,10 @@ class Pager {
   /// held for the next commit and the commit in flight (0 when within it). Kept records do
   /// not count here: they are dropped to fit (dropRecordsToFit) rather than push blocks out.
   size_t excessOverBudget(size_t resident) const;
+  /// The blocks that may join `resident` ones before excessOverBudget() is above 0 (the held
+  /// records and the commit in flight beside them; kept records make way); SIZE_MAX without a
+  /// budget.
+  [[nodiscard]] size_t roomFor(size_t resident) const;
   /// Drops the blocks (whole regions) from RAM; they are paged out. A region with a change
   /// since the last commit leaves as its record, encoded here and held in RAM (counted against
   /// the budget) until the next commit writes it: paging out writes nothing, so the store stays
