@@ -22,6 +22,10 @@ FRAGG_CUDA="${FRAGG_CUDA:-all}"
 # first run builds only what it runs. Passed on every catkin_make, so a workspace the demo
 # configured builds its tests again under build.sh.
 FRAGG_TESTS="${FRAGG_TESTS:-ON}"
+# Unity builds of src/ (FRAGG_UNITY_BUILD: .cpp files compiled in batches): ON for the demo
+# scripts, whose first run is a fresh build; OFF by default (an incremental rebuild recompiles a
+# whole batch). Passed on every catkin_make, like FRAGG_TESTS.
+FRAGG_UNITY="${FRAGG_UNITY:-OFF}"
 FRAGG_DEPS=1
 
 fragg_usage_common() {
@@ -138,7 +142,8 @@ fragg_cuda_choice() {
 fragg_catkin_make() {
   fragg_cuda_choice
   (cd "$FRAGG_WS" && catkin_make -j"$FRAGG_JOBS" "$@" -DCMAKE_BUILD_TYPE=Release \
-    -DFRAGG_BUILD_TESTS="$FRAGG_TESTS" -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+    -DFRAGG_BUILD_TESTS="$FRAGG_TESTS" -DFRAGG_UNITY_BUILD="$FRAGG_UNITY" \
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 \
     -DPython3_EXECUTABLE=/usr/bin/python3 \
     "${FRAGG_CUDA_ARGS[@]}")
 }

@@ -9,6 +9,8 @@
 set -euo pipefail
 # First-run speed: CUDA kernels for the GPU present only, none without a GPU (common.sh).
 FRAGG_CUDA="${FRAGG_CUDA:-machine}"
+# and the sources compiled in unity batches (fewer, larger translation units: less CPU).
+FRAGG_UNITY="${FRAGG_UNITY:-ON}"
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 FRAGG_DEPS_ARGS=(--demo)  # no test, format or benchmark packages: the demo builds no tests
 

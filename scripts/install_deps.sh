@@ -83,13 +83,19 @@ wait_for_apt_lock() {
   echo "install_deps: the lock is free after $((SECONDS - start)) s"
 }
 
-# What the first build will take, scaled from the one measured figure we have: ~11 min at -j2
-# on a fresh 2-core machine without a GPU, CUDA kernels for every architecture included
-# (issue 16). The demo builds no CUDA code on a machine without a GPU, which saves part of it.
+# What the first build will take, scaled from measured figures: ~11 min at -j2 on a fresh
+# 2-core machine without a GPU, CUDA kernels for every architecture included (issue 16); the
+# demo's (--demo: its targets only, unity batches, no tests, no CUDA without a GPU) about 360
+# CPU seconds (issue 38: 492 CPU s for its whole first run, 128 of them the demo steps).
 print_build_estimate() {
-  local cores
+  local cores demo="${1:-0}"
   cores="$(nproc 2>/dev/null || echo 2)"
   [ "$cores" -ge 1 ] 2>/dev/null || cores=2
+  if [ "$demo" -eq 1 ]; then
+    echo "install_deps: next, the demo's first build: about $(((6 + cores - 1) / cores)) min" \
+      "on $cores core(s) (about 6 CPU minutes: its targets only, in unity batches)"
+    return
+  fi
   echo "install_deps: next, the first build: about $(((11 * 2 + cores - 1) / cores)) min on" \
     "$cores core(s) (measured: 11 min on 2 cores with CUDA for every architecture; the demo" \
     "skips CUDA without a GPU)"
@@ -136,7 +142,7 @@ main() {
   echo "install_deps: missing ${#missing[@]} package(s): ${missing[*]}"
   if [ "$dry_run" -eq 1 ]; then
     print_install_plan "${missing[@]}"
-    print_build_estimate
+    print_build_estimate "$demo"
     exit 0
   fi
 
@@ -155,7 +161,7 @@ main() {
   lock_timeout=(-o "DPkg::Lock::Timeout=${FRAGG_APT_LOCK_WAIT_S:-600}")
   "${as_root[@]}" apt-get "${lock_timeout[@]}" update
   print_install_plan "${missing[@]}"
-  print_build_estimate
+  print_build_estimate "$demo"
   echo "install_deps: installing (no recommends): ${missing[*]}"
   "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive \
     apt-get "${lock_timeout[@]}" install -y --no-install-recommends "${missing[@]}"

@@ -9,6 +9,7 @@
 
 #include "fragg_map/internal/decay.h"
 #include "fragg_map/internal/dynamic_classifier.h"
+#include "fragg_map/internal/seconds_since.h"
 #include "fragg_map/internal/thread_count.h"
 #include "fragg_map/raycast.h"
 #include "fragg_map/raycast_octomap.h"
@@ -16,10 +17,6 @@
 namespace fragg {
 
 namespace {
-double secondsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 /// Marks the cells of rays in the scratch. Follows the ray from block to block through the
 /// blocks' face-neighbour links; other lookups go through a small direct-mapped cache of
 /// recent blocks (neighbouring rays share blocks) before the scratch's table. When inserting,

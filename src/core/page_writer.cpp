@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <chrono>
 #include <exception>
-#include <tuple>
 #include <unordered_set>
 
 #include "fragg_map/errors.h"
@@ -20,10 +19,6 @@ namespace fragg {
 namespace {
 /// Nice value of the writer thread (Linux: per thread), above the map's threads' 0.
 constexpr int kWriterNice = 10;
-
-bool storeOrder(const BlockKey& a, const BlockKey& b) {
-  return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
-}
 }  // namespace
 
 PageWriter::PageWriter(std::shared_ptr<PageStore> store) : store_(std::move(store)) {

@@ -8,6 +8,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/byte_io.h"
+#include "fragg_map/internal/seconds_since.h"
 #include "fragg_map/log.h"
 
 namespace fragg {
@@ -52,13 +53,6 @@ void regionBox(BlockKey* lo, BlockKey* hi) {
   hi->z |= kRegionMask;
 }
 
-bool storeOrder(const BlockKey& a, const BlockKey& b) {
-  return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
-}
-
-double secondsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 }  // namespace
 
 void PagingPolicy::validate() const {

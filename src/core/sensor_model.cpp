@@ -10,7 +10,7 @@
 namespace fragg {
 
 namespace {
-constexpr double kDeg = M_PI / 180.0;
+constexpr double kRadPerDeg = M_PI / 180.0;
 }  // namespace
 
 const char* toString(SensorType t) {
@@ -115,9 +115,10 @@ std::string SensorModel::describe() const {
   s.precision(4);
   s << toString(type);
   if (type == SensorType::kPinhole)
-    s << " hfov=" << hfov_rad / kDeg << "deg vfov=" << vfov_rad / kDeg << "deg";
+    s << " hfov=" << hfov_rad / kRadPerDeg << "deg vfov=" << vfov_rad / kRadPerDeg << "deg";
   if (type == SensorType::kSpinningLidar)
-    s << " elevation=[" << elevation_min_rad / kDeg << ", " << elevation_max_rad / kDeg << "]deg";
+    s << " elevation=[" << elevation_min_rad / kRadPerDeg << ", " << elevation_max_rad / kRadPerDeg
+      << "]deg";
   s << " range=[" << min_range_m << ", ";
   if (max_range_m > 0.0)
     s << max_range_m << "]m";

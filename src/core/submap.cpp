@@ -11,16 +11,13 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/backend.h"
 #include "fragg_map/internal/rigid_pose.h"
+#include "fragg_map/internal/seconds_since.h"
 #include "fragg_map/map.h"
 
 namespace fragg {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 /// Voxel key of a point, each axis clamped into the int32 key range (a box may reach beyond
 /// the map; the cells it can hold cannot).

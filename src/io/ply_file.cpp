@@ -80,7 +80,7 @@ size_t typeSize(PlyType type) {
   return 0;
 }
 
-PlyHeader parseHeader(const std::string& path, const std::string& bytes) {
+PlyHeader parsePlyHeader(const std::string& path, const std::string& bytes) {
   PlyHeader header;
   size_t pos = 0;
   size_t line_number = 0;
@@ -182,7 +182,7 @@ double readBinaryScalar(ByteCursor& cursor, PlyType type, bool big_endian, const
 }
 
 // Index of x, y, z in the vertex element; throws when one is missing or a list.
-void findXyz(const std::string& path, const PlyElement& vertex, int xyz[3]) {
+void findPlyXyz(const std::string& path, const PlyElement& vertex, int xyz[3]) {
   static const char* const kNames[3] = {"x", "y", "z"};
   for (int axis = 0; axis < 3; ++axis) {
     xyz[axis] = -1;
@@ -211,7 +211,7 @@ void readBinaryBody(const std::string& path, const std::string& bytes, const Ply
   for (const PlyElement& element : header.elements) {
     const bool is_vertex = element.name == "vertex";
     int xyz[3] = {-1, -1, -1};
-    if (is_vertex) findXyz(path, element, xyz);
+    if (is_vertex) findPlyXyz(path, element, xyz);
     // Fixed-size records can be checked against the file size before allocating.
     size_t record_bytes = 0;
     bool fixed = true;
@@ -272,7 +272,7 @@ void readAsciiBody(const std::string& path, const std::string& bytes, const PlyH
     const bool is_vertex = element.name == "vertex";
     int xyz[3] = {-1, -1, -1};
     if (is_vertex) {
-      findXyz(path, element, xyz);
+      findPlyXyz(path, element, xyz);
       points.reserve(std::min<uint64_t>(element.count, (bytes.size() - pos) / 6));
     }
     for (uint64_t i = 0; i < element.count; ++i) {
@@ -301,7 +301,7 @@ void readAsciiBody(const std::string& path, const std::string& bytes, const PlyH
 
 PointCloud readPly(const std::string& path) {
   const std::string bytes = internal::readFileBytes(path);
-  const PlyHeader header = parseHeader(path, bytes);
+  const PlyHeader header = parsePlyHeader(path, bytes);
   bool has_vertex = false;
   for (const PlyElement& element : header.elements) has_vertex |= element.name == "vertex";
   if (!has_vertex) throwIo(path, "PLY file has no vertex element");

@@ -8,8 +8,7 @@ namespace fragg::planning {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
+constexpr double kDeg = M_PI / 180.0;
 constexpr double kWedgeRad = 1.0 * kDeg;      // azimuth wedge
 constexpr double kSameBeamRad = 0.02 * kDeg;  // closer elevations: one beam
 constexpr size_t kMaxSamples = 60000;
@@ -37,7 +36,7 @@ std::optional<BeamSpacing> estimateBeamSpacing(const std::vector<Eigen::Vector3f
     if (!p.allFinite()) continue;
     const double horizontal = std::hypot(p.x(), p.y()), range = p.norm();
     if (range < 1.0 || horizontal <= 0.0) continue;
-    const double azimuth = std::atan2(p.y(), p.x()) + kPi;  // [0, 2 pi]
+    const double azimuth = std::atan2(p.y(), p.x()) + M_PI;  // [0, 2 pi]
     samples.push_back({int32_t(azimuth / kWedgeRad), std::atan2(p.z(), horizontal)});
     ranges.push_back(range);
   }

@@ -5,27 +5,13 @@
 #include <filesystem>
 
 #include "fragg_map/errors.h"
+#include "param_lookup.h"
 
 namespace fragg::ros {
 
 namespace {
 using XmlRpc::XmlRpcValue;
 namespace fs = std::filesystem;
-
-[[noreturn]] void badParam(const std::string& name, const std::string& problem) {
-  throw fragg::InvalidArgument("parameter '" + name + "': " + problem);
-}
-
-/// root[group][name] (group empty: root[name]) when there, else nullptr.
-const XmlRpcValue* member(const XmlRpcValue& root, const char* group, const char* name) {
-  if (root.getType() != XmlRpcValue::TypeStruct) return nullptr;
-  XmlRpcValue& r = const_cast<XmlRpcValue&>(root);
-  if (*group == '\0') return r.hasMember(name) ? &r[name] : nullptr;
-  if (!r.hasMember(group)) return nullptr;
-  XmlRpcValue& g = r[group];
-  if (g.getType() != XmlRpcValue::TypeStruct || !g.hasMember(name)) return nullptr;
-  return &g[name];
-}
 
 std::string readString(const XmlRpcValue* v, const std::string& name) {
   XmlRpcValue copy = *v;
@@ -69,14 +55,14 @@ std::string resolveAutosavePath(const std::string& path, const std::string& file
 AutosaveParams parseAutosaveParameters(const XmlRpcValue& root) {
   AutosaveParams p;
   p.file_root = defaultFileRoot();
-  if (const XmlRpcValue* v = member(root, "", "file_root")) {
+  if (const XmlRpcValue* v = paramMember(root, "", "file_root")) {
     const std::string given = readString(v, "file_root");
     if (!given.empty()) {  // "" keeps the default, as for the file services
       if (!fs::path(given).is_absolute()) badParam("file_root", "expected an absolute folder");
       p.file_root = given;
     }
   }
-  if (const XmlRpcValue* v = member(root, "autosave", "period_s")) {
+  if (const XmlRpcValue* v = paramMember(root, "autosave", "period_s")) {
     XmlRpcValue copy = *v;
     if (copy.getType() == XmlRpcValue::TypeDouble)
       p.period_s = static_cast<double>(copy);
@@ -87,7 +73,7 @@ AutosaveParams parseAutosaveParameters(const XmlRpcValue& root) {
     if (!std::isfinite(p.period_s) || p.period_s < 0)
       badParam("autosave/period_s", "expected a finite number >= 0 (0: on shutdown only)");
   }
-  if (const XmlRpcValue* v = member(root, "autosave", "path")) {
+  if (const XmlRpcValue* v = paramMember(root, "autosave", "path")) {
     const std::string given = readString(v, "autosave/path");
     if (!given.empty()) {
       try {

@@ -2,19 +2,12 @@
 #include "fragg_map/ros/collision_markers.h"
 
 #include "fragg_map/errors.h"
+#include "point_msg.h"
 
 namespace fragg::ros {
 namespace {
 
 using visualization_msgs::Marker;
-
-geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
-  geometry_msgs::Point out;
-  out.x = p.x();
-  out.y = p.y();
-  out.z = p.z();
-  return out;
-}
 
 geometry_msgs::Pose toPose(const Eigen::Isometry3d& T) {
   geometry_msgs::Pose pose;

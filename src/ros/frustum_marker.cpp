@@ -5,17 +5,10 @@
 #include <vector>
 
 #include "fragg_map/errors.h"
+#include "point_msg.h"
 
 namespace fragg::ros {
 namespace {
-
-geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
-  geometry_msgs::Point out;
-  out.x = p.x();
-  out.y = p.y();
-  out.z = p.z();
-  return out;
-}
 
 // Corners of the pinhole pyramid's far plane in the sensor frame.
 std::vector<Eigen::Vector3d> pinholeCorners_S(const fragg::SensorModel& s) {

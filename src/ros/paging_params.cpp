@@ -4,6 +4,7 @@
 #include <string>
 
 #include "fragg_map/errors.h"
+#include "param_lookup.h"
 #ifdef FRAGG_HAVE_PAGE_STORE
 #include "fragg_map/store/page_stores.h"
 #endif
@@ -13,21 +14,9 @@ namespace fragg::ros {
 namespace {
 using XmlRpc::XmlRpcValue;
 
-[[noreturn]] void badParam(const std::string& name, const std::string& problem) {
-  throw fragg::InvalidArgument("parameter '" + name + "': " + problem);
-}
-
-/// root[group][name] when both are there, else nullptr.
-const XmlRpcValue* member(const XmlRpcValue& root, const char* group, const char* name) {
-  if (root.getType() != XmlRpcValue::TypeStruct || !root.hasMember(group)) return nullptr;
-  XmlRpcValue& g = const_cast<XmlRpcValue&>(root)[group];
-  if (g.getType() != XmlRpcValue::TypeStruct || !g.hasMember(name)) return nullptr;
-  return &g[name];
-}
-
 /// paging/<name> into *out when given; true when given.
 bool readNumber(const XmlRpcValue& root, const char* name, double* out) {
-  const XmlRpcValue* v = member(root, "paging", name);
+  const XmlRpcValue* v = paramMember(root, "paging", name);
   if (!v) return false;
   XmlRpcValue copy = *v;
   if (copy.getType() == XmlRpcValue::TypeDouble)
@@ -51,7 +40,7 @@ const std::vector<std::string>& pagingParameterNames() {
 
 PagingParams parsePagingParameters(const XmlRpcValue& root, fragg::MapParams* map) {
   PagingParams p;
-  if (const XmlRpcValue* v = member(root, "paging", "store")) {
+  if (const XmlRpcValue* v = paramMember(root, "paging", "store")) {
     XmlRpcValue copy = *v;
     if (copy.getType() != XmlRpcValue::TypeString) badParam("paging/store", "expected a string");
     p.store = static_cast<std::string>(copy);

@@ -19,15 +19,12 @@
 #include "fragg_map/planning/coarse_map.h"
 #include "fragg_map/ros/autosave_params.h"
 #include "fragg_map/ros/paging_params.h"
+#include "param_lookup.h"
 
 namespace fragg::ros {
 namespace {
 
 using XmlRpc::XmlRpcValue;
-
-[[noreturn]] void badParam(const std::string& name, const std::string& problem) {
-  throw fragg::InvalidArgument("parameter '" + name + "': " + problem);
-}
 
 // Every name the parser asks for, present or not (parseParameters sets it): the names in the
 // namespace that none asked for are the unknown ones.

@@ -12,12 +12,18 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <utility>
 #include <vector>
 
 #include "fragg_map/page_store.h"
 
 namespace fragg {
+
+/// The page stores' order of block and region keys: by z, then y, then x.
+[[nodiscard]] inline bool storeOrder(const BlockKey& a, const BlockKey& b) {
+  return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+}
 
 class PageWriter {
  public:

@@ -7,13 +7,10 @@
 #include <string>
 
 #include "fragg_map/ros/ground_filter.h"
+#include "frame_text.h"
 
 namespace fragg::ros {
 namespace {
-
-std::string withoutLeadingSlash(const std::string& frame) {
-  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
-}
 
 GroundFilterParams groundFilterParamsOf(const OctomapCompatParams& o) {
   GroundFilterParams g;

@@ -19,13 +19,10 @@
 #include "fragg_map/ros/collision_markers.h"
 #include "fragg_map/ros/collision_shape_msg.h"
 #include "fragg_map/ros/pose_correction.h"
+#include "frame_text.h"
 
 namespace fragg::ros {
 namespace {
-
-std::string withoutLeadingSlash(const std::string& frame) {
-  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
-}
 
 void clearAnswer(fragg_map::CheckCollision::Response& res) {
   res = fragg_map::CheckCollision::Response();

@@ -7,6 +7,7 @@
 #include <system_error>
 
 #include "fragg_map/errors.h"
+#include "frame_text.h"
 #if FRAGG_HAVE_OCTOMAP
 #include "fragg_map/interop/octomap_io.h"
 #include "fragg_map/submap.h"
@@ -14,11 +15,6 @@
 
 namespace fragg::ros {
 namespace {
-
-bool endsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() &&
-         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 void requireResolution(const fragg::Map& loaded, const fragg::MapParams& runtime,
                        const std::string& path) {

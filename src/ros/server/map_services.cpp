@@ -10,6 +10,7 @@
 #include "file_root.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/map_image.h"
+#include "frame_text.h"
 #include "map_copy.h"
 #include "map_file_loader.h"
 #include "process_memory.h"
@@ -19,11 +20,6 @@
 
 namespace fragg::ros {
 namespace {
-
-bool endsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() &&
-         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 // Runs `fn`, turning any exception into success=false + message (logged, throttled).
 template <typename Response, typename Fn>

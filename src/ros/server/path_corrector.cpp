@@ -12,15 +12,9 @@
 #include "apply_correction.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/pose_correction.h"
+#include "frame_text.h"
 
 namespace fragg::ros {
-namespace {
-
-std::string withoutLeadingSlash(const std::string& frame) {
-  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
-}
-
-}  // namespace
 
 PathCorrector::PathCorrector(::ros::NodeHandle& nh, const ServerParams& params,
                              const tf2_ros::Buffer& tf, SharedMap* shared, ServerStats* stats,

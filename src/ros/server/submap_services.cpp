@@ -57,8 +57,10 @@ fragg::Map copyOf(const fragg::Map& map, const fragg::SubmapRegion& region,
              : map.extractOutside(region.center_map, region.radius_m, fragg::Backend::kCpu, st);
 }
 
+// Runs `fn`; on an exception the response is cleared to success=false + message (logged,
+// throttled).
 template <typename Response, typename Fn>
-void answer(const char* service, Response& res, Fn&& fn) {
+void answerOrClear(const char* service, Response& res, Fn&& fn) {
   try {
     res.message = fn();
     res.success = true;
@@ -81,7 +83,7 @@ SubmapServices::SubmapServices(::ros::NodeHandle& private_nh, const ServerParams
 
 bool SubmapServices::truncate(fragg_map::Truncate::Request& req,
                               fragg_map::Truncate::Response& res) {
-  answer("truncate", res, [&] {
+  answerOrClear("truncate", res, [&] {
     const std::string path = fgmUnderRoot(params_.file_root, req.path);
     fragg::SubmapRegion region = regionOf(req);
     region.frame_id = params_.frame_id;
@@ -122,7 +124,7 @@ bool SubmapServices::truncate(fragg_map::Truncate::Request& req,
 }
 
 bool SubmapServices::merge(fragg_map::Merge::Request& req, fragg_map::Merge::Response& res) {
-  answer("merge", res, [&] {
+  answerOrClear("merge", res, [&] {
     const std::string path = fgmUnderRoot(params_.file_root, req.path);
     const fragg::MergeMode mode = fragg::mergeModeFromString(req.mode);
     std::optional<Eigen::Isometry3d> T_map_sub;
