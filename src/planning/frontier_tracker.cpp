@@ -21,6 +21,22 @@
 
 namespace fragg::planning {
 
+// Not in the anonymous namespace: FrontierTracker::State (external linkage) holds them.
+namespace frontier_tracker_detail {
+
+// One block of the map as the tracker knows it.
+struct BlockRecord {
+  BlockKey key;
+  StateMasks state;
+  FrontierBits frontier;
+  uint32_t count = 0;  ///< frontier cells (after the filter)
+  uint32_t mark = 0;   ///< update number that queued it for examination
+};
+
+}  // namespace frontier_tracker_detail
+
+using frontier_tracker_detail::BlockRecord;
+
 namespace {
 
 double secondsSince(std::chrono::steady_clock::time_point t0) {
@@ -39,15 +55,6 @@ VoxelKey keyAt(const Eigen::Vector3d& p_map, double resolution_m) {
   return {static_cast<int32_t>(std::floor(v.x())), static_cast<int32_t>(std::floor(v.y())),
           static_cast<int32_t>(std::floor(v.z()))};
 }
-
-// One block of the map as the tracker knows it.
-struct BlockRecord {
-  BlockKey key;
-  StateMasks state;
-  FrontierBits frontier;
-  uint32_t count = 0;  ///< frontier cells (after the filter)
-  uint32_t mark = 0;   ///< update number that queued it for examination
-};
 
 }  // namespace
 
