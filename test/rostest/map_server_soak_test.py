@@ -54,7 +54,9 @@ class Soak(unittest.TestCase):
             self.assertEqual(run.returncode, 0, run.stdout[-6000:])
             checks = summary.get("checks", {})
             self.assertTrue(checks and all(checks.values()), checks)
-            self.assertGreater(summary["clouds_sent"], 500)
+            # The mix plays the bag at 10 Hz for all but the final phase's 10 s: at least 70 %
+            # of that must have been sent (the player shares the cores with the node).
+            self.assertGreater(summary["clouds_sent"], int(0.7 * 10 * (seconds - 10)))
             self.assertIsInstance(summary["final_phase"]["compare"], dict, summary)
         finally:
             shutil.rmtree(out, ignore_errors=True)
