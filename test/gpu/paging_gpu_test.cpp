@@ -127,12 +127,7 @@ TEST(CudaPaging, AScanThatCannotFitTheBudgetIsRefusedAndTheMapStaysAsItWas) {
   EXPECT_LE(paged.pagingStats().peak_resident_blocks, paged.pagingStats().budget_blocks);
 
   // A scan that fits goes in afterwards, on the device, as it would into a map without paging.
-  PointCloud few;
-  for (const Eigen::Vector3d& p_map :
-       {Eigen::Vector3d(3.0, 1.0, 1.0), Eigen::Vector3d(3.0, -1.0, 1.2)})
-    few.points_S.push_back((T.inverse() * p_map).cast<float>());
-  few.width = 2;
-  few.height = 1;
+  const PointCloud few = twoPointScan(T);
   paged.insert(few, T, corridorSensor());
   Map memory(corridorParams(Backend::kCpu));
   memory.insert(few, T, corridorSensor());

@@ -50,6 +50,18 @@ inline Eigen::Isometry3d corridorPose(int i, int n) {
 }
 
 /// A 16-ring LiDAR scan (sensor frame) from `T_map_sensor`; returns beyond 15 m are dropped.
+/// Two points ahead of the sensor at `T_map_sensor` (map (3, 1, 1) and (3, -1, 1.2)): a scan
+/// small enough for any budget the tests set.
+inline PointCloud twoPointScan(const Eigen::Isometry3d& T_map_sensor) {
+  PointCloud few;
+  for (const Eigen::Vector3d& p_map :
+       {Eigen::Vector3d(3.0, 1.0, 1.0), Eigen::Vector3d(3.0, -1.0, 1.2)})
+    few.points_S.push_back((T_map_sensor.inverse() * p_map).cast<float>());
+  few.width = 2;
+  few.height = 1;
+  return few;
+}
+
 inline PointCloud corridorScan(const Eigen::Isometry3d& T_map_sensor) {
   PointCloud cloud;
   for (int ring = 0; ring < 16; ++ring) {
