@@ -13,6 +13,7 @@
 
 #include "fragg_map/block_key_table.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/seconds_since.h"
 #include "fragg_map/internal/thread_count.h"
 #include "frontier_masks.h"
 #if FRAGG_HAVE_CUDA
@@ -38,10 +39,6 @@ struct BlockRecord {
 using frontier_tracker_detail::BlockRecord;
 
 namespace {
-
-double secondsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // A cell's centre and a point's cell at `resolution_m`, as Map::centerOf and Map::keyOf.
 Eigen::Vector3d centreOf(const VoxelKey& key, double resolution_m) {

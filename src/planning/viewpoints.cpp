@@ -10,6 +10,7 @@
 #include <unordered_set>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/seconds_since.h"
 #include "gain_walk.h"
 #if FRAGG_HAVE_CUDA
 #include "cuda/viewpoint_gains.h"
@@ -255,8 +256,7 @@ bool gainsOnBackend(const Map& map, const std::vector<Eigen::Vector3d>& position
       throw CudaOutOfMemory("the device cannot hold every block the viewpoints' rays reach");
     if (timings) {
       *timings = GainTimings{};
-      timings->view_seconds =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      timings->view_seconds = secondsSince(t0);
       viewpointGainsOnDevice(lease->view(), lease->scratch(), batch, map.model(), gains.data(),
                              &timings->tables_seconds, &timings->walk_seconds, &timings->rounds);
       timings->on_device = true;

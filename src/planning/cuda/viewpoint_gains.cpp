@@ -9,6 +9,7 @@
 #include "cuda_check.h"
 #include "cuda_stream.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/seconds_since.h"
 #include "gain_kernels.h"
 
 namespace fragg::planning {
@@ -178,9 +179,7 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
   }
   cuda::copyToHost(out, gains, n, stream);
   FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream));
-  if (walk_seconds)
-    *walk_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_walk).count();
+  if (walk_seconds) *walk_seconds = secondsSince(t_walk);
 }
 
 }  // namespace fragg::planning
