@@ -15,6 +15,9 @@
 set -euo pipefail
 
 packages=(
+  # the toolchain: g++ is nvcc's host compiler and the default C++ compiler (a machine with only
+  # clang fails at CMake's CUDA check: "cannot execute 'cc1plus'")
+  g++ make cmake
   # ROS 1 (the ROS.md list)
   ros-core-dev catkin libnodeletlib-dev libnodelet-dev libnodeletlib-tools rosbash
   libtf2-ros-dev libtf2-eigen-dev libtf2-sensor-msgs-dev libpcl-ros-dev libpcl-conversions-dev
