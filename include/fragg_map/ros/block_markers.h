@@ -5,7 +5,9 @@
 // look at from Map::changedBlocksSince (kOccupied for occupied markers: only the blocks where a
 // cell crossed the occupied threshold; kMasks, the change log, for the others): an update's
 // work follows what changed, not the map. Applied in order, the updates show what a
-// full rebuild (allBlockMarkers) shows.
+// full rebuild (allBlockMarkers) shows. Paced (pacedBlockMarkersWire): the chunks that changed
+// are queued in the ledger and each cloud sends its share of them, every chunk within the pace's
+// period of its change, so that a once-a-second update does not come as one burst.
 #pragma once
 
 #include <ros/time.h>
@@ -13,6 +15,7 @@
 
 #include <bitset>
 #include <cstdint>
+#include <deque>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -70,8 +73,10 @@ class MarkerLedger {
   uint64_t publishedRevision() const { return published_revision_; }
   /// Blocks with drawn cells.
   size_t shownBlocks() const { return shown_blocks_; }
-  /// Chunks shown (markers a subscriber holds).
+  /// Chunks shown (markers a subscriber holds), and those queued to be sent (paced).
   size_t shownChunks() const { return chunks_.size(); }
+  /// Chunks whose change is queued and not yet sent (pacedBlockMarkersWire).
+  [[nodiscard]] size_t pendingChunks() const { return pending_.size(); }
   /// The id of the marker that draws block `key`, or -1 when the block is not shown.
   [[nodiscard]] int32_t idOf(const fragg::BlockKey& key) const;
 
@@ -88,11 +93,13 @@ class MarkerLedger {
     /// sent): sent again as is in a late subscriber's snapshot; its buffer is written over
     /// when the chunk is drawn again and nothing else holds it.
     std::shared_ptr<WireMarker> wire;
+    bool pending = false;  ///< changed since it was last sent (listed in pending_)
   };
 
  private:
-  friend SerializedMarkerArray changedBlockMarkersWire(const fragg::Map&, const MarkerStyle&,
-                                                       const ::ros::Time&, MarkerLedger*);
+  friend SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map&, const MarkerStyle&,
+                                                     const ::ros::Time&, double, double,
+                                                     MarkerLedger*);
   friend SerializedMarkerArray allBlockMarkersWire(const fragg::Map&, const MarkerStyle&,
                                                    const ::ros::Time&, MarkerLedger*);
   friend SerializedMarkerArray shownBlockMarkersWire(const fragg::Map&, const MarkerStyle&,
@@ -107,6 +114,15 @@ class MarkerLedger {
   /// Map::viewEpoch() of the last update: shown blocks can only have left the map (clearBox,
   /// reset, paging) when it moved, so only then are they looked up.
   uint64_t view_epoch_ = 0;
+  /// The chunks changed and not yet sent, oldest first, with when they changed (paced).
+  struct Pending {
+    fragg::BlockKey chunk;
+    double since_s = 0.0;
+  };
+  std::deque<Pending> pending_;
+  double last_paced_s_ = 0.0;  ///< now_s of the last paced update (the clouds' interval)
+  double last_note_s_ = 0.0;   ///< now_s when the map's changes were last taken in (paced)
+  bool paced_ = false;         ///< last_paced_s_ is set
 };
 
 /// The chunk (of `chunk_blocks` blocks a side) that holds block `key`.
@@ -127,6 +143,21 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
                                                             const MarkerStyle& style,
                                                             const ::ros::Time& stamp,
                                                             MarkerLedger* ledger);
+
+/// changedBlockMarkersWire at a pace, called after every cloud (`now_s`: seconds of a steady or
+/// sensor clock): the ledger takes the map's changes in once every `period_s` (the first call,
+/// then the first call a period after the last time; as changedBlockMarkersWire), and the chunks
+/// they changed are queued and sent in even shares over the calls of the next period (the
+/// interval measured between calls): each call sends what is left over the calls left, all of
+/// it by the time the next changes are taken in. So a changed chunk reaches the subscribers
+/// within two periods of its change, in a rolling set spread over the clouds, and a period after
+/// the changes stop they see what a full rebuild shows. A late subscriber's snapshot
+/// (shownBlockMarkersWire) is the chunks as last sent, to which the queued ones still apply.
+/// `period_s` <= 0: the changes taken in and sent at once (changedBlockMarkersWire).
+[[nodiscard]] SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map& map,
+                                                          const MarkerStyle& style,
+                                                          const ::ros::Time& stamp, double now_s,
+                                                          double period_s, MarkerLedger* ledger);
 
 /// A full republish (after reset or load, or for a late subscriber): a DELETEALL marker in
 /// `style.ns`, then one ADD per chunk with drawn cells. Rebuilds the ledger (and its kept
