@@ -253,7 +253,8 @@ fragg::BlockChange MapOutputCache::refreshOn(const fragg::OccupancyModel& model)
 
 std::vector<MapOutputCache::Source> MapOutputCache::listChanges(const fragg::Map& map,
                                                                 const fragg::BlockView& blocks,
-                                                                bool full, bool masks_suffice) {
+                                                                bool full, bool masks_suffice,
+                                                                bool keys_only) {
   const fragg::BlockChange refresh_on = refreshOn(map.model());
   std::vector<Source> refresh;
   if (full) {
@@ -272,11 +273,12 @@ std::vector<MapOutputCache::Source> MapOutputCache::listChanges(const fragg::Map
           blocks.changedRefsSince(revision_, fragg::BlockChange::kState);
       refresh.reserve(changed.size());
       for (const fragg::BlockRef& r : changed)
-        refresh.push_back({r.key, blocks.findMasks(r.key), r.block});
+        refresh.push_back({r.key, keys_only ? nullptr : blocks.findMasks(r.key), r.block});
     } else if (masks_suffice) {
       const std::vector<fragg::BlockKey> changed = blocks.changedSince(revision_, refresh_on);
       refresh.reserve(changed.size());
-      for (const fragg::BlockKey& k : changed) refresh.push_back({k, blocks.findMasks(k), nullptr});
+      for (const fragg::BlockKey& k : changed)
+        refresh.push_back({k, keys_only ? nullptr : blocks.findMasks(k), nullptr});
     } else {
       for (const fragg::BlockRef& r : blocks.changedRefsSince(revision_, refresh_on))
         refresh.push_back({r.key, nullptr, r.block});
@@ -336,6 +338,7 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
     column_index_.clear();
     undrawn_.clear();  // their columns are gone: the grid is drawn whole
     queue_.clear();
+    queue_head_ = 0;
     occupied_cells_ = 0;
     seen_valid_ = false;
   }
@@ -343,90 +346,54 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   // shares over the clouds of the next period.
   const bool paced = period_s > 0.0 && !out.full;
   const bool list = !paced || with_grid || !advanced_;
-  std::vector<Source> refresh;
-  if (list) refresh = listChanges(map, blocks, out.full, masks_suffice);
-  if (out.full) piece_index_.reserve(refresh.size());
-  std::vector<uint32_t> slots;
-  if (!paced && queue_.empty()) {
-    // Everything listed, at once (update(), or a rebuild).
-    slots.resize(refresh.size());
-    for (size_t j = 0; j < refresh.size(); ++j) slots[j] = pieceFor(refresh[j].key);
-  } else {
-    // A listing cloud takes what is left of the last list (nothing, when the shares kept up);
-    // the others their share of it: what is left over the clouds left until it is a period old.
-    size_t take = queue_.size();
-    if (paced && !list && !queue_.empty()) {
-      const double interval_s = std::clamp(now_s - last_advance_s_, 1e-6, period_s);
-      const double left_s = queue_.front().since_s + period_s - now_s;
-      const double clouds_left = std::max(1.0, std::floor(left_s / interval_s + 1e-6));
-      take = static_cast<size_t>(std::ceil(static_cast<double>(queue_.size()) / clouds_left));
-    }
-    // The listed blocks join the queue (once each: a queued block's change is owed already).
-    for (const Source& s : refresh) {
-      const uint32_t i = pieceFor(s.key);
-      if (pieces_[i].queued) continue;
-      pieces_[i].queued = true;
-      queue_.push_back({i, s.key, now_s});
-    }
-    refresh.clear();
-    if (!paced) take = queue_.size();
-    std::vector<fragg::BlockKey> keys, gone;
-    keys.reserve(take);
-    for (size_t q = 0; q < take; ++q) {
-      const Queued e = queue_.front();
-      queue_.pop_front();
-      uint32_t i = e.piece;
-      if (i >= pieces_.size() || pieces_[i].key != e.key) i = piece_index_.find(e.key);
-      if (i == fragg::BlockKeyTable::kNone) continue;  // dropped since
-      pieces_[i].queued = false;
-      (blocks.findMasks(e.key) ? keys : gone).push_back(e.key);
-    }
-    for (const fragg::BlockKey& k : gone) dropPiece(k);  // moves pieces: before the slots
-    refresh.reserve(keys.size());
-    slots.reserve(keys.size());
-    for (const fragg::BlockKey& k : keys) {
-      refresh.push_back({k, masks_suffice ? blocks.findMasks(k) : nullptr, nullptr});
-      slots.push_back(piece_index_.find(k));
-    }
+  // First what was queued and is due: at a listing all of it (what the shares left: nothing,
+  // when they kept up), else this cloud's share: what is left over the clouds left until the
+  // list is a period old.
+  size_t take = queuedBlocks();
+  if (paced && !list && take > 0) {
+    const double interval_s = std::clamp(now_s - last_advance_s_, 1e-6, period_s);
+    const double left_s = queued_since_s_ + period_s - now_s;
+    const double clouds_left = std::max(1.0, std::floor(left_s / interval_s + 1e-6));
+    take = static_cast<size_t>(std::ceil(static_cast<double>(take) / clouds_left));
   }
   if (paced) {
     last_advance_s_ = now_s;
     advanced_ = true;
   }
-  out.blocks_queued = queue_.size();
-  out.list_ms = msSince(t0);
-  t0 = std::chrono::steady_clock::now();
-  // The pieces in parallel (read-only map, one piece per iteration; pieces_ does not change
-  // while they are computed), then the sums in order.
-  std::vector<PieceDelta> deltas(refresh.size());
-  const int64_t n = static_cast<int64_t>(refresh.size());
-  // The loop waits on memory (a piece and a block's masks, each a few cache lines at random
-  // places): both are fetched a few iterations ahead.
-  constexpr int64_t kAhead = 8;
-#pragma omp parallel for schedule(dynamic, 256) if (n > 1024)
-  for (int64_t j = 0; j < n; ++j) {
-    if (j + kAhead < n) {
-      const Piece* ahead = &pieces_[slots[j + kAhead]];
-      __builtin_prefetch(ahead);
-      __builtin_prefetch(ahead->shown.data());
-      if (const fragg::BlockStateMasks* m = refresh[j + kAhead].masks) {
-        __builtin_prefetch(m->occupied);
-        __builtin_prefetch(m->free);
-      }
+  std::vector<Source> queued;
+  queued.reserve(take);
+  std::vector<fragg::BlockKey> gone;
+  for (size_t q = queue_head_; q < queue_head_ + take; ++q) {
+    const fragg::BlockKey& k = queue_[q];
+    const fragg::BlockStateMasks* m = blocks.findMasks(k);
+    if (!m) {
+      gone.push_back(k);  // left the map since it was listed
+      continue;
     }
-    deltas[j] = computePiece(map, blocks, refresh[j], masks_suffice, &pieces_[slots[j]]);
+    queued.push_back({k, masks_suffice ? m : nullptr, nullptr});
   }
-  int64_t occupied_delta = 0;
-  for (size_t j = 0; j < refresh.size(); ++j) {
-    const PieceDelta& d = deltas[j];
-    relist(slots[j]);
-    occupied_delta += d.occupied;
-    out.blocks_cells_read += d.cells_read;
-    if (d.column) markDirty(pieces_[slots[j]].column);
+  queue_head_ += take;
+  if (queue_head_ == queue_.size()) {
+    queue_.clear();
+    queue_head_ = 0;
   }
-  occupied_cells_ = static_cast<size_t>(static_cast<int64_t>(occupied_cells_) + occupied_delta);
-  out.blocks_read = refresh.size();
-  out.pieces_ms = msSince(t0);
+  for (const fragg::BlockKey& k : gone) dropPiece(k);
+  out.list_ms += msSince(t0);
+  recompute(map, blocks, queued, masks_suffice, &out);
+  // Then the changes since the last list: queued (paced), or recomputed now.
+  t0 = std::chrono::steady_clock::now();
+  std::vector<Source> listed;
+  if (list) listed = listChanges(map, blocks, out.full, masks_suffice, paced);
+  if (paced && list) {
+    queue_.reserve(queue_.size() + listed.size());
+    for (const Source& s : listed) queue_.push_back(s.key);
+    queued_since_s_ = now_s;
+    listed.clear();
+  }
+  out.list_ms += msSince(t0);
+  if (out.full) piece_index_.reserve(listed.size());
+  recompute(map, blocks, listed, masks_suffice, &out);
+  out.blocks_queued = queuedBlocks();
   t0 = std::chrono::steady_clock::now();
   for (const uint32_t c : dirty_) {
     Column& col = columns_[c];
@@ -443,6 +410,47 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   epoch_ = map.viewEpoch();
   out.grid_ms = msSince(t0);
   return out;
+}
+
+void MapOutputCache::recompute(const fragg::Map& map, const fragg::BlockView& blocks,
+                               const std::vector<Source>& sources, bool masks_suffice,
+                               OutputCacheUpdate* out) {
+  if (sources.empty()) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  // Each block's piece (new ones made first: pieces_ does not change while the pieces are
+  // computed), then the pieces in parallel (read-only map, one piece per iteration), then the
+  // sums in order.
+  std::vector<uint32_t> slots(sources.size());
+  for (size_t j = 0; j < sources.size(); ++j) slots[j] = pieceFor(sources[j].key);
+  std::vector<PieceDelta> deltas(sources.size());
+  const int64_t n = static_cast<int64_t>(sources.size());
+  // The loop waits on memory (a piece and a block's masks, each a few cache lines at random
+  // places): both are fetched a few iterations ahead.
+  constexpr int64_t kAhead = 8;
+#pragma omp parallel for schedule(dynamic, 256) if (n > 1024)
+  for (int64_t j = 0; j < n; ++j) {
+    if (j + kAhead < n) {
+      const Piece* ahead = &pieces_[slots[j + kAhead]];
+      __builtin_prefetch(ahead);
+      __builtin_prefetch(ahead->shown.data());
+      if (const fragg::BlockStateMasks* m = sources[j + kAhead].masks) {
+        __builtin_prefetch(m->occupied);
+        __builtin_prefetch(m->free);
+      }
+    }
+    deltas[j] = computePiece(map, blocks, sources[j], masks_suffice, &pieces_[slots[j]]);
+  }
+  int64_t occupied_delta = 0;
+  for (size_t j = 0; j < sources.size(); ++j) {
+    const PieceDelta& d = deltas[j];
+    relist(slots[j]);
+    occupied_delta += d.occupied;
+    out->blocks_cells_read += d.cells_read;
+    if (d.column) markDirty(pieces_[slots[j]].column);
+  }
+  occupied_cells_ = static_cast<size_t>(static_cast<int64_t>(occupied_cells_) + occupied_delta);
+  out->blocks_read += sources.size();
+  out->pieces_ms += msSince(t0);
 }
 
 void MapOutputCache::drawColumn(const Column& col) {

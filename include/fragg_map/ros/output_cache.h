@@ -8,11 +8,11 @@
 // itself is kept between updates and patched in the changed columns (octomap_server's
 // incremental_2D_projection); messages are assembled from the pieces (a copy of the output,
 // no pass over the cells). The results equal occupiedCloud() and projectedMap() of the same
-// map as sets (point order differs). Paced (advance()): the blocks changed by each cloud are
-// queued and each cloud recomputes its share of the queue, so that the work follows the clouds
-// instead of coming as one backlog per publication; every queued block is recomputed within
-// the pace's period of its change (the outputs lag the map by at most that), and update()
-// catches up at once. Not thread-safe: one owner, under the map's read lock.
+// map as sets (point order differs). Paced (advance()): the changed blocks are listed at a
+// publication and recomputed in even shares over the clouds of the next period, so that the
+// work follows the clouds instead of coming as one backlog per publication; a block's change
+// reaches the outputs within two periods (listed within one, recomputed within the next), and
+// update() catches up at once. Not thread-safe: one owner, under the map's read lock.
 #pragma once
 
 #include <nav_msgs/OccupancyGrid.h>
@@ -82,18 +82,18 @@ class MapOutputCache {
   /// Brings the pieces and the grid up to date with `map` (held under its read lock), the
   /// blocks advance() left queued included.
   OutputCacheUpdate update(const fragg::Map& map);
-  /// One cloud's share of a paced refresh (`map` under its read lock): the blocks changed since
-  /// the last call are queued (stamped `now_s`), and the queue's oldest are recomputed: every
-  /// block queued for `period_s` or more by the next cloud (the clouds' interval measured
-  /// between calls), and at least its share of the queue (queued x interval / period). The
-  /// columns are merged; the grid is drawn only `with_grid` (before a publication: the grid's
-  /// bounds are kept current either way). `period_s` <= 0: as update(). A rebuild (view moved,
-  /// first call) is done whole at once.
+  /// One cloud's share of a paced refresh (`map` under its read lock). `with_grid` (a
+  /// publication follows: the grid is drawn): what is left of the last list is recomputed and
+  /// the blocks changed since are listed and queued (stamped `now_s`); otherwise this cloud's
+  /// share of the queue is recomputed, what is left over the clouds left until the list is
+  /// `period_s` old (the clouds' interval measured between calls), so the queue is empty by
+  /// the next publication. The columns are merged either way, the grid's bounds kept current.
+  /// `period_s` <= 0: as update(). A rebuild (view moved, first call) is done whole at once.
   OutputCacheUpdate advance(const fragg::Map& map, double now_s, double period_s, bool with_grid);
   /// Forgets everything: the next update rebuilds.
   void invalidate() { valid_ = false; }
   /// Blocks queued by advance() and not yet recomputed.
-  [[nodiscard]] size_t queuedBlocks() const { return queue_.size(); }
+  [[nodiscard]] size_t queuedBlocks() const { return queue_.size() - queue_head_; }
 
   /// The occupied cloud of the last update: packed float32 x, y, z (as occupiedCloud()),
   /// gathered from the pieces that hold cells into a message kept by the cache (valid until
@@ -124,7 +124,6 @@ class MapOutputCache {
     int8_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
     uint32_t column = 0;     ///< its place in columns_
     int64_t listed = -1;     ///< its place in with_cells_; -1 while xyz is empty
-    bool queued = false;     ///< in queue_ (advance(): changed, not recomputed yet)
     std::vector<float> xyz;  ///< the shown cells' centres
   };
   /// What recomputing a piece changed.
@@ -151,16 +150,13 @@ class MapOutputCache {
     bool dirty = false;    ///< listed in the update's dirty columns
     bool undrawn = false;  ///< merged since the grid was last drawn (listed in undrawn_)
   };
-  /// A block queued by advance(): its piece and when it was queued.
-  struct Queued {
-    uint32_t piece = 0;
-    fragg::BlockKey key;  ///< checks the piece index (dropPiece moves pieces)
-    double since_s = 0.0;
-  };
-
   /// The blocks changed since the last update (all of them for a rebuild, `full`).
+  /// `keys_only`: the sources' masks are not looked up (they are queued by key).
   std::vector<Source> listChanges(const fragg::Map& map, const fragg::BlockView& blocks, bool full,
-                                  bool masks_suffice);
+                                  bool masks_suffice, bool keys_only);
+  /// Recomputes the pieces of `sources` (distinct blocks of the map), adding to `out`.
+  void recompute(const fragg::Map& map, const fragg::BlockView& blocks,
+                 const std::vector<Source>& sources, bool masks_suffice, OutputCacheUpdate* out);
   /// The common path of update() and advance(): `period_s` <= 0 recomputes everything listed
   /// and queued.
   OutputCacheUpdate refresh(const fragg::Map& map, double now_s, double period_s, bool with_grid);
@@ -208,9 +204,12 @@ class MapOutputCache {
   std::vector<uint32_t> undrawn_;      ///< columns merged since the grid was last drawn
   std::vector<uint32_t> drawing_;      ///< refreshGrid's copy of undrawn_ (kept for its memory)
   bool redraw_owed_ = false;           ///< a rebuild since the grid was last drawn
-  std::deque<Queued> queue_;           ///< advance(): blocks to recompute, oldest first
-  double last_advance_s_ = 0.0;        ///< now_s of the last advance() (the clouds' interval)
-  bool advanced_ = false;              ///< last_advance_s_ is set
+  /// advance(): the blocks of the last list not recomputed yet, from queue_head_ on.
+  std::vector<fragg::BlockKey> queue_;
+  size_t queue_head_ = 0;
+  double queued_since_s_ = 0.0;  ///< now_s when queue_ was listed
+  double last_advance_s_ = 0.0;  ///< now_s of the last advance() (the clouds' interval)
+  bool advanced_ = false;        ///< last_advance_s_ is set
   size_t occupied_cells_ = 0;
   /// The observed cells' xy key bounds at the last update (seen_valid_: some cell observed).
   bool seen_valid_ = false;
