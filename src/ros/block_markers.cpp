@@ -136,6 +136,7 @@ void appendCells(const fragg::Map& map, const fragg::BlockKey& key, const CellMa
     p.y = (v.y + 0.5) * res_m;
     p.z = (v.z + 0.5) * res_m;
     m->points.push_back(p);
+    if (!perPointColors(style)) continue;  // the marker's colour
     m->colors.push_back(layer_color[c >> (2 * fragg::kBlockBits)]);
     if (style.colors) {
       if (const std::optional<Rgb8> rgb = style.colors->find(v)) {
@@ -151,7 +152,14 @@ visualization_msgs::Marker emptyCubeList(const fragg::Map& map, const MarkerStyl
                                          const ::ros::Time& stamp, int32_t id) {
   visualization_msgs::Marker m = markerHeader(style, stamp, id, visualization_msgs::Marker::ADD);
   m.scale.x = m.scale.y = m.scale.z = map.resolution();
-  m.color = heightColor(0.0, 0.0, 1.0, style.alpha);  // per-point colours win
+  if (perPointColors(style)) {
+    m.color = heightColor(0.0, 0.0, 1.0, style.alpha);  // per-point colours win
+  } else {
+    m.color.r = style.flat_rgb[0];
+    m.color.g = style.flat_rgb[1];
+    m.color.b = style.flat_rgb[2];
+    m.color.a = style.alpha;
+  }
   return m;
 }
 
@@ -166,7 +174,7 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
                                        const ::ros::Time& stamp, int32_t id) {
   visualization_msgs::Marker m = emptyCubeList(map, style, stamp, id);
   m.points.reserve(cells.count());
-  m.colors.reserve(cells.count());
+  if (perPointColors(style)) m.colors.reserve(cells.count());
   appendCells(map, key, cells, style, &m);
   return m;
 }
@@ -192,9 +200,11 @@ uint32_t writeCells(const fragg::Map& map, const fragg::BlockKey& key, const Cel
     }
   }
   uint32_t i = first;
+  const bool per_point = perPointColors(style);
   for (size_t c = cells._Find_first(); c < cells.size(); c = cells._Find_next(c), ++i) {
     const fragg::VoxelKey v = fragg::voxelKeyOf(key, static_cast<int>(c));
     w->setPoint(i, (v.x + 0.5) * res_m, (v.y + 0.5) * res_m, (v.z + 0.5) * res_m);
+    if (!per_point) continue;  // the marker's colour
     const float* rgba = layer_rgba[c >> (2 * fragg::kBlockBits)];
     if (style.colors) {
       if (const std::optional<Rgb8> rgb = style.colors->find(v)) {
@@ -221,7 +231,7 @@ std::shared_ptr<WireMarker> chunkWire(const fragg::Map& map, const Blocks& block
   size_t cells = 0;
   for (size_t i = 0; i < blocks.size(); ++i) cells += blocks[i].cells.count();
   CubeListWriter w(emptyCubeList(map, style, ::ros::Time(), id), static_cast<uint32_t>(cells),
-                   std::move(reuse));
+                   std::move(reuse), perPointColors(style));
   uint32_t next = 0;
   for (size_t i : order) next = writeCells(map, blocks[i].key, blocks[i].cells, style, &w, next);
   return w.finish();

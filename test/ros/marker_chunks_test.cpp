@@ -41,14 +41,15 @@ void apply(const fragg::Map& map, const MarkerArray& a, View* view) {
     } else {
       ASSERT_EQ(m.action, Marker::ADD);
       ASSERT_EQ(m.type, Marker::CUBE_LIST);
-      ASSERT_EQ(m.points.size(), m.colors.size());
+      // Per-point colours, or none: the marker's colour draws every cube (flat markers).
+      ASSERT_TRUE(m.colors.empty() || m.points.size() == m.colors.size());
       ASSERT_FALSE(m.points.empty()) << "an ADD of an empty chunk";
       std::vector<Drawn>& cells = (*view)[m.id];
       cells.clear();
       for (size_t i = 0; i < m.points.size(); ++i) {
         const auto& p = m.points[i];
         const fragg::VoxelKey v = map.keyOf(Eigen::Vector3d(p.x, p.y, p.z));
-        const auto& c = m.colors[i];
+        const auto& c = m.colors.empty() ? m.color : m.colors[i];
         auto q = [](float x) { return static_cast<int>(std::lround(x * 1000.0f)); };
         cells.emplace_back(v.x, v.y, v.z, q(c.r), q(c.g), q(c.b), q(c.a));
       }
@@ -160,6 +161,14 @@ TEST(MarkerChunks, HiddenSpecklesAndAHeightBandToo) {
   style.chunk_blocks = 4;
   style.hide_speckles = true;
   style.heights = {-0.45, 0.65};
+  expectIncrementsEqualRebuild(style);
+}
+
+TEST(MarkerChunks, FlatColoursWithoutPerPointColoursToo) {
+  MarkerStyle style;
+  style.chunk_blocks = 4;
+  style.height_colors = false;  // octomap_server's height_map false
+  style.flat_rgb[1] = 0.5f;
   expectIncrementsEqualRebuild(style);
 }
 

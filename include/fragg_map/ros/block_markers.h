@@ -35,7 +35,9 @@ struct MarkerStyle {
   double color_min_z_m = -1.0;                           ///< bottom of the height colour ramp
   double color_max_z_m = 4.0;                            ///< top of the height colour ramp
   float alpha = 1.0f;
-  /// false (octomap_server's height_map false): every cell in `flat_rgb` (alpha above).
+  /// false (octomap_server's height_map false): every cell in `flat_rgb` (alpha above), as
+  /// the marker's colour without per-point colours (as octomap_server draws it; 24 bytes a
+  /// cell on the wire instead of 40), unless `colors` gives cells their own.
   bool height_colors = true;
   float flat_rgb[3] = {0.0f, 0.0f, 1.0f};
   /// filter_speckles: occupied cells without an occupied neighbour are not drawn (decided when
@@ -128,7 +130,14 @@ class MarkerLedger {
 /// The chunk (of `chunk_blocks` blocks a side) that holds block `key`.
 fragg::BlockKey chunkOf(const fragg::BlockKey& key, int32_t chunk_blocks);
 
-/// The CUBE_LIST marker of one block: centres of the cells in `cells`, coloured by height.
+/// Whether `style` draws per-point colours (height colours or a colour table); else the
+/// marker's own colour is every cell's.
+[[nodiscard]] inline bool perPointColors(const MarkerStyle& style) {
+  return style.height_colors || style.colors != nullptr;
+}
+
+/// The CUBE_LIST marker of one block: centres of the cells in `cells`, coloured by height (or
+/// flat: perPointColors).
 visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::BlockKey& key,
                                        const CellMask& cells, const MarkerStyle& style,
                                        const ::ros::Time& stamp, int32_t id);

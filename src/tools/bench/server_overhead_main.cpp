@@ -29,7 +29,8 @@
 //   fragg_map_server_overhead --workloads DIR [--scans N] [--big-map FILE] [--big-scans K]
 //                             [--cloud-rate HZ] [--marker-rate HZ] [--map-rate HZ]
 //                             [--marker-chunk N] [--after-only] [--cells-always]
-//                             [--fresh-buffers] [--unpaced] [--backend cpu|cuda]
+//                             [--fresh-buffers] [--unpaced] [--flat-markers]
+//                             [--backend cpu|cuda]
 #include <ros/serialization.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/PointField.h>
@@ -108,6 +109,8 @@ struct Times {
 
 /// Blocks per side of a marker chunk (--marker-chunk; the server's markers/chunk_blocks).
 int g_marker_chunk_blocks = 4;
+/// --flat-markers: octomap_server's height_map false (one colour a marker, none per point).
+bool g_flat_markers = false;
 /// --cells-always: the after path's cache reads every refreshed block's cells (as before it
 /// read the state masks where they suffice).
 bool g_cells_always = false;
@@ -134,6 +137,7 @@ class Outputs {
   explicit Outputs(bool before, fragg::BlockChange refresh_on = fragg::BlockChange::kMasks)
       : before_(before), cache_(optionsWith(refresh_on)) {
     style_.chunk_blocks = g_marker_chunk_blocks;
+    style_.height_colors = !g_flat_markers;
   }
   /// `due`: the after path's throttled outputs (the before path ignores it); `pace`: paced,
   /// the markers' share goes out and the cache takes its share after every cloud (the
@@ -430,6 +434,9 @@ int runMain(int argc, char** argv) {
                  "cpu | cuda: the map's backend (the outputs read its masks and change log; "
                  "cuda needs a CUDA build)")
       ->check(CLI::IsMember({"cpu", "cuda"}));
+  app.add_flag("--flat-markers", g_flat_markers,
+               "markers in one colour without per-point colours (the server's height_map "
+               "false: 24 bytes a cell instead of 40)");
   bool unpaced = false;
   app.add_flag("--unpaced", unpaced,
                "as the server with paced_outputs false: the throttled updates whole when due "
