@@ -5,10 +5,13 @@
 #endif
 #include <cmath>
 #include <string>
+#include <unordered_set>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/backend.h"
 #include "fragg_map/internal/pager.h"
+#include "fragg_map/internal/region_reach.h"
+#include "fragg_map/internal/seconds_since.h"
 #include "fragg_map/log.h"
 #include "fragg_map/map.h"
 
@@ -168,8 +171,11 @@ void Map::pageInKeys(const std::vector<BlockKey>& keys) {
         pager_->victims(blocks_, sensor, /*clean_only=*/true, incoming, &keys);
     if (pager_->excessOverBudget(blocks_.size() - out.size() + incoming) > 0)
       out = pager_->victims(blocks_, sensor, /*clean_only=*/false, incoming, &keys);
+    const auto t_evict = std::chrono::steady_clock::now();
     backend_->cache().forget(out, blocks_);  // the insertion holds sync_mutex_ already
+    pager_->stageCounters().seconds_evict += secondsSince(t_evict);
     pager_->pageOut(out, blocks_);
+    ++pager_->stageCounters().rounds_in_scan;
   }
   // The kept records make way for the blocks (they never push a block out).
   if (!pager_->dropRecordsToFit(blocks_.size() + incoming))
@@ -212,55 +218,105 @@ DevicePaging Map::devicePaging(size_t* read) {
   };
   paging.make_room = [this, read](const std::vector<BlockKey>& reached,
                                   const std::vector<BlockKey>& pinned, size_t new_blocks) {
-    // As pageInKeys, with the backend's own blocks counted and its scan's blocks pinned: the
-    // scan runs on (the insertion holds sync_mutex_), nothing of it is applied yet.
-    size_t own = backend_->cache().blocksNotInHostMap();
-    std::vector<BlockKey> wanted = pager_->pagedOutOfRegions(reached, blocks_, nullptr);
-    const size_t incoming = wanted.size() + new_blocks;
+    // A stop inside the scan (its pass is redone after it): counted apart from the read-ahead.
     const auto t0 = std::chrono::steady_clock::now();
-    const bool round = pager_->excessOverBudget(blocks_.size() + own + incoming) > 0;
-    if (round) {
-      // The blocks earlier scans made on the device get their host blocks first, so that they
-      // can leave too (between commits they would fill the budget); this scan's, not applied
-      // yet, stay on the device.
-      backend_->cache().sync(blocks_);
-      own = backend_->cache().blocksNotInHostMap();
-      std::vector<BlockKey> held = pinned;
-      held.insert(held.end(), reached.begin(), reached.end());
-      const Eigen::Vector3d sensor = pager_->lastSensor();
-      std::vector<BlockIndex> out =
-          pager_->victims(blocks_, sensor, /*clean_only=*/true, own + incoming, &held);
-      if (pager_->excessOverBudget(blocks_.size() - out.size() + own + incoming) > 0)
-        out = pager_->victims(blocks_, sensor, /*clean_only=*/false, own + incoming, &held);
-      backend_->cache().forget(out, blocks_);
-      pager_->pageOut(out, blocks_);
-    }
-    const size_t needed = blocks_.size() + own + incoming;
-    // The rays stop at the budget's room (the pass is redone after this): a scan that still
-    // has no room for its new blocks beside the held records would never finish.
-    if (!pager_->dropRecordsToFit(needed) ||
-        pager_->roomFor(blocks_.size() + own + wanted.size()) < new_blocks)
-      throw scanTooLarge(needed, pager_->blockBytes(), pager_->policy().budget_mb);
-    if (round)
-      pager_->notePageOutSeconds(
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    pager_->reserveBlocks(own + new_blocks);
-    std::vector<BlockIndex> back;
-    try {
-      back = pager_->readBack(std::move(wanted), blocks_);
-    } catch (...) {
-      pager_->reserveBlocks(0);
-      throw;
-    }
-    pager_->reserveBlocks(0);
-    pager_->noteResident(blocks_.size() + own);
-    *read += back.size();
-    if (back.empty()) return;
-    blocks_.recomputeMasks(back, model_);  // the store keeps cells only
-    backend_->cache().added(back, blocks_);
-    bumpViewEpoch();
+    PagingStats& c = pager_->stageCounters();
+    const size_t back = makeDeviceRoom(reached, pinned, new_blocks, /*in_scan=*/true);
+    ++c.stops_in_scan;
+    c.blocks_read_in_scan += back;
+    c.seconds_in_scan += secondsSince(t0);
+    *read += back;
   };
   return paging;
+}
+
+size_t Map::makeDeviceRoom(const std::vector<BlockKey>& reached,
+                           const std::vector<BlockKey>& pinned, size_t new_blocks, bool in_scan) {
+  // As pageInKeys, with the backend's own blocks counted and its scan's blocks pinned: the
+  // scan runs on (the insertion holds sync_mutex_), nothing of it is applied yet.
+  PagingStats& counters = pager_->stageCounters();
+  size_t own = backend_->cache().blocksNotInHostMap();
+  std::vector<BlockKey> wanted = pager_->pagedOutOfRegions(reached, blocks_, nullptr);
+  const size_t incoming = wanted.size() + new_blocks;
+  const auto t0 = std::chrono::steady_clock::now();
+  const bool round = pager_->excessOverBudget(blocks_.size() + own + incoming) > 0;
+  if (round) {
+    // The blocks earlier scans made on the device get their host blocks first, so that they
+    // can leave too (between commits they would fill the budget); this scan's, not applied
+    // yet, stay on the device.
+    const auto t_sync = std::chrono::steady_clock::now();
+    backend_->cache().sync(blocks_);
+    const double sync_s = secondsSince(t_sync);
+    pager_->noteSyncSeconds(sync_s);
+    if (in_scan) counters.seconds_sync_in_scan += sync_s;
+    own = backend_->cache().blocksNotInHostMap();
+    std::vector<BlockKey> held = pinned;
+    held.insert(held.end(), reached.begin(), reached.end());
+    const Eigen::Vector3d sensor = pager_->lastSensor();
+    std::vector<BlockIndex> out =
+        pager_->victims(blocks_, sensor, /*clean_only=*/true, own + incoming, &held);
+    if (pager_->excessOverBudget(blocks_.size() - out.size() + own + incoming) > 0)
+      out = pager_->victims(blocks_, sensor, /*clean_only=*/false, own + incoming, &held);
+    const auto t_evict = std::chrono::steady_clock::now();
+    backend_->cache().forget(out, blocks_);
+    counters.seconds_evict += secondsSince(t_evict);
+    pager_->pageOut(out, blocks_);
+    ++(in_scan ? counters.rounds_in_scan : counters.rounds_between_scans);
+  }
+  const size_t needed = blocks_.size() + own + incoming;
+  // The rays stop at the budget's room (the pass is redone after this): a scan that still
+  // has no room for its new blocks beside the held records would never finish.
+  if (!pager_->dropRecordsToFit(needed) ||
+      pager_->roomFor(blocks_.size() + own + wanted.size()) < new_blocks)
+    throw scanTooLarge(needed, pager_->blockBytes(), pager_->policy().budget_mb);
+  if (round) pager_->notePageOutSeconds(secondsSince(t0));
+  pager_->reserveBlocks(own + new_blocks);
+  std::vector<BlockIndex> back;
+  try {
+    back = pager_->readBack(std::move(wanted), blocks_);
+  } catch (...) {
+    pager_->reserveBlocks(0);
+    throw;
+  }
+  pager_->reserveBlocks(0);
+  pager_->noteResident(blocks_.size() + own);
+  if (back.empty()) return 0;
+  blocks_.recomputeMasks(back, model_);  // the store keeps cells only
+  backend_->cache().added(back, blocks_);
+  bumpViewEpoch();
+  return back.size();
+}
+
+void Map::pageInAhead(const PointCloud& cloud, const ScanRecord& how, const BlockKey& lo,
+                      const BlockKey& hi, size_t* read) {
+  // The CPU path pages in exactly the blocks its rays mark before it applies any; the device's
+  // rays run on the device, so the regions they pass through are walked here first (at region
+  // granularity, every ray): the paged-out ones are read back and the resident ones pinned
+  // while room is made. A region the walk misses (rounding at a corner, a no-return ray) is
+  // still caught by the pass (a miss, read back, the pass redone).
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<BlockKey> paged_regions = pager_->pagedOutRegionsIn(lo, hi);
+  PagingStats& c = pager_->stageCounters();
+  if (paged_regions.empty()) {
+    c.seconds_reach += secondsSince(t0);
+    return;
+  }
+  const std::unordered_set<BlockKey, BlockKeyHash> paged(paged_regions.begin(),
+                                                         paged_regions.end());
+  const double region_m = params_.resolution_m * kBlockSize * (1 << kRegionBits);
+  const std::vector<BlockKey> regions =
+      regionsReached(cloud, how.T_map_sensor, how.model.max_range_m, region_m, regionOf(lo),
+                     regionOf(hi), params_.threads);
+  std::vector<BlockKey> reached, pinned;
+  for (const BlockKey& r : regions) (paged.count(r) ? reached : pinned).push_back(firstBlockOf(r));
+  c.seconds_reach += secondsSince(t0);
+  if (reached.empty()) return;
+  const auto t1 = std::chrono::steady_clock::now();
+  const size_t back = makeDeviceRoom(reached, pinned, /*new_blocks=*/0, /*in_scan=*/false);
+  ++c.scans_read_ahead;
+  c.blocks_read_ahead += back;
+  c.seconds_read_ahead += secondsSince(t1);
+  *read += back;
 }
 
 void Map::pageInAllBlocks() {
@@ -345,9 +401,12 @@ void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
   {
     // Only the leaving blocks' device copies go; the cache keeps the rest.
     std::lock_guard<std::mutex> lock(*sync_mutex_);
+    const auto t_evict = Clock::now();
     backend_->cache().forget(out, blocks_);
+    pager_->stageCounters().seconds_evict += secondsSince(t_evict);
   }
   pager_->pageOut(out, blocks_);
+  ++pager_->stageCounters().rounds_between_scans;
   (void)pager_->dropRecordsToFit(blocks_.size());
   releasePagedOutMemory();
   bumpViewEpoch();
