@@ -160,7 +160,9 @@ for name in runs:
     r = json.load(open(f"{out}/{name}.json")).get("rss_mib")
     if r:  # the build loop's peak, before the last commit and the -o write (--cmp)
         print(f"{name}: peak RSS of the build loop {r['peak_build_loop']:,.0f} MiB, before the "
-              f"first scan {r['before_first_scan']:,.0f} MiB (the process and the backend)")
+              f"first scan {r['before_first_scan']:,.0f} MiB (the process and the backend); at "
+              f"the loop's end anonymous {r.get('anon_loop_end', 0):,.0f}, files "
+              f"{r.get('file_loop_end', 0):,.0f}, shared {r.get('shmem_loop_end', 0):,.0f} MiB")
 if "paged" in runs:
     p = json.load(open(f"{out}/paged.json"))
     pg = p["paging"]
@@ -172,7 +174,8 @@ if "paged" in runs:
               f"({pg['scans_read_ahead']} scans, {pg['blocks_read_ahead']:,} blocks); "
               f"in-scan stops {pg['stops_in_scan']} ({pg['seconds_in_scan']:.2f} s, "
               f"{pg['blocks_read_in_scan']:,} blocks, sync {pg['seconds_sync_in_scan']:.2f}), "
-              f"passes redone {p['passes_redone']} ({p['seconds_redone']:.2f} s with the stops); "
+              f"passes redone {p['passes_redone']} ({p['passes_redone'] / max(1, p['scans']):.2f} a "
+              f"scan, {p['seconds_redone']:.2f} s with the stops); "
               f"store reads+decode {pg['seconds_page_in']:.2f}; device write-back (sync) "
               f"{pg['seconds_sync']:.2f}; page-out {pg['seconds_page_out']:.2f} (evict "
               f"{pg['seconds_evict']:.2f}, encode {pg['seconds_encode']:.2f}); rounds "

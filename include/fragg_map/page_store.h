@@ -177,8 +177,9 @@ struct PagingStats {
   double seconds_evict = 0;
   /// ... of it encoding the changed regions that leave (records held for the next commit)
   double seconds_encode = 0;
-  /// Paging rounds (blocks paged out to make room): after a scan, for the next one
-  /// (Map::pageAfterScan), and inside a scan (a read-back or the blocks it creates needed room).
+  /// Paging rounds (blocks paged out to make room): between scans (after one, for the next:
+  /// Map::pageAfterScan; or before a device's ray pass, for its read-ahead), and inside a scan
+  /// (the CPU backend's page-in of the blocks its rays mark, a device pass's stop).
   uint64_t rounds_between_scans = 0;
   uint64_t rounds_in_scan = 0;
   /// A device backend (the CUDA one): the scans whose rays reached a paged-out region before

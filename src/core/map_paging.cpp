@@ -238,15 +238,16 @@ size_t Map::makeDeviceRoom(const std::vector<BlockKey>& reached,
   size_t own = backend_->cache().blocksNotInHostMap();
   std::vector<BlockKey> wanted = pager_->pagedOutOfRegions(reached, blocks_, nullptr);
   const size_t incoming = wanted.size() + new_blocks;
-  const auto t0 = std::chrono::steady_clock::now();
   const bool round = pager_->excessOverBudget(blocks_.size() + own + incoming) > 0;
+  std::chrono::steady_clock::time_point t0;  // page-out: after the write-back (seconds_sync)
   if (round) {
     // The blocks earlier scans made on the device get their host blocks first, so that they
     // can leave too (between commits they would fill the budget); this scan's, not applied
     // yet, stay on the device.
     const auto t_sync = std::chrono::steady_clock::now();
     backend_->cache().sync(blocks_);
-    const double sync_s = secondsSince(t_sync);
+    t0 = std::chrono::steady_clock::now();
+    const double sync_s = std::chrono::duration<double>(t0 - t_sync).count();
     pager_->noteSyncSeconds(sync_s);
     if (in_scan) counters.seconds_sync_in_scan += sync_s;
     own = backend_->cache().blocksNotInHostMap();

@@ -31,14 +31,16 @@ namespace fragg::cli {
 namespace {
 using tools::percentile;
 
-/// The process's resident memory now (VmRSS), MiB; 0 where /proc is missing.
-double residentMib() {
+/// A line of /proc/self/status (`field`: "VmRSS", "RssAnon", "RssFile"...), MiB; 0 where
+/// /proc or the field is missing.
+double statusMib(const char* field) {
   std::FILE* f = std::fopen("/proc/self/status", "r");
   if (!f) return 0.0;
+  const std::string format = std::string(field) + ": %lf kB";
   char line[256];
   double kib = 0.0;
   while (std::fgets(line, sizeof line, f))
-    if (std::sscanf(line, "VmRSS: %lf kB", &kib) == 1) break;
+    if (std::sscanf(line, format.c_str(), &kib) == 1) break;
   std::fclose(f);
   return kib / 1024.0;
 }
@@ -206,7 +208,7 @@ void runBuild(const BuildOptions& o) {
   }();
 
   // The process before its first scan (the backend started: the CUDA runtime's share).
-  const double rss_open_mib = residentMib();
+  const double rss_open_mib = statusMib("VmRSS");
   Progress progress(source->size());
   InsertStats total;
   std::vector<double> ms_per_scan;
@@ -268,6 +270,10 @@ void runBuild(const BuildOptions& o) {
     throw IoError(fmt::format("{} holds {} scans but {} has only {}", o.page_store, resumed,
                               o.input, skipped_resumed));
   const double peak_rss_loop_mib = peakResidentMib();  // before the last commit and -o
+  // What is resident at the loop's end: anonymous memory (the map, buffers, the runtime's heap),
+  // mapped files (LMDB's map, libraries), shared memory.
+  const double rss_anon_mib = statusMib("RssAnon"), rss_file_mib = statusMib("RssFile"),
+               rss_shmem_mib = statusMib("RssShmem");
   map.commitPages();
   if (!o.output.empty()) map.save(o.output);
   const PagingStats paging = map.pagingStats();
@@ -307,7 +313,12 @@ void runBuild(const BuildOptions& o) {
         {"scans_skipped", source->skipped()},
         {"voxel_visits", total.voxel_visits},
         {"seconds", seconds},
-        {"rss_mib", {{"before_first_scan", rss_open_mib}, {"peak_build_loop", peak_rss_loop_mib}}},
+        {"rss_mib",
+         {{"before_first_scan", rss_open_mib},
+          {"peak_build_loop", peak_rss_loop_mib},
+          {"anon_loop_end", rss_anon_mib},
+          {"file_loop_end", rss_file_mib},
+          {"shmem_loop_end", rss_shmem_mib}}},
         {"passes_redone", total.passes_redone},
         {"seconds_redone", total.seconds_redone},
         {"seconds_residency", total.seconds_residency},
