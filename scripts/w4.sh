@@ -106,7 +106,10 @@ build in_memory -o "$out/in_memory.fgm"
 runs=(in_memory)
 checks=()
 if [ "$paged" = 1 ]; then
-  if "$fm" build --help | grep -q -- '--page-store'; then
+  # The help read whole first: `grep -q` stops at its first match, fragg_map then dies of
+  # SIGPIPE and pipefail made the test false (the paged build was skipped).
+  build_help="$("$fm" build --help 2>&1 || true)"
+  if grep -q -- '--page-store' <<<"$build_help"; then
     # The store is the map: no .fgm is written (that would page every block back in) unless
     # --cmp asks for it.
     rm -f "$out/w4_pages.$store_ext"* "$out/paged.fgm"
