@@ -264,14 +264,24 @@ size_t Map::makeDeviceRoom(const std::vector<BlockKey>& reached,
     pager_->pageOut(out, blocks_);
     ++(in_scan ? counters.rounds_in_scan : counters.rounds_between_scans);
   }
-  const size_t needed = blocks_.size() + own + incoming;
-  // The rays stop at the budget's room (the pass is redone after this): a scan that still
-  // has no room for its new blocks beside the held records would never finish.
-  if (!pager_->dropRecordsToFit(needed) ||
-      pager_->roomFor(blocks_.size() + own + wanted.size()) < new_blocks)
-    throw scanTooLarge(needed, pager_->blockBytes(), pager_->policy().budget_mb);
   if (round) pager_->notePageOutSeconds(secondsSince(t0));
-  pager_->reserveBlocks(own + new_blocks);
+  if (in_scan) {
+    const size_t needed = blocks_.size() + own + incoming;
+    // The rays stop at the budget's room (the pass is redone after this): a scan that still
+    // has no room for its new blocks beside the held records would never finish.
+    if (!pager_->dropRecordsToFit(needed) ||
+        pager_->roomFor(blocks_.size() + own + wanted.size()) < new_blocks)
+      throw scanTooLarge(needed, pager_->blockBytes(), pager_->policy().budget_mb);
+  } else {
+    // Ahead of the pass `new_blocks` is an estimate: room made for it where it can be. When
+    // the reads themselves do not fit beside the held records nothing is read ahead: the pass
+    // stops for them and decides (reads with the room it makes, or refuses the scan).
+    const size_t resident = blocks_.size() + own;
+    if (!pager_->dropRecordsToFit(resident + wanted.size()) ||
+        pager_->roomFor(resident) < wanted.size())
+      return 0;
+  }
+  pager_->reserveBlocks(own + (in_scan ? new_blocks : 0));
   std::vector<BlockIndex> back;
   try {
     back = pager_->readBack(std::move(wanted), blocks_);
@@ -313,8 +323,12 @@ void Map::pageInAhead(const PointCloud& cloud, const ScanRecord& how, const Bloc
   c.seconds_reach += secondsSince(t0);
   if (reached.empty()) return;
   const auto t1 = std::chrono::steady_clock::now();
-  const size_t back = makeDeviceRoom(reached, pinned, /*new_blocks=*/0, /*in_scan=*/false);
-  ++c.scans_read_ahead;
+  // Room for the blocks the rays will create too, as many as the last scan brought in (as
+  // Map::pageAfterScan reckons): the pass then rarely stops for the budget's room, and a round
+  // needed here runs with every region the rays reach held.
+  const size_t back =
+      makeDeviceRoom(reached, pinned, pager_->lastScanIncoming(), /*in_scan=*/false);
+  c.scans_read_ahead += back > 0;
   c.blocks_read_ahead += back;
   c.seconds_read_ahead += secondsSince(t1);
   *read += back;
