@@ -57,7 +57,8 @@ void walkSegment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const int64
 
 std::vector<BlockKey> regionsReached(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                                      double max_range_m, double region_m, const BlockKey& region_lo,
-                                     const BlockKey& region_hi, int threads, size_t max_regions) {
+                                     const BlockKey& region_hi, int threads, size_t max_rays,
+                                     size_t max_regions) {
   std::vector<BlockKey> out;
   const int64_t lo[3] = {region_lo.x, region_lo.y, region_lo.z};
   const int64_t size[3] = {int64_t{region_hi.x} - region_lo.x + 1,
@@ -69,14 +70,16 @@ std::vector<BlockKey> regionsReached(const PointCloud& cloud, const Eigen::Isome
   const size_t n_cells = static_cast<size_t>(cells);
   const Eigen::Matrix3d R = T_map_sensor.linear();
   const Eigen::Vector3d origin = T_map_sensor.translation() / region_m;
-  const long n = static_cast<long>(cloud.points_S.size());
+  const size_t points = cloud.points_S.size();
+  const size_t stride = max_rays > 0 && points > max_rays ? (points + max_rays - 1) / max_rays : 1;
+  const long n = static_cast<long>((points + stride - 1) / stride);  // rays walked
   std::vector<uint8_t> grid(n_cells, 0);
 #pragma omp parallel num_threads(threadCount(threads))
   {
     std::vector<uint8_t> mine(n_cells, 0);
 #pragma omp for schedule(static)
     for (long i = 0; i < n; ++i) {
-      const Eigen::Vector3f& p = cloud.points_S[static_cast<size_t>(i)];
+      const Eigen::Vector3f& p = cloud.points_S[static_cast<size_t>(i) * stride];
       if (!p.allFinite()) continue;
       Eigen::Vector3d d = p.cast<double>();
       const double r = d.norm();

@@ -99,6 +99,25 @@ TEST(RegionReach, EqualsBruteForceSegmentBoxTest) {
   }));
 }
 
+TEST(RegionReach, ASampleOfTheRaysWalksEveryKthPoint) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-9.0f, 9.0f);
+  PointCloud cloud, sample;
+  for (int i = 0; i < 1000; ++i) cloud.points_S.emplace_back(u(rng), u(rng), 0.3f * u(rng));
+  for (size_t i = 0; i < cloud.points_S.size(); i += 4)
+    sample.points_S.push_back(cloud.points_S[i]);
+  const Eigen::Isometry3d T = pose();
+  const BlockKey lo{-8, -9, -4}, hi{8, 6, 4};
+  // 1000 points, at most 250 rays: every 4th point.
+  const KeySet sampled = setOf(regionsReached(cloud, T, 0.0, 1.6, lo, hi, 2, 250));
+  EXPECT_EQ(sampled, setOf(regionsReached(sample, T, 0.0, 1.6, lo, hi, 2)));
+  const KeySet all = setOf(regionsReached(cloud, T, 0.0, 1.6, lo, hi, 2));
+  EXPECT_LT(sampled.size(), all.size());  // a sample: some regions only the others reach
+  EXPECT_TRUE(std::includes(all.begin(), all.end(), sampled.begin(), sampled.end()));
+  // A limit above the point count walks every ray.
+  EXPECT_EQ(setOf(regionsReached(cloud, T, 0.0, 1.6, lo, hi, 2, 5000)), all);
+}
+
 TEST(RegionReach, PointsBeyondMaxRangeEndThere) {
   PointCloud cloud;
   cloud.points_S.emplace_back(20.0f, 0.1f, 0.1f);  // along +x, beyond a 5 m range
@@ -115,7 +134,7 @@ TEST(RegionReach, BoxTooLargeOrEmptyGivesNothing) {
   PointCloud cloud;
   cloud.points_S.emplace_back(2.5f, 0.5f, 0.5f);
   const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  EXPECT_TRUE(regionsReached(cloud, T, 0.0, 1.0, {0, 0, 0}, {99, 99, 99}, 1, 1000).empty());
+  EXPECT_TRUE(regionsReached(cloud, T, 0.0, 1.0, {0, 0, 0}, {99, 99, 99}, 1, 0, 1000).empty());
   EXPECT_TRUE(regionsReached(cloud, T, 0.0, 1.0, {3, 0, 0}, {2, 9, 9}, 1).empty());
   EXPECT_EQ(regionsReached(cloud, T, 0.0, 1.0, {0, 0, 0}, {9, 9, 9}, 1).size(), 3u);
 }
