@@ -238,21 +238,25 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   params.clear_no_return_rays = how.clear_no_return_rays;
   params.free_cut_cell = how.free_cut_cell;
   InsertStats stats;
-  PageInKeys page_in;
+  PageInKeys page_in, page_in_around;
   PagedOutSaturated paged_out_saturated;
   DevicePaging device_paging;  // set for a backend that reports the blocks its rays reach
   size_t device_read = 0;
+  BlockKey lo, hi;  // the rays' block box (paging)
   if (pager_) {
     // Every block the rays can reach is resident before the backend creates one: the CPU
     // backend asks for exactly the blocks its rays mark, the CUDA backend for the blocks its
     // rays reach; any other backend (and a removal, which creates none) gets the scan's whole
     // box first.
-    BlockKey lo, hi;
     rayBlockBounds(cloud, how, params_.resolution_m, &lo, &hi);
     const bool reports = backend_->reportsReachedBlocks();
     if (!remove && (backend_->pagesInMarkedBlocks() || reports)) {
       pager_->touch(lo, hi, scans_ + 1);
       page_in = [this](const std::vector<BlockKey>& keys) { pageInKeys(keys); };
+      if (params_.dynamic.enabled)
+        page_in_around = [this](const std::vector<BlockKey>& keys) {
+          pageInKeysAndNeighbours(keys);
+        };
       const Pager* pager = pager_.get();
       paged_out_saturated = [pager](const BlockKey& key) {
         return pager->isPagedOutSaturated(key);
@@ -282,6 +286,7 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   UpdateSettings settings{params, model_, revision_ + 1, page_in ? &page_in : nullptr,
                           page_in ? &paged_out_saturated : nullptr};
   if (device_paging.make_room) settings.device_paging = &device_paging;
+  if (page_in_around) settings.page_in_around = &page_in_around;
   settings.stage_next = stage_next;
   settings.stage_next_auto_stats = stage_next_auto_stats;
   const ScanUpdate what = remove ? ScanUpdate::kRemove : ScanUpdate::kIntegrate;
@@ -294,6 +299,9 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
       backend_->integrate(scan, settings, blocks_, into);
   };
   try {
+    // The regions the device's rays pass through are paged in before its pass (the misses
+    // that redo it are then rare), as the CPU backend pages in what its rays mark.
+    if (settings.device_paging) pageInAhead(cloud, how, lo, hi, &device_read);
     run(stats);
   } catch (const CudaOutOfMemory& e) {
     // The device backend applies a scan all at once or not at all: the map is intact.

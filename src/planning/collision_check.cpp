@@ -116,8 +116,11 @@ std::vector<CollisionResult> checkOnCuda(const Map& map, DeviceScratch& scratch,
         checker->checkPrimitives(obstacles, T_map_shape.size(), map.resolution(),
                                  0.5 * map.resolution() - kTouchEpsilon_m, options.count_cells);
   }
+  const int64_t count = static_cast<int64_t>(answers.size());
   std::vector<CollisionResult> results(answers.size());
-  for (size_t i = 0; i < answers.size(); ++i) results[i] = resultOf(answers[i]);
+#pragma omp parallel for schedule(static) \
+    num_threads(threadCount(options.threads)) if (count > 16384)
+  for (int64_t i = 0; i < count; ++i) results[i] = resultOf(answers[i]);
   return results;
 }
 
