@@ -329,6 +329,9 @@ class Map {
   void pageInAllBlocks();
   /// Pages in the blocks of `keys` that are paged out (the backend's exact page-in).
   void pageInKeys(const std::vector<BlockKey>& keys);
+  /// pageInKeys for `keys` and the 26 blocks around each that exist (resident or paged out):
+  /// the blocks MapParams::dynamic's rules read around the cells a scan touches.
+  void pageInKeysAndNeighbours(const std::vector<BlockKey>& keys);
   /// Paging for a backend that reports the blocks its rays reach (DevicePaging, map_paging.cpp);
   /// `*read` counts the blocks it reads back.
   DevicePaging devicePaging(size_t* read);

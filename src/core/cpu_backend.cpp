@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
+#include <tuple>
+#include <vector>
 
 #include "fragg_map/internal/decay.h"
 #include "fragg_map/internal/dynamic_classifier.h"
@@ -106,6 +108,26 @@ void scanBlockBounds(const PreparedScan& scan, BlockKey* lo, BlockKey* hi) {
 }
 }  // namespace
 
+namespace {
+/// The blocks of a prepared scan's hit cells, each once.
+std::vector<BlockKey> hitBlockKeys(const PreparedScan& scan) {
+  std::vector<BlockKey> keys;
+  for (size_t r = 0; r < scan.rays.size(); ++r) {
+    if (!isHitCode(scan.rays[r].hit)) continue;
+    const BlockKey k =
+        blockKeyOf(VoxelKey{scan.ref.x + scan.endCell(r, 0), scan.ref.y + scan.endCell(r, 1),
+                            scan.ref.z + scan.endCell(r, 2)});
+    if (keys.empty() || !(keys.back() == k)) keys.push_back(k);
+  }
+  const auto less = [](const BlockKey& a, const BlockKey& b) {
+    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+  };
+  std::sort(keys.begin(), keys.end(), less);
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  return keys;
+}
+}  // namespace
+
 void CpuBackend::update(const ScanInput& in, ScanUpdate what, const UpdateSettings& how,
                         BlockMap& blocks, InsertStats& stats) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -113,6 +135,9 @@ void CpuBackend::update(const ScanInput& in, ScanUpdate what, const UpdateSettin
               prepared_, stats);
   dynamic_points_S_.clear();
   if (how.params.dynamic.enabled && what == ScanUpdate::kIntegrate) {
+    // Paging: the hits' blocks and those around them back first (the rule reads a hit's
+    // neighbourhood; paging in changes no cell).
+    if (how.page_in_around) (*how.page_in_around)(hitBlockKeys(prepared_));
     // Hits in void space become free-only rays before any cell changes (the map as it was).
     classifyDynamicHits(prepared_, blocks,
                         DynamicRule::fromParams(how.params.dynamic, how.params.occupancy),
@@ -200,6 +225,13 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
   const bool dynamic = how.params.dynamic.enabled && !remove;
   const bool pass_through = dynamic && !rule.surround;
   const bool surround = dynamic && rule.surround;
+  if (dynamic && page_in && how.page_in_around) {
+    // Paging: the rules read the touched blocks and the 26 around each, so those come back
+    // before them (the marked blocks among them, as below).
+    std::vector<BlockKey> keys(static_cast<size_t>(touched));
+    for (long j = 0; j < touched; ++j) keys[j] = merged.touched(j).key;
+    (*how.page_in_around)(keys);
+  }
   std::vector<uint64_t> resets(pass_through ? static_cast<size_t>(touched) * kStateMaskWords : 0);
   if (pass_through) {
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 64)

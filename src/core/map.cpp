@@ -249,7 +249,7 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   params.clear_no_return_rays = how.clear_no_return_rays;
   params.free_cut_cell = how.free_cut_cell;
   InsertStats stats;
-  PageInKeys page_in;
+  PageInKeys page_in, page_in_around;
   PagedOutSaturated paged_out_saturated;
   DevicePaging device_paging;  // set for a backend that reports the blocks its rays reach
   size_t device_read = 0;
@@ -264,6 +264,10 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
     if (!remove && (backend_->pagesInMarkedBlocks() || reports)) {
       pager_->touch(lo, hi, scans_ + 1);
       page_in = [this](const std::vector<BlockKey>& keys) { pageInKeys(keys); };
+      if (params_.dynamic.enabled)
+        page_in_around = [this](const std::vector<BlockKey>& keys) {
+          pageInKeysAndNeighbours(keys);
+        };
       const Pager* pager = pager_.get();
       paged_out_saturated = [pager](const BlockKey& key) {
         return pager->isPagedOutSaturated(key);
@@ -293,6 +297,7 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   UpdateSettings settings{params, model_, revision_ + 1, page_in ? &page_in : nullptr,
                           page_in ? &paged_out_saturated : nullptr};
   if (device_paging.make_room) settings.device_paging = &device_paging;
+  if (page_in_around) settings.page_in_around = &page_in_around;
   settings.stage_next = stage_next;
   settings.stage_next_auto_stats = stage_next_auto_stats;
   const ScanUpdate what = remove ? ScanUpdate::kRemove : ScanUpdate::kIntegrate;

@@ -3,8 +3,11 @@
 #ifdef __GLIBC__
 #include <malloc.h>
 #endif
+#include <algorithm>
 #include <cmath>
 #include <string>
+#include <tuple>
+#include <vector>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/backend.h"
@@ -148,6 +151,28 @@ void Map::pageInBlocks(const BlockKey& lo, const BlockKey& hi) {
   blocks_.recomputeMasks(read, model_);  // the store keeps cells only
   backend_->cache().added(read, blocks_);
   bumpViewEpoch();
+}
+
+void Map::pageInKeysAndNeighbours(const std::vector<BlockKey>& keys) {
+  if (!pager_) return;
+  // Neighbours that exist nowhere stay out: pageInKeys counts a missing key as a block the
+  // scan creates (room is reserved for it).
+  std::vector<BlockKey> all(keys);
+  all.reserve(keys.size() * 2);
+  for (const BlockKey& k : keys)
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (dx == 0 && dy == 0 && dz == 0) continue;
+          const BlockKey n{k.x + dx, k.y + dy, k.z + dz};
+          if (blocks_.find(n) != kNoBlock || pager_->isPagedOut(n)) all.push_back(n);
+        }
+  const auto less = [](const BlockKey& a, const BlockKey& b) {
+    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+  };
+  std::sort(all.begin(), all.end(), less);
+  all.erase(std::unique(all.begin(), all.end()), all.end());
+  pageInKeys(all);
 }
 
 void Map::pageInKeys(const std::vector<BlockKey>& keys) {

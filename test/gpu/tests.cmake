@@ -26,6 +26,7 @@ endif()
 if(TARGET fragg_map_store)
   fragg_add_test(fragg_gpu_paging_test
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/paging_gpu_test.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/dynamic_paging_gpu_test.cpp
     LIBS fragg_map_store
     LABELS gpu paging)
 endif()

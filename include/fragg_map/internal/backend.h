@@ -140,6 +140,11 @@ struct UpdateSettings {
   const PageInKeys* page_in = nullptr;
   /// With page_in: see PagedOutSaturated (null: no such block is known).
   const PagedOutSaturated* paged_out_saturated = nullptr;
+  /// With page_in and MapParams::dynamic: page_in for `keys` and the 26 blocks around each
+  /// that exist, resident or paged out (the void rules read the map around the cells a scan
+  /// touches: the hits' neighbourhoods before the scan, the passed-through blocks' after its
+  /// rays); called before the rules read the map.
+  const PageInKeys* page_in_around = nullptr;
   /// Paging on a backend that reports the blocks its rays reach (null: no paging, or the map
   /// paged in the scan's whole box first). Set beside page_in, which such a backend ignores but
   /// for the scans it hands to the CPU backend.
