@@ -519,6 +519,13 @@ ServerParams parseKnown(const XmlRpcValue& root) {
   asParameters([&] { m.validate(); });
 
   readSensor(root, p);
+  // The points an unorganised cloud loses to the height band would read as beams with no
+  // return (Map::insert refuses every such cloud): refused once, at start-up.
+  if (m.clear_no_return_rays && !p.sensor.lidar_beams.empty() && m.height_filter.active())
+    badParam("sensor/lidar_height",
+             "(a beam table with clear_no_return_rays) cannot be combined with "
+             "pointcloud_min_z / pointcloud_max_z: points cut by the band would read as no "
+             "returns");
 
   readDouble(root, "occupancy_min_z", &p.occupancy_min_z_m);
   readDouble(root, "occupancy_max_z", &p.occupancy_max_z_m);

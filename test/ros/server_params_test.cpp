@@ -340,6 +340,12 @@ TEST(ServerParams, LidarBeamTable) {
   set(unordered, "sensor/lidar_height", 0);
   EXPECT_NE(rejection(unordered).find("sensor/lidar_ring_elevations"), std::string::npos)
       << rejection(unordered);
+  XmlRpcValue banded = root;
+  set(banded, "clear_no_return_rays", true);
+  set(banded, "pointcloud_min_z", 0.2);
+  EXPECT_NE(rejection(banded).find("pointcloud_min_z"), std::string::npos) << rejection(banded);
+  set(banded, "clear_no_return_rays", false);
+  EXPECT_EQ(fragg::ros::parseParameters(banded).sensor.lidar_beams.rings(), 16u);
   XmlRpcValue auto_even;
   set(auto_even, "sensor/lidar_height", 16);
   set(auto_even, "sensor/lidar_width", 1800);
