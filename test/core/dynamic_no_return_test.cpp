@@ -4,7 +4,7 @@
 // brute-force reference: the same returns plus a free-only point at twice max range along each
 // beam no return falls in (bins found by an exhaustive nearest-angle search), inserted with the
 // option off. Bad beam tables are refused with the field named and the map left as it was; the
-// option leaves organised clouds and clouds without a table as they were.
+// option leaves clouds without a table as they were; a kept scan with a table is not removable.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -183,6 +183,19 @@ TEST(NoReturnBeams, OptionOffOrNoTableLeavesTheMapAsBefore) {
   EXPECT_EQ(s.rays_no_return, 0u);
   test::expectSameMap(with_table_off, plain_off, "table, option off");
   test::expectSameMap(no_table_on, plain_off, "option on, no table");
+}
+
+// The scan store keeps points, not the beam table: such a scan cannot be walked again, and
+// removing it is refused with the map left as it was.
+TEST(NoReturnBeams, KeptScanWithBeamTableIsNotRemovable) {
+  MapParams p = params(true);
+  p.scans.keep = true;
+  Map map(p), before(p);
+  const InsertStats s = map.insert(unorganisedScan(), pose(), lidar());
+  before.insert(unorganisedScan(), pose(), lidar());
+  EXPECT_GT(s.rays_no_return, 0u);
+  EXPECT_THROW(map.remove(s.scan_id), InvalidArgument);
+  test::expectSameMap(map, before, "after the refused removal");
 }
 
 TEST(NoReturnBeams, EvenlySpacedRingsSpanTheElevations) {
