@@ -4,15 +4,10 @@
 #include <chrono>
 #include <string>
 
+#include "fragg_map/internal/seconds_since.h"
 #include "kernels.h"
 
 namespace fragg::cuda {
-
-namespace {
-double secondsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-}  // namespace
 
 CudaIntegrator::CudaIntegrator(cudaStream_t stream, DeviceBlockCache& cache, int sm_count,
                                int host_threads)
@@ -50,7 +45,7 @@ bool CudaIntegrator::update(const ScanInput& in, ScanUpdate what, const UpdateSe
   uint32_t created = 0;
   try {
     if (dynamic) classifyDynamicHits(in, how, blocks, host_only, stats);
-    created = rayAndApply(what, how, blocks, std::move(host_only));
+    created = rayAndApply(what, how, blocks, std::move(host_only), stats);
   } catch (const CudaOutOfMemory&) {
     throw;  // the map drops the cache and runs the scan on the CPU
   } catch (...) {
@@ -138,8 +133,10 @@ void CudaIntegrator::classifyDynamicHits(const ScanInput& in, const UpdateSettin
   // host-only block listed it; it is uploaded and the pass runs again.
   // Paging: the regions paged out are read like host-only blocks (read back when missed).
   const DevicePaging* paging = how.device_paging;
+  std::chrono::steady_clock::time_point first_pass_done;
   for (int attempt = 0;; ++attempt) {
     if (attempt > 8) throw CudaError("dynamic classification did not converge (residency bug)");
+    if (attempt > 0) ++stats.passes_redone;
     std::vector<std::pair<BlockKey, BlockKey>> paged_out;
     if (paging) paged_out = paging->paged_out_regions(window_.lo(), window_.hi());
     scan_.reserveMisses(window_.fill(cache_.arrays(), host_only, paged_out));
@@ -149,7 +146,11 @@ void CudaIntegrator::classifyDynamicHits(const ScanInput& in, const UpdateSettin
     FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
     if (c.outside_window != 0)
       throw CudaError("dynamic classification left the window table: residency bug");
-    if (c.misses == 0) break;
+    if (attempt == 0) first_pass_done = std::chrono::steady_clock::now();
+    if (c.misses == 0) {
+      if (attempt > 0) stats.seconds_redone += secondsSince(first_pass_done);
+      break;
+    }
     resolveMissesAndOverflow(blocks, paging);
     host_only = hostOnlyInWindow(blocks);
     c.misses = 0;
@@ -174,7 +175,7 @@ void CudaIntegrator::classifyDynamicHits(const ScanInput& in, const UpdateSettin
 }
 
 uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how, BlockMap& blocks,
-                                     std::vector<BlockKey> host_only) {
+                                     std::vector<BlockKey> host_only, InsertStats& stats) {
   ScanCounters& c = scan_.counters();
   // Paging: the regions paged out are missed like host-only blocks (paged in when a ray
   // reaches them), and the rays create no more blocks than the budget has room for.
@@ -184,8 +185,10 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
   // MapParams::dynamic: only the void test lacked blocks, the rays' marks and touched list are
   // complete: the next attempt runs the void test and the apply, not the ray pass again.
   bool marks_complete = false;
+  std::chrono::steady_clock::time_point first_pass_done;
   for (int attempt = 0;; ++attempt) {
     if (attempt > 8) throw CudaError("ray pass did not converge (residency bug)");
+    if (attempt > 0) ++stats.passes_redone;
     std::vector<std::pair<BlockKey, BlockKey>> paged_out;
     if (paging) paged_out = paging->paged_out_regions(window_.lo(), window_.hi());
     scan_.reserveMisses(window_.fill(cache_.arrays(), host_only, paged_out));
@@ -245,7 +248,11 @@ uint32_t CudaIntegrator::rayAndApply(ScanUpdate what, const UpdateSettings& how,
                       " cells): residency bug");
     // The slots the rays took are resident blocks, device-only until written back.
     created += cache_.adoptDeviceSlots(std::max(c.free_top, floor));
-    if (c.applied) return created;
+    if (attempt == 0) first_pass_done = std::chrono::steady_clock::now();
+    if (c.applied) {
+      if (attempt > 0) stats.seconds_redone += secondsSince(first_pass_done);
+      return created;
+    }
     // The pass is redone from a clean count: the marks and allocations stay (touched slots
     // are stamped: never evicted to make room).
     marks_complete = dynamic_on && c.overflow == 0 && c.misses == c.void_misses;

@@ -49,9 +49,9 @@ class CudaIntegrator {
   /// The dynamic kernels' arguments for this scan's window and rule.
   DynamicPassArgs dynamicArgs(const UpdateSettings& how) const;
   /// Ray pass, touched list and apply until a pass runs without a miss or an overflow.
-  /// Returns the number of blocks the rays created.
+  /// Returns the number of blocks the rays created; counts the passes redone in `stats`.
   uint32_t rayAndApply(ScanUpdate what, const UpdateSettings& how, BlockMap& blocks,
-                       std::vector<BlockKey> host_only);
+                       std::vector<BlockKey> host_only, InsertStats& stats);
   /// DeviceScan::stageAhead(), skipped when the device has no room for it.
   void stageNext(const PointCloud& cloud, bool auto_stats);
   /// After a pass that missed host-only blocks or ran out of slots: uploads the missed blocks

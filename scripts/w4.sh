@@ -106,7 +106,10 @@ build in_memory -o "$out/in_memory.fgm"
 runs=(in_memory)
 checks=()
 if [ "$paged" = 1 ]; then
-  if "$fm" build --help | grep -q -- '--page-store'; then
+  # The help read whole first: `grep -q` stops at its first match, fragg_map then dies of
+  # SIGPIPE and pipefail made the test false (the paged build was skipped).
+  build_help="$("$fm" build --help 2>&1 || true)"
+  if grep -q -- '--page-store' <<<"$build_help"; then
     # The store is the map: no .fgm is written (that would page every block back in) unless
     # --cmp asks for it.
     rm -f "$out/w4_pages.$store_ext"* "$out/paged.fgm"
@@ -156,7 +159,32 @@ for name in runs:
     print(f"| {name} | {j['scans']} | {wall_s:.1f} | {j['seconds']:.1f} | "
           f"{j['scans'] / j['seconds']:.2f} | {rss_mib:,.0f} | {j['host_bytes'] / 2**20:,.0f} | "
           f"{j['blocks']:,} | {paging or '-'} |")
+for name in runs:
+    r = json.load(open(f"{out}/{name}.json")).get("rss_mib")
+    if r:  # the build loop's peak, before the last commit and the -o write (--cmp)
+        print(f"{name}: peak RSS of the build loop {r['peak_build_loop']:,.0f} MiB, before the "
+              f"first scan {r['before_first_scan']:,.0f} MiB (the process and the backend); at "
+              f"the loop's end anonymous {r.get('anon_loop_end', 0):,.0f}, files "
+              f"{r.get('file_loop_end', 0):,.0f}, shared {r.get('shmem_loop_end', 0):,.0f} MiB")
 if "paged" in runs:
+    p = json.load(open(f"{out}/paged.json"))
+    pg = p["paging"]
+    if "stops_in_scan" in pg:
+        # Where the paged build's time goes, summed over its scans.
+        print(f"paged stages (s): ray pass {p['seconds_raycast']:.2f}, apply "
+              f"{p['seconds_apply']:.2f}, residency {p['seconds_residency']:.2f}; read-ahead "
+              f"walk {pg['seconds_reach']:.2f}, read-ahead {pg['seconds_read_ahead']:.2f} "
+              f"({pg['scans_read_ahead']} scans, {pg['blocks_read_ahead']:,} blocks); "
+              f"in-scan stops {pg['stops_in_scan']} ({pg['seconds_in_scan']:.2f} s, "
+              f"{pg['blocks_read_in_scan']:,} blocks, sync {pg['seconds_sync_in_scan']:.2f}), "
+              f"passes redone {p['passes_redone']} ({p['passes_redone'] / max(1, p['scans']):.2f} a "
+              f"scan, {p['seconds_redone']:.2f} s with the stops); "
+              f"store reads+decode {pg['seconds_page_in']:.2f}; device write-back (sync) "
+              f"{pg['seconds_sync']:.2f}; page-out {pg['seconds_page_out']:.2f} (evict "
+              f"{pg['seconds_evict']:.2f}, encode {pg['seconds_encode']:.2f}); rounds "
+              f"{pg['rounds_between_scans']} between scans, {pg['rounds_in_scan']} in scans; "
+              f"commits {pg['seconds_commit']:.2f} on the map's thread, writer "
+              f"{pg['seconds_writer']:.2f}")
     mem = json.load(open(f"{out}/in_memory.json"))["seconds"]
     paged = json.load(open(f"{out}/paged.json"))["seconds"]
     print(f"paged throughput: {100 * mem / paged:.1f} % of in-memory (build loops {paged:.2f} "

@@ -35,6 +35,12 @@ struct InsertStats {
   /// CUDA: 1 when the scan's points went up while the device worked on the update before
   /// (UpdateSettings::stage_next: Map::insertSequence, Map::correctPoses).
   uint64_t scans_staged = 0;
+  /// CUDA: ray passes (and dynamic classification passes) run again after one stopped on a
+  /// block it lacked (host-only, or in a paged-out region) or on a full pool / budget, and the
+  /// time from the end of the scan's first pass to the end of its last (the stops' uploads and
+  /// paging included).
+  uint64_t passes_redone = 0;
+  double seconds_redone = 0;
   CullCounters culling;
   double seconds_total = 0;
   double seconds_prepare = 0;    ///< transform + filter (+ dynamic classification)

@@ -335,6 +335,15 @@ class Map {
   /// Paging for a backend that reports the blocks its rays reach (DevicePaging, map_paging.cpp);
   /// `*read` counts the blocks it reads back.
   DevicePaging devicePaging(size_t* read);
+  /// DevicePaging::make_room's work (`in_scan`: a stop inside the scan, else the read-ahead);
+  /// returns the blocks read back.
+  size_t makeDeviceRoom(const std::vector<BlockKey>& reached, const std::vector<BlockKey>& pinned,
+                        size_t new_blocks, bool in_scan);
+  /// Paging on a device backend, before its ray pass: reads back the paged-out regions the
+  /// scan's rays pass through (walked on the host, region_reach.h; [lo, hi] their block box),
+  /// making room with the regions they reach held; `*read` counts the blocks read back.
+  void pageInAhead(const PointCloud& cloud, const ScanRecord& how, const BlockKey& lo,
+                   const BlockKey& hi, size_t* read);
   /// Paging after a scan (or removal): commits when due or over budget, then pages out.
   void pageAfterScan(const Eigen::Vector3d& sensor_map);
   /// After paging out: the memory of the blocks that left goes back to the system.

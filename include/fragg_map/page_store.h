@@ -173,7 +173,31 @@ struct PagingStats {
   /// paging round (the CPU backend writes the host map directly: 0)
   double seconds_sync = 0;
   double seconds_page_out = 0;  ///< time choosing the blocks that leave and dropping them
-  uint64_t store_bytes = 0;     ///< on disk
+  /// ... of it dropping the leaving blocks' device copies (written back first when changed)
+  double seconds_evict = 0;
+  /// ... of it encoding the changed regions that leave (records held for the next commit)
+  double seconds_encode = 0;
+  /// Paging rounds (blocks paged out to make room): between scans (after one, for the next:
+  /// Map::pageAfterScan; or before a device's ray pass, for its read-ahead), and inside a scan
+  /// (the CPU backend's page-in of the blocks its rays mark, a device pass's stop).
+  uint64_t rounds_between_scans = 0;
+  uint64_t rounds_in_scan = 0;
+  /// A device backend (the CUDA one): the scans whose rays reached a paged-out region before
+  /// the ray pass (walked on the host, Map::pageInAhead), the blocks read back for them, the
+  /// walk's time and the reads' (with the rounds that made room for them).
+  uint64_t scans_read_ahead = 0;
+  uint64_t blocks_read_ahead = 0;
+  double seconds_reach = 0;
+  double seconds_read_ahead = 0;
+  /// A device backend: the times a scan's pass stopped for paging (a ray reached a paged-out
+  /// region the walk missed, or the budget had no room for its new blocks; each costs a pass
+  /// redone: InsertStats::passes_redone), the blocks read back then, and the time in those stops
+  /// (rounds, read-backs), of it writing the device's changes back (also in seconds_sync).
+  uint64_t stops_in_scan = 0;
+  uint64_t blocks_read_in_scan = 0;
+  double seconds_in_scan = 0;
+  double seconds_sync_in_scan = 0;
+  uint64_t store_bytes = 0;  ///< on disk
 };
 
 }  // namespace fragg

@@ -19,6 +19,8 @@ void InsertStats::add(const InsertStats& o) {
   blocks_uploaded += o.blocks_uploaded;
   blocks_evicted += o.blocks_evicted;
   scans_staged += o.scans_staged;
+  passes_redone += o.passes_redone;
+  seconds_redone += o.seconds_redone;
   culling.add(o.culling);
   seconds_total += o.seconds_total;
   seconds_prepare += o.seconds_prepare;

@@ -253,12 +253,12 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
   PagedOutSaturated paged_out_saturated;
   DevicePaging device_paging;  // set for a backend that reports the blocks its rays reach
   size_t device_read = 0;
+  BlockKey lo, hi;  // the rays' block box (paging)
   if (pager_) {
     // Every block the rays can reach is resident before the backend creates one: the CPU
     // backend asks for exactly the blocks its rays mark, the CUDA backend for the blocks its
     // rays reach; any other backend (and a removal, which creates none) gets the scan's whole
     // box first.
-    BlockKey lo, hi;
     rayBlockBounds(cloud, how, params_.resolution_m, &lo, &hi);
     const bool reports = backend_->reportsReachedBlocks();
     if (!remove && (backend_->pagesInMarkedBlocks() || reports)) {
@@ -310,6 +310,9 @@ InsertStats Map::integrateScan(const PointCloud& cloud, const ScanRecord& how, b
       backend_->integrate(scan, settings, blocks_, into);
   };
   try {
+    // The regions the device's rays pass through are paged in before its pass (the misses
+    // that redo it are then rare), as the CPU backend pages in what its rays mark.
+    if (settings.device_paging) pageInAhead(cloud, how, lo, hi, &device_read);
     run(stats);
   } catch (const CudaOutOfMemory& e) {
     // The device backend applies a scan all at once or not at all: the map is intact.

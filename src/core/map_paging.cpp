@@ -7,11 +7,14 @@
 #include <cmath>
 #include <string>
 #include <tuple>
+#include <unordered_set>
 #include <vector>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/backend.h"
 #include "fragg_map/internal/pager.h"
+#include "fragg_map/internal/region_reach.h"
+#include "fragg_map/internal/seconds_since.h"
 #include "fragg_map/log.h"
 #include "fragg_map/map.h"
 
@@ -32,6 +35,13 @@ StoreMapMeta metaOf(const MapParams& p, uint64_t scans) {
   m.scans = scans;
   return m;
 }
+
+/// Rays the CUDA read-ahead walks at most (Map::pageInAhead). Three W4 scans (~162,000
+/// points, 5 cm, 30 m), one thread of the 2-core machine (loaded): every ray 20-31 ms; 32,768
+/// rays 3.3-4.5 ms, missing 1.2-1.5 % of the regions every ray reaches (16,384: 1.7-2.3 ms,
+/// 2.1-3.3 %; 65,536: 5.5-7.6 ms, 0.5-0.6 %). A missed paged-out region costs a stop and a
+/// pass redone.
+constexpr size_t kReadAheadRays = 32768;
 
 InvalidArgument scanTooLarge(size_t needed, size_t block_bytes, double budget_mb) {
   const double needed_mb = static_cast<double>(needed * block_bytes) / (1024.0 * 1024.0);
@@ -193,8 +203,11 @@ void Map::pageInKeys(const std::vector<BlockKey>& keys) {
         pager_->victims(blocks_, sensor, /*clean_only=*/true, incoming, &keys);
     if (pager_->excessOverBudget(blocks_.size() - out.size() + incoming) > 0)
       out = pager_->victims(blocks_, sensor, /*clean_only=*/false, incoming, &keys);
+    const auto t_evict = std::chrono::steady_clock::now();
     backend_->cache().forget(out, blocks_);  // the insertion holds sync_mutex_ already
+    pager_->stageCounters().seconds_evict += secondsSince(t_evict);
     pager_->pageOut(out, blocks_);
+    ++pager_->stageCounters().rounds_in_scan;
   }
   // The kept records make way for the blocks (they never push a block out).
   if (!pager_->dropRecordsToFit(blocks_.size() + incoming))
@@ -237,55 +250,121 @@ DevicePaging Map::devicePaging(size_t* read) {
   };
   paging.make_room = [this, read](const std::vector<BlockKey>& reached,
                                   const std::vector<BlockKey>& pinned, size_t new_blocks) {
-    // As pageInKeys, with the backend's own blocks counted and its scan's blocks pinned: the
-    // scan runs on (the insertion holds sync_mutex_), nothing of it is applied yet.
-    size_t own = backend_->cache().blocksNotInHostMap();
-    std::vector<BlockKey> wanted = pager_->pagedOutOfRegions(reached, blocks_, nullptr);
-    const size_t incoming = wanted.size() + new_blocks;
+    // A stop inside the scan (its pass is redone after it): counted apart from the read-ahead.
     const auto t0 = std::chrono::steady_clock::now();
-    const bool round = pager_->excessOverBudget(blocks_.size() + own + incoming) > 0;
-    if (round) {
-      // The blocks earlier scans made on the device get their host blocks first, so that they
-      // can leave too (between commits they would fill the budget); this scan's, not applied
-      // yet, stay on the device.
-      backend_->cache().sync(blocks_);
-      own = backend_->cache().blocksNotInHostMap();
-      std::vector<BlockKey> held = pinned;
-      held.insert(held.end(), reached.begin(), reached.end());
-      const Eigen::Vector3d sensor = pager_->lastSensor();
-      std::vector<BlockIndex> out =
-          pager_->victims(blocks_, sensor, /*clean_only=*/true, own + incoming, &held);
-      if (pager_->excessOverBudget(blocks_.size() - out.size() + own + incoming) > 0)
-        out = pager_->victims(blocks_, sensor, /*clean_only=*/false, own + incoming, &held);
-      backend_->cache().forget(out, blocks_);
-      pager_->pageOut(out, blocks_);
-    }
+    PagingStats& c = pager_->stageCounters();
+    const size_t back = makeDeviceRoom(reached, pinned, new_blocks, /*in_scan=*/true);
+    ++c.stops_in_scan;
+    c.blocks_read_in_scan += back;
+    c.seconds_in_scan += secondsSince(t0);
+    *read += back;
+  };
+  return paging;
+}
+
+size_t Map::makeDeviceRoom(const std::vector<BlockKey>& reached,
+                           const std::vector<BlockKey>& pinned, size_t new_blocks, bool in_scan) {
+  // As pageInKeys, with the backend's own blocks counted and its scan's blocks pinned: the
+  // scan runs on (the insertion holds sync_mutex_), nothing of it is applied yet.
+  PagingStats& counters = pager_->stageCounters();
+  size_t own = backend_->cache().blocksNotInHostMap();
+  std::vector<BlockKey> wanted = pager_->pagedOutOfRegions(reached, blocks_, nullptr);
+  const size_t incoming = wanted.size() + new_blocks;
+  const bool round = pager_->excessOverBudget(blocks_.size() + own + incoming) > 0;
+  std::chrono::steady_clock::time_point t0;  // page-out: after the write-back (seconds_sync)
+  if (round) {
+    // The blocks earlier scans made on the device get their host blocks first, so that they
+    // can leave too (between commits they would fill the budget); this scan's, not applied
+    // yet, stay on the device.
+    const auto t_sync = std::chrono::steady_clock::now();
+    backend_->cache().sync(blocks_);
+    t0 = std::chrono::steady_clock::now();
+    const double sync_s = std::chrono::duration<double>(t0 - t_sync).count();
+    pager_->noteSyncSeconds(sync_s);
+    if (in_scan) counters.seconds_sync_in_scan += sync_s;
+    own = backend_->cache().blocksNotInHostMap();
+    std::vector<BlockKey> held = pinned;
+    held.insert(held.end(), reached.begin(), reached.end());
+    const Eigen::Vector3d sensor = pager_->lastSensor();
+    std::vector<BlockIndex> out =
+        pager_->victims(blocks_, sensor, /*clean_only=*/true, own + incoming, &held);
+    if (pager_->excessOverBudget(blocks_.size() - out.size() + own + incoming) > 0)
+      out = pager_->victims(blocks_, sensor, /*clean_only=*/false, own + incoming, &held);
+    const auto t_evict = std::chrono::steady_clock::now();
+    backend_->cache().forget(out, blocks_);
+    counters.seconds_evict += secondsSince(t_evict);
+    pager_->pageOut(out, blocks_);
+    ++(in_scan ? counters.rounds_in_scan : counters.rounds_between_scans);
+  }
+  if (round) pager_->notePageOutSeconds(secondsSince(t0));
+  if (in_scan) {
     const size_t needed = blocks_.size() + own + incoming;
     // The rays stop at the budget's room (the pass is redone after this): a scan that still
     // has no room for its new blocks beside the held records would never finish.
     if (!pager_->dropRecordsToFit(needed) ||
         pager_->roomFor(blocks_.size() + own + wanted.size()) < new_blocks)
       throw scanTooLarge(needed, pager_->blockBytes(), pager_->policy().budget_mb);
-    if (round)
-      pager_->notePageOutSeconds(
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    pager_->reserveBlocks(own + new_blocks);
-    std::vector<BlockIndex> back;
-    try {
-      back = pager_->readBack(std::move(wanted), blocks_);
-    } catch (...) {
-      pager_->reserveBlocks(0);
-      throw;
-    }
+  } else {
+    // Ahead of the pass `new_blocks` is an estimate: room made for it where it can be. When
+    // the reads themselves do not fit beside the held records nothing is read ahead: the pass
+    // stops for them and decides (reads with the room it makes, or refuses the scan).
+    const size_t resident = blocks_.size() + own;
+    if (!pager_->dropRecordsToFit(resident + wanted.size()) ||
+        pager_->roomFor(resident) < wanted.size())
+      return 0;
+  }
+  pager_->reserveBlocks(own + (in_scan ? new_blocks : 0));
+  std::vector<BlockIndex> back;
+  try {
+    back = pager_->readBack(std::move(wanted), blocks_);
+  } catch (...) {
     pager_->reserveBlocks(0);
-    pager_->noteResident(blocks_.size() + own);
-    *read += back.size();
-    if (back.empty()) return;
-    blocks_.recomputeMasks(back, model_);  // the store keeps cells only
-    backend_->cache().added(back, blocks_);
-    bumpViewEpoch();
-  };
-  return paging;
+    throw;
+  }
+  pager_->reserveBlocks(0);
+  pager_->noteResident(blocks_.size() + own);
+  if (back.empty()) return 0;
+  blocks_.recomputeMasks(back, model_);  // the store keeps cells only
+  backend_->cache().added(back, blocks_);
+  bumpViewEpoch();
+  return back.size();
+}
+
+void Map::pageInAhead(const PointCloud& cloud, const ScanRecord& how, const BlockKey& lo,
+                      const BlockKey& hi, size_t* read) {
+  // The CPU path pages in exactly the blocks its rays mark before it applies any; the device's
+  // rays run on the device, so the regions they pass through are walked here first (at region
+  // granularity; up to kReadAheadRays rays, an even sample of a denser scan): the paged-out ones
+  // are read back and the resident ones pinned while room is made. A region the walk misses
+  // (reached by rays between the sample's, at a corner in float, a no-return ray) is still
+  // caught by the pass (a miss, read back, the pass redone).
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<BlockKey> paged_regions = pager_->pagedOutRegionsIn(lo, hi);
+  PagingStats& c = pager_->stageCounters();
+  if (paged_regions.empty()) {
+    c.seconds_reach += secondsSince(t0);
+    return;
+  }
+  const std::unordered_set<BlockKey, BlockKeyHash> paged(paged_regions.begin(),
+                                                         paged_regions.end());
+  const double region_m = params_.resolution_m * kBlockSize * (1 << kRegionBits);
+  const std::vector<BlockKey> regions =
+      regionsReached(cloud, how.T_map_sensor, how.model.max_range_m, region_m, regionOf(lo),
+                     regionOf(hi), params_.threads, kReadAheadRays);
+  std::vector<BlockKey> reached, pinned;
+  for (const BlockKey& r : regions) (paged.count(r) ? reached : pinned).push_back(firstBlockOf(r));
+  c.seconds_reach += secondsSince(t0);
+  if (reached.empty()) return;
+  const auto t1 = std::chrono::steady_clock::now();
+  // Room for the blocks the rays will create too, as many as the last scan brought in (as
+  // Map::pageAfterScan reckons): the pass then rarely stops for the budget's room, and a round
+  // needed here runs with every region the rays reach held.
+  const size_t back =
+      makeDeviceRoom(reached, pinned, pager_->lastScanIncoming(), /*in_scan=*/false);
+  c.scans_read_ahead += back > 0;
+  c.blocks_read_ahead += back;
+  c.seconds_read_ahead += secondsSince(t1);
+  *read += back;
 }
 
 void Map::pageInAllBlocks() {
@@ -370,9 +449,12 @@ void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
   {
     // Only the leaving blocks' device copies go; the cache keeps the rest.
     std::lock_guard<std::mutex> lock(*sync_mutex_);
+    const auto t_evict = Clock::now();
     backend_->cache().forget(out, blocks_);
+    pager_->stageCounters().seconds_evict += secondsSince(t_evict);
   }
   pager_->pageOut(out, blocks_);
+  ++pager_->stageCounters().rounds_between_scans;
   (void)pager_->dropRecordsToFit(blocks_.size());
   releasePagedOutMemory();
   bumpViewEpoch();

@@ -749,7 +749,9 @@ void Pager::pageOut(const std::vector<BlockIndex>& victims, BlockMap& blocks) {
     to_encode_keys.push_back(held_regions[j]);
   }
   if (!to_encode.empty()) {
+    const auto t_encode = Clock::now();
     std::vector<BlockRecord> records = store_->encode(to_encode, to_encode_previous);
+    counters_.seconds_encode += secondsSince(t_encode);
     for (size_t j = 0; j < records.size(); ++j) {
       Held& h = held_[to_encode_keys[j]];
       held_bytes_ -= h.record.empty() ? 0 : h.record.capacity() + kKeptRecordOverhead;

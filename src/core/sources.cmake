@@ -32,6 +32,7 @@ set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/map_paging.cpp
   ${CMAKE_CURRENT_LIST_DIR}/page_writer.cpp
   ${CMAKE_CURRENT_LIST_DIR}/pager.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/region_reach.cpp
   ${CMAKE_CURRENT_LIST_DIR}/submap_region.cpp
   ${CMAKE_CURRENT_LIST_DIR}/submap.cpp
 )

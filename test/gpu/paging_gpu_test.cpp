@@ -80,6 +80,11 @@ void pagedCudaBuildMatchesCpu(const std::string& store_path, size_t pool_max_byt
   const PagingStats st = paged.pagingStats();
   EXPECT_GT(st.pages_evicted, 1000u);
   EXPECT_GT(st.pages_read, 100u);
+  // The regions the rays pass through are read back before the ray pass (Map::pageInAhead,
+  // walked on the host): a pass that stops on a paged-out region is the exception.
+  EXPECT_GT(st.scans_read_ahead, 0u);
+  EXPECT_GT(st.blocks_read_ahead, st.blocks_read_in_scan)
+      << "stops in scans " << st.stops_in_scan << ", read-ahead scans " << st.scans_read_ahead;
   // Paging out drops only the leaving blocks' device copies: with a pool that holds the map,
   // a block is uploaded only after it came back from the store (emptying the cache at every
   // paging round uploaded every block of the scans again).

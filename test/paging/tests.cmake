@@ -6,6 +6,7 @@ if(TARGET fragg_map_store)
             ${CMAKE_CURRENT_LIST_DIR}/state_masks_paging_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/paging_budget_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/paging_memory_test.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/region_reach_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/dynamic_paging_test.cpp
     LIBS fragg_map_store fragg_map_planning SQLite::SQLite3
     LABELS core paging)

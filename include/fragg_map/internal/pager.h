@@ -160,6 +160,9 @@ class Pager {
   /// Time of the map's steps around paging (PagingStats::seconds_sync, seconds_page_out).
   void noteSyncSeconds(double s) { counters_.seconds_sync += s; }
   void notePageOutSeconds(double s) { counters_.seconds_page_out += s; }
+  /// The counters the map's paging steps add their times and counts to (rounds, a device
+  /// backend's read-ahead and in-scan stops); stats() reports them.
+  PagingStats& stageCounters() { return counters_; }
 
  private:
   using Clock = std::chrono::steady_clock;

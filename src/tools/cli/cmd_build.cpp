@@ -1,5 +1,6 @@
 // fragg_map build INPUT -o MAP.fgm: integrates every scan of a dataset into a map.
 #include <fmt/format.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
@@ -29,6 +30,27 @@ namespace fragg::cli {
 
 namespace {
 using tools::percentile;
+
+/// A line of /proc/self/status (`field`: "VmRSS", "RssAnon", "RssFile"...), MiB; 0 where
+/// /proc or the field is missing.
+double statusMib(const char* field) {
+  std::FILE* f = std::fopen("/proc/self/status", "r");
+  if (!f) return 0.0;
+  const std::string format = std::string(field) + ": %lf kB";
+  char line[256];
+  double kib = 0.0;
+  while (std::fgets(line, sizeof line, f))
+    if (std::sscanf(line, format.c_str(), &kib) == 1) break;
+  std::fclose(f);
+  return kib / 1024.0;
+}
+
+/// The process's peak resident memory so far (getrusage's ru_maxrss), MiB.
+double peakResidentMib() {
+  struct rusage usage {};
+  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0.0;
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;  // KiB on Linux
+}
 
 struct BuildOptions {
   std::string input, output;
@@ -220,6 +242,8 @@ void runBuild(const BuildOptions& o) {
 #endif
   }();
 
+  // The process before its first scan (the backend started: the CUDA runtime's share).
+  const double rss_open_mib = statusMib("VmRSS");
   Progress progress(source->size());
   InsertStats total;
   std::vector<double> ms_per_scan;
@@ -280,6 +304,11 @@ void runBuild(const BuildOptions& o) {
   if (resumed > skipped_resumed)
     throw IoError(fmt::format("{} holds {} scans but {} has only {}", o.page_store, resumed,
                               o.input, skipped_resumed));
+  const double peak_rss_loop_mib = peakResidentMib();  // before the last commit and -o
+  // What is resident at the loop's end: anonymous memory (the map, buffers, the runtime's heap),
+  // mapped files (LMDB's map, libraries), shared memory.
+  const double rss_anon_mib = statusMib("RssAnon"), rss_file_mib = statusMib("RssFile"),
+               rss_shmem_mib = statusMib("RssShmem");
   map.commitPages();
   if (!o.output.empty()) map.save(o.output);
   const PagingStats paging = map.pagingStats();
@@ -319,6 +348,17 @@ void runBuild(const BuildOptions& o) {
         {"scans_skipped", source->skipped()},
         {"voxel_visits", total.voxel_visits},
         {"seconds", seconds},
+        {"rss_mib",
+         {{"before_first_scan", rss_open_mib},
+          {"peak_build_loop", peak_rss_loop_mib},
+          {"anon_loop_end", rss_anon_mib},
+          {"file_loop_end", rss_file_mib},
+          {"shmem_loop_end", rss_shmem_mib}}},
+        {"passes_redone", total.passes_redone},
+        {"seconds_redone", total.seconds_redone},
+        {"seconds_residency", total.seconds_residency},
+        {"seconds_raycast", total.seconds_raycast},
+        {"seconds_apply", total.seconds_apply},
         {"insert_seconds", total.seconds_total},
         {"ms_per_scan",
          {{"median", median}, {"p99", p99}, {"mean", total.seconds_total * 1e3 / inserted}}},
@@ -368,6 +408,18 @@ void runBuild(const BuildOptions& o) {
                      {"seconds_page_in", paging.seconds_page_in},
                      {"seconds_sync", paging.seconds_sync},
                      {"seconds_page_out", paging.seconds_page_out},
+                     {"seconds_evict", paging.seconds_evict},
+                     {"seconds_encode", paging.seconds_encode},
+                     {"rounds_between_scans", paging.rounds_between_scans},
+                     {"rounds_in_scan", paging.rounds_in_scan},
+                     {"scans_read_ahead", paging.scans_read_ahead},
+                     {"blocks_read_ahead", paging.blocks_read_ahead},
+                     {"seconds_reach", paging.seconds_reach},
+                     {"seconds_read_ahead", paging.seconds_read_ahead},
+                     {"stops_in_scan", paging.stops_in_scan},
+                     {"blocks_read_in_scan", paging.blocks_read_in_scan},
+                     {"seconds_in_scan", paging.seconds_in_scan},
+                     {"seconds_sync_in_scan", paging.seconds_sync_in_scan},
                      {"store_bytes", paging.store_bytes}};
     std::printf("%s\n", j.dump().c_str());
   } else {
