@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "fragg_map/internal/auto_sensor.h"
+#include "fragg_map/internal/no_return_beams.h"
 #include "kernels.h"
 
 namespace fragg::cuda {
@@ -34,7 +35,8 @@ void DeviceScan::prepare(const ScanInput& in, const MapParams& params, int32_t f
   stats_ahead_ = false;
   if (staged && staged_ahead_) stats.scans_staged += 1;
   staged_ahead_ = false;
-  if (params.clear_no_return_rays && in.cloud.organised()) {
+  if ((params.clear_no_return_rays && in.cloud.organised()) ||
+      clearsBeamNoReturns(params.clear_no_return_rays, in.cloud, in.model)) {
     prepareOnHost(in, params, stats);
     stats.seconds_prepare += secondsSince(t0);
     return;
@@ -122,7 +124,8 @@ void DeviceScan::stageAhead(const PointCloud& cloud, bool auto_stats) {
 }
 
 void DeviceScan::prepareOnHost(const ScanInput& in, const MapParams& params, InsertStats& stats) {
-  // No-return rays need the row neighbours' directions.
+  // No-return rays need the row neighbours' directions (organised) or the whole cloud's
+  // beam bins (unorganised, with a beam table).
   prepareScan(in.cloud, in.T_map_sensor, in.model, in.frustum, in.explicit_model, params, prepared_,
               stats);
   ScanCounters& c = counters();

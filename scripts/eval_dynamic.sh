@@ -15,10 +15,13 @@
 #   --known-radius  the "on" map's neighbourhood radius in cells (fragg_map build --known-radius;
 #             default: the map's, 2)
 #   --reuse   keeps OctoMap's .bt when present
+#   --no-return  W5: both fragg maps also clear the LiDAR's no-return beams (--clear-no-return
+#             with W5's beam table: --sensor lidar, 32 rings over -25..15 degrees, 1024
+#             columns; the KITTI .bin keeps no NaN). W6's depth images carry no beam table.
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
 workloads="${FRAGG_WORKLOADS:-$HOME/.cache/fragg_map/workloads}"
-out="" bin="" only="w5,w6" reuse=0 rule=pass-through radius=""
+out="" bin="" only="w5,w6" reuse=0 rule=pass-through radius="" no_return=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --workloads) workloads="$2"; shift 2 ;;
@@ -26,9 +29,10 @@ while [ $# -gt 0 ]; do
     --bin) bin="$2"; shift 2 ;;
     --only) only="$2"; shift 2 ;;
     --reuse) reuse=1; shift ;;
+    --no-return) no_return=1; shift ;;
     --rule) rule="$2"; shift 2 ;;
     --known-radius) radius="$2"; shift 2 ;;
-    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
     *) echo "eval_dynamic: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
@@ -79,8 +83,12 @@ PY
 
 for w in ${only//,/ }; do
   case "$w" in
-    w5) run w5 "$workloads/w5_movers" "$workloads/scenes/campus_movers.obj" 0.1 30 \
-      --range-noise 0.01 ;;
+    w5)
+      w5_beams=()
+      [ "$no_return" = 1 ] && w5_beams=(--clear-no-return --sensor lidar --elevation-min -25
+        --elevation-max 15 --lidar-height 32 --lidar-width 1024)
+      run w5 "$workloads/w5_movers" "$workloads/scenes/campus_movers.obj" 0.1 30 \
+        --range-noise 0.01 "${w5_beams[@]}" ;;
     w6) run w6 "$workloads/w6_people" "$workloads/scenes/office_people.obj" 0.05 6 \
       --range-noise-quadratic 0.001 ;;
     *) echo "eval_dynamic: unknown workload '$w'" >&2; exit 2 ;;

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <string>
 
+#include "fragg_map/lidar_beams.h"
 #include "fragg_map/point_cloud.h"
 
 namespace fragg {
@@ -53,6 +54,11 @@ struct SensorModel {
   // behaviour, every cell up to the hit cell is free.
   double range_noise_m = 0.0;
   double range_noise_quadratic_per_m = 0.0;
+  /// A LiDAR's beams (empty: unknown). With MapParams::clear_no_return_rays, the beams of an
+  /// unorganised cloud that returned nothing clear free space to max_range_m
+  /// (prepareScan; an organised cloud's NaN pixels are used instead). LiDAR or auto only;
+  /// an explicit LiDAR's rings lie within its elevation limits.
+  LidarBeams lidar_beams;
 
   /// sigma(r) above; 0 when the model has no noise.
   double rangeNoiseAt(double range_m) const {

@@ -13,6 +13,7 @@
 #include "fragg_map/internal/culler.h"
 #include "fragg_map/internal/frustum_builder.h"
 #include "fragg_map/internal/height_filter.h"
+#include "fragg_map/internal/no_return_beams.h"
 #include "fragg_map/internal/pager.h"
 #include "fragg_map/internal/rigid_pose.h"
 #include "fragg_map/log.h"
@@ -29,13 +30,20 @@ void validatePose(const Eigen::Isometry3d& T) { requireRigidPose(T, "sensor pose
 
 /// Map::insert's argument checks (InvalidArgument).
 void validateInsert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
-                    const SensorModel& sensor, const std::string& sensor_frame) {
+                    const SensorModel& sensor, const std::string& sensor_frame,
+                    const MapParams& params) {
   validatePose(T_map_sensor);
   sensor.validate();
   if (sensor_frame.size() > kMaxSensorFrameChars)
     throw InvalidArgument("sensor frame id longer than " + std::to_string(kMaxSensorFrameChars) +
                           " characters");
   if (cloud.empty()) throw InvalidArgument("point cloud is empty");
+  // A point left out of the height band would read as a beam with no return.
+  if (params.height_filter.active() &&
+      clearsBeamNoReturns(params.clear_no_return_rays, cloud, sensor))
+    throw InvalidArgument(
+        "clear_no_return_rays with a LiDAR beam table (sensor.lidar_rings) and an unorganised "
+        "cloud cannot be combined with height_filter: give an organised cloud or no band");
   if (cloud.hasFreeOnly() && cloud.free_only.size() != cloud.size())
     throw InvalidArgument("point cloud has " + std::to_string(cloud.free_only.size()) +
                           " free-only flags for " + std::to_string(cloud.size()) + " points");
@@ -48,7 +56,7 @@ void rayBlockBounds(const PointCloud& cloud, const ScanRecord& how, double resol
   const Eigen::Vector3d o = how.T_map_sensor.translation();
   const Eigen::Vector3d reach = Eigen::Vector3d::Constant(how.model.max_range_m + 2 * resolution_m);
   Eigen::Vector3d mn = o, mx = o;
-  if (how.clear_no_return_rays && cloud.organised()) {
+  if (how.clear_no_return_rays && (cloud.organised() || !how.model.lidar_beams.empty())) {
     mn = o - reach;
     mx = o + reach;
   } else {
@@ -123,7 +131,7 @@ Map& Map::operator=(Map&& other) noexcept {
 InsertStats Map::insert(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                         const SensorModel& sensor, int64_t stamp_ns,
                         const std::string& sensor_frame) {
-  validateInsert(cloud, T_map_sensor, sensor, sensor_frame);
+  validateInsert(cloud, T_map_sensor, sensor, sensor_frame, params_);
   return insertChecked(cloud, T_map_sensor, sensor, stamp_ns, sensor_frame, false, nullptr);
 }
 
@@ -136,7 +144,7 @@ std::vector<InsertStats> Map::insertSequence(const std::vector<ScanToInsert>& sc
     const ScanToInsert& s = scans[i];
     try {
       if (!s.cloud) throw InvalidArgument("no point cloud");
-      validateInsert(*s.cloud, s.T_map_sensor, s.sensor, s.sensor_frame);
+      validateInsert(*s.cloud, s.T_map_sensor, s.sensor, s.sensor_frame, params_);
     } catch (const InvalidArgument& e) {
       throw InvalidArgument("scan " + std::to_string(i) + " of the sequence: " + e.what());
     }
@@ -162,6 +170,7 @@ InsertStats Map::insertChecked(const PointCloud& cloud, const Eigen::Isometry3d&
   const auto t0 = std::chrono::steady_clock::now();
   // The height band first: a kept scan holds the points that were integrated.
   const bool by_height = params_.height_filter.active();
+  const bool beam_no_returns = clearsBeamNoReturns(params_.clear_no_return_rays, cloud, sensor);
   PointCloud in_band;
   const uint64_t dropped_height =
       by_height ? filterHeight(cloud, T_map_sensor, params_.height_filter, &in_band) : 0;
@@ -210,6 +219,8 @@ InsertStats Map::insertChecked(const PointCloud& cloud, const Eigen::Isometry3d&
     if (std::any_of(filtered.free_only.begin(), filtered.free_only.end(),
                     [](uint8_t f) { return f != 0; }))
       how.removable = false;
+    // Nor the beam table its no-return rays came from.
+    if (beam_no_returns) how.removable = false;
     scan_store_->add(how, std::move(kept));
   }
   ++next_scan_id_;

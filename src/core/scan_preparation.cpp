@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/internal/no_return_beams.h"
 #include "fragg_map/internal/prepared_scan.h"
 #include "fragg_map/internal/thread_count.h"
 
@@ -150,6 +151,18 @@ void prepareScan(const PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
     out.point_index.reserve(total);
     for (const auto& v : per_thread_index)
       out.point_index.insert(out.point_index.end(), v.begin(), v.end());
+  }
+  if (clearsBeamNoReturns(params.clear_no_return_rays, cloud, model)) {
+    // An unorganised cloud's no-return beams, from the sensor's beam table, after its points.
+    for (const Eigen::Vector3d& dir_S : emptyBeamDirections(cloud, model.lidar_beams)) {
+      const double s[3] = {dir_S.x() * prep.max_range_m, dir_S.y() * prep.max_range_m,
+                           dir_S.z() * prep.max_range_m};
+      RayEnd ray;
+      if (!freeRayEnd(prep, s, &ray)) continue;
+      out.rays.push_back(ray);
+      if (index_points) out.point_index.push_back(kNoPointIndex);
+      ++no_return;
+    }
   }
   stats.dropped_invalid += invalid;
   stats.dropped_min_range += too_close;

@@ -108,6 +108,18 @@ void SensorModel::validate() const {
     if (elevation_min_rad >= elevation_max_rad)
       throw InvalidArgument("sensor.elevation_min_rad must be below sensor.elevation_max_rad");
   }
+  lidar_beams.validate();
+  if (!lidar_beams.empty()) {
+    if (type == SensorType::kPinhole)
+      throw InvalidArgument("sensor.lidar_rings: a beam table needs a lidar (or auto) sensor");
+    if (type == SensorType::kSpinningLidar &&
+        (lidar_beams.ring_elevations_rad.front() < elevation_min_rad - 1e-9 ||
+         lidar_beams.ring_elevations_rad.back() > elevation_max_rad + 1e-9))
+      throw InvalidArgument("sensor.lidar_ring_elevations_rad: the rings span [" +
+                            std::to_string(lidar_beams.ring_elevations_rad.front()) + ", " +
+                            std::to_string(lidar_beams.ring_elevations_rad.back()) +
+                            "] rad, outside sensor.elevation_min_rad..sensor.elevation_max_rad");
+  }
 }
 
 std::string SensorModel::describe() const {
@@ -124,6 +136,7 @@ std::string SensorModel::describe() const {
     s << max_range_m << "]m";
   else
     s << "unlimited]";
+  if (!lidar_beams.empty()) s << " beams=" << lidar_beams.rings() << "x" << lidar_beams.columns;
   if (range_noise_m > 0.0 || range_noise_quadratic_per_m > 0.0)
     s << " noise=" << range_noise_m << "m+" << range_noise_quadratic_per_m << "/m*r^2";
   return s.str();

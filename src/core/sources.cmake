@@ -7,6 +7,8 @@ set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/field_names.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_params.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sensor_model.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/lidar_beams.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/no_return_beams.cpp
   ${CMAKE_CURRENT_LIST_DIR}/auto_sensor.cpp
   ${CMAKE_CURRENT_LIST_DIR}/state_masks.cpp
   ${CMAKE_CURRENT_LIST_DIR}/change_log.cpp

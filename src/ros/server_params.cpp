@@ -135,6 +135,10 @@ const std::vector<fragg::FieldName>& parameterNames() {
       {"sensor.max_range_m", "sensor_model/max_range"},
       {"sensor.range_noise_m", "sensor/range_noise"},
       {"sensor.range_noise_quadratic_per_m", "sensor/range_noise_quadratic"},
+      {"sensor.lidar_rings", "sensor/lidar_height"},
+      {"sensor.lidar_columns", "sensor/lidar_width"},
+      {"sensor.lidar_ring_elevations_rad", "sensor/lidar_ring_elevations"},
+      {"sensor.lidar_azimuth_offset_rad", "sensor/lidar_azimuth_offset"},
   };
   return names;
 }
@@ -148,6 +152,42 @@ void asParameters(Fn&& fn) {
   } catch (const fragg::InvalidArgument& e) {
     throw fragg::InvalidArgument("parameter " + fragg::renameFields(e.what(), parameterNames()));
   }
+}
+
+// The LiDAR's beam table for clear_no_return_rays on unorganised clouds, named as nvblox
+// names it: sensor/lidar_height rings evenly spaced over sensor/elevation_min..max (sensor/type
+// lidar) or sensor/lidar_ring_elevations (radians, ascending), sensor/lidar_width columns a
+// revolution, sensor/lidar_azimuth_offset (radians) the azimuth of column 0.
+void readLidarBeams(const XmlRpcValue& root, fragg::SensorType type, double elevation_min,
+                    double elevation_max, fragg::LidarBeams& b) {
+  int rings = 0, columns = 0;
+  std::vector<double> elevations;
+  double offset = 0.0;
+  readInt(root, "sensor/lidar_height", &rings);
+  readInt(root, "sensor/lidar_width", &columns);
+  readDoubleList(root, "sensor/lidar_ring_elevations", &elevations);
+  readDouble(root, "sensor/lidar_azimuth_offset", &offset);
+  if (rings < 0) badParam("sensor/lidar_height", "must be >= 0, got " + std::to_string(rings));
+  if (columns < 0) badParam("sensor/lidar_width", "must be >= 0, got " + std::to_string(columns));
+  b = fragg::LidarBeams{};
+  if (!elevations.empty()) {
+    if (rings != 0 && size_t(rings) != elevations.size())
+      badParam("sensor/lidar_height", std::to_string(rings) + " disagrees with the " +
+                                          std::to_string(elevations.size()) +
+                                          " sensor/lidar_ring_elevations");
+    b.ring_elevations_rad = elevations;
+  } else if (rings != 0) {
+    if (type != fragg::SensorType::kSpinningLidar)
+      badParam("sensor/lidar_height",
+               "spaces its rings over sensor/elevation_min..max: needs sensor/type lidar (or "
+               "give sensor/lidar_ring_elevations)");
+    asParameters([&] {
+      b = fragg::LidarBeams::evenlySpaced(uint32_t(rings), uint32_t(columns), elevation_min,
+                                          elevation_max);
+    });
+  }
+  b.columns = uint32_t(columns);
+  b.azimuth_offset_rad = offset;
 }
 
 void readSensor(const XmlRpcValue& root, ServerParams& p) {
@@ -183,6 +223,7 @@ void readSensor(const XmlRpcValue& root, ServerParams& p) {
   }
   p.sensor.range_noise_m = noise_m;
   p.sensor.range_noise_quadratic_per_m = noise_quadratic;
+  readLidarBeams(root, sensor_type, elevation_min, elevation_max, p.sensor.lidar_beams);
   asParameters([&] { p.sensor.validate(); });
 }
 
@@ -478,6 +519,13 @@ ServerParams parseKnown(const XmlRpcValue& root) {
   asParameters([&] { m.validate(); });
 
   readSensor(root, p);
+  // The points an unorganised cloud loses to the height band would read as beams with no
+  // return (Map::insert refuses every such cloud): refused once, at start-up.
+  if (m.clear_no_return_rays && !p.sensor.lidar_beams.empty() && m.height_filter.active())
+    badParam("sensor/lidar_height",
+             "(a beam table with clear_no_return_rays) cannot be combined with "
+             "pointcloud_min_z / pointcloud_max_z: points cut by the band would read as no "
+             "returns");
 
   readDouble(root, "occupancy_min_z", &p.occupancy_min_z_m);
   readDouble(root, "occupancy_max_z", &p.occupancy_max_z_m);

@@ -13,6 +13,18 @@ bool occupiedCell(const Map& map, const Cell* c, bool octomap_threshold) {
   return octomap_threshold ? c->log_odds_fx >= 0 : map.state(*c) == CellState::kOccupied;
 }
 
+/// Free in the static truth: the cell centre `p` lies farther than `near_m` from the scene's
+/// surface and outside its solids.
+bool freeInStaticTruth(const Eigen::Vector3f& p, const geometry::MeshBvh& static_scene,
+                       const Eigen::AlignedBox3f& bounds, float near_m) {
+  if (static_scene.withinDistance(p, near_m)) return false;
+  return !(bounds.contains(p) && static_scene.inside(p));
+}
+
+float nearDistance(const Map& map) {
+  return static_cast<float>(std::sqrt(3.0) / 2.0 * map.resolution());
+}
+
 }  // namespace
 
 void addLabelledScan(const Map& map, const PointCloud& cloud_S,
@@ -42,7 +54,7 @@ void addLabelledScan(const Map& map, const PointCloud& cloud_S,
 
 void countGhostCells(const Map& map, const geometry::MeshBvh& static_scene, bool octomap_threshold,
                      DynamicQuality& quality) {
-  const float near_m = static_cast<float>(std::sqrt(3.0) / 2.0 * map.resolution());
+  const float near_m = nearDistance(map);
   const BlockView blocks = map.blockView();
   const std::vector<BlockRef> all = blocks.all();
   const Eigen::AlignedBox3f bounds = static_scene.bounds();
@@ -54,13 +66,32 @@ void countGhostCells(const Map& map, const geometry::MeshBvh& static_scene, bool
       if (!occupiedCell(map, &block.cells[ci], octomap_threshold)) continue;
       ++occupied;
       const Eigen::Vector3f p = map.centerOf(voxelKeyOf(all[n].key, ci)).cast<float>();
-      if (static_scene.withinDistance(p, near_m)) continue;
-      if (bounds.contains(p) && static_scene.inside(p)) continue;
-      ++ghosts;
+      if (freeInStaticTruth(p, static_scene, bounds, near_m)) ++ghosts;
     }
   }
   quality.occupied += occupied;
   quality.ghost_cells += ghosts;
+}
+
+std::vector<VoxelKey> ghostCellKeys(const Map& map, const geometry::MeshBvh& static_scene,
+                                    bool octomap_threshold) {
+  const float near_m = nearDistance(map);
+  const std::vector<BlockRef> all = map.blockView().all();
+  const Eigen::AlignedBox3f bounds = static_scene.bounds();
+  std::vector<std::vector<VoxelKey>> per_block(all.size());
+#pragma omp parallel for schedule(dynamic, 16)
+  for (size_t n = 0; n < all.size(); ++n) {
+    const Block& block = *all[n].block;
+    for (int ci = 0; ci < kCellsPerBlock; ++ci) {
+      if (!occupiedCell(map, &block.cells[ci], octomap_threshold)) continue;
+      const VoxelKey key = voxelKeyOf(all[n].key, ci);
+      if (freeInStaticTruth(map.centerOf(key).cast<float>(), static_scene, bounds, near_m))
+        per_block[n].push_back(key);
+    }
+  }
+  std::vector<VoxelKey> keys;
+  for (const auto& v : per_block) keys.insert(keys.end(), v.begin(), v.end());
+  return keys;
 }
 
 }  // namespace fragg::sim

@@ -39,10 +39,11 @@ if(TARGET fragg_core_map_image_test)
 endif()
 
 # Dynamic-aware mapping (MapParams::dynamic) on the CPU backend against a brute-force reference,
-# both rules (surround; pass-through, the default).
+# both rules (surround; pass-through, the default), decay, no-return beams of unorganised clouds.
 fragg_add_test(fragg_dynamic_mapping_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/dynamic_mapping_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/dynamic_pass_through_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/dynamic_decay_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/dynamic_no_return_test.cpp
   LIBS fragg_map_core
   LABELS core)

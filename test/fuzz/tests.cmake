@@ -75,6 +75,7 @@ if(FRAGG_FUZZ)
   set(_src ${PROJECT_SOURCE_DIR}/src)
   add_library(fragg_fuzz_io_lib STATIC ${FRAGG_IO_SOURCES} ${_src}/core/atomic_file.cpp
     ${_src}/core/byte_io.cpp ${_src}/core/scan_codec.cpp ${_src}/core/sensor_model.cpp
+    ${_src}/core/lidar_beams.cpp
     ${_src}/planning/waypoint_file.cpp ${_src}/geometry/obj_file.cpp
     ${_src}/geometry/triangle_mesh.cpp ${_src}/geometry/mesh_bvh.cpp
     ${_src}/planning/collision_shape.cpp)

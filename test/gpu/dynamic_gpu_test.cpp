@@ -4,7 +4,9 @@
 // office with people walking, config/scenes/office_people.json, a depth camera) with a pool
 // small enough to evict and upload blocks again. After every scan the maps are byte-identical
 // (every block's cells and state masks), and the points classified dynamic are the same points.
-// Skipped without a device.
+// Also a slice of W5 (campus street with movers, its 32 x 1024 LiDAR with dropout) as an
+// unorganised cloud with the LiDAR's beam table and clear_no_return_rays: the no-return beams
+// cleared, maps byte-identical. Skipped without a device.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -19,6 +21,7 @@
 #include "fragg_map/geometry/mesh_bvh.h"
 #include "fragg_map/map.h"
 #include "fragg_map/sim/depth_camera.h"
+#include "fragg_map/sim/lidar_sensor.h"
 #include "fragg_map/sim/scene.h"
 #include "fragg_map/sim/trajectory.h"
 #include "gpu_test_util.h"
@@ -161,6 +164,54 @@ TEST(DynamicGpuTest, W6SliceIsByteIdentical) {
 TEST(DynamicGpuTest, W6SliceWithSmallPoolIsByteIdentical) {
   REQUIRE_DEVICE();
   w6OnBothBackends(2500);
+}
+
+/// W5's LiDAR (config/workloads/w5_movers.args) with 10 % dropout along 12 frames of the drive,
+/// NaN points dropped as a KITTI .bin drops them, through both backends with the beam table,
+/// clear_no_return_rays and the surround rule.
+TEST(DynamicGpuTest, W5SliceUnorganisedNoReturnBeamsIsByteIdentical) {
+  REQUIRE_DEVICE();
+  sim::Scene scene =
+      sim::loadScene(std::string(FRAGG_SOURCE_DIR) + "/config/scenes/campus_movers.json");
+  const sim::Terrain terrain = scene.terrain;
+  auto ground = [&terrain](double x, double y) { return terrain.heightAt(x, y); };
+  const std::vector<sim::PoseSample> samples =
+      sim::sampleTrajectory(scene.trajectories.at("drive"), ground, sim::DriftSpec{}, 505, 120);
+  const geometry::MeshBvh bvh(std::move(scene.mesh));
+  sim::LidarSpec lidar;  // W5's: 32 x 1024, -25..15 degrees
+  lidar.max_range_m = 80;
+  lidar.range_noise_m = 0.01;
+  lidar.dropout = 0.1;
+  SensorModel sensor = SensorModel::autoFromCloud(0.0, 30.0);
+  sensor.lidar_beams = LidarBeams::evenlySpaced(
+      uint32_t(lidar.beams), uint32_t(lidar.azimuth_steps), lidar.elevation_min_deg * M_PI / 180,
+      lidar.elevation_max_deg * M_PI / 180);
+  MapParams p = dynamicSceneParams(true, VoidSpaceRule::kSurround, 2);
+  p.resolution_m = 0.1;
+  p.clear_no_return_rays = true;
+  Map cpu(p);
+  p.backend = Backend::kCuda;
+  Map gpu(p);
+  uint64_t no_return = 0;
+  ASSERT_GE(samples.size(), 100u);
+  for (size_t i = 0; i < samples.size(); i += 10) {
+    const geometry::MeshBvh movers(sim::moversMeshAt(scene.movers, samples[i].stamp_s, ground));
+    const Eigen::Isometry3d T =
+        samples[i].T_map_base * Eigen::Translation3d(0, 0, 1.8);  // the record's LiDAR mount
+    const PointCloud organised = sim::simulateLidar(bvh, lidar, T, 505, i, &movers);
+    PointCloud cloud;
+    for (const Eigen::Vector3f& q : organised.points_S)
+      if (q.allFinite()) cloud.points_S.push_back(q);
+    const InsertStats a = cpu.insert(cloud, T, sensor);
+    const InsertStats b = gpu.insert(cloud, T, sensor);
+    const std::string what = "W5 frame " + std::to_string(i);
+    EXPECT_EQ(a.rays_no_return, b.rays_no_return) << what;
+    EXPECT_EQ(a.rays_dynamic, b.rays_dynamic) << what;
+    expectSameDynamicPoints(cpu, gpu, what);
+    expectSameMaps(cpu, gpu, what);
+    no_return += b.rays_no_return;
+  }
+  EXPECT_GT(no_return, 10u * 1024u) << "few no-return beams: the sky and the dropout give many";
 }
 
 }  // namespace

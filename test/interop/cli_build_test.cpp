@@ -91,6 +91,15 @@ TEST(CliBuild, BadArgumentsAndInputsFailCleanly) {
        "--clamp-min must be below --clamp-max"},
       {"build '" + kPly + "' -o '" + out + "/m.fgm' --dynamic --dynamic-rule sideways", 2,
        "--dynamic-rule must be pass-through or surround, got 'sideways'"},
+      {"build '" + kPly + "' -o '" + out +
+           "/m.fgm' --clear-no-return --sensor lidar --elevation-min -15 --elevation-max 15 "
+           "--lidar-height 16",
+       2, "--lidar-width must be in [1, 100000], got 0"},
+      {"build '" + kPly + "' -o '" + out + "/m.fgm' --lidar-height 16 --lidar-width 1800", 2,
+       "--lidar-height spaces its rings over --sensor lidar's"},
+      {"build '" + kPly + "' -o '" + out +
+           "/m.fgm' --lidar-ring-elevations 2,-2,5 --lidar-width 1800",
+       2, "--lidar-ring-elevations must increase strictly"},
       {"build '" + kPly + "'", 2, "output"},
       {"stats '" + dir + "/missing.fgm'", 1, "missing.fgm"},
       {"stats '" + dir + "/corrupt.fgm'", 1, "corrupt.fgm"},

@@ -20,10 +20,12 @@ if(TARGET fragg_map_octomap)
     LABELS interop octomap)
 endif()
 
-# Runs the built `fragg_map` binary (export / render / compare, good and bad input).
+# Runs the built `fragg_map` binary (export / render / compare, good and bad input; render
+# --highlight-ghosts).
 fragg_add_test(interop_cli_test
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/cli_test.cpp
-  LIBS fragg_map_core nlohmann_json::nlohmann_json
+          ${CMAKE_CURRENT_LIST_DIR}/cli_render_ghosts_test.cpp
+  LIBS fragg_map_core nlohmann_json::nlohmann_json PNG::PNG
   LABELS interop cli)
 if(TARGET interop_cli_test)
   add_dependencies(interop_cli_test fragg_map_cli)

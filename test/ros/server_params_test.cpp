@@ -309,6 +309,48 @@ TEST(ServerParams, LidarSensor) {
   EXPECT_EQ(p.sensor.range_noise_quadratic_per_m, 0.001);
   EXPECT_EQ(p.sensor.elevation_min_rad, -0.3);
   EXPECT_EQ(p.sensor.elevation_max_rad, 0.3);
+  EXPECT_TRUE(p.sensor.lidar_beams.empty());
+}
+
+// The beam table of clear_no_return_rays on unorganised clouds, nvblox's names.
+TEST(ServerParams, LidarBeamTable) {
+  XmlRpcValue root;
+  set(root, "sensor/type", std::string("lidar"));
+  set(root, "sensor/elevation_min", -0.3);
+  set(root, "sensor/elevation_max", 0.3);
+  set(root, "sensor/lidar_height", 16);
+  set(root, "sensor/lidar_width", 1800);
+  const fragg::ros::ServerParams p = fragg::ros::parseParameters(root);
+  ASSERT_EQ(p.sensor.lidar_beams.rings(), 16u);
+  EXPECT_EQ(p.sensor.lidar_beams.columns, 1800u);
+  EXPECT_DOUBLE_EQ(p.sensor.lidar_beams.ring_elevations_rad.front(), -0.3);
+  EXPECT_DOUBLE_EQ(p.sensor.lidar_beams.ring_elevations_rad.back(), 0.3);
+  EXPECT_TRUE(p.unknown_parameters.empty());
+
+  XmlRpcValue no_columns = root;
+  set(no_columns, "sensor/lidar_width", 0);
+  EXPECT_NE(rejection(no_columns).find("sensor/lidar_width"), std::string::npos)
+      << rejection(no_columns);
+  XmlRpcValue unordered = root;
+  XmlRpcValue list;
+  list.setSize(2);
+  list[0] = 0.1;
+  list[1] = -0.1;
+  unordered["sensor"]["lidar_ring_elevations"] = list;
+  set(unordered, "sensor/lidar_height", 0);
+  EXPECT_NE(rejection(unordered).find("sensor/lidar_ring_elevations"), std::string::npos)
+      << rejection(unordered);
+  XmlRpcValue banded = root;
+  set(banded, "clear_no_return_rays", true);
+  set(banded, "pointcloud_min_z", 0.2);
+  EXPECT_NE(rejection(banded).find("pointcloud_min_z"), std::string::npos) << rejection(banded);
+  set(banded, "clear_no_return_rays", false);
+  EXPECT_EQ(fragg::ros::parseParameters(banded).sensor.lidar_beams.rings(), 16u);
+  XmlRpcValue auto_even;
+  set(auto_even, "sensor/lidar_height", 16);
+  set(auto_even, "sensor/lidar_width", 1800);
+  EXPECT_NE(rejection(auto_even).find("sensor/lidar_height"), std::string::npos)
+      << rejection(auto_even);
 }
 
 TEST(ServerParams, InvalidValuesNameTheParameter) {

@@ -15,11 +15,15 @@
 
 namespace fragg {
 
+/// PreparedScan::point_index of a ray with no point of the cloud behind it.
+constexpr uint32_t kNoPointIndex = 0xffffffffu;
+
 struct PreparedScan {
   VoxelKey ref;                  ///< the sensor origin's voxel
   float start_v[3] = {0, 0, 0};  ///< sensor origin relative to ref, voxel units, in [0, 1)
   std::vector<RayEnd> rays;
-  /// With MapParams::dynamic enabled: the cloud index of each ray's point (else empty).
+  /// With MapParams::dynamic enabled: the cloud index of each ray's point (else empty);
+  /// kNoPointIndex for a no-return beam of the beam table (a free ray, never dynamic).
   std::vector<uint32_t> point_index;
   /// RayCast::kOctomap: the rays end in float metres (RayEnd::end_v) and are walked from
   /// `origin_m` by traverseOctomapKeys.

@@ -54,4 +54,9 @@ void addLabelledScan(const Map& map, const PointCloud& cloud_S,
 void countGhostCells(const Map& map, const geometry::MeshBvh& static_scene, bool octomap_threshold,
                      DynamicQuality& quality);
 
+/// The ghost cells countGhostCells counts, their keys (in the map's block order).
+[[nodiscard]] std::vector<VoxelKey> ghostCellKeys(const Map& map,
+                                                  const geometry::MeshBvh& static_scene,
+                                                  bool octomap_threshold);
+
 }  // namespace fragg::sim

@@ -60,6 +60,11 @@ struct BuildOptions {
   std::string sensor = "auto", backend = "auto", raycast = "dda";
   double hfov_deg = 0.0, vfov_deg = 0.0;
   double elevation_min_deg = -90.0, elevation_max_deg = 90.0;
+  // The LiDAR's beam table (nvblox's lidar_height / lidar_width), for --clear-no-return on
+  // unorganised clouds.
+  uint32_t lidar_rings = 0, lidar_columns = 0;
+  std::vector<double> lidar_ring_elevations_deg;
+  double lidar_azimuth_offset_deg = 0.0;
   std::string optical_axis = "z";
   std::string topic, frame = "map";
   OccupancyParams occupancy;
@@ -106,6 +111,10 @@ const std::vector<FieldName>& flagNames() {
       {"sensor.max_range_m", "--max-range"},
       {"sensor.range_noise_m", "--range-noise"},
       {"sensor.range_noise_quadratic_per_m", "--range-noise-quadratic"},
+      {"sensor.lidar_rings", "--lidar-height"},
+      {"sensor.lidar_columns", "--lidar-width"},
+      {"sensor.lidar_ring_elevations_rad", "--lidar-ring-elevations"},
+      {"sensor.lidar_azimuth_offset_rad", "--lidar-azimuth-offset"},
   };
   return names;
 }
@@ -131,10 +140,36 @@ SensorModel sensorShape(const BuildOptions& o) {
   return SensorModel::autoFromCloud(o.min_range_m, o.max_range_m);
 }
 
+/// The beam table of --lidar-height/--lidar-width (rings evenly spaced over --sensor lidar's
+/// --elevation-min..max) or --lidar-ring-elevations; empty when none is given.
+LidarBeams beamsFrom(const BuildOptions& o) {
+  LidarBeams b;
+  if (!o.lidar_ring_elevations_deg.empty()) {
+    if (o.lidar_rings != 0 && o.lidar_rings != o.lidar_ring_elevations_deg.size())
+      throw InvalidArgument(
+          "--lidar-height (" + std::to_string(o.lidar_rings) + ") disagrees with " +
+          std::to_string(o.lidar_ring_elevations_deg.size()) + " --lidar-ring-elevations");
+    for (double e : o.lidar_ring_elevations_deg) b.ring_elevations_rad.push_back(e * kDeg);
+    b.columns = o.lidar_columns;
+  } else if (o.lidar_rings != 0) {
+    if (sensorTypeFromString(o.sensor) != SensorType::kSpinningLidar)
+      throw InvalidArgument(
+          "--lidar-height spaces its rings over --sensor lidar's --elevation-min..max: give "
+          "--sensor lidar, or --lidar-ring-elevations");
+    b = LidarBeams::evenlySpaced(o.lidar_rings, o.lidar_columns, o.elevation_min_deg * kDeg,
+                                 o.elevation_max_deg * kDeg);
+  } else {
+    b.columns = o.lidar_columns;  // validate() refuses columns without rings
+  }
+  b.azimuth_offset_rad = o.lidar_azimuth_offset_deg * kDeg;
+  return b;
+}
+
 SensorModel sensorFrom(const BuildOptions& o) {
   SensorModel m = sensorShape(o);
   m.range_noise_m = o.range_noise_m;
   m.range_noise_quadratic_per_m = o.range_noise_quadratic_per_m;
+  m.lidar_beams = beamsFrom(o);
   m.validate();
   return m;
 }
@@ -470,7 +505,22 @@ void addBuildCommand(CLI::App& app) {
   c->add_option("--max-z", o->height_filter.max_z_m,
                 "Points above this map-frame height are not inserted (m; pointcloud_max_z)");
   c->add_flag("--clear-no-return", o->clear_no_return,
-              "Organised clouds: clear free space along rays without a return");
+              "Clear free space to --max-range along rays without a return: an organised "
+              "cloud's NaN pixels, or an unorganised cloud's empty beams of --lidar-height x "
+              "--lidar-width");
+  c->add_option("--lidar-height", o->lidar_rings,
+                "LiDAR rings (nvblox's lidar_height), evenly spaced from --elevation-min to "
+                "--elevation-max (--sensor lidar); with --lidar-width a beam table for "
+                "--clear-no-return on unorganised clouds");
+  c->add_option("--lidar-width", o->lidar_columns,
+                "LiDAR columns a revolution (nvblox's lidar_width)");
+  c->add_option("--lidar-ring-elevations", o->lidar_ring_elevations_deg,
+                "LiDAR ring elevations, degrees ascending, comma-separated (rings not evenly "
+                "spaced; instead of --lidar-height)")
+      ->delimiter(',');
+  c->add_option("--lidar-azimuth-offset", o->lidar_azimuth_offset_deg,
+                "Azimuth of the LiDAR's column 0 (degrees counter-clockwise from +x)")
+      ->capture_default_str();
   c->add_flag("--free-cut-cell", o->free_cut_cell,
               "A ray cut at --max-range also frees the cell at the cut point (octomap_server's "
               "rule; off: liboctomap's insertPointCloud leaves it)");

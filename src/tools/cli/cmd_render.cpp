@@ -1,4 +1,5 @@
 // fragg_map render MAP -o FILE.png [--view top|slice] [--z M] [--scale N] [--frontiers ...]
+//                                   [--highlight-ghosts STATIC_SCENE.obj]
 #include <fmt/format.h>
 
 #include <memory>
@@ -9,9 +10,13 @@
 #include "cli/commands.h"
 #include "cli/frontier_drawing.h"
 #include "cli/frontier_options.h"
+#include "cli/ghost_drawing.h"
 #include "cli/map_input.h"
 #include "fragg_map/errors.h"
+#include "fragg_map/geometry/mesh_bvh.h"
+#include "fragg_map/geometry/obj_file.h"
 #include "fragg_map/interop/render.h"
+#include "fragg_map/sim/scene.h"
 
 namespace fragg::cli {
 namespace {
@@ -27,6 +32,8 @@ struct RenderArgs {
   bool no_downscale = false;
   bool no_legend = false;
   bool frontiers = false;
+  /// The static truth (OBJ or fragg_map_sim scene) whose ghost cells are drawn red.
+  std::string ghosts_scene;
   /// The options of `fragg_map frontiers`, but the best viewpoint of each cluster by default.
   FrontierFlags frontier_flags = [] {
     FrontierFlags f;
@@ -57,6 +64,19 @@ void runRender(const RenderArgs& args) {
   if (!slice && !args.z.empty()) throw InvalidArgument("render: --z applies to --view slice only");
   if (slice && args.frontiers)
     throw InvalidArgument("render: --frontiers draws over the top view, not --view slice");
+  const bool ghosts = !args.ghosts_scene.empty();
+  if (ghosts && slice)
+    throw InvalidArgument("render: --highlight-ghosts draws over the top view, not --view slice");
+  if (ghosts && args.frontiers)
+    throw InvalidArgument(
+        "render: --highlight-ghosts and --frontiers each draw over the map: "
+        "give one");
+  const std::string scene_ext = ghosts ? extensionOf(args.ghosts_scene) : "";
+  if (ghosts && scene_ext != "obj" && scene_ext != "json")
+    throw InvalidArgument(fmt::format(
+        "render: --highlight-ghosts needs the static scene as an OBJ file or a fragg_map_sim "
+        "scene (.json), got '{}'",
+        args.ghosts_scene));
   const RenderOptions options = optionsOf(args);
   std::optional<FrontierSettings> frontier_settings;
   if (args.frontiers) frontier_settings = frontierSettings(args.frontier_flags);
@@ -74,6 +94,16 @@ void runRender(const RenderArgs& args) {
     fmt::print("frontiers: {} cells, {} clusters ({} cells drawn), {} viewpoints drawn\n",
                frontiers.cells.size(), frontiers.clusters.size(), drawn.cells_drawn,
                drawn.viewpoints_drawn);
+  } else if (ghosts) {
+    const geometry::MeshBvh scene(scene_ext == "obj" ? geometry::readObj(args.ghosts_scene)
+                                                     : sim::loadScene(args.ghosts_scene).mesh);
+    RenderImage image = renderTopDownImage(map, options);
+    const GhostDrawStats drawn = drawGhosts(image, map, scene, options.crop);
+    if (options.legend) appendLegend(image, RenderView::kTop, options);
+    writePng(image, args.output);
+    info = image.info;
+    fmt::print("ghosts: {} cells occupied in the map and free in the static scene ({} drawn)\n",
+               drawn.ghost_cells, drawn.cells_drawn);
   } else {
     info = slice ? renderSlice(map, args.z[0], args.output, options)
                  : renderTopDown(map, args.output, options);
@@ -127,6 +157,10 @@ void addRenderCommand(CLI::App& app) {
       "below are those of "
       "`fragg_map frontiers` (here --viewpoints defaults to 1)");
   addFrontierFlags(cmd, &args->frontier_flags, frontiers);
+  cmd->add_option("--highlight-ghosts", args->ghosts_scene,
+                  "Static truth (OBJ, or a fragg_map_sim scene .json): draw the map's ghost "
+                  "cells -- occupied, but free in the static scene, as `fragg_map eval` counts "
+                  "them -- in red over the top view (faded to half contrast)");
   cmd->callback([args] { runRender(*args); });
 }
 

@@ -33,8 +33,9 @@ bool inside(const std::optional<Eigen::AlignedBox3d>& crop, const Eigen::Vector3
   return !crop || crop->contains(p);
 }
 
-/// Fills the pixels the cell's x/y square covers (at least the one under its centre).
-void fillCell(RenderImage& image, const Map& map, const VoxelKey& key, const Rgb& color) {
+}  // namespace
+
+void fillCellSquare(RenderImage& image, const Map& map, const VoxelKey& key, const Rgb& color) {
   const double r = map.resolution();
   const Eigen::Vector3d lo(key.x * r, key.y * r, 0.0), hi((key.x + 1) * r, (key.y + 1) * r, 0.0);
   const Eigen::Vector2d a = image.pixelOf(lo), b = image.pixelOf(hi);  // b.y() < a.y()
@@ -54,8 +55,6 @@ void fillCell(RenderImage& image, const Map& map, const VoxelKey& key, const Rgb
     }
 }
 
-}  // namespace
-
 FrontierDrawStats drawFrontiers(RenderImage& image, const Map& map, const FrontierResult& result,
                                 const std::optional<Eigen::AlignedBox3d>& crop) {
   FrontierDrawStats stats;
@@ -63,7 +62,7 @@ FrontierDrawStats drawFrontiers(RenderImage& image, const Map& map, const Fronti
     const Rgb color = clusterColor(cluster.id);
     for (const VoxelKey& key : cluster.cells) {
       if (!inside(crop, map.centerOf(key))) continue;
-      fillCell(image, map, key, color);
+      fillCellSquare(image, map, key, color);
       ++stats.cells_drawn;
     }
   }

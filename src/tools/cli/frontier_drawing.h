@@ -22,6 +22,10 @@ Rgb clusterColor(uint64_t id);
 /// within [64, 191]), which keeps the map readable under the clusters' colours.
 void fadeForOverlay(RenderImage& image);
 
+/// Fills the pixels the x/y square of cell `key` of `map` covers on `image` (rendered from
+/// `map`), at least the one under its centre.
+void fillCellSquare(RenderImage& image, const Map& map, const VoxelKey& key, const Rgb& color);
+
 /// The viewpoints' fill colour and outline.
 inline constexpr Rgb kViewpointColor{255, 255, 255};
 inline constexpr Rgb kViewpointOutline{0, 0, 0};
