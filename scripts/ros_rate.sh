@@ -6,18 +6,21 @@
 # rate. Starts its own master on a free loopback port and stops everything it started.
 # Usage: bash scripts/ros_rate.sh [--workload DIR] [--scans N] [--resolution M]
 #          [--max-range M] [--rates "1 2 3"] [--queue-size N] [--markers] [--marker-rate HZ]
-#          [--map-rate HZ] [--no-build] [--out DIR] [common options]
+#          [--map-rate HZ] [--unpaced] [--no-build] [--out DIR] [common options]
 #   --markers       subscribe to occupied_cells_vis_array (rostopic hz, raw bytes) so the node
 #                   builds and sends its markers; without it nobody subscribes and it does not
 #   --marker-rate   the node's marker_rate parameter (0: an update after every cloud)
 #   --map-rate      the node's map_rate parameter (whole-map outputs; default.yaml's when absent)
+#   --unpaced       the node's paced_outputs false (throttled updates whole when due)
 #   --no-build      use the workspace as it is (no catkin build first)
+# The node inherits this shell's environment (GLIBC_TUNABLES, OMP_WAIT_POLICY: the launch files
+# set them, this script does not).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 workload="${FRAGG_WORKLOADS:-$HOME/.cache/fragg_map/workloads}/w1_lidar360"
 scans=100 resolution=0.05 max_range=30 rates="1 2 3" queue_size=5 markers=0 marker_rate=0
-map_rate="" build=1
+map_rate="" build=1 paced=
 out="$FRAGG_REPO/out/ros_rate"
 args=()
 while [ $# -gt 0 ]; do
@@ -31,13 +34,14 @@ while [ $# -gt 0 ]; do
     --markers) markers=1; shift ;;
     --marker-rate) marker_rate="$2"; shift 2 ;;
     --map-rate) map_rate="$2"; shift 2 ;;
+    --unpaced) paced=false; shift ;;
     --no-build) build=0; shift ;;
     --out) out="$2"; shift 2 ;;
     *) args+=("$1"); shift ;;
   esac
 done
 fragg_usage() {
-  sed -n '7,14p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
+  sed -n '7,17p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
   fragg_usage_common
 }
 fragg_parse_common "${args[@]+"${args[@]}"}"
@@ -87,6 +91,7 @@ for rate in $rates; do
   rosparam set /fragg_map/queue_size "$queue_size"
   rosparam set /fragg_map/marker_rate "$marker_rate"
   [ -z "$map_rate" ] || rosparam set /fragg_map/map_rate "$map_rate"
+  [ -z "$paced" ] || rosparam set /fragg_map/paced_outputs "$paced"
   # Unlatched, as the figures in docs/benchmarks.md were measured (latched, the default since
   # issue 16, builds every output after every cloud even without subscribers).
   rosparam set /fragg_map/latch false

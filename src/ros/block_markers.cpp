@@ -3,6 +3,7 @@
 #include "fragg_map/ros/block_markers.h"
 
 #include <algorithm>
+#include <cmath>
 #include <optional>
 #include <unordered_set>
 #include <vector>
@@ -49,6 +50,7 @@ int32_t MarkerLedger::idOf(const fragg::BlockKey& key) const {
 
 void MarkerLedger::clear(int32_t chunk_blocks) {
   chunks_.clear();
+  pending_.clear();
   chunk_blocks_ = std::max(1, chunk_blocks);
   shown_blocks_ = 0;
   next_id_ = 0;
@@ -134,6 +136,7 @@ void appendCells(const fragg::Map& map, const fragg::BlockKey& key, const CellMa
     p.y = (v.y + 0.5) * res_m;
     p.z = (v.z + 0.5) * res_m;
     m->points.push_back(p);
+    if (!perPointColors(style)) continue;  // the marker's colour
     m->colors.push_back(layer_color[c >> (2 * fragg::kBlockBits)]);
     if (style.colors) {
       if (const std::optional<Rgb8> rgb = style.colors->find(v)) {
@@ -149,7 +152,14 @@ visualization_msgs::Marker emptyCubeList(const fragg::Map& map, const MarkerStyl
                                          const ::ros::Time& stamp, int32_t id) {
   visualization_msgs::Marker m = markerHeader(style, stamp, id, visualization_msgs::Marker::ADD);
   m.scale.x = m.scale.y = m.scale.z = map.resolution();
-  m.color = heightColor(0.0, 0.0, 1.0, style.alpha);  // per-point colours win
+  if (perPointColors(style)) {
+    m.color = heightColor(0.0, 0.0, 1.0, style.alpha);  // per-point colours win
+  } else {
+    m.color.r = style.flat_rgb[0];
+    m.color.g = style.flat_rgb[1];
+    m.color.b = style.flat_rgb[2];
+    m.color.a = style.alpha;
+  }
   return m;
 }
 
@@ -164,7 +174,7 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
                                        const ::ros::Time& stamp, int32_t id) {
   visualization_msgs::Marker m = emptyCubeList(map, style, stamp, id);
   m.points.reserve(cells.count());
-  m.colors.reserve(cells.count());
+  if (perPointColors(style)) m.colors.reserve(cells.count());
   appendCells(map, key, cells, style, &m);
   return m;
 }
@@ -190,9 +200,11 @@ uint32_t writeCells(const fragg::Map& map, const fragg::BlockKey& key, const Cel
     }
   }
   uint32_t i = first;
+  const bool per_point = perPointColors(style);
   for (size_t c = cells._Find_first(); c < cells.size(); c = cells._Find_next(c), ++i) {
     const fragg::VoxelKey v = fragg::voxelKeyOf(key, static_cast<int>(c));
     w->setPoint(i, (v.x + 0.5) * res_m, (v.y + 0.5) * res_m, (v.z + 0.5) * res_m);
+    if (!per_point) continue;  // the marker's colour
     const float* rgba = layer_rgba[c >> (2 * fragg::kBlockBits)];
     if (style.colors) {
       if (const std::optional<Rgb8> rgb = style.colors->find(v)) {
@@ -219,7 +231,7 @@ std::shared_ptr<WireMarker> chunkWire(const fragg::Map& map, const Blocks& block
   size_t cells = 0;
   for (size_t i = 0; i < blocks.size(); ++i) cells += blocks[i].cells.count();
   CubeListWriter w(emptyCubeList(map, style, ::ros::Time(), id), static_cast<uint32_t>(cells),
-                   std::move(reuse));
+                   std::move(reuse), perPointColors(style));
   uint32_t next = 0;
   for (size_t i : order) next = writeCells(map, blocks[i].key, blocks[i].cells, style, &w, next);
   return w.finish();
@@ -239,6 +251,12 @@ void encodeChunks(const fragg::Map& map, const MarkerStyle& style,
 
 SerializedMarkerArray changedBlockMarkersWire(const fragg::Map& map, const MarkerStyle& style,
                                               const ::ros::Time& stamp, MarkerLedger* ledger) {
+  return pacedBlockMarkersWire(map, style, stamp, 0.0, 0.0, ledger);
+}
+
+SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map& map, const MarkerStyle& style,
+                                            const ::ros::Time& stamp, double now_s, double period_s,
+                                            MarkerLedger* ledger) {
   if (std::max(1, style.chunk_blocks) != ledger->chunk_blocks_ && !ledger->chunks_.empty())
     return allBlockMarkersWire(map, style, stamp, ledger);  // a new chunk size: redraw all
   ledger->chunk_blocks_ = std::max(1, style.chunk_blocks);
@@ -247,96 +265,138 @@ SerializedMarkerArray changedBlockMarkersWire(const fragg::Map& map, const Marke
   out.stamp = stamp;
   const fragg::BlockView blocks = map.blockView();
   const uint64_t since = ledger->published_revision_;
+  // Paced, the map's changes are taken in once a period (the first call, then a period after
+  // the last time) and their chunks sent in even shares over the period's calls; unpaced, at
+  // every call and all at once.
+  const bool paced = period_s > 0.0;
+  const bool note = !paced || !ledger->paced_ || now_s - ledger->last_note_s_ >= period_s - 1e-6;
+  // A call that takes the changes in sends what is left of the last ones (nothing, when the
+  // shares kept up); the others their share: what is left over the calls left until it is a
+  // period old.
+  size_t take = ledger->pending_.size();
+  if (paced && !note && !ledger->pending_.empty()) {
+    const double interval_s = std::clamp(now_s - ledger->last_paced_s_, 1e-6, period_s);
+    const double left_s = ledger->pending_.front().since_s + period_s - now_s;
+    const double calls_left = std::max(1.0, std::floor(left_s / interval_s + 1e-6));
+    take =
+        static_cast<size_t>(std::ceil(static_cast<double>(ledger->pending_.size()) / calls_left));
+  }
+  if (paced) {
+    ledger->last_paced_s_ = now_s;
+    ledger->paced_ = true;
+  }
   std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> dirty;  // chunk keys
-  // Shown blocks that were erased (clearBox, reset, paged out) are not listed as changed: look
-  // them up, when the map's view changed since the last update (no erase without that).
-  if (map.viewEpoch() != ledger->view_epoch_) {
-    for (auto& [chunk_key, chunk] : ledger->chunks_) {
-      auto& list = chunk.blocks;
-      const size_t before = list.size();
-      list.erase(std::remove_if(list.begin(), list.end(),
-                                [&](const MarkerLedger::ShownBlock& b) {
-                                  return blocks.findBlock(b.key) == nullptr;
-                                }),
-                 list.end());
-      if (list.size() != before) {
-        ledger->shown_blocks_ -= before - list.size();
+  if (note) {
+    // Shown blocks that were erased (clearBox, reset, paged out) are not listed as changed: look
+    // them up, when the map's view changed since the last update (no erase without that).
+    if (map.viewEpoch() != ledger->view_epoch_) {
+      for (auto& [chunk_key, chunk] : ledger->chunks_) {
+        auto& list = chunk.blocks;
+        const size_t before = list.size();
+        list.erase(std::remove_if(list.begin(), list.end(),
+                                  [&](const MarkerLedger::ShownBlock& b) {
+                                    return blocks.findBlock(b.key) == nullptr;
+                                  }),
+                   list.end());
+        if (list.size() != before) {
+          ledger->shown_blocks_ -= before - list.size();
+          dirty.insert(chunk_key);
+        }
+      }
+    }
+    // The blocks whose drawn state changed, with their 26 neighbours when speckles are hidden
+    // (a cell's speckle state follows its neighbours' occupancy).
+    // Occupied markers: the blocks where a cell crossed the occupied threshold (most blocks a
+    // scan changes gain free cells only); other states: those whose masks changed, from the
+    // change log.
+    std::vector<fragg::BlockRef> changed = blocks.changedRefsSince(
+        since, style.state == fragg::CellState::kOccupied ? fragg::BlockChange::kOccupied
+                                                          : fragg::BlockChange::kMasks);
+    if (style.hide_speckles && !changed.empty()) {
+      std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around;
+      for (const fragg::BlockRef& r : changed)
+        for (int dz = -1; dz <= 1; ++dz)
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx)
+              around.insert({r.key.x + dx, r.key.y + dy, r.key.z + dz});
+      changed.clear();
+      for (const fragg::BlockKey& k : around)
+        if (const fragg::Block* b = blocks.findBlock(k)) changed.push_back({k, b});
+    }
+    // colored_map: blocks whose colours changed are redrawn even with the same cells.
+    std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> recolored;
+    if (style.colors) {
+      for (const fragg::BlockKey& k : style.colors->recoloredSince(ledger->colors_drawn_))
+        if (blocks.findBlock(k)) recolored.insert(k);
+      for (const fragg::BlockRef& r : changed) recolored.erase(r.key);
+      for (const fragg::BlockKey& k : recolored) changed.push_back({k, blocks.findBlock(k)});
+    }
+    // The drawn cells in parallel (read-only), the ledger in order.
+    std::vector<CellMask> masks(changed.size());
+    const int64_t n = static_cast<int64_t>(changed.size());
+#pragma omp parallel for schedule(static) if (n > 256)
+    for (int64_t j = 0; j < n; ++j)
+      masks[j] = drawnCells(map, blocks, changed[j].key, *changed[j].block, style);
+    for (size_t j = 0; j < changed.size(); ++j) {
+      const fragg::BlockKey& key = changed[j].key;
+      const CellMask& cells = masks[j];
+      const fragg::BlockKey chunk_key = chunkOf(key, chunk_blocks);
+      const auto chunk = ledger->chunks_.find(chunk_key);
+      if (chunk == ledger->chunks_.end()) {
+        if (cells.none()) continue;
+        MarkerLedger::Chunk& added = ledger->chunks_[chunk_key];
+        added.blocks.push_back({key, cells});
+        ++ledger->shown_blocks_;
+        dirty.insert(chunk_key);
+        continue;
+      }
+      auto& list = chunk->second.blocks;
+      const auto shown =
+          std::find_if(list.begin(), list.end(),
+                       [&](const MarkerLedger::ShownBlock& b) { return b.key == key; });
+      if (shown == list.end()) {
+        if (cells.none()) continue;
+        list.push_back({key, cells});
+        ++ledger->shown_blocks_;
+        dirty.insert(chunk_key);
+      } else if (cells.none()) {
+        list.erase(shown);
+        --ledger->shown_blocks_;
+        dirty.insert(chunk_key);
+      } else if (cells != shown->cells || recolored.count(key)) {
+        shown->cells = cells;
         dirty.insert(chunk_key);
       }
     }
+    ledger->published_revision_ = map.revision();
+    ledger->view_epoch_ = map.viewEpoch();
+    if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
+    if (paced) ledger->last_note_s_ = now_s;
   }
-  // The blocks whose drawn state changed, with their 26 neighbours when speckles are hidden
-  // (a cell's speckle state follows its neighbours' occupancy).
-  // Occupied markers: the blocks where a cell crossed the occupied threshold (most blocks a
-  // scan changes gain free cells only); other states: those whose masks changed, from the
-  // change log.
-  std::vector<fragg::BlockRef> changed = blocks.changedRefsSince(
-      since, style.state == fragg::CellState::kOccupied ? fragg::BlockChange::kOccupied
-                                                        : fragg::BlockChange::kMasks);
-  if (style.hide_speckles && !changed.empty()) {
-    std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around;
-    for (const fragg::BlockRef& r : changed)
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx)
-            around.insert({r.key.x + dx, r.key.y + dy, r.key.z + dz});
-    changed.clear();
-    for (const fragg::BlockKey& k : around)
-      if (const fragg::Block* b = blocks.findBlock(k)) changed.push_back({k, b});
+  // The changed chunks join the queue (once each: a queued chunk is drawn from the ledger when
+  // it is sent, its latest cells).
+  for (const fragg::BlockKey& chunk_key : dirty) {
+    MarkerLedger::Chunk& chunk = ledger->chunks_.at(chunk_key);
+    if (chunk.pending) continue;
+    chunk.pending = true;
+    ledger->pending_.push_back({chunk_key, now_s});
   }
-  // colored_map: blocks whose colours changed are redrawn even with the same cells.
-  std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> recolored;
-  if (style.colors) {
-    for (const fragg::BlockKey& k : style.colors->recoloredSince(ledger->colors_drawn_))
-      if (blocks.findBlock(k)) recolored.insert(k);
-    for (const fragg::BlockRef& r : changed) recolored.erase(r.key);
-    for (const fragg::BlockKey& k : recolored) changed.push_back({k, blocks.findBlock(k)});
-  }
-  // The drawn cells in parallel (read-only), the ledger in order.
-  std::vector<CellMask> masks(changed.size());
-  const int64_t n = static_cast<int64_t>(changed.size());
-#pragma omp parallel for schedule(static) if (n > 256)
-  for (int64_t j = 0; j < n; ++j)
-    masks[j] = drawnCells(map, blocks, changed[j].key, *changed[j].block, style);
-  for (size_t j = 0; j < changed.size(); ++j) {
-    const fragg::BlockKey& key = changed[j].key;
-    const CellMask& cells = masks[j];
-    const fragg::BlockKey chunk_key = chunkOf(key, chunk_blocks);
-    const auto chunk = ledger->chunks_.find(chunk_key);
-    if (chunk == ledger->chunks_.end()) {
-      if (cells.none()) continue;
-      MarkerLedger::Chunk& added = ledger->chunks_[chunk_key];
-      added.blocks.push_back({key, cells});
-      ++ledger->shown_blocks_;
-      dirty.insert(chunk_key);
-      continue;
-    }
-    auto& list = chunk->second.blocks;
-    const auto shown = std::find_if(
-        list.begin(), list.end(), [&](const MarkerLedger::ShownBlock& b) { return b.key == key; });
-    if (shown == list.end()) {
-      if (cells.none()) continue;
-      list.push_back({key, cells});
-      ++ledger->shown_blocks_;
-      dirty.insert(chunk_key);
-    } else if (cells.none()) {
-      list.erase(shown);
-      --ledger->shown_blocks_;
-      dirty.insert(chunk_key);
-    } else if (cells != shown->cells || recolored.count(key)) {
-      shown->cells = cells;
-      dirty.insert(chunk_key);
-    }
-  }
-  // One entry per changed chunk: its whole marker (encoded again and kept), or DELETE when it
+  if (!paced) take = ledger->pending_.size();
+  // One entry per chunk sent: its whole marker (encoded again and kept), or DELETE when it
   // draws nothing now.
-  std::vector<fragg::BlockKey> order(dirty.begin(), dirty.end());
+  std::vector<fragg::BlockKey> order;
+  order.reserve(take);
+  for (size_t q = 0; q < take; ++q) {
+    order.push_back(ledger->pending_.front().chunk);
+    ledger->pending_.pop_front();
+  }
   std::sort(order.begin(), order.end(), byKey);
   std::vector<MarkerLedger::Chunk*> redrawn;
   redrawn.reserve(order.size());
   out.markers.reserve(order.size());
   for (const fragg::BlockKey& chunk_key : order) {
     const auto chunk = ledger->chunks_.find(chunk_key);
+    chunk->second.pending = false;
     if (chunk->second.blocks.empty()) {
       if (chunk->second.id >= 0)
         out.markers.push_back(wireOf(
@@ -352,9 +412,6 @@ SerializedMarkerArray changedBlockMarkersWire(const fragg::Map& map, const Marke
   size_t next = 0;
   for (WireMarkerPtr& m : out.markers)
     if (!m) m = redrawn[next++]->wire;
-  ledger->published_revision_ = map.revision();
-  ledger->view_epoch_ = map.viewEpoch();
-  if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
   return out;
 }
 
@@ -413,6 +470,7 @@ SerializedMarkerArray shownBlockMarkersWire(const fragg::Map& map, const MarkerS
   const bool kept = map.viewEpoch() == ledger.view_epoch_ && !style.colors;
   for (const fragg::BlockKey& chunk_key : order) {
     const MarkerLedger::Chunk& chunk = ledger.chunks_.at(chunk_key);
+    if (chunk.id < 0) continue;  // queued, never sent: it comes with the increments
     if (kept && chunk.wire) {
       out.markers.push_back(chunk.wire);
       continue;

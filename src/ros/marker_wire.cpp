@@ -33,7 +33,7 @@ WireMarkerPtr wireOf(const visualization_msgs::Marker& marker) {
 }
 
 CubeListWriter::CubeListWriter(const visualization_msgs::Marker& head, uint32_t points,
-                               std::shared_ptr<WireMarker> reuse) {
+                               std::shared_ptr<WireMarker> reuse, bool with_colors) {
   if (!head.points.empty() || !head.colors.empty())
     throw fragg::InvalidArgument("CubeListWriter: the head marker must have no points or colours");
   // Marker's fields after colors: text and mesh_resource (strings: a uint32 length and the
@@ -43,7 +43,8 @@ CubeListWriter::CubeListWriter(const visualization_msgs::Marker& head, uint32_t 
   const uint32_t tail =
       static_cast<uint32_t>(4 + head.text.size() + 4 + head.mesh_resource.size() + 1);
   const uint32_t prefix = head_size - 8 - tail;
-  const uint32_t size = head_size + points * (24 + 16);
+  const uint32_t colors = with_colors ? points : 0;
+  const uint32_t size = head_size + points * 24 + colors * 16;
   out_ = allocate(size, std::move(reuse));
   uint8_t* bytes = out_->bytes.get();
   ::ros::serialization::OStream stream(bytes, head_size);
@@ -51,8 +52,8 @@ CubeListWriter::CubeListWriter(const visualization_msgs::Marker& head, uint32_t 
   std::memmove(bytes + size - tail, bytes + head_size - tail, tail);
   std::memcpy(bytes + prefix, &points, 4);
   points_ = bytes + prefix + 4;
-  std::memcpy(points_ + 24 * size_t{points}, &points, 4);
-  colors_ = points_ + 24 * size_t{points} + 4;
+  std::memcpy(points_ + 24 * size_t{points}, &colors, 4);
+  colors_ = with_colors ? points_ + 24 * size_t{points} + 4 : nullptr;
 }
 
 std::shared_ptr<WireMarker> CubeListWriter::finish() { return std::move(out_); }

@@ -251,29 +251,13 @@ fragg::BlockChange MapOutputCache::refreshOn(const fragg::OccupancyModel& model)
   return leaves_band ? fragg::BlockChange::kMasks : fragg::BlockChange::kState;
 }
 
-OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
-  OutputCacheUpdate out;
-  auto t0 = std::chrono::steady_clock::now();
-  const fragg::BlockView blocks = map.blockView();
-  const uint64_t revision = map.revision();
-  out.full = !valid_ || map.viewEpoch() != epoch_ || revision < revision_ ||
-             map.resolution() != resolution_m_;
-  // The blocks to recompute, and those that left the map. With the change log (kMasks) a block
-  // comes with its state masks (its cells are read only where the grid's bounds need them).
+std::vector<MapOutputCache::Source> MapOutputCache::listChanges(const fragg::Map& map,
+                                                                const fragg::BlockView& blocks,
+                                                                bool full, bool masks_suffice,
+                                                                bool keys_only) {
   const fragg::BlockChange refresh_on = refreshOn(map.model());
-  const bool masks_suffice =
-      !out.full && refresh_on == fragg::BlockChange::kMasks && options_.masks_where_settled;
   std::vector<Source> refresh;
-  for (const uint32_t c : dirty_) columns_[c].dirty = false;
-  dirty_.clear();
-  if (out.full) {
-    pieces_.clear();
-    piece_index_.clear();
-    with_cells_.clear();
-    columns_.clear();
-    column_index_.clear();
-    occupied_cells_ = 0;
-    seen_valid_ = false;
+  if (full) {
     for (const fragg::BlockRef& r : blocks.all()) refresh.push_back({r.key, nullptr, r.block});
   } else if (!options_.hide_speckles) {
     // Several revisions since the last update (a throttled map_rate): the change log names a
@@ -282,18 +266,19 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
     // stamps. kState lists the blocks of kMasks and those whose cells moved within the
     // unknown band (recomputed from their masks all the same). The CUDA backend stamps
     // state_at with every change, so there the log serves.
-    const bool walk = masks_suffice && revision - revision_ > kLogRevisions &&
+    const bool walk = masks_suffice && map.revision() - revision_ > kLogRevisions &&
                       std::strcmp(map.backendName(), "cpu") == 0;
     if (walk) {
       const std::vector<fragg::BlockRef> changed =
           blocks.changedRefsSince(revision_, fragg::BlockChange::kState);
       refresh.reserve(changed.size());
       for (const fragg::BlockRef& r : changed)
-        refresh.push_back({r.key, blocks.findMasks(r.key), r.block});
+        refresh.push_back({r.key, keys_only ? nullptr : blocks.findMasks(r.key), r.block});
     } else if (masks_suffice) {
       const std::vector<fragg::BlockKey> changed = blocks.changedSince(revision_, refresh_on);
       refresh.reserve(changed.size());
-      for (const fragg::BlockKey& k : changed) refresh.push_back({k, blocks.findMasks(k), nullptr});
+      for (const fragg::BlockKey& k : changed)
+        refresh.push_back({k, keys_only ? nullptr : blocks.findMasks(k), nullptr});
     } else {
       for (const fragg::BlockRef& r : blocks.changedRefsSince(revision_, refresh_on))
         refresh.push_back({r.key, nullptr, r.block});
@@ -319,16 +304,126 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
       }
     }
   }
-  out.list_ms = msSince(t0);
+  return refresh;
+}
+
+OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
+  return refresh(map, 0.0, 0.0, true);
+}
+
+OutputCacheUpdate MapOutputCache::advance(const fragg::Map& map, double now_s, double period_s,
+                                          bool with_grid) {
+  return refresh(map, now_s, period_s, with_grid || period_s <= 0.0);
+}
+
+OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, double period_s,
+                                          bool with_grid) {
+  OutputCacheUpdate out;
+  auto t0 = std::chrono::steady_clock::now();
+  const fragg::BlockView blocks = map.blockView();
+  const uint64_t revision = map.revision();
+  out.full = !valid_ || map.viewEpoch() != epoch_ || revision < revision_ ||
+             map.resolution() != resolution_m_;
+  // The blocks to recompute, and those that left the map. With the change log (kMasks) a block
+  // comes with its state masks (its cells are read only where the grid's bounds need them).
+  const bool masks_suffice = !out.full && refreshOn(map.model()) == fragg::BlockChange::kMasks &&
+                             options_.masks_where_settled;
+  for (const uint32_t c : dirty_) columns_[c].dirty = false;
+  dirty_.clear();
+  if (out.full) {
+    pieces_.clear();
+    piece_index_.clear();
+    with_cells_.clear();
+    columns_.clear();
+    column_index_.clear();
+    undrawn_.clear();  // their columns are gone: the grid is drawn whole
+    queue_.clear();
+    queue_head_ = 0;
+    occupied_cells_ = 0;
+    seen_valid_ = false;
+  }
+  // Paced, the changes are listed at a publication (with_grid) only, and recomputed in even
+  // shares over the clouds of the next period.
+  const bool paced = period_s > 0.0 && !out.full;
+  const bool list = !paced || with_grid || !advanced_;
+  // First what was queued and is due: at a listing all of it (what the shares left: nothing,
+  // when they kept up), else this cloud's share: what is left over the clouds left until the
+  // list is a period old.
+  size_t take = queuedBlocks();
+  if (paced && !list && take > 0) {
+    const double interval_s = std::clamp(now_s - last_advance_s_, 1e-6, period_s);
+    const double left_s = queued_since_s_ + period_s - now_s;
+    const double clouds_left = std::max(1.0, std::floor(left_s / interval_s + 1e-6));
+    take = static_cast<size_t>(std::ceil(static_cast<double>(take) / clouds_left));
+  }
+  if (paced) {
+    last_advance_s_ = now_s;
+    advanced_ = true;
+  }
+  std::vector<Source> queued;
+  queued.reserve(take);
+  std::vector<fragg::BlockKey> gone;
+  for (size_t q = queue_head_; q < queue_head_ + take; ++q) {
+    const fragg::BlockKey& k = queue_[q];
+    const fragg::BlockStateMasks* m = blocks.findMasks(k);
+    if (!m) {
+      gone.push_back(k);  // left the map since it was listed
+      continue;
+    }
+    queued.push_back({k, masks_suffice ? m : nullptr, nullptr});
+  }
+  queue_head_ += take;
+  if (queue_head_ == queue_.size()) {
+    queue_.clear();
+    queue_head_ = 0;
+  }
+  for (const fragg::BlockKey& k : gone) dropPiece(k);
+  out.list_ms += msSince(t0);
+  recompute(map, blocks, queued, masks_suffice, &out);
+  // Then the changes since the last list: queued (paced), or recomputed now.
   t0 = std::chrono::steady_clock::now();
+  std::vector<Source> listed;
+  if (list) listed = listChanges(map, blocks, out.full, masks_suffice, paced);
+  if (paced && list) {
+    queue_.reserve(queue_.size() + listed.size());
+    for (const Source& s : listed) queue_.push_back(s.key);
+    queued_since_s_ = now_s;
+    listed.clear();
+  }
+  out.list_ms += msSince(t0);
+  if (out.full) piece_index_.reserve(listed.size());
+  recompute(map, blocks, listed, masks_suffice, &out);
+  out.blocks_queued = queuedBlocks();
+  t0 = std::chrono::steady_clock::now();
+  for (const uint32_t c : dirty_) {
+    Column& col = columns_[c];
+    mergeColumn(&col);
+    if (col.undrawn) continue;
+    col.undrawn = true;
+    undrawn_.push_back(c);
+  }
+  out.columns_merged = dirty_.size();
+  resolution_m_ = map.resolution();  // refreshGrid's octomap bounds need it
+  refreshGrid(out.full, with_grid);
+  valid_ = true;
+  if (list) revision_ = revision;  // the changes up to it are in the pieces or queued
+  epoch_ = map.viewEpoch();
+  out.grid_ms = msSince(t0);
+  return out;
+}
+
+void MapOutputCache::recompute(const fragg::Map& map, const fragg::BlockView& blocks,
+                               const std::vector<Source>& sources, bool masks_suffice,
+                               OutputCacheUpdate* out) {
+  if (sources.empty()) return;
+  const auto t0 = std::chrono::steady_clock::now();
   // Each block's piece (new ones made first: pieces_ does not change while the pieces are
   // computed), then the pieces in parallel (read-only map, one piece per iteration), then the
   // sums in order.
-  if (out.full) piece_index_.reserve(refresh.size());
-  std::vector<uint32_t> slots(refresh.size());
-  for (size_t j = 0; j < refresh.size(); ++j) slots[j] = pieceFor(refresh[j].key);
-  std::vector<PieceDelta> deltas(refresh.size());
-  const int64_t n = static_cast<int64_t>(refresh.size());
+  std::vector<uint32_t> slots(sources.size());
+  for (size_t j = 0; j < sources.size(); ++j) slots[j] = pieceFor(sources[j].key);
+  std::vector<PieceDelta> deltas(sources.size());
+  const int64_t n = static_cast<int64_t>(sources.size());
   // The loop waits on memory (a piece and a block's masks, each a few cache lines at random
   // places): both are fetched a few iterations ahead.
   constexpr int64_t kAhead = 8;
@@ -338,34 +433,24 @@ OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
       const Piece* ahead = &pieces_[slots[j + kAhead]];
       __builtin_prefetch(ahead);
       __builtin_prefetch(ahead->shown.data());
-      if (const fragg::BlockStateMasks* m = refresh[j + kAhead].masks) {
+      if (const fragg::BlockStateMasks* m = sources[j + kAhead].masks) {
         __builtin_prefetch(m->occupied);
         __builtin_prefetch(m->free);
       }
     }
-    deltas[j] = computePiece(map, blocks, refresh[j], masks_suffice, &pieces_[slots[j]]);
+    deltas[j] = computePiece(map, blocks, sources[j], masks_suffice, &pieces_[slots[j]]);
   }
   int64_t occupied_delta = 0;
-  for (size_t j = 0; j < refresh.size(); ++j) {
+  for (size_t j = 0; j < sources.size(); ++j) {
     const PieceDelta& d = deltas[j];
     relist(slots[j]);
     occupied_delta += d.occupied;
-    out.blocks_cells_read += d.cells_read;
+    out->blocks_cells_read += d.cells_read;
     if (d.column) markDirty(pieces_[slots[j]].column);
   }
   occupied_cells_ = static_cast<size_t>(static_cast<int64_t>(occupied_cells_) + occupied_delta);
-  out.blocks_read = refresh.size();
-  out.pieces_ms = msSince(t0);
-  t0 = std::chrono::steady_clock::now();
-  for (const uint32_t c : dirty_) mergeColumn(&columns_[c]);
-  out.columns_merged = dirty_.size();
-  resolution_m_ = map.resolution();  // refreshGrid's octomap bounds need it
-  refreshGrid(out.full);
-  valid_ = true;
-  revision_ = revision;
-  epoch_ = map.viewEpoch();
-  out.grid_ms = msSince(t0);
-  return out;
+  out->blocks_read += sources.size();
+  out->pieces_ms += msSince(t0);
 }
 
 void MapOutputCache::drawColumn(const Column& col) {
@@ -385,7 +470,7 @@ void MapOutputCache::drawColumn(const Column& col) {
   }
 }
 
-void MapOutputCache::refreshGrid(bool all) {
+void MapOutputCache::refreshGrid(bool all, bool draw) {
   // Bounds over the columns (one pass over the flat column table, not the cells).
   bool empty = true;
   int64_t lo_x = 0, hi_x = -1, lo_y = 0, hi_y = -1;
@@ -405,6 +490,13 @@ void MapOutputCache::refreshGrid(bool all) {
   // The observed cells' bounds, for the next update's boundsSettled.
   seen_valid_ = !empty;
   seen_lo_x_ = lo_x, seen_hi_x_ = hi_x, seen_lo_y_ = lo_y, seen_hi_y_ = hi_y;
+  redraw_owed_ = redraw_owed_ || all;
+  if (!draw) return;  // drawn before the next publication (advance with_grid, or update)
+  for (const uint32_t c : undrawn_) columns_[c].undrawn = false;
+  const bool redraw = redraw_owed_;
+  redraw_owed_ = false;
+  undrawn_.swap(drawing_);
+  undrawn_.clear();
   if (empty) {
     grid_empty_ = true;
     grid_.clear();
@@ -418,7 +510,7 @@ void MapOutputCache::refreshGrid(bool all) {
   }
   const bool moved = grid_empty_ || lo_x != grid_min_x_ || lo_y != grid_min_y_ ||
                      hi_x - lo_x + 1 != grid_width_ || hi_y - lo_y + 1 != grid_height_;
-  if (moved || all) {
+  if (moved || redraw) {
     grid_empty_ = false;
     grid_min_x_ = static_cast<int32_t>(lo_x);
     grid_min_y_ = static_cast<int32_t>(lo_y);
@@ -428,8 +520,9 @@ void MapOutputCache::refreshGrid(bool all) {
     for (const Column& col : columns_) drawColumn(col);
     return;
   }
-  // Same bounds: patch the changed columns (an emptied column merged to unknown).
-  for (const uint32_t c : dirty_) drawColumn(columns_[c]);
+  // Same bounds: patch the columns merged since the last draw (an emptied column merged to
+  // unknown).
+  for (const uint32_t c : drawing_) drawColumn(columns_[c]);
 }
 
 const sensor_msgs::PointCloud2& MapOutputCache::occupiedCloud(const std::string& frame_id,

@@ -4,6 +4,9 @@
 // cells in the same colours, one marker per chunk), chunks that empty are DELETEd, an update
 // carries only the chunks that changed, and a late subscriber's snapshot (shownBlockMarkers)
 // followed by the next increments shows the same. Also with hidden speckles and a height band.
+// Paced (pacedBlockMarkersWire, the server's paced_outputs): the changes are taken in once a
+// period and each call sends a share of their chunks; two periods after the last change the
+// subscribers (and one that joined in between) see what a full rebuild shows.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -38,14 +41,15 @@ void apply(const fragg::Map& map, const MarkerArray& a, View* view) {
     } else {
       ASSERT_EQ(m.action, Marker::ADD);
       ASSERT_EQ(m.type, Marker::CUBE_LIST);
-      ASSERT_EQ(m.points.size(), m.colors.size());
+      // Per-point colours, or none: the marker's colour draws every cube (flat markers).
+      ASSERT_TRUE(m.colors.empty() || m.points.size() == m.colors.size());
       ASSERT_FALSE(m.points.empty()) << "an ADD of an empty chunk";
       std::vector<Drawn>& cells = (*view)[m.id];
       cells.clear();
       for (size_t i = 0; i < m.points.size(); ++i) {
         const auto& p = m.points[i];
         const fragg::VoxelKey v = map.keyOf(Eigen::Vector3d(p.x, p.y, p.z));
-        const auto& c = m.colors[i];
+        const auto& c = m.colors.empty() ? m.color : m.colors[i];
         auto q = [](float x) { return static_cast<int>(std::lround(x * 1000.0f)); };
         cells.emplace_back(v.x, v.y, v.z, q(c.r), q(c.g), q(c.b), q(c.a));
       }
@@ -160,6 +164,14 @@ TEST(MarkerChunks, HiddenSpecklesAndAHeightBandToo) {
   expectIncrementsEqualRebuild(style);
 }
 
+TEST(MarkerChunks, FlatColoursWithoutPerPointColoursToo) {
+  MarkerStyle style;
+  style.chunk_blocks = 4;
+  style.height_colors = false;  // octomap_server's height_map false
+  style.flat_rgb[1] = 0.5f;
+  expectIncrementsEqualRebuild(style);
+}
+
 TEST(MarkerChunks, FreeCellsToo) {
   MarkerStyle style;
   style.chunk_blocks = 4;
@@ -198,6 +210,63 @@ TEST(MarkerChunks, AnUpdateCarriesOnlyTheChunksThatChangedAndDeletesEmptiedOnes)
   EXPECT_EQ(del.markers[0].id, id);
   EXPECT_EQ(topic.idOf(fragg::blockKeyOf(lone)), -1);
   EXPECT_EQ(topic.shownChunks(), wall_chunks);
+}
+
+// Clouds every 1/8 s, markers at 1 Hz, paced: the changes taken in once a period go out in
+// shares over the next period's calls (not all at once), none waits longer than two periods,
+// and once the map stops changing the view (and a late subscriber's) equals a full rebuild.
+void expectPacedReachesRebuild(MarkerStyle style) {
+  fragg::Map map(fragg::ros::test::cpuParams());
+  MarkerLedger topic;
+  View view, late_view;
+  constexpr double kPeriodS = 1.0, kIntervalS = 0.125;  // exact in binary
+  const auto paced = [&](double now_s) {
+    return fragg::ros::toMarkerArray(
+        fragg::ros::pacedBlockMarkersWire(map, style, kStamp, now_s, kPeriodS, &topic));
+  };
+  bool shared = false;  // some call left chunks queued for later calls
+  double now_s = 0.0;
+  for (int step = 0; step < 10; ++step, now_s += kIntervalS) {
+    SCOPED_TRACE("after edit " + std::to_string(step));
+    edit(map, step);
+    const MarkerArray update = paced(now_s);
+    apply(map, update, &view);
+    if (step > 0 && topic.pendingChunks() > 0) shared = true;
+    if (step > 3) apply(map, update, &late_view);
+    if (step == 3) {
+      // A subscriber joining while chunks are queued: the chunks as last sent, then the
+      // increments (the queued ones among them).
+      apply(map, fragg::ros::shownBlockMarkers(map, style, kStamp, topic), &late_view);
+      EXPECT_EQ(allDrawn(late_view), allDrawn(view));
+    }
+  }
+  EXPECT_TRUE(shared) << "every call sent everything: not paced";
+  // No more changes: two periods after the last one every chunk has gone out.
+  const double last_change_s = now_s - kIntervalS;
+  for (; now_s <= last_change_s + 2 * kPeriodS; now_s += kIntervalS) {
+    const MarkerArray update = paced(now_s);
+    apply(map, update, &view);
+    apply(map, update, &late_view);
+  }
+  EXPECT_EQ(topic.pendingChunks(), 0u) << "a chunk waited longer than two periods";
+  MarkerLedger rebuilt;
+  View full;
+  apply(map, fragg::ros::allBlockMarkers(map, style, kStamp, &rebuilt), &full);
+  EXPECT_EQ(allDrawn(view), allDrawn(full));
+  EXPECT_EQ(allDrawn(late_view), allDrawn(full));
+  EXPECT_EQ(view.size(), full.size()) << "one marker per chunk";
+  EXPECT_EQ(topic.shownChunks(), rebuilt.shownChunks());
+  EXPECT_TRUE(paced(now_s).markers.empty()) << "nothing left to send";
+}
+
+TEST(MarkerChunks, PacedSharesEqualAFullRebuildTwoPeriodsAfterTheLastChange) {
+  MarkerStyle style;
+  style.chunk_blocks = 1;  // many markers an edit: shares of them
+  expectPacedReachesRebuild(style);
+  style.chunk_blocks = 2;
+  style.hide_speckles = true;
+  style.heights = {-0.45, 0.65};
+  expectPacedReachesRebuild(style);
 }
 
 TEST(MarkerChunks, ChunkKeysFloorNegativeBlocks) {

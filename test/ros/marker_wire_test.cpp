@@ -87,6 +87,26 @@ TEST(MarkerWire, BytesEqualRoscppsSerialisationOfTheMarkersFlatColoursFreeCells)
   style.ns = "free";
   style.frame_id = "odom";
   expectSameBytesAsFieldByField(style);
+  // Flat: the marker's colour, no per-point colours (24 bytes a cell, not 40).
+  fragg::Map map(fragg::ros::test::cpuParams());
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  MarkerLedger flat, coloured;
+  const MarkerArray a = fragg::ros::allBlockMarkers(map, style, kStamp, &flat);
+  ASSERT_GT(a.markers.size(), 1u);
+  size_t cells = 0;
+  for (const Marker& m : a.markers) {
+    if (m.action != Marker::ADD) continue;
+    EXPECT_TRUE(m.colors.empty());
+    EXPECT_FLOAT_EQ(m.color.r, 0.25f);
+    EXPECT_FLOAT_EQ(m.color.a, 0.5f);
+    cells += m.points.size();
+  }
+  style.height_colors = true;
+  const SerializedMarkerArray with_colours =
+      fragg::ros::allBlockMarkersWire(map, style, kStamp, &coloured);
+  style.height_colors = false;
+  const SerializedMarkerArray without = fragg::ros::allBlockMarkersWire(map, style, kStamp, &flat);
+  EXPECT_EQ(bytesOf(with_colours).size() - bytesOf(without).size(), 16 * cells);
 }
 
 TEST(MarkerWire, CubeListWriterRefusesAHeadWithPoints) {

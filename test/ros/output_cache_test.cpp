@@ -3,7 +3,10 @@
 // projected map equal a from-scratch build of the same map (occupiedCloud, projectedMap),
 // with and without speckle hiding and a height band; insertions are incremental. Updates
 // skipped (map_rate) lose nothing. Blocks are read from their state masks where no cell of
-// theirs can widen the projected map, from their cells elsewhere.
+// theirs can widen the projected map, from their cells elsewhere. Paced (advance(), the server's
+// paced_outputs): the changes listed at a publication are recomputed in shares over the next
+// period's clouds; two periods after the last change, or at once with update(), the outputs
+// equal a rebuild.
 #include "fragg_map/ros/output_cache.h"
 
 #include <gtest/gtest.h>
@@ -391,6 +394,71 @@ TEST_P(OutputCacheManyBlocks, EqualsARebuildAsTheSensorMovesOn) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Options, OutputCacheManyBlocks, ::testing::Values(0, 1));
+
+// Clouds every 1/8 s, the whole-map outputs at 1 Hz, paced: the changes listed at a publication
+// (with_grid) are recomputed in shares over the next period's clouds (not all at once); two
+// periods after the last change the queue is empty and the outputs equal a rebuild; update()
+// catches up at once.
+class OutputCachePaced : public ::testing::TestWithParam<int> {};
+
+TEST_P(OutputCachePaced, EqualsARebuildTwoPeriodsAfterTheLastChange) {
+  OutputCacheOptions o;
+  o.hide_speckles = GetParam() & 1;
+  o.octomap_bounds = GetParam() & 2;
+  o.occupancy_min_z_m = -1.0;
+  o.occupancy_max_z_m = 0.8;
+  fragg::Map map(test::cpuParams(0.05));
+  MapOutputCache paced(o), caught_up(o);
+  std::mt19937 rng(57 + GetParam());
+  constexpr double kPeriodS = 1.0, kIntervalS = 0.125;  // exact in binary
+  EXPECT_TRUE(paced.advance(map, 0.0, kPeriodS, true).full);
+  EXPECT_TRUE(caught_up.update(map).full);
+  double now_s = kIntervalS, published_s = 0.0;
+  // As the server: a publication (the grid drawn, the changes listed) once a period.
+  const auto advance = [&](double t_s) {
+    const bool due = t_s - published_s >= kPeriodS;
+    if (due) published_s = t_s;
+    return paced.advance(map, t_s, kPeriodS, due);
+  };
+  size_t shares = 0;  // clouds that recomputed some blocks and left others queued
+  for (int cloud = 0; cloud < 12; ++cloud, now_s += kIntervalS) {
+    Eigen::Isometry3d T_map_sensor = Eigen::Isometry3d::Identity();
+    T_map_sensor.translation() = Eigen::Vector3d(0.6 * cloud, 0.1 * (cloud % 3), 0.0);
+    T_map_sensor.rotate(Eigen::AngleAxisd(0.15 * cloud, Eigen::Vector3d::UnitZ()));
+    map.insert(ringScan(&rng, 2000), T_map_sensor, fragg::SensorModel::autoFromCloud(0.0, 10.0));
+    const OutputCacheUpdate u = advance(now_s);
+    EXPECT_FALSE(u.full) << cloud;
+    EXPECT_EQ(u.blocks_queued, paced.queuedBlocks());
+    shares += u.blocks_read > 0 && u.blocks_queued > 0;
+    if (cloud == 5) {
+      // update() lists and takes everything at once: a second cache kept that way agrees.
+      (void)caught_up.update(map);
+      expectSameAsRebuild(map, caught_up, o, "update() at cloud 5");
+      EXPECT_EQ(caught_up.queuedBlocks(), 0u);
+    }
+  }
+  EXPECT_GE(shares, 2u) << "the listed blocks were not spread over the clouds";
+  // No more changes: two periods after the last one everything is in.
+  const double last_change_s = now_s - kIntervalS;
+  for (; now_s <= last_change_s + 2 * kPeriodS; now_s += kIntervalS) (void)advance(now_s);
+  EXPECT_EQ(paced.queuedBlocks(), 0u);
+  (void)paced.advance(map, now_s, kPeriodS, true);  // a publication: the grid drawn
+  EXPECT_EQ(paced.queuedBlocks(), 0u);
+  expectSameAsRebuild(map, paced, o, "two periods after the last cloud");
+  // Blocks queued, then update(): everything at once.
+  published_s = now_s - kPeriodS;  // the next call is a publication: it lists the new changes
+  for (int cloud = 0; cloud < 3; ++cloud, now_s += kIntervalS) {
+    Eigen::Isometry3d T_map_sensor = Eigen::Isometry3d::Identity();
+    T_map_sensor.translation() = Eigen::Vector3d(-0.8 * cloud, 1.0, 0.0);
+    map.insert(ringScan(&rng, 2000), T_map_sensor, fragg::SensorModel::autoFromCloud(0.0, 10.0));
+    (void)advance(now_s);
+  }
+  EXPECT_GT(paced.queuedBlocks(), 0u);
+  EXPECT_EQ(paced.update(map).blocks_queued, 0u);
+  expectSameAsRebuild(map, paced, o, "update() after paced clouds");
+}
+
+INSTANTIATE_TEST_SUITE_P(Options, OutputCachePaced, ::testing::Values(0, 3));
 
 TEST(OutputCache, RefreshingOnOccupiedChangesOnlyIsRefused) {
   OutputCacheOptions o;

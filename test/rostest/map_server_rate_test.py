@@ -158,6 +158,13 @@ class MapServerRateTest(unittest.TestCase):
         self.assertGreater(len(self.last["grid"].data), 0)
 
     def test_4_markers_equal_a_full_rebuild(self):
+        # Paced outputs (marker_rate / map_rate > 0): a change reaches the markers and the
+        # whole-map topics within two periods (taken in within one, sent within the next).
+        rate_hz = min([r for r in (rospy.get_param("/fragg_map/marker_rate", 0.0),
+                                   rospy.get_param("/fragg_map/map_rate", 0.0)) if r > 0],
+                      default=0.0)
+        if rate_hz > 0:
+            time.sleep(2.0 / rate_hz + 0.5)
         with self.lock:
             arrays = list(self.arrays)
         self.assertTrue(arrays, "no marker array")

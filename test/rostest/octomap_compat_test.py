@@ -210,15 +210,17 @@ class OctomapCompatTest(unittest.TestCase):
 
     # ---- parameters of the YAML ----
     def test_01_frame_resolution_and_flat_colour(self):
-        """frame_id, resolution, height_map false with color/*: every marker cell red."""
+        """frame_id, resolution, height_map false with color/*: every marker cell red (the
+        marker's colour, no per-point colours: as octomap_server draws it)."""
         markers = [m for m in self.last["occupied_cells_vis_array"].markers
                    if m.action == Marker.ADD]
         self.assertTrue(markers)
         for m in markers:
             self.assertEqual(m.header.frame_id, "map")
             self.assertAlmostEqual(m.scale.x, RES)
-            for c in m.colors:
-                self.assertEqual((c.r, c.g, c.b, c.a), (1.0, 0.0, 0.0, 1.0))
+            self.assertEqual(len(m.colors), 0)
+            c = m.color
+            self.assertEqual((c.r, c.g, c.b, c.a), (1.0, 0.0, 0.0, 1.0))
 
     def test_02_publish_free_space(self):
         wait_for(lambda: "free_cells_vis_array" in self.last, 10, "free_cells_vis_array")

@@ -5,7 +5,9 @@
 // look at from Map::changedBlocksSince (kOccupied for occupied markers: only the blocks where a
 // cell crossed the occupied threshold; kMasks, the change log, for the others): an update's
 // work follows what changed, not the map. Applied in order, the updates show what a
-// full rebuild (allBlockMarkers) shows.
+// full rebuild (allBlockMarkers) shows. Paced (pacedBlockMarkersWire): the chunks that changed
+// are queued in the ledger and each cloud sends its share of them, every chunk within the pace's
+// period of its change, so that a once-a-second update does not come as one burst.
 #pragma once
 
 #include <ros/time.h>
@@ -13,6 +15,7 @@
 
 #include <bitset>
 #include <cstdint>
+#include <deque>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -32,7 +35,9 @@ struct MarkerStyle {
   double color_min_z_m = -1.0;                           ///< bottom of the height colour ramp
   double color_max_z_m = 4.0;                            ///< top of the height colour ramp
   float alpha = 1.0f;
-  /// false (octomap_server's height_map false): every cell in `flat_rgb` (alpha above).
+  /// false (octomap_server's height_map false): every cell in `flat_rgb` (alpha above), as
+  /// the marker's colour without per-point colours (as octomap_server draws it; 24 bytes a
+  /// cell on the wire instead of 40), unless `colors` gives cells their own.
   bool height_colors = true;
   float flat_rgb[3] = {0.0f, 0.0f, 1.0f};
   /// filter_speckles: occupied cells without an occupied neighbour are not drawn (decided when
@@ -70,8 +75,10 @@ class MarkerLedger {
   uint64_t publishedRevision() const { return published_revision_; }
   /// Blocks with drawn cells.
   size_t shownBlocks() const { return shown_blocks_; }
-  /// Chunks shown (markers a subscriber holds).
+  /// Chunks shown (markers a subscriber holds), and those queued to be sent (paced).
   size_t shownChunks() const { return chunks_.size(); }
+  /// Chunks whose change is queued and not yet sent (pacedBlockMarkersWire).
+  [[nodiscard]] size_t pendingChunks() const { return pending_.size(); }
   /// The id of the marker that draws block `key`, or -1 when the block is not shown.
   [[nodiscard]] int32_t idOf(const fragg::BlockKey& key) const;
 
@@ -88,11 +95,13 @@ class MarkerLedger {
     /// sent): sent again as is in a late subscriber's snapshot; its buffer is written over
     /// when the chunk is drawn again and nothing else holds it.
     std::shared_ptr<WireMarker> wire;
+    bool pending = false;  ///< changed since it was last sent (listed in pending_)
   };
 
  private:
-  friend SerializedMarkerArray changedBlockMarkersWire(const fragg::Map&, const MarkerStyle&,
-                                                       const ::ros::Time&, MarkerLedger*);
+  friend SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map&, const MarkerStyle&,
+                                                     const ::ros::Time&, double, double,
+                                                     MarkerLedger*);
   friend SerializedMarkerArray allBlockMarkersWire(const fragg::Map&, const MarkerStyle&,
                                                    const ::ros::Time&, MarkerLedger*);
   friend SerializedMarkerArray shownBlockMarkersWire(const fragg::Map&, const MarkerStyle&,
@@ -107,12 +116,28 @@ class MarkerLedger {
   /// Map::viewEpoch() of the last update: shown blocks can only have left the map (clearBox,
   /// reset, paging) when it moved, so only then are they looked up.
   uint64_t view_epoch_ = 0;
+  /// The chunks changed and not yet sent, oldest first, with when they changed (paced).
+  struct Pending {
+    fragg::BlockKey chunk;
+    double since_s = 0.0;
+  };
+  std::deque<Pending> pending_;
+  double last_paced_s_ = 0.0;  ///< now_s of the last paced update (the clouds' interval)
+  double last_note_s_ = 0.0;   ///< now_s when the map's changes were last taken in (paced)
+  bool paced_ = false;         ///< last_paced_s_ is set
 };
 
 /// The chunk (of `chunk_blocks` blocks a side) that holds block `key`.
 fragg::BlockKey chunkOf(const fragg::BlockKey& key, int32_t chunk_blocks);
 
-/// The CUBE_LIST marker of one block: centres of the cells in `cells`, coloured by height.
+/// Whether `style` draws per-point colours (height colours or a colour table); else the
+/// marker's own colour is every cell's.
+[[nodiscard]] inline bool perPointColors(const MarkerStyle& style) {
+  return style.height_colors || style.colors != nullptr;
+}
+
+/// The CUBE_LIST marker of one block: centres of the cells in `cells`, coloured by height (or
+/// flat: perPointColors).
 visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::BlockKey& key,
                                        const CellMask& cells, const MarkerStyle& style,
                                        const ::ros::Time& stamp, int32_t id);
@@ -127,6 +152,21 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
                                                             const MarkerStyle& style,
                                                             const ::ros::Time& stamp,
                                                             MarkerLedger* ledger);
+
+/// changedBlockMarkersWire at a pace, called after every cloud (`now_s`: seconds of a steady or
+/// sensor clock): the ledger takes the map's changes in once every `period_s` (the first call,
+/// then the first call a period after the last time; as changedBlockMarkersWire), and the chunks
+/// they changed are queued and sent in even shares over the calls of the next period (the
+/// interval measured between calls): each call sends what is left over the calls left, all of
+/// it by the time the next changes are taken in. So a changed chunk reaches the subscribers
+/// within two periods of its change, in a rolling set spread over the clouds, and a period after
+/// the changes stop they see what a full rebuild shows. A late subscriber's snapshot
+/// (shownBlockMarkersWire) is the chunks as last sent, to which the queued ones still apply.
+/// `period_s` <= 0: the changes taken in and sent at once (changedBlockMarkersWire).
+[[nodiscard]] SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map& map,
+                                                          const MarkerStyle& style,
+                                                          const ::ros::Time& stamp, double now_s,
+                                                          double period_s, MarkerLedger* ledger);
 
 /// A full republish (after reset or load, or for a late subscriber): a DELETEALL marker in
 /// `style.ns`, then one ADD per chunk with drawn cells. Rebuilds the ledger (and its kept

@@ -8,7 +8,11 @@
 // itself is kept between updates and patched in the changed columns (octomap_server's
 // incremental_2D_projection); messages are assembled from the pieces (a copy of the output,
 // no pass over the cells). The results equal occupiedCloud() and projectedMap() of the same
-// map as sets (point order differs). Not thread-safe: one owner, under the map's read lock.
+// map as sets (point order differs). Paced (advance()): the changed blocks are listed at a
+// publication and recomputed in even shares over the clouds of the next period, so that the
+// work follows the clouds instead of coming as one backlog per publication; a block's change
+// reaches the outputs within two periods (listed within one, recomputed within the next), and
+// update() catches up at once. Not thread-safe: one owner, under the map's read lock.
 #pragma once
 
 #include <nav_msgs/OccupancyGrid.h>
@@ -63,6 +67,8 @@ struct OutputCacheUpdate {
   size_t columns_merged = 0;  ///< 8 x 8 column groups of the grid recomputed
   /// Of blocks_read, those whose cells were read (the others from their state masks alone).
   size_t blocks_cells_read = 0;
+  /// advance(): blocks left queued for later clouds (0 after update()).
+  size_t blocks_queued = 0;
   /// Wall milliseconds of its stages: the blocks to refresh listed (change log, look-ups), the
   /// pieces found or made and recomputed, the columns merged and the grid drawn.
   double list_ms = 0.0, pieces_ms = 0.0, grid_ms = 0.0;
@@ -73,10 +79,21 @@ class MapOutputCache {
   /// Throws fragg::InvalidArgument for NaN heights or min > max (as projectedMap).
   explicit MapOutputCache(const OutputCacheOptions& options = OutputCacheOptions());
 
-  /// Brings the pieces and the grid up to date with `map` (held under its read lock).
+  /// Brings the pieces and the grid up to date with `map` (held under its read lock), the
+  /// blocks advance() left queued included.
   OutputCacheUpdate update(const fragg::Map& map);
+  /// One cloud's share of a paced refresh (`map` under its read lock). `with_grid` (a
+  /// publication follows: the grid is drawn): what is left of the last list is recomputed and
+  /// the blocks changed since are listed and queued (stamped `now_s`); otherwise this cloud's
+  /// share of the queue is recomputed, what is left over the clouds left until the list is
+  /// `period_s` old (the clouds' interval measured between calls), so the queue is empty by
+  /// the next publication. The columns are merged either way, the grid's bounds kept current.
+  /// `period_s` <= 0: as update(). A rebuild (view moved, first call) is done whole at once.
+  OutputCacheUpdate advance(const fragg::Map& map, double now_s, double period_s, bool with_grid);
   /// Forgets everything: the next update rebuilds.
   void invalidate() { valid_ = false; }
+  /// Blocks queued by advance() and not yet recomputed.
+  [[nodiscard]] size_t queuedBlocks() const { return queue_.size() - queue_head_; }
 
   /// The occupied cloud of the last update: packed float32 x, y, z (as occupiedCloud()),
   /// gathered from the pieces that hold cells into a message kept by the cache (valid until
@@ -130,8 +147,19 @@ class MapOutputCache {
     std::vector<uint32_t> pieces;  ///< indices into pieces_
     uint64_t occupied = 0, free = 0;
     int8_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
-    bool dirty = false;  ///< listed in the update's dirty columns
+    bool dirty = false;    ///< listed in the update's dirty columns
+    bool undrawn = false;  ///< merged since the grid was last drawn (listed in undrawn_)
   };
+  /// The blocks changed since the last update (all of them for a rebuild, `full`).
+  /// `keys_only`: the sources' masks are not looked up (they are queued by key).
+  std::vector<Source> listChanges(const fragg::Map& map, const fragg::BlockView& blocks, bool full,
+                                  bool masks_suffice, bool keys_only);
+  /// Recomputes the pieces of `sources` (distinct blocks of the map), adding to `out`.
+  void recompute(const fragg::Map& map, const fragg::BlockView& blocks,
+                 const std::vector<Source>& sources, bool masks_suffice, OutputCacheUpdate* out);
+  /// The common path of update() and advance(): `period_s` <= 0 recomputes everything listed
+  /// and queued.
+  OutputCacheUpdate refresh(const fragg::Map& map, double now_s, double period_s, bool with_grid);
 
   /// Brings `piece` (new: default-constructed) up to date with `source`'s block. With
   /// `masks_suffice` (the change log lists every block where a cell became observed: refreshOn
@@ -153,9 +181,10 @@ class MapOutputCache {
   void dropPiece(const fragg::BlockKey& key);
   /// Recomputes `col`'s merged patch and bounds from its blocks' pieces.
   void mergeColumn(Column* col) const;
-  /// Grid bounds from the columns; reallocates and redraws the grid when they moved, else
-  /// draws the dirty columns.
-  void refreshGrid(bool all);
+  /// Grid bounds from the columns (kept for boundsSettled); with `draw`, reallocates and redraws
+  /// the grid when they moved (or `all`, or a redraw is owed), else draws the columns merged
+  /// since the last draw; without, only notes what is owed.
+  void refreshGrid(bool all, bool draw);
   void drawColumn(const Column& col);
 
   OutputCacheOptions options_;
@@ -171,7 +200,16 @@ class MapOutputCache {
   mutable sensor_msgs::PointCloud2 cloud_msg_;  ///< occupiedCloud()'s message and buffer
   std::vector<Column> columns_;
   fragg::BlockKeyTable column_index_;  ///< {x, y, 0} block key -> index into columns_
-  std::vector<uint32_t> dirty_;        ///< columns to merge and draw in this update
+  std::vector<uint32_t> dirty_;        ///< columns to merge in this update
+  std::vector<uint32_t> undrawn_;      ///< columns merged since the grid was last drawn
+  std::vector<uint32_t> drawing_;      ///< refreshGrid's copy of undrawn_ (kept for its memory)
+  bool redraw_owed_ = false;           ///< a rebuild since the grid was last drawn
+  /// advance(): the blocks of the last list not recomputed yet, from queue_head_ on.
+  std::vector<fragg::BlockKey> queue_;
+  size_t queue_head_ = 0;
+  double queued_since_s_ = 0.0;  ///< now_s when queue_ was listed
+  double last_advance_s_ = 0.0;  ///< now_s of the last advance() (the clouds' interval)
+  bool advanced_ = false;        ///< last_advance_s_ is set
   size_t occupied_cells_ = 0;
   /// The observed cells' xy key bounds at the last update (seen_valid_: some cell observed).
   bool seen_valid_ = false;

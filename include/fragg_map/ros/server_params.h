@@ -135,6 +135,11 @@ struct ServerParams {
   /// cloud. Skipped clouds cost nothing there (the output cache catches up from the revision
   /// it last saw); reset, load, clear and corrections publish at once.
   double map_rate_hz = 0.0;
+  /// paced_outputs: with marker_rate / map_rate > 0, the work behind an update is spread over
+  /// the clouds of its period (after every cloud a share of the changed marker chunks is sent
+  /// and a share of the changed blocks goes into the output cache; each within a period of its
+  /// change) instead of coming as one burst when the update is due. false: the burst.
+  bool paced_outputs = true;
   /// trace_csv: a file that gets one row per cloud received (its outcome and where its time
   /// went: queue, conversion, tf, insertion, outputs); empty: none.
   std::string trace_csv;

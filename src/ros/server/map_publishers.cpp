@@ -163,11 +163,28 @@ void MapPublishers::publishMapOutputs(const fragg::Map& map, const ::ros::Time& 
     return;
   }
   const double now_s = ::ros::SteadyTime::now().toSec();
+  if (throttled && pacedMaps()) {
+    // Paced: the cache takes its share of the changed blocks after every cloud (each within a
+    // period of its change), and the messages go out when due, as the cache has them.
+    const bool due = held_maps_.letThrough(now_s, stamp);
+    outputs_.advance(map, now_s, held_maps_.throttle().periodS(), due);
+    if (!due) return;
+    held_maps_.published(now_s);
+    sendMapOutputs(stamp, cloud_wanted, grid_wanted);
+    // Changes still queued: the timer sends the map again once they are in (the clouds may
+    // stop before the next publication).
+    if (outputs_.queuedBlocks() > 0) (void)held_maps_.letThrough(now_s, stamp);
+    return;
+  }
   // Held back: not even the cache's update; it reads every block changed since the revision
   // it last saw when the next publication comes.
   if (throttled && !held_maps_.letThrough(now_s, stamp)) return;
   held_maps_.published(now_s);  // also when building throws: the next cloud tries again
   outputs_.update(map);         // the changed blocks only
+  sendMapOutputs(stamp, cloud_wanted, grid_wanted);
+}
+
+void MapPublishers::sendMapOutputs(const ::ros::Time& stamp, bool cloud_wanted, bool grid_wanted) {
   if (cloud_wanted) {
     const sensor_msgs::PointCloud2& cloud = outputs_.occupiedCloud(params_.frame_id, stamp);
     if (wanted(occupied_cloud_pub_)) occupied_cloud_pub_.publish(cloud);
@@ -186,27 +203,34 @@ void MapPublishers::flushPendingMaps(const ::ros::SteadyTimerEvent&) {
 void MapPublishers::publishMarkerTopics(const fragg::Map& map, const ::ros::Time& stamp,
                                         bool full) {
   const double now_s = ::ros::SteadyTime::now().toSec();
-  if (!full && !marker_throttle_.due(now_s)) return;  // the changes stay pending
-  publishMarkers(map, occupied_markers_, stamp, full);
-  if (params_.publish_free_space) publishMarkers(map, free_markers_, stamp, full);
+  // Paced: after every cloud, its share of the changed chunks (each within a period of its
+  // change); unpaced: all of them when the throttle lets an update out.
+  const double period_s = pacedMarkers() ? marker_throttle_.periodS() : 0.0;
+  if (!full && period_s <= 0.0 && !marker_throttle_.due(now_s)) return;  // they stay pending
+  publishMarkers(map, occupied_markers_, stamp, full, now_s, period_s);
+  if (params_.publish_free_space) publishMarkers(map, free_markers_, stamp, full, now_s, period_s);
   marker_throttle_.published(now_s);
 }
 
 void MapPublishers::flushPendingMarkers(const ::ros::SteadyTimerEvent&) {
-  // What is pending shows in the map: the ledgers lag its revision.
+  // What is pending shows in the map (the ledgers lag its revision) or, paced, in the ledgers'
+  // queues.
+  const auto pending = [this](const MarkerTopic& topic, uint64_t revision) {
+    return topic.ledger.publishedRevision() != revision || topic.ledger.pendingChunks() > 0;
+  };
   flushWithoutWaiting(
       publish_mutex_, *shared_, [] { return true; },
-      [this](const fragg::Map& map) {
+      [this, pending](const fragg::Map& map) {
         const uint64_t revision = map.revision();
-        const bool pending =
-            occupied_markers_.ledger.publishedRevision() != revision ||
-            (params_.publish_free_space && free_markers_.ledger.publishedRevision() != revision);
-        if (pending) publishMarkerTopics(map, ::ros::Time::now(), false);
+        if (pending(occupied_markers_, revision) ||
+            (params_.publish_free_space && pending(free_markers_, revision)))
+          publishMarkerTopics(map, ::ros::Time::now(), false);
       });
 }
 
 void MapPublishers::publishMarkers(const fragg::Map& map, MarkerTopic& topic,
-                                   const ::ros::Time& stamp, bool full) {
+                                   const ::ros::Time& stamp, bool full, double now_s,
+                                   double period_s) {
   const uint32_t subscribers = topic.pub ? topic.pub.getNumSubscribers() : 0;
   if (subscribers == 0) {
     // Nobody sees the markers: the next subscriber starts from a full set.
@@ -222,8 +246,9 @@ void MapPublishers::publishMarkers(const fragg::Map& map, MarkerTopic& topic,
   // Kept wire bytes of the chunks (marker_wire.h): roscpp copies them, nothing is serialised
   // again.
   const SerializedMarkerArray markers =
-      full || first || joined ? allBlockMarkersWire(map, topic.style, stamp, &topic.ledger)
-                              : changedBlockMarkersWire(map, topic.style, stamp, &topic.ledger);
+      full || first || joined
+          ? allBlockMarkersWire(map, topic.style, stamp, &topic.ledger)
+          : pacedBlockMarkersWire(map, topic.style, stamp, now_s, period_s, &topic.ledger);
   if (!markers.markers.empty()) topic.pub.publish(markers);
 }
 

@@ -7,9 +7,14 @@
 // per-block pieces that only the changed blocks refresh (MapOutputCache). With `marker_rate` the
 // marker updates are throttled: the insertion thread publishes them when one is due, and a steady
 // timer sends what is still pending once the clouds stop. `map_rate` throttles the whole-map
-// outputs the same way: after a cloud that is not due the cache is not even updated (it catches up
-// from the revision it last saw at the next publication). Reset, load, clear and corrections
-// publish the whole-map outputs at once; frustum and ~stats go out after every cloud.
+// outputs the same way. With `paced_outputs` (the default) the work behind both is spread over
+// the clouds: after every cloud the marker topics send their share of the changed chunks (every
+// chunk within 1 / marker_rate of its change) and the output cache recomputes its share of the
+// changed blocks (the whole-map messages, when due, carry the cache as it is: each block within
+// 1 / map_rate of its change); unpaced, after a cloud that is not due nothing is done (the
+// ledgers and the cache catch up from the revision they last saw at the next update). Reset, load,
+// clear and corrections publish the whole-map outputs at once; frustum and ~stats go out after
+// every cloud.
 #pragma once
 
 #include <ros/node_handle.h>
@@ -66,8 +71,14 @@ class MapPublishers {
   void publishMapOutputs(const fragg::Map& map, const ::ros::Time& stamp, bool throttled);
   /// Both marker topics: a full set, or the changes when the throttle lets an update out.
   void publishMarkerTopics(const fragg::Map& map, const ::ros::Time& stamp, bool full);
+  /// One topic: a full set, or the changes (paced with `period_s` > 0: this cloud's share).
   void publishMarkers(const fragg::Map& map, MarkerTopic& topic, const ::ros::Time& stamp,
-                      bool full);
+                      bool full, double now_s, double period_s);
+  /// occupied_cells, octomap_point_cloud_centers and projected_map from the cache as it is.
+  void sendMapOutputs(const ::ros::Time& stamp, bool cloud_wanted, bool grid_wanted);
+  /// paced_outputs with a marker_rate / map_rate limit in effect.
+  bool pacedMarkers() const { return params_.paced_outputs && marker_throttle_.limited(); }
+  bool pacedMaps() const { return params_.paced_outputs && held_maps_.throttle().limited(); }
   /// Timer: the changes still pending (never waits for the map: an insertion holding it
   /// publishes them itself when it ends).
   void flushPendingMarkers(const ::ros::SteadyTimerEvent& event);

@@ -20,13 +20,17 @@
 // rows then show 0 in the columns that were not due. Then it prints the after path's cost
 // amortised over all clouds (sum / clouds), the median and max of one update of each kind
 // (what a publication costs when it comes: that latency is not amortised), and what the
-// server's timer would flush after the last cloud (not in the sum). The before and any paths
-// stay unthrottled (any: the markers that the before rows borrow when the after path's were
-// not due).
+// server's timer would flush after the last cloud (not in the sum). Paced (the server's
+// paced_outputs, the default; --unpaced: not), the markers send their share of the changed
+// chunks and the cache recomputes its share of the changed blocks after every cloud (the
+// whole-map messages when due); the per-cloud p50 / p99 is what the server's insertion thread
+// spends outside insertion. The before and any paths stay unthrottled (any: the markers that
+// the before rows borrow when the after path's were not due).
 //   fragg_map_server_overhead --workloads DIR [--scans N] [--big-map FILE] [--big-scans K]
 //                             [--cloud-rate HZ] [--marker-rate HZ] [--map-rate HZ]
 //                             [--marker-chunk N] [--after-only] [--cells-always]
-//                             [--fresh-buffers] [--backend cpu|cuda]
+//                             [--fresh-buffers] [--unpaced] [--flat-markers]
+//                             [--backend cpu|cuda]
 #include <ros/serialization.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/PointField.h>
@@ -105,6 +109,8 @@ struct Times {
 
 /// Blocks per side of a marker chunk (--marker-chunk; the server's markers/chunk_blocks).
 int g_marker_chunk_blocks = 4;
+/// --flat-markers: octomap_server's height_map false (one colour a marker, none per point).
+bool g_flat_markers = false;
 /// --cells-always: the after path's cache reads every refreshed block's cells (as before it
 /// read the state masks where they suffice).
 bool g_cells_always = false;
@@ -115,21 +121,39 @@ struct Due {
   bool maps = true;
 };
 
+/// The server's paced_outputs (--unpaced: off): after every cloud the markers send their share
+/// of the changed chunks and the output cache recomputes its share of the changed blocks, each
+/// within a period of the rate of its change; the whole-map messages go out when due.
+struct Pace {
+  bool on = false;
+  double now_s = 0.0;          ///< the cloud's sensor time
+  double marker_period_s = 0;  ///< 1 / marker_rate (0: every cloud, not paced)
+  double map_period_s = 0;     ///< 1 / map_rate
+};
+
 /// The outputs after one cloud, one way or the other. `before`: the whole-map rebuilds.
 class Outputs {
  public:
   explicit Outputs(bool before, fragg::BlockChange refresh_on = fragg::BlockChange::kMasks)
       : before_(before), cache_(optionsWith(refresh_on)) {
     style_.chunk_blocks = g_marker_chunk_blocks;
+    style_.height_colors = !g_flat_markers;
   }
-  /// `due`: the after path's throttled outputs (the before path ignores it).
-  Times publish(const fragg::Map& map, Due due = Due()) {
+  /// `due`: the after path's throttled outputs (the before path ignores it); `pace`: paced,
+  /// the markers' share goes out and the cache takes its share after every cloud (the
+  /// whole-map messages only when due).
+  Times publish(const fragg::Map& map, Due due = Due(), const Pace& pace = Pace()) {
     Times t;
     auto t0 = Clock::now();
     long faults = minorFaults(), marker_faults = 0;
     fragg::ros::SerializedMarkerArray markers;  // as the server publishes them
+    const bool paced_markers = !before_ && pace.on && pace.marker_period_s > 0.0;
+    const bool paced_maps = !before_ && pace.on && pace.map_period_s > 0.0;
+    if (paced_markers) due.markers = true;  // something may be sent after every cloud
     if (!before_ && due.markers) {
-      markers = fragg::ros::changedBlockMarkersWire(map, style_, ros::Time(), &ledger_);
+      markers =
+          fragg::ros::pacedBlockMarkersWire(map, style_, ros::Time(), pace.now_s,
+                                            paced_markers ? pace.marker_period_s : 0.0, &ledger_);
       t.markers = msSince(t0);
     }
     marker_faults = minorFaults() - faults;
@@ -145,8 +169,19 @@ class Outputs {
       t0 = Clock::now();
       grid = fragg::ros::projectedMap(map, kMinZ, kMaxZ, "map", ros::Time());
       t.grid = msSince(t0);
+    } else if (paced_maps && !due.maps) {
+      // This cloud's share of the changed blocks; no message.
+      const fragg::ros::OutputCacheUpdate u =
+          cache_.advance(map, pace.now_s, pace.map_period_s, false);
+      t.blocks_read = u.blocks_read;
+      t.cells_read = u.blocks_cells_read;
+      t.stages = u;
+      t.cache_update = msSince(t0);
+      t.cloud = t.cache_update;
     } else if (due.maps) {
-      const fragg::ros::OutputCacheUpdate u = cache_.update(map);
+      const fragg::ros::OutputCacheUpdate u =
+          paced_maps ? cache_.advance(map, pace.now_s, pace.map_period_s, true)
+                     : cache_.update(map);
       t.blocks_read = u.blocks_read;
       t.cells_read = u.blocks_cells_read;
       t.stages = u;
@@ -170,6 +205,9 @@ class Outputs {
     t.map_faults += minorFaults() - faults;
     return t;
   }
+  /// Blocks and chunks queued by the paced path (what the server's timers send once the clouds
+  /// stop).
+  size_t queued() const { return cache_.queuedBlocks() + ledger_.pendingChunks(); }
 
  private:
   static fragg::ros::OutputCacheOptions optionsWith(fragg::BlockChange refresh_on) {
@@ -262,7 +300,7 @@ size_t occupiedCells(const fragg::Map& map) {
 /// (1-based) and the medians.
 void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_range_m,
          const std::vector<size_t>& shown, const std::string& label, const Rates& rates,
-         bool after_only) {
+         bool after_only, bool paced) {
   // after: the cache refreshes the blocks whose cell states changed; any: every changed block
   // (as before BlockMeta::state_at), for the same-run comparison.
   Outputs before(true), after(false), any(false, fragg::BlockChange::kAny);
@@ -292,7 +330,13 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
     due.maps = map_throttle.due(now_s);
     if (due.markers) marker_throttle.published(now_s);
     if (due.maps) map_throttle.published(now_s);
-    const Times a = after.publish(map, due);
+    Pace pace;
+    pace.on = paced;
+    pace.now_s = now_s;
+    pace.marker_period_s = rates.marker_hz > 0.0 ? 1.0 / rates.marker_hz : 0.0;
+    pace.map_period_s = rates.map_hz > 0.0 ? 1.0 / rates.map_hz : 0.0;
+    const Times a = after.publish(map, due, pace);
+    if (paced && pace.marker_period_s > 0.0) due.markers = true;  // a share after every cloud
     total_after.push_back(convert_ms + a.total());
     converts.push_back(convert_ms);
     after_times.push_back(a);
@@ -319,8 +363,11 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
     }
   }
   using fragg::tools::percentile;
-  std::printf("after: median %.2f ms, max %.2f ms per cloud over %zu clouds\n",
-              percentile(total_after, 0.5), percentile(total_after, 1.0), scans.size());
+  std::printf(
+      "after%s: per cloud (convert + markers + whole-map outputs) p50 %.2f ms, p99 %.2f ms, max "
+      "%.2f ms over %zu clouds\n",
+      paced ? " (paced)" : "", percentile(total_after, 0.5), percentile(total_after, 0.99),
+      percentile(total_after, 1.0), scans.size());
   if (!after_only)
     std::printf("any:   median %.2f ms, max %.2f ms per cloud over %zu clouds\n",
                 percentile(total_any, 0.5), percentile(total_any, 1.0), scans.size());
@@ -328,8 +375,8 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
   Times flush;
   if (!dues.empty()) {
     Due pending;  // the last cloud's changes (and those before it since the last update)
-    pending.markers = !dues.back().markers;
-    pending.maps = !dues.back().maps;
+    pending.markers = !dues.back().markers || (paced && after.queued() > 0);
+    pending.maps = !dues.back().maps || (paced && after.queued() > 0);
     if (pending.markers || pending.maps) flush = after.publish(map, pending);
     if (pending.maps)
       std::printf(
@@ -387,11 +434,19 @@ int runMain(int argc, char** argv) {
                  "cpu | cuda: the map's backend (the outputs read its masks and change log; "
                  "cuda needs a CUDA build)")
       ->check(CLI::IsMember({"cpu", "cuda"}));
+  app.add_flag("--flat-markers", g_flat_markers,
+               "markers in one colour without per-point colours (the server's height_map "
+               "false: 24 bytes a cell instead of 40)");
+  bool unpaced = false;
+  app.add_flag("--unpaced", unpaced,
+               "as the server with paced_outputs false: the throttled updates whole when due "
+               "(default: paced, their work spread over the clouds of a period)");
   bool fresh_buffers = false;
   app.add_flag("--fresh-buffers", fresh_buffers,
                "leave glibc's mmap and trim thresholds as they are (the server raises them: "
                "keepPublicationBuffers), so that each serialised message maps fresh pages");
   CLI11_PARSE(app, argc, argv);
+  const bool paced = !unpaced && rates.limited();
   if (!fresh_buffers && !fragg::ros::keepPublicationBuffers(fragg::ros::kKeptPublicationBytes))
     std::printf("keepPublicationBuffers: refused (not glibc?): fresh pages per message\n");
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows as they come (long runs)
@@ -412,7 +467,7 @@ int runMain(int argc, char** argv) {
     std::vector<fragg::Scan> first(w1.scans.begin(),
                                    w1.scans.begin() + std::min(scans, w1.scans.size()));
     run(map, first, w1.max_range_m, shown, "new map, W1 scans 1.." + std::to_string(first.size()),
-        rates, after_only);
+        rates, after_only, paced);
   }
   if (!big_map.empty()) {
     fragg::Map map = fragg::Map::load(big_map, params);
@@ -423,7 +478,7 @@ int runMain(int argc, char** argv) {
     run(map, first, w1.max_range_m, all,
         big_map + " (" + std::to_string(map.blockCount()) + " blocks) + W1 scans 1.." +
             std::to_string(first.size()),
-        rates, after_only);
+        rates, after_only, paced);
   }
   return 0;
 }
