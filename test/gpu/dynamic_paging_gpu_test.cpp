@@ -25,23 +25,13 @@ constexpr int kScans = 40;
     if (cudaDeviceName(0, &why).empty()) GTEST_SKIP() << "skipped: " << why; \
   } while (0)
 
-/// 12 MB: room for the blocks one corridor scan needs on the device (~3,660, see
-/// paging_gpu_test.cpp) and its ring, fewer than the drive makes (8,359): blocks page out.
-PagingPolicy budget() {
-  PagingPolicy p;
-  p.budget_mb = 12.0;
-  p.radius_m = 4.0;
-  p.commit_every_scans = 7;
-  p.commit_every_s = 0;
-  return p;
-}
-
 void expectCudaPagedEqualsCpuInMemory(VoidSpaceRule rule) {
   const std::string dir = testDir();
   Map cpu(dynamicCorridorParams(rule, Backend::kCpu));
   Map cuda(dynamicCorridorParams(rule, Backend::kCuda));
   ASSERT_STREQ(cuda.backendName(), "cuda");
-  cuda.attachPageStore(openPageStore(dir + "/map.db", false), budget());
+  cuda.attachPageStore(openPageStore(dir + "/map.db", false),
+                       corridorBudget(12.0, 7));  // room for a scan on the device and its ring
   uint64_t dynamic_hits = 0;
   for (int i = 0; i < kScans; ++i) {
     const Eigen::Isometry3d T = corridorPose(i, kScans);

@@ -18,21 +18,10 @@ namespace {
 
 constexpr int kScans = 40;
 
-PagingPolicy smallBudget() {
-  PagingPolicy p;
-  // Fewer blocks than the drive makes, more than one scan reaches: blocks page out on the way
-  // down and back in on the way back.
-  p.budget_mb = 10.0;
-  p.radius_m = 4.0;
-  p.commit_every_scans = 5;
-  p.commit_every_s = 0;
-  return p;
-}
-
 void expectPagedEqualsMemory(VoidSpaceRule rule) {
   const std::string dir = testDir();
   Map paged(dynamicCorridorParams(rule)), memory(dynamicCorridorParams(rule));
-  paged.attachPageStore(openPageStore(dir + "/map.db", false), smallBudget());
+  paged.attachPageStore(openPageStore(dir + "/map.db", false), corridorBudget(10.0, 5));
   uint64_t dynamic_hits = 0;
   for (int i = 0; i < kScans; ++i) {
     const Eigen::Isometry3d T = corridorPose(i, kScans);

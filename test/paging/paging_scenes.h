@@ -14,6 +14,7 @@
 
 #include "../test_dir.h"
 #include "fragg_map/map.h"
+#include "fragg_map/page_store.h"
 
 namespace fragg::test {
 
@@ -77,6 +78,19 @@ inline PointCloud corridorScan(const Eigen::Isometry3d& T_map_sensor) {
   cloud.width = static_cast<uint32_t>(cloud.points_S.size());
   cloud.height = 1;
   return cloud;
+}
+
+/// A RAM budget of `mb` for the corridor, paging out from 4 m around the sensor, committing
+/// every `commit_every_scans` scans (never by time: deterministic). 10 MB holds ~4,800 blocks of
+/// the corridor map's 8,359 and one scan's reach (up to ~3,900 blocks on the CPU): blocks page
+/// out on the way down and back in on the way back.
+inline PagingPolicy corridorBudget(double mb, uint64_t commit_every_scans) {
+  PagingPolicy p;
+  p.budget_mb = mb;
+  p.radius_m = 4.0;
+  p.commit_every_scans = commit_every_scans;
+  p.commit_every_s = 0;
+  return p;
 }
 
 inline SensorModel corridorSensor() { return SensorModel::autoFromCloud(0.0, 15.0); }

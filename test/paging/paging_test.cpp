@@ -24,16 +24,9 @@ namespace {
 
 constexpr int kScans = 80;
 
-PagingPolicy smallBudget() {
-  PagingPolicy p;
-  // ~4,800 blocks of the corridor map's 8,359; it holds one scan's reach (up to ~3,900 blocks):
-  // a budget that does not is refused at the scan (paging_budget_test.cpp).
-  p.budget_mb = 10.0;
-  p.radius_m = 4.0;
-  p.commit_every_scans = 7;
-  p.commit_every_s = 0;
-  return p;
-}
+// ~4,800 blocks of the corridor map's 8,359; it holds one scan's reach (up to ~3,900 blocks):
+// a budget that does not is refused at the scan (paging_budget_test.cpp).
+PagingPolicy smallBudget() { return corridorBudget(10.0, 7); }
 
 Map inMemory(int scans) {
   Map map(corridorParams());

@@ -15,16 +15,7 @@ namespace {
 
 constexpr int kScans = 60;
 
-PagingPolicy tinyBudget() {
-  PagingPolicy p;
-  // fewer blocks than the drive makes (8,359), more than one scan reaches (~3,900): blocks
-  // page out and back in
-  p.budget_mb = 10.0;
-  p.radius_m = 4.0;
-  p.commit_every_scans = 5;
-  p.commit_every_s = 0;
-  return p;
-}
+PagingPolicy tinyBudget() { return corridorBudget(10.0, 5); }
 
 TEST(StateMasksPaging, PagedInBlocksComeWithCurrentMasks) {
   const std::string dir = testDir();
