@@ -15,8 +15,10 @@ export ROS_MASTER_URI=http://127.0.0.1:11311 ROS_IP=127.0.0.1 ROSCONSOLE_STDOUT_
 fragg_default_ws() { printf '%s_ws\n' "$FRAGG_REPO"; }
 FRAGG_WS="${FRAGG_WS:-$(fragg_default_ws)}"
 FRAGG_JOBS="${FRAGG_JOBS:-2}"
-# CUDA kernels: "all" (every supported architecture: build.sh, test.sh, CI) or "machine" (the
-# demo scripts: only the GPU present, native, and no CUDA at all without a GPU).
+# CUDA kernels: "all" (every supported architecture: build.sh, test.sh), "check" (CI, .ci/run:
+# one architecture, the oldest supported, sm_75: every kernel compiled and checked by ptxas once,
+# not seven times; a GPU-less CI machine runs none of them) or "machine" (the demo scripts: only
+# the GPU present, native, and no CUDA at all without a GPU).
 FRAGG_CUDA="${FRAGG_CUDA:-all}"
 # The tests (FRAGG_BUILD_TESTS): ON for build.sh, test.sh and CI; OFF for the demo scripts, whose
 # first run builds only what it runs. Passed on every catkin_make, so a workspace the demo
@@ -120,6 +122,9 @@ fragg_cuda_choice() {
     all)
       FRAGG_CUDA_ARGS=(-DFRAGG_WITH_CUDA=ON -DFRAGG_CUDA_NATIVE=OFF)
       FRAGG_CUDA_NOTE="CUDA: kernels for every supported architecture (when nvcc is found)" ;;
+    check)
+      FRAGG_CUDA_ARGS=(-DFRAGG_WITH_CUDA=ON -DFRAGG_CUDA_NATIVE=OFF -DCMAKE_CUDA_ARCHITECTURES=75-real)
+      FRAGG_CUDA_NOTE="CUDA: kernels compiled for sm_75 only, a compile check (when nvcc is found)" ;;
     machine)
       local gpu=""
       if command -v nvidia-smi >/dev/null 2>&1; then
@@ -132,7 +137,7 @@ fragg_cuda_choice() {
         FRAGG_CUDA_ARGS=(-DFRAGG_WITH_CUDA=OFF -DFRAGG_CUDA_NATIVE=OFF)
         FRAGG_CUDA_NOTE="CUDA: no GPU found (nvidia-smi): building without CUDA, CPU backend only"
       fi ;;
-    *) echo "FRAGG_CUDA must be all or machine, not '$FRAGG_CUDA'" >&2; return 2 ;;
+    *) echo "FRAGG_CUDA must be all, check or machine, not '$FRAGG_CUDA'" >&2; return 2 ;;
   esac
   echo "$FRAGG_CUDA_NOTE"
 }
