@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
-#include <tuple>
 #include <vector>
 
 #include "fragg_map/internal/decay.h"
@@ -109,7 +108,8 @@ void scanBlockBounds(const PreparedScan& scan, BlockKey* lo, BlockKey* hi) {
 }  // namespace
 
 namespace {
-/// The blocks of a prepared scan's hit cells, each once.
+/// The blocks of a prepared scan's hit cells (a run of hits in one block listed once; the
+/// page-in takes each key once).
 std::vector<BlockKey> hitBlockKeys(const PreparedScan& scan) {
   std::vector<BlockKey> keys;
   for (size_t r = 0; r < scan.rays.size(); ++r) {
@@ -119,11 +119,6 @@ std::vector<BlockKey> hitBlockKeys(const PreparedScan& scan) {
                             scan.ref.z + scan.endCell(r, 2)});
     if (keys.empty() || !(keys.back() == k)) keys.push_back(k);
   }
-  const auto less = [](const BlockKey& a, const BlockKey& b) {
-    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
-  };
-  std::sort(keys.begin(), keys.end(), less);
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   return keys;
 }
 }  // namespace
@@ -218,29 +213,8 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
   // 3. Apply: find or create the host blocks, then update the marked cells.
   t0 = std::chrono::steady_clock::now();
   const long touched = static_cast<long>(merged.touchedCount());
-  // MapParams::dynamic: the passed-through cells that become void (read before any cell
-  // changes): occupied ones with an observed neighbourhood (pass-through rule) or those the
-  // surround test passes.
   const DynamicRule rule = DynamicRule::fromParams(how.params.dynamic, how.params.occupancy);
   const bool dynamic = how.params.dynamic.enabled && !remove;
-  const bool pass_through = dynamic && !rule.surround;
-  const bool surround = dynamic && rule.surround;
-  if (dynamic && page_in && how.page_in_around) {
-    // Paging: the rules read the touched blocks and the 26 around each, so those come back
-    // before them (the marked blocks among them, as below).
-    std::vector<BlockKey> keys(static_cast<size_t>(touched));
-    for (long j = 0; j < touched; ++j) keys[j] = merged.touched(j).key;
-    (*how.page_in_around)(keys);
-  }
-  std::vector<uint64_t> resets(pass_through ? static_cast<size_t>(touched) * kStateMaskWords : 0);
-  if (pass_through) {
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 64)
-    for (long j = 0; j < touched; ++j) {
-      const ScratchBlock& b = merged.touched(j);
-      passThroughResets(b.key, b.free, b.hit, blocks, rule, &resets[j * kStateMaskWords]);
-    }
-  }
-  if (surround) surroundedCells(merged, blocks, rule, threads, surrounded_);
   std::vector<BlockIndex> target(static_cast<size_t>(touched), kNoBlock);
   // A scratch block without marks was only entered by misses in a skipped block: nothing to do.
   std::vector<char> marked(static_cast<size_t>(touched), 0);
@@ -251,9 +225,10 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
   }
   if (page_in) {
     // Paging: the marked blocks the map lacks may be in the store; those come back first
-    // (exactly the blocks the rays reach, not the scan's whole box). The pager gets every
-    // marked block: it may page out others to make room for them (the budget is a hard
-    // limit), so every target is found again.
+    // (exactly the blocks the rays reach, not the scan's whole box), with MapParams::dynamic
+    // also the blocks around them that its rules read below. The pager gets every marked
+    // block: it may page out others to make room for them (the budget is a hard limit), so
+    // every target is found again.
     std::vector<BlockKey> keys;
     bool missing = false;
     for (long j = 0; j < touched; ++j) {
@@ -261,13 +236,30 @@ void CpuBackend::updatePrepared(const PreparedScan& scan, ScanUpdate what,
       keys.push_back(merged.touched(j).key);
       missing |= target[j] == kNoBlock;
     }
-    if (missing) {
-      (*page_in)(keys);
+    const PageInKeys* call = dynamic && how.page_in_around ? how.page_in_around
+                             : missing                     ? page_in
+                                                           : nullptr;
+    if (call) {
+      (*call)(keys);
 #pragma omp parallel for num_threads(threads) schedule(static)
       for (long j = 0; j < touched; ++j)
         if (marked[j]) target[j] = blocks.find(merged.touched(j).key);
     }
   }
+  // MapParams::dynamic: the passed-through cells that become void (read before any cell
+  // changes): occupied ones with an observed neighbourhood (pass-through rule) or those the
+  // surround test passes.
+  const bool pass_through = dynamic && !rule.surround;
+  const bool surround = dynamic && rule.surround;
+  std::vector<uint64_t> resets(pass_through ? static_cast<size_t>(touched) * kStateMaskWords : 0);
+  if (pass_through) {
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 64)
+    for (long j = 0; j < touched; ++j) {
+      const ScratchBlock& b = merged.touched(j);
+      passThroughResets(b.key, b.free, b.hit, blocks, rule, &resets[j * kStateMaskWords]);
+    }
+  }
+  if (surround) surroundedCells(merged, blocks, rule, threads, surrounded_);
   uint64_t created = 0, touched_marked = 0;
   std::vector<char> fresh(static_cast<size_t>(touched), 0);
   std::vector<char> masks_changed(static_cast<size_t>(touched), 0);

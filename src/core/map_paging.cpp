@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
-#include <tuple>
 #include <unordered_set>
 #include <vector>
 
@@ -177,10 +176,7 @@ void Map::pageInKeysAndNeighbours(const std::vector<BlockKey>& keys) {
           const BlockKey n{k.x + dx, k.y + dy, k.z + dz};
           if (blocks_.find(n) != kNoBlock || pager_->isPagedOut(n)) all.push_back(n);
         }
-  const auto less = [](const BlockKey& a, const BlockKey& b) {
-    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
-  };
-  std::sort(all.begin(), all.end(), less);
+  std::sort(all.begin(), all.end(), storeOrder);
   all.erase(std::unique(all.begin(), all.end()), all.end());
   pageInKeys(all);
 }

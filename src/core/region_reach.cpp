@@ -4,53 +4,32 @@
 
 #include <cmath>
 #include <cstdint>
-#include <limits>
 
 #include "fragg_map/internal/thread_count.h"
+#include "fragg_map/raycast.h"
 
 namespace fragg {
 
 namespace {
-/// Marks the regions of the segment a -> b (region units) in `grid` (the box lo + size).
+/// Marks the regions of the segment a -> b (region units) in `grid` (the box lo + size), on the
+/// insertion's traversal (raycast.h's DdaAxis / ddaStep in region units, from a reference
+/// region so that the float parameters stay small).
 void walkSegment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const int64_t lo[3],
                  const int64_t size[3], std::vector<uint8_t>& grid) {
-  int64_t cell[3], step[3];
-  double t_max[3], t_delta[3];
-  int64_t steps = 0;
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < 3; ++k) {
-    cell[k] = static_cast<int64_t>(std::floor(a[k]));
-    const int64_t end = static_cast<int64_t>(std::floor(b[k]));
-    steps += end > cell[k] ? end - cell[k] : cell[k] - end;
-    const double d = b[k] - a[k];
-    step[k] = end > cell[k] ? 1 : (end < cell[k] ? -1 : 0);
-    if (step[k] == 0) {
-      t_max[k] = t_delta[k] = kInf;
-      continue;
-    }
-    t_delta[k] = 1.0 / std::abs(d);
-    const double to_face = step[k] > 0 ? double(cell[k] + 1) - a[k] : a[k] - double(cell[k]);
-    t_max[k] = to_face * t_delta[k];
-  }
-  auto mark = [&] {
-    int64_t off[3];
-    for (int k = 0; k < 3; ++k) {
-      off[k] = cell[k] - lo[k];
-      if (off[k] < 0 || off[k] >= size[k]) return;
-    }
-    grid[static_cast<size_t>((off[2] * size[1] + off[1]) * size[0] + off[0])] = 1;
+  const auto axisOf = [](double from, double to) {
+    const int ref = static_cast<int>(std::floor(from));
+    DdaAxis d;
+    d.init(ref, static_cast<float>(from - ref), static_cast<float>(to - ref));
+    return d;
   };
-  mark();
-  // As many face crossings as the end cell is away (Manhattan): the walk ends in it whatever
-  // the rounding of t_max.
-  for (int64_t s = 0; s < steps; ++s) {
-    int axis = 0;
-    for (int k = 1; k < 3; ++k)
-      if (t_max[k] < t_max[axis]) axis = k;
-    if (step[axis] == 0) break;  // rounding left no axis to step (cannot happen for steps > 0)
-    cell[axis] += step[axis];
-    t_max[axis] += t_delta[axis];
-    mark();
+  DdaAxis x = axisOf(a.x(), b.x()), y = axisOf(a.y(), b.y()), z = axisOf(a.z(), b.z());
+  for (;;) {
+    const int64_t off[3] = {x.cur - lo[0], y.cur - lo[1], z.cur - lo[2]};
+    if (off[0] >= 0 && off[1] >= 0 && off[2] >= 0 && off[0] < size[0] && off[1] < size[1] &&
+        off[2] < size[2])
+      grid[static_cast<size_t>((off[2] * size[1] + off[1]) * size[0] + off[0])] = 1;
+    if (x.remaining == 0 && y.remaining == 0 && z.remaining == 0) break;
+    ddaStep(x, y, z);
   }
 }
 }  // namespace

@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 
 #include <string>
-#include <vector>
 
 #include "../paging/dynamic_corridor.h"
 #include "../test_dir.h"

@@ -142,8 +142,8 @@ struct UpdateSettings {
   const PagedOutSaturated* paged_out_saturated = nullptr;
   /// With page_in and MapParams::dynamic: page_in for `keys` and the 26 blocks around each
   /// that exist, resident or paged out (the void rules read the map around the cells a scan
-  /// touches: the hits' neighbourhoods before the scan, the passed-through blocks' after its
-  /// rays); called before the rules read the map.
+  /// touches): called with the hits' blocks before they are classified, and in place of
+  /// page_in with the marked blocks after the rays, before the rules read them.
   const PageInKeys* page_in_around = nullptr;
   /// Paging on a backend that reports the blocks its rays reach (null: no paging, or the map
   /// paged in the scan's whole box first). Set beside page_in, which such a backend ignores but
