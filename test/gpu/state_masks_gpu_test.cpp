@@ -202,12 +202,10 @@ TEST(StateMasksGpuTest, PagedDriveIsByteIdentical) {
   REQUIRE_DEVICE();
   const std::string dir = testDir();
   Map gpu(corridorParams(Backend::kCuda)), cpu(corridorParams(Backend::kCpu));
-  PagingPolicy policy;
-  policy.budget_mb = 2.0;
-  policy.radius_m = 4.0;
-  policy.commit_every_scans = 5;
-  policy.commit_every_s = 0;
-  gpu.attachPageStore(openPageStore(dir + "/map.db", false), policy);
+  // 12 MB: a corridor scan needs up to ~3,660 blocks resident at once on the device (~8.5 MB
+  // counted; 2 MB, the old figure, was refused as too small once the budget became a hard
+  // limit), and the corridor's 8,359 blocks still page out and back in.
+  gpu.attachPageStore(openPageStore(dir + "/map.db", false), corridorBudget(12.0, 5));
   constexpr int kScans = 60;
   for (int i = 0; i < kScans; ++i) {
     const Eigen::Isometry3d T = corridorPose(i, kScans);
