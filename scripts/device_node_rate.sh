@@ -12,9 +12,12 @@
 # map_rate:=1; publish_free_space:=true adds the free-space markers, huge on a LiDAR map).
 # Usage (on the device, in the checkout; .device/ros or .device/ros.tar.xz carried):
 #   bash scripts/device_node_rate.sh [--rate HZ] [--clouds N] [--resolution M] [--max-range M]
-#     [--backend cuda|cpu|auto] [--bag FILE] [--out DIR] [name:=value ...]
+#     [--backend cuda|cpu|auto] [--azimuth-steps N] [--bag FILE] [--out DIR] [name:=value ...]
+# --azimuth-steps: columns a revolution (default 1406: 179,968 points a cloud; 2048: 262,144,
+# a 128-beam LiDAR at 2048 columns).
 set -euo pipefail
 rate=10 clouds=620 resolution=0.05 max_range=30 backend=cuda bag="" out="${OUT:-/tmp/node_rate}"
+azimuth_steps=1406
 params=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -23,10 +26,11 @@ while [ $# -gt 0 ]; do
     --resolution) resolution="$2"; shift 2 ;;
     --max-range) max_range="$2"; shift 2 ;;
     --backend) backend="$2"; shift 2 ;;
+    --azimuth-steps) azimuth_steps="$2"; shift 2 ;;
     --bag) bag="$2"; shift 2 ;;
     --out) out="$2"; shift 2 ;;
     *:=*) params+=("$1"); shift ;;
-    *) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; exit 2 ;;
+    *) sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'; exit 2 ;;
   esac
 done
 top=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)
@@ -39,12 +43,12 @@ fi
 source "$ros/env.sh"
 mkdir -p "$out"
 scratch=$(mktemp -d /tmp/node_rate.XXXXXX)
-bag=${bag:-/tmp/w1_street_${clouds}.bag}
+bag=${bag:-/tmp/w1_street_${clouds}_${azimuth_steps}.bag}
 if [ ! -f "$bag" ]; then
   # W1's sensor and seed; 1.4 m/s at 10 Hz keeps --clouds frames (<= 640) on the 90 m street.
   echo "device_node_rate: recording $clouds W1 clouds into $bag"
   fragg_map_sim record "$top/config/scenes/campus.json" --trajectory street --sensor lidar \
-    --seed 101 --beams 128 --azimuth-steps 1406 --elevation-min -25 --elevation-max 15 \
+    --seed 101 --beams 128 --azimuth-steps "$azimuth_steps" --elevation-min -25 --elevation-max 15 \
     --lidar-max-range 80 --range-noise 0.02 --lidar-dropout 0.0 --speed 1.4 --rate 10 \
     --frames "$clouds" --bag "$bag.part" > "$out/sim.log" 2>&1
   mv "$bag.part" "$bag"
@@ -105,7 +109,7 @@ sleep 3
 kill -INT "$node_pid" 2>/dev/null || true
 wait "$node_pid" 2>/dev/null || true
 echo "card: $(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -1)"
-echo "commit: $(git -C "$top" rev-parse --short HEAD 2>/dev/null), W1 street, $clouds clouds at $rate/s, $resolution m, max range $max_range m, backend $backend ${params[*]+"${params[*]}"}"
+echo "commit: $(git -C "$top" rev-parse --short HEAD 2>/dev/null), W1 street (128 x $azimuth_steps beams), $clouds clouds at $rate/s, $resolution m, max range $max_range m, backend $backend ${params[*]+"${params[*]}"}"
 echo "outputs received by the subscriber (the last <= 2 GB kept): $(du -ch "$scratch"/outputs* 2>/dev/null | tail -1 | cut -f1)"
 echo "node parameters: default.yaml's marker_rate $(grep -m1 '^marker_rate' "$top/config/default.yaml" | awk '{print $2}'), map_rate $(grep -m1 '^map_rate' "$top/config/default.yaml" | awk '{print $2}') unless given above"
 python3 - "$out/trace.csv" "$clouds" <<'PY'
