@@ -30,7 +30,7 @@ while [ $# -gt 0 ]; do
     --bag) bag="$2"; shift 2 ;;
     --out) out="$2"; shift 2 ;;
     *:=*) params+=("$1"); shift ;;
-    *) sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'; exit 2 ;;
+    *) sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; exit 2 ;;
   esac
 done
 top=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)
