@@ -27,13 +27,19 @@ struct SlotUpdate {
 };
 
 /// Whether cell `cell` of `slot` is void this scan (DynamicApply; false when off).
+template <bool kDynamic>
 __device__ __forceinline__ bool voidCell(const DynamicApply& d, int32_t slot, int cell) {
-  return d.void_bits &&
-         (d.void_bits[int64_t(slot) * (kCellsPerBlock / 64) + (cell >> 6)] >> (cell & 63)) & 1;
+  if constexpr (!kDynamic) return false;
+  return (d.void_bits[int64_t(slot) * (kCellsPerBlock / 64) + (cell >> 6)] >> (cell & 63)) & 1;
 }
 
 /// One cell of a touched slot: its marks applied (or undone), written back. `void_cell`: the
 /// dynamic rule made it void (DynamicApply). Returns the cell's state after the update.
+/// kDynamic: MapParams::dynamic is on (DynamicApply::void_bits set). A template parameter, not a
+/// run-time test: the rule's arguments and branches in the default kernel took the warp
+/// kernel from 48 to 80 registers and doubled the apply pass (W1 30 m on an H100: 0.28 ->
+/// 0.59 ms a scan).
+template <bool kDynamic>
 __device__ __forceinline__ CellState updateCell(Block& block, int cell, bool hit, bool marked,
                                                 bool fresh, const OccupancyModel& model,
                                                 bool remove, const DynamicApply& dynamic,
@@ -46,11 +52,11 @@ __device__ __forceinline__ CellState updateCell(Block& block, int cell, bool hit
   Cell value = fresh ? Cell() : block.cells[cell];
   if (marked) {
     const Cell before = value;
-    if (dynamic.void_bits && !dynamic.rule.surround && void_cell) {
+    if (kDynamic && !dynamic.rule.surround && void_cell) {
       value.log_odds_fx = dynamic.rule.seen_free_at_or_below_fx;  // kPassThrough's reset
     } else {
       model.update(value, hit, remove);
-      if (dynamic.void_bits && dynamic.rule.surround && !hit)
+      if (kDynamic && dynamic.rule.surround && !hit)
         value.log_odds_fx = dynamic.rule.afterMiss(before, value.log_odds_fx, void_cell);
     }
     u.changed |= before.log_odds_fx != value.log_odds_fx || before.hits != value.hits;
@@ -116,6 +122,7 @@ __device__ __forceinline__ void finishSlot(const SlotArrays& s, int32_t slot, bo
 }
 
 /// A thread block a slot (CudaParams::warp_per_slot_apply off).
+template <bool kDynamic>
 __global__ void __launch_bounds__(kThreads)
     applyKernel(SlotArrays s, OccupancyModel model, uint64_t revision, uint32_t scan, bool remove,
                 DynamicApply dynamic, ScanCounters* c) {
@@ -139,8 +146,9 @@ __global__ void __launch_bounds__(kThreads)
       const uint32_t bit = 1u << (cell & 31);
       const bool hit = marks.hit[cell >> 5] & bit;
       const bool marked = hit || (marks.free[cell >> 5] & bit);
-      const CellState state = updateCell(s.cells[slot], cell, hit, marked, fresh, model, remove,
-                                         dynamic, marked && voidCell(dynamic, slot, cell), u);
+      const CellState state =
+          updateCell<kDynamic>(s.cells[slot], cell, hit, marked, fresh, model, remove, dynamic,
+                               marked && voidCell<kDynamic>(dynamic, slot, cell), u);
       halves.vote(state, lane, unsigned(k));
     }
     if (lane < kCellsPerThread) u.masks_changed = halves.store(s.masks[slot], my_half);
@@ -166,6 +174,7 @@ __global__ void __launch_bounds__(kThreads)
 /// marks are bit `lane` of scratch word k): warp votes instead of the thread block's barriers,
 /// and four times as many slots in flight per SM, for the latency of each slot's dependent
 /// loads (touched list -> slot -> scratch and cells).
+template <bool kDynamic>
 __global__ void __launch_bounds__(kThreads)
     applyWarpKernel(SlotArrays s, OccupancyModel model, uint64_t revision, uint32_t scan,
                     bool remove, DynamicApply dynamic, ScanCounters* c) {
@@ -193,8 +202,9 @@ __global__ void __launch_bounds__(kThreads)
       const bool hit = hit_word & bit;
       const int cell = lane + 32 * k;
       const bool marked = hit || (free_word & bit);
-      const CellState state = updateCell(s.cells[slot], cell, hit, marked, fresh, model, remove,
-                                         dynamic, marked && voidCell(dynamic, slot, cell), u);
+      const CellState state =
+          updateCell<kDynamic>(s.cells[slot], cell, hit, marked, fresh, model, remove, dynamic,
+                               marked && voidCell<kDynamic>(dynamic, slot, cell), u);
       halves.vote(state, lane, unsigned(k));
     }
     if (lane < kScratchWords) u.masks_changed = halves.store(s.masks[slot], int(lane));
@@ -217,14 +227,23 @@ __global__ void __launch_bounds__(kThreads)
 void launchApply(const SlotArrays& slots, const OccupancyModel& model, uint64_t revision,
                  uint32_t scan, bool remove, const DynamicApply& dynamic, ScanCounters* counters,
                  int grid, bool warp_per_slot, cudaStream_t stream) {
+  const bool on = dynamic.void_bits != nullptr;
   if (warp_per_slot) {
-    applyWarpKernel<<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, dynamic,
-                                                   counters);
+    if (on)
+      applyWarpKernel<true>
+          <<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, dynamic, counters);
+    else
+      applyWarpKernel<false>
+          <<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, dynamic, counters);
     FRAGG_CUDA_CHECK_LAUNCH("applyWarpKernel");
     return;
   }
-  applyKernel<<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, dynamic,
-                                             counters);
+  if (on)
+    applyKernel<true>
+        <<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, dynamic, counters);
+  else
+    applyKernel<false>
+        <<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, dynamic, counters);
   FRAGG_CUDA_CHECK_LAUNCH("applyKernel");
 }
 
