@@ -14,21 +14,44 @@ namespace {
 constexpr int kThreads = 128;
 constexpr int kRangeThreads = 256;
 
+// The obstacle cells of a pose's range in scan order, the exact test, stopping at the first
+// collision unless count_cells (as the CPU checker's checkPrimitive).
+__device__ CollisionAnswer checkPrimitivePose(const ObstacleMasksView& masks,
+                                              const PrimitivePose& p, double resolution_m,
+                                              double half_m, bool count_cells) {
+  CollisionAnswer a;
+  forEachObstacleCell(masks, p.lo, p.hi, [&](const VoxelKey& k) {
+    if (!primitiveOverlapsCell(p, cellCentre(k, resolution_m), half_m)) return false;
+    if (!a.collides) a.first_cell = k;
+    a.collides = true;
+    ++a.colliding_cells;
+    return !count_cells;
+  });
+  return a;
+}
+
 __global__ void primitiveKernel(ObstacleMasksView masks, const PrimitivePose* poses, uint32_t n,
                                 double resolution_m, double half_m, bool count_cells,
                                 DeviceAnswer* answers) {
   const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= n) return;
-  const PrimitivePose& p = poses[i];
-  DeviceAnswer a{0, UINT32_MAX, 0, VoxelKey{}};
-  forEachObstacleCell(masks, p.lo, p.hi, [&](const VoxelKey& k) {
-    if (!primitiveOverlapsCell(p, cellCentre(k, resolution_m), half_m)) return false;
-    if (!a.collides) a.first_cell = k;
-    a.collides = 1;
-    ++a.colliding_cells;
-    return !count_cells;
-  });
-  answers[i] = a;
+  const CollisionAnswer a = checkPrimitivePose(masks, poses[i], resolution_m, half_m, count_cells);
+  answers[i] = DeviceAnswer{a.collides ? 1u : 0u, UINT32_MAX, a.colliding_cells, a.first_cell};
+}
+
+__global__ void rigidPoseKernel(ObstacleMasksView masks, const RigidPose* poses, uint32_t first,
+                                uint32_t count, PrimitiveShape shape, double half_m,
+                                bool count_cells, CollisionAnswer* answers, uint32_t* first_bad) {
+  const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= count) return;
+  const RigidPose& T = poses[i];
+  PrimitivePose p;
+  if (!preparePrimitivePose(shape, T.R_map_shape, T.t_map_shape, &p)) {
+    atomicMin(first_bad, first + i);
+    answers[i] = CollisionAnswer();
+    return;
+  }
+  answers[i] = checkPrimitivePose(masks, p, shape.resolution_m, half_m, count_cells);
 }
 
 __device__ int32_t floorKey(double v) { return static_cast<int32_t>(floor(v)); }
@@ -185,6 +208,16 @@ void launchPrimitiveCheck(const ObstacleMasksView& masks, const PrimitivePose* p
   primitiveKernel<<<gridFor(n), kThreads, 0, stream>>>(masks, poses, n, resolution_m, half_m,
                                                        count_cells, answers);
   FRAGG_CUDA_CHECK_LAUNCH("primitiveKernel");
+}
+
+void launchRigidPoseCheck(const ObstacleMasksView& masks, const RigidPose* poses, uint32_t first,
+                          uint32_t count, const PrimitiveShape& shape, double half_m,
+                          bool count_cells, CollisionAnswer* answers, uint32_t* first_bad,
+                          cudaStream_t stream) {
+  if (count == 0) return;
+  rigidPoseKernel<<<gridFor(count), kThreads, 0, stream>>>(masks, poses, first, count, shape,
+                                                           half_m, count_cells, answers, first_bad);
+  FRAGG_CUDA_CHECK_LAUNCH("rigidPoseKernel");
 }
 
 void launchMeshRanges(const DeviceMesh& mesh, const MeshPose* poses, uint32_t n,
