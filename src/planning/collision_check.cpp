@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <mutex>
@@ -20,6 +21,20 @@
 namespace fragg::planning {
 
 namespace {
+
+/// Milliseconds since the last lap (or construction), for CollisionStages.
+class Lap {
+ public:
+  double ms() {
+    const auto now = std::chrono::steady_clock::now();
+    const double out = std::chrono::duration<double, std::milli>(now - t_).count();
+    t_ = now;
+    return out;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point t_ = std::chrono::steady_clock::now();
+};
 
 /// validatePose() for every pose of a batch, on `threads` threads: the first bad pose (by
 /// index, whatever the threads) throws, named.
@@ -48,6 +63,7 @@ std::vector<CollisionResult> checkOnCpu(const Map& map, const ObstacleIndex& ind
                                         const CollisionShape& shape,
                                         const std::vector<Eigen::Isometry3d>& T_map_shape,
                                         const CollisionOptions& options) {
+  Lap lap;
   const ObstacleMasksView masks = index.view();
   std::vector<CollisionResult> results(T_map_shape.size());
   std::exception_ptr error;
@@ -77,6 +93,7 @@ std::vector<CollisionResult> checkOnCpu(const Map& map, const ObstacleIndex& ind
   }
   if (first_bad < n) throw keyRangeError(static_cast<size_t>(first_bad));
   if (error) std::rethrow_exception(error);
+  if (options.stages) options.stages->device_ms = lap.ms();
   return results;
 }
 
@@ -100,6 +117,8 @@ std::vector<CollisionResult> checkOnCuda(const Map& map, DeviceScratch& scratch,
                                          const CollisionShape& shape,
                                          const std::vector<Eigen::Isometry3d>& T_map_shape,
                                          const CollisionOptions& options) {
+  Lap lap;
+  double pose_ms = 0.0;  // of the device path's packing
   const std::unique_ptr<CudaCollision> checker = makeCudaCollision(scratch);
   const int threads = threadCount(options.threads);
   const int64_t n = static_cast<int64_t>(T_map_shape.size());
@@ -116,6 +135,7 @@ std::vector<CollisionResult> checkOnCuda(const Map& map, DeviceScratch& scratch,
         obstacles, T_map_shape.size(), primitiveShape(map, shape, options), half_m,
         options.count_cells, chunk,
         [&](size_t first, size_t count, RigidPose* out) {
+          Lap pack;
           const int64_t m = static_cast<int64_t>(count);
 #pragma omp parallel for schedule(static) num_threads(threads) if (m > 4096)
           for (int64_t i = 0; i < m; ++i) {
@@ -123,16 +143,25 @@ std::vector<CollisionResult> checkOnCuda(const Map& map, DeviceScratch& scratch,
             out[i].R_map_shape = T.linear();
             out[i].t_map_shape = T.translation();
           }
+          pose_ms += pack.ms();
         },
         &first_bad);
+    const double call_ms = lap.ms();
     if (first_bad < T_map_shape.size()) throw keyRangeError(first_bad);
 #pragma omp parallel for schedule(static) num_threads(threads) if (n > 16384)
     for (int64_t i = 0; i < n; ++i) results[i] = resultOf(answers[i]);
+    if (options.stages) {
+      options.stages->poses_ms = pose_ms;
+      options.stages->device_ms = call_ms - pose_ms;
+      options.stages->results_ms = lap.ms();
+    }
     return results;
   }
   std::vector<CollisionAnswer> answers;
   if (shape.kind() == ShapeKind::kMesh) {
-    answers = checker->checkMesh(obstacles, meshPoses(T_map_shape), meshCheck(map, shape, options));
+    const std::vector<MeshPose> mesh_poses = meshPoses(T_map_shape);
+    pose_ms = lap.ms();
+    answers = checker->checkMesh(obstacles, mesh_poses, meshCheck(map, shape, options));
   } else {
     // Prepared on the host, in parallel straight into the checker's pinned staging.
     const PrimitiveShape primitive = primitiveShape(map, shape, options);
@@ -144,11 +173,18 @@ std::vector<CollisionResult> checkOnCuda(const Map& map, DeviceScratch& scratch,
                                 &poses[i]))
         first_bad = std::min(first_bad, i);
     if (first_bad < n) throw keyRangeError(static_cast<size_t>(first_bad));
+    pose_ms = lap.ms();
     answers = checker->checkPrimitives(obstacles, T_map_shape.size(), map.resolution(), half_m,
                                        options.count_cells);
   }
+  const double call_ms = lap.ms();
 #pragma omp parallel for schedule(static) num_threads(threads) if (n > 16384)
   for (int64_t i = 0; i < n; ++i) results[i] = resultOf(answers[i]);
+  if (options.stages) {
+    options.stages->poses_ms = pose_ms;
+    options.stages->device_ms = call_ms;
+    options.stages->results_ms = lap.ms();
+  }
   return results;
 }
 
@@ -177,6 +213,7 @@ std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape
                                             const CollisionOptions& options, Backend backend) {
   const Backend use = resolveCollisionBackend(backend);
   if (T_map_shape.empty()) return {};
+  Lap lap;
   BlockKey lo, hi;
   batchBlockRange(map, shape, min_m, max_m, options, &lo, &hi);
 #if FRAGG_HAVE_CUDA
@@ -184,6 +221,7 @@ std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape
     // A map keeping its layers on the device: the kernels read its state masks in place, with
     // the map's own buffers (nothing classified or uploaded but the poses).
     if (const std::unique_ptr<DeviceViewLease> lease = map.deviceView(lo, hi)) {
+      if (options.stages) options.stages->obstacles_ms = lap.ms();
       ObstacleSource source;
       source.device = layerObstacles(lease->view(), options.unknown_is_occupied);
       return checkOnCuda(map, lease->scratch(), source, shape, T_map_shape, options);
@@ -191,6 +229,7 @@ std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape
     // Otherwise its host masks, indexed and uploaded to device 0 for this batch.
     const BlockView view = map.blockView();
     const ObstacleIndex index(view, lo, hi, options.unknown_is_occupied, options.threads);
+    if (options.stages) options.stages->obstacles_ms = lap.ms();
     const std::unique_ptr<DeviceScratch> scratch = makeDeviceScratch(0);
     return checkIndexOnCuda(map, *scratch, index, shape, T_map_shape, options);
   }
@@ -199,6 +238,7 @@ std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape
 #endif
   const BlockView view = map.blockView();
   const ObstacleIndex index(view, lo, hi, options.unknown_is_occupied, options.threads);
+  if (options.stages) options.stages->obstacles_ms = lap.ms();
   return checkOnCpu(map, index, shape, T_map_shape, options);
 }
 
@@ -276,8 +316,11 @@ std::vector<CollisionResult> checkPoses(const Map& map, const CollisionShape& sh
                                         const CollisionOptions& options, Backend backend) {
   validate(options);
   // The poses checked and their box found in one pass.
+  Lap lap;
+  if (options.stages) *options.stages = CollisionStages();
   Eigen::Vector3d min_m, max_m;
   validatedPoseBox(T_map_shape, options.threads, &min_m, &max_m);
+  if (options.stages) options.stages->validate_ms = lap.ms();
   return checkValidated(map, shape, T_map_shape, min_m, max_m, options, backend);
 }
 
@@ -295,6 +338,7 @@ std::vector<CollisionResult> checkPoses(const PreparedMap& prepared, const Colli
                                         const std::vector<Eigen::Isometry3d>& T_map_shape,
                                         const CollisionOptions& options, Backend backend) {
   validate(options);
+  if (options.stages) *options.stages = CollisionStages();  // the CUDA stages filled only
   validatePoses(T_map_shape, options.threads);
   if (options.unknown_is_occupied != prepared.unknownIsOccupied())
     throw InvalidArgument("the prepared map was classified for the other unknown_is_occupied");

@@ -46,6 +46,17 @@ constexpr double kTouchEpsilon_m = 1e-6;
 /// ignore it.
 enum class PosePreparation { kHost, kDevice };
 
+/// Where a batch's time went (milliseconds on the host's clock), for benchmarks: filled by
+/// checkPoses when CollisionOptions::stages points at one.
+struct CollisionStages {
+  double validate_ms = 0.0;   ///< the poses checked and their box found (one pass)
+  double obstacles_ms = 0.0;  ///< the map's device layer view leased, or the obstacle index built
+  double poses_ms = 0.0;      ///< CUDA: poses prepared (host) or packed (device, overlapping it)
+  double device_ms = 0.0;     ///< CUDA: the rest of the checker's call (an index uploaded, pose
+                              ///< copies, kernels, waits, answers back); CPU: the checks
+  double results_ms = 0.0;    ///< CUDA: answers turned into results
+};
+
 struct CollisionOptions {
   bool unknown_is_occupied = false;
   double margin_m = 0.0;     ///< >= 0; see the header comment for meshes
@@ -54,6 +65,8 @@ struct CollisionOptions {
   PosePreparation pose_preparation = PosePreparation::kHost;  ///< CUDA batches, see above
   /// kDevice: poses a chunk (0: the batch in four chunks of at least 8,192 poses).
   size_t device_chunk_poses = 0;
+  /// When set, checkPoses fills it (over a prepared map: its CUDA stages only).
+  CollisionStages* stages = nullptr;
 };
 
 struct CollisionResult {

@@ -100,6 +100,7 @@ struct Run {
   std::string shape, backend;
   size_t poses = 0, colliding = 0;
   double ms_median = 0, ms_min = 0;
+  planning::CollisionStages stages;  ///< median of each stage over the repeats
 };
 
 using Batch =
@@ -111,19 +112,38 @@ std::vector<Run> timeBatches(const Batch& batch, const std::string& name, Backen
                              const std::vector<Prep>& preps, int repeats, size_t n_poses,
                              std::vector<std::vector<planning::CollisionResult>>* answers) {
   std::vector<std::vector<double>> ms(preps.size());
+  std::vector<std::vector<planning::CollisionStages>> stages(preps.size());
   answers->assign(preps.size(), {});
   for (int r = 0; r < repeats; ++r)
     for (size_t p = 0; p < preps.size(); ++p) {
+      planning::CollisionOptions options = preps[p].options;
+      planning::CollisionStages s;
+      options.stages = &s;
       const auto t0 = std::chrono::steady_clock::now();
-      (*answers)[p] = batch(preps[p].options);
+      (*answers)[p] = batch(options);
       ms[p].push_back(msSince(t0));
+      stages[p].push_back(s);
     }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
   std::vector<Run> runs;
   for (size_t p = 0; p < preps.size(); ++p) {
     std::sort(ms[p].begin(), ms[p].end());
     std::string label = toString(backend);
     if (preps.size() > 1 || !preps[p].label.empty()) label += "/" + preps[p].label;
-    Run run{name, label, n_poses, 0, ms[p][ms[p].size() / 2], ms[p].front()};
+    Run run{name, label, n_poses, 0, ms[p][ms[p].size() / 2], ms[p].front(), {}};
+    auto stage = [&](double planning::CollisionStages::*field) {
+      std::vector<double> v;
+      for (const planning::CollisionStages& s : stages[p]) v.push_back(s.*field);
+      return median(v);
+    };
+    run.stages.validate_ms = stage(&planning::CollisionStages::validate_ms);
+    run.stages.obstacles_ms = stage(&planning::CollisionStages::obstacles_ms);
+    run.stages.poses_ms = stage(&planning::CollisionStages::poses_ms);
+    run.stages.device_ms = stage(&planning::CollisionStages::device_ms);
+    run.stages.results_ms = stage(&planning::CollisionStages::results_ms);
     for (const auto& a : (*answers)[p]) run.colliding += a.collides;
     runs.push_back(run);
   }
@@ -172,7 +192,7 @@ Run timeFcl(const Map& map, const Eigen::Vector3d& box_m,
     fcl::collide(&box_object, &tree_object, request, result);
     hit[i] = result.isCollision();
   }
-  Run run{"box", "fcl-octree", poses.size(), 0, msSince(t0), 0};
+  Run run{"box", "fcl-octree", poses.size(), 0, msSince(t0), 0, {}};
   run.ms_min = run.ms_median;
   *agree = 0;
   for (size_t i = 0; i < poses.size(); ++i) {
@@ -277,10 +297,24 @@ void run(const Options& o) {
           fmt::print("{:<40} {:>8} {:>8} {:>10} {:>10.2f} {:>12.3g}{}\n", r.shape, r.backend,
                      r.poses, r.colliding, r.ms_median, r.poses / (r.ms_median * 1e-3),
                      line_note.empty() ? "" : "  " + line_note);
-          nlohmann::json run = {{"shape", r.shape},         {"backend", r.backend + json_suffix},
-                                {"poses", r.poses},         {"colliding", r.colliding},
-                                {"ms_median", r.ms_median}, {"ms_min", r.ms_min},
-                                {"differ", differ}};
+          const planning::CollisionStages& st = r.stages;
+          fmt::print(
+              "{:<40} stages, median ms: validate {:.3f}, obstacles {:.3f}, poses {:.3f}, "
+              "device {:.3f}, results {:.3f}\n",
+              "", st.validate_ms, st.obstacles_ms, st.poses_ms, st.device_ms, st.results_ms);
+          nlohmann::json run = {{"shape", r.shape},
+                                {"backend", r.backend + json_suffix},
+                                {"poses", r.poses},
+                                {"colliding", r.colliding},
+                                {"ms_median", r.ms_median},
+                                {"ms_min", r.ms_min},
+                                {"differ", differ},
+                                {"stages_ms",
+                                 {{"validate", r.stages.validate_ms},
+                                  {"obstacles", r.stages.obstacles_ms},
+                                  {"poses", r.stages.poses_ms},
+                                  {"device", r.stages.device_ms},
+                                  {"results", r.stages.results_ms}}}};
           run.update(extra);
           j["runs"].push_back(run);
         }
