@@ -30,28 +30,35 @@ __device__ CollisionAnswer checkPrimitivePose(const ObstacleMasksView& masks,
   return a;
 }
 
+// A pose's answer as each checker path stores it.
+__device__ void store(const CollisionAnswer& a, DeviceAnswer* out) {
+  *out = DeviceAnswer{a.collides ? 1u : 0u, UINT32_MAX, a.colliding_cells, a.first_cell};
+}
+__device__ void store(const CollisionAnswer& a, CollisionAnswer* out) { *out = a; }
+
+template <class Answer>
 __global__ void primitiveKernel(ObstacleMasksView masks, const PrimitivePose* poses, uint32_t n,
                                 double resolution_m, double half_m, bool count_cells,
-                                DeviceAnswer* answers) {
+                                Answer* answers) {
   const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= n) return;
-  const CollisionAnswer a = checkPrimitivePose(masks, poses[i], resolution_m, half_m, count_cells);
-  answers[i] = DeviceAnswer{a.collides ? 1u : 0u, UINT32_MAX, a.colliding_cells, a.first_cell};
+  store(checkPrimitivePose(masks, poses[i], resolution_m, half_m, count_cells), &answers[i]);
 }
 
-__global__ void rigidPoseKernel(ObstacleMasksView masks, const RigidPose* poses, uint32_t first,
-                                uint32_t count, PrimitiveShape shape, double half_m,
-                                bool count_cells, CollisionAnswer* answers, uint32_t* first_bad) {
+// Pose first + i of the batch (poses[i]) as the host would prepare it. A pose whose cells leave
+// the key range gets an empty cell range (lo > hi: nothing to visit) and is reported.
+__global__ void preparePosesKernel(const RigidPose* poses, uint32_t first, uint32_t count,
+                                   PrimitiveShape shape, PrimitivePose* prepared,
+                                   uint32_t* first_bad) {
   const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= count) return;
-  const RigidPose& T = poses[i];
   PrimitivePose p;
-  if (!preparePrimitivePose(shape, T.R_map_shape, T.t_map_shape, &p)) {
+  if (!preparePrimitivePose(shape, poses[i].R_map_shape, poses[i].t_map_shape, &p)) {
     atomicMin(first_bad, first + i);
-    answers[i] = CollisionAnswer();
-    return;
+    p.lo = VoxelKey{0, 0, 0};
+    p.hi = VoxelKey{-1, -1, -1};
   }
-  answers[i] = checkPrimitivePose(masks, p, shape.resolution_m, half_m, count_cells);
+  prepared[i] = p;
 }
 
 __device__ int32_t floorKey(double v) { return static_cast<int32_t>(floor(v)); }
@@ -212,12 +219,15 @@ void launchPrimitiveCheck(const ObstacleMasksView& masks, const PrimitivePose* p
 
 void launchRigidPoseCheck(const ObstacleMasksView& masks, const RigidPose* poses, uint32_t first,
                           uint32_t count, const PrimitiveShape& shape, double half_m,
-                          bool count_cells, CollisionAnswer* answers, uint32_t* first_bad,
-                          cudaStream_t stream) {
+                          bool count_cells, PrimitivePose* prepared, CollisionAnswer* answers,
+                          uint32_t* first_bad, cudaStream_t stream) {
   if (count == 0) return;
-  rigidPoseKernel<<<gridFor(count), kThreads, 0, stream>>>(masks, poses, first, count, shape,
-                                                           half_m, count_cells, answers, first_bad);
-  FRAGG_CUDA_CHECK_LAUNCH("rigidPoseKernel");
+  preparePosesKernel<<<gridFor(count), kThreads, 0, stream>>>(poses, first, count, shape, prepared,
+                                                              first_bad);
+  FRAGG_CUDA_CHECK_LAUNCH("preparePosesKernel");
+  primitiveKernel<<<gridFor(count), kThreads, 0, stream>>>(
+      masks, prepared, count, shape.resolution_m, half_m, count_cells, answers);
+  FRAGG_CUDA_CHECK_LAUNCH("primitiveKernel");
 }
 
 void launchMeshRanges(const DeviceMesh& mesh, const MeshPose* poses, uint32_t n,

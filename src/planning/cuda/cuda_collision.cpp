@@ -81,6 +81,7 @@ class CudaCollisionImpl final : public CudaCollision {
     CollisionAnswer* answers = s_.pinned<CollisionAnswer>(kRigidAnswersHost, count);
     uint32_t* bad = s_.pinned<uint32_t>(kFirstBadHost, 1);
     RigidPose* d_poses = s_.device<RigidPose>(kRigidPoses, count);
+    PrimitivePose* d_prepared = s_.device<PrimitivePose>(kPrimitivePoses, count);
     CollisionAnswer* d_answers = s_.device<CollisionAnswer>(kRigidAnswers, count);
     uint32_t* d_bad = s_.device<uint32_t>(kFirstBad, 1);
     FRAGG_CUDA_CHECK(cudaMemsetAsync(d_bad, 0xff, sizeof(uint32_t), stream_));
@@ -92,8 +93,8 @@ class CudaCollisionImpl final : public CudaCollision {
       pack(first, n, staged + first);
       copyToDevice(d_poses + first, staged + first, n, stream_);
       launchRigidPoseCheck(view, d_poses + first, static_cast<uint32_t>(first),
-                           static_cast<uint32_t>(n), shape, half_m, count_cells, d_answers + first,
-                           d_bad, stream_);
+                           static_cast<uint32_t>(n), shape, half_m, count_cells, d_prepared + first,
+                           d_answers + first, d_bad, stream_);
       copyToHost(answers + first, d_answers + first, n, stream_);
     }
     copyToHost(bad, d_bad, 1, stream_);
