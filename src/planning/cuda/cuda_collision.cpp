@@ -85,13 +85,21 @@ class CudaCollisionImpl final : public CudaCollision {
     CollisionAnswer* d_answers = s_.device<CollisionAnswer>(kRigidAnswers, count);
     uint32_t* d_bad = s_.device<uint32_t>(kFirstBad, 1);
     FRAGG_CUDA_CHECK(cudaMemsetAsync(d_bad, 0xff, sizeof(uint32_t), stream_));
+    // The poses' copies on a stream of their own, so that chunk k + 1's copy runs beside chunk
+    // k's kernels (a copy engine and the SMs); the kernels of a chunk wait for its copy.
+    if (!copies_) {
+      copies_ = std::make_unique<CudaStream>();
+      copied_ = std::make_unique<CudaEvent>();
+    }
     const size_t chunk = std::max<size_t>(chunk_poses, 1);
-    // Chunk k's copy, kernel and answers are queued (asynchronous) before chunk k + 1 is packed:
+    // Chunk k's copy, kernels and answers are queued (asynchronous) before chunk k + 1 is packed:
     // the device works on k while the host threads pack k + 1.
     for (size_t first = 0; first < count; first += chunk) {
       const size_t n = std::min(chunk, count - first);
       pack(first, n, staged + first);
-      copyToDevice(d_poses + first, staged + first, n, stream_);
+      copyToDevice(d_poses + first, staged + first, n, copies_->get());
+      copied_->record(copies_->get());
+      copied_->makeWait(stream_);
       launchRigidPoseCheck(view, d_poses + first, static_cast<uint32_t>(first),
                            static_cast<uint32_t>(n), shape, half_m, count_cells, d_prepared + first,
                            d_answers + first, d_bad, stream_);
@@ -207,6 +215,9 @@ class CudaCollisionImpl final : public CudaCollision {
 
   DeviceScratch& s_;
   cudaStream_t stream_;
+  /// checkRigidPoses: the stream of the poses' copies and the event of the latest one.
+  std::unique_ptr<CudaStream> copies_;
+  std::unique_ptr<CudaEvent> copied_;
 };
 
 }  // namespace
