@@ -75,14 +75,6 @@ InvalidArgument keyRangeError(size_t index) {
       fmt::format("pose {}: the shape's cells are outside the map's key range", index));
 }
 
-PrimitivePose preparePrimitive(const PrimitiveShape& shape, const Eigen::Isometry3d& T_map_shape,
-                               size_t index) {
-  PrimitivePose p;
-  if (!preparePrimitivePose(shape, T_map_shape.linear(), T_map_shape.translation(), &p))
-    throw keyRangeError(index);
-  return p;
-}
-
 std::vector<MeshPose> meshPoses(const std::vector<Eigen::Isometry3d>& T_map_shape) {
   std::vector<MeshPose> out(T_map_shape.size());
   for (size_t i = 0; i < out.size(); ++i) {

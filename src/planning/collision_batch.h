@@ -1,5 +1,6 @@
-// Host-side preparation of a collision batch, shared by the CPU and CUDA checkers: each
-// primitive pose as the cell tests see it, mesh poses with their inverses, and the block range
+// Host-side preparation of a collision batch, shared by the CPU and CUDA checkers: the poses
+// checked, what a batch's primitive poses share (each pose then prepared by
+// preparePrimitivePose, collision_pose.h), mesh poses with their inverses, and the block range
 // a batch's obstacle index must cover. Internal to fragg_map_planning.
 #pragma once
 
@@ -18,12 +19,6 @@ namespace fragg::planning {
 /// map's resolution); preparePrimitivePose() turns one pose into a PrimitivePose with it.
 [[nodiscard]] PrimitiveShape primitiveShape(const Map& map, const CollisionShape& shape,
                                             const CollisionOptions& options);
-
-/// Box, sphere or capsule at T_map_shape, grown by the margin, with its cell range (the shared
-/// preparePrimitivePose). Throws InvalidArgument naming pose `index` when its cells leave the
-/// map's key range.
-[[nodiscard]] PrimitivePose preparePrimitive(const PrimitiveShape& shape,
-                                             const Eigen::Isometry3d& T_map_shape, size_t index);
 
 /// The error for pose `index` whose cells leave the map's key range (host and device paths).
 [[nodiscard]] InvalidArgument keyRangeError(size_t index);

@@ -1,9 +1,10 @@
 // One pose of a box, sphere or capsule as the collision checkers test it against cells, and the
 // per-cell arithmetic both checkers share (FRAGG_HD): the CPU checker (src/planning) and the
 // CUDA kernels (cuda/collision_kernels.cu) call the same functions on the same values, so their
-// answers are identical. A pose is prepared by preparePrimitivePose, on the host
-// (src/planning/collision_batch.cpp) or in the CUDA kernel (pose preparation on the device): the
-// same function on the same bits, so both give the same PrimitivePose.
+// answers are identical. A pose is prepared by preparePrimitivePose, on the host (the CPU
+// checker and the CUDA checker's host staging, src/planning/collision_check.cpp) or in a CUDA
+// kernel (CollisionOptions::pose_preparation = kDevice): the same function on the same bits, so
+// both give the same PrimitivePose.
 #pragma once
 
 #include <Eigen/Core>
