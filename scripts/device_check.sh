@@ -67,7 +67,7 @@ while [ $# -gt 0 ]; do
         done
       done
       # The slow cases first, so that they do not start last.
-      slow='SimulatedW1|RangeNoise|SaturatedBlock|EveryShape|CudaTrackerEqualsCpu|Synthetic|Paging\.|PathsMatch'
+      slow='SimulatedW1|RangeNoise|SaturatedBlock|EveryShape|PosesPrepared|CudaTrackerEqualsCpu|Synthetic|Paging\.|PathsMatch'
       export build sdir slow
       sanitize_one() {
         local tool="$1" bin="$2" case_name="$3" extra=() start rc note=""
