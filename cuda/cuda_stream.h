@@ -29,6 +29,8 @@ class CudaEvent {
   CudaEvent(const CudaEvent&) = delete;
   CudaEvent& operator=(const CudaEvent&) = delete;
   void record(cudaStream_t stream) { FRAGG_CUDA_CHECK(cudaEventRecord(e_, stream)); }
+  /// Makes `stream` wait for the work recorded before this event (its latest record).
+  void makeWait(cudaStream_t stream) const { FRAGG_CUDA_CHECK(cudaStreamWaitEvent(stream, e_, 0)); }
   /// Waits for the work recorded before this event (not for what the stream got since).
   void synchronize() const { FRAGG_CUDA_CHECK(cudaEventSynchronize(e_)); }
   /// Seconds from `start` to this event (both recorded and complete).

@@ -8,7 +8,8 @@
 #        [bench ARGS...] | [ohm ARGS...]
 # (workloads go to .device/workloads; bench ARGS are fragg_map_bench's; collision runs
 # fragg_map_collision_bench on MAP, default .device/w1.fgm, built from .device/workloads/
-# w1_lidar360 at 5 cm, 30 m, when missing: run `workloads w1` before it; ohm builds the peer
+# w1_lidar360 at 5 cm, 30 m, when missing: run `workloads w1` before it; its arguments from
+# FRAGG_COLLISION_ARGS when set; ohm builds the peer
 # mapper OHM from .device/ohm-src and runs fragg_map_ohm_bench with ARGS: scripts/ohm_peer.sh).
 # Logs go to $OUT when set (the device tool brings them back).
 set -uo pipefail
@@ -66,7 +67,7 @@ while [ $# -gt 0 ]; do
         done
       done
       # The slow cases first, so that they do not start last.
-      slow='SimulatedW1|RangeNoise|SaturatedBlock|EveryShape|CudaTrackerEqualsCpu|Synthetic|Paging\.|PathsMatch'
+      slow='SimulatedW1|RangeNoise|SaturatedBlock|EveryShape|PosesPrepared|CudaTrackerEqualsCpu|Synthetic|Paging\.|PathsMatch'
       export build sdir slow
       sanitize_one() {
         local tool="$1" bin="$2" case_name="$3" extra=() start rc note=""
@@ -124,7 +125,10 @@ while [ $# -gt 0 ]; do
           --resolution 0.05 --max-range 30 --backend cuda >"$out/w1_build.log" 2>&1 ||
           { tail -5 "$out/w1_build.log"; status=1; shift; continue; }
       fi
-      "$build/bin/fragg_map_collision_bench" --map "$map" --backends cpu cuda \
+      # FRAGG_COLLISION_ARGS (word-split) replaces the default arguments "--backends cpu cuda",
+      # e.g. "--backends cuda --fcl-poses 0 --pose-prep both".
+      read -r -a collision_args <<<"${FRAGG_COLLISION_ARGS:---backends cpu cuda}"
+      "$build/bin/fragg_map_collision_bench" --map "$map" "${collision_args[@]}" \
         --json "$out/collision_bench.json" 2>&1 | tee "$out/collision_bench.log" || status=1
       shift ;;
     frontiers)

@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <mutex>
@@ -21,27 +22,25 @@ namespace fragg::planning {
 
 namespace {
 
-/// Why `T_map_shape` is not a rigid pose (empty: it is one).
-std::string poseError(const Eigen::Isometry3d& T_map_shape) {
-  if (!T_map_shape.matrix().allFinite()) return "shape pose is not finite";
-  const Eigen::Matrix3d R = T_map_shape.linear();
-  const double err = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (err > 1e-6 || R.determinant() < 0.0)
-    return fmt::format("shape pose rotation is not a rotation (orthonormality error {})", err);
-  return {};
-}
+/// Milliseconds since the last lap (or construction), for CollisionStages.
+class Lap {
+ public:
+  double ms() {
+    const auto now = std::chrono::steady_clock::now();
+    const double out = std::chrono::duration<double, std::milli>(now - t_).count();
+    t_ = now;
+    return out;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point t_ = std::chrono::steady_clock::now();
+};
 
 /// validatePose() for every pose of a batch, on `threads` threads: the first bad pose (by
-/// index, whatever the threads) throws.
+/// index, whatever the threads) throws, named.
 void validatePoses(const std::vector<Eigen::Isometry3d>& T_map_shape, int threads) {
-  const int64_t n = static_cast<int64_t>(T_map_shape.size());
-  int64_t first_bad = n;
-#pragma omp parallel for schedule(static) reduction(min          \
-                                                    : first_bad) \
-    num_threads(threadCount(threads)) if (n > 4096)
-  for (int64_t i = 0; i < n; ++i)
-    if (i < first_bad && !poseError(T_map_shape[i]).empty()) first_bad = i;
-  if (first_bad < n) throw InvalidArgument(poseError(T_map_shape[first_bad]));
+  Eigen::Vector3d min_m, max_m;
+  validatedPoseBox(T_map_shape, threads, &min_m, &max_m);
 }
 
 // Box, sphere, capsule: every obstacle cell of the shape's cell range gets the exact test
@@ -64,25 +63,37 @@ std::vector<CollisionResult> checkOnCpu(const Map& map, const ObstacleIndex& ind
                                         const CollisionShape& shape,
                                         const std::vector<Eigen::Isometry3d>& T_map_shape,
                                         const CollisionOptions& options) {
+  Lap lap;
   const ObstacleMasksView masks = index.view();
   std::vector<CollisionResult> results(T_map_shape.size());
   std::exception_ptr error;
   const int threads = threadCount(options.threads);
   const int64_t n = static_cast<int64_t>(T_map_shape.size());
   const bool mesh = shape.kind() == ShapeKind::kMesh;
-#pragma omp parallel for schedule(dynamic, 64) num_threads(threads)
+  const PrimitiveShape primitive = primitiveShape(map, shape, options);
+  int64_t first_bad = n;  // the first pose whose cells leave the key range
+#pragma omp parallel for schedule(dynamic, 64) num_threads(threads) reduction(min : first_bad)
   for (int64_t i = 0; i < n; ++i) {
+    if (!mesh) {
+      PrimitivePose pose;
+      if (!preparePrimitivePose(primitive, T_map_shape[i].linear(), T_map_shape[i].translation(),
+                                &pose)) {
+        first_bad = std::min(first_bad, i);
+        continue;
+      }
+      results[i] = checkPrimitive(masks, pose, map.resolution(), options.count_cells);
+      continue;
+    }
     try {
-      results[i] =
-          mesh ? checkMeshPose(map, masks, shape, T_map_shape[i], options)
-               : checkPrimitive(masks, preparePrimitive(map, shape, T_map_shape[i], options),
-                                map.resolution(), options.count_cells);
+      results[i] = checkMeshPose(map, masks, shape, T_map_shape[i], options);
     } catch (...) {
 #pragma omp critical(fragg_collision_error)
       if (!error) error = std::current_exception();
     }
   }
+  if (first_bad < n) throw keyRangeError(static_cast<size_t>(first_bad));
   if (error) std::rethrow_exception(error);
+  if (options.stages) options.stages->device_ms = lap.ms();
   return results;
 }
 
@@ -95,32 +106,85 @@ CollisionResult resultOf(const CollisionAnswer& a) {
   return r;
 }
 
+// Poses a chunk when the device prepares them and options.device_chunk_poses is 0: the batch
+// in four chunks (the pack of one overlaps the copy and kernel of the one before), at least
+// this many poses each (a chunk's copy and launch cost some microseconds).
+constexpr size_t kMinChunkPoses = 8192;
+
 // The batch on CUDA over `obstacles`, in `scratch` (its device, stream and buffers).
 std::vector<CollisionResult> checkOnCuda(const Map& map, DeviceScratch& scratch,
                                          const ObstacleSource& obstacles,
                                          const CollisionShape& shape,
                                          const std::vector<Eigen::Isometry3d>& T_map_shape,
                                          const CollisionOptions& options) {
+  Lap lap;
+  double pose_ms = 0.0;  // of the device path's packing
   const std::unique_ptr<CudaCollision> checker = makeCudaCollision(scratch);
+  const int threads = threadCount(options.threads);
+  const int64_t n = static_cast<int64_t>(T_map_shape.size());
+  const double half_m = 0.5 * map.resolution() - kTouchEpsilon_m;
+  std::vector<CollisionResult> results(T_map_shape.size());
+  if (shape.kind() != ShapeKind::kMesh && options.pose_preparation == PosePreparation::kDevice) {
+    // Only the rigid poses go to the device (packed on the batch's threads a chunk at a time
+    // into the checker's pinned staging); the kernel prepares each pose as the host would.
+    const size_t chunk = options.device_chunk_poses > 0
+                             ? options.device_chunk_poses
+                             : std::max(kMinChunkPoses, (T_map_shape.size() + 3) / 4);
+    size_t first_bad = 0;
+    const CollisionAnswer* answers = checker->checkRigidPoses(
+        obstacles, T_map_shape.size(), primitiveShape(map, shape, options), half_m,
+        options.count_cells, chunk,
+        [&](size_t first, size_t count, RigidPose* out) {
+          Lap pack;
+          const int64_t m = static_cast<int64_t>(count);
+#pragma omp parallel for schedule(static) num_threads(threads) if (m > 4096)
+          for (int64_t i = 0; i < m; ++i) {
+            const Eigen::Isometry3d& T = T_map_shape[first + i];
+            out[i].R_map_shape = T.linear();
+            out[i].t_map_shape = T.translation();
+          }
+          pose_ms += pack.ms();
+        },
+        &first_bad);
+    const double call_ms = lap.ms();
+    if (first_bad < T_map_shape.size()) throw keyRangeError(first_bad);
+#pragma omp parallel for schedule(static) num_threads(threads) if (n > 16384)
+    for (int64_t i = 0; i < n; ++i) results[i] = resultOf(answers[i]);
+    if (options.stages) {
+      options.stages->poses_ms = pose_ms;
+      options.stages->device_ms = call_ms - pose_ms;
+      options.stages->results_ms = lap.ms();
+    }
+    return results;
+  }
   std::vector<CollisionAnswer> answers;
   if (shape.kind() == ShapeKind::kMesh) {
-    answers = checker->checkMesh(obstacles, meshPoses(T_map_shape), meshCheck(map, shape, options));
+    const std::vector<MeshPose> mesh_poses = meshPoses(T_map_shape);
+    pose_ms = lap.ms();
+    answers = checker->checkMesh(obstacles, mesh_poses, meshCheck(map, shape, options));
   } else {
-    // Prepared in parallel straight into the checker's pinned staging.
-    const int64_t n = static_cast<int64_t>(T_map_shape.size());
+    // Prepared on the host, in parallel straight into the checker's pinned staging.
+    const PrimitiveShape primitive = primitiveShape(map, shape, options);
     PrimitivePose* poses = checker->primitiveStaging(T_map_shape.size());
-#pragma omp parallel for schedule(static) num_threads(threadCount(options.threads))
+    int64_t first_bad = n;
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(min : first_bad)
     for (int64_t i = 0; i < n; ++i)
-      poses[i] = preparePrimitive(map, shape, T_map_shape[i], options);
-    answers =
-        checker->checkPrimitives(obstacles, T_map_shape.size(), map.resolution(),
-                                 0.5 * map.resolution() - kTouchEpsilon_m, options.count_cells);
+      if (!preparePrimitivePose(primitive, T_map_shape[i].linear(), T_map_shape[i].translation(),
+                                &poses[i]))
+        first_bad = std::min(first_bad, i);
+    if (first_bad < n) throw keyRangeError(static_cast<size_t>(first_bad));
+    pose_ms = lap.ms();
+    answers = checker->checkPrimitives(obstacles, T_map_shape.size(), map.resolution(), half_m,
+                                       options.count_cells);
   }
-  const int64_t count = static_cast<int64_t>(answers.size());
-  std::vector<CollisionResult> results(answers.size());
-#pragma omp parallel for schedule(static) \
-    num_threads(threadCount(options.threads)) if (count > 16384)
-  for (int64_t i = 0; i < count; ++i) results[i] = resultOf(answers[i]);
+  const double call_ms = lap.ms();
+#pragma omp parallel for schedule(static) num_threads(threads) if (n > 16384)
+  for (int64_t i = 0; i < n; ++i) results[i] = resultOf(answers[i]);
+  if (options.stages) {
+    options.stages->poses_ms = pose_ms;
+    options.stages->device_ms = call_ms;
+    options.stages->results_ms = lap.ms();
+  }
   return results;
 }
 
@@ -141,18 +205,23 @@ std::vector<CollisionResult> checkIndexOnCuda(const Map& map, DeviceScratch& scr
 }
 #endif
 
+// The poses checked already; their translations lie in [min_m, max_m].
 std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape& shape,
                                             const std::vector<Eigen::Isometry3d>& T_map_shape,
+                                            const Eigen::Vector3d& min_m,
+                                            const Eigen::Vector3d& max_m,
                                             const CollisionOptions& options, Backend backend) {
   const Backend use = resolveCollisionBackend(backend);
   if (T_map_shape.empty()) return {};
+  Lap lap;
   BlockKey lo, hi;
-  batchBlockRange(map, shape, T_map_shape, options, &lo, &hi);
+  batchBlockRange(map, shape, min_m, max_m, options, &lo, &hi);
 #if FRAGG_HAVE_CUDA
   if (use == Backend::kCuda) {
     // A map keeping its layers on the device: the kernels read its state masks in place, with
     // the map's own buffers (nothing classified or uploaded but the poses).
     if (const std::unique_ptr<DeviceViewLease> lease = map.deviceView(lo, hi)) {
+      if (options.stages) options.stages->obstacles_ms = lap.ms();
       ObstacleSource source;
       source.device = layerObstacles(lease->view(), options.unknown_is_occupied);
       return checkOnCuda(map, lease->scratch(), source, shape, T_map_shape, options);
@@ -160,6 +229,7 @@ std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape
     // Otherwise its host masks, indexed and uploaded to device 0 for this batch.
     const BlockView view = map.blockView();
     const ObstacleIndex index(view, lo, hi, options.unknown_is_occupied, options.threads);
+    if (options.stages) options.stages->obstacles_ms = lap.ms();
     const std::unique_ptr<DeviceScratch> scratch = makeDeviceScratch(0);
     return checkIndexOnCuda(map, *scratch, index, shape, T_map_shape, options);
   }
@@ -168,6 +238,7 @@ std::vector<CollisionResult> checkValidated(const Map& map, const CollisionShape
 #endif
   const BlockView view = map.blockView();
   const ObstacleIndex index(view, lo, hi, options.unknown_is_occupied, options.threads);
+  if (options.stages) options.stages->obstacles_ms = lap.ms();
   return checkOnCpu(map, index, shape, T_map_shape, options);
 }
 
@@ -235,15 +306,22 @@ CollisionResult checkPose(const Map& map, const CollisionShape& shape,
                           Backend backend) {
   validate(options);
   validatePose(T_map_shape);
-  return checkValidated(map, shape, {T_map_shape}, options, backend).front();
+  return checkValidated(map, shape, {T_map_shape}, T_map_shape.translation(),
+                        T_map_shape.translation(), options, backend)
+      .front();
 }
 
 std::vector<CollisionResult> checkPoses(const Map& map, const CollisionShape& shape,
                                         const std::vector<Eigen::Isometry3d>& T_map_shape,
                                         const CollisionOptions& options, Backend backend) {
   validate(options);
-  validatePoses(T_map_shape, options.threads);
-  return checkValidated(map, shape, T_map_shape, options, backend);
+  // The poses checked and their box found in one pass.
+  Lap lap;
+  if (options.stages) *options.stages = CollisionStages();
+  Eigen::Vector3d min_m, max_m;
+  validatedPoseBox(T_map_shape, options.threads, &min_m, &max_m);
+  if (options.stages) options.stages->validate_ms = lap.ms();
+  return checkValidated(map, shape, T_map_shape, min_m, max_m, options, backend);
 }
 
 PreparedMap::PreparedMap(const Map& map, bool unknown_is_occupied, int threads)
@@ -260,6 +338,7 @@ std::vector<CollisionResult> checkPoses(const PreparedMap& prepared, const Colli
                                         const std::vector<Eigen::Isometry3d>& T_map_shape,
                                         const CollisionOptions& options, Backend backend) {
   validate(options);
+  if (options.stages) *options.stages = CollisionStages();  // the CUDA stages filled only
   validatePoses(T_map_shape, options.threads);
   if (options.unknown_is_occupied != prepared.unknownIsOccupied())
     throw InvalidArgument("the prepared map was classified for the other unknown_is_occupied");

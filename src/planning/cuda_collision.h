@@ -9,6 +9,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -57,6 +58,9 @@ struct MeshCheck {
   bool count_cells = false;
 };
 
+/// Writes poses first .. first + count - 1 of a batch to out[0 .. count - 1].
+using RigidPosePacker = std::function<void(size_t first, size_t count, RigidPose* out)>;
+
 class CudaCollision {
  public:
   virtual ~CudaCollision() = default;
@@ -68,6 +72,17 @@ class CudaCollision {
   virtual std::vector<CollisionAnswer> checkPrimitives(const ObstacleSource& masks, size_t n,
                                                        double resolution_m, double half_m,
                                                        bool count_cells) = 0;
+  /// Boxes, spheres, capsules prepared on the device: the kernel turns each pose into its
+  /// PrimitivePose with preparePrimitivePose (the function the host calls: the same bits), so
+  /// only the rigid poses travel (96 bytes a pose). `pack(first, count, out)` writes poses
+  /// first .. first + count - 1 of the batch to out[0 .. count - 1] (pinned memory); the
+  /// checker asks for them in chunks of `chunk_poses` and uploads and checks chunk k (its
+  /// answers copied back) while chunk k + 1 is packed. Returns the `n` answers in pinned memory,
+  /// valid until the next call; *first_bad gets the first pose (by index) whose cells leave the
+  /// map's key range, `n` when none (its answer is then meaningless).
+  [[nodiscard]] virtual const CollisionAnswer* checkRigidPoses(
+      const ObstacleSource& masks, size_t n, const PrimitiveShape& shape, double half_m,
+      bool count_cells, size_t chunk_poses, const RigidPosePacker& pack, size_t* first_bad) = 0;
   /// A triangle mesh at each pose. Throws InvalidArgument when an inside test meets more than
   /// 32 solids above a point.
   virtual std::vector<CollisionAnswer> checkMesh(const ObstacleSource& masks,

@@ -5,6 +5,7 @@
 // checked. Needs a device (skips without one).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <random>
 #include <string>
@@ -154,6 +155,105 @@ TEST(CollisionGpu, DeviceLayerViewOfACudaMapMatchesTheCpu) {
         EXPECT_GT(colliding, 20) << what;
       }
   }
+}
+
+// Poses prepared on the device (CollisionOptions::pose_preparation = kDevice: the rigid poses
+// uploaded, preparePrimitivePose in the kernel): the answers equal the CPU checker's for box,
+// sphere and capsule, every option, in one chunk and in many uneven ones, on a CPU map (index
+// uploaded), through a CUDA map's device layer view and over a prepared map; meshes ignore the
+// option and still match.
+TEST(CollisionGpu, PosesPreparedOnTheDeviceMatchTheCpu) {
+  REQUIRE_DEVICE();
+  const Map& map = roomMap();
+  const Map cuda_map = buildRoomMap(Backend::kCuda);
+  const std::vector<Eigen::Isometry3d> poses = randomPoses(map, 3000, 13);
+  const PreparedMap prepared(map, false);
+  int cases = 0;
+  for (const NamedShape& s : shapes()) {
+    const bool mesh = s.shape.kind() == ShapeKind::kMesh;
+    for (const bool unknown : {false, true})
+      for (const double margin : {0.0, 0.07})
+        for (const bool count : {false, true})
+          for (const size_t chunk : {size_t{0}, size_t{700}}) {
+            if (mesh && (margin > 0 || chunk > 0)) continue;  // the option is ignored: once
+            CollisionOptions o;
+            o.unknown_is_occupied = unknown;
+            o.margin_m = margin;
+            o.count_cells = count;
+            const auto cpu = checkPoses(map, s.shape, poses, o, Backend::kCpu);
+            // The CUDA map's own host blocks, as the layer view test compares.
+            const auto cpu_of_cuda_map = checkPoses(cuda_map, s.shape, poses, o, Backend::kCpu);
+            o.pose_preparation = PosePreparation::kDevice;
+            o.device_chunk_poses = chunk;
+            const std::string what = s.name + " device-prepared" +
+                                     (unknown ? " unknown-occupied" : "") +
+                                     (margin > 0 ? " margin" : "") + (count ? " count" : "") +
+                                     (chunk ? " chunks of 700" : "");
+            int colliding = 0;
+            expectSame(cpu, checkPoses(map, s.shape, poses, o, Backend::kCuda), what, &colliding);
+            int on_view = 0;
+            expectSame(cpu_of_cuda_map, checkPoses(cuda_map, s.shape, poses, o, Backend::kCuda),
+                       what + " (layer view)", &on_view);
+            if (!unknown) {
+              int on_prepared = 0;
+              expectSame(cpu, checkPoses(prepared, s.shape, poses, o, Backend::kCuda),
+                         what + " (prepared map)", &on_prepared);
+            }
+            std::printf("[gpu] collision %s: %d of %zu poses collide, CPU == CUDA\n", what.c_str(),
+                        colliding, poses.size());
+            EXPECT_GT(colliding, 20) << what;
+            if (!unknown) {
+              EXPECT_LT(colliding, static_cast<int>(poses.size()) - 20) << what;
+            }
+            ++cases;
+          }
+  }
+  EXPECT_EQ(cases, 3 * 16 + 3 * 4);
+}
+
+// A pose whose cells leave the key range (see CollisionInputs.ACellRangeBeyondTheKeyRange-
+// NamesThePose): refused with the same message, naming the first such pose, whether the host
+// or the device prepares the poses; the checker works on afterwards.
+TEST(CollisionGpu, ACellRangeBeyondTheKeyRangeIsRefusedOnBothPreparations) {
+  REQUIRE_DEVICE();
+  const Map& map = roomMap();
+  const double x_limit_m = 2147483647.0 * map.resolution();
+  Eigen::Matrix3d R;
+  R.row(0) = Eigen::Vector3d(1, 1, 1) / std::sqrt(3.0);
+  R.row(1) = Eigen::Vector3d(1, -1, 0) / std::sqrt(2.0);
+  R.row(2) = R.row(0).cross(R.row(1));
+  Eigen::Isometry3d fine = Eigen::Isometry3d::Identity();
+  fine.linear() = R;
+  fine.translation().x() = x_limit_m - 2.0;
+  Eigen::Isometry3d bad = fine;
+  bad.translation().x() = x_limit_m - 0.75;
+  std::vector<Eigen::Isometry3d> many(20000, fine);
+  many[15000] = bad;
+  many[19000] = bad;
+  const auto box = CollisionShape::box({0.01, 0.01, 0.01});
+  const std::vector<Eigen::Isometry3d> good = randomPoses(map, 500, 21);
+  for (const PosePreparation prep : {PosePreparation::kHost, PosePreparation::kDevice})
+    for (const size_t chunk : {size_t{0}, size_t{3000}}) {
+      CollisionOptions o;
+      o.margin_m = 0.5;
+      o.pose_preparation = prep;
+      o.device_chunk_poses = chunk;
+      try {
+        (void)checkPoses(map, box, many, o, Backend::kCuda);
+        ADD_FAILURE() << "a pose beyond the key range was accepted";
+      } catch (const InvalidArgument& e) {
+        EXPECT_NE(std::string(e.what()).find("pose 15000: the shape's cells are outside the "
+                                             "map's key range"),
+                  std::string::npos)
+            << e.what();
+      }
+      CollisionOptions plain;
+      plain.pose_preparation = prep;
+      int colliding = 0;
+      expectSame(checkPoses(map, box, good, plain, Backend::kCpu),
+                 checkPoses(map, box, good, plain, Backend::kCuda), "after the refusal",
+                 &colliding);
+    }
 }
 
 TEST(CollisionGpu, SinglePosesMatchTheCpu) {

@@ -228,9 +228,51 @@ TEST(CollisionInputs, BadShapesOptionsAndPosesAreRefused) {
       (void)checkPoses(map, sphere, many, o);
       ADD_FAILURE() << "a batch with bad poses was accepted";
     } catch (const InvalidArgument& e) {
-      EXPECT_NE(std::string(e.what()).find("not a rotation"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("pose 7000: shape pose rotation is not a rotation"),
+                std::string::npos)
+          << e.what();
     }
   }
+}
+
+// A box whose map-frame box reaches further along x than the batch's block range allows for
+// (its bounding sphere plus one margin): the rotation's first row is (1, 1, 1) / sqrt(3), so
+// a 2 cm cube grown by a 0.5 m margin spans 0.03 / sqrt(3) + 0.5 sqrt(3) = 0.883 m from its
+// centre along x, against a reach of 0.017 + 0.5 + 0.1 = 0.617 m. Placed 0.75 m below the
+// largest x of the key range, the batch's range fits and this pose's cells do not: refused
+// with the pose named, on every thread count, not a crash.
+TEST(CollisionInputs, ACellRangeBeyondTheKeyRangeNamesThePose) {
+  const Map map = mapWith({{0, 0, 0}});
+  const double x_limit_m = 2147483647.0 * map.resolution();
+  Eigen::Matrix3d R;
+  R.row(0) = Eigen::Vector3d(1, 1, 1) / std::sqrt(3.0);
+  R.row(1) = Eigen::Vector3d(1, -1, 0) / std::sqrt(2.0);
+  R.row(2) = R.row(0).cross(R.row(1));
+  Eigen::Isometry3d bad = at(x_limit_m - 0.75, 0, 0);
+  bad.linear() = R;
+  Eigen::Isometry3d fine = bad;
+  fine.translation().x() = x_limit_m - 2.0;
+  CollisionOptions o;
+  o.margin_m = 0.5;
+  const auto box = CollisionShape::box({0.01, 0.01, 0.01});
+  EXPECT_FALSE(checkPoses(map, box, {fine, fine}, o)[1].collides);
+  std::vector<Eigen::Isometry3d> many(20000, fine);
+  many[15000] = bad;
+  many[19000] = bad;
+  for (const int threads : {1, 2}) {
+    o.threads = threads;
+    try {
+      (void)checkPoses(map, box, many, o);
+      ADD_FAILURE() << "a pose beyond the key range was accepted";
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find("pose 15000: the shape's cells are outside the map's "
+                                           "key range"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  // The map is untouched: a good batch after it answers as before.
+  EXPECT_TRUE(checkPoses(map, box, {at(0.05, 0.05, 0.05)}, CollisionOptions())[0].collides);
 }
 
 TEST(CollisionInputs, PreparedMapRefusesAChangedMapAndOtherOptions) {

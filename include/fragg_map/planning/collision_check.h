@@ -38,11 +38,35 @@ namespace fragg::planning {
 /// How far (metres) a shape must reach into a cell's cube to collide with it.
 constexpr double kTouchEpsilon_m = 1e-6;
 
+/// Where a CUDA batch of boxes, spheres or capsules prepares its poses (each pose's rotation,
+/// grown sizes, capsule ends and cell range): kHost computes them on the batch's threads and
+/// uploads them (208 bytes a pose); kDevice uploads the rigid poses as given (96 bytes a pose,
+/// in chunks that overlap the host's packing with the copies and kernels) and the kernel
+/// computes them with the same function. The answers are identical; CPU checks and meshes
+/// ignore it.
+enum class PosePreparation { kHost, kDevice };
+
+/// Where a batch's time went (milliseconds on the host's clock), for benchmarks: filled by
+/// checkPoses when CollisionOptions::stages points at one.
+struct CollisionStages {
+  double validate_ms = 0.0;   ///< the poses checked and their box found (one pass)
+  double obstacles_ms = 0.0;  ///< the map's device layer view leased, or the obstacle index built
+  double poses_ms = 0.0;      ///< CUDA: poses prepared (host) or packed (device, overlapping it)
+  double device_ms = 0.0;     ///< CUDA: the rest of the checker's call (an index uploaded, pose
+                              ///< copies, kernels, waits, answers back); CPU: the checks
+  double results_ms = 0.0;    ///< CUDA: answers turned into results
+};
+
 struct CollisionOptions {
   bool unknown_is_occupied = false;
   double margin_m = 0.0;     ///< >= 0; see the header comment for meshes
   bool count_cells = false;  ///< count every colliding cell (otherwise stop at the first)
   int threads = 0;           ///< batches: OpenMP threads (0 = every core)
+  PosePreparation pose_preparation = PosePreparation::kHost;  ///< CUDA batches, see above
+  /// kDevice: poses a chunk (0: the batch in four chunks of at least 8,192 poses).
+  size_t device_chunk_poses = 0;
+  /// When set, checkPoses fills it (over a prepared map: its CUDA stages only).
+  CollisionStages* stages = nullptr;
 };
 
 struct CollisionResult {

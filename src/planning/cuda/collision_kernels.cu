@@ -14,21 +14,51 @@ namespace {
 constexpr int kThreads = 128;
 constexpr int kRangeThreads = 256;
 
-__global__ void primitiveKernel(ObstacleMasksView masks, const PrimitivePose* poses, uint32_t n,
-                                double resolution_m, double half_m, bool count_cells,
-                                DeviceAnswer* answers) {
-  const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n) return;
-  const PrimitivePose& p = poses[i];
-  DeviceAnswer a{0, UINT32_MAX, 0, VoxelKey{}};
+// The obstacle cells of a pose's range in scan order, the exact test, stopping at the first
+// collision unless count_cells (as the CPU checker's checkPrimitive).
+__device__ CollisionAnswer checkPrimitivePose(const ObstacleMasksView& masks,
+                                              const PrimitivePose& p, double resolution_m,
+                                              double half_m, bool count_cells) {
+  CollisionAnswer a;
   forEachObstacleCell(masks, p.lo, p.hi, [&](const VoxelKey& k) {
     if (!primitiveOverlapsCell(p, cellCentre(k, resolution_m), half_m)) return false;
     if (!a.collides) a.first_cell = k;
-    a.collides = 1;
+    a.collides = true;
     ++a.colliding_cells;
     return !count_cells;
   });
-  answers[i] = a;
+  return a;
+}
+
+// A pose's answer as each checker path stores it.
+__device__ void store(const CollisionAnswer& a, DeviceAnswer* out) {
+  *out = DeviceAnswer{a.collides ? 1u : 0u, UINT32_MAX, a.colliding_cells, a.first_cell};
+}
+__device__ void store(const CollisionAnswer& a, CollisionAnswer* out) { *out = a; }
+
+template <class Answer>
+__global__ void primitiveKernel(ObstacleMasksView masks, const PrimitivePose* poses, uint32_t n,
+                                double resolution_m, double half_m, bool count_cells,
+                                Answer* answers) {
+  const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  store(checkPrimitivePose(masks, poses[i], resolution_m, half_m, count_cells), &answers[i]);
+}
+
+// Pose first + i of the batch (poses[i]) as the host would prepare it. A pose whose cells leave
+// the key range gets an empty cell range (lo > hi: nothing to visit) and is reported.
+__global__ void preparePosesKernel(const RigidPose* poses, uint32_t first, uint32_t count,
+                                   PrimitiveShape shape, PrimitivePose* prepared,
+                                   uint32_t* first_bad) {
+  const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= count) return;
+  PrimitivePose p;
+  if (!preparePrimitivePose(shape, poses[i].R_map_shape, poses[i].t_map_shape, &p)) {
+    atomicMin(first_bad, first + i);
+    p.lo = VoxelKey{0, 0, 0};
+    p.hi = VoxelKey{-1, -1, -1};
+  }
+  prepared[i] = p;
 }
 
 __device__ int32_t floorKey(double v) { return static_cast<int32_t>(floor(v)); }
@@ -184,6 +214,19 @@ void launchPrimitiveCheck(const ObstacleMasksView& masks, const PrimitivePose* p
   if (n == 0) return;
   primitiveKernel<<<gridFor(n), kThreads, 0, stream>>>(masks, poses, n, resolution_m, half_m,
                                                        count_cells, answers);
+  FRAGG_CUDA_CHECK_LAUNCH("primitiveKernel");
+}
+
+void launchRigidPoseCheck(const ObstacleMasksView& masks, const RigidPose* poses, uint32_t first,
+                          uint32_t count, const PrimitiveShape& shape, double half_m,
+                          bool count_cells, PrimitivePose* prepared, CollisionAnswer* answers,
+                          uint32_t* first_bad, cudaStream_t stream) {
+  if (count == 0) return;
+  preparePosesKernel<<<gridFor(count), kThreads, 0, stream>>>(poses, first, count, shape, prepared,
+                                                              first_bad);
+  FRAGG_CUDA_CHECK_LAUNCH("preparePosesKernel");
+  primitiveKernel<<<gridFor(count), kThreads, 0, stream>>>(
+      masks, prepared, count, shape.resolution_m, half_m, count_cells, answers);
   FRAGG_CUDA_CHECK_LAUNCH("primitiveKernel");
 }
 

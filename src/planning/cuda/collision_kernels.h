@@ -27,6 +27,17 @@ void launchPrimitiveCheck(const ObstacleMasksView& masks, const PrimitivePose* p
                           double resolution_m, double half_m, bool count_cells,
                           DeviceAnswer* answers, cudaStream_t stream);
 
+/// A chunk of poses prepared on the device, then checked: poses[0 .. count - 1] (pose first + i
+/// of the batch) turned into prepared[i] by preparePrimitivePose, one thread a pose, then
+/// checked as launchPrimitiveCheck does (the same kernel), answers[i] for each. A pose whose
+/// cells leave the key range gets an empty answer and its batch index atomicMin'ed into
+/// *first_bad. (Two kernels, not one: a kernel that prepares and checks held 194 registers a
+/// thread, or spilled when held to 128; the check alone holds 125.)
+void launchRigidPoseCheck(const ObstacleMasksView& masks, const RigidPose* poses, uint32_t first,
+                          uint32_t count, const PrimitiveShape& shape, double half_m,
+                          bool count_cells, PrimitivePose* prepared, CollisionAnswer* answers,
+                          uint32_t* first_bad, cudaStream_t stream);
+
 /// The mesh on the device: flat BVH, vertices and triangles in leaf order.
 struct DeviceMesh {
   const geometry::MeshBvh::Node* nodes;

@@ -36,9 +36,18 @@ enum Buffer : int {
   kSolids,
   kVertices,
   kSlotTriangles,
+  kRigidPoses,
+  kRigidAnswers,
+  kFirstBad,
 };
 /// Pinned host buffers (their own numbering).
-enum PinnedBuffer : int { kAnswersHost = 100, kStagedPoses };
+enum PinnedBuffer : int {
+  kAnswersHost = 100,
+  kStagedPoses,
+  kStagedRigidPoses,
+  kRigidAnswersHost,
+  kFirstBadHost
+};
 
 class CudaCollisionImpl final : public CudaCollision {
  public:
@@ -61,6 +70,45 @@ class CudaCollisionImpl final : public CudaCollision {
     copyToDevice(d_poses, s_.pinned<PrimitivePose>(kStagedPoses, n), n, stream_);
     launchPrimitiveCheck(view, d_poses, n, resolution_m, half_m, count_cells, d_answers, stream_);
     return download(d_answers, n, count_cells);
+  }
+
+  const CollisionAnswer* checkRigidPoses(const ObstacleSource& masks, size_t count,
+                                         const PrimitiveShape& shape, double half_m,
+                                         bool count_cells, size_t chunk_poses,
+                                         const RigidPosePacker& pack, size_t* first_bad) override {
+    const ObstacleMasksView view = obstacles(masks);
+    RigidPose* staged = s_.pinned<RigidPose>(kStagedRigidPoses, count);
+    CollisionAnswer* answers = s_.pinned<CollisionAnswer>(kRigidAnswersHost, count);
+    uint32_t* bad = s_.pinned<uint32_t>(kFirstBadHost, 1);
+    RigidPose* d_poses = s_.device<RigidPose>(kRigidPoses, count);
+    PrimitivePose* d_prepared = s_.device<PrimitivePose>(kPrimitivePoses, count);
+    CollisionAnswer* d_answers = s_.device<CollisionAnswer>(kRigidAnswers, count);
+    uint32_t* d_bad = s_.device<uint32_t>(kFirstBad, 1);
+    FRAGG_CUDA_CHECK(cudaMemsetAsync(d_bad, 0xff, sizeof(uint32_t), stream_));
+    // The poses' copies on a stream of their own, so that chunk k + 1's copy runs beside chunk
+    // k's kernels (a copy engine and the SMs); the kernels of a chunk wait for its copy.
+    if (!copies_) {
+      copies_ = std::make_unique<CudaStream>();
+      copied_ = std::make_unique<CudaEvent>();
+    }
+    const size_t chunk = std::max<size_t>(chunk_poses, 1);
+    // Chunk k's copy, kernels and answers are queued (asynchronous) before chunk k + 1 is packed:
+    // the device works on k while the host threads pack k + 1.
+    for (size_t first = 0; first < count; first += chunk) {
+      const size_t n = std::min(chunk, count - first);
+      pack(first, n, staged + first);
+      copyToDevice(d_poses + first, staged + first, n, copies_->get());
+      copied_->record(copies_->get());
+      copied_->makeWait(stream_);
+      launchRigidPoseCheck(view, d_poses + first, static_cast<uint32_t>(first),
+                           static_cast<uint32_t>(n), shape, half_m, count_cells, d_prepared + first,
+                           d_answers + first, d_bad, stream_);
+      copyToHost(answers + first, d_answers + first, n, stream_);
+    }
+    copyToHost(bad, d_bad, 1, stream_);
+    FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+    *first_bad = *bad == UINT32_MAX ? count : *bad;
+    return answers;
   }
 
   std::vector<CollisionAnswer> checkMesh(const ObstacleSource& masks,
@@ -167,6 +215,9 @@ class CudaCollisionImpl final : public CudaCollision {
 
   DeviceScratch& s_;
   cudaStream_t stream_;
+  /// checkRigidPoses: the stream of the poses' copies and the event of the latest one.
+  std::unique_ptr<CudaStream> copies_;
+  std::unique_ptr<CudaEvent> copied_;
 };
 
 }  // namespace

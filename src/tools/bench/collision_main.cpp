@@ -6,8 +6,13 @@
 // build time, FCL's OcTree collision (the map's occupied cells in an octomap::OcTree) runs on the
 // same box poses.
 //
+// On CUDA, box, sphere and capsule poses are prepared on the host (the library's default) or
+// on the device (--pose-prep device; `both` alternates the two batch by batch in one process,
+// each timed and printed apart, answers compared).
+//
 //   fragg_map_collision_bench --map W1.fgm [--poses 100000] [--mesh-poses 1000]
 //       [--backends cpu cuda] [--repeats 3] [--fcl-poses 20000] [--json FILE]
+//       [--pose-prep host|device|both] [--chunk-poses 0 ...]
 #include <fmt/format.h>
 #include <omp.h>
 
@@ -17,6 +22,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -45,7 +51,30 @@ struct Options {
   std::vector<std::string> shapes = {"box", "sphere", "capsule", "mesh"};
   int repeats = 3;
   uint32_t seed = 15;
+  std::string pose_prep = "host";
+  std::vector<size_t> chunk_poses = {0};  ///< device preparation: one run per value
 };
+
+/// One way of running a CUDA batch: where poses are prepared, and its chunk size.
+struct Prep {
+  std::string label;  ///< "" for the library's default (host)
+  planning::CollisionOptions options;
+};
+
+/// The ways the options ask for: host and/or device (one per chunk size).
+std::vector<Prep> prepsOf(const Options& o) {
+  std::vector<Prep> out;
+  if (o.pose_prep == "host" || o.pose_prep == "both") out.push_back({"host", {}});
+  if (o.pose_prep == "device" || o.pose_prep == "both")
+    for (const size_t chunk : o.chunk_poses) {
+      Prep p{chunk ? fmt::format("device/{}", chunk) : "device", {}};
+      p.options.pose_preparation = planning::PosePreparation::kDevice;
+      p.options.device_chunk_poses = chunk;
+      out.push_back(p);
+    }
+  if (out.empty()) throw InvalidArgument("--pose-prep must be host, device or both");
+  return out;
+}
 
 double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -71,21 +100,65 @@ struct Run {
   std::string shape, backend;
   size_t poses = 0, colliding = 0;
   double ms_median = 0, ms_min = 0;
+  planning::CollisionStages stages;  ///< median of each stage over the repeats
 };
 
-Run timeBatch(const Map& map, const std::string& name, const planning::CollisionShape& shape,
-              const std::vector<Eigen::Isometry3d>& poses, Backend backend, int repeats,
-              std::vector<planning::CollisionResult>* answers) {
-  std::vector<double> ms;
-  for (int r = 0; r < repeats; ++r) {
-    const auto t0 = std::chrono::steady_clock::now();
-    *answers = planning::checkPoses(map, shape, poses, planning::CollisionOptions(), backend);
-    ms.push_back(msSince(t0));
+using Batch =
+    std::function<std::vector<planning::CollisionResult>(const planning::CollisionOptions&)>;
+
+/// `batch` run `repeats` times each way of `preps`, the ways alternated batch by batch (so that
+/// drifts of the machine hit them alike); one Run (median, min) and the last answers per way.
+std::vector<Run> timeBatches(const Batch& batch, const std::string& name, Backend backend,
+                             const std::vector<Prep>& preps, int repeats, size_t n_poses,
+                             std::vector<std::vector<planning::CollisionResult>>* answers) {
+  std::vector<std::vector<double>> ms(preps.size());
+  std::vector<std::vector<planning::CollisionStages>> stages(preps.size());
+  answers->assign(preps.size(), {});
+  for (int r = 0; r < repeats; ++r)
+    for (size_t p = 0; p < preps.size(); ++p) {
+      planning::CollisionOptions options = preps[p].options;
+      planning::CollisionStages s;
+      options.stages = &s;
+      const auto t0 = std::chrono::steady_clock::now();
+      (*answers)[p] = batch(options);
+      ms[p].push_back(msSince(t0));
+      stages[p].push_back(s);
+    }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  std::vector<Run> runs;
+  for (size_t p = 0; p < preps.size(); ++p) {
+    std::sort(ms[p].begin(), ms[p].end());
+    std::string label = toString(backend);
+    if (preps.size() > 1 || !preps[p].label.empty()) label += "/" + preps[p].label;
+    Run run{name, label, n_poses, 0, ms[p][ms[p].size() / 2], ms[p].front(), {}};
+    auto stage = [&](double planning::CollisionStages::*field) {
+      std::vector<double> v;
+      for (const planning::CollisionStages& s : stages[p]) v.push_back(s.*field);
+      return median(v);
+    };
+    run.stages.validate_ms = stage(&planning::CollisionStages::validate_ms);
+    run.stages.obstacles_ms = stage(&planning::CollisionStages::obstacles_ms);
+    run.stages.poses_ms = stage(&planning::CollisionStages::poses_ms);
+    run.stages.device_ms = stage(&planning::CollisionStages::device_ms);
+    run.stages.results_ms = stage(&planning::CollisionStages::results_ms);
+    for (const auto& a : (*answers)[p]) run.colliding += a.collides;
+    runs.push_back(run);
   }
-  std::sort(ms.begin(), ms.end());
-  Run run{name, toString(backend), poses.size(), 0, ms[ms.size() / 2], ms.front()};
-  for (const auto& a : *answers) run.colliding += a.collides;
-  return run;
+  return runs;
+}
+
+/// Poses whose answers differ between `a` and `b` (collides, or the first cell where both
+/// collide).
+size_t differing(const std::vector<planning::CollisionResult>& a,
+                 const std::vector<planning::CollisionResult>& b) {
+  size_t differ = 0;
+  for (size_t i = 0; i < a.size() && i < b.size(); ++i)
+    differ +=
+        a[i].collides != b[i].collides || (a[i].collides && a[i].first_cell != b[i].first_cell);
+  return differ + (a.size() > b.size() ? a.size() - b.size() : b.size() - a.size());
 }
 
 #if FRAGG_HAVE_FCL
@@ -119,7 +192,7 @@ Run timeFcl(const Map& map, const Eigen::Vector3d& box_m,
     fcl::collide(&box_object, &tree_object, request, result);
     hit[i] = result.isCollision();
   }
-  Run run{"box", "fcl-octree", poses.size(), 0, msSince(t0), 0};
+  Run run{"box", "fcl-octree", poses.size(), 0, msSince(t0), 0, {}};
   run.ms_min = run.ms_median;
   *agree = 0;
   for (size_t i = 0; i < poses.size(); ++i) {
@@ -191,84 +264,99 @@ void run(const Options& o) {
   std::vector<planning::CollisionResult> box_cpu;
   fmt::print("{:<40} {:>8} {:>8} {:>10} {:>10} {:>12}\n", "shape", "backend", "poses", "colliding",
              "ms median", "poses/s");
+  const std::vector<Prep> preps = prepsOf(o);
   for (const Case& c : cases) {
     std::vector<std::vector<planning::CollisionResult>> per_backend;
     for (const std::string& name : o.backends) {
       const Backend requested = backendFromString(name);
       std::string why;
+      Backend use = Backend::kCpu;
       try {
-        planning::resolveCollisionBackend(requested, &why);
+        use = planning::resolveCollisionBackend(requested, &why);
       } catch (const InvalidArgument& e) {
         fmt::print("{:<40} {:>8} skipped: {}\n", c.name, name, e.what());
         continue;
       }
-      std::vector<planning::CollisionResult> answers;
-      const Run r = timeBatch(map, c.name, c.shape, *c.poses, requested, o.repeats, &answers);
-      fmt::print("{:<40} {:>8} {:>8} {:>10} {:>10.2f} {:>12.3g}\n", r.shape, r.backend, r.poses,
-                 r.colliding, r.ms_median, r.poses / (r.ms_median * 1e-3));
-      j["runs"].push_back({{"shape", r.shape},
-                           {"backend", r.backend},
-                           {"poses", r.poses},
-                           {"colliding", r.colliding},
-                           {"ms_median", r.ms_median},
-                           {"ms_min", r.ms_min}});
-      if (c.key == "box" && requested == Backend::kCpu) box_cpu = answers;
-      per_backend.push_back(std::move(answers));
-      if (requested == Backend::kCuda && cuda_map) {
+      // Where poses are prepared matters on CUDA for boxes, spheres and capsules only.
+      const std::vector<Prep> ways =
+          use == Backend::kCuda && c.key != "mesh" ? preps : std::vector<Prep>{Prep{"", {}}};
+      // One line per way; every way's answers against `reference` (none: against the first).
+      auto report = [&](const std::vector<Run>& runs,
+                        const std::vector<std::vector<planning::CollisionResult>>& answers,
+                        const std::vector<planning::CollisionResult>* reference,
+                        const std::string& note, const std::string& json_suffix,
+                        nlohmann::json extra) {
+        for (size_t p = 0; p < runs.size(); ++p) {
+          const Run& r = runs[p];
+          std::string line_note = note;
+          size_t differ = 0;
+          if (reference || p > 0) {
+            differ = differing(reference ? *reference : answers[0], answers[p]);
+            line_note += fmt::format("{}{} answers differ", line_note.empty() ? "" : "; ", differ);
+          }
+          fmt::print("{:<40} {:>8} {:>8} {:>10} {:>10.2f} {:>12.3g}{}\n", r.shape, r.backend,
+                     r.poses, r.colliding, r.ms_median, r.poses / (r.ms_median * 1e-3),
+                     line_note.empty() ? "" : "  " + line_note);
+          const planning::CollisionStages& st = r.stages;
+          fmt::print(
+              "{:<40} stages, median ms: validate {:.3f}, obstacles {:.3f}, poses {:.3f}, "
+              "device {:.3f}, results {:.3f}\n",
+              "", st.validate_ms, st.obstacles_ms, st.poses_ms, st.device_ms, st.results_ms);
+          nlohmann::json run = {{"shape", r.shape},
+                                {"backend", r.backend + json_suffix},
+                                {"poses", r.poses},
+                                {"colliding", r.colliding},
+                                {"ms_median", r.ms_median},
+                                {"ms_min", r.ms_min},
+                                {"differ", differ},
+                                {"stages_ms",
+                                 {{"validate", r.stages.validate_ms},
+                                  {"obstacles", r.stages.obstacles_ms},
+                                  {"poses", r.stages.poses_ms},
+                                  {"device", r.stages.device_ms},
+                                  {"results", r.stages.results_ms}}}};
+          run.update(extra);
+          j["runs"].push_back(run);
+        }
+      };
+      std::vector<std::vector<planning::CollisionResult>> answers;
+      const std::vector<Run> runs = timeBatches(
+          [&](const planning::CollisionOptions& opt) {
+            return planning::checkPoses(map, c.shape, *c.poses, opt, requested);
+          },
+          c.name, requested, ways, o.repeats, c.poses->size(), &answers);
+      report(runs, answers, nullptr, "", "", nlohmann::json::object());
+      if (c.key == "box" && requested == Backend::kCpu) box_cpu = answers[0];
+      per_backend.push_back(answers[0]);
+      if (use == Backend::kCuda && cuda_map) {
         // A map integrating on CUDA: the first batch brings its blocks to the device (timed
         // apart), then batches read them in place.
-        std::vector<planning::CollisionResult> on_view;
         const auto t_first = std::chrono::steady_clock::now();
-        on_view = planning::checkPoses(*cuda_map, c.shape, *c.poses, planning::CollisionOptions(),
-                                       Backend::kCuda);
+        (void)planning::checkPoses(*cuda_map, c.shape, *c.poses, ways[0].options, Backend::kCuda);
         const double first_ms = msSince(t_first);
-        const Run v =
-            timeBatch(*cuda_map, c.name, c.shape, *c.poses, Backend::kCuda, o.repeats, &on_view);
-        size_t differ = 0;
-        for (size_t i = 0; i < on_view.size(); ++i)
-          differ +=
-              on_view[i].collides != per_backend.back()[i].collides ||
-              (on_view[i].collides && on_view[i].first_cell != per_backend.back()[i].first_cell);
-        fmt::print(
-            "{:<40} {:>8} {:>8} {:>10} {:>10.2f} {:>12.3g}  map on CUDA, device layer view "
-            "(first batch {:.1f} ms; {} answers differ)\n",
-            v.shape, v.backend, v.poses, v.colliding, v.ms_median, v.poses / (v.ms_median * 1e-3),
-            first_ms, differ);
-        j["runs"].push_back({{"shape", v.shape},
-                             {"backend", "cuda+layer_view"},
-                             {"poses", v.poses},
-                             {"ms_median", v.ms_median},
-                             {"ms_min", v.ms_min},
-                             {"first_batch_ms", first_ms},
-                             {"differ", differ}});
+        std::vector<std::vector<planning::CollisionResult>> on_view;
+        const std::vector<Run> v = timeBatches(
+            [&](const planning::CollisionOptions& opt) {
+              return planning::checkPoses(*cuda_map, c.shape, *c.poses, opt, Backend::kCuda);
+            },
+            c.name, Backend::kCuda, ways, o.repeats, c.poses->size(), &on_view);
+        report(v, on_view, &per_backend.back(),
+               fmt::format("map on CUDA, device layer view (first batch {:.1f} ms)", first_ms),
+               "+layer_view", {{"first_batch_ms", first_ms}});
       }
       // The same batch over a map prepared once (PreparedMap: masks of every block kept
       // between batches, as FCL's OcTree is built once), preparation timed apart.
       const auto t_prep = std::chrono::steady_clock::now();
       const planning::PreparedMap prepared(map, false);
       const double prep_ms = msSince(t_prep);
-      std::vector<double> ms;
-      std::vector<planning::CollisionResult> again;
-      for (int k = 0; k < o.repeats; ++k) {
-        const auto t0 = std::chrono::steady_clock::now();
-        again = planning::checkPoses(prepared, c.shape, *c.poses, planning::CollisionOptions(),
-                                     requested);
-        ms.push_back(msSince(t0));
-      }
-      std::sort(ms.begin(), ms.end());
-      const double med = ms[ms.size() / 2];
-      size_t differ = 0;
-      for (size_t i = 0; i < again.size(); ++i)
-        differ += again[i].collides != per_backend.back()[i].collides;
-      fmt::print(
-          "{:<40} {:>8} {:>8} {:>10} {:>10.2f} {:>12.3g}  prepared map ({:.0f} ms once; "
-          "{} answers differ)\n",
-          r.shape, r.backend, r.poses, r.colliding, med, r.poses / (med * 1e-3), prep_ms, differ);
-      j["runs"].push_back({{"shape", r.shape},
-                           {"backend", r.backend + "+prepared"},
-                           {"poses", r.poses},
-                           {"ms_median", med},
-                           {"prepare_ms", prep_ms}});
+      std::vector<std::vector<planning::CollisionResult>> again;
+      const std::vector<Run> pr = timeBatches(
+          [&](const planning::CollisionOptions& opt) {
+            return planning::checkPoses(prepared, c.shape, *c.poses, opt, requested);
+          },
+          c.name, requested, ways, o.repeats, c.poses->size(), &again);
+      report(pr, again, &per_backend.back(), fmt::format("prepared map ({:.0f} ms once)", prep_ms),
+             "+prepared", {{"prepare_ms", prep_ms}});
     }
     // Backends must agree exactly (the gpu test asserts it; the benchmark says so too).
     for (size_t b = 1; b < per_backend.size(); ++b) {
@@ -324,6 +412,14 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--seed", o.seed, "Pose seed")->capture_default_str();
   app.add_option("--json", o.json_path, "Write the figures as JSON");
+  app.add_option("--pose-prep", o.pose_prep,
+                 "CUDA boxes, spheres, capsules: poses prepared on the host, the device, or both "
+                 "(alternated batch by batch)")
+      ->check(CLI::IsMember({"host", "device", "both"}))
+      ->capture_default_str();
+  app.add_option("--chunk-poses", o.chunk_poses,
+                 "Device preparation: poses a chunk, one run per value (0: four chunks)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
     fragg::bench::run(o);
