@@ -52,6 +52,8 @@ FRAGG_HD double cellGainBits(const OccupancyModel& model, const Cell* cell) {
 struct GainWalk {
   DdaAxis x, y, z;
 
+  /// No ray yet (a lane of the queued CUDA kernels before it takes one).
+  GainWalk() = default;
   FRAGG_HD GainWalk(const double* start_v, const double* end_v) {
     int ref[3];
     float s[3], e[3];

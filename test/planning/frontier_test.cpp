@@ -569,6 +569,32 @@ TEST(FrontierArguments, RefusedCleanly) {
                InvalidArgument);
   EXPECT_EQ(viewpointGainsBits(map, at, {0.0}, GainSensor(), 0, Backend::kAuto),
             viewpointGainsBits(map, at, {0.0}, GainSensor(), 0, Backend::kCpu));
+  // The CUDA gain kernel's options: checked before any walk, on every backend.
+  GainDeviceOptions bad;
+  bad.refill_lanes = 0;
+  EXPECT_THROW(viewpointGainsBits(map, at, {0.0}, GainSensor(), 0, Backend::kCpu, bad),
+               InvalidArgument);
+  bad.refill_lanes = 33;
+  EXPECT_THROW(viewpointGainsBits(map, at, {0.0}, GainSensor(), 0, Backend::kAuto, bad),
+               InvalidArgument);
+  bad.refill_lanes = 32;
+  bad.pool_blocks = (size_t(1) << 31) + 1;
+  EXPECT_THROW(viewpointGainsBits(map, at, {0.0}, GainSensor(), 0, Backend::kCpu, bad),
+               InvalidArgument);
+  v.radii_m = {1.0};
+  v.device_gains.refill_lanes = -1;
+  EXPECT_THROW(clusterViewpoints(map, cluster, v), InvalidArgument);
+}
+
+TEST(Viewpoints, GainKernelNames) {
+  for (const GainKernel k : kGainKernels) EXPECT_EQ(gainKernelFromName(gainKernelName(k)), k);
+  EXPECT_STREQ(gainKernelName(GainKernel::kPooledQueued), "pooled-queued");
+  EXPECT_EQ(gainKernelFromName("plain"), GainKernel::kPlain);
+  EXPECT_THROW((void)gainKernelFromName("all"), InvalidArgument);
+  EXPECT_THROW((void)gainKernelFromName(""), InvalidArgument);
+  // The default is the plain kernel, the one checked longest against the CPU.
+  EXPECT_EQ(GainDeviceOptions().kernel, GainKernel::kPlain);
+  EXPECT_EQ(ViewpointOptions().device_gains.kernel, GainKernel::kPlain);
 }
 
 }  // namespace
