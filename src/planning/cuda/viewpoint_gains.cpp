@@ -285,11 +285,11 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
     directory = scratch.device<uint32_t>(kDirectory, max_units);
     // The pool: what the budget leaves, but no more than a round's directories have entries
     // (a pool that large cannot run out; a small batch takes little).
-    pool_blocks = options.pool_blocks
-                      ? options.pool_blocks
-                      : std::min<uint64_t>(
-                            static_cast<uint64_t>(budget * kPoolShare) / kPoolBitmapBytes,
-                            max_units);
+    pool_blocks =
+        options.pool_blocks
+            ? options.pool_blocks
+            : std::min<uint64_t>(static_cast<uint64_t>(budget * kPoolShare) / kPoolBitmapBytes,
+                                 max_units);
     pool_blocks = std::clamp<uint64_t>(pool_blocks, 1, uint64_t(1) << 31);
     pool = scratch.device<unsigned long long>(kPool, pool_blocks * (kPoolBitmapBytes / 8));
     pool_taken = scratch.device<unsigned int>(kPoolTaken, n_rounds);
