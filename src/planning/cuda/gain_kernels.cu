@@ -130,7 +130,9 @@ struct RayWalk {
 /// keeping `r.gain` when the viewpoint is the one it counts for; else adds that gain first.
 template <bool kPooled>
 __device__ void startRay(const GainWalkArgs& a, uint64_t ray, RayWalk& r) {
-  const uint32_t vp = static_cast<uint32_t>(ray / a.rays_per_viewpoint);
+  // A 32-bit division where the index fits (every round of a realistic batch).
+  const uint32_t vp = ray <= 0xffffffffu ? static_cast<uint32_t>(ray) / a.rays_per_viewpoint
+                                         : static_cast<uint32_t>(ray / a.rays_per_viewpoint);
   const uint32_t i = static_cast<uint32_t>(ray - uint64_t(vp) * a.rays_per_viewpoint);
   if (vp != r.vp) {
     if (r.gain != 0.0) atomicAdd(&a.gains[r.vp], r.gain);
@@ -158,7 +160,11 @@ __device__ void startRay(const GainWalkArgs& a, uint64_t ray, RayWalk& r) {
 /// first lane that asks (a compare-and-swap on the directory entry; the others wait for it to
 /// publish), nullptr outside the viewpoint's box (no cell of it is counted, as the plain
 /// kernel's box check) or when the pool is full (the viewpoint is flagged, its gain computed
-/// again).
+/// again). Memory order: the taker clears the bitmap, then publishes its index with a release
+/// store (a fence: the zeros reach L2 first); the others read the entry relaxed (an acquire
+/// load at device scope would invalidate the SM's L1, where the masks are read) and touch the
+/// bitmap only by atomics, which run at L2 and cannot issue before the index they address is
+/// read: the CUDA guide's threadfence pattern (writer fence, reader without one).
 __device__ unsigned long long* poolBitmap(const GainWalkArgs& a, uint32_t vp, const BlockKey& b) {
   int64_t at = 0, stride = 1;
   const int32_t key[3] = {b.x, b.y, b.z};
@@ -172,7 +178,7 @@ __device__ unsigned long long* poolBitmap(const GainWalkArgs& a, uint32_t vp, co
   }
   ::cuda::atomic_ref<uint32_t, ::cuda::thread_scope_device> entry(
       a.directory[__ldg(&a.directory_offset[vp]) + at]);
-  uint32_t v = entry.load(::cuda::memory_order_acquire);
+  uint32_t v = entry.load(::cuda::memory_order_relaxed);
   if (v == 0) {
     uint32_t expected = 0;
     if (entry.compare_exchange_strong(expected, kPoolBusy, ::cuda::memory_order_relaxed)) {
@@ -189,7 +195,7 @@ __device__ unsigned long long* poolBitmap(const GainWalkArgs& a, uint32_t vp, co
       v = expected;
       while (v == kPoolBusy) {
         __nanosleep(32);
-        v = entry.load(::cuda::memory_order_acquire);
+        v = entry.load(::cuda::memory_order_relaxed);
       }
     }
   }
