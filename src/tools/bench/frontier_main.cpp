@@ -413,7 +413,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   app.add_option("--gain-pool-blocks", o.gain_pool_blocks,
-                 "Pooled kernels: block bitmaps in the pool (0 = from free device memory)")
+                 "Pooled kernels: block bitmaps in the pool (0 = from the bitmap budget)")
       ->capture_default_str();
   app.add_option("--gain-refill-lanes", o.gain_refill_lanes,
                  "Queued kernels: idle lanes of a warp before it takes new rays (1..32)")
