@@ -185,15 +185,28 @@ const char* gainKernelName(GainKernel kernel) {
       return "queued";
     case GainKernel::kPooledQueued:
       return "pooled-queued";
+    case GainKernel::kDeferred:
+      return "deferred";
   }
   return "unknown";
+}
+
+bool gainKernelPooled(GainKernel kernel) {
+  return kernel == GainKernel::kPooled || kernel == GainKernel::kPooledQueued ||
+         kernel == GainKernel::kDeferred;
+}
+
+bool gainKernelQueued(GainKernel kernel) {
+  return kernel == GainKernel::kQueued || kernel == GainKernel::kPooledQueued ||
+         kernel == GainKernel::kDeferred;
 }
 
 GainKernel gainKernelFromName(const std::string& name) {
   for (const GainKernel k : kGainKernels)
     if (name == gainKernelName(k)) return k;
   throw InvalidArgument(fmt::format(
-      "gain kernel must be plain, sized, pooled, queued or pooled-queued, got \"{}\"", name));
+      "gain kernel must be plain, sized, pooled, queued, pooled-queued or deferred, got \"{}\"",
+      name));
 }
 
 void ViewpointOptions::validate() const {

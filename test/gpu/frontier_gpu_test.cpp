@@ -172,7 +172,8 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
     c.expect_rounds = true;
     cases.push_back(c);
   }
-  for (const GainKernel k : {GainKernel::kPooled, GainKernel::kPooledQueued}) {
+  for (const GainKernel k :
+       {GainKernel::kPooled, GainKernel::kPooledQueued, GainKernel::kDeferred}) {
     KernelCase c;
     c.device.kernel = k;
     c.device.pool_blocks = 64;
@@ -180,7 +181,7 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
     c.expect_reruns = true;
     cases.push_back(c);
   }
-  for (const GainKernel k : {GainKernel::kQueued, GainKernel::kPooledQueued})
+  for (const GainKernel k : {GainKernel::kQueued, GainKernel::kPooledQueued, GainKernel::kDeferred})
     for (const int lanes : {1, 32}) {
       KernelCase c;
       c.device.kernel = k;
@@ -198,8 +199,7 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
       for (size_t i = 0; i < cpu.size(); ++i)
         EXPECT_NEAR(gpu[i], cpu[i], 1e-9 * std::max(1.0, cpu[i])) << c.what << ", viewpoint " << i;
       EXPECT_TRUE(t.on_device) << c.what;
-      const bool pooled =
-          c.device.kernel == GainKernel::kPooled || c.device.kernel == GainKernel::kPooledQueued;
+      const bool pooled = gainKernelPooled(c.device.kernel);
       if (pooled) {
         EXPECT_GT(t.pool_blocks_wanted, 0u) << c.what;
       }

@@ -589,6 +589,9 @@ TEST(FrontierArguments, RefusedCleanly) {
 TEST(Viewpoints, GainKernelNames) {
   for (const GainKernel k : kGainKernels) EXPECT_EQ(gainKernelFromName(gainKernelName(k)), k);
   EXPECT_STREQ(gainKernelName(GainKernel::kPooledQueued), "pooled-queued");
+  EXPECT_TRUE(gainKernelPooled(GainKernel::kDeferred) && gainKernelQueued(GainKernel::kDeferred));
+  EXPECT_FALSE(gainKernelPooled(GainKernel::kQueued) || gainKernelQueued(GainKernel::kPooled));
+  EXPECT_FALSE(gainKernelPooled(GainKernel::kPlain) || gainKernelQueued(GainKernel::kPlain));
   EXPECT_EQ(gainKernelFromName("plain"), GainKernel::kPlain);
   EXPECT_THROW((void)gainKernelFromName("all"), InvalidArgument);
   EXPECT_THROW((void)gainKernelFromName(""), InvalidArgument);

@@ -57,14 +57,24 @@ enum class GainKernel {
   kQueued,
   /// kQueued's scheduling with kPooled's bitmaps.
   kPooledQueued,
+  /// kPooledQueued whose walk sets seen bits without waiting for the atomics' old values (no
+  /// cell read while walking); a second kernel sums the entropy of the cells set in each
+  /// taken pool bitmap into its viewpoint's gain.
+  kDeferred,
 };
 
-/// Every GainKernel, kPlain first.
-inline constexpr GainKernel kGainKernels[] = {GainKernel::kPlain, GainKernel::kSized,
-                                              GainKernel::kPooled, GainKernel::kQueued,
-                                              GainKernel::kPooledQueued};
+/// Whether `kernel` keeps seen cells in block bitmaps from a pool (kPooled, kPooledQueued,
+/// kDeferred).
+[[nodiscard]] bool gainKernelPooled(GainKernel kernel);
+/// Whether `kernel` hands rays out from a queue (kQueued, kPooledQueued, kDeferred).
+[[nodiscard]] bool gainKernelQueued(GainKernel kernel);
 
-/// "plain", "sized", "pooled", "queued" or "pooled-queued".
+/// Every GainKernel, kPlain first.
+inline constexpr GainKernel kGainKernels[] = {GainKernel::kPlain,        GainKernel::kSized,
+                                              GainKernel::kPooled,       GainKernel::kQueued,
+                                              GainKernel::kPooledQueued, GainKernel::kDeferred};
+
+/// "plain", "sized", "pooled", "queued", "pooled-queued" or "deferred".
 [[nodiscard]] const char* gainKernelName(GainKernel kernel);
 /// The kernel named `name` (gainKernelName's names); InvalidArgument for another name.
 [[nodiscard]] GainKernel gainKernelFromName(const std::string& name);
@@ -72,12 +82,12 @@ inline constexpr GainKernel kGainKernels[] = {GainKernel::kPlain, GainKernel::kS
 /// How a batch of gains runs on the device (ignored on the CPU).
 struct GainDeviceOptions {
   GainKernel kernel = GainKernel::kPlain;
-  /// kPooled, kPooledQueued: block bitmaps in the pool (64 bytes each); 0 sizes the pool
+  /// Pooled kernels (gainKernelPooled): block bitmaps in the pool (64 bytes each); 0 sizes the pool
   /// from the bitmap budget (three quarters of it), never larger than a round's directories
   /// (one bitmap for every block of every box: a pool that cannot run out).
   size_t pool_blocks = 0;
-  /// kQueued, kPooledQueued: a warp takes new rays once at least this many of its 32 lanes
-  /// have finished theirs (1..32).
+  /// Queued kernels (gainKernelQueued): a warp takes new rays once at least this many of its 32
+  /// lanes have finished theirs (1..32).
   int refill_lanes = 4;
   /// Device bytes for one round's bitmaps (every kernel; the pooled kernels give a quarter to
   /// the directories, the rest to the pool unless pool_blocks says); a batch whose bitmaps pass

@@ -130,10 +130,9 @@ struct RayWalk {
 /// keeping `r.gain` when the viewpoint is the one it counts for; else adds that gain first.
 template <bool kPooled>
 __device__ void startRay(const GainWalkArgs& a, uint64_t ray, RayWalk& r) {
-  // A 32-bit division where the index fits (every round of a realistic batch).
-  const uint32_t vp = ray <= 0xffffffffu ? static_cast<uint32_t>(ray) / a.rays_per_viewpoint
-                                         : static_cast<uint32_t>(ray / a.rays_per_viewpoint);
-  const uint32_t i = static_cast<uint32_t>(ray - uint64_t(vp) * a.rays_per_viewpoint);
+  // 32-bit: a round has fewer than 2^32 rays (viewpointGainsOnDevice splits rounds so).
+  const uint32_t vp = static_cast<uint32_t>(ray) / a.rays_per_viewpoint;
+  const uint32_t i = static_cast<uint32_t>(ray) - vp * a.rays_per_viewpoint;
   if (vp != r.vp) {
     if (r.gain != 0.0) atomicAdd(&a.gains[r.vp], r.gain);
     r.gain = 0.0;
@@ -165,6 +164,7 @@ __device__ void startRay(const GainWalkArgs& a, uint64_t ray, RayWalk& r) {
 /// load at device scope would invalidate the SM's L1, where the masks are read) and touch the
 /// bitmap only by atomics, which run at L2 and cannot issue before the index they address is
 /// read: the CUDA guide's threadfence pattern (writer fence, reader without one).
+template <bool kDeferred>
 __device__ unsigned long long* poolBitmap(const GainWalkArgs& a, uint32_t vp, const BlockKey& b) {
   int64_t at = 0, stride = 1;
   const int32_t key[3] = {b.x, b.y, b.z};
@@ -188,6 +188,7 @@ __device__ unsigned long long* poolBitmap(const GainWalkArgs& a, uint32_t vp, co
       } else {
         ulonglong2* bits = reinterpret_cast<ulonglong2*>(a.pool + 8 * uint64_t(i));
         for (int w = 0; w < 4; ++w) bits[w] = make_ulonglong2(0, 0);
+        if (kDeferred) a.pool_owner[i] = PoolOwner{vp, b.x, b.y, b.z};
         v = i + 1;
       }
       entry.store(v, ::cuda::memory_order_release);  // the cleared bitmap before its index
@@ -206,10 +207,16 @@ __device__ unsigned long long* poolBitmap(const GainWalkArgs& a, uint32_t vp, co
   return a.pool + 8 * uint64_t(v - 1);
 }
 
+/// `*word |= mask` at L2 without returning the old value (a reduction: the lane does not wait).
+__device__ void orBits(unsigned long long* word, unsigned long long mask) {
+  asm volatile("red.global.or.b64 [%0], %1;" ::"l"(word), "l"(mask) : "memory");
+}
+
 /// One cell of the ray (the plain kernel's loop body): counts it when it is unknown and first
-/// seen by the viewpoint, then steps on. False when the ray has ended (an occupied cell, or
-/// the end cell visited).
-template <bool kPooled>
+/// seen by the viewpoint (kDeferred: only sets its seen bit, without waiting for the old
+/// value), then steps on. False when the ray has ended (an occupied cell, or the end cell
+/// visited).
+template <bool kPooled, bool kDeferred = false>
 __device__ bool stepRay(const GainWalkArgs& a, RayWalk& r) {
   const VoxelKey k = r.walk.cell();
   if (r.entry != kSameBlock) {
@@ -229,7 +236,7 @@ __device__ bool stepRay(const GainWalkArgs& a, RayWalk& r) {
     unsigned long long* word = nullptr;
     unsigned long long mask = 0;
     if (kPooled) {
-      if (r.seen == nullptr) r.seen = poolBitmap(a, r.vp, blockKeyOf(k));
+      if (r.seen == nullptr) r.seen = poolBitmap<kDeferred>(a, r.vp, blockKeyOf(k));
       if (r.seen) {
         word = r.seen + (c >> 6);
         mask = cell_bit;
@@ -242,7 +249,9 @@ __device__ bool stepRay(const GainWalkArgs& a, RayWalk& r) {
         mask = 1ULL << (bit & 63);
       }
     }
-    if (word && !(atomicOr(word, mask) & mask))
+    if (kDeferred) {
+      if (word) orBits(word, mask);
+    } else if (word && !(atomicOr(word, mask) & mask))
       r.gain +=
           cellGainBits(a.model, r.slot == kNoViewSlot ? nullptr : &a.view.cells[r.slot].cells[c]);
   }
@@ -280,7 +289,7 @@ __global__ void __launch_bounds__(kWalkThreads, kWalkBlocksPerSm) gainWalkKernel
 /// lane whose ray ends waits, and once `refill_lanes` lanes of the warp wait, the warp takes
 /// that many next rays from the queue with one atomic. A lane adds its gain to the viewpoint's
 /// when it moves to another viewpoint's ray, and at the end.
-template <bool kPooled>
+template <bool kPooled, bool kDeferred>
 __global__ void __launch_bounds__(kWalkThreads, kWalkBlocksPerSm) gainQueueKernel(GainWalkArgs a) {
   const uint64_t total = uint64_t(a.viewpoints) * a.rays_per_viewpoint;
   const uint64_t launched = uint64_t(gridDim.x) * blockDim.x;
@@ -293,7 +302,7 @@ __global__ void __launch_bounds__(kWalkThreads, kWalkBlocksPerSm) gainQueueKerne
   if (live) startRay<kPooled>(a, first, r);
   bool drained = launched >= total;  // the same in every lane of the warp
   for (;;) {
-    for (int s = 0; s < kQueueBurst && live; ++s) live = stepRay<kPooled>(a, r);
+    for (int s = 0; s < kQueueBurst && live; ++s) live = stepRay<kPooled, kDeferred>(a, r);
     const unsigned live_lanes = __ballot_sync(kFullWarp, live);
     if (drained) {
       if (live_lanes == 0) break;
@@ -315,6 +324,45 @@ __global__ void __launch_bounds__(kWalkThreads, kWalkBlocksPerSm) gainQueueKerne
     }
   }
   if (r.gain != 0.0) atomicAdd(&a.gains[r.vp], r.gain);
+}
+
+constexpr int kSumThreads = 256;
+
+/// The deferred kernel's second pass: the entropy of every cell set in the round's taken pool
+/// bitmaps (all unknown cells: 1 bit where the block is missing or the cell never observed,
+/// H(p) in the unknown band), added to the bitmap's viewpoint. Eight lanes a bitmap, a word
+/// each; one atomic a bitmap.
+__global__ void __launch_bounds__(kSumThreads) poolGainSumKernel(GainWalkArgs a) {
+  const uint64_t words = 8 * uint64_t(min(*a.pool_taken, a.pool_blocks));
+  const uint64_t stride = uint64_t(gridDim.x) * blockDim.x;
+  // The loop's bounds are the same for every lane of a block (the shuffles need whole warps).
+  for (uint64_t base = uint64_t(blockIdx.x) * blockDim.x; base < words; base += stride) {
+    const uint64_t t = base + threadIdx.x;
+    double sum = 0.0;
+    uint32_t vp = 0;
+    if (t < words) {
+      const PoolOwner o = a.pool_owner[t >> 3];
+      vp = o.vp;
+      const int w = static_cast<int>(t & 7);
+      unsigned long long bits = a.pool[t];
+      if (bits) {
+        const int32_t slot = gainSlot(a, BlockKey{o.x, o.y, o.z});
+        if (slot == kNoViewSlot) {
+          sum = __popcll(bits);
+        } else {
+          while (bits) {
+            const int b = __ffsll(static_cast<long long>(bits)) - 1;
+            bits &= bits - 1;
+            sum += cellGainBits(a.model, &a.view.cells[slot].cells[64 * w + b]);
+          }
+        }
+      }
+    }
+    sum += __shfl_xor_sync(kFullWarp, sum, 1);
+    sum += __shfl_xor_sync(kFullWarp, sum, 2);
+    sum += __shfl_xor_sync(kFullWarp, sum, 4);
+    if (t < words && (t & 7) == 0 && sum != 0.0) atomicAdd(&a.gains[vp], sum);
+  }
 }
 
 }  // namespace
@@ -340,29 +388,36 @@ void launchDenseBlockTable(const DeviceLayerView& view, BlockKey lo, const int32
   FRAGG_CUDA_CHECK(cudaGetLastError());
 }
 
-void launchGainWalk(const GainWalkArgs& args, bool pooled, bool queued, cudaStream_t stream) {
+void launchGainWalk(const GainWalkArgs& args, bool pooled, bool queued, bool deferred,
+                    cudaStream_t stream) {
   const uint64_t total = uint64_t(args.viewpoints) * args.rays_per_viewpoint;
   if (total == 0) return;
   uint64_t grid = (total + kWalkThreads - 1) / kWalkThreads;
+  int device = 0, sms = 0;
+  FRAGG_CUDA_CHECK(cudaGetDevice(&device));
+  FRAGG_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
+  sms = std::max(1, sms);
   if (queued) {
     // As many blocks as the device runs at once (no more: a later block would start only when
     // an earlier one has drained the queue).
-    int device = 0, sms = 0, per_sm = 0;
-    FRAGG_CUDA_CHECK(cudaGetDevice(&device));
-    FRAGG_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
-    FRAGG_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(
-        &per_sm, pooled ? gainQueueKernel<true> : gainQueueKernel<false>, kWalkThreads, 0));
-    grid = std::min<uint64_t>(grid, uint64_t(std::max(1, sms)) * uint64_t(std::max(1, per_sm)));
-    if (pooled)
-      gainQueueKernel<true><<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
-    else
-      gainQueueKernel<false><<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
+    const auto kernel = deferred ? gainQueueKernel<true, true>  // deferred implies pooled
+                        : pooled ? gainQueueKernel<true, false>
+                                 : gainQueueKernel<false, false>;
+    int per_sm = 0;
+    FRAGG_CUDA_CHECK(
+        cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernel, kWalkThreads, 0));
+    grid = std::min<uint64_t>(grid, uint64_t(sms) * uint64_t(std::max(1, per_sm)));
+    kernel<<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
   } else if (pooled) {
     gainWalkKernel<true><<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
   } else {
     gainWalkKernel<false><<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
   }
   FRAGG_CUDA_CHECK(cudaGetLastError());
+  if (deferred) {
+    poolGainSumKernel<<<static_cast<unsigned>(4 * sms), kSumThreads, 0, stream>>>(args);
+    FRAGG_CUDA_CHECK(cudaGetLastError());
+  }
 }
 
 }  // namespace fragg::cuda

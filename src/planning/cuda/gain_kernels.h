@@ -42,6 +42,13 @@ void launchViewpointGains(const GainKernelArgs& args, cudaStream_t stream);
 constexpr uint32_t kPoolBusy = 0xffffffffu;
 constexpr uint32_t kPoolOverflow = 0xfffffffeu;
 
+/// Whose a taken pool bitmap is (the deferred kernel's second pass): the viewpoint (index in
+/// its round) and the map block.
+struct alignas(16) PoolOwner {
+  uint32_t vp;
+  int32_t x, y, z;
+};
+
 /// The sized, pooled and queued gain kernels' arguments (launchGainWalk): as GainKernelArgs,
 /// with each viewpoint's box of its own size and the seen cells kept densely (a bitmap a
 /// viewpoint) or by block (a directory a viewpoint over its box's blocks, block bitmaps from a
@@ -54,7 +61,7 @@ struct GainWalkArgs {
   const double* sin_yaw;
   const double* rays;
   uint32_t rays_per_viewpoint;
-  uint32_t viewpoints;
+  uint32_t viewpoints;  ///< viewpoints * rays_per_viewpoint < 2^32
   double length_v;
   /// Viewpoint i's box: the cells box_lo[3i..3i+2] + [0, box_dims[3i..3i+2]) (voxel keys),
   /// every cell its rays can enter (seenBoxes).
@@ -73,6 +80,8 @@ struct GainWalkArgs {
   uint32_t pool_blocks = 0;
   unsigned int* pool_taken = nullptr;
   uint32_t* overflow = nullptr;
+  /// Deferred: the owner of each taken bitmap (pool_blocks entries).
+  PoolOwner* pool_owner = nullptr;
   /// Queued: the rays handed out after the first (one a launched thread), 0 at launch; a warp
   /// takes new rays once `refill_lanes` lanes are idle.
   unsigned long long* queue = nullptr;
@@ -85,8 +94,12 @@ struct GainWalkArgs {
 };
 
 /// Launcher of the sized (dense, one thread a ray), pooled (`pooled`) and queued (`queued`:
-/// persistent threads, as many as the device holds at once) walks (gain_kernels.cu).
-void launchGainWalk(const GainWalkArgs& args, bool pooled, bool queued, cudaStream_t stream);
+/// persistent threads, as many as the device holds at once) walks; `deferred` (only with
+/// `pooled` and `queued`, the callers' duty): the walk only sets the seen bits, and a second kernel
+/// sums the entropy of the cells set in the round's taken bitmaps into their viewpoints' gains
+/// (gain_kernels.cu).
+void launchGainWalk(const GainWalkArgs& args, bool pooled, bool queued, bool deferred,
+                    cudaStream_t stream);
 
 /// Fills `table` (dims[0] * dims[1] * dims[2] entries) with the slot of every block of `view`
 /// in the box lo + [0, dims), kNoViewSlot elsewhere.

@@ -42,7 +42,8 @@ enum Buffer : int {
   kPool,
   kQueue,
   kPoolTaken,
-  kOverflow
+  kOverflow,
+  kPoolOwner
 };
 enum PinnedBuffer : int { kPinnedOverflow = 200, kPinnedCounters };
 /// The pool's share of the bitmap budget (the directories get the rest).
@@ -126,12 +127,14 @@ uint64_t directoryEntries(const SeenBoxes& boxes, size_t i) {
 }
 
 /// Rounds of consecutive viewpoints whose `sizes` sum to at most `budget` (a viewpoint larger
-/// than the budget alone): the first viewpoint of each, then sizes.size().
-std::vector<size_t> roundStarts(const std::vector<uint64_t>& sizes, uint64_t budget) {
+/// than the budget alone), at most `max_count` a round: the first viewpoint of each, then
+/// sizes.size().
+std::vector<size_t> roundStarts(const std::vector<uint64_t>& sizes, uint64_t budget,
+                                size_t max_count) {
   std::vector<size_t> starts{0};
   uint64_t used = 0;
   for (size_t i = 0; i < sizes.size(); ++i) {
-    if (used > 0 && used + sizes[i] > budget) {
+    if (used > 0 && (used + sizes[i] > budget || i - starts.back() >= max_count)) {
       starts.push_back(i);
       used = 0;
     }
@@ -251,10 +254,9 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
   // Sized, pooled, queued: each viewpoint's box of its own size; rounds of viewpoints whose
   // bitmaps (dense) or directories (pooled) fit the budget, each laid out from its round's
   // start.
-  const bool pooled =
-      options.kernel == GainKernel::kPooled || options.kernel == GainKernel::kPooledQueued;
-  const bool queued =
-      options.kernel == GainKernel::kQueued || options.kernel == GainKernel::kPooledQueued;
+  const bool pooled = gainKernelPooled(options.kernel);
+  const bool queued = gainKernelQueued(options.kernel);
+  const bool deferred = options.kernel == GainKernel::kDeferred;
   int32_t* box_dims = scratch.device<int32_t>(kBoxDims, 3 * n);
   cuda::copyToDevice(box_dims, boxes.own_dims.data(), 3 * n, stream);
   std::vector<uint64_t> sizes(n);  // words (dense) or directory entries (pooled)
@@ -263,7 +265,9 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
   const uint64_t unit_bytes = pooled ? sizeof(uint32_t) : sizeof(uint64_t);
   const uint64_t round_budget =
       (pooled ? static_cast<uint64_t>(budget * (1.0 - kPoolShare)) : budget) / unit_bytes;
-  const std::vector<size_t> starts = roundStarts(sizes, round_budget);
+  // Fewer than 2^32 rays a round (the kernels index a round's rays in 32 bits).
+  const size_t max_per_round = std::max<size_t>(1, 0xffffffffu / std::max<size_t>(1, n_rays));
+  const std::vector<size_t> starts = roundStarts(sizes, round_budget, max_per_round);
   const size_t n_rounds = starts.size() - 1;
   std::vector<uint64_t> offsets(n);
   std::vector<uint64_t> round_units(n_rounds, 0);
@@ -280,6 +284,7 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
   unsigned long long* pool = nullptr;
   unsigned int* pool_taken = nullptr;
   uint32_t* overflow = nullptr;
+  cuda::PoolOwner* pool_owner = nullptr;
   uint64_t pool_blocks = 0;
   if (pooled) {
     directory = scratch.device<uint32_t>(kDirectory, max_units);
@@ -292,6 +297,7 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
                                  max_units);
     pool_blocks = std::clamp<uint64_t>(pool_blocks, 1, uint64_t(1) << 31);
     pool = scratch.device<unsigned long long>(kPool, pool_blocks * (kPoolBitmapBytes / 8));
+    if (deferred) pool_owner = scratch.device<cuda::PoolOwner>(kPoolOwner, pool_blocks);
     pool_taken = scratch.device<unsigned int>(kPoolTaken, n_rounds);
     overflow = scratch.device<uint32_t>(kOverflow, n);
     FRAGG_CUDA_CHECK(cudaMemsetAsync(pool_taken, 0, n_rounds * sizeof(unsigned int), stream));
@@ -341,7 +347,8 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
       args.dense_lo = reach_lo;
       for (int a = 0; a < 3; ++a) args.dense_dims[a] = dense_dims[a];
     }
-    cuda::launchGainWalk(args, pooled, queued, stream);
+    if (deferred) args.pool_owner = pool_owner;
+    cuda::launchGainWalk(args, pooled, queued, deferred, stream);
   }
   cuda::copyToHost(out, gains, n, stream);
   if (!pooled) {
