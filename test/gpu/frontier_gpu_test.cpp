@@ -153,10 +153,10 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
 
   // Every CUDA gain kernel against the CPU walk (GainKernel: boxes of their own size, bitmaps
   // by block from a pool, persistent threads on a ray queue, the entropy summed over the pool
-  // after the walk); then the pooled kernels with a
-  // pool far too small (the viewpoints that met the full pool are computed again by the sized
-  // kernel), every kernel with a bitmap budget that splits the batch into many rounds, and
-  // the queued kernels refilling at 1 and at 32 idle lanes.
+  // after the walk); then the pooled kernels with a pool far too small (the viewpoints that
+  // met the full pool are computed again by the sized kernel), every kernel with a bitmap
+  // budget that splits the batch into many rounds, and the queued kernels refilling at 1 and
+  // at 32 idle lanes.
   struct KernelCase {
     GainDeviceOptions device;
     std::string what;
