@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -156,7 +157,9 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
   // after the walk); then the pooled kernels with a pool far too small (the viewpoints that
   // met the full pool are computed again by the sized kernel), every kernel with a bitmap
   // budget that splits the batch into many rounds, and the queued kernels refilling at 1 and
-  // at 32 idle lanes.
+  // at 32 idle lanes. A kernel that throws fails its own case, named; as a CUDA context error
+  // is sticky (every later call fails too), the kernels without a pool run first, the
+  // clusters' checks on the default kernel next, and the pooled kernels last.
   struct KernelCase {
     GainDeviceOptions device;
     std::string what;
@@ -190,31 +193,52 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
       c.what = std::string(gainKernelName(k)) + ", refill at " + std::to_string(lanes);
       cases.push_back(c);
     }
-  for (const GainSensor& sensor : {camera, lidar}) {
-    const std::vector<double> cpu = viewpointGainsBits(cpu_map, positions, yaws, sensor, 0);
-    for (const KernelCase& c : cases) {
-      GainTimings t;
-      const std::vector<double> gpu =
-          viewpointGainsBits(cuda_map, positions, yaws, sensor, 0, Backend::kCuda, c.device, &t);
-      ASSERT_EQ(gpu.size(), cpu.size()) << c.what;
-      for (size_t i = 0; i < cpu.size(); ++i)
-        EXPECT_NEAR(gpu[i], cpu[i], 1e-9 * std::max(1.0, cpu[i])) << c.what << ", viewpoint " << i;
-      EXPECT_TRUE(t.on_device) << c.what;
-      const bool pooled = gainKernelPooled(c.device.kernel);
-      if (pooled) {
-        EXPECT_GT(t.pool_blocks_wanted, 0u) << c.what;
-      }
-      if (c.expect_reruns) {
-        EXPECT_GT(t.pool_reruns, 0u) << c.what;
-        EXPECT_GT(t.pool_blocks_wanted, c.device.pool_blocks) << c.what;
-      } else if (pooled && !c.expect_rounds) {  // the default pool cannot run out
-        EXPECT_EQ(t.pool_reruns, 0u) << c.what << " (" << t.pool_blocks_wanted << " wanted)";
-      }
-      if (c.expect_rounds) {
-        EXPECT_GT(t.rounds, 1u) << c.what;
+  std::stable_partition(cases.begin(), cases.end(),
+                        [](const KernelCase& c) { return !gainKernelPooled(c.device.kernel); });
+  // The first case that threw (later device errors may be its sticky context error).
+  std::string first_throw;
+  const auto checkCases = [&](bool pooled_cases) {
+    for (const GainSensor& sensor : {camera, lidar}) {
+      const std::vector<double> cpu = viewpointGainsBits(cpu_map, positions, yaws, sensor, 0);
+      for (const KernelCase& c : cases) {
+        if (gainKernelPooled(c.device.kernel) != pooled_cases) continue;
+        const std::string what =
+            c.what + (sensor.kind == GainSensor::Kind::kLidar ? std::string(", lidar")
+                                                              : std::string(", camera"));
+        GainTimings t;
+        std::vector<double> gpu;
+        try {
+          gpu = viewpointGainsBits(cuda_map, positions, yaws, sensor, 0, Backend::kCuda, c.device,
+                                   &t);
+        } catch (const std::exception& e) {
+          ADD_FAILURE() << "gain kernel " << what << " threw: " << e.what()
+                        << (first_throw.empty()
+                                ? std::string()
+                                : " (after " + first_throw + " threw: a CUDA error is sticky)");
+          if (first_throw.empty()) first_throw = what;
+          continue;
+        }
+        ASSERT_EQ(gpu.size(), cpu.size()) << what;
+        for (size_t i = 0; i < cpu.size(); ++i)
+          EXPECT_NEAR(gpu[i], cpu[i], 1e-9 * std::max(1.0, cpu[i])) << what << ", viewpoint " << i;
+        EXPECT_TRUE(t.on_device) << what;
+        const bool pooled = gainKernelPooled(c.device.kernel);
+        if (pooled) {
+          EXPECT_GT(t.pool_blocks_wanted, 0u) << what;
+        }
+        if (c.expect_reruns) {
+          EXPECT_GT(t.pool_reruns, 0u) << what;
+          EXPECT_GT(t.pool_blocks_wanted, c.device.pool_blocks) << what;
+        } else if (pooled && !c.expect_rounds) {  // the default pool cannot run out
+          EXPECT_EQ(t.pool_reruns, 0u) << what << " (" << t.pool_blocks_wanted << " wanted)";
+        }
+        if (c.expect_rounds) {
+          EXPECT_GT(t.rounds, 1u) << what;
+        }
       }
     }
-  }
+  };
+  checkCases(false);
 
   // Every cluster's viewpoints in one batch (clustersViewpoints): entropy gains on the device
   // for the CUDA map, coverage on the host for both; the same candidates, ranks and gains.
@@ -240,13 +264,21 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
     }
     EXPECT_GT(views, 10u) << viewpointGainName(gain);
   }
+  checkCases(true);
+
   // The kernel chosen in the options reaches the batch of every cluster's candidates.
   {
     ViewpointOptions o;
     o.top_k = 3;
     const auto cpu = clustersViewpoints(cpu_map, clusters, o, 0);
     o.device_gains.kernel = GainKernel::kPooledQueued;
-    const auto gpu = clustersViewpoints(cuda_map, clusters, o, 0);
+    std::vector<std::vector<Viewpoint>> gpu;
+    try {
+      gpu = clustersViewpoints(cuda_map, clusters, o, 0);
+    } catch (const std::exception& e) {
+      FAIL() << "clusters' viewpoints by the pooled-queued kernel threw: " << e.what()
+             << (first_throw.empty() ? std::string() : " (after " + first_throw + " threw)");
+    }
     ASSERT_EQ(gpu.size(), cpu.size());
     for (size_t c = 0; c < cpu.size(); ++c) {
       ASSERT_EQ(gpu[c].size(), cpu[c].size()) << "cluster " << c;

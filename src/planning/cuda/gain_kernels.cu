@@ -156,55 +156,50 @@ __device__ void startRay(const GainWalkArgs& a, uint64_t ray, RayWalk& r) {
 }
 
 /// The pool bitmap of block `b` for viewpoint `vp`: taken from the pool and cleared by the
-/// first lane that asks (a compare-and-swap on the directory entry; the others wait for it to
-/// publish), nullptr outside the viewpoint's box (no cell of it is counted, as the plain
-/// kernel's box check) or when the pool is full (the viewpoint is flagged, its gain computed
-/// again). Memory order: the taker clears the bitmap, then publishes its index with a release
-/// store (a fence: the zeros reach L2 first); the others read the entry relaxed (an acquire
-/// load at device scope would invalidate the SM's L1, where the masks are read) and touch the
-/// bitmap only by atomics, which run at L2 and cannot issue before the index they address is
-/// read: the CUDA guide's threadfence pattern (writer fence, reader without one).
+/// first lane that asks (a compare-and-swap on the directory entry from kPoolEmpty to
+/// kPoolBusy; every other lane waits while the entry reads kPoolBusy, whichever load saw it),
+/// nullptr outside the viewpoint's box (no cell of it is counted, as the plain kernel's box
+/// check) or when the pool is full (the viewpoint is flagged, its gain computed again).
+/// Memory order: the taker clears the bitmap, then publishes its index with a release store
+/// (a fence: the zeros reach L2 first); the others read the entry relaxed (an acquire load at
+/// device scope would invalidate the SM's L1, where the masks are read) and touch the bitmap
+/// only by atomics, which run at L2 and cannot issue before the index they address is read:
+/// the CUDA guide's threadfence pattern (writer fence, reader without one).
 template <bool kDeferred>
 __device__ unsigned long long* poolBitmap(const GainWalkArgs& a, uint32_t vp, const BlockKey& b) {
-  int64_t at = 0, stride = 1;
-  const int32_t key[3] = {b.x, b.y, b.z};
-  for (int d = 0; d < 3; ++d) {
-    const int32_t lo = __ldg(&a.box_lo[3 * vp + d]), n = __ldg(&a.box_dims[3 * vp + d]);
-    const int32_t first = lo >> kBlockBits, blocks = ((lo + n - 1) >> kBlockBits) - first + 1;
-    const int32_t i = key[d] - first;
-    if (i < 0 || i >= blocks) return nullptr;
-    at += stride * i;
-    stride *= blocks;
-  }
+  const PoolDirectory dir = PoolDirectory::over(a.box_lo + 3 * vp, a.box_dims + 3 * vp);
+  const int64_t at = dir.indexOf(b);
+  if (at < 0) return nullptr;
   ::cuda::atomic_ref<uint32_t, ::cuda::thread_scope_device> entry(
-      a.directory[__ldg(&a.directory_offset[vp]) + at]);
+      a.directory[__ldg(&a.directory_offset[vp]) + uint64_t(at)]);
   uint32_t v = entry.load(::cuda::memory_order_relaxed);
-  if (v == 0) {
-    uint32_t expected = 0;
+  if (v == kPoolEmpty) {
+    uint32_t expected = kPoolEmpty;
     if (entry.compare_exchange_strong(expected, kPoolBusy, ::cuda::memory_order_relaxed)) {
-      const uint32_t i = atomicAdd(a.pool_taken, 1u);
-      if (i >= a.pool_blocks) {
-        v = kPoolOverflow;
-      } else {
-        ulonglong2* bits = reinterpret_cast<ulonglong2*>(a.pool + 8 * uint64_t(i));
+      v = poolEntryOf(atomicAdd(a.pool_taken, 1u), a.pool_blocks);
+      const int64_t taken = poolBitmapOf(v);
+      if (taken >= 0) {
+        ulonglong2* bits = reinterpret_cast<ulonglong2*>(a.pool + 8 * uint64_t(taken));
         for (int w = 0; w < 4; ++w) bits[w] = make_ulonglong2(0, 0);
-        if (kDeferred) a.pool_owner[i] = PoolOwner{vp, b.x, b.y, b.z};
-        v = i + 1;
+        if (kDeferred) a.pool_owner[taken] = PoolOwner{vp, b.x, b.y, b.z};
       }
       entry.store(v, ::cuda::memory_order_release);  // the cleared bitmap before its index
     } else {
-      v = expected;
-      while (v == kPoolBusy) {
-        __nanosleep(32);
-        v = entry.load(::cuda::memory_order_relaxed);
-      }
+      v = expected;  // the entry as the failed exchange read it
     }
   }
-  if (v == kPoolOverflow) {
+  // Another lane is taking the bitmap (seen by the first load or by the failed exchange):
+  // wait for its index. (Issue 34: a lane whose first load saw kPoolBusy used it as an index.)
+  while (v == kPoolBusy) {
+    __nanosleep(32);
+    v = entry.load(::cuda::memory_order_relaxed);
+  }
+  const int64_t index = poolBitmapOf(v);
+  if (index < 0) {  // kPoolOverflow
     a.overflow[vp] = 1;
     return nullptr;
   }
-  return a.pool + 8 * uint64_t(v - 1);
+  return a.pool + 8 * uint64_t(index);
 }
 
 /// `*word |= mask` at L2 without returning the old value (a reduction: the lane does not wait).

@@ -37,11 +37,6 @@ struct GainKernelArgs {
 /// Launcher (gain_kernels.cu).
 void launchViewpointGains(const GainKernelArgs& args, cudaStream_t stream);
 
-/// A pooled directory entry: no bitmap yet (0), being taken (kPoolBusy), the pool ran out
-/// (kPoolOverflow), else the bitmap's index in the pool + 1.
-constexpr uint32_t kPoolBusy = 0xffffffffu;
-constexpr uint32_t kPoolOverflow = 0xfffffffeu;
-
 /// Whose a taken pool bitmap is (the deferred kernel's second pass): the viewpoint (index in
 /// its round) and the map block.
 struct alignas(16) PoolOwner {
@@ -71,9 +66,10 @@ struct GainWalkArgs {
   const uint64_t* seen_offset = nullptr;
   unsigned long long* seen = nullptr;
   /// Pooled: viewpoint i's directory starts at directory + directory_offset[i]; its entries
-  /// cover the blocks of its box, from blockKeyOf(box_lo) to blockKeyOf(box_lo + box_dims - 1)
-  /// (x fastest). Bitmaps of 8 words (one block's 512 cells) in `pool`, `pool_blocks` of them;
-  /// `pool_taken` counts those taken; overflow[i] is set when viewpoint i met a full pool.
+  /// cover the blocks of its box (PoolDirectory::over(box_lo + 3i, box_dims + 3i); entries as
+  /// gain_walk.h's kPoolEmpty etc.). Bitmaps of 8 words (one block's 512 cells) in `pool`,
+  /// `pool_blocks` of them; `pool_taken` counts those taken; overflow[i] is set when viewpoint i
+  /// met a full pool.
   const uint64_t* directory_offset = nullptr;
   uint32_t* directory = nullptr;
   unsigned long long* pool = nullptr;

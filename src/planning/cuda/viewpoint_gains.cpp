@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -118,12 +119,7 @@ uint64_t ownWords(const SeenBoxes& boxes, size_t i) {
 
 /// Entries of viewpoint i's pooled directory: the blocks its box touches.
 uint64_t directoryEntries(const SeenBoxes& boxes, size_t i) {
-  uint64_t entries = 1;
-  for (int a = 0; a < 3; ++a) {
-    const int32_t lo = boxes.lo[3 * i + a], n = boxes.own_dims[3 * i + a];
-    entries *= uint64_t(((lo + n - 1) >> kBlockBits) - (lo >> kBlockBits) + 1);
-  }
-  return entries;
+  return PoolDirectory::over(&boxes.lo[3 * i], &boxes.own_dims[3 * i]).entries();
 }
 
 /// Rounds of consecutive viewpoints whose `sizes` sum to at most `budget` (a viewpoint larger
@@ -277,6 +273,14 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
       round_units[r] += sizes[i];
     }
   const uint64_t max_units = *std::max_element(round_units.begin(), round_units.end());
+  // The kernels' index widths (cheap checks of the layout above): a round's rays and
+  // viewpoints in 32 bits, every box at least a cell on each axis.
+  for (size_t r = 0; r < n_rounds; ++r)
+    if (uint64_t(starts[r + 1] - starts[r]) * n_rays > 0xffffffffu)
+      throw std::logic_error("gain round of " + std::to_string(starts[r + 1] - starts[r]) +
+                             " viewpoints passes 2^32 rays");
+  for (const int32_t d : boxes.own_dims)
+    if (d < 1) throw std::logic_error("gain viewpoint box of " + std::to_string(d) + " cells");
   uint64_t* offsets_d = scratch.device<uint64_t>(pooled ? kDirectoryOffset : kSeenOffset, n);
   cuda::copyToDevice(offsets_d, offsets.data(), n, stream);
   unsigned long long* seen = nullptr;
@@ -295,7 +299,9 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
             ? options.pool_blocks
             : std::min<uint64_t>(static_cast<uint64_t>(budget * kPoolShare) / kPoolBitmapBytes,
                                  max_units);
-    pool_blocks = std::clamp<uint64_t>(pool_blocks, 1, uint64_t(1) << 31);
+    pool_blocks = std::clamp<uint64_t>(pool_blocks, 1, kPoolMaxBlocks);
+    if (pool_blocks >= kPoolOverflow)  // an index + 1 must not read as kPoolOverflow/kPoolBusy
+      throw std::logic_error("gain pool of " + std::to_string(pool_blocks) + " blocks");
     pool = scratch.device<unsigned long long>(kPool, pool_blocks * (kPoolBitmapBytes / 8));
     if (deferred) pool_owner = scratch.device<cuda::PoolOwner>(kPoolOwner, pool_blocks);
     pool_taken = scratch.device<unsigned int>(kPoolTaken, n_rounds);
