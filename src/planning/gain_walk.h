@@ -52,6 +52,8 @@ FRAGG_HD double cellGainBits(const OccupancyModel& model, const Cell* cell) {
 struct GainWalk {
   DdaAxis x, y, z;
 
+  /// No ray yet (a lane of the queued CUDA kernels before it takes one).
+  GainWalk() = default;
   FRAGG_HD GainWalk(const double* start_v, const double* end_v) {
     int ref[3];
     float s[3], e[3];
@@ -76,5 +78,61 @@ struct GainWalk {
   }
   FRAGG_HD int next() { return ddaStep(x, y, z); }
 };
+
+/// The pooled gain kernels' directory of one viewpoint: an entry for every map block that its
+/// box of cells (the voxel keys lo + [0, dims), dims >= 1) touches, from blockKeyOf(lo) to
+/// blockKeyOf(lo + dims - 1), x fastest. The host sizes the directories by entries() and the
+/// device looks blocks up by indexOf(), so the two agree by construction.
+struct PoolDirectory {
+  int32_t first[3];   ///< the box's lowest block key
+  int32_t blocks[3];  ///< blocks along each axis (>= 1)
+
+  /// The directory over the box lo[0..2] + [0, dims[0..2]).
+  FRAGG_HD static PoolDirectory over(const int32_t* lo, const int32_t* dims) {
+    PoolDirectory d;
+    for (int a = 0; a < 3; ++a) {
+      // 64-bit: lo + dims - 1 may pass int32 for a box at the key range's edge.
+      const int64_t top = int64_t(lo[a]) + dims[a] - 1;
+      d.first[a] = lo[a] >> kBlockBits;
+      d.blocks[a] = static_cast<int32_t>((top >> kBlockBits) - d.first[a] + 1);
+    }
+    return d;
+  }
+  /// Entries of the directory (4 bytes each on the device).
+  [[nodiscard]] FRAGG_HD uint64_t entries() const {
+    return uint64_t(blocks[0]) * uint64_t(blocks[1]) * uint64_t(blocks[2]);
+  }
+  /// The entry of block `b`, -1 when b lies outside the box's blocks.
+  [[nodiscard]] FRAGG_HD int64_t indexOf(const BlockKey& b) const {
+    const int64_t i[3] = {int64_t(b.x) - first[0], int64_t(b.y) - first[1],
+                          int64_t(b.z) - first[2]};
+    for (int a = 0; a < 3; ++a)
+      if (i[a] < 0 || i[a] >= blocks[a]) return -1;
+    return (i[2] * blocks[1] + i[1]) * blocks[0] + i[0];
+  }
+};
+
+/// A pooled directory entry: no bitmap yet (kPoolEmpty, what a cleared directory holds), being
+/// taken by another lane (kPoolBusy), the pool ran out (kPoolOverflow), else the bitmap's index
+/// in the pool + 1.
+constexpr uint32_t kPoolEmpty = 0u;
+constexpr uint32_t kPoolBusy = 0xffffffffu;
+constexpr uint32_t kPoolOverflow = 0xfffffffeu;
+/// The most bitmaps a pool may hold: every index + 1 stays below kPoolOverflow.
+constexpr uint64_t kPoolMaxBlocks = uint64_t(1) << 31;
+
+/// The entry the lane that took a directory entry publishes: the pool's `taken`-th bitmap
+/// (the counter's old value) + 1, or kPoolOverflow when the pool of `pool_blocks` has no such
+/// bitmap.
+[[nodiscard]] FRAGG_HD uint32_t poolEntryOf(uint32_t taken, uint32_t pool_blocks) {
+  return taken < pool_blocks ? taken + 1u : kPoolOverflow;
+}
+
+/// The pool bitmap a published entry names, -1 for one naming none (kPoolEmpty, kPoolBusy,
+/// kPoolOverflow: a reader must wait out kPoolBusy before asking).
+[[nodiscard]] FRAGG_HD int64_t poolBitmapOf(uint32_t entry) {
+  if (entry == kPoolEmpty || entry == kPoolBusy || entry == kPoolOverflow) return -1;
+  return int64_t(entry) - 1;
+}
 
 }  // namespace fragg

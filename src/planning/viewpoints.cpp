@@ -164,8 +164,54 @@ void GainSensor::validate() const {
   }
 }
 
+void GainDeviceOptions::validate() const {
+  if (refill_lanes < 1 || refill_lanes > 32)
+    throw InvalidArgument(
+        fmt::format("gain kernel refill lanes must be in [1, 32], got {}", refill_lanes));
+  if (pool_blocks > (size_t(1) << 31))
+    throw InvalidArgument(
+        fmt::format("gain kernel pool must hold <= 2^31 blocks, got {}", pool_blocks));
+}
+
+const char* gainKernelName(GainKernel kernel) {
+  switch (kernel) {
+    case GainKernel::kPlain:
+      return "plain";
+    case GainKernel::kSized:
+      return "sized";
+    case GainKernel::kPooled:
+      return "pooled";
+    case GainKernel::kQueued:
+      return "queued";
+    case GainKernel::kPooledQueued:
+      return "pooled-queued";
+    case GainKernel::kDeferred:
+      return "deferred";
+  }
+  return "unknown";
+}
+
+bool gainKernelPooled(GainKernel kernel) {
+  return kernel == GainKernel::kPooled || kernel == GainKernel::kPooledQueued ||
+         kernel == GainKernel::kDeferred;
+}
+
+bool gainKernelQueued(GainKernel kernel) {
+  return kernel == GainKernel::kQueued || kernel == GainKernel::kPooledQueued ||
+         kernel == GainKernel::kDeferred;
+}
+
+GainKernel gainKernelFromName(const std::string& name) {
+  for (const GainKernel k : kGainKernels)
+    if (name == gainKernelName(k)) return k;
+  throw InvalidArgument(fmt::format(
+      "gain kernel must be plain, sized, pooled, queued, pooled-queued or deferred, got \"{}\"",
+      name));
+}
+
 void ViewpointOptions::validate() const {
   sensor.validate();
+  device_gains.validate();
   if (radii_m.empty()) throw InvalidArgument("viewpoint rings need at least one radius");
   for (double r : radii_m)
     if (!std::isfinite(r) || r <= 0.0)
@@ -226,8 +272,8 @@ namespace {
 // one log line when the device cannot take the batch.
 bool gainsOnBackend(const Map& map, const std::vector<Eigen::Vector3d>& positions_m,
                     const std::vector<double>& yaws_rad, const std::vector<Eigen::Vector3d>& rays,
-                    double max_range_m, Backend backend, std::vector<double>& gains,
-                    GainTimings* timings) {
+                    double max_range_m, Backend backend, const GainDeviceOptions& device,
+                    std::vector<double>& gains, GainTimings* timings) {
   const bool on_cuda = std::string(map.backendName()) == "cuda";
   if (!on_cuda) {
     if (backend == Backend::kCuda)
@@ -257,11 +303,18 @@ bool gainsOnBackend(const Map& map, const std::vector<Eigen::Vector3d>& position
     if (timings) {
       *timings = GainTimings{};
       timings->view_seconds = secondsSince(t0);
-      viewpointGainsOnDevice(lease->view(), lease->scratch(), batch, map.model(), gains.data(),
-                             &timings->tables_seconds, &timings->walk_seconds, &timings->rounds);
+      DeviceGainStats stats;
+      viewpointGainsOnDevice(lease->view(), lease->scratch(), batch, map.model(), device,
+                             gains.data(), &stats);
       timings->on_device = true;
+      timings->tables_seconds = stats.tables_seconds;
+      timings->walk_seconds = stats.walk_seconds;
+      timings->rounds = stats.rounds;
+      timings->pool_blocks_wanted = stats.pool_blocks_wanted;
+      timings->pool_reruns = stats.pool_reruns;
     } else {
-      viewpointGainsOnDevice(lease->view(), lease->scratch(), batch, map.model(), gains.data());
+      viewpointGainsOnDevice(lease->view(), lease->scratch(), batch, map.model(), device,
+                             gains.data());
     }
     return true;
 #else
@@ -280,8 +333,9 @@ std::vector<double> viewpointGainsBits(const Map& map,
                                        const std::vector<Eigen::Vector3d>& positions_m,
                                        const std::vector<double>& yaws_rad,
                                        const GainSensor& sensor, int threads, Backend backend,
-                                       GainTimings* timings) {
+                                       const GainDeviceOptions& device, GainTimings* timings) {
   sensor.validate();
+  device.validate();
   if (positions_m.size() != yaws_rad.size())
     throw InvalidArgument(
         fmt::format("{} viewpoint positions but {} yaws", positions_m.size(), yaws_rad.size()));
@@ -292,7 +346,7 @@ std::vector<double> viewpointGainsBits(const Map& map,
   const std::vector<Eigen::Vector3d> rays = sensorRays(sensor);
   std::vector<double> gains(positions_m.size());
   if (backend != Backend::kCpu && !positions_m.empty()) {
-    if (gainsOnBackend(map, positions_m, yaws_rad, rays, sensor.max_range_m, backend, gains,
+    if (gainsOnBackend(map, positions_m, yaws_rad, rays, sensor.max_range_m, backend, device, gains,
                        timings))
       return gains;
   }
@@ -450,8 +504,8 @@ std::vector<double> candidateGains(const Map& map, const BlockView& view,
         positions.push_back(candidates[i].view.position_m);
         yaws.push_back(candidates[i].view.yaw_rad);
       }
-      const std::vector<double> piece =
-          viewpointGainsBits(map, positions, yaws, options.sensor, threads, options.backend);
+      const std::vector<double> piece = viewpointGainsBits(
+          map, positions, yaws, options.sensor, threads, options.backend, options.device_gains);
       std::copy(piece.begin(), piece.end(), gains.begin() + ptrdiff_t(begin));
     }
   }

@@ -2,10 +2,11 @@
 // each (with two boxes cleared on the way); after every scan the CUDA map's tracker (updated on
 // the device: masks compared per pool slot, neighbourhoods examined there) equals the CPU map's,
 // with and without a box and height filter, and full recomputes agree. Needs a
-// device (skips without one). Then viewpoint gains: the CUDA kernel against the CPU walk.
+// device (skips without one). Then viewpoint gains: every CUDA gain kernel against the CPU walk.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -151,6 +152,94 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
     EXPECT_GT(total, 1000.0);
   }
 
+  // Every CUDA gain kernel against the CPU walk (GainKernel: boxes of their own size, bitmaps
+  // by block from a pool, persistent threads on a ray queue, the entropy summed over the pool
+  // after the walk); then the pooled kernels with a pool far too small (the viewpoints that
+  // met the full pool are computed again by the sized kernel), every kernel with a bitmap
+  // budget that splits the batch into many rounds, and the queued kernels refilling at 1 and
+  // at 32 idle lanes. A kernel that throws fails its own case, named; as a CUDA context error
+  // is sticky (every later call fails too), the kernels without a pool run first, the
+  // clusters' checks on the default kernel next, and the pooled kernels last.
+  struct KernelCase {
+    GainDeviceOptions device;
+    std::string what;
+    bool expect_reruns = false, expect_rounds = false;
+  };
+  std::vector<KernelCase> cases;
+  for (const GainKernel k : kGainKernels) {
+    KernelCase c;
+    c.device.kernel = k;
+    c.what = gainKernelName(k);
+    cases.push_back(c);
+    c.device.bitmap_budget_bytes = size_t(4) << 20;
+    c.what += ", 4 MiB of bitmaps a round";
+    c.expect_rounds = true;
+    cases.push_back(c);
+  }
+  for (const GainKernel k :
+       {GainKernel::kPooled, GainKernel::kPooledQueued, GainKernel::kDeferred}) {
+    KernelCase c;
+    c.device.kernel = k;
+    c.device.pool_blocks = 64;
+    c.what = std::string(gainKernelName(k)) + ", a pool of 64 blocks";
+    c.expect_reruns = true;
+    cases.push_back(c);
+  }
+  for (const GainKernel k : {GainKernel::kQueued, GainKernel::kPooledQueued, GainKernel::kDeferred})
+    for (const int lanes : {1, 32}) {
+      KernelCase c;
+      c.device.kernel = k;
+      c.device.refill_lanes = lanes;
+      c.what = std::string(gainKernelName(k)) + ", refill at " + std::to_string(lanes);
+      cases.push_back(c);
+    }
+  std::stable_partition(cases.begin(), cases.end(),
+                        [](const KernelCase& c) { return !gainKernelPooled(c.device.kernel); });
+  // The first case that threw (later device errors may be its sticky context error).
+  std::string first_throw;
+  const auto checkCases = [&](bool pooled_cases) {
+    for (const GainSensor& sensor : {camera, lidar}) {
+      const std::vector<double> cpu = viewpointGainsBits(cpu_map, positions, yaws, sensor, 0);
+      for (const KernelCase& c : cases) {
+        if (gainKernelPooled(c.device.kernel) != pooled_cases) continue;
+        const std::string what =
+            c.what + (sensor.kind == GainSensor::Kind::kLidar ? std::string(", lidar")
+                                                              : std::string(", camera"));
+        GainTimings t;
+        std::vector<double> gpu;
+        try {
+          gpu = viewpointGainsBits(cuda_map, positions, yaws, sensor, 0, Backend::kCuda, c.device,
+                                   &t);
+        } catch (const std::exception& e) {
+          ADD_FAILURE() << "gain kernel " << what << " threw: " << e.what()
+                        << (first_throw.empty()
+                                ? std::string()
+                                : " (after " + first_throw + " threw: a CUDA error is sticky)");
+          if (first_throw.empty()) first_throw = what;
+          continue;
+        }
+        ASSERT_EQ(gpu.size(), cpu.size()) << what;
+        for (size_t i = 0; i < cpu.size(); ++i)
+          EXPECT_NEAR(gpu[i], cpu[i], 1e-9 * std::max(1.0, cpu[i])) << what << ", viewpoint " << i;
+        EXPECT_TRUE(t.on_device) << what;
+        const bool pooled = gainKernelPooled(c.device.kernel);
+        if (pooled) {
+          EXPECT_GT(t.pool_blocks_wanted, 0u) << what;
+        }
+        if (c.expect_reruns) {
+          EXPECT_GT(t.pool_reruns, 0u) << what;
+          EXPECT_GT(t.pool_blocks_wanted, c.device.pool_blocks) << what;
+        } else if (pooled && !c.expect_rounds) {  // the default pool cannot run out
+          EXPECT_EQ(t.pool_reruns, 0u) << what << " (" << t.pool_blocks_wanted << " wanted)";
+        }
+        if (c.expect_rounds) {
+          EXPECT_GT(t.rounds, 1u) << what;
+        }
+      }
+    }
+  };
+  checkCases(false);
+
   // Every cluster's viewpoints in one batch (clustersViewpoints): entropy gains on the device
   // for the CUDA map, coverage on the host for both; the same candidates, ranks and gains.
   const std::vector<FrontierCluster> clusters =
@@ -174,6 +263,30 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
       views += cpu[c].size();
     }
     EXPECT_GT(views, 10u) << viewpointGainName(gain);
+  }
+  checkCases(true);
+
+  // The kernel chosen in the options reaches the batch of every cluster's candidates.
+  {
+    ViewpointOptions o;
+    o.top_k = 3;
+    const auto cpu = clustersViewpoints(cpu_map, clusters, o, 0);
+    o.device_gains.kernel = GainKernel::kPooledQueued;
+    std::vector<std::vector<Viewpoint>> gpu;
+    try {
+      gpu = clustersViewpoints(cuda_map, clusters, o, 0);
+    } catch (const std::exception& e) {
+      FAIL() << "clusters' viewpoints by the pooled-queued kernel threw: " << e.what()
+             << (first_throw.empty() ? std::string() : " (after " + first_throw + " threw)");
+    }
+    ASSERT_EQ(gpu.size(), cpu.size());
+    for (size_t c = 0; c < cpu.size(); ++c) {
+      ASSERT_EQ(gpu[c].size(), cpu[c].size()) << "cluster " << c;
+      for (size_t j = 0; j < cpu[c].size(); ++j)
+        EXPECT_NEAR(gpu[c][j].gain_bits, cpu[c][j].gain_bits,
+                    1e-9 * std::max(1.0, cpu[c][j].gain_bits))
+            << "pooled-queued, cluster " << c;
+    }
   }
 }
 

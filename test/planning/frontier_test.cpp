@@ -5,8 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
+#include <limits>
+#include <map>
 #include <random>
 #include <set>
 
@@ -22,6 +25,7 @@
 #include "fragg_map/sim/lidar_sensor.h"
 #include "fragg_map/sim/scene.h"
 #include "fragg_map/sim/trajectory.h"
+#include "gain_walk.h"
 #include "planning/collision_reference.h"
 
 namespace fragg::planning::test {
@@ -569,6 +573,106 @@ TEST(FrontierArguments, RefusedCleanly) {
                InvalidArgument);
   EXPECT_EQ(viewpointGainsBits(map, at, {0.0}, GainSensor(), 0, Backend::kAuto),
             viewpointGainsBits(map, at, {0.0}, GainSensor(), 0, Backend::kCpu));
+  // The CUDA gain kernel's options: checked before any walk, on every backend.
+  GainDeviceOptions bad;
+  bad.refill_lanes = 0;
+  EXPECT_THROW(viewpointGainsBits(map, at, {0.0}, GainSensor(), 0, Backend::kCpu, bad),
+               InvalidArgument);
+  bad.refill_lanes = 33;
+  EXPECT_THROW(viewpointGainsBits(map, at, {0.0}, GainSensor(), 0, Backend::kAuto, bad),
+               InvalidArgument);
+  bad.refill_lanes = 32;
+  bad.pool_blocks = (size_t(1) << 31) + 1;
+  EXPECT_THROW(viewpointGainsBits(map, at, {0.0}, GainSensor(), 0, Backend::kCpu, bad),
+               InvalidArgument);
+  v.radii_m = {1.0};
+  v.device_gains.refill_lanes = -1;
+  EXPECT_THROW(clusterViewpoints(map, cluster, v), InvalidArgument);
+}
+
+TEST(Viewpoints, GainKernelNames) {
+  for (const GainKernel k : kGainKernels) EXPECT_EQ(gainKernelFromName(gainKernelName(k)), k);
+  EXPECT_STREQ(gainKernelName(GainKernel::kPooledQueued), "pooled-queued");
+  EXPECT_TRUE(gainKernelPooled(GainKernel::kDeferred) && gainKernelQueued(GainKernel::kDeferred));
+  EXPECT_FALSE(gainKernelPooled(GainKernel::kQueued) || gainKernelQueued(GainKernel::kPooled));
+  EXPECT_FALSE(gainKernelPooled(GainKernel::kPlain) || gainKernelQueued(GainKernel::kPlain));
+  EXPECT_EQ(gainKernelFromName("plain"), GainKernel::kPlain);
+  EXPECT_THROW((void)gainKernelFromName("all"), InvalidArgument);
+  EXPECT_THROW((void)gainKernelFromName(""), InvalidArgument);
+  // The default is the plain kernel, the one checked longest against the CPU.
+  EXPECT_EQ(GainDeviceOptions().kernel, GainKernel::kPlain);
+  EXPECT_EQ(ViewpointOptions().device_gains.kernel, GainKernel::kPlain);
+}
+
+// The pooled gain kernels' directory (gain_walk.h's PoolDirectory, run on the device by
+// poolBitmap and sized on the host by viewpointGainsOnDevice): over random boxes, negative
+// keys and boxes at the key range's edge, every cell of the box finds an entry in
+// [0, entries()), every entry is some block's and distinct blocks get distinct entries, and
+// the blocks just outside the box get none.
+TEST(GainPool, DirectoryIndexCoversTheBoxBlocksOnce) {
+  std::mt19937 rng(34);
+  std::uniform_int_distribution<int32_t> lo_of(-300, 300), dim_of(1, 40);
+  std::vector<std::array<int32_t, 6>> boxes;
+  for (int t = 0; t < 200; ++t)
+    boxes.push_back({lo_of(rng), lo_of(rng), lo_of(rng), dim_of(rng), dim_of(rng), dim_of(rng)});
+  const int32_t top = std::numeric_limits<int32_t>::max(),
+                bottom = std::numeric_limits<int32_t>::min();
+  boxes.push_back({top - 20, bottom, -8, 21, 17, 1});
+  boxes.push_back({-1, -8, 7, 1, 1, 2});
+  for (const auto& box : boxes) {
+    const int32_t* lo = box.data();
+    const int32_t* dims = box.data() + 3;
+    const PoolDirectory dir = PoolDirectory::over(lo, dims);
+    const uint64_t entries = dir.entries();
+    ASSERT_GE(entries, 1u);
+    std::map<int64_t, BlockKey> owner;
+    for (int64_t z = lo[2]; z < int64_t(lo[2]) + dims[2]; ++z)
+      for (int64_t y = lo[1]; y < int64_t(lo[1]) + dims[1]; ++y)
+        for (int64_t x = lo[0]; x < int64_t(lo[0]) + dims[0]; ++x) {
+          const BlockKey b = blockKeyOf(VoxelKey{int32_t(x), int32_t(y), int32_t(z)});
+          const int64_t at = dir.indexOf(b);
+          ASSERT_GE(at, 0) << "cell " << x << " " << y << " " << z;
+          ASSERT_LT(uint64_t(at), entries);
+          const auto [it, fresh] = owner.emplace(at, b);
+          if (!fresh) {
+            ASSERT_EQ(it->second, b) << "two blocks share entry " << at;
+          }
+        }
+    EXPECT_EQ(owner.size(), entries) << "an entry no block of the box uses";
+    // One block past each face (where that block key exists).
+    const BlockKey first = blockKeyOf(VoxelKey{lo[0], lo[1], lo[2]});
+    const int64_t f[3] = {first.x, first.y, first.z};
+    for (int a = 0; a < 3; ++a)
+      for (const int64_t k : {f[a] - 1, f[a] + dir.blocks[a]}) {
+        if (k < (std::numeric_limits<int32_t>::min() >> kBlockBits) ||
+            k > (std::numeric_limits<int32_t>::max() >> kBlockBits))
+          continue;
+        int32_t b[3] = {first.x, first.y, first.z};
+        b[a] = static_cast<int32_t>(k);
+        EXPECT_EQ(dir.indexOf(BlockKey{b[0], b[1], b[2]}), -1) << "axis " << a << " block " << k;
+      }
+  }
+}
+
+// The directory entries' protocol: a taken index reads back as its bitmap, a full pool as
+// overflow, and the other states (empty, busy: issue 34's crash used busy as an index) name
+// no bitmap; the largest pool's indices stay clear of the sentinels.
+TEST(GainPool, EntriesNameTheirBitmapOnly) {
+  for (const uint32_t pool : {1u, 64u, 1000u, uint32_t(kPoolMaxBlocks)}) {
+    for (const uint32_t taken : {0u, pool / 2, pool - 1}) {
+      const uint32_t e = poolEntryOf(taken, pool);
+      EXPECT_NE(e, kPoolEmpty);
+      EXPECT_NE(e, kPoolBusy);
+      EXPECT_NE(e, kPoolOverflow);
+      EXPECT_EQ(poolBitmapOf(e), int64_t(taken));
+    }
+    for (const uint32_t taken : {pool, pool + 1, 0xfffffffeu, 0xffffffffu})
+      EXPECT_EQ(poolEntryOf(taken, pool), kPoolOverflow) << pool << " " << taken;
+  }
+  EXPECT_EQ(poolBitmapOf(kPoolEmpty), -1);
+  EXPECT_EQ(poolBitmapOf(kPoolBusy), -1);
+  EXPECT_EQ(poolBitmapOf(kPoolOverflow), -1);
+  EXPECT_LT(kPoolMaxBlocks, uint64_t(kPoolOverflow));
 }
 
 }  // namespace

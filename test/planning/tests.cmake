@@ -38,6 +38,8 @@ fragg_add_test(fragg_frontier_test
   LABELS planning)
 if(TARGET fragg_frontier_test)
   target_compile_definitions(fragg_frontier_test PRIVATE FRAGG_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+  # gain_walk.h: the index arithmetic the CUDA gain kernels share with the host.
+  target_include_directories(fragg_frontier_test PRIVATE ${PROJECT_SOURCE_DIR}/src/planning)
 endif()
 
 # Runs the built `fragg_map frontiers` and `render --frontiers` on hand-written maps saved as .fgm.

@@ -36,6 +36,67 @@ struct GainSensor {
 double viewpointGainBits(const Map& map, const BlockView& view, const Eigen::Vector3d& position_m,
                          double yaw_rad, const GainSensor& sensor);
 
+/// The CUDA kernels for a batch of entropy gains (viewpointGainsBits on a map integrating on
+/// CUDA). All walk the same cells as the CPU (the same gains, to rounding); they differ in how
+/// a viewpoint's seen cells are kept (each unknown cell counts once a viewpoint) and in how
+/// rays are handed to threads.
+enum class GainKernel {
+  /// One thread a ray; a dense cell bitmap a viewpoint, every one the size of the largest
+  /// viewpoint's box (the tested default).
+  kPlain,
+  /// As kPlain, each viewpoint's bitmap the size of its own box (less to clear).
+  kSized,
+  /// One thread a ray; seen cells by map block: a viewpoint has a directory over its box's
+  /// blocks, and the first lane meeting an unknown cell in a block takes a 64-byte bitmap for
+  /// it from a pool shared by the round (and clears it): only the directories are cleared.
+  /// Viewpoints of a round that finds the pool too small are computed again by kSized.
+  kPooled,
+  /// Persistent threads on kSized's bitmaps: a warp whose rays have ended takes the next rays
+  /// from a queue (one atomic a warp), so lanes keep walking instead of waiting for the
+  /// warp's longest ray.
+  kQueued,
+  /// kQueued's scheduling with kPooled's bitmaps.
+  kPooledQueued,
+  /// kPooledQueued whose walk sets seen bits without waiting for the atomics' old values (no
+  /// cell read while walking); a second kernel sums the entropy of the cells set in each
+  /// taken pool bitmap into its viewpoint's gain.
+  kDeferred,
+};
+
+/// Whether `kernel` keeps seen cells in block bitmaps from a pool (kPooled, kPooledQueued,
+/// kDeferred).
+[[nodiscard]] bool gainKernelPooled(GainKernel kernel);
+/// Whether `kernel` hands rays out from a queue (kQueued, kPooledQueued, kDeferred).
+[[nodiscard]] bool gainKernelQueued(GainKernel kernel);
+
+/// Every GainKernel, kPlain first.
+inline constexpr GainKernel kGainKernels[] = {GainKernel::kPlain,        GainKernel::kSized,
+                                              GainKernel::kPooled,       GainKernel::kQueued,
+                                              GainKernel::kPooledQueued, GainKernel::kDeferred};
+
+/// "plain", "sized", "pooled", "queued", "pooled-queued" or "deferred".
+[[nodiscard]] const char* gainKernelName(GainKernel kernel);
+/// The kernel named `name` (gainKernelName's names); InvalidArgument for another name.
+[[nodiscard]] GainKernel gainKernelFromName(const std::string& name);
+
+/// How a batch of gains runs on the device (ignored on the CPU).
+struct GainDeviceOptions {
+  GainKernel kernel = GainKernel::kPlain;
+  /// Pooled kernels (gainKernelPooled): block bitmaps in the pool (64 bytes each); 0 sizes the pool
+  /// from the bitmap budget (three quarters of it), never larger than a round's directories
+  /// (one bitmap for every block of every box: a pool that cannot run out).
+  size_t pool_blocks = 0;
+  /// Queued kernels (gainKernelQueued): a warp takes new rays once at least this many of its 32
+  /// lanes have finished theirs (1..32).
+  int refill_lanes = 4;
+  /// Device bytes for one round's bitmaps (every kernel; the pooled kernels give a quarter to
+  /// the directories, the rest to the pool unless pool_blocks says); a batch whose bitmaps pass
+  /// it runs in several rounds. 0: a quarter of the device's free memory, within 1 to 4 GiB.
+  size_t bitmap_budget_bytes = 0;
+  /// Throws InvalidArgument naming the bad field.
+  void validate() const;
+};
+
 /// Where a batch of gains spent its time on the device (viewpointGainsBits with `timings`;
 /// all zero when the batch ran on the CPU): the map's device view over the batch's reach
 /// (residency and its block table), the batch's own tables (inputs copied, the dense block
@@ -44,7 +105,11 @@ double viewpointGainBits(const Map& map, const BlockView& view, const Eigen::Vec
 struct GainTimings {
   bool on_device = false;
   double view_seconds = 0.0, tables_seconds = 0.0, walk_seconds = 0.0;
-  size_t rounds = 0;  ///< kernel launches (bitmaps of one round fit 1 GiB)
+  size_t rounds = 0;  ///< kernel launches (bitmaps of one round fit the device budget)
+  /// Pooled kernels: the most block bitmaps one round asked the pool for (its demand, which
+  /// may pass the pool), and the viewpoints computed again by kSized after their round found
+  /// the pool too small.
+  size_t pool_blocks_wanted = 0, pool_reruns = 0;
 };
 
 /// Gains of many viewpoints at once; result i belongs to position i and yaw i (the two must
@@ -52,13 +117,14 @@ struct GainTimings {
 /// core); kAuto uses the map's backend where it has a gain path (a map integrating on CUDA:
 /// one device thread per ray over its block cache, the same cells as the CPU walk; sums equal
 /// to rounding), else the CPU, falling back to the CPU with one log line when the device
-/// cannot take the batch; kCuda insists (InvalidArgument for a map not on CUDA). `timings`
-/// (optional): where the device's time went.
+/// cannot take the batch; kCuda insists (InvalidArgument for a map not on CUDA). `device`:
+/// the kernel on CUDA. `timings` (optional): where the device's time went.
 std::vector<double> viewpointGainsBits(const Map& map,
                                        const std::vector<Eigen::Vector3d>& positions_m,
                                        const std::vector<double>& yaws_rad,
                                        const GainSensor& sensor, int threads = 0,
                                        Backend backend = Backend::kCpu,
+                                       const GainDeviceOptions& device = {},
                                        GainTimings* timings = nullptr);
 
 /// Entropy (bits) of a cell as the gain counts it: 1 for never observed, H(p) inside the
@@ -94,6 +160,8 @@ struct ViewpointOptions {
   GainSensor sensor;
   /// Where the gains are computed (viewpointGainsBits): kAuto follows the map's backend.
   Backend backend = Backend::kAuto;
+  /// The kernel when they are computed on CUDA.
+  GainDeviceOptions device_gains;
   /// What the gain counts; kCoverage is always computed on the host.
   ViewpointGain gain = ViewpointGain::kEntropy;
   /// Ranks by gain per metre of straight-line distance from this position (else by gain).

@@ -8,6 +8,11 @@
 //   fragg_map_frontier_bench (--workloads DIR | --map MAP.fgm) [--max-scans 100]
 //       [--resolution 0.05] [--max-range 30] [--backend cpu|cuda|auto] [--viewpoints 1000]
 //       [--threads N] [--json FILE] [--lidar-query K --box X0 Y0 Z0 X1 Y1 Z1]
+//       [--gain-kernel plain|sized|pooled|queued|pooled-queued|deferred|all] [--gain-repeats 5]
+//       [--gain-pool-blocks N] [--gain-refill-lanes 4]
+// --gain-kernel picks the CUDA gain kernel (planning::GainKernel); `all` times the plain kernel
+// as usual, then every kernel alternated in this process, --gain-repeats rounds, each kernel's
+// gains compared with the plain kernel's.
 // --lidar-query K times only the node's ~get_frontiers on a LiDAR map (a coarse grid of K cells,
 // the coverage gain, k = 8) for the whole map and for the box, step by step.
 #include <fmt/format.h>
@@ -16,6 +21,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -47,10 +53,70 @@ struct Options {
   size_t max_scans = 100, viewpoints = 1000;
   double resolution_m = 0.05, max_range_m = 30.0;
   int threads = 0;
-  int coarse_cells = 0;        ///< > 0: also time the node's LiDAR query on this grid
-  bool device_tracker = true;  ///< FrontierTracker::useDevice
-  std::vector<double> box;     ///< its box (6 values), else around the map's centre
+  int coarse_cells = 0;               ///< > 0: also time the node's LiDAR query on this grid
+  bool device_tracker = true;         ///< FrontierTracker::useDevice
+  std::vector<double> box;            ///< its box (6 values), else around the map's centre
+  std::string gain_kernel = "plain";  ///< a GainKernel's name, or "all"
+  int gain_repeats = 5;               ///< rounds of the alternated kernels (`all`)
+  size_t gain_pool_blocks = 0;        ///< GainDeviceOptions::pool_blocks
+  int gain_refill_lanes = 4;          ///< GainDeviceOptions::refill_lanes
 };
+
+/// The gain kernels alternated in one process (--gain-kernel all): per round every kernel once
+/// (wall time of viewpointGainsBits), then per kernel the median, its stages and pool counts
+/// (one more call, stages timed apart) and its gains against the plain kernel's.
+void compareGainKernels(const Map& map, const std::vector<Eigen::Vector3d>& positions,
+                        const std::vector<double>& yaws, const planning::GainSensor& camera,
+                        const Options& o) {
+  const auto options = [&](planning::GainKernel k) {
+    planning::GainDeviceOptions d;
+    d.kernel = k;
+    d.pool_blocks = o.gain_pool_blocks;
+    d.refill_lanes = o.gain_refill_lanes;
+    return d;
+  };
+  std::vector<std::vector<double>> gains;
+  for (const planning::GainKernel k : planning::kGainKernels)  // warm-up: buffers allocated
+    gains.push_back(planning::viewpointGainsBits(map, positions, yaws, camera, o.threads,
+                                                 Backend::kAuto, options(k)));
+  const size_t n_kernels = gains.size();
+  std::vector<std::vector<double>> ms(n_kernels);
+  for (int round = 0; round < o.gain_repeats; ++round) {
+    std::string line = fmt::format("gain kernels, round {}:", round + 1);
+    for (size_t k = 0; k < n_kernels; ++k) {
+      const auto t0 = Clock::now();
+      (void)planning::viewpointGainsBits(map, positions, yaws, camera, o.threads, Backend::kAuto,
+                                         options(planning::kGainKernels[k]));
+      ms[k].push_back(msSince(t0));
+      line += fmt::format(" {} {:.2f} ms{}", planning::gainKernelName(planning::kGainKernels[k]),
+                          ms[k].back(), k + 1 < n_kernels ? "," : "");
+    }
+    std::printf("%s\n", line.c_str());
+  }
+  for (size_t k = 0; k < n_kernels; ++k) {
+    planning::GainTimings t;
+    (void)planning::viewpointGainsBits(map, positions, yaws, camera, o.threads, Backend::kAuto,
+                                       options(planning::kGainKernels[k]), &t);
+    double max_rel = 0.0;
+    for (size_t i = 0; i < positions.size(); ++i)
+      max_rel = std::max(
+          max_rel, std::abs(gains[k][i] - gains[0][i]) / std::max(1.0, std::abs(gains[0][i])));
+    std::printf(
+        "%s\n",
+        fmt::format("gain kernel {:>13}: median {:.2f} ms (min {:.2f}, max {:.2f}, {} rounds); "
+                    "stages: view {:.2f} ms, tables {:.2f} ms, walk {:.2f} ms in {} launches; "
+                    "pool: {} blocks wanted, {} viewpoints rerun; gains {} the plain kernel's "
+                    "(max relative difference {:.1e})",
+                    planning::gainKernelName(planning::kGainKernels[k]),
+                    ms[k].empty() ? 0.0 : percentile(ms[k], 0.5),
+                    ms[k].empty() ? 0.0 : percentile(ms[k], 0.0),
+                    ms[k].empty() ? 0.0 : percentile(ms[k], 1.0), ms[k].size(),
+                    t.view_seconds * 1e3, t.tables_seconds * 1e3, t.walk_seconds * 1e3, t.rounds,
+                    t.pool_blocks_wanted, t.pool_reruns,
+                    max_rel <= 1e-9 ? "EQUAL TO" : "DIFFER FROM", max_rel)
+            .c_str());
+  }
+}
 
 /// Process CPU time (user + system), ms: with other work on the machine, the steadier figure.
 double cpuMs() {
@@ -198,25 +264,32 @@ int run(const Options& o) {
       yaws.push_back(std::atan2(c.centroid_m.y() - p.y(), c.centroid_m.x() - p.x()));
     }
   planning::GainSensor camera;  // pinhole 64 x 48, 90 x 68.8 degrees, 10 m
+  planning::GainDeviceOptions device_gains;
+  device_gains.kernel = o.gain_kernel == "all" ? planning::GainKernel::kPlain
+                                               : planning::gainKernelFromName(o.gain_kernel);
+  device_gains.pool_blocks = o.gain_pool_blocks;
+  device_gains.refill_lanes = o.gain_refill_lanes;
   // Once to warm up (the device table and bitmaps are allocated on the first call), then timed.
-  planning::viewpointGainsBits(map, positions, yaws, camera, o.threads, Backend::kAuto);
+  planning::viewpointGainsBits(map, positions, yaws, camera, o.threads, Backend::kAuto,
+                               device_gains);
   t0 = Clock::now();
   c0 = cpuMs();
-  const std::vector<double> gains =
-      planning::viewpointGainsBits(map, positions, yaws, camera, o.threads, Backend::kAuto);
+  const std::vector<double> gains = planning::viewpointGainsBits(
+      map, positions, yaws, camera, o.threads, Backend::kAuto, device_gains);
   const double gain_ms = msSince(t0), gain_cpu_ms = cpuMs() - c0;
   double gain_sum = 0.0;
   for (double g : gains) gain_sum += g;
   // Once more with the device's stages timed (a synchronisation between them).
   planning::GainTimings gt;
-  (void)planning::viewpointGainsBits(map, positions, yaws, camera, o.threads, Backend::kAuto, &gt);
+  (void)planning::viewpointGainsBits(map, positions, yaws, camera, o.threads, Backend::kAuto,
+                                     device_gains, &gt);
   // The part of a call that does not grow with the viewpoints (the view, tables, copies): one
   // viewpoint, medians of 5.
   std::vector<double> one_ms;
   for (int i = 0; i < 5 && !positions.empty(); ++i) {
     t0 = Clock::now();
     (void)planning::viewpointGainsBits(map, {positions[0]}, {yaws[0]}, camera, o.threads,
-                                       Backend::kAuto);
+                                       Backend::kAuto, device_gains);
     one_ms.push_back(msSince(t0));
   }
 
@@ -262,11 +335,14 @@ int run(const Options& o) {
                                   one_ms.empty() ? 0.0 : percentile(one_ms, 0.5))
                           .c_str());
   if (gt.on_device)
-    std::printf("%s\n", fmt::format("  of which (stages timed apart): device view {:.2f} ms, "
-                                    "tables and bitmaps {:.2f} ms, walk {:.2f} ms in {} rounds",
-                                    gt.view_seconds * 1e3, gt.tables_seconds * 1e3,
-                                    gt.walk_seconds * 1e3, gt.rounds)
-                            .c_str());
+    std::printf("%s\n",
+                fmt::format("  of which (stages timed apart, {} kernel): device view "
+                            "{:.2f} ms, tables and bitmaps {:.2f} ms, walk {:.2f} ms in "
+                            "{} rounds",
+                            planning::gainKernelName(device_gains.kernel), gt.view_seconds * 1e3,
+                            gt.tables_seconds * 1e3, gt.walk_seconds * 1e3, gt.rounds)
+                    .c_str());
+  if (o.gain_kernel == "all" && gt.on_device) compareGainKernels(map, positions, yaws, camera, o);
   if (!o.json_path.empty()) {
     const nlohmann::json j = {{"scans", scans.size()},
                               {"map", o.map_path},
@@ -293,7 +369,8 @@ int run(const Options& o) {
                               {"incremental_equals_full", equal},
                               {"cluster_ms", cluster_ms},
                               {"viewpoints", positions.size()},
-                              {"gain_ms", gain_ms}};
+                              {"gain_ms", gain_ms},
+                              {"gain_kernel", planning::gainKernelName(device_gains.kernel)}};
     std::ofstream(o.json_path) << j.dump(2) << "\n";
   }
   return equal ? 0 : 1;
@@ -328,12 +405,28 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({1, 2, 4, 8}));
   app.add_option("--box", o.box, "The LiDAR query's box X0 Y0 Z0 X1 Y1 Z1 (m)")->expected(6);
   app.add_option("--json", o.json_path, "Write the figures as JSON");
+  app.add_option(
+         "--gain-kernel", o.gain_kernel,
+         "CUDA gain kernel: plain | sized | pooled | queued | pooled-queued | deferred, or all "
+         "(every kernel alternated, after the plain kernel's figures)")
+      ->capture_default_str();
+  app.add_option("--gain-repeats", o.gain_repeats, "Rounds of the alternated kernels (all)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--gain-pool-blocks", o.gain_pool_blocks,
+                 "Pooled kernels: block bitmaps in the pool (0 = from the bitmap budget)")
+      ->capture_default_str();
+  app.add_option("--gain-refill-lanes", o.gain_refill_lanes,
+                 "Queued kernels: idle lanes of a warp before it takes new rays (1..32)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 32));
   try {
     app.parse(argc, argv);
     if (o.workloads.empty() && o.map_path.empty())
       throw fragg::InvalidArgument("give --workloads DIR or --map MAP.fgm");
     if (o.coarse_cells > 0 && o.box.size() != 6)
       throw fragg::InvalidArgument("--lidar-query needs --box X0 Y0 Z0 X1 Y1 Z1");
+    if (o.gain_kernel != "all") (void)fragg::planning::gainKernelFromName(o.gain_kernel);
     return fragg::bench::run(o);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
