@@ -285,11 +285,20 @@ SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map& map, const MarkerS
     ledger->last_paced_s_ = now_s;
     ledger->paced_ = true;
   }
-  std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> dirty;  // chunk keys
+  // A chunk joins the queue once (a queued chunk is drawn when it is sent: its latest cells).
+  const auto queue = [&](const fragg::BlockKey& chunk_key) -> MarkerLedger::Chunk& {
+    MarkerLedger::Chunk& chunk = ledger->chunks_[chunk_key];
+    if (!chunk.pending) {
+      chunk.pending = true;
+      ledger->pending_.push_back({chunk_key, now_s});
+    }
+    return chunk;
+  };
   if (note) {
     // Shown blocks that were erased (clearBox, reset, paged out) are not listed as changed: look
     // them up, when the map's view changed since the last update (no erase without that).
     if (map.viewEpoch() != ledger->view_epoch_) {
+      std::vector<fragg::BlockKey> emptied;
       for (auto& [chunk_key, chunk] : ledger->chunks_) {
         auto& list = chunk.blocks;
         const size_t before = list.size();
@@ -300,72 +309,37 @@ SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map& map, const MarkerS
                    list.end());
         if (list.size() != before) {
           ledger->shown_blocks_ -= before - list.size();
-          dirty.insert(chunk_key);
+          emptied.push_back(chunk_key);
         }
       }
+      for (const fragg::BlockKey& chunk_key : emptied) queue(chunk_key).redraw = true;
     }
     // The blocks whose drawn state changed, with their 26 neighbours when speckles are hidden
     // (a cell's speckle state follows its neighbours' occupancy).
     // Occupied markers: the blocks where a cell crossed the occupied threshold (most blocks a
     // scan changes gain free cells only); other states: those whose masks changed, from the
-    // change log.
-    std::vector<fragg::BlockRef> changed = blocks.changedRefsSince(
+    // change log. Listed by chunk only: their cells are drawn when the chunk is sent.
+    std::vector<fragg::BlockKey> changed = blocks.changedSince(
         since, style.state == fragg::CellState::kOccupied ? fragg::BlockChange::kOccupied
                                                           : fragg::BlockChange::kMasks);
     if (style.hide_speckles && !changed.empty()) {
       std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around;
-      for (const fragg::BlockRef& r : changed)
+      for (const fragg::BlockKey& k : changed)
         for (int dz = -1; dz <= 1; ++dz)
           for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx)
-              around.insert({r.key.x + dx, r.key.y + dy, r.key.z + dz});
+            for (int dx = -1; dx <= 1; ++dx) around.insert({k.x + dx, k.y + dy, k.z + dz});
       changed.clear();
       for (const fragg::BlockKey& k : around)
-        if (const fragg::Block* b = blocks.findBlock(k)) changed.push_back({k, b});
+        if (blocks.findBlock(k)) changed.push_back(k);
     }
+    for (const fragg::BlockKey& k : changed) queue(chunkOf(k, chunk_blocks)).listed.push_back(k);
     // colored_map: blocks whose colours changed are redrawn even with the same cells.
-    std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> recolored;
     if (style.colors) {
-      for (const fragg::BlockKey& k : style.colors->recoloredSince(ledger->colors_drawn_))
-        if (blocks.findBlock(k)) recolored.insert(k);
-      for (const fragg::BlockRef& r : changed) recolored.erase(r.key);
-      for (const fragg::BlockKey& k : recolored) changed.push_back({k, blocks.findBlock(k)});
-    }
-    // The drawn cells in parallel (read-only), the ledger in order.
-    std::vector<CellMask> masks(changed.size());
-    const int64_t n = static_cast<int64_t>(changed.size());
-#pragma omp parallel for schedule(static) if (n > 256)
-    for (int64_t j = 0; j < n; ++j)
-      masks[j] = drawnCells(map, blocks, changed[j].key, *changed[j].block, style);
-    for (size_t j = 0; j < changed.size(); ++j) {
-      const fragg::BlockKey& key = changed[j].key;
-      const CellMask& cells = masks[j];
-      const fragg::BlockKey chunk_key = chunkOf(key, chunk_blocks);
-      const auto chunk = ledger->chunks_.find(chunk_key);
-      if (chunk == ledger->chunks_.end()) {
-        if (cells.none()) continue;
-        MarkerLedger::Chunk& added = ledger->chunks_[chunk_key];
-        added.blocks.push_back({key, cells});
-        ++ledger->shown_blocks_;
-        dirty.insert(chunk_key);
-        continue;
-      }
-      auto& list = chunk->second.blocks;
-      const auto shown =
-          std::find_if(list.begin(), list.end(),
-                       [&](const MarkerLedger::ShownBlock& b) { return b.key == key; });
-      if (shown == list.end()) {
-        if (cells.none()) continue;
-        list.push_back({key, cells});
-        ++ledger->shown_blocks_;
-        dirty.insert(chunk_key);
-      } else if (cells.none()) {
-        list.erase(shown);
-        --ledger->shown_blocks_;
-        dirty.insert(chunk_key);
-      } else if (cells != shown->cells || recolored.count(key)) {
-        shown->cells = cells;
-        dirty.insert(chunk_key);
+      for (const fragg::BlockKey& k : style.colors->recoloredSince(ledger->colors_drawn_)) {
+        if (!blocks.findBlock(k)) continue;
+        MarkerLedger::Chunk& chunk = queue(chunkOf(k, chunk_blocks));
+        chunk.listed.push_back(k);
+        chunk.redraw = true;
       }
     }
     ledger->published_revision_ = map.revision();
@@ -373,17 +347,8 @@ SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map& map, const MarkerS
     if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
     if (paced) ledger->last_note_s_ = now_s;
   }
-  // The changed chunks join the queue (once each: a queued chunk is drawn from the ledger when
-  // it is sent, its latest cells).
-  for (const fragg::BlockKey& chunk_key : dirty) {
-    MarkerLedger::Chunk& chunk = ledger->chunks_.at(chunk_key);
-    if (chunk.pending) continue;
-    chunk.pending = true;
-    ledger->pending_.push_back({chunk_key, now_s});
-  }
   if (!paced) take = ledger->pending_.size();
-  // One entry per chunk sent: its whole marker (encoded again and kept), or DELETE when it
-  // draws nothing now.
+  // The chunks sent now, in key order.
   std::vector<fragg::BlockKey> order;
   order.reserve(take);
   for (size_t q = 0; q < take; ++q) {
@@ -391,21 +356,71 @@ SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map& map, const MarkerS
     ledger->pending_.pop_front();
   }
   std::sort(order.begin(), order.end(), byKey);
+  // Their listed blocks' drawn cells, in parallel (read-only; a block that left the map draws
+  // nothing), then the ledger in order.
+  struct Listed {
+    MarkerLedger::Chunk* chunk;
+    fragg::BlockKey key;
+  };
+  std::vector<MarkerLedger::Chunk*> sent;
+  sent.reserve(order.size());
+  std::vector<Listed> listed;
+  for (const fragg::BlockKey& chunk_key : order) {
+    MarkerLedger::Chunk& chunk = ledger->chunks_.at(chunk_key);
+    sent.push_back(&chunk);
+    std::sort(chunk.listed.begin(), chunk.listed.end(), byKey);
+    chunk.listed.erase(std::unique(chunk.listed.begin(), chunk.listed.end()), chunk.listed.end());
+    for (const fragg::BlockKey& k : chunk.listed) listed.push_back({&chunk, k});
+  }
+  std::vector<CellMask> masks(listed.size());
+  const int64_t n = static_cast<int64_t>(listed.size());
+#pragma omp parallel for schedule(static) if (n > 256)
+  for (int64_t j = 0; j < n; ++j) {
+    if (const fragg::Block* b = blocks.findBlock(listed[j].key))
+      masks[j] = drawnCells(map, blocks, listed[j].key, *b, style);
+  }
+  for (size_t j = 0; j < listed.size(); ++j) {
+    MarkerLedger::Chunk& chunk = *listed[j].chunk;
+    const fragg::BlockKey& key = listed[j].key;
+    const CellMask& cells = masks[j];
+    auto& list = chunk.blocks;
+    const auto shown = std::find_if(
+        list.begin(), list.end(), [&](const MarkerLedger::ShownBlock& b) { return b.key == key; });
+    if (shown == list.end()) {
+      if (cells.none()) continue;
+      list.push_back({key, cells});
+      ++ledger->shown_blocks_;
+      chunk.redraw = true;
+    } else if (cells.none()) {
+      list.erase(shown);
+      --ledger->shown_blocks_;
+      chunk.redraw = true;
+    } else if (cells != shown->cells) {
+      shown->cells = cells;
+      chunk.redraw = true;
+    }
+  }
+  // One entry per chunk whose drawing changed: its whole marker (encoded again and kept), or
+  // DELETE when it draws nothing now.
   std::vector<MarkerLedger::Chunk*> redrawn;
   redrawn.reserve(order.size());
   out.markers.reserve(order.size());
-  for (const fragg::BlockKey& chunk_key : order) {
-    const auto chunk = ledger->chunks_.find(chunk_key);
-    chunk->second.pending = false;
-    if (chunk->second.blocks.empty()) {
-      if (chunk->second.id >= 0)
-        out.markers.push_back(wireOf(
-            markerHeader(style, stamp, chunk->second.id, visualization_msgs::Marker::DELETE)));
-      ledger->chunks_.erase(chunk);
+  for (size_t i = 0; i < order.size(); ++i) {
+    MarkerLedger::Chunk& chunk = *sent[i];
+    chunk.pending = false;
+    chunk.listed.clear();
+    const bool redraw = chunk.redraw;
+    chunk.redraw = false;
+    if (chunk.blocks.empty()) {
+      if (chunk.id >= 0)
+        out.markers.push_back(
+            wireOf(markerHeader(style, stamp, chunk.id, visualization_msgs::Marker::DELETE)));
+      ledger->chunks_.erase(order[i]);
       continue;
     }
-    if (chunk->second.id < 0) chunk->second.id = ledger->next_id_++;
-    redrawn.push_back(&chunk->second);
+    if (!redraw) continue;  // its blocks' drawn cells are as last sent
+    if (chunk.id < 0) chunk.id = ledger->next_id_++;
+    redrawn.push_back(&chunk);
     out.markers.emplace_back();  // its wire, once encoded
   }
   encodeChunks(map, style, redrawn);

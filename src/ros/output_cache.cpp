@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
+#include <string>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/layer_masks.h"
@@ -212,6 +214,7 @@ uint32_t MapOutputCache::pieceFor(const fragg::BlockKey& key) {
 void MapOutputCache::dropPiece(const fragg::BlockKey& k) {
   const uint32_t i = piece_index_.find(k);
   if (i == fragg::BlockKeyTable::kNone) return;
+  regather();  // with_cells_ changes
   occupied_cells_ -= pieces_[i].xyz.size() / 3;
   unlist(i);
   const auto drop = [](std::vector<uint32_t>* list, uint32_t from, uint32_t to) {
@@ -308,16 +311,16 @@ std::vector<MapOutputCache::Source> MapOutputCache::listChanges(const fragg::Map
 }
 
 OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
-  return refresh(map, 0.0, 0.0, true);
+  return refresh(map, 0.0, 0.0, true, false);
 }
 
 OutputCacheUpdate MapOutputCache::advance(const fragg::Map& map, double now_s, double period_s,
-                                          bool with_grid) {
-  return refresh(map, now_s, period_s, with_grid || period_s <= 0.0);
+                                          bool with_grid, bool gather_cloud) {
+  return refresh(map, now_s, period_s, with_grid || period_s <= 0.0, gather_cloud);
 }
 
 OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, double period_s,
-                                          bool with_grid) {
+                                          bool with_grid, bool gather_cloud) {
   OutputCacheUpdate out;
   auto t0 = std::chrono::steady_clock::now();
   const fragg::BlockView blocks = map.blockView();
@@ -341,6 +344,7 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
     queue_head_ = 0;
     occupied_cells_ = 0;
     seen_valid_ = false;
+    regather();
   }
   // Paced, the changes are listed at a publication (with_grid) only, and recomputed in even
   // shares over the clouds of the next period.
@@ -348,14 +352,15 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   const bool list = !paced || with_grid || !advanced_;
   // First what was queued and is due: at a listing all of it (what the shares left: nothing,
   // when they kept up), else this cloud's share: what is left over the clouds left until the
-  // list is a period old.
+  // list is kRecomputedBy of a period old.
   size_t take = queuedBlocks();
-  if (paced && !list && take > 0) {
-    const double interval_s = std::clamp(now_s - last_advance_s_, 1e-6, period_s);
-    const double left_s = queued_since_s_ + period_s - now_s;
-    const double clouds_left = std::max(1.0, std::floor(left_s / interval_s + 1e-6));
-    take = static_cast<size_t>(std::ceil(static_cast<double>(take) / clouds_left));
-  }
+  const double interval_s = paced ? std::clamp(now_s - last_advance_s_, 1e-6, period_s) : 0.0;
+  // Shares of `n` over the clouds left until `until_s` (this one included; at least one).
+  const auto share = [&](size_t n, double until_s) {
+    const double clouds_left = std::max(1.0, std::floor((until_s - now_s) / interval_s + 1e-6));
+    return static_cast<size_t>(std::ceil(static_cast<double>(n) / clouds_left));
+  };
+  if (paced && !list && take > 0) take = share(take, queued_since_s_ + kRecomputedBy * period_s);
   if (paced) {
     last_advance_s_ = now_s;
     advanced_ = true;
@@ -380,6 +385,18 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   for (const fragg::BlockKey& k : gone) dropPiece(k);
   out.list_ms += msSince(t0);
   recompute(map, blocks, queued, masks_suffice, &out);
+  // The queue recomputed: the pieces stay as they are until the next listing, and the clouds
+  // until then gather them into the next publication's cloud message (its share: what is left
+  // over the clouds left until the list is a period old, the publication's included).
+  if (paced && !list && gather_cloud && queuedBlocks() == 0 && gathered_ < with_cells_.size()) {
+    t0 = std::chrono::steady_clock::now();
+    const size_t before = gathered_bytes_;
+    const size_t pieces = share(with_cells_.size() - gathered_, queued_since_s_ + period_s);
+    gatherCloud(pieces);
+    out.pieces_gathered = pieces;
+    out.bytes_gathered = gathered_bytes_ - before;
+    out.gather_ms = msSince(t0);
+  }
   // Then the changes since the last list: queued (paced), or recomputed now.
   t0 = std::chrono::steady_clock::now();
   std::vector<Source> listed;
@@ -416,6 +433,7 @@ void MapOutputCache::recompute(const fragg::Map& map, const fragg::BlockView& bl
                                const std::vector<Source>& sources, bool masks_suffice,
                                OutputCacheUpdate* out) {
   if (sources.empty()) return;
+  regather();  // pieces may change
   const auto t0 = std::chrono::steady_clock::now();
   // Each block's piece (new ones made first: pieces_ does not change while the pieces are
   // computed), then the pieces in parallel (read-only map, one piece per iteration), then the
@@ -550,6 +568,56 @@ const sensor_msgs::PointCloud2& MapOutputCache::occupiedCloud(const std::string&
   }
   cloud_msg_.data = std::move(data);
   return cloud_msg_;
+}
+
+void MapOutputCache::gatherCloud(size_t pieces) {
+  uint8_t* payload =
+      cloud_wire_.reserve(occupied_cells_ * 3 * sizeof(float), gathered_bytes_) + gathered_bytes_;
+  const size_t end = std::min(with_cells_.size(), gathered_ + pieces);
+  for (; gathered_ < end; ++gathered_) {
+    const std::vector<float>& xyz = pieces_[with_cells_[gathered_]].xyz;
+    const size_t bytes = xyz.size() * sizeof(float);
+    std::memcpy(payload, xyz.data(), bytes);
+    payload += bytes;
+    gathered_bytes_ += bytes;
+  }
+}
+
+PreserializedCloud MapOutputCache::occupiedCloudWire(const std::string& frame_id,
+                                                     const ::ros::Time& stamp) {
+  gatherCloud(with_cells_.size() - gathered_);  // what the shares left (all after update())
+  if (gathered_bytes_ != occupied_cells_ * 3 * sizeof(float))
+    throw std::logic_error("output cache: the gathered cloud (" + std::to_string(gathered_bytes_) +
+                           " bytes) is not the occupied cells' (" +
+                           std::to_string(occupied_cells_) + ")");
+  // The message's fields around its data, serialised by roscpp (a hundred bytes).
+  sensor_msgs::PointCloud2 empty = packedXyzCloud(std::vector<float>(), frame_id, stamp);
+  empty.width = static_cast<uint32_t>(occupied_cells_);
+  empty.row_step = empty.point_step * empty.width;
+  const ::ros::SerializedMessage fields = ::ros::serialization::serializeMessage(empty);
+  PreserializedCloud out{cloud_wire_.finish(fields, sizeof(empty.is_dense), gathered_bytes_)};
+  regather();  // the next message: another buffer, gathered from the start
+  return out;
+}
+
+PreserializedGrid MapOutputCache::projectedMapWire(const std::string& frame_id,
+                                                   const ::ros::Time& stamp) {
+  nav_msgs::OccupancyGrid empty;
+  empty.header.frame_id = frame_id;
+  empty.header.stamp = stamp;
+  empty.info.map_load_time = stamp;
+  empty.info.resolution = static_cast<float>(resolution_m_);
+  empty.info.origin.orientation.w = 1.0;
+  if (!grid_empty_) {
+    empty.info.width = static_cast<uint32_t>(grid_width_);
+    empty.info.height = static_cast<uint32_t>(grid_height_);
+    empty.info.origin.position.x = grid_min_x_ * resolution_m_;
+    empty.info.origin.position.y = grid_min_y_ * resolution_m_;
+  }
+  const size_t bytes = grid_empty_ ? 0 : grid_.size();
+  if (bytes > 0) std::memcpy(grid_wire_.reserve(bytes, 0), grid_.data(), bytes);
+  const ::ros::SerializedMessage fields = ::ros::serialization::serializeMessage(empty);
+  return PreserializedGrid{grid_wire_.finish(fields, 0, bytes)};
 }
 
 nav_msgs::OccupancyGrid MapOutputCache::projectedMap(const std::string& frame_id,

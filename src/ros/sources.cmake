@@ -8,6 +8,7 @@ set(FRAGG_ROS_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/block_markers.cpp
   ${CMAKE_CURRENT_LIST_DIR}/marker_wire.cpp
   ${CMAKE_CURRENT_LIST_DIR}/publish_buffers.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/wire_payload.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cell_colors.cpp
   ${CMAKE_CURRENT_LIST_DIR}/occupied_cloud.cpp
   ${CMAKE_CURRENT_LIST_DIR}/output_cache.cpp

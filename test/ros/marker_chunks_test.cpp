@@ -6,7 +6,8 @@
 // followed by the next increments shows the same. Also with hidden speckles and a height band.
 // Paced (pacedBlockMarkersWire, the server's paced_outputs): the changes are taken in once a
 // period and each call sends a share of their chunks; two periods after the last change the
-// subscribers (and one that joined in between) see what a full rebuild shows.
+// subscribers (and one that joined in between) see what a full rebuild shows; the taking-in
+// only lists the changed blocks, which are drawn when their chunk is sent.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -267,6 +268,50 @@ TEST(MarkerChunks, PacedSharesEqualAFullRebuildTwoPeriodsAfterTheLastChange) {
   style.hide_speckles = true;
   style.heights = {-0.45, 0.65};
   expectPacedReachesRebuild(style);
+}
+
+// Paced, the taking-in lists the changed blocks by chunk and draws none of them: each chunk's
+// blocks are drawn when it is sent (the work comes in the shares, not on one cloud), and a
+// chunk whose drawn cells did not change (a cell above the height band turned occupied) is not
+// sent at all.
+TEST(MarkerChunks, PacedTakingInListsAndTheSharesDraw) {
+  fragg::Map map(fragg::ros::test::cpuParams());
+  MarkerStyle style;
+  style.chunk_blocks = 1;
+  style.heights = {-0.45, 0.65};
+  MarkerLedger topic;
+  constexpr double kPeriodS = 1.0, kIntervalS = 0.125;  // exact in binary
+  const auto paced = [&](double now_s) {
+    return fragg::ros::toMarkerArray(
+        fragg::ros::pacedBlockMarkersWire(map, style, kStamp, now_s, kPeriodS, &topic));
+  };
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  fragg::ros::test::setCell(map, {200, 200, 0}, fragg::CellState::kOccupied);
+  EXPECT_TRUE(paced(0.0).markers.empty()) << "the taking-in sent chunks";
+  ASSERT_GT(topic.pendingChunks(), 1u);
+  EXPECT_EQ(topic.shownBlocks(), 0u) << "the taking-in drew blocks";
+  View view;
+  size_t sends = 0;
+  double now_s = kIntervalS;
+  for (; now_s < kPeriodS; now_s += kIntervalS) {
+    const MarkerArray share = paced(now_s);
+    sends += !share.markers.empty();
+    apply(map, share, &view);
+  }
+  EXPECT_EQ(topic.pendingChunks(), 0u);
+  EXPECT_GE(sends, 2u) << "not sent in shares";
+  MarkerLedger rebuilt;
+  View full;
+  apply(map, fragg::ros::allBlockMarkers(map, style, kStamp, &rebuilt), &full);
+  EXPECT_EQ(allDrawn(view), allDrawn(full));
+  EXPECT_EQ(topic.shownBlocks(), rebuilt.shownBlocks());
+  // Above the band, in the lone cell's block: the block is listed, draws the same, goes nowhere.
+  fragg::ros::test::setCell(map, {200, 200, 7}, fragg::CellState::kOccupied);
+  EXPECT_TRUE(paced(now_s).markers.empty());
+  EXPECT_EQ(topic.pendingChunks(), 1u);
+  for (now_s += kIntervalS; now_s < 2 * kPeriodS; now_s += kIntervalS)
+    EXPECT_TRUE(paced(now_s).markers.empty()) << "an unchanged chunk was sent";
+  EXPECT_EQ(topic.pendingChunks(), 0u);
 }
 
 TEST(MarkerChunks, ChunkKeysFloorNegativeBlocks) {

@@ -6,7 +6,9 @@
 // theirs can widen the projected map, from their cells elsewhere. Paced (advance(), the server's
 // paced_outputs): the changes listed at a publication are recomputed in shares over the next
 // period's clouds; two periods after the last change, or at once with update(), the outputs
-// equal a rebuild.
+// equal a rebuild. The messages a publisher sends, in roscpp's wire layout already (the cloud
+// gathered in shares between publications), are byte for byte what roscpp makes of the
+// cache's messages; a message roscpp holds is never written over.
 #include "fragg_map/ros/output_cache.h"
 
 #include <gtest/gtest.h>
@@ -23,6 +25,7 @@
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/occupied_cloud.h"
 #include "fragg_map/ros/projected_map.h"
+#include "fragg_map/ros/wire_payload.h"
 #include "map_fixtures.h"
 
 namespace fragg::ros {
@@ -65,6 +68,36 @@ void expectSameAsRebuild(const fragg::Map& map, const MapOutputCache& cache,
   EXPECT_EQ(differing, 0u);
 }
 
+/// The messages a publisher sends (occupiedCloudWire, projectedMapWire: already in roscpp's
+/// wire layout) are, byte for byte, what roscpp makes of occupiedCloud() and projectedMap().
+/// Takes the cache's current messages (the next cloud message is gathered afresh).
+void expectWireEqualsMessages(MapOutputCache* cache, const std::string& frame_id,
+                              const std::string& step) {
+  SCOPED_TRACE(step + ", wire");
+  const ::ros::Time stamp(9, 87);
+  const ::ros::SerializedMessage want_cloud =
+      ::ros::serialization::serializeMessage(cache->occupiedCloud(frame_id, stamp));
+  const ::ros::SerializedMessage want_grid =
+      ::ros::serialization::serializeMessage(cache->projectedMap(frame_id, stamp));
+  const PreserializedCloud cloud = cache->occupiedCloudWire(frame_id, stamp);
+  const PreserializedGrid grid = cache->projectedMapWire(frame_id, stamp);
+  // What roscpp sends: serializeMessage's bytes (for these types: the kept ones, no copy).
+  const ::ros::SerializedMessage got_cloud = ::ros::serialization::serializeMessage(cloud);
+  const ::ros::SerializedMessage got_grid = ::ros::serialization::serializeMessage(grid);
+  EXPECT_EQ(got_cloud.buf.get(), cloud.wire.buf.get()) << "the cloud was copied";
+  ASSERT_EQ(got_cloud.num_bytes, want_cloud.num_bytes);
+  EXPECT_EQ(std::memcmp(got_cloud.buf.get(), want_cloud.buf.get(), want_cloud.num_bytes), 0);
+  EXPECT_EQ(got_cloud.message_start, got_cloud.buf.get() + 4);
+  ASSERT_EQ(got_grid.num_bytes, want_grid.num_bytes);
+  EXPECT_EQ(std::memcmp(got_grid.buf.get(), want_grid.buf.get(), want_grid.num_bytes), 0);
+  // And a subscriber reads the same message back.
+  sensor_msgs::PointCloud2 read;
+  ::ros::serialization::deserializeMessage(got_cloud, read);
+  EXPECT_EQ(read.header.frame_id, frame_id);
+  EXPECT_EQ(read.width, cache->occupiedCells());
+  EXPECT_EQ(read.data.size(), size_t{read.width} * 12);
+}
+
 /// A scan of scattered points (isolated hits make speckles) and a wall, from `sensor`.
 fragg::PointCloud scatteredScan(std::mt19937* rng, int points) {
   std::uniform_real_distribution<float> u(-2.5f, 2.5f);
@@ -94,6 +127,7 @@ TEST_P(OutputCacheSequence, EqualsARebuildAfterEveryEdit) {
       EXPECT_FALSE(u.full) << step;
     }
     expectSameAsRebuild(map, cache, o, step);
+    expectWireEqualsMessages(&cache, "map", step);
   };
   check("empty map", false);
   std::vector<fragg::ScanId> ids;
@@ -414,11 +448,20 @@ TEST_P(OutputCachePaced, EqualsARebuildTwoPeriodsAfterTheLastChange) {
   EXPECT_TRUE(paced.advance(map, 0.0, kPeriodS, true).full);
   EXPECT_TRUE(caught_up.update(map).full);
   double now_s = kIntervalS, published_s = 0.0;
-  // As the server: a publication (the grid drawn, the changes listed) once a period.
+  // As the server: a publication (the grid drawn, the changes listed, the messages sent) once a
+  // period; the cloud message is gathered in shares once a period's queue is recomputed.
+  size_t gather_shares = 0;  // clouds between publications that gathered part of the cloud
   const auto advance = [&](double t_s) {
     const bool due = t_s - published_s >= kPeriodS;
     if (due) published_s = t_s;
-    return paced.advance(map, t_s, kPeriodS, due);
+    const OutputCacheUpdate u = paced.advance(map, t_s, kPeriodS, due);
+    if (due) {
+      expectWireEqualsMessages(&paced, "map", "publication at " + std::to_string(t_s) + " s");
+    } else if (u.pieces_gathered > 0) {
+      ++gather_shares;
+      EXPECT_EQ(u.blocks_queued, 0u) << "gathered while pieces were still to be recomputed";
+    }
+    return u;
   };
   size_t shares = 0;  // clouds that recomputed some blocks and left others queued
   for (int cloud = 0; cloud < 12; ++cloud, now_s += kIntervalS) {
@@ -438,6 +481,7 @@ TEST_P(OutputCachePaced, EqualsARebuildTwoPeriodsAfterTheLastChange) {
     }
   }
   EXPECT_GE(shares, 2u) << "the listed blocks were not spread over the clouds";
+  EXPECT_GE(gather_shares, 2u) << "the cloud message was not gathered between publications";
   // No more changes: two periods after the last one everything is in.
   const double last_change_s = now_s - kIntervalS;
   for (; now_s <= last_change_s + 2 * kPeriodS; now_s += kIntervalS) (void)advance(now_s);
@@ -459,6 +503,40 @@ TEST_P(OutputCachePaced, EqualsARebuildTwoPeriodsAfterTheLastChange) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Options, OutputCachePaced, ::testing::Values(0, 3));
+
+// A message handed to roscpp is never written again while roscpp holds it (a latched topic, a
+// subscriber's queue): the next one goes into another buffer; one roscpp let go of is reused.
+// A frame_id too long for the room kept in front of the payload still gives the right message.
+TEST(OutputCache, WireMessagesRoscppHoldsAreNotOverwritten) {
+  fragg::Map map(test::cpuParams(0.1));
+  MapOutputCache cache;
+  test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  (void)cache.update(map);
+  const sensor_msgs::PointCloud2 first = cache.occupiedCloud("map", ::ros::Time(1.0));
+  PreserializedCloud held = cache.occupiedCloudWire("map", ::ros::Time(1.0));
+  const std::vector<uint8_t> held_bytes(held.wire.buf.get(),
+                                        held.wire.buf.get() + held.wire.num_bytes);
+  // More cells, two more messages while the first is held.
+  for (int i = 0; i < 2; ++i) {
+    test::insertWall(map, Eigen::Vector3d(0.0, 1.0 + i, 0.2), 2.5);
+    (void)cache.update(map);
+    const PreserializedCloud next = cache.occupiedCloudWire("map", ::ros::Time(2.0 + i));
+    EXPECT_NE(next.wire.buf.get(), held.wire.buf.get());
+  }
+  EXPECT_TRUE(std::equal(held_bytes.begin(), held_bytes.end(), held.wire.buf.get()))
+      << "a held message was written over";
+  sensor_msgs::PointCloud2 read;
+  ::ros::serialization::deserializeMessage(held.wire, read);
+  EXPECT_EQ(read.data, first.data);
+  // One held, the next let go of at once: that one's buffer serves the one after.
+  held = cache.occupiedCloudWire("map", ::ros::Time(5.0));
+  const uint8_t* let_go = cache.occupiedCloudWire("map", ::ros::Time(6.0)).wire.buf.get();
+  EXPECT_NE(let_go, held.wire.buf.get());
+  EXPECT_EQ(cache.occupiedCloudWire("map", ::ros::Time(7.0)).wire.buf.get(), let_go)
+      << "a buffer nobody holds was not reused";
+  expectWireEqualsMessages(&cache, std::string(3000, 'f'), "a long frame_id");
+  expectWireEqualsMessages(&cache, "map", "after the long frame_id");
+}
 
 TEST(OutputCache, RefreshingOnOccupiedChangesOnlyIsRefused) {
   OutputCacheOptions o;

@@ -96,6 +96,13 @@ class MarkerLedger {
     /// when the chunk is drawn again and nothing else holds it.
     std::shared_ptr<WireMarker> wire;
     bool pending = false;  ///< changed since it was last sent (listed in pending_)
+    /// Blocks of the chunk listed as changed when the map's changes were taken in, drawn when
+    /// the chunk is sent (their cells as they are then): the taking-in lists keys only, so that
+    /// its cost does not come on one cloud (pacedBlockMarkersWire).
+    std::vector<fragg::BlockKey> listed;
+    /// Sent again even if no listed block's drawn cells changed: shown blocks left the map, or
+    /// colours changed (colored_map).
+    bool redraw = false;
   };
 
  private:
@@ -155,10 +162,12 @@ visualization_msgs::Marker blockMarker(const fragg::Map& map, const fragg::Block
 
 /// changedBlockMarkersWire at a pace, called after every cloud (`now_s`: seconds of a steady or
 /// sensor clock): the ledger takes the map's changes in once every `period_s` (the first call,
-/// then the first call a period after the last time; as changedBlockMarkersWire), and the chunks
-/// they changed are queued and sent in even shares over the calls of the next period (the
-/// interval measured between calls): each call sends what is left over the calls left, all of
-/// it by the time the next changes are taken in. So a changed chunk reaches the subscribers
+/// then the first call a period after the last time): the changed blocks are listed by chunk,
+/// and the chunks are queued and sent in even shares over the calls of the next period (the
+/// interval measured between calls), each chunk's listed blocks drawn when it is sent (their
+/// cells as they are then; a chunk whose drawn cells did not change is not sent): each call
+/// sends what is left over the calls left, all of it by the time the next changes are taken
+/// in. So a changed chunk reaches the subscribers
 /// within two periods of its change, in a rolling set spread over the clouds, and a period after
 /// the changes stop they see what a full rebuild shows. A late subscriber's snapshot
 /// (shownBlockMarkersWire) is the chunks as last sent, to which the queued ones still apply.

@@ -12,7 +12,11 @@
 // publication and recomputed in even shares over the clouds of the next period, so that the
 // work follows the clouds instead of coming as one backlog per publication; a block's change
 // reaches the outputs within two periods (listed within one, recomputed within the next), and
-// update() catches up at once. Not thread-safe: one owner, under the map's read lock.
+// update() catches up at once. The occupied cloud is also kept as the next publication's
+// message in roscpp's wire layout (occupiedCloudWire): paced, once a period's queue is
+// recomputed (by kRecomputedBy of the period), the following clouds gather the pieces into it in
+// shares, so that a publication neither gathers nor serialises the whole cloud. Not
+// thread-safe: one owner, under the map's read lock.
 #pragma once
 
 #include <nav_msgs/OccupancyGrid.h>
@@ -30,6 +34,7 @@
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
 #include "fragg_map/ros/height_band.h"
+#include "fragg_map/ros/wire_payload.h"
 #include "fragg_map/state_masks.h"
 
 namespace fragg::ros {
@@ -69,9 +74,12 @@ struct OutputCacheUpdate {
   size_t blocks_cells_read = 0;
   /// advance(): blocks left queued for later clouds (0 after update()).
   size_t blocks_queued = 0;
+  /// advance(): pieces gathered into the next publication's occupied cloud, and their bytes.
+  size_t pieces_gathered = 0, bytes_gathered = 0;
   /// Wall milliseconds of its stages: the blocks to refresh listed (change log, look-ups), the
-  /// pieces found or made and recomputed, the columns merged and the grid drawn.
-  double list_ms = 0.0, pieces_ms = 0.0, grid_ms = 0.0;
+  /// pieces found or made and recomputed, the columns merged and the grid drawn, the pieces
+  /// gathered into the next occupied cloud message.
+  double list_ms = 0.0, pieces_ms = 0.0, grid_ms = 0.0, gather_ms = 0.0;
 };
 
 class MapOutputCache {
@@ -89,7 +97,14 @@ class MapOutputCache {
   /// `period_s` old (the clouds' interval measured between calls), so the queue is empty by
   /// the next publication. The columns are merged either way, the grid's bounds kept current.
   /// `period_s` <= 0: as update(). A rebuild (view moved, first call) is done whole at once.
-  OutputCacheUpdate advance(const fragg::Map& map, double now_s, double period_s, bool with_grid);
+  /// The queue is recomputed by kRecomputedBy of the period; the clouds after it gather the
+  /// pieces into the next occupied cloud message in shares (what is left over the clouds left
+  /// until the next publication), unless `gather_cloud` is false (nobody wants the cloud).
+  OutputCacheUpdate advance(const fragg::Map& map, double now_s, double period_s, bool with_grid,
+                            bool gather_cloud = true);
+  /// Part of a period by which advance() recomputes what a publication listed; the rest of the
+  /// period gathers the occupied cloud.
+  static constexpr double kRecomputedBy = 0.8;
   /// Forgets everything: the next update rebuilds.
   void invalidate() { valid_ = false; }
   /// Blocks queued by advance() and not yet recomputed.
@@ -102,6 +117,15 @@ class MapOutputCache {
                                                 const ::ros::Time& stamp) const;
   /// The projected map of the last update (as projectedMap()).
   nav_msgs::OccupancyGrid projectedMap(const std::string& frame_id, const ::ros::Time& stamp) const;
+  /// occupiedCloud() as roscpp serialises it (what a publisher sends: serializeMessage hands
+  /// these bytes on), from the pieces gathered by advance() and what is left gathered now
+  /// (all of it after update()). The message owns its buffer; the cache gathers the next one
+  /// into another.
+  [[nodiscard]] PreserializedCloud occupiedCloudWire(const std::string& frame_id,
+                                                     const ::ros::Time& stamp);
+  /// projectedMap() as roscpp serialises it: the grid copied once into a kept buffer.
+  [[nodiscard]] PreserializedGrid projectedMapWire(const std::string& frame_id,
+                                                   const ::ros::Time& stamp);
   size_t occupiedCells() const { return occupied_cells_; }
   uint64_t revision() const { return revision_; }
 
@@ -159,7 +183,8 @@ class MapOutputCache {
                  const std::vector<Source>& sources, bool masks_suffice, OutputCacheUpdate* out);
   /// The common path of update() and advance(): `period_s` <= 0 recomputes everything listed
   /// and queued.
-  OutputCacheUpdate refresh(const fragg::Map& map, double now_s, double period_s, bool with_grid);
+  OutputCacheUpdate refresh(const fragg::Map& map, double now_s, double period_s, bool with_grid,
+                            bool gather_cloud);
 
   /// Brings `piece` (new: default-constructed) up to date with `source`'s block. With
   /// `masks_suffice` (the change log lists every block where a cell became observed: refreshOn
@@ -186,6 +211,10 @@ class MapOutputCache {
   /// since the last draw; without, only notes what is owed.
   void refreshGrid(bool all, bool draw);
   void drawColumn(const Column& col);
+  /// Gathers the next `pieces` of with_cells_ into the next cloud message (gathered_ on).
+  void gatherCloud(size_t pieces);
+  /// The pieces changed: the next cloud message is gathered from the start.
+  void regather() { gathered_ = 0, gathered_bytes_ = 0; }
 
   OutputCacheOptions options_;
   bool valid_ = false;
@@ -219,6 +248,11 @@ class MapOutputCache {
   int32_t grid_min_x_ = 0, grid_min_y_ = 0;
   int64_t grid_width_ = 0, grid_height_ = 0;
   std::vector<int8_t> grid_;
+  /// The next occupied cloud message's payload: with_cells_[0, gathered_) are in it, their
+  /// gathered_bytes_ written (the pieces have not changed since: any recompute starts over).
+  WirePayload cloud_wire_;
+  size_t gathered_ = 0, gathered_bytes_ = 0;
+  WirePayload grid_wire_;
 };
 
 }  // namespace fragg::ros

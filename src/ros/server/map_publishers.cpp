@@ -167,7 +167,7 @@ void MapPublishers::publishMapOutputs(const fragg::Map& map, const ::ros::Time& 
     // Paced: the cache takes its share of the changed blocks after every cloud (each within a
     // period of its change), and the messages go out when due, as the cache has them.
     const bool due = held_maps_.letThrough(now_s, stamp);
-    outputs_.advance(map, now_s, held_maps_.throttle().periodS(), due);
+    outputs_.advance(map, now_s, held_maps_.throttle().periodS(), due, cloud_wanted);
     if (!due) return;
     held_maps_.published(now_s);
     sendMapOutputs(stamp, cloud_wanted, grid_wanted);
@@ -185,12 +185,13 @@ void MapPublishers::publishMapOutputs(const fragg::Map& map, const ::ros::Time& 
 }
 
 void MapPublishers::sendMapOutputs(const ::ros::Time& stamp, bool cloud_wanted, bool grid_wanted) {
+  // Both in roscpp's wire layout already (wire_payload.h): publishing them copies nothing.
   if (cloud_wanted) {
-    const sensor_msgs::PointCloud2& cloud = outputs_.occupiedCloud(params_.frame_id, stamp);
+    const PreserializedCloud cloud = outputs_.occupiedCloudWire(params_.frame_id, stamp);
     if (wanted(occupied_cloud_pub_)) occupied_cloud_pub_.publish(cloud);
     if (wanted(centers_pub_)) centers_pub_.publish(cloud);
   }
-  if (grid_wanted) projected_map_pub_.publish(outputs_.projectedMap(params_.frame_id, stamp));
+  if (grid_wanted) projected_map_pub_.publish(outputs_.projectedMapWire(params_.frame_id, stamp));
 }
 
 void MapPublishers::flushPendingMaps(const ::ros::SteadyTimerEvent&) {

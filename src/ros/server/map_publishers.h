@@ -10,11 +10,12 @@
 // outputs the same way. With `paced_outputs` (the default) the work behind both is spread over
 // the clouds: after every cloud the marker topics send their share of the changed chunks (every
 // chunk within 1 / marker_rate of its change) and the output cache recomputes its share of the
-// changed blocks (the whole-map messages, when due, carry the cache as it is: each block within
-// 1 / map_rate of its change); unpaced, after a cloud that is not due nothing is done (the
-// ledgers and the cache catch up from the revision they last saw at the next update). Reset, load,
-// clear and corrections publish the whole-map outputs at once; frustum and ~stats go out after
-// every cloud.
+// changed blocks and then, once they are in, gathers the next occupied cloud message (the
+// whole-map messages, when due, carry the cache as it is: each block within two periods of its
+// change; both go to roscpp already serialised, wire_payload.h); unpaced, after a cloud that is not
+// due nothing is done (the ledgers and the cache catch up from the revision they last saw at the
+// next update). Reset, load, clear and corrections publish the whole-map outputs at once; frustum
+// and ~stats go out after every cloud.
 #pragma once
 
 #include <ros/node_handle.h>

@@ -29,7 +29,7 @@
 //   fragg_map_server_overhead --workloads DIR [--scans N] [--big-map FILE] [--big-scans K]
 //                             [--cloud-rate HZ] [--marker-rate HZ] [--map-rate HZ]
 //                             [--marker-chunk N] [--after-only] [--cells-always]
-//                             [--fresh-buffers] [--unpaced] [--flat-markers]
+//                             [--fresh-buffers] [--unpaced] [--flat-markers] [--worst N]
 //                             [--backend cpu|cuda]
 #include <ros/serialization.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -100,6 +100,8 @@ struct Times {
   size_t cells_read = 0;         ///< of those, blocks whose cells it read (the others: masks)
   fragg::ros::OutputCacheUpdate stages;  ///< the cache update's own account (wall times)
   double cache_update = 0;               ///< of `cloud`: MapOutputCache::update alone (after path)
+  size_t pending_chunks = 0;             ///< marker chunks queued after the cloud (paced)
+  size_t queued_blocks = 0;              ///< blocks the cache left queued after the cloud
   double total() const { return markers + cloud + grid + serialise; }
   /// One marker update: built and serialised.
   double markerUpdate() const { return markers + marker_serialise; }
@@ -161,8 +163,10 @@ class Outputs {
     faults = minorFaults();
     t0 = Clock::now();
     sensor_msgs::PointCloud2 rebuilt;
-    const sensor_msgs::PointCloud2* cloud = &rebuilt;  // the after path's is the cache's own
     nav_msgs::OccupancyGrid grid;
+    // The after path's messages as the server publishes them: in roscpp's wire layout already.
+    fragg::ros::PreserializedCloud cloud_wire;
+    fragg::ros::PreserializedGrid grid_wire;
     if (before_) {
       rebuilt = fragg::ros::occupiedCloud(map, "map", ros::Time());
       t.cloud = msSince(t0);
@@ -186,10 +190,10 @@ class Outputs {
       t.cells_read = u.blocks_cells_read;
       t.stages = u;
       t.cache_update = msSince(t0);
-      cloud = &cache_.occupiedCloud("map", ros::Time());
+      cloud_wire = cache_.occupiedCloudWire("map", ros::Time());
       t.cloud = msSince(t0);
       t0 = Clock::now();
-      grid = cache_.projectedMap("map", ros::Time());
+      grid_wire = cache_.projectedMapWire("map", ros::Time());
       t.grid = msSince(t0);
     }
     t.map_faults = minorFaults() - faults;
@@ -200,9 +204,12 @@ class Outputs {
     t.marker_faults = marker_faults + minorFaults() - faults;
     faults = minorFaults();
     t.bytes = t.marker_bytes;
-    if (before_ || due.maps) t.bytes += serialised(*cloud) + serialised(grid);
+    if (before_) t.bytes += serialised(rebuilt) + serialised(grid);
+    if (!before_ && due.maps) t.bytes += serialised(cloud_wire) + serialised(grid_wire);
     t.serialise = msSince(t0);
     t.map_faults += minorFaults() - faults;
+    t.pending_chunks = ledger_.pendingChunks();
+    t.queued_blocks = cache_.queuedBlocks();
     return t;
   }
   /// Blocks and chunks queued by the paced path (what the server's timers send once the clouds
@@ -287,6 +294,43 @@ void printAmortised(const Rates& rates, const std::vector<double>& convert_ms,
         (sum_convert + sum_markers + sum_maps + flush.markerUpdate() + flush.mapUpdate()) / n);
 }
 
+/// --worst N: the N costliest clouds of the after path (those that make its p99).
+size_t g_worst = 0;
+
+/// The `g_worst` costliest clouds of the after path, stage by stage: where a cloud's time goes.
+void printWorst(const std::vector<double>& total_ms, const std::vector<double>& convert_ms,
+                const std::vector<Times>& after) {
+  if (g_worst == 0 || total_ms.empty()) return;
+  std::vector<size_t> order(total_ms.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return total_ms[a] > total_ms[b]; });
+  std::printf(
+      "the %zu costliest clouds (CPU ms: total = convert + markers built + markers serialised + "
+      "whole-map outputs (cache update + messages) + their serialisation; the cache update's "
+      "stages in wall ms: list, pieces, columns and grid, gather; minor page faults of the markers "
+      "and of the whole-map outputs)\n",
+      std::min(g_worst, order.size()));
+  std::printf(
+      "%6s %8s %8s %8s %8s %8s %8s %8s %8s | %7s %7s %7s %7s | %8s %8s %7s %9s %8s %8s %7s %7s\n",
+      "cloud", "total", "convert", "mk_build", "mk_ser", "cache", "cloud_msg", "grid_msg",
+      "map_ser", "list", "pieces", "grid", "gather", "blocks", "of_cells", "gathered", "MB_gath",
+      "chunks_q", "blocks_q", "mk_flt", "map_flt");
+  for (size_t k = 0; k < std::min(g_worst, order.size()); ++k) {
+    const size_t i = order[k];
+    const Times& t = after[i];
+    std::printf(
+        "%6zu %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f | %7.2f %7.2f %7.2f %7.2f | %8zu "
+        "%8zu "
+        "%7zu %9.2f %8zu %8zu %7ld %7ld\n",
+        i + 1, total_ms[i], convert_ms[i], t.markers, t.marker_serialise, t.cache_update,
+        t.cloud - t.cache_update, t.grid, t.serialise - t.marker_serialise, t.stages.list_ms,
+        t.stages.pieces_ms, t.stages.grid_ms, t.stages.gather_ms, t.blocks_read, t.cells_read,
+        t.stages.pieces_gathered, t.stages.bytes_gathered / 1e6, t.pending_chunks, t.queued_blocks,
+        t.marker_faults, t.map_faults);
+  }
+}
+
 /// Occupied cells of the whole map (for the rows; untimed).
 size_t occupiedCells(const fragg::Map& map) {
   size_t occupied = 0;
@@ -368,6 +412,7 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
       "%.2f ms over %zu clouds\n",
       paced ? " (paced)" : "", percentile(total_after, 0.5), percentile(total_after, 0.99),
       percentile(total_after, 1.0), scans.size());
+  printWorst(total_after, converts, after_times);
   if (!after_only)
     std::printf("any:   median %.2f ms, max %.2f ms per cloud over %zu clouds\n",
                 percentile(total_any, 0.5), percentile(total_any, 1.0), scans.size());
@@ -437,6 +482,9 @@ int runMain(int argc, char** argv) {
   app.add_flag("--flat-markers", g_flat_markers,
                "markers in one colour without per-point colours (the server's height_map "
                "false: 24 bytes a cell instead of 40)");
+  app.add_option("--worst", g_worst,
+                 "print the N costliest clouds of the after path stage by stage (what makes its "
+                 "p99)");
   bool unpaced = false;
   app.add_flag("--unpaced", unpaced,
                "as the server with paced_outputs false: the throttled updates whole when due "
