@@ -156,6 +156,14 @@ class Map {
   // write-back cache), so these always see the whole map.
   /// Read-only view of the blocks, valid until the map next changes; lock-free lookups.
   BlockView blockView() const { return BlockView(hostBlocks()); }
+  /// The blocks as the host holds them now, without writing the device's changes back first
+  /// (blockView() does). The same as blockView() on a CPU map. On a CUDA map, blocks changed on
+  /// the device since the last write-back (blockView(), a save, an eviction) show their older
+  /// cells and masks, and blocks made there since are missing. For readers that took their keys
+  /// from a blockView() and accept cells that old (the server's paced outputs between their
+  /// take-ins: a write-back of every changed block at every cloud cost a CUDA map's markers
+  /// ~53 ms a cloud). Hold the map's read lock.
+  [[nodiscard]] BlockView hostBlockView() const;
   /// Calls fn(key, block) for every block, in unspecified order.
   void forEachBlock(const BlockVisitor& fn) const { blockView().forEach(fn); }
   /// Calls fn(key, block) for every block whose key lies in [lo, hi] (inclusive).

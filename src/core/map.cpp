@@ -588,6 +588,11 @@ const BlockMap& Map::hostBlocks() const {
   return blocks_;
 }
 
+BlockView Map::hostBlockView() const {
+  std::lock_guard<std::mutex> lock(*sync_mutex_);  // not while another reader writes back
+  return BlockView(blocks_);
+}
+
 const char* Map::backendName() const { return backend_->name(); }
 
 bool Map::masksChangedSince(uint64_t revision, std::vector<BlockKey>* keys,

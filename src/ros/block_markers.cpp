@@ -263,13 +263,16 @@ SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map& map, const MarkerS
   const int32_t chunk_blocks = ledger->chunk_blocks_;
   SerializedMarkerArray out;
   out.stamp = stamp;
-  const fragg::BlockView blocks = map.blockView();
   const uint64_t since = ledger->published_revision_;
   // Paced, the map's changes are taken in once a period (the first call, then a period after
   // the last time) and their chunks sent in even shares over the period's calls; unpaced, at
   // every call and all at once.
   const bool paced = period_s > 0.0;
   const bool note = !paced || !ledger->paced_ || now_s - ledger->last_note_s_ >= period_s - 1e-6;
+  // A take-in reads the whole map (a CUDA map's changes written back first); a share draws its
+  // chunks' listed blocks from the host's copy as it stands, so a CUDA map is written back once
+  // a period, not at every cloud (same cells on a CPU map).
+  const fragg::BlockView blocks = note ? map.blockView() : map.hostBlockView();
   // A call that takes the changes in sends what is left of the last ones (nothing, when the
   // shares kept up); the others their share: what is left over the calls left until it is a
   // period old.

@@ -323,10 +323,17 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
                                           bool with_grid, bool gather_cloud) {
   OutputCacheUpdate out;
   auto t0 = std::chrono::steady_clock::now();
-  const fragg::BlockView blocks = map.blockView();
   const uint64_t revision = map.revision();
   out.full = !valid_ || map.viewEpoch() != epoch_ || revision < revision_ ||
              map.resolution() != resolution_m_;
+  // Paced, the changes are listed at a publication (with_grid) only, and recomputed in even
+  // shares over the clouds of the next period.
+  const bool paced = period_s > 0.0 && !out.full;
+  const bool list = !paced || with_grid || !advanced_;
+  // A listing reads the whole map (a CUDA map's changes written back first); a share recomputes
+  // blocks listed then, from the host's copy as it stands: a CUDA map is written back once a
+  // period, not at every cloud (the same cells on a CPU map).
+  const fragg::BlockView blocks = list ? map.blockView() : map.hostBlockView();
   // The blocks to recompute, and those that left the map. With the change log (kMasks) a block
   // comes with its state masks (its cells are read only where the grid's bounds need them).
   const bool masks_suffice = !out.full && refreshOn(map.model()) == fragg::BlockChange::kMasks &&
@@ -346,10 +353,6 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
     seen_valid_ = false;
     regather();
   }
-  // Paced, the changes are listed at a publication (with_grid) only, and recomputed in even
-  // shares over the clouds of the next period.
-  const bool paced = period_s > 0.0 && !out.full;
-  const bool list = !paced || with_grid || !advanced_;
   // First what was queued and is due: at a listing all of it (what the shares left: nothing,
   // when they kept up), else this cloud's share: what is left over the clouds left until the
   // list is kRecomputedBy of a period old.

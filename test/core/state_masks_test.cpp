@@ -96,6 +96,23 @@ TEST(StateMasksTest, InsertionKeepsMasksCurrentAfterEveryScan) {
   }
 }
 
+// On a CPU map nothing waits for a write-back: the host's view (the server's paced output
+// shares read it) is blockView(), block for block and mask for mask.
+TEST(StateMasksTest, HostBlockViewOfACpuMapIsItsBlockView) {
+  Map map(keeping());
+  for (int i = 0; i < 3; ++i) map.insert(room(), poseAt(i), lidar());
+  const BlockView all = map.blockView();
+  const BlockView host = map.hostBlockView();
+  ASSERT_GT(all.size(), 0u);
+  ASSERT_EQ(host.size(), all.size());
+  size_t differ = 0;
+  all.forEach([&](const BlockKey& key, const Block& block) {
+    const Block* h = host.findBlock(key);
+    if (h != &block || !(*host.findMasks(key) == *all.findMasks(key))) ++differ;
+  });
+  EXPECT_EQ(differ, 0u);
+}
+
 TEST(StateMasksTest, RemovalAndCorrectionKeepMasksCurrent) {
   Map map(keeping());
   for (int i = 0; i < 4; ++i) map.insert(room(), poseAt(i), lidar());

@@ -134,6 +134,34 @@ TEST(StateMasksGpuTest, DriveBlockPerSlotApplyIsByteIdentical) {
   driveAndCompare(false);
 }
 
+// Map::hostBlockView (the server's paced output shares): on a CUDA map it writes nothing back,
+// so the device's changes since the last blockView() are not in it; after a blockView() it holds
+// the same blocks and masks as blockView().
+TEST(StateMasksGpuTest, HostBlockViewLagsTheDeviceUntilAWriteBack) {
+  REQUIRE_DEVICE();
+  const std::vector<Input> scans = outAndBack(3, 0.5);
+  Map gpu(paramsFor(Backend::kCuda, 0.05));
+  ASSERT_STREQ(gpu.backendName(), "cuda") << gpu.backendReason();
+  const SensorModel sensor = SensorModel::autoFromCloud(0.0, 30.0);
+  gpu.insert(scans[0].cloud, scans[0].T, sensor);
+  const size_t synced = gpu.blockView().size();  // written back
+  EXPECT_EQ(gpu.hostBlockView().size(), synced);
+  gpu.insert(scans[1].cloud, scans[1].T, sensor);
+  const size_t host_before = gpu.hostBlockView().size();
+  const BlockView all = gpu.blockView();
+  EXPECT_LE(host_before, all.size());
+  EXPECT_GT(all.size(), synced) << "the second scan made blocks";
+  const BlockView host = gpu.hostBlockView();
+  ASSERT_EQ(host.size(), all.size());
+  size_t differ = 0;
+  all.forEach([&](const BlockKey& key, const Block&) {
+    const BlockStateMasks* a = all.findMasks(key);
+    const BlockStateMasks* h = host.findMasks(key);
+    if (!a || !h || !(*a == *h)) ++differ;
+  });
+  EXPECT_EQ(differ, 0u);
+}
+
 TEST(StateMasksGpuTest, NamedEditsAreByteIdentical) {
   REQUIRE_DEVICE();
   const std::vector<Input> scans = outAndBack(3, 2.0);
