@@ -10,7 +10,9 @@
 
 namespace fragg::cuda {
 
-struct GainKernelArgs {
+/// What every gain kernel reads of a round: the map's view, the model, the round's viewpoints
+/// and the sensor's rays.
+struct GainRound {
   DeviceLayerView view;  ///< the map's blocks on the device
   OccupancyModel model;
   const double* origins_v;  ///< this round's viewpoints
@@ -18,8 +20,12 @@ struct GainKernelArgs {
   const double* sin_yaw;
   const double* rays;
   uint32_t rays_per_viewpoint;
-  uint32_t viewpoints;
+  uint32_t viewpoints;  ///< viewpoints * rays_per_viewpoint < 2^32
   double length_v;
+};
+
+/// The plain gain kernel's arguments (launchViewpointGains): every viewpoint's bitmap of one size.
+struct GainKernelArgs : GainRound {
   /// Viewpoint i's cell bitmap covers the cells box_lo[3i..3i+2] + [0, box_dims) (voxel keys):
   /// every cell its rays can enter (seenBoxes).
   const int32_t* box_lo;
@@ -48,16 +54,7 @@ struct alignas(16) PoolOwner {
 /// with each viewpoint's box of its own size and the seen cells kept densely (a bitmap a
 /// viewpoint) or by block (a directory a viewpoint over its box's blocks, block bitmaps from a
 /// pool).
-struct GainWalkArgs {
-  DeviceLayerView view;  ///< the map's blocks on the device
-  OccupancyModel model;
-  const double* origins_v;  ///< this round's viewpoints
-  const double* cos_yaw;
-  const double* sin_yaw;
-  const double* rays;
-  uint32_t rays_per_viewpoint;
-  uint32_t viewpoints;  ///< viewpoints * rays_per_viewpoint < 2^32
-  double length_v;
+struct GainWalkArgs : GainRound {
   /// Viewpoint i's box: the cells box_lo[3i..3i+2] + [0, box_dims[3i..3i+2]) (voxel keys),
   /// every cell its rays can enter (seenBoxes).
   const int32_t* box_lo;

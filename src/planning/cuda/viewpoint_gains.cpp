@@ -204,6 +204,18 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
     FRAGG_CUDA_CHECK(cudaMemGetInfo(&free_bytes, &total_bytes));
     budget = std::clamp<uint64_t>(free_bytes / 4, kSeenBudgetMinBytes, kSeenBudgetMaxBytes);
   }
+  // What every kernel reads of the round of viewpoints first .. first + m - 1.
+  const auto roundOf = [&](size_t first, size_t m) {
+    return cuda::GainRound{view,
+                           model,
+                           origins + 3 * first,
+                           cos_yaw + first,
+                           sin_yaw + first,
+                           rays,
+                           static_cast<uint32_t>(n_rays),
+                           static_cast<uint32_t>(m),
+                           batch.length_v};
+  };
   auto t_walk = t_start;
   const auto tablesDone = [&](size_t rounds) {
     if (!stats) return;
@@ -220,15 +232,7 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
     for (size_t first = 0; first < n; first += per_round) {
       const size_t m = std::min(per_round, n - first);
       FRAGG_CUDA_CHECK(cudaMemsetAsync(seen, 0, m * words * 8, stream));
-      cuda::GainKernelArgs args{view,
-                                model,
-                                origins + 3 * first,
-                                cos_yaw + first,
-                                sin_yaw + first,
-                                rays,
-                                static_cast<uint32_t>(n_rays),
-                                static_cast<uint32_t>(m),
-                                batch.length_v,
+      cuda::GainKernelArgs args{roundOf(first, m),
                                 box_lo + 3 * first,
                                 {boxes.dims[0], boxes.dims[1], boxes.dims[2]},
                                 words,
@@ -319,17 +323,7 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
   tablesDone(n_rounds);
   for (size_t r = 0; r < n_rounds; ++r) {
     const size_t first = starts[r], m = starts[r + 1] - first;
-    cuda::GainWalkArgs args{view,
-                            model,
-                            origins + 3 * first,
-                            cos_yaw + first,
-                            sin_yaw + first,
-                            rays,
-                            static_cast<uint32_t>(n_rays),
-                            static_cast<uint32_t>(m),
-                            batch.length_v,
-                            box_lo + 3 * first,
-                            box_dims + 3 * first};
+    cuda::GainWalkArgs args{roundOf(first, m), box_lo + 3 * first, box_dims + 3 * first};
     args.gains = gains + first;
     if (pooled) {
       FRAGG_CUDA_CHECK(cudaMemsetAsync(directory, 0, round_units[r] * sizeof(uint32_t), stream));
