@@ -227,24 +227,13 @@ __global__ void __launch_bounds__(kThreads)
 void launchApply(const SlotArrays& slots, const OccupancyModel& model, uint64_t revision,
                  uint32_t scan, bool remove, const DynamicApply& dynamic, ScanCounters* counters,
                  int grid, bool warp_per_slot, cudaStream_t stream) {
+  using Kernel =
+      void (*)(SlotArrays, OccupancyModel, uint64_t, uint32_t, bool, DynamicApply, ScanCounters*);
   const bool on = dynamic.void_bits != nullptr;
-  if (warp_per_slot) {
-    if (on)
-      applyWarpKernel<true>
-          <<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, dynamic, counters);
-    else
-      applyWarpKernel<false>
-          <<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, dynamic, counters);
-    FRAGG_CUDA_CHECK_LAUNCH("applyWarpKernel");
-    return;
-  }
-  if (on)
-    applyKernel<true>
-        <<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, dynamic, counters);
-  else
-    applyKernel<false>
-        <<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, dynamic, counters);
-  FRAGG_CUDA_CHECK_LAUNCH("applyKernel");
+  const Kernel kernel = warp_per_slot ? (on ? applyWarpKernel<true> : applyWarpKernel<false>)
+                                      : (on ? applyKernel<true> : applyKernel<false>);
+  kernel<<<grid, kThreads, 0, stream>>>(slots, model, revision, scan, remove, dynamic, counters);
+  FRAGG_CUDA_CHECK_LAUNCH("applyKernel / applyWarpKernel");
 }
 
 }  // namespace fragg::cuda

@@ -605,26 +605,15 @@ PreserializedCloud MapOutputCache::occupiedCloudWire(const std::string& frame_id
 
 PreserializedGrid MapOutputCache::projectedMapWire(const std::string& frame_id,
                                                    const ::ros::Time& stamp) {
-  nav_msgs::OccupancyGrid empty;
-  empty.header.frame_id = frame_id;
-  empty.header.stamp = stamp;
-  empty.info.map_load_time = stamp;
-  empty.info.resolution = static_cast<float>(resolution_m_);
-  empty.info.origin.orientation.w = 1.0;
-  if (!grid_empty_) {
-    empty.info.width = static_cast<uint32_t>(grid_width_);
-    empty.info.height = static_cast<uint32_t>(grid_height_);
-    empty.info.origin.position.x = grid_min_x_ * resolution_m_;
-    empty.info.origin.position.y = grid_min_y_ * resolution_m_;
-  }
+  const nav_msgs::OccupancyGrid empty = gridWithoutData(frame_id, stamp);
   const size_t bytes = grid_empty_ ? 0 : grid_.size();
   if (bytes > 0) std::memcpy(grid_wire_.reserve(bytes, 0), grid_.data(), bytes);
   const ::ros::SerializedMessage fields = ::ros::serialization::serializeMessage(empty);
   return PreserializedGrid{grid_wire_.finish(fields, 0, bytes)};
 }
 
-nav_msgs::OccupancyGrid MapOutputCache::projectedMap(const std::string& frame_id,
-                                                     const ::ros::Time& stamp) const {
+nav_msgs::OccupancyGrid MapOutputCache::gridWithoutData(const std::string& frame_id,
+                                                        const ::ros::Time& stamp) const {
   nav_msgs::OccupancyGrid grid;
   grid.header.frame_id = frame_id;
   grid.header.stamp = stamp;
@@ -636,8 +625,13 @@ nav_msgs::OccupancyGrid MapOutputCache::projectedMap(const std::string& frame_id
   grid.info.height = static_cast<uint32_t>(grid_height_);
   grid.info.origin.position.x = grid_min_x_ * resolution_m_;
   grid.info.origin.position.y = grid_min_y_ * resolution_m_;
-  grid.info.origin.position.z = 0.0;
-  grid.data = grid_;
+  return grid;
+}
+
+nav_msgs::OccupancyGrid MapOutputCache::projectedMap(const std::string& frame_id,
+                                                     const ::ros::Time& stamp) const {
+  nav_msgs::OccupancyGrid grid = gridWithoutData(frame_id, stamp);
+  if (!grid_empty_) grid.data = grid_;
   return grid;
 }
 

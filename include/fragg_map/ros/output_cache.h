@@ -130,6 +130,9 @@ class MapOutputCache {
   uint64_t revision() const { return revision_; }
 
  private:
+  /// projectedMap()'s header and info (size and origin from the last update), no cells.
+  nav_msgs::OccupancyGrid gridWithoutData(const std::string& frame_id,
+                                          const ::ros::Time& stamp) const;
   /// The change kind to list for `model` (options_.refresh_on, kMasks checked).
   fragg::BlockChange refreshOn(const fragg::OccupancyModel& model) const;
   HeightBand heights() const { return {options_.occupancy_min_z_m, options_.occupancy_max_z_m}; }
