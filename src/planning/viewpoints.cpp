@@ -187,13 +187,15 @@ const char* gainKernelName(GainKernel kernel) {
       return "pooled-queued";
     case GainKernel::kDeferred:
       return "deferred";
+    case GainKernel::kPooledDeferred:
+      return "pooled-deferred";
   }
   return "unknown";
 }
 
 bool gainKernelPooled(GainKernel kernel) {
   return kernel == GainKernel::kPooled || kernel == GainKernel::kPooledQueued ||
-         kernel == GainKernel::kDeferred;
+         gainKernelDeferred(kernel);
 }
 
 bool gainKernelQueued(GainKernel kernel) {
@@ -201,11 +203,16 @@ bool gainKernelQueued(GainKernel kernel) {
          kernel == GainKernel::kDeferred;
 }
 
+bool gainKernelDeferred(GainKernel kernel) {
+  return kernel == GainKernel::kDeferred || kernel == GainKernel::kPooledDeferred;
+}
+
 GainKernel gainKernelFromName(const std::string& name) {
   for (const GainKernel k : kGainKernels)
     if (name == gainKernelName(k)) return k;
   throw InvalidArgument(fmt::format(
-      "gain kernel must be plain, sized, pooled, queued, pooled-queued or deferred, got \"{}\"",
+      "gain kernel must be plain, sized, pooled, queued, pooled-queued, deferred or "
+      "pooled-deferred, got \"{}\"",
       name));
 }
 

@@ -176,8 +176,8 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
     c.expect_rounds = true;
     cases.push_back(c);
   }
-  for (const GainKernel k :
-       {GainKernel::kPooled, GainKernel::kPooledQueued, GainKernel::kDeferred}) {
+  for (const GainKernel k : {GainKernel::kPooled, GainKernel::kPooledQueued, GainKernel::kDeferred,
+                            GainKernel::kPooledDeferred}) {
     KernelCase c;
     c.device.kernel = k;
     c.device.pool_blocks = 64;

@@ -594,6 +594,11 @@ TEST(Viewpoints, GainKernelNames) {
   for (const GainKernel k : kGainKernels) EXPECT_EQ(gainKernelFromName(gainKernelName(k)), k);
   EXPECT_STREQ(gainKernelName(GainKernel::kPooledQueued), "pooled-queued");
   EXPECT_TRUE(gainKernelPooled(GainKernel::kDeferred) && gainKernelQueued(GainKernel::kDeferred));
+  EXPECT_TRUE(gainKernelPooled(GainKernel::kPooledDeferred) &&
+              gainKernelDeferred(GainKernel::kPooledDeferred));
+  EXPECT_FALSE(gainKernelQueued(GainKernel::kPooledDeferred) ||
+               gainKernelDeferred(GainKernel::kPooled));
+  EXPECT_STREQ(gainKernelName(GainKernel::kPooledDeferred), "pooled-deferred");
   EXPECT_FALSE(gainKernelPooled(GainKernel::kQueued) || gainKernelQueued(GainKernel::kPooled));
   EXPECT_FALSE(gainKernelPooled(GainKernel::kPlain) || gainKernelQueued(GainKernel::kPlain));
   EXPECT_EQ(gainKernelFromName("plain"), GainKernel::kPlain);

@@ -61,20 +61,27 @@ enum class GainKernel {
   /// cell read while walking); a second kernel sums the entropy of the cells set in each
   /// taken pool bitmap into its viewpoint's gain.
   kDeferred,
+  /// kDeferred without the queue: kPooled's one thread a ray, setting seen bits without
+  /// waiting (the atomics' latency off the walk), then the same sum pass.
+  kPooledDeferred,
 };
 
 /// Whether `kernel` keeps seen cells in block bitmaps from a pool (kPooled, kPooledQueued,
-/// kDeferred).
+/// kDeferred, kPooledDeferred).
 [[nodiscard]] bool gainKernelPooled(GainKernel kernel);
 /// Whether `kernel` hands rays out from a queue (kQueued, kPooledQueued, kDeferred).
 [[nodiscard]] bool gainKernelQueued(GainKernel kernel);
+/// Whether `kernel` sets seen bits without reading them and sums gains in a second pass
+/// (kDeferred, kPooledDeferred).
+[[nodiscard]] bool gainKernelDeferred(GainKernel kernel);
 
 /// Every GainKernel, kPlain first.
-inline constexpr GainKernel kGainKernels[] = {GainKernel::kPlain,        GainKernel::kSized,
-                                              GainKernel::kPooled,       GainKernel::kQueued,
-                                              GainKernel::kPooledQueued, GainKernel::kDeferred};
+inline constexpr GainKernel kGainKernels[] = {
+    GainKernel::kPlain,        GainKernel::kSized,    GainKernel::kPooled,
+    GainKernel::kQueued,       GainKernel::kPooledQueued, GainKernel::kDeferred,
+    GainKernel::kPooledDeferred};
 
-/// "plain", "sized", "pooled", "queued", "pooled-queued" or "deferred".
+/// "plain", "sized", "pooled", "queued", "pooled-queued", "deferred" or "pooled-deferred".
 [[nodiscard]] const char* gainKernelName(GainKernel kernel);
 /// The kernel named `name` (gainKernelName's names); InvalidArgument for another name.
 [[nodiscard]] GainKernel gainKernelFromName(const std::string& name);

@@ -255,8 +255,8 @@ __device__ bool stepRay(const GainWalkArgs& a, RayWalk& r) {
   return true;
 }
 
-/// One thread a ray (sized, pooled): the plain kernel's shape.
-template <bool kPooled>
+/// One thread a ray (sized, pooled, pooled-deferred): the plain kernel's shape.
+template <bool kPooled, bool kDeferred>
 __global__ void __launch_bounds__(kWalkThreads, kWalkBlocksPerSm) gainWalkKernel(GainWalkArgs a) {
   const uint64_t idx = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
   const uint64_t total = uint64_t(a.viewpoints) * a.rays_per_viewpoint;
@@ -265,7 +265,7 @@ __global__ void __launch_bounds__(kWalkThreads, kWalkBlocksPerSm) gainWalkKernel
   r.vp = 0;
   if (idx < total) {
     startRay<kPooled>(a, idx, r);
-    while (stepRay<kPooled>(a, r)) {
+    while (stepRay<kPooled, kDeferred>(a, r)) {
     }
   }
   // Rays of one viewpoint are consecutive: sum within the warp where all lanes share it.
@@ -403,10 +403,12 @@ void launchGainWalk(const GainWalkArgs& args, bool pooled, bool queued, bool def
         cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernel, kWalkThreads, 0));
     grid = std::min<uint64_t>(grid, uint64_t(sms) * uint64_t(std::max(1, per_sm)));
     kernel<<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
+  } else if (deferred) {  // deferred implies pooled
+    gainWalkKernel<true, true><<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
   } else if (pooled) {
-    gainWalkKernel<true><<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
+    gainWalkKernel<true, false><<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
   } else {
-    gainWalkKernel<false><<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
+    gainWalkKernel<false, false><<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
   }
   FRAGG_CUDA_CHECK(cudaGetLastError());
   if (deferred) {

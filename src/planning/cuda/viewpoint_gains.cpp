@@ -256,7 +256,7 @@ void viewpointGainsOnDevice(const DeviceLayerView& view, DeviceScratch& scratch,
   // start.
   const bool pooled = gainKernelPooled(options.kernel);
   const bool queued = gainKernelQueued(options.kernel);
-  const bool deferred = options.kernel == GainKernel::kDeferred;
+  const bool deferred = gainKernelDeferred(options.kernel);
   int32_t* box_dims = scratch.device<int32_t>(kBoxDims, 3 * n);
   cuda::copyToDevice(box_dims, boxes.own_dims.data(), 3 * n, stream);
   std::vector<uint64_t> sizes(n);  // words (dense) or directory entries (pooled)

@@ -8,7 +8,7 @@
 //   fragg_map_frontier_bench (--workloads DIR | --map MAP.fgm) [--max-scans 100]
 //       [--resolution 0.05] [--max-range 30] [--backend cpu|cuda|auto] [--viewpoints 1000]
 //       [--threads N] [--json FILE] [--lidar-query K --box X0 Y0 Z0 X1 Y1 Z1]
-//       [--gain-kernel plain|sized|pooled|queued|pooled-queued|deferred|all] [--gain-repeats 5]
+//       [--gain-kernel plain|sized|pooled|queued|pooled-queued|deferred|pooled-deferred|all] [--gain-repeats 5]
 //       [--gain-pool-blocks N] [--gain-refill-lanes 4]
 // --gain-kernel picks the CUDA gain kernel (planning::GainKernel); `all` times the plain kernel
 // as usual, then every kernel alternated in this process, --gain-repeats rounds, each kernel's
@@ -407,7 +407,8 @@ int main(int argc, char** argv) {
   app.add_option("--json", o.json_path, "Write the figures as JSON");
   app.add_option(
          "--gain-kernel", o.gain_kernel,
-         "CUDA gain kernel: plain | sized | pooled | queued | pooled-queued | deferred, or all "
+         "CUDA gain kernel: plain | sized | pooled | queued | pooled-queued | deferred | "
+         "pooled-deferred, or all "
          "(every kernel alternated, after the plain kernel's figures)")
       ->capture_default_str();
   app.add_option("--gain-repeats", o.gain_repeats, "Rounds of the alternated kernels (all)")
