@@ -107,7 +107,13 @@ constexpr unsigned kFullWarp = 0xffffffffu;
 constexpr int kQueueBurst = 8;
 constexpr int kWalkThreads = 128;
 /// Blocks an SM should hold: caps the walks at 64 registers (the plain kernel uses 72: 7 blocks).
+/// FRAGG_GAIN_WALK_BLOCKS_PER_SM (a compile definition) overrides it, to time the walks at
+/// other register caps (10: 48 registers, 12: 40).
+#ifdef FRAGG_GAIN_WALK_BLOCKS_PER_SM
+constexpr int kWalkBlocksPerSm = FRAGG_GAIN_WALK_BLOCKS_PER_SM;
+#else
 constexpr int kWalkBlocksPerSm = 8;
+#endif
 
 /// One ray's walk in a sized, pooled or queued kernel: the DDA, the current block's slot and
 /// the cell's z slice of its masks (as the plain kernel keeps them), and where its seen cells
