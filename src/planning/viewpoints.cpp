@@ -210,10 +210,10 @@ bool gainKernelDeferred(GainKernel kernel) {
 GainKernel gainKernelFromName(const std::string& name) {
   for (const GainKernel k : kGainKernels)
     if (name == gainKernelName(k)) return k;
-  throw InvalidArgument(fmt::format(
-      "gain kernel must be plain, sized, pooled, queued, pooled-queued, deferred or "
-      "pooled-deferred, got \"{}\"",
-      name));
+  throw InvalidArgument(
+      fmt::format("gain kernel must be plain, sized, pooled, queued, pooled-queued, deferred or "
+                  "pooled-deferred, got \"{}\"",
+                  name));
 }
 
 void ViewpointOptions::validate() const {

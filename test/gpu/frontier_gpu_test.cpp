@@ -177,7 +177,7 @@ TEST(FrontierGpu, CudaTrackerEqualsCpuOverADrive) {
     cases.push_back(c);
   }
   for (const GainKernel k : {GainKernel::kPooled, GainKernel::kPooledQueued, GainKernel::kDeferred,
-                            GainKernel::kPooledDeferred}) {
+                             GainKernel::kPooledDeferred}) {
     KernelCase c;
     c.device.kernel = k;
     c.device.pool_blocks = 64;

@@ -76,10 +76,10 @@ enum class GainKernel {
 [[nodiscard]] bool gainKernelDeferred(GainKernel kernel);
 
 /// Every GainKernel, kPlain first.
-inline constexpr GainKernel kGainKernels[] = {
-    GainKernel::kPlain,        GainKernel::kSized,    GainKernel::kPooled,
-    GainKernel::kQueued,       GainKernel::kPooledQueued, GainKernel::kDeferred,
-    GainKernel::kPooledDeferred};
+inline constexpr GainKernel kGainKernels[] = {GainKernel::kPlain,         GainKernel::kSized,
+                                              GainKernel::kPooled,        GainKernel::kQueued,
+                                              GainKernel::kPooledQueued,  GainKernel::kDeferred,
+                                              GainKernel::kPooledDeferred};
 
 /// "plain", "sized", "pooled", "queued", "pooled-queued", "deferred" or "pooled-deferred".
 [[nodiscard]] const char* gainKernelName(GainKernel kernel);

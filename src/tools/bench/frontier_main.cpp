@@ -8,7 +8,8 @@
 //   fragg_map_frontier_bench (--workloads DIR | --map MAP.fgm) [--max-scans 100]
 //       [--resolution 0.05] [--max-range 30] [--backend cpu|cuda|auto] [--viewpoints 1000]
 //       [--threads N] [--json FILE] [--lidar-query K --box X0 Y0 Z0 X1 Y1 Z1]
-//       [--gain-kernel plain|sized|pooled|queued|pooled-queued|deferred|pooled-deferred|all] [--gain-repeats 5]
+//       [--gain-kernel plain|sized|pooled|queued|pooled-queued|deferred|pooled-deferred|all]
+//       [--gain-repeats 5]
 //       [--gain-pool-blocks N] [--gain-refill-lanes 4]
 // --gain-kernel picks the CUDA gain kernel (planning::GainKernel); `all` times the plain kernel
 // as usual, then every kernel alternated in this process, --gain-repeats rounds, each kernel's
@@ -405,11 +406,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({1, 2, 4, 8}));
   app.add_option("--box", o.box, "The LiDAR query's box X0 Y0 Z0 X1 Y1 Z1 (m)")->expected(6);
   app.add_option("--json", o.json_path, "Write the figures as JSON");
-  app.add_option(
-         "--gain-kernel", o.gain_kernel,
-         "CUDA gain kernel: plain | sized | pooled | queued | pooled-queued | deferred | "
-         "pooled-deferred, or all "
-         "(every kernel alternated, after the plain kernel's figures)")
+  app.add_option("--gain-kernel", o.gain_kernel,
+                 "CUDA gain kernel: plain | sized | pooled | queued | pooled-queued | deferred | "
+                 "pooled-deferred, or all "
+                 "(every kernel alternated, after the plain kernel's figures)")
       ->capture_default_str();
   app.add_option("--gain-repeats", o.gain_repeats, "Rounds of the alternated kernels (all)")
       ->capture_default_str()
