@@ -8,7 +8,7 @@
 #           "pooled-deferred sized pooled plain"), each in its own process, twice
 #   tests   the staged gpu test programs (fragg_gpu_*), each with a 120 s limit
 #   memcheck  compute-sanitizer memcheck on a short gain run of each GAIN_KERNELS kernel
-# W1 is generated first (scripts/make_workloads.sh with the staged simulator, ~12 s). Logs go
+# W1 is generated first (scripts/make_workloads.sh with the staged simulator). Logs go
 # to $OUT (the device tool brings them back).
 # Usage: bash scripts/device_prebuilt.sh [insert] [gains] [tests] [memcheck]
 set -uo pipefail

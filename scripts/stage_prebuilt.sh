@@ -74,7 +74,8 @@ if [ -n "$base" ]; then
   cp "$build/base/bin/fragg_map_bench" "$dest/base/"
   echo "$base_commit" >"$dest/base/COMMIT"
 fi
-strip "$dest"/head/* "$dest"/base/fragg_map_bench 2>/dev/null || strip "$dest"/head/*
+strip "$dest"/head/*
+if [ -n "$base" ]; then strip "$dest/base/fragg_map_bench"; fi
 cp -a /lib/x86_64-linux-gnu/libfmt.so.9* "$dest/lib/"
 git -C "$top" rev-parse HEAD >"$dest/head/COMMIT"
 git -C "$top" diff --quiet || echo "(with uncommitted changes)" >>"$dest/head/COMMIT"

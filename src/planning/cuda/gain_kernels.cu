@@ -108,7 +108,8 @@ constexpr int kQueueBurst = 8;
 constexpr int kWalkThreads = 128;
 /// Blocks an SM should hold: caps the walks at 64 registers (the plain kernel uses 72: 7 blocks).
 /// FRAGG_GAIN_WALK_BLOCKS_PER_SM (a compile definition) overrides it, to time the walks at
-/// other register caps (10: 48 registers, 12: 40).
+/// other register caps (ptxas -v, nvcc 13, sm_90: 10 gives 48 registers with 20-98 bytes of
+/// spill stores a kernel, pooled-deferred the least; 12 gives 40 with 60-206).
 #ifdef FRAGG_GAIN_WALK_BLOCKS_PER_SM
 constexpr int kWalkBlocksPerSm = FRAGG_GAIN_WALK_BLOCKS_PER_SM;
 #else
@@ -398,24 +399,23 @@ void launchGainWalk(const GainWalkArgs& args, bool pooled, bool queued, bool def
   FRAGG_CUDA_CHECK(cudaGetDevice(&device));
   FRAGG_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
   sms = std::max(1, sms);
+  // deferred implies pooled.
+  using Kernel = void (*)(GainWalkArgs);
+  const Kernel kernel = queued ? (deferred ? gainQueueKernel<true, true>
+                                  : pooled ? gainQueueKernel<true, false>
+                                           : gainQueueKernel<false, false>)
+                               : (deferred ? gainWalkKernel<true, true>
+                                  : pooled ? gainWalkKernel<true, false>
+                                           : gainWalkKernel<false, false>);
   if (queued) {
     // As many blocks as the device runs at once (no more: a later block would start only when
     // an earlier one has drained the queue).
-    const auto kernel = deferred ? gainQueueKernel<true, true>  // deferred implies pooled
-                        : pooled ? gainQueueKernel<true, false>
-                                 : gainQueueKernel<false, false>;
     int per_sm = 0;
     FRAGG_CUDA_CHECK(
         cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernel, kWalkThreads, 0));
     grid = std::min<uint64_t>(grid, uint64_t(sms) * uint64_t(std::max(1, per_sm)));
-    kernel<<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
-  } else if (deferred) {  // deferred implies pooled
-    gainWalkKernel<true, true><<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
-  } else if (pooled) {
-    gainWalkKernel<true, false><<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
-  } else {
-    gainWalkKernel<false, false><<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
   }
+  kernel<<<static_cast<unsigned>(grid), kWalkThreads, 0, stream>>>(args);
   FRAGG_CUDA_CHECK(cudaGetLastError());
   if (deferred) {
     poolGainSumKernel<<<static_cast<unsigned>(4 * sms), kSumThreads, 0, stream>>>(args);
