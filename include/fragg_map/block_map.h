@@ -114,6 +114,13 @@ class BlockMap {
     return chunks_[i / kBlocksPerChunk][i % kBlocksPerChunk];
   }
   BlockMeta& meta(BlockIndex i) { return meta_[i]; }
+  /// Slots of the per-block arrays, in use or free: every block's index is below it.
+  [[nodiscard]] size_t slotCount() const { return meta_.size(); }
+  /// Whether slot `i` (< slotCount()) holds a block: an erased slot's metadata keeps
+  /// kFreedSlotKey (and no stamps) until findOrCreate hands it to another block.
+  [[nodiscard]] bool liveAt(BlockIndex i) const { return meta_[i].key != kFreedSlotKey; }
+  /// The key of free slots' metadata: no block has it (block keys are voxel keys >> 3).
+  static constexpr BlockKey kFreedSlotKey{INT32_MIN, INT32_MIN, INT32_MIN};
   const BlockMeta& meta(BlockIndex i) const { return meta_[i]; }
   /// The block's cell-state masks (state_masks.h). A new block's are all unknown; whoever
   /// writes cells keeps them equal to stateMasksOf(block(i), the map's model).
@@ -170,6 +177,8 @@ class BlockMap {
   size_t releaseFreePages();
 
  private:
+  /// Puts slot `i` on the free list, its metadata marked free (kFreedSlotKey, no stamps).
+  void freeSlot(BlockIndex i);
   struct SuperKeyHash {
     size_t operator()(const BlockKey& k) const noexcept { return BlockKeyHash()(k); }
   };

@@ -68,6 +68,34 @@ class BlockView {
   std::vector<BlockRef> changedRefsSince(uint64_t revision,
                                          BlockChange what = BlockChange::kAny) const;
   BlockStamps stamps(const BlockKey& key) const;
+
+  // Slots: the blocks' places in the map's storage (BlockIndex). A block keeps its slot until
+  // it leaves the map; a later block may take the slot over (compare keyAt with the key kept).
+  // Reading by slot costs no look-up, and ascending slots read the storage in order: readers
+  // that keep per-block records across updates index them by slot.
+  /// Slots in use or free: every block's slot is below it.
+  [[nodiscard]] size_t slotCount() const { return blocks_->slotCount(); }
+  /// The slot of block `key`, kNoBlock when it does not exist.
+  [[nodiscard]] BlockIndex slotOf(const BlockKey& key) const { return blocks_->find(key); }
+  /// Whether `slot` (< slotCount()) holds the block `key` now.
+  [[nodiscard]] bool holds(BlockIndex slot, const BlockKey& key) const {
+    return blocks_->meta(slot).key == key && blocks_->liveAt(slot);
+  }
+  /// The key of the block in `slot` (< slotCount()); BlockMap::kFreedSlotKey for a free slot.
+  [[nodiscard]] const BlockKey& keyAt(BlockIndex slot) const { return blocks_->meta(slot).key; }
+  /// The cells of the block in `slot` (a live slot).
+  [[nodiscard]] const Block& blockAt(BlockIndex slot) const { return blocks_->block(slot); }
+  /// The state masks of the block in `slot` (a live slot).
+  [[nodiscard]] const BlockStateMasks& masksAt(BlockIndex slot) const {
+    return blocks_->masks(slot);
+  }
+  /// Slots of every block, ascending.
+  [[nodiscard]] std::vector<BlockIndex> allSlots() const;
+  /// Slots of the blocks changed (`what`) after map revision `revision`, ascending: from the
+  /// change log for kMasks while it reaches back, else from one walk over the blocks' stamps
+  /// in storage order (sequential reads, no look-up per block).
+  [[nodiscard]] std::vector<BlockIndex> changedSlotsSince(
+      uint64_t revision, BlockChange what = BlockChange::kAny) const;
   /// Exact bounds of observed cells.
   KeyBounds observedBounds() const { return blocks_->observedBounds(); }
 

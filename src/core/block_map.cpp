@@ -138,7 +138,7 @@ void BlockMap::erase(const BlockKey& key) {
     v.erase(std::remove(v.begin(), v.end(), i), v.end());
     if (v.empty()) super_.erase(sit);
   }
-  free_.push_back(i);
+  freeSlot(i);
 }
 
 void BlockMap::orderFreeSlots() {
@@ -156,7 +156,7 @@ void BlockMap::erase(const std::vector<BlockKey>& keys) {
     index_.erase(key);
     gone[i] = 1;
     lists.push_back(superKeyOf(key));
-    free_.push_back(i);
+    freeSlot(i);
   }
   std::sort(lists.begin(), lists.end(), [](const BlockKey& a, const BlockKey& b) {
     return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
@@ -212,7 +212,15 @@ void BlockMap::clear() {
   index_.clear();
   super_.clear();
   free_.clear();
-  for (BlockIndex i = static_cast<BlockIndex>(meta_.size()); i-- > 0;) free_.push_back(i);
+  for (BlockIndex i = static_cast<BlockIndex>(meta_.size()); i-- > 0;) freeSlot(i);
+}
+
+void BlockMap::freeSlot(BlockIndex i) {
+  // No key and no stamps: walks over the slots (BlockView::changedSlotsSince) skip it.
+  BlockMeta& m = meta_[i];
+  m.key = kFreedSlotKey;
+  m.changed_at = m.occupied_at = m.state_at = m.masks_at = 0;
+  free_.push_back(i);
 }
 
 void BlockMap::forEachInBox(const BlockKey& lo, const BlockKey& hi,

@@ -1,5 +1,7 @@
 #include "fragg_map/block_view.h"
 
+#include <algorithm>
+
 namespace fragg {
 
 void BlockView::forEach(const BlockVisitor& fn) const {
@@ -48,30 +50,52 @@ uint64_t stampOf(const BlockMeta& m, BlockChange what) {
   }
   return m.changed_at;
 }
+
+/// Slots whose `what` stamp is after `revision`, ascending: the metadata read in storage order
+/// (free slots carry no stamps), where a walk through the index reads it at random.
+std::vector<BlockIndex> stampedAfter(const BlockMap& blocks, uint64_t revision, BlockChange what) {
+  std::vector<BlockIndex> out;
+  const BlockIndex n = static_cast<BlockIndex>(blocks.slotCount());
+  for (BlockIndex i = 0; i < n; ++i)
+    if (stampOf(blocks.meta(i), what) > revision) out.push_back(i);
+  return out;
+}
 }  // namespace
+
+std::vector<BlockIndex> BlockView::allSlots() const {
+  std::vector<BlockIndex> out;
+  out.reserve(blocks_->size());
+  const BlockIndex n = static_cast<BlockIndex>(blocks_->slotCount());
+  for (BlockIndex i = 0; i < n; ++i)
+    if (blocks_->liveAt(i)) out.push_back(i);
+  return out;
+}
+
+std::vector<BlockIndex> BlockView::changedSlotsSince(uint64_t revision, BlockChange what) const {
+  std::vector<BlockIndex> out;
+  if (what == BlockChange::kMasks && blocks_->masksChangedSince(revision, &out)) {
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+  return stampedAfter(*blocks_, revision, what);
+}
 
 std::vector<BlockKey> BlockView::changedSince(uint64_t revision, BlockChange what) const {
   std::vector<BlockKey> out;
   if (what == BlockChange::kMasks && blocks_->masksChangedSince(revision, &out)) return out;
-  blocks_->forEach([&](BlockIndex i) {
-    const BlockMeta& m = blocks_->meta(i);
-    if (stampOf(m, what) > revision) out.push_back(m.key);
-  });
+  const std::vector<BlockIndex> slots = stampedAfter(*blocks_, revision, what);
+  out.reserve(slots.size());
+  for (const BlockIndex i : slots) out.push_back(blocks_->meta(i).key);
   return out;
 }
 
 std::vector<BlockRef> BlockView::changedRefsSince(uint64_t revision, BlockChange what) const {
   std::vector<BlockRef> out;
-  std::vector<BlockKey> keys;
-  if (what == BlockChange::kMasks && blocks_->masksChangedSince(revision, &keys)) {
-    out.reserve(keys.size());
-    for (const BlockKey& key : keys) out.push_back({key, blocks_->findBlock(key)});
-    return out;
-  }
-  blocks_->forEach([&](BlockIndex i) {
-    const BlockMeta& m = blocks_->meta(i);
-    if (stampOf(m, what) > revision) out.push_back({m.key, &blocks_->block(i)});
-  });
+  std::vector<BlockIndex> slots;
+  if (what != BlockChange::kMasks || !blocks_->masksChangedSince(revision, &slots))
+    slots = stampedAfter(*blocks_, revision, what);
+  out.reserve(slots.size());
+  for (const BlockIndex i : slots) out.push_back({blocks_->meta(i).key, &blocks_->block(i)});
   return out;
 }
 

@@ -61,11 +61,8 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
   const fragg::BlockKey& key = source.key;
   PieceDelta delta;
   const bool from_masks = source.masks && masks_suffice && boundsSettled(key, *piece);
-  const fragg::Block* block = source.block;
-  if (!from_masks) {
-    if (!block) block = blocks.findBlock(key);  // listed with its masks: it exists
-    delta.cells_read = true;
-  }
+  const fragg::Block* block = from_masks ? nullptr : &blocks.blockAt(source.slot);
+  delta.cells_read = !from_masks;
   const fragg::OccupancyModel& model = map.model();
   const int16_t above = model.occupied_above_fx, below = model.free_below_fx;
   const uint8_t shown_layers = heights().blockLayers(key.z, map.resolution());
@@ -189,9 +186,14 @@ void MapOutputCache::markDirty(uint32_t c) {
   dirty_.push_back(c);
 }
 
-uint32_t MapOutputCache::pieceFor(const fragg::BlockKey& key) {
-  const uint32_t found = piece_index_.find(key);
-  if (found != fragg::BlockKeyTable::kNone) return found;
+uint32_t MapOutputCache::pieceFor(const Source& source) {
+  const uint32_t i = source.slot;
+  const fragg::BlockKey& key = source.key;
+  if (i >= pieces_.size()) pieces_.resize(i + 1);
+  if (pieces_[i].column != kNoColumn) {
+    if (pieces_[i].key == key) return i;
+    dropPiece(i);  // the slot's block left the map (paged out) and another took the slot
+  }
   const fragg::BlockKey column_key{key.x, key.y, 0};
   uint32_t c = column_index_.find(column_key);
   if (c == fragg::BlockKeyTable::kNone) {
@@ -201,46 +203,23 @@ uint32_t MapOutputCache::pieceFor(const fragg::BlockKey& key) {
     columns_.back().y = key.y;
     column_index_.insert(column_key, c);
   }
-  const uint32_t i = static_cast<uint32_t>(pieces_.size());
-  pieces_.emplace_back();
-  pieces_.back().key = key;
-  pieces_.back().column = c;
-  piece_index_.insert(key, i);
+  pieces_[i].key = key;
+  pieces_[i].column = c;
   columns_[c].pieces.push_back(i);
   markDirty(c);  // a new piece's column is always merged
   return i;
 }
 
-void MapOutputCache::dropPiece(const fragg::BlockKey& k) {
-  const uint32_t i = piece_index_.find(k);
-  if (i == fragg::BlockKeyTable::kNone) return;
+void MapOutputCache::dropPiece(uint32_t i) {
+  if (i >= pieces_.size() || pieces_[i].column == kNoColumn) return;
   regather();  // with_cells_ changes
-  occupied_cells_ -= pieces_[i].xyz.size() / 3;
+  Piece& piece = pieces_[i];
+  occupied_cells_ -= piece.xyz.size() / 3;
   unlist(i);
-  const auto drop = [](std::vector<uint32_t>* list, uint32_t from, uint32_t to) {
-    // Replaces `from` by `to` in a column's list (to == kNone: removes it).
-    const auto it = std::find(list->begin(), list->end(), from);
-    if (to == fragg::BlockKeyTable::kNone)
-      list->erase(it);
-    else
-      *it = to;
-  };
-  const uint32_t c = pieces_[i].column;
-  drop(&columns_[c].pieces, i, fragg::BlockKeyTable::kNone);
-  markDirty(c);
-  piece_index_.erase(k);
-  // The last piece moves into the hole: its index changes in the table, its column and the list
-  // of pieces with cells.
-  const uint32_t last = static_cast<uint32_t>(pieces_.size() - 1);
-  if (i != last) {
-    Piece& moved = pieces_[last];
-    piece_index_.erase(moved.key);
-    piece_index_.insert(moved.key, i);
-    drop(&columns_[moved.column].pieces, last, i);
-    if (moved.listed >= 0) with_cells_[static_cast<size_t>(moved.listed)] = i;
-    pieces_[i] = std::move(moved);
-  }
-  pieces_.pop_back();
+  std::vector<uint32_t>& list = columns_[piece.column].pieces;
+  list.erase(std::find(list.begin(), list.end(), i));
+  markDirty(piece.column);
+  piece = Piece();
 }
 
 fragg::BlockChange MapOutputCache::refreshOn(const fragg::OccupancyModel& model) const {
@@ -260,32 +239,27 @@ std::vector<MapOutputCache::Source> MapOutputCache::listChanges(const fragg::Map
                                                                 bool keys_only) {
   const fragg::BlockChange refresh_on = refreshOn(map.model());
   std::vector<Source> refresh;
+  const auto add = [&](fragg::BlockIndex slot, bool with_masks) {
+    refresh.push_back(
+        {slot, blocks.keyAt(slot), with_masks && !keys_only ? &blocks.masksAt(slot) : nullptr});
+  };
   if (full) {
-    for (const fragg::BlockRef& r : blocks.all()) refresh.push_back({r.key, nullptr, r.block});
+    const std::vector<fragg::BlockIndex> slots = blocks.allSlots();
+    refresh.reserve(slots.size());
+    for (const fragg::BlockIndex i : slots) add(i, false);
   } else if (!options_.hide_speckles) {
     // Several revisions since the last update (a throttled map_rate): the change log names a
     // block once per revision it changed in (ten W1 clouds at 5 cm: 48-54 k blocks each, 87 k
     // distinct), and de-duplicating the records costs more than a walk over the blocks'
-    // stamps. kState lists the blocks of kMasks and those whose cells moved within the
-    // unknown band (recomputed from their masks all the same). The CUDA backend stamps
-    // state_at with every change, so there the log serves.
+    // stamps in slot order. kState lists the blocks of kMasks and those whose cells moved
+    // within the unknown band (recomputed from their masks all the same). The CUDA backend
+    // stamps state_at with every change, so there the log serves.
     const bool walk = masks_suffice && map.revision() - revision_ > kLogRevisions &&
                       std::strcmp(map.backendName(), "cpu") == 0;
-    if (walk) {
-      const std::vector<fragg::BlockRef> changed =
-          blocks.changedRefsSince(revision_, fragg::BlockChange::kState);
-      refresh.reserve(changed.size());
-      for (const fragg::BlockRef& r : changed)
-        refresh.push_back({r.key, keys_only ? nullptr : blocks.findMasks(r.key), r.block});
-    } else if (masks_suffice) {
-      const std::vector<fragg::BlockKey> changed = blocks.changedSince(revision_, refresh_on);
-      refresh.reserve(changed.size());
-      for (const fragg::BlockKey& k : changed)
-        refresh.push_back({k, keys_only ? nullptr : blocks.findMasks(k), nullptr});
-    } else {
-      for (const fragg::BlockRef& r : blocks.changedRefsSince(revision_, refresh_on))
-        refresh.push_back({r.key, nullptr, r.block});
-    }
+    const std::vector<fragg::BlockIndex> slots =
+        blocks.changedSlotsSince(revision_, walk ? fragg::BlockChange::kState : refresh_on);
+    refresh.reserve(slots.size());
+    for (const fragg::BlockIndex i : slots) add(i, masks_suffice);
   } else {
     // A cell's speckle state follows its neighbours: the blocks around a change too.
     const std::vector<fragg::BlockKey> changed = blocks.changedSince(revision_, refresh_on);
@@ -298,14 +272,15 @@ std::vector<MapOutputCache::Source> MapOutputCache::listChanges(const fragg::Map
             const fragg::BlockKey n{k.x + dx, k.y + dy, k.z + dz};
             if (around.find(n) != fragg::BlockKeyTable::kNone) continue;
             around.insert(n, 0);
-            if (const fragg::BlockStateMasks* m = blocks.findMasks(n))
-              refresh.push_back({n, m, nullptr});
-            else
-              dropPiece(n);  // only through the ring: erased blocks change the view epoch
+            // A missing neighbour has no piece (erasing a block changes the view epoch).
+            const fragg::BlockIndex slot = blocks.slotOf(n);
+            if (slot != fragg::kNoBlock) add(slot, true);
           }
         }
       }
     }
+    std::sort(refresh.begin(), refresh.end(),
+              [](const Source& x, const Source& y) { return x.slot < y.slot; });
   }
   return refresh;
 }
@@ -342,7 +317,6 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   dirty_.clear();
   if (out.full) {
     pieces_.clear();
-    piece_index_.clear();
     with_cells_.clear();
     columns_.clear();
     column_index_.clear();
@@ -370,22 +344,22 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   }
   std::vector<Source> queued;
   queued.reserve(take);
-  std::vector<fragg::BlockKey> gone;
+  std::vector<fragg::BlockIndex> gone;
   for (size_t q = queue_head_; q < queue_head_ + take; ++q) {
-    const fragg::BlockKey& k = queue_[q];
-    const fragg::BlockStateMasks* m = blocks.findMasks(k);
-    if (!m) {
-      gone.push_back(k);  // left the map since it was listed
+    const Queued& k = queue_[q];
+    if (!blocks.holds(k.slot, k.key)) {
+      // Left the map since it was listed: its piece goes (unless another block's is there).
+      if (k.slot < pieces_.size() && pieces_[k.slot].key == k.key) gone.push_back(k.slot);
       continue;
     }
-    queued.push_back({k, masks_suffice ? m : nullptr, nullptr});
+    queued.push_back({k.slot, k.key, masks_suffice ? &blocks.masksAt(k.slot) : nullptr});
   }
   queue_head_ += take;
   if (queue_head_ == queue_.size()) {
     queue_.clear();
     queue_head_ = 0;
   }
-  for (const fragg::BlockKey& k : gone) dropPiece(k);
+  for (const fragg::BlockIndex slot : gone) dropPiece(slot);
   out.list_ms += msSince(t0);
   recompute(map, blocks, queued, masks_suffice, &out);
   // The queue recomputed: the pieces stay as they are until the next listing, and the clouds
@@ -406,12 +380,11 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   if (list) listed = listChanges(map, blocks, out.full, masks_suffice, paced);
   if (paced && list) {
     queue_.reserve(queue_.size() + listed.size());
-    for (const Source& s : listed) queue_.push_back(s.key);
+    for (const Source& s : listed) queue_.push_back({s.slot, s.key});
     queued_since_s_ = now_s;
     listed.clear();
   }
   out.list_ms += msSince(t0);
-  if (out.full) piece_index_.reserve(listed.size());
   recompute(map, blocks, listed, masks_suffice, &out);
   out.blocks_queued = queuedBlocks();
   t0 = std::chrono::steady_clock::now();
@@ -442,7 +415,7 @@ void MapOutputCache::recompute(const fragg::Map& map, const fragg::BlockView& bl
   // computed), then the pieces in parallel (read-only map, one piece per iteration), then the
   // sums in order.
   std::vector<uint32_t> slots(sources.size());
-  for (size_t j = 0; j < sources.size(); ++j) slots[j] = pieceFor(sources[j].key);
+  for (size_t j = 0; j < sources.size(); ++j) slots[j] = pieceFor(sources[j]);
   std::vector<PieceDelta> deltas(sources.size());
   const int64_t n = static_cast<int64_t>(sources.size());
   // The loop waits on memory (a piece and a block's masks, each a few cache lines at random

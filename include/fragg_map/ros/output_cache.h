@@ -137,9 +137,11 @@ class MapOutputCache {
   fragg::BlockChange refreshOn(const fragg::OccupancyModel& model) const;
   HeightBand heights() const { return {options_.occupancy_min_z_m, options_.occupancy_max_z_m}; }
 
-  /// A block's outputs. Pieces live in one deque (pieces_: indexed, never moved as it grows),
-  /// found through a flat key table (piece_index_): no node per block, so the tens of
-  /// thousands of blocks a LiDAR second lists cost a probe of one table each.
+  static constexpr uint32_t kNoColumn = UINT32_MAX;  ///< Piece::column of an unused slot
+  /// A block's outputs. Pieces live in one deque indexed by the block's slot in the map
+  /// (BlockView::slotCount; never moved as it grows): the tens of thousands of blocks a LiDAR
+  /// second lists are read and written in storage order, with no look-up per block. A piece
+  /// keeps its block's key: a slot another block took over is dropped and made again.
   struct Piece {
     fragg::BlockKey key;
     /// The occupied cells shown (in the band, speckles left out when hidden), one word per z
@@ -149,9 +151,9 @@ class MapOutputCache {
     uint64_t band_occupied = 0, band_free = 0;
     /// Observed cells' xy key bounds within the block (lo > hi: none observed).
     int8_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
-    uint32_t column = 0;     ///< its place in columns_
-    int64_t listed = -1;     ///< its place in with_cells_; -1 while xyz is empty
-    std::vector<float> xyz;  ///< the shown cells' centres
+    uint32_t column = kNoColumn;  ///< its place in columns_; kNoColumn: no piece here
+    int64_t listed = -1;          ///< its place in with_cells_; -1 while xyz is empty
+    std::vector<float> xyz;       ///< the shown cells' centres
   };
   /// What recomputing a piece changed.
   struct PieceDelta {
@@ -159,12 +161,16 @@ class MapOutputCache {
     bool column = false;      ///< its columns or bounds changed: the column must be merged
     bool cells_read = false;  ///< the block's cells were read (not its masks alone)
   };
-  /// A block to recompute: its state masks (nullptr: read the cells) and, where at hand, its
-  /// cells (nullptr: looked up when they must be read).
+  /// A block to recompute: its slot and key, its state masks (nullptr: read the cells).
   struct Source {
+    fragg::BlockIndex slot = fragg::kNoBlock;
     fragg::BlockKey key;
     const fragg::BlockStateMasks* masks = nullptr;
-    const fragg::Block* block = nullptr;
+  };
+  /// A block listed for a later cloud (advance()): the slot checked against the key then.
+  struct Queued {
+    fragg::BlockIndex slot;
+    fragg::BlockKey key;
   };
   /// A column of blocks (same x, y block key): its pieces, the merged 8 x 8 grid patch (bit
   /// lx + 8 ly: occupied in some block, free in some block) and the xy bounds. Columns stay in
@@ -177,8 +183,8 @@ class MapOutputCache {
     bool dirty = false;    ///< listed in the update's dirty columns
     bool undrawn = false;  ///< merged since the grid was last drawn (listed in undrawn_)
   };
-  /// The blocks changed since the last update (all of them for a rebuild, `full`).
-  /// `keys_only`: the sources' masks are not looked up (they are queued by key).
+  /// The blocks changed since the last update (all of them for a rebuild, `full`), in slot
+  /// order. `keys_only`: the sources' masks are left out (they are queued).
   std::vector<Source> listChanges(const fragg::Map& map, const fragg::BlockView& blocks, bool full,
                                   bool masks_suffice, bool keys_only);
   /// Recomputes the pieces of `sources` (distinct blocks of the map), adding to `out`.
@@ -198,15 +204,17 @@ class MapOutputCache {
   /// bounds span the whole block, or the block lies inside the observed bounds of the last
   /// update (observed cells stay observed until the view's epoch changes, which rebuilds).
   bool boundsSettled(const fragg::BlockKey& key, const Piece& piece) const;
-  /// The piece of block `key`, made (and registered in its column, marked dirty) when new.
-  uint32_t pieceFor(const fragg::BlockKey& key);
+  /// The piece of `source`'s block, made (and registered in its column, marked dirty) when
+  /// new; a piece of another block in the slot is dropped first.
+  uint32_t pieceFor(const Source& source);
   /// Lists `piece` in with_cells_ when it holds cells, takes it out when it does not.
   void relist(uint32_t piece);
   void unlist(uint32_t piece);
   /// Marks column `c` dirty (once per update).
   void markDirty(uint32_t c);
-  /// Drops the piece of a block that left the map; its column becomes dirty.
-  void dropPiece(const fragg::BlockKey& key);
+  /// Drops the piece in `slot` (if any): its block left the map or the slot went to another
+  /// block; its column becomes dirty.
+  void dropPiece(uint32_t slot);
   /// Recomputes `col`'s merged patch and bounds from its blocks' pieces.
   void mergeColumn(Column* col) const;
   /// Grid bounds from the columns (kept for boundsSettled); with `draw`, reallocates and redraws
@@ -224,8 +232,7 @@ class MapOutputCache {
   uint64_t revision_ = 0;
   uint64_t epoch_ = 0;
   double resolution_m_ = 0.0;
-  std::deque<Piece> pieces_;
-  fragg::BlockKeyTable piece_index_;  ///< block key -> index into pieces_
+  std::deque<Piece> pieces_;  ///< by the blocks' slots (BlockView::slotCount)
   /// The pieces with occupied cells shown (a small part of pieces_: most blocks hold free
   /// space only), so that the cloud is gathered without walking the others.
   std::vector<uint32_t> with_cells_;
@@ -237,7 +244,7 @@ class MapOutputCache {
   std::vector<uint32_t> drawing_;      ///< refreshGrid's copy of undrawn_ (kept for its memory)
   bool redraw_owed_ = false;           ///< a rebuild since the grid was last drawn
   /// advance(): the blocks of the last list not recomputed yet, from queue_head_ on.
-  std::vector<fragg::BlockKey> queue_;
+  std::vector<Queued> queue_;
   size_t queue_head_ = 0;
   double queued_since_s_ = 0.0;  ///< now_s when queue_ was listed
   double last_advance_s_ = 0.0;  ///< now_s of the last advance() (the clouds' interval)
