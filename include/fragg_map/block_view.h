@@ -96,6 +96,8 @@ class BlockView {
   /// in storage order (sequential reads, no look-up per block).
   [[nodiscard]] std::vector<BlockIndex> changedSlotsSince(
       uint64_t revision, BlockChange what = BlockChange::kAny) const;
+  /// The same into `out` (its memory kept: a caller listing every period reuses its pages).
+  void changedSlotsSince(uint64_t revision, BlockChange what, std::vector<BlockIndex>* out) const;
   /// Exact bounds of observed cells.
   KeyBounds observedBounds() const { return blocks_->observedBounds(); }
 

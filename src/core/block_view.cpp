@@ -51,13 +51,19 @@ uint64_t stampOf(const BlockMeta& m, BlockChange what) {
   return m.changed_at;
 }
 
-/// Slots whose `what` stamp is after `revision`, ascending: the metadata read in storage order
-/// (free slots carry no stamps), where a walk through the index reads it at random.
-std::vector<BlockIndex> stampedAfter(const BlockMap& blocks, uint64_t revision, BlockChange what) {
-  std::vector<BlockIndex> out;
+/// Appends the slots whose `what` stamp is after `revision` to `out`, ascending: the metadata
+/// read in storage order (free slots carry no stamps), where a walk through the index reads it
+/// at random.
+void stampedAfter(const BlockMap& blocks, uint64_t revision, BlockChange what,
+                  std::vector<BlockIndex>* out) {
   const BlockIndex n = static_cast<BlockIndex>(blocks.slotCount());
   for (BlockIndex i = 0; i < n; ++i)
-    if (stampOf(blocks.meta(i), what) > revision) out.push_back(i);
+    if (stampOf(blocks.meta(i), what) > revision) out->push_back(i);
+}
+
+std::vector<BlockIndex> stampedAfter(const BlockMap& blocks, uint64_t revision, BlockChange what) {
+  std::vector<BlockIndex> out;
+  stampedAfter(blocks, revision, what, &out);
   return out;
 }
 }  // namespace
@@ -73,11 +79,18 @@ std::vector<BlockIndex> BlockView::allSlots() const {
 
 std::vector<BlockIndex> BlockView::changedSlotsSince(uint64_t revision, BlockChange what) const {
   std::vector<BlockIndex> out;
-  if (what == BlockChange::kMasks && blocks_->masksChangedSince(revision, &out)) {
-    std::sort(out.begin(), out.end());
-    return out;
+  changedSlotsSince(revision, what, &out);
+  return out;
+}
+
+void BlockView::changedSlotsSince(uint64_t revision, BlockChange what,
+                                  std::vector<BlockIndex>* out) const {
+  out->clear();
+  if (what == BlockChange::kMasks && blocks_->masksChangedSince(revision, out)) {
+    std::sort(out->begin(), out->end());
+    return;
   }
-  return stampedAfter(*blocks_, revision, what);
+  stampedAfter(*blocks_, revision, what, out);
 }
 
 std::vector<BlockKey> BlockView::changedSince(uint64_t revision, BlockChange what) const {

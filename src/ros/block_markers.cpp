@@ -263,6 +263,7 @@ SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map& map, const MarkerS
   const int32_t chunk_blocks = ledger->chunk_blocks_;
   SerializedMarkerArray out;
   out.stamp = stamp;
+  out.buffers = ledger->buffers_;
   const uint64_t since = ledger->published_revision_;
   // Paced, the map's changes are taken in once a period (the first call, then a period after
   // the last time) and their chunks sent in even shares over the period's calls; unpaced, at

@@ -58,6 +58,19 @@ CubeListWriter::CubeListWriter(const visualization_msgs::Marker& head, uint32_t 
 
 std::shared_ptr<WireMarker> CubeListWriter::finish() { return std::move(out_); }
 
+::ros::SerializedMessage serializeMarkerArray(const SerializedMarkerArray& array) {
+  ::ros::SerializedMessage m;
+  const uint32_t length = ::ros::serialization::serializationLength(array);
+  m.num_bytes = size_t{length} + 4;
+  m.buf = array.buffers ? array.buffers->take(m.num_bytes).bytes
+                        : boost::shared_array<uint8_t>(new uint8_t[m.num_bytes]);
+  ::ros::serialization::OStream stream(m.buf.get(), static_cast<uint32_t>(m.num_bytes));
+  ::ros::serialization::serialize(stream, length);
+  m.message_start = stream.getData();
+  ::ros::serialization::serialize(stream, array);
+  return m;
+}
+
 visualization_msgs::MarkerArray toMarkerArray(const SerializedMarkerArray& wire) {
   const uint32_t size = ::ros::serialization::serializationLength(wire);
   std::vector<uint8_t> bytes(size);

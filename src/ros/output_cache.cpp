@@ -233,12 +233,11 @@ fragg::BlockChange MapOutputCache::refreshOn(const fragg::OccupancyModel& model)
   return leaves_band ? fragg::BlockChange::kMasks : fragg::BlockChange::kState;
 }
 
-std::vector<MapOutputCache::Source> MapOutputCache::listChanges(const fragg::Map& map,
-                                                                const fragg::BlockView& blocks,
-                                                                bool full, bool masks_suffice,
-                                                                bool keys_only) {
+void MapOutputCache::listChanges(const fragg::Map& map, const fragg::BlockView& blocks, bool full,
+                                 bool masks_suffice, bool keys_only, std::vector<Source>* out) {
   const fragg::BlockChange refresh_on = refreshOn(map.model());
-  std::vector<Source> refresh;
+  std::vector<Source>& refresh = *out;
+  refresh.clear();
   const auto add = [&](fragg::BlockIndex slot, bool with_masks) {
     refresh.push_back(
         {slot, blocks.keyAt(slot), with_masks && !keys_only ? &blocks.masksAt(slot) : nullptr});
@@ -256,10 +255,9 @@ std::vector<MapOutputCache::Source> MapOutputCache::listChanges(const fragg::Map
     // stamps state_at with every change, so there the log serves.
     const bool walk = masks_suffice && map.revision() - revision_ > kLogRevisions &&
                       std::strcmp(map.backendName(), "cpu") == 0;
-    const std::vector<fragg::BlockIndex> slots =
-        blocks.changedSlotsSince(revision_, walk ? fragg::BlockChange::kState : refresh_on);
-    refresh.reserve(slots.size());
-    for (const fragg::BlockIndex i : slots) add(i, masks_suffice);
+    blocks.changedSlotsSince(revision_, walk ? fragg::BlockChange::kState : refresh_on, &slots_);
+    refresh.reserve(slots_.size());
+    for (const fragg::BlockIndex i : slots_) add(i, masks_suffice);
   } else {
     // A cell's speckle state follows its neighbours: the blocks around a change too.
     const std::vector<fragg::BlockKey> changed = blocks.changedSince(revision_, refresh_on);
@@ -282,7 +280,6 @@ std::vector<MapOutputCache::Source> MapOutputCache::listChanges(const fragg::Map
     std::sort(refresh.begin(), refresh.end(),
               [](const Source& x, const Source& y) { return x.slot < y.slot; });
   }
-  return refresh;
 }
 
 OutputCacheUpdate MapOutputCache::update(const fragg::Map& map) {
@@ -342,8 +339,8 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
     last_advance_s_ = now_s;
     advanced_ = true;
   }
-  std::vector<Source> queued;
-  queued.reserve(take);
+  std::vector<Source>& queued = sources_;
+  queued.clear();
   std::vector<fragg::BlockIndex> gone;
   for (size_t q = queue_head_; q < queue_head_ + take; ++q) {
     const Queued& k = queue_[q];
@@ -376,8 +373,9 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   }
   // Then the changes since the last list: queued (paced), or recomputed now.
   t0 = std::chrono::steady_clock::now();
-  std::vector<Source> listed;
-  if (list) listed = listChanges(map, blocks, out.full, masks_suffice, paced);
+  std::vector<Source>& listed = sources_;  // the queue's share is recomputed
+  listed.clear();
+  if (list) listChanges(map, blocks, out.full, masks_suffice, paced, &listed);
   if (paced && list) {
     queue_.reserve(queue_.size() + listed.size());
     for (const Source& s : listed) queue_.push_back({s.slot, s.key});
@@ -414,9 +412,9 @@ void MapOutputCache::recompute(const fragg::Map& map, const fragg::BlockView& bl
   // Each block's piece (new ones made first: pieces_ does not change while the pieces are
   // computed), then the pieces in parallel (read-only map, one piece per iteration), then the
   // sums in order.
-  std::vector<uint32_t> slots(sources.size());
-  for (size_t j = 0; j < sources.size(); ++j) slots[j] = pieceFor(sources[j]);
-  std::vector<PieceDelta> deltas(sources.size());
+  for (const Source& source : sources) (void)pieceFor(source);  // a piece's index is its slot
+  std::vector<PieceDelta>& deltas = deltas_;
+  deltas.assign(sources.size(), PieceDelta());
   const int64_t n = static_cast<int64_t>(sources.size());
   // The loop waits on memory (a piece and a block's masks, each a few cache lines at random
   // places): both are fetched a few iterations ahead.
@@ -424,7 +422,7 @@ void MapOutputCache::recompute(const fragg::Map& map, const fragg::BlockView& bl
 #pragma omp parallel for schedule(dynamic, 256) if (n > 1024)
   for (int64_t j = 0; j < n; ++j) {
     if (j + kAhead < n) {
-      const Piece* ahead = &pieces_[slots[j + kAhead]];
+      const Piece* ahead = &pieces_[sources[j + kAhead].slot];
       __builtin_prefetch(ahead);
       __builtin_prefetch(ahead->shown.data());
       if (const fragg::BlockStateMasks* m = sources[j + kAhead].masks) {
@@ -432,15 +430,15 @@ void MapOutputCache::recompute(const fragg::Map& map, const fragg::BlockView& bl
         __builtin_prefetch(m->free);
       }
     }
-    deltas[j] = computePiece(map, blocks, sources[j], masks_suffice, &pieces_[slots[j]]);
+    deltas[j] = computePiece(map, blocks, sources[j], masks_suffice, &pieces_[sources[j].slot]);
   }
   int64_t occupied_delta = 0;
   for (size_t j = 0; j < sources.size(); ++j) {
     const PieceDelta& d = deltas[j];
-    relist(slots[j]);
+    relist(sources[j].slot);
     occupied_delta += d.occupied;
     out->blocks_cells_read += d.cells_read;
-    if (d.column) markDirty(pieces_[slots[j]].column);
+    if (d.column) markDirty(pieces_[sources[j].slot].column);
   }
   occupied_cells_ = static_cast<size_t>(static_cast<int64_t>(occupied_cells_) + occupied_delta);
   out->blocks_read += sources.size();

@@ -1,6 +1,7 @@
 // Message payloads written in place, in roscpp's wire layout.
 #include "fragg_map/ros/wire_payload.h"
 
+#include <algorithm>
 #include <cstring>
 #include <utility>
 
@@ -15,16 +16,7 @@ constexpr size_t kTailRoom = 16;
 uint8_t* WirePayload::reserve(size_t bytes, size_t kept) {
   const size_t need = kHeadroom + bytes + kTailRoom;
   if (current_.bytes && current_.capacity >= need) return current_.bytes.get() + kHeadroom;
-  Buffer next;
-  if (sent_.free() && sent_.capacity >= need) {
-    next = std::move(sent_);  // the last message's buffer: roscpp has let go of it
-    sent_ = Buffer();
-  } else {
-    // Room for the payload to grow by half before the next buffer: a fresh buffer's pages
-    // fault in when first written (~15 us each on the 2-core VM).
-    next.capacity = need + bytes / 2;
-    next.bytes.reset(new uint8_t[next.capacity]);
-  }
+  WireBuffer next = buffers_->take(need);
   if (current_.bytes && kept > 0)
     std::memcpy(next.bytes.get() + kHeadroom, current_.bytes.get() + kHeadroom, kept);
   current_ = std::move(next);
@@ -50,8 +42,7 @@ uint8_t* WirePayload::reserve(size_t bytes, size_t kept) {
     out.buf = boost::shared_array<uint8_t>(current_.bytes, start);
     out.num_bytes = total;
     out.message_start = start + 4;
-    sent_ = std::move(current_);
-    current_ = Buffer();
+    current_ = WireBuffer();  // the pool takes it again once roscpp lets go of `out`
     return out;
   }
   // Fields longer than the headroom (a very long frame_id): a buffer of the message's own.
@@ -64,6 +55,36 @@ uint8_t* WirePayload::reserve(size_t bytes, size_t kept) {
   out.num_bytes = total;
   out.message_start = out.buf.get() + 4;
   return out;
+}
+
+WireBuffer WireBufferPool::take(size_t bytes) {
+  if (bytes > kLargest) return {boost::shared_array<uint8_t>(new uint8_t[bytes]), bytes};
+  std::lock_guard<std::mutex> lock(mutex_);
+  WireBuffer* fit = nullptr;   // the smallest free buffer that fits
+  WireBuffer* grow = nullptr;  // else the largest free one, made anew larger
+  for (WireBuffer& b : kept_) {
+    if (b.bytes.use_count() != 1) continue;  // held: being written, queued or latched
+    if (b.capacity >= bytes) {
+      if (!fit || b.capacity < fit->capacity) fit = &b;
+    } else if (!grow || b.capacity > grow->capacity) {
+      grow = &b;
+    }
+  }
+  if (!fit && (grow || kept_.size() < kKept)) {
+    if (!grow) grow = &kept_.emplace_back();
+    grow->capacity = std::max(2 * bytes, kMinCapacity);
+    grow->bytes.reset(new uint8_t[grow->capacity]);
+    fit = grow;
+  }
+  if (!fit) return {boost::shared_array<uint8_t>(new uint8_t[bytes]), bytes};  // all held
+  return *fit;
+}
+
+size_t WireBufferPool::keptBytes() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  size_t total = 0;
+  for (const WireBuffer& b : kept_) total += b.capacity;
+  return total;
 }
 
 }  // namespace fragg::ros

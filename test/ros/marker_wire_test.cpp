@@ -186,3 +186,61 @@ TEST(MarkerWire, SnapshotFromKeptBytesEqualsOneDrawnAfresh) {
 }
 
 }  // namespace
+
+// A marker topic's updates are serialised into its kept buffers: the bytes are roscpp's
+// serialisation of the markers, a buffer roscpp still holds is never written again, and one it
+// let go of serves the next update (its pages are resident).
+TEST(MarkerWire, UpdatesSerialiseIntoKeptBuffersNobodyElseHolds) {
+  fragg::Map map(fragg::ros::test::cpuParams());
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  MarkerStyle style;
+  MarkerLedger ledger;
+  const SerializedMarkerArray update =
+      fragg::ros::changedBlockMarkersWire(map, style, kStamp, &ledger);
+  ASSERT_GT(update.markers.size(), 1u);
+  ASSERT_NE(update.buffers, nullptr);
+  const MarkerArray decoded = fragg::ros::toMarkerArray(update);
+  const std::vector<uint8_t> expected = bytesOf(decoded);
+  const ros::SerializedMessage held = ros::serialization::serializeMessage(update);
+  ASSERT_EQ(held.num_bytes, expected.size());
+  EXPECT_TRUE(std::equal(expected.begin(), expected.end(), held.buf.get()));
+  EXPECT_EQ(held.message_start, held.buf.get() + 4);
+  const uint8_t* let_go = nullptr;
+  {
+    const ros::SerializedMessage next = ros::serialization::serializeMessage(update);
+    EXPECT_NE(next.buf.get(), held.buf.get()) << "a held buffer was handed out again";
+    let_go = next.buf.get();
+  }
+  const ros::SerializedMessage again = ros::serialization::serializeMessage(update);
+  EXPECT_EQ(again.buf.get(), let_go) << "a buffer nobody holds was not reused";
+  EXPECT_TRUE(std::equal(expected.begin(), expected.end(), held.buf.get()))
+      << "a held message was written over";
+  // Without buffers (a full set): a buffer of its own, the same bytes.
+  SerializedMarkerArray own = update;
+  own.buffers = nullptr;
+  EXPECT_EQ(bytesOf(own), expected);
+}
+
+TEST(WireBufferPool, TakesTheSmallestFreeBufferGrowsOneOrMakesItsOwn) {
+  fragg::ros::WireBufferPool pool;
+  fragg::ros::WireBuffer a = pool.take(1000);
+  EXPECT_GE(a.capacity, 1000u);
+  fragg::ros::WireBuffer b = pool.take(100);  // a is held
+  EXPECT_NE(b.bytes.get(), a.bytes.get());
+  const uint8_t* small = b.bytes.get();
+  b = fragg::ros::WireBuffer();
+  EXPECT_EQ(pool.take(50).bytes.get(), small) << "the smallest free buffer that fits";
+  // Larger than any free one: the free one is made anew, larger.
+  const size_t kept = pool.keptBytes();
+  const size_t larger = fragg::ros::WireBufferPool::kMinCapacity + 1;  // address space only
+  fragg::ros::WireBuffer big = pool.take(larger);
+  EXPECT_GE(big.capacity, larger);
+  EXPECT_GT(pool.keptBytes(), kept);
+  // Every kept buffer held: a buffer of its own, not kept.
+  std::vector<fragg::ros::WireBuffer> held = {std::move(a), std::move(big)};
+  while (held.size() < fragg::ros::WireBufferPool::kKept) held.push_back(pool.take(10));
+  const size_t all_kept = pool.keptBytes();
+  const fragg::ros::WireBuffer extra = pool.take(10);
+  for (const fragg::ros::WireBuffer& h : held) EXPECT_NE(extra.bytes.get(), h.bytes.get());
+  EXPECT_EQ(pool.keptBytes(), all_kept);
+}

@@ -120,6 +120,8 @@ class MarkerLedger {
   int32_t next_id_ = 0;
   uint64_t published_revision_ = 0;
   uint64_t colors_drawn_ = 0;  ///< CellColors::sequence() of the last update (colored_map)
+  /// The updates' serialised arrays are written into these (a full set gets its own buffer).
+  std::shared_ptr<WireBufferPool> buffers_ = std::make_shared<WireBufferPool>();
   /// Map::viewEpoch() of the last update: shown blocks can only have left the map (clearBox,
   /// reset, paging) when it moved, so only then are they looked up.
   uint64_t view_epoch_ = 0;

@@ -19,6 +19,8 @@
 #include <memory>
 #include <vector>
 
+#include "fragg_map/ros/wire_payload.h"
+
 namespace fragg::ros {
 
 /// One visualization_msgs/Marker in roscpp's wire layout (no length prefix): `size` bytes of
@@ -36,7 +38,13 @@ using WireMarkerPtr = std::shared_ptr<const WireMarker>;
 struct SerializedMarkerArray {
   ::ros::Time stamp;
   std::vector<WireMarkerPtr> markers;
+  /// Where the serialised array is written (a topic's kept buffers); nullptr: a new buffer.
+  std::shared_ptr<WireBufferPool> buffers;
 };
+
+/// `array` serialised as roscpp does (length prefix, then MarkerArray's layout), into a buffer
+/// of array.buffers when it has them.
+[[nodiscard]] ::ros::SerializedMessage serializeMarkerArray(const SerializedMarkerArray& array);
 
 /// `marker` serialised by roscpp (any type and action).
 [[nodiscard]] WireMarkerPtr wireOf(const visualization_msgs::Marker& marker);
@@ -124,6 +132,13 @@ struct Serializer<fragg::ros::SerializedMarkerArray> {
     return bytes;
   }
 };
+
+/// Publisher::publish serialises through this: into the topic's kept buffers.
+template <>
+inline SerializedMessage serializeMessage<fragg::ros::SerializedMarkerArray>(
+    const fragg::ros::SerializedMarkerArray& message) {
+  return fragg::ros::serializeMarkerArray(message);
+}
 
 }  // namespace serialization
 }  // namespace ros

@@ -312,22 +312,24 @@ void printWorst(const std::vector<double>& total_ms, const std::vector<double>& 
       "and of the whole-map outputs)\n",
       std::min(g_worst, order.size()));
   std::printf(
-      "%6s %8s %8s %8s %8s %8s %8s %8s %8s | %7s %7s %7s %7s | %8s %8s %7s %9s %8s %8s %7s %7s\n",
-      "cloud", "total", "convert", "mk_build", "mk_ser", "cache", "cloud_msg", "grid_msg",
+      "%6s %8s %8s %8s %8s %6s %8s %8s %8s %8s | %7s %7s %7s %7s | %8s %8s %7s %9s %8s %8s %7s "
+      "%7s\n",
+      "cloud", "total", "convert", "mk_build", "mk_ser", "mk_MB", "cache", "cloud_msg", "grid_msg",
       "map_ser", "list", "pieces", "grid", "gather", "blocks", "of_cells", "gathered", "MB_gath",
       "chunks_q", "blocks_q", "mk_flt", "map_flt");
   for (size_t k = 0; k < std::min(g_worst, order.size()); ++k) {
     const size_t i = order[k];
     const Times& t = after[i];
     std::printf(
-        "%6zu %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f | %7.2f %7.2f %7.2f %7.2f | %8zu "
+        "%6zu %8.2f %8.2f %8.2f %8.2f %6.2f %8.2f %8.2f %8.2f %8.2f | %7.2f %7.2f %7.2f %7.2f | "
+        "%8zu "
         "%8zu "
         "%7zu %9.2f %8zu %8zu %7ld %7ld\n",
-        i + 1, total_ms[i], convert_ms[i], t.markers, t.marker_serialise, t.cache_update,
-        t.cloud - t.cache_update, t.grid, t.serialise - t.marker_serialise, t.stages.list_ms,
-        t.stages.pieces_ms, t.stages.grid_ms, t.stages.gather_ms, t.blocks_read, t.cells_read,
-        t.stages.pieces_gathered, t.stages.bytes_gathered / 1e6, t.pending_chunks, t.queued_blocks,
-        t.marker_faults, t.map_faults);
+        i + 1, total_ms[i], convert_ms[i], t.markers, t.marker_serialise, t.marker_bytes / 1e6,
+        t.cache_update, t.cloud - t.cache_update, t.grid, t.serialise - t.marker_serialise,
+        t.stages.list_ms, t.stages.pieces_ms, t.stages.grid_ms, t.stages.gather_ms, t.blocks_read,
+        t.cells_read, t.stages.pieces_gathered, t.stages.bytes_gathered / 1e6, t.pending_chunks,
+        t.queued_blocks, t.marker_faults, t.map_faults);
   }
 }
 
