@@ -134,6 +134,14 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
   if (band_occupied != piece->band_occupied || band_free != piece->band_free ||
       min_x != piece->min_x || max_x != piece->max_x || min_y != piece->min_y ||
       max_y != piece->max_y) {
+    // Lost an occupied column, a free one that did not turn occupied, or bounds (a column's
+    // merged patch cannot take the change by OR-ing it in).
+    // Bounds shrink only where observed cells became unobserved (a scan removed).
+    delta.bounds_shrank =
+        piece->max_x >= 0 && (max_x < 0 || min_x > piece->min_x || max_x < piece->max_x ||
+                              min_y > piece->min_y || max_y < piece->max_y);
+    delta.shrank = delta.bounds_shrank || (piece->band_occupied & ~band_occupied) != 0 ||
+                   (piece->band_free & ~(band_free | band_occupied)) != 0;
     piece->band_occupied = band_occupied;
     piece->band_free = band_free;
     piece->min_x = static_cast<int8_t>(min_x), piece->max_x = static_cast<int8_t>(max_x);
@@ -141,6 +149,44 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
     delta.column = true;
   }
   return delta;
+}
+
+void MapOutputCache::widenColumn(Column* col, const Piece& piece) {
+  col->occupied |= piece.band_occupied;
+  col->free = (col->free | piece.band_free) & ~col->occupied;
+  if (piece.max_x < 0) return;
+  if (col->max_x < 0) {
+    col->min_x = piece.min_x, col->max_x = piece.max_x;
+    col->min_y = piece.min_y, col->max_y = piece.max_y;
+    return;
+  }
+  col->min_x = std::min(col->min_x, piece.min_x);
+  col->max_x = std::max(col->max_x, piece.max_x);
+  col->min_y = std::min(col->min_y, piece.min_y);
+  col->max_y = std::max(col->max_y, piece.max_y);
+}
+
+void MapOutputCache::widenSeen(const Column& col) {
+  if (col.max_x < 0) return;
+  const int64_t x0 = int64_t{col.x} * fragg::kBlockSize, y0 = int64_t{col.y} * fragg::kBlockSize;
+  const int64_t lo_x = x0 + col.min_x, hi_x = x0 + col.max_x;
+  const int64_t lo_y = y0 + col.min_y, hi_y = y0 + col.max_y;
+  if (!seen_valid_) {
+    seen_valid_ = true;
+    seen_lo_x_ = lo_x, seen_hi_x_ = hi_x, seen_lo_y_ = lo_y, seen_hi_y_ = hi_y;
+    return;
+  }
+  seen_lo_x_ = std::min(seen_lo_x_, lo_x);
+  seen_hi_x_ = std::max(seen_hi_x_, hi_x);
+  seen_lo_y_ = std::min(seen_lo_y_, lo_y);
+  seen_hi_y_ = std::max(seen_hi_y_, hi_y);
+}
+
+void MapOutputCache::markUndrawn(uint32_t c) {
+  Column& col = columns_[c];
+  if (col.undrawn) return;
+  col.undrawn = true;
+  undrawn_.push_back(c);
 }
 
 void MapOutputCache::mergeColumn(Column* col) const {
@@ -219,6 +265,7 @@ void MapOutputCache::dropPiece(uint32_t i) {
   std::vector<uint32_t>& list = columns_[piece.column].pieces;
   list.erase(std::find(list.begin(), list.end(), i));
   markDirty(piece.column);
+  bounds_stale_ = true;  // the column's bounds may shrink
   piece = Piece();
 }
 
@@ -322,6 +369,7 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
     queue_head_ = 0;
     occupied_cells_ = 0;
     seen_valid_ = false;
+    bounds_stale_ = false;
     regather();
   }
   // First what was queued and is due: at a listing all of it (what the shares left: nothing,
@@ -389,11 +437,10 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   for (const uint32_t c : dirty_) {
     Column& col = columns_[c];
     mergeColumn(&col);
-    if (col.undrawn) continue;
-    col.undrawn = true;
-    undrawn_.push_back(c);
+    widenSeen(col);
+    markUndrawn(c);
   }
-  out.columns_merged = dirty_.size();
+  out.columns_merged += dirty_.size();
   resolution_m_ = map.resolution();  // refreshGrid's octomap bounds need it
   refreshGrid(out.full, with_grid);
   valid_ = true;
@@ -438,7 +485,20 @@ void MapOutputCache::recompute(const fragg::Map& map, const fragg::BlockView& bl
     relist(sources[j].slot);
     occupied_delta += d.occupied;
     out->blocks_cells_read += d.cells_read;
-    if (d.column) markDirty(pieces_[sources[j].slot].column);
+    if (!d.column) continue;
+    const Piece& piece = pieces_[sources[j].slot];
+    Column& col = columns_[piece.column];
+    if (d.shrank || col.dirty) {
+      markDirty(piece.column);  // merged again from all its pieces
+      bounds_stale_ = bounds_stale_ || d.bounds_shrank;
+      continue;
+    }
+    // The piece only gained: OR-ed into its column's patch (what a merge would give), the
+    // column's and the grid's bounds widened.
+    widenColumn(&col, piece);
+    widenSeen(col);
+    markUndrawn(piece.column);
+    ++out->columns_merged;
   }
   occupied_cells_ = static_cast<size_t>(static_cast<int64_t>(occupied_cells_) + occupied_delta);
   out->blocks_read += sources.size();
@@ -463,25 +523,15 @@ void MapOutputCache::drawColumn(const Column& col) {
 }
 
 void MapOutputCache::refreshGrid(bool all, bool draw) {
-  // Bounds over the columns (one pass over the flat column table, not the cells).
-  bool empty = true;
-  int64_t lo_x = 0, hi_x = -1, lo_y = 0, hi_y = -1;
-  for (const Column& col : columns_) {
-    if (col.max_x < 0) continue;
-    const int64_t x0 = int64_t{col.x} * fragg::kBlockSize, y0 = int64_t{col.y} * fragg::kBlockSize;
-    if (empty) {
-      lo_x = x0 + col.min_x, hi_x = x0 + col.max_x, lo_y = y0 + col.min_y, hi_y = y0 + col.max_y;
-      empty = false;
-      continue;
-    }
-    lo_x = std::min(lo_x, x0 + col.min_x);
-    hi_x = std::max(hi_x, x0 + col.max_x);
-    lo_y = std::min(lo_y, y0 + col.min_y);
-    hi_y = std::max(hi_y, y0 + col.max_y);
+  // The observed cells' bounds (also for the next update's boundsSettled): widened as columns
+  // change (observed cells stay observed), over every column again only after a piece left.
+  if (bounds_stale_) {
+    seen_valid_ = false;
+    for (const Column& col : columns_) widenSeen(col);
+    bounds_stale_ = false;
   }
-  // The observed cells' bounds, for the next update's boundsSettled.
-  seen_valid_ = !empty;
-  seen_lo_x_ = lo_x, seen_hi_x_ = hi_x, seen_lo_y_ = lo_y, seen_hi_y_ = hi_y;
+  const bool empty = !seen_valid_;
+  int64_t lo_x = seen_lo_x_, hi_x = seen_hi_x_, lo_y = seen_lo_y_, hi_y = seen_hi_y_;
   redraw_owed_ = redraw_owed_ || all;
   if (!draw) return;  // drawn before the next publication (advance with_grid, or update)
   for (const uint32_t c : undrawn_) columns_[c].undrawn = false;

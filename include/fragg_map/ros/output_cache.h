@@ -160,6 +160,9 @@ class MapOutputCache {
     int64_t occupied = 0;     ///< shown occupied cells gained (negative: lost)
     bool column = false;      ///< its columns or bounds changed: the column must be merged
     bool cells_read = false;  ///< the block's cells were read (not its masks alone)
+    /// With `column`: it lost a column or bounds (its column is merged again, not OR-ed into).
+    bool shrank = false;
+    bool bounds_shrank = false;  ///< of those, it lost bounds (the grid's may shrink)
   };
   /// A block to recompute: its slot and key, its state masks (nullptr: read the cells).
   struct Source {
@@ -217,6 +220,12 @@ class MapOutputCache {
   void dropPiece(uint32_t slot);
   /// Recomputes `col`'s merged patch and bounds from its blocks' pieces.
   void mergeColumn(Column* col) const;
+  /// ORs `piece` (which only gained columns and bounds) into `col`'s patch and bounds.
+  static void widenColumn(Column* col, const Piece& piece);
+  /// Widens the observed cells' bounds (seen_*) by `col`'s.
+  void widenSeen(const Column& col);
+  /// Lists column `c` in undrawn_ (once).
+  void markUndrawn(uint32_t c);
   /// Grid bounds from the columns (kept for boundsSettled); with `draw`, reallocates and redraws
   /// the grid when they moved (or `all`, or a redraw is owed), else draws the columns merged
   /// since the last draw; without, only notes what is owed.
@@ -257,6 +266,8 @@ class MapOutputCache {
   size_t occupied_cells_ = 0;
   /// The observed cells' xy key bounds at the last update (seen_valid_: some cell observed).
   bool seen_valid_ = false;
+  /// A piece left or lost bounds: seen_* are recomputed over every column.
+  bool bounds_stale_ = false;
   int64_t seen_lo_x_ = 0, seen_hi_x_ = -1, seen_lo_y_ = 0, seen_hi_y_ = -1;
   // The grid: cells [grid_min_x, +width) x [grid_min_y, +height), row-major (y rows).
   bool grid_empty_ = true;
