@@ -251,8 +251,8 @@ uint32_t MapOutputCache::pieceFor(const Source& source) {
   }
   pieces_[i].key = key;
   pieces_[i].column = c;
+  // Empty until computed: what it gains is OR-ed into the column then (recompute).
   columns_[c].pieces.push_back(i);
-  markDirty(c);  // a new piece's column is always merged
   return i;
 }
 
