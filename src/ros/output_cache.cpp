@@ -140,8 +140,8 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
     delta.bounds_shrank =
         piece->max_x >= 0 && (max_x < 0 || min_x > piece->min_x || max_x < piece->max_x ||
                               min_y > piece->min_y || max_y < piece->max_y);
-    delta.shrank = delta.bounds_shrank || (piece->band_occupied & ~band_occupied) != 0 ||
-                   (piece->band_free & ~(band_free | band_occupied)) != 0;
+    delta.occupied_before = piece->band_occupied;
+    delta.free_before = piece->band_free;
     piece->band_occupied = band_occupied;
     piece->band_free = band_free;
     piece->min_x = static_cast<int8_t>(min_x), piece->max_x = static_cast<int8_t>(max_x);
@@ -151,9 +151,30 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
   return delta;
 }
 
+void MapOutputCache::countPiece(Column* col, uint64_t occupied_before, uint64_t free_before,
+                                uint64_t occupied_after, uint64_t free_after) {
+  const uint64_t occupied_moved = occupied_before ^ occupied_after;
+  const uint64_t free_moved = free_before ^ free_after;
+  for (uint64_t m = occupied_moved; m; m &= m - 1) {
+    const int b = __builtin_ctzll(m);
+    col->n_occupied[b] =
+        static_cast<uint16_t>(col->n_occupied[b] + (occupied_after >> b & 1 ? 1 : -1));
+  }
+  for (uint64_t m = free_moved; m; m &= m - 1) {
+    const int b = __builtin_ctzll(m);
+    col->n_free[b] = static_cast<uint16_t>(col->n_free[b] + (free_after >> b & 1 ? 1 : -1));
+  }
+  // The patch where a count moved: occupied where some piece is, else free where some piece is.
+  for (uint64_t m = occupied_moved | free_moved; m; m &= m - 1) {
+    const int b = __builtin_ctzll(m);
+    const uint64_t bit = uint64_t{1} << b;
+    const bool occupied = col->n_occupied[b] > 0;
+    col->occupied = occupied ? col->occupied | bit : col->occupied & ~bit;
+    col->free = !occupied && col->n_free[b] > 0 ? col->free | bit : col->free & ~bit;
+  }
+}
+
 void MapOutputCache::widenColumn(Column* col, const Piece& piece) {
-  col->occupied |= piece.band_occupied;
-  col->free = (col->free | piece.band_free) & ~col->occupied;
   if (piece.max_x < 0) return;
   if (col->max_x < 0) {
     col->min_x = piece.min_x, col->max_x = piece.max_x;
@@ -189,22 +210,10 @@ void MapOutputCache::markUndrawn(uint32_t c) {
   undrawn_.push_back(c);
 }
 
-void MapOutputCache::mergeColumn(Column* col) const {
-  col->occupied = col->free = 0;
+void MapOutputCache::mergeBounds(Column* col) const {
   col->min_x = col->min_y = fragg::kBlockSize;
   col->max_x = col->max_y = -1;
-  for (const uint32_t i : col->pieces) {
-    const Piece& p = pieces_[i];
-    if (p.max_x >= 0) {
-      col->min_x = std::min(col->min_x, p.min_x);
-      col->max_x = std::max(col->max_x, p.max_x);
-      col->min_y = std::min(col->min_y, p.min_y);
-      col->max_y = std::max(col->max_y, p.max_y);
-    }
-    col->occupied |= p.band_occupied;
-    col->free |= p.band_free;
-  }
-  col->free &= ~col->occupied;
+  for (const uint32_t i : col->pieces) widenColumn(col, pieces_[i]);
 }
 
 void MapOutputCache::relist(uint32_t i) {
@@ -262,8 +271,9 @@ void MapOutputCache::dropPiece(uint32_t i) {
   Piece& piece = pieces_[i];
   occupied_cells_ -= piece.xyz.size() / 3;
   unlist(i);
-  std::vector<uint32_t>& list = columns_[piece.column].pieces;
-  list.erase(std::find(list.begin(), list.end(), i));
+  Column& col = columns_[piece.column];
+  countPiece(&col, piece.band_occupied, piece.band_free, 0, 0);
+  col.pieces.erase(std::find(col.pieces.begin(), col.pieces.end(), i));
   markDirty(piece.column);
   bounds_stale_ = true;  // the column's bounds may shrink
   piece = Piece();
@@ -436,7 +446,7 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   t0 = std::chrono::steady_clock::now();
   for (const uint32_t c : dirty_) {
     Column& col = columns_[c];
-    mergeColumn(&col);
+    mergeBounds(&col);
     widenSeen(col);
     markUndrawn(c);
   }
@@ -486,19 +496,21 @@ void MapOutputCache::recompute(const fragg::Map& map, const fragg::BlockView& bl
     occupied_delta += d.occupied;
     out->blocks_cells_read += d.cells_read;
     if (!d.column) continue;
+    // The column's counts take the piece's change (no pass over its pieces); its bounds and
+    // the grid's widen, unless the piece lost bounds (a scan removed): then the column's are
+    // merged again from its pieces and the grid's recomputed.
     const Piece& piece = pieces_[sources[j].slot];
     Column& col = columns_[piece.column];
-    if (d.shrank || col.dirty) {
-      markDirty(piece.column);  // merged again from all its pieces
-      bounds_stale_ = bounds_stale_ || d.bounds_shrank;
-      continue;
-    }
-    // The piece only gained: OR-ed into its column's patch (what a merge would give), the
-    // column's and the grid's bounds widened.
-    widenColumn(&col, piece);
-    widenSeen(col);
+    countPiece(&col, d.occupied_before, d.free_before, piece.band_occupied, piece.band_free);
     markUndrawn(piece.column);
     ++out->columns_merged;
+    if (d.bounds_shrank) {
+      markDirty(piece.column);
+      bounds_stale_ = true;
+      continue;
+    }
+    widenColumn(&col, piece);
+    widenSeen(col);
   }
   occupied_cells_ = static_cast<size_t>(static_cast<int64_t>(occupied_cells_) + occupied_delta);
   out->blocks_read += sources.size();

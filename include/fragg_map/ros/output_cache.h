@@ -160,9 +160,9 @@ class MapOutputCache {
     int64_t occupied = 0;     ///< shown occupied cells gained (negative: lost)
     bool column = false;      ///< its columns or bounds changed: the column must be merged
     bool cells_read = false;  ///< the block's cells were read (not its masks alone)
-    /// With `column`: it lost a column or bounds (its column is merged again, not OR-ed into).
-    bool shrank = false;
-    bool bounds_shrank = false;  ///< of those, it lost bounds (the grid's may shrink)
+    /// With `column`: its columns before (what its column's counts held of it).
+    uint64_t occupied_before = 0, free_before = 0;
+    bool bounds_shrank = false;  ///< with `column`: it lost bounds (the grid's may shrink)
   };
   /// A block to recompute: its slot and key, its state masks (nullptr: read the cells).
   struct Source {
@@ -176,14 +176,17 @@ class MapOutputCache {
     fragg::BlockKey key;
   };
   /// A column of blocks (same x, y block key): its pieces, the merged 8 x 8 grid patch (bit
-  /// lx + 8 ly: occupied in some block, free in some block) and the xy bounds. Columns stay in
-  /// columns_ once made (an emptied one merges to unknown and no bounds) until a rebuild.
+  /// lx + 8 ly: occupied in some block, else free in some block), kept by counting the pieces
+  /// occupied and free at each bit (a piece's change moves the counts: no pass over the
+  /// column's pieces), and the xy bounds. Columns stay in columns_ once made (an emptied one
+  /// shows unknown and no bounds) until a rebuild.
   struct Column {
     int32_t x = 0, y = 0;
     std::vector<uint32_t> pieces;  ///< indices into pieces_
     uint64_t occupied = 0, free = 0;
+    std::array<uint16_t, 64> n_occupied{}, n_free{};  ///< pieces occupied / free at each bit
     int8_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
-    bool dirty = false;    ///< listed in the update's dirty columns
+    bool dirty = false;    ///< listed in the update's dirty columns (bounds merged again)
     bool undrawn = false;  ///< merged since the grid was last drawn (listed in undrawn_)
   };
   /// The blocks changed since the last update (all of them for a rebuild, `full`), in slot
@@ -218,9 +221,12 @@ class MapOutputCache {
   /// Drops the piece in `slot` (if any): its block left the map or the slot went to another
   /// block; its column becomes dirty.
   void dropPiece(uint32_t slot);
-  /// Recomputes `col`'s merged patch and bounds from its blocks' pieces.
-  void mergeColumn(Column* col) const;
-  /// ORs `piece` (which only gained columns and bounds) into `col`'s patch and bounds.
+  /// Recomputes `col`'s bounds from its blocks' pieces.
+  void mergeBounds(Column* col) const;
+  /// Moves `col`'s counts and patch from a piece's columns before to after.
+  static void countPiece(Column* col, uint64_t occupied_before, uint64_t free_before,
+                         uint64_t occupied_after, uint64_t free_after);
+  /// Widens `col`'s bounds by `piece`'s.
   static void widenColumn(Column* col, const Piece& piece);
   /// Widens the observed cells' bounds (seen_*) by `col`'s.
   void widenSeen(const Column& col);
@@ -248,7 +254,7 @@ class MapOutputCache {
   mutable sensor_msgs::PointCloud2 cloud_msg_;  ///< occupiedCloud()'s message and buffer
   std::vector<Column> columns_;
   fragg::BlockKeyTable column_index_;  ///< {x, y, 0} block key -> index into columns_
-  std::vector<uint32_t> dirty_;        ///< columns to merge in this update
+  std::vector<uint32_t> dirty_;        ///< columns whose bounds are merged in this update
   std::vector<uint32_t> undrawn_;      ///< columns merged since the grid was last drawn
   std::vector<uint32_t> drawing_;      ///< refreshGrid's copy of undrawn_ (kept for its memory)
   bool redraw_owed_ = false;           ///< a rebuild since the grid was last drawn
