@@ -10,8 +10,11 @@
 #include <new>
 #include <random>
 #include <set>
+#include <string>
 #include <tuple>
 #include <vector>
+
+#include "fragg_map/block_view.h"
 
 namespace fragg {
 namespace {
@@ -519,6 +522,65 @@ TEST(BlockMapTest, AFailedChunkAllocationLeavesTheMapAsItWas) {
   counting->fail = false;
   EXPECT_EQ(m.findOrCreate({-2, 0, 0}), BlockIndex(BlockMap::kBlocksPerChunk));
   EXPECT_EQ(m.size(), BlockMap::kBlocksPerChunk + 1);
+}
+
+}  // namespace
+}  // namespace fragg
+
+namespace fragg {
+namespace {
+
+// BlockView's slots: a walk over the stamps in slot order lists what the keyed walk lists,
+// ascending; an erased slot holds no key and no stamps (never listed, holds() false for its old
+// key) until another block takes it; erasing many at once and clear() do the same.
+TEST(BlockViewSlots, ChangedSlotsEqualTheChangedKeysAndErasedSlotsHoldNothing) {
+  BlockMap blocks;
+  std::vector<BlockKey> keys;
+  for (int i = 0; i < 40; ++i) keys.push_back({i % 7 - 3, i / 7, i % 3});
+  for (size_t j = 0; j < keys.size(); ++j) {
+    BlockMeta& m = blocks.meta(blocks.findOrCreate(keys[j]));
+    m.changed_at = m.state_at = j + 1;  // block j changed at revision j + 1
+  }
+  const BlockView view(blocks);
+  const auto expectListing = [&](uint64_t revision, const std::string& when) {
+    SCOPED_TRACE(when);
+    const std::vector<BlockIndex> slots = view.changedSlotsSince(revision, BlockChange::kState);
+    EXPECT_TRUE(std::is_sorted(slots.begin(), slots.end()));
+    std::set<BlockKey, KeyLess> from_slots, from_keys;
+    for (const BlockIndex s : slots) {
+      ASSERT_LT(s, view.slotCount());
+      EXPECT_TRUE(view.holds(s, view.keyAt(s)));
+      EXPECT_EQ(view.slotOf(view.keyAt(s)), s);
+      EXPECT_EQ(&view.blockAt(s), view.findBlock(view.keyAt(s)));
+      EXPECT_EQ(&view.masksAt(s), view.findMasks(view.keyAt(s)));
+      from_slots.insert(view.keyAt(s));
+    }
+    for (const BlockKey& k : view.changedSince(revision, BlockChange::kState)) from_keys.insert(k);
+    EXPECT_EQ(slots.size(), from_slots.size());
+    EXPECT_EQ(from_slots, from_keys);
+  };
+  expectListing(0, "all");
+  expectListing(25, "the last 15");
+  const BlockIndex gone = blocks.find(keys[30]);
+  blocks.erase(keys[30]);
+  EXPECT_FALSE(blocks.liveAt(gone));
+  EXPECT_FALSE(view.holds(gone, keys[30]));
+  EXPECT_EQ(view.keyAt(gone), BlockMap::kFreedSlotKey);
+  expectListing(25, "one erased");
+  EXPECT_EQ(view.changedSlotsSince(25, BlockChange::kState).size(), 14u);
+  const std::map<BlockIndex, BlockKey> freed = {
+      {gone, keys[30]}, {blocks.find(keys[31]), keys[31]}, {blocks.find(keys[32]), keys[32]}};
+  blocks.erase(std::vector<BlockKey>{keys[31], keys[32], BlockKey{99, 99, 99}});
+  EXPECT_EQ(view.changedSlotsSince(25, BlockChange::kState).size(), 12u);
+  EXPECT_EQ(view.allSlots().size(), blocks.size());
+  // Another block takes a freed slot: the slot holds it, not the old key.
+  const BlockIndex taken = blocks.findOrCreate({50, 50, 50});
+  ASSERT_EQ(freed.count(taken), 1u) << "a freed slot is taken before the arena grows";
+  EXPECT_TRUE(view.holds(taken, {50, 50, 50}));
+  EXPECT_FALSE(view.holds(taken, freed.at(taken)));
+  blocks.clear();
+  EXPECT_TRUE(view.allSlots().empty());
+  EXPECT_TRUE(view.changedSlotsSince(0, BlockChange::kAny).empty());
 }
 
 }  // namespace
