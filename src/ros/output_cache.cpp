@@ -39,14 +39,35 @@ MapOutputCache::MapOutputCache(const OutputCacheOptions& options) : options_(opt
     throw fragg::InvalidArgument("output cache: refresh_on kOccupied would miss free cells");
 }
 
-bool MapOutputCache::boundsSettled(const fragg::BlockKey& key, const Piece& piece) const {
-  if (piece.min_x == 0 && piece.min_y == 0 && piece.max_x == fragg::kBlockMask &&
-      piece.max_y == fragg::kBlockMask)
-    return true;  // every column of the block observed already: nothing can widen them
-  if (!seen_valid_) return false;
+bool MapOutputCache::boundsSettled(const fragg::BlockKey& key, const Piece& piece,
+                                   const fragg::BlockStateMasks& masks) const {
+  // The block's observed columns that the masks show (free or occupied cells), with the bounds
+  // kept from earlier reads (observed cells stay observed): cells the masks miss (observed, in
+  // the unknown band) lie inside the block, so on a side where these reach the block's edge, or
+  // where the block lies inside the observed bounds of the map, no cell can widen the bounds.
+  uint64_t observed_xy = 0;
+  for (int z = 0; z < fragg::kBlockSize; ++z) observed_xy |= masks.occupied[z] | masks.free[z];
+  int32_t min_x = fragg::kBlockSize, max_x = -1, min_y = fragg::kBlockSize, max_y = -1;
+  if (observed_xy) {
+    uint64_t rows = 0, xs = 0;
+    for (int ly = 0; ly < fragg::kBlockSize; ++ly) {
+      const uint64_t row = observed_xy >> (fragg::kBlockSize * ly) & 0xff;
+      rows |= uint64_t{row != 0} << ly;
+      xs |= row;
+    }
+    min_x = __builtin_ctzll(xs), max_x = 63 - __builtin_clzll(xs);
+    min_y = __builtin_ctzll(rows), max_y = 63 - __builtin_clzll(rows);
+  }
+  if (piece.max_x >= 0) {
+    min_x = std::min<int32_t>(min_x, piece.min_x), max_x = std::max<int32_t>(max_x, piece.max_x);
+    min_y = std::min<int32_t>(min_y, piece.min_y), max_y = std::max<int32_t>(max_y, piece.max_y);
+  }
   const int64_t x0 = int64_t{key.x} * fragg::kBlockSize, y0 = int64_t{key.y} * fragg::kBlockSize;
-  return x0 >= seen_lo_x_ && x0 + fragg::kBlockMask <= seen_hi_x_ && y0 >= seen_lo_y_ &&
-         y0 + fragg::kBlockMask <= seen_hi_y_;
+  const int64_t x1 = x0 + fragg::kBlockMask, y1 = y0 + fragg::kBlockMask;
+  return (min_x == 0 || (seen_valid_ && x0 >= seen_lo_x_)) &&
+         (max_x == fragg::kBlockMask || (seen_valid_ && x1 <= seen_hi_x_)) &&
+         (min_y == 0 || (seen_valid_ && y0 >= seen_lo_y_)) &&
+         (max_y == fragg::kBlockMask || (seen_valid_ && y1 <= seen_hi_y_));
 }
 
 MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
@@ -60,7 +81,8 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
   // changed (most state changes are cells seen for the first time or turning free).
   const fragg::BlockKey& key = source.key;
   PieceDelta delta;
-  const bool from_masks = source.masks && masks_suffice && boundsSettled(key, *piece);
+  const bool from_masks =
+      source.masks && masks_suffice && boundsSettled(key, *piece, *source.masks);
   const fragg::Block* block = from_masks ? nullptr : &blocks.blockAt(source.slot);
   delta.cells_read = !from_masks;
   const fragg::OccupancyModel& model = map.model();

@@ -206,10 +206,13 @@ class MapOutputCache {
   /// is kMasks) and source.masks, the masks alone serve where boundsSettled.
   PieceDelta computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
                           const Source& source, bool masks_suffice, Piece* piece) const;
-  /// Whether no cell of the block can widen the projected map's bounds: the piece's observed
-  /// bounds span the whole block, or the block lies inside the observed bounds of the last
-  /// update (observed cells stay observed until the view's epoch changes, which rebuilds).
-  bool boundsSettled(const fragg::BlockKey& key, const Piece& piece) const;
+  /// Whether no cell of the block can widen the projected map's bounds, side by side: on each
+  /// side either the block lies inside the map's observed bounds, or the observed columns the
+  /// masks show (with the piece's kept bounds: observed cells stay observed until the view's
+  /// epoch changes, which rebuilds) reach the block's edge (cells the masks miss, observed in
+  /// the unknown band, lie inside the block).
+  bool boundsSettled(const fragg::BlockKey& key, const Piece& piece,
+                     const fragg::BlockStateMasks& masks) const;
   /// The piece of `source`'s block, made (and registered in its column, marked dirty) when
   /// new; a piece of another block in the slot is dropped first.
   uint32_t pieceFor(const Source& source);
