@@ -328,6 +328,20 @@ TEST(OutputCache, CellsInTheUnknownBandAtTheEdgeWidenTheGrid) {
   EXPECT_EQ(u.blocks_read, 1u);
   EXPECT_EQ(u.blocks_cells_read, 0u);
   expectSameAsRebuild(map, cache, OutputCacheOptions(), "a band cell inside");
+  // Outside the bounds, but the masks show free cells at the block's edges on every side: no
+  // cell of it can lie further out, its masks suffice (a band cell inside it included).
+  const fragg::VoxelKey corner{-104, 96, 0};  // the block's low x, low y corner
+  ASSERT_EQ(corner.x % 8, 0);
+  ASSERT_EQ(corner.y % 8, 0);
+  for (const fragg::VoxelKey& v : {corner, fragg::VoxelKey{corner.x + 7, corner.y + 7, 0}})
+    test::setCell(map, v, fragg::CellState::kFree);
+  const fragg::VoxelKey band{corner.x + 3, corner.y + 4, 0};
+  test::setCell(map, band, fragg::CellState::kOccupied);
+  setLogOdds(map, band, 0);
+  u = cache.update(map);
+  EXPECT_EQ(u.blocks_read, 1u);
+  EXPECT_EQ(u.blocks_cells_read, 0u);
+  expectSameAsRebuild(map, cache, OutputCacheOptions(), "masks at the block's edges");
   // The wall seen from elsewhere: most of its blocks lie inside the bounds.
   test::insertWall(map, Eigen::Vector3d(0.4, 0.3, 0.0), 2.0);
   u = cache.update(map);
