@@ -17,6 +17,9 @@ out=${OUT:-/tmp/fragg_prebuilt_out}
 mkdir -p "$out"
 pre=$top/.device/pre
 export LD_LIBRARY_PATH="$pre/lib:$top/.device/octomap/lib:$top/.device/store/lib:${LD_LIBRARY_PATH:-}"
+# The tests' scratch folder (their built-in one is this machine's build tree).
+export FRAGG_TEST_TMP=${FRAGG_TEST_TMP:-/tmp/fragg_test_tmp}
+mkdir -p "$FRAGG_TEST_TMP"
 steps=("$@")
 [ ${#steps[@]} -eq 0 ] && steps=(insert gains tests)
 nvidia-smi -L || echo "no nvidia-smi"

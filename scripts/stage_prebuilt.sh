@@ -76,7 +76,10 @@ if [ -n "$base" ]; then
 fi
 strip "$dest"/head/*
 if [ -n "$base" ]; then strip "$dest/base/fragg_map_bench"; fi
+# Debian libraries the GPU machine's image lacks: fmt 9; FCL and libccd for the collision bench
+# (liboctomap comes with .device/octomap).
 cp -a /lib/x86_64-linux-gnu/libfmt.so.9* "$dest/lib/"
+cp -L /usr/lib/x86_64-linux-gnu/libfcl.so.0.7 /lib/x86_64-linux-gnu/libccd.so.2 "$dest/lib/"
 git -C "$top" rev-parse HEAD >"$dest/head/COMMIT"
 git -C "$top" diff --quiet || echo "(with uncommitted changes)" >>"$dest/head/COMMIT"
 echo "staged in $dest ($(du -sh "$dest" | cut -f1); carry it with .device/octomap and .device/store):"

@@ -213,7 +213,7 @@ TEST(StateMasksGpuTest, NamedEditsAreByteIdentical) {
       },
       "merge");
   both(insert(4), "scan 4 after merge");
-  const std::string path = std::string(FRAGG_TEST_TMP) + "/state_masks_gpu.fgm";
+  const std::string path = testDir() + "/state_masks_gpu.fgm";
   gpu.save(path);
   Map loaded = Map::load(path, Backend::kCuda);
   ASSERT_STREQ(loaded.backendName(), "cuda") << loaded.backendReason();
