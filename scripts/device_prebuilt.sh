@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# On the GPU machine: runs what scripts/stage_prebuilt.sh staged (carry .device/pre,
-# .device/octomap, .device/store), no build. Steps, in the order given (default: insert gains
+# On the GPU machine: runs what scripts/stage_prebuilt.sh staged (carry .device/pre, or the
+# --dest given there as FRAGG_PREBUILT, with .device/octomap and .device/store), no build. Steps, in the order given (default: insert gains
 # tests):
 #   insert  W1 30 m insertion, batch and one insert (fragg_map_bench --backends cuda+sequence
 #           cuda), this tree and the staged base alternated, twice; the stage lines too
@@ -15,7 +15,7 @@ set -uo pipefail
 top="$(cd "$(dirname "$0")/.." && pwd)"
 out=${OUT:-/tmp/fragg_prebuilt_out}
 mkdir -p "$out"
-pre=$top/.device/pre
+pre=${FRAGG_PREBUILT:-$top/.device/pre}  # stage_prebuilt.sh's --dest
 export LD_LIBRARY_PATH="$pre/lib:$top/.device/octomap/lib:$top/.device/store/lib:${LD_LIBRARY_PATH:-}"
 # The tests' scratch folder (their built-in one is this machine's build tree).
 export FRAGG_TEST_TMP=${FRAGG_TEST_TMP:-/tmp/fragg_test_tmp}

@@ -3,7 +3,7 @@
 # stripped, under DEST (default .device/pre) so that a device call only runs them: no build
 # in the call, whose minutes are scarce. DEST/head holds this tree's programs, DEST/base the
 # benchmark of BASE when given (git archive BASE, built with tests off), DEST/lib the shared
-# libraries Ubuntu's image may lack (fmt). liboctomap and the page stores come from
+# libraries Ubuntu's image lacks (fmt; FCL and libccd). liboctomap and the page stores come from
 # .device/octomap and .device/store (../shared/tools/stage-octomap.sh, scripts/stage_store.sh),
 # carried beside DEST. The gpu tests that read ../shared/data/real find it at FRAGG_REAL_DATA's
 # path as compiled: pass --real-data PATH as it will be on the device (it is not known here),

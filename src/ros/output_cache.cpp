@@ -39,35 +39,30 @@ MapOutputCache::MapOutputCache(const OutputCacheOptions& options) : options_(opt
     throw fragg::InvalidArgument("output cache: refresh_on kOccupied would miss free cells");
 }
 
-bool MapOutputCache::boundsSettled(const fragg::BlockKey& key, const Piece& piece,
-                                   const fragg::BlockStateMasks& masks) const {
-  // The block's observed columns that the masks show (free or occupied cells), with the bounds
-  // kept from earlier reads (observed cells stay observed): cells the masks miss (observed, in
-  // the unknown band) lie inside the block, so on a side where these reach the block's edge, or
-  // where the block lies inside the observed bounds of the map, no cell can widen the bounds.
-  uint64_t observed_xy = 0;
-  for (int z = 0; z < fragg::kBlockSize; ++z) observed_xy |= masks.occupied[z] | masks.free[z];
-  int32_t min_x = fragg::kBlockSize, max_x = -1, min_y = fragg::kBlockSize, max_y = -1;
-  if (observed_xy) {
-    uint64_t rows = 0, xs = 0;
-    for (int ly = 0; ly < fragg::kBlockSize; ++ly) {
-      const uint64_t row = observed_xy >> (fragg::kBlockSize * ly) & 0xff;
-      rows |= uint64_t{row != 0} << ly;
-      xs |= row;
-    }
-    min_x = __builtin_ctzll(xs), max_x = 63 - __builtin_clzll(xs);
-    min_y = __builtin_ctzll(rows), max_y = 63 - __builtin_clzll(rows);
+MapOutputCache::XyBounds MapOutputCache::xyBoundsOf(uint64_t columns_xy) {
+  XyBounds b;
+  if (!columns_xy) return b;
+  uint64_t rows = 0, xs = 0;
+  for (int ly = 0; ly < fragg::kBlockSize; ++ly) {
+    const uint64_t row = columns_xy >> (fragg::kBlockSize * ly) & 0xff;
+    rows |= uint64_t{row != 0} << ly;
+    xs |= row;
   }
-  if (piece.max_x >= 0) {
-    min_x = std::min<int32_t>(min_x, piece.min_x), max_x = std::max<int32_t>(max_x, piece.max_x);
-    min_y = std::min<int32_t>(min_y, piece.min_y), max_y = std::max<int32_t>(max_y, piece.max_y);
-  }
+  b.min_x = __builtin_ctzll(xs), b.max_x = 63 - __builtin_clzll(xs);
+  b.min_y = __builtin_ctzll(rows), b.max_y = 63 - __builtin_clzll(rows);
+  return b;
+}
+
+bool MapOutputCache::boundsSettled(const fragg::BlockKey& key, const XyBounds& known) const {
+  // Cells `known` misses (observed, in the unknown band) lie inside the block: on a side where
+  // `known` reaches the block's edge, or where the block lies inside the map's observed bounds,
+  // none of them can widen the bounds.
   const int64_t x0 = int64_t{key.x} * fragg::kBlockSize, y0 = int64_t{key.y} * fragg::kBlockSize;
   const int64_t x1 = x0 + fragg::kBlockMask, y1 = y0 + fragg::kBlockMask;
-  return (min_x == 0 || (seen_valid_ && x0 >= seen_lo_x_)) &&
-         (max_x == fragg::kBlockMask || (seen_valid_ && x1 <= seen_hi_x_)) &&
-         (min_y == 0 || (seen_valid_ && y0 >= seen_lo_y_)) &&
-         (max_y == fragg::kBlockMask || (seen_valid_ && y1 <= seen_hi_y_));
+  return (known.min_x == 0 || (seen_valid_ && x0 >= seen_lo_x_)) &&
+         (known.max_x == fragg::kBlockMask || (seen_valid_ && x1 <= seen_hi_x_)) &&
+         (known.min_y == 0 || (seen_valid_ && y0 >= seen_lo_y_)) &&
+         (known.max_y == fragg::kBlockMask || (seen_valid_ && y1 <= seen_hi_y_));
 }
 
 MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
@@ -81,8 +76,24 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
   // changed (most state changes are cells seen for the first time or turning free).
   const fragg::BlockKey& key = source.key;
   PieceDelta delta;
-  const bool from_masks =
-      source.masks && masks_suffice && boundsSettled(key, *piece, *source.masks);
+  // From the masks: the observed columns they show (free or occupied cells) widened by the
+  // kept bounds (exact when last read from the cells; observed cells stay observed until a
+  // rebuild): the masks miss observed cells in the unknown band.
+  const bool masks_may_serve = source.masks && masks_suffice;
+  XyBounds masks_bounds;
+  if (masks_may_serve) {
+    uint64_t masks_xy = 0;
+    for (int z = 0; z < fragg::kBlockSize; ++z)
+      masks_xy |= source.masks->occupied[z] | source.masks->free[z];
+    masks_bounds = xyBoundsOf(masks_xy);
+    if (piece->max_x >= 0) {
+      masks_bounds.min_x = std::min<int32_t>(masks_bounds.min_x, piece->min_x);
+      masks_bounds.max_x = std::max<int32_t>(masks_bounds.max_x, piece->max_x);
+      masks_bounds.min_y = std::min<int32_t>(masks_bounds.min_y, piece->min_y);
+      masks_bounds.max_y = std::max<int32_t>(masks_bounds.max_y, piece->max_y);
+    }
+  }
+  const bool from_masks = masks_may_serve && boundsSettled(key, masks_bounds);
   const fragg::Block* block = from_masks ? nullptr : &blocks.blockAt(source.slot);
   delta.cells_read = !from_masks;
   const fragg::OccupancyModel& model = map.model();
@@ -95,7 +106,6 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
     if (from_masks) {
       o = source.masks->occupied[z];
       f = source.masks->free[z];
-      observed_xy |= o | f;  // widens the kept bounds only (see below)
     } else {
       const LayerMasks layer = layerMasks(block->cells + 64 * z, above, below);
       o = layer.occupied;
@@ -130,34 +140,13 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
   }
   // A column is occupied where a cell of it is, else free where one is (the grid's values).
   band_free &= ~band_occupied;
-  int32_t min_x = fragg::kBlockSize, min_y = fragg::kBlockSize, max_x = -1, max_y = -1;
-  if (observed_xy) {
-    // Rows (y) and columns (x) holding an observed cell: the first and last of each.
-    uint64_t rows = 0, xs = 0;
-    for (int ly = 0; ly < fragg::kBlockSize; ++ly) {
-      const uint64_t row = observed_xy >> (fragg::kBlockSize * ly) & 0xff;
-      rows |= uint64_t{row != 0} << ly;
-      xs |= row;
-    }
-    min_x = __builtin_ctzll(xs);
-    max_x = 63 - __builtin_clzll(xs);
-    min_y = __builtin_ctzll(rows);
-    max_y = 63 - __builtin_clzll(rows);
-  }
-  if (from_masks && piece->max_x >= 0) {
-    // The masks miss observed cells in the unknown band: the kept bounds (exact when last
-    // read from the cells, and observed cells stay observed until a rebuild) widened by them.
-    // Where they are short of the cells', the block lies inside the grid's bounds anyway.
-    min_x = std::min<int32_t>(min_x, piece->min_x);
-    max_x = std::max<int32_t>(max_x, piece->max_x);
-    min_y = std::min<int32_t>(min_y, piece->min_y);
-    max_y = std::max<int32_t>(max_y, piece->max_y);
-  }
+  const XyBounds bounds = from_masks ? masks_bounds : xyBoundsOf(observed_xy);
+  const int32_t min_x = bounds.min_x, max_x = bounds.max_x;
+  const int32_t min_y = bounds.min_y, max_y = bounds.max_y;
   if (band_occupied != piece->band_occupied || band_free != piece->band_free ||
       min_x != piece->min_x || max_x != piece->max_x || min_y != piece->min_y ||
       max_y != piece->max_y) {
-    // Lost an occupied column, a free one that did not turn occupied, or bounds (a column's
-    // merged patch cannot take the change by OR-ing it in).
+    // What its column's counts held of it, and whether it lost bounds.
     // Bounds shrink only where observed cells became unobserved (a scan removed).
     delta.bounds_shrank =
         piece->max_x >= 0 && (max_x < 0 || min_x > piece->min_x || max_x < piece->max_x ||
@@ -263,12 +252,12 @@ void MapOutputCache::markDirty(uint32_t c) {
   dirty_.push_back(c);
 }
 
-uint32_t MapOutputCache::pieceFor(const Source& source) {
+void MapOutputCache::pieceFor(const Source& source) {
   const uint32_t i = source.slot;
   const fragg::BlockKey& key = source.key;
   if (i >= pieces_.size()) pieces_.resize(i + 1);
   if (pieces_[i].column != kNoColumn) {
-    if (pieces_[i].key == key) return i;
+    if (pieces_[i].key == key) return;
     dropPiece(i);  // the slot's block left the map (paged out) and another took the slot
   }
   const fragg::BlockKey column_key{key.x, key.y, 0};
@@ -282,9 +271,8 @@ uint32_t MapOutputCache::pieceFor(const Source& source) {
   }
   pieces_[i].key = key;
   pieces_[i].column = c;
-  // Empty until computed: what it gains is OR-ed into the column then (recompute).
+  // Empty until computed: what it gains is counted into the column then (recompute).
   columns_[c].pieces.push_back(i);
-  return i;
 }
 
 void MapOutputCache::dropPiece(uint32_t i) {
@@ -491,7 +479,7 @@ void MapOutputCache::recompute(const fragg::Map& map, const fragg::BlockView& bl
   // Each block's piece (new ones made first: pieces_ does not change while the pieces are
   // computed), then the pieces in parallel (read-only map, one piece per iteration), then the
   // sums in order.
-  for (const Source& source : sources) (void)pieceFor(source);  // a piece's index is its slot
+  for (const Source& source : sources) pieceFor(source);  // a piece's index is its slot
   std::vector<PieceDelta>& deltas = deltas_;
   deltas.assign(sources.size(), PieceDelta());
   const int64_t n = static_cast<int64_t>(sources.size());

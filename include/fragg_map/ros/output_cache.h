@@ -158,7 +158,7 @@ class MapOutputCache {
   /// What recomputing a piece changed.
   struct PieceDelta {
     int64_t occupied = 0;     ///< shown occupied cells gained (negative: lost)
-    bool column = false;      ///< its columns or bounds changed: the column must be merged
+    bool column = false;      ///< its columns or bounds changed: its column takes the change
     bool cells_read = false;  ///< the block's cells were read (not its masks alone)
     /// With `column`: its columns before (what its column's counts held of it).
     uint64_t occupied_before = 0, free_before = 0;
@@ -206,16 +206,20 @@ class MapOutputCache {
   /// is kMasks) and source.masks, the masks alone serve where boundsSettled.
   PieceDelta computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
                           const Source& source, bool masks_suffice, Piece* piece) const;
-  /// Whether no cell of the block can widen the projected map's bounds, side by side: on each
-  /// side either the block lies inside the map's observed bounds, or the observed columns the
-  /// masks show (with the piece's kept bounds: observed cells stay observed until the view's
-  /// epoch changes, which rebuilds) reach the block's edge (cells the masks miss, observed in
-  /// the unknown band, lie inside the block).
-  bool boundsSettled(const fragg::BlockKey& key, const Piece& piece,
-                     const fragg::BlockStateMasks& masks) const;
-  /// The piece of `source`'s block, made (and registered in its column, marked dirty) when
-  /// new; a piece of another block in the slot is dropped first.
-  uint32_t pieceFor(const Source& source);
+  /// Observed xy key bounds within a block (min > max: none).
+  struct XyBounds {
+    int32_t min_x = fragg::kBlockSize, max_x = -1, min_y = fragg::kBlockSize, max_y = -1;
+  };
+  /// The first and last x and y of the columns set in `columns_xy` (bit lx + 8 ly).
+  static XyBounds xyBoundsOf(uint64_t columns_xy);
+  /// Whether no cell of the block can widen the projected map's bounds beyond `known` (the
+  /// observed bounds its masks and kept bounds show), side by side: on each side either the
+  /// block lies inside the map's observed bounds, or `known` reaches the block's edge (cells
+  /// the masks miss, observed in the unknown band, lie inside the block).
+  bool boundsSettled(const fragg::BlockKey& key, const XyBounds& known) const;
+  /// Makes the piece of `source`'s block (registered in its column, empty) when it has none;
+  /// a piece of another block in the slot is dropped first. The piece's index is the slot.
+  void pieceFor(const Source& source);
   /// Lists `piece` in with_cells_ when it holds cells, takes it out when it does not.
   void relist(uint32_t piece);
   void unlist(uint32_t piece);
