@@ -30,7 +30,12 @@
 //                             [--cloud-rate HZ] [--marker-rate HZ] [--map-rate HZ]
 //                             [--marker-chunk N] [--after-only] [--cells-always]
 //                             [--fresh-buffers] [--unpaced] [--flat-markers] [--worst N]
-//                             [--backend cpu|cuda]
+//                             [--backend cpu|cuda] [--sync-stage]
+// --sync-stage: before the outputs of a cloud where the markers take the changes in or a
+// whole-map publication lists them (where the server's outputs read Map::blockView(), which on a
+// CUDA map writes the device's changed blocks back first), that write-back is done and timed on
+// its own (`sync`, `sync_flt` in --worst; a line of its own), so that the outputs' stages show
+// what they cost apart from it. On a CPU map it costs nothing.
 #include <ros/serialization.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/PointField.h>
@@ -100,9 +105,12 @@ struct Times {
   size_t cells_read = 0;         ///< of those, blocks whose cells it read (the others: masks)
   fragg::ros::OutputCacheUpdate stages;  ///< the cache update's own account (wall times)
   double cache_update = 0;               ///< of `cloud`: MapOutputCache::update alone (after path)
-  size_t pending_chunks = 0;             ///< marker chunks queued after the cloud (paced)
-  size_t queued_blocks = 0;              ///< blocks the cache left queued after the cloud
-  double total() const { return markers + cloud + grid + serialise; }
+  double sync = 0;            ///< --sync-stage: Map::blockView() alone (a CUDA map's write-back)
+  long sync_faults = 0;       ///< minor page faults in it
+  bool synced = false;        ///< the stage ran before this cloud's outputs
+  size_t pending_chunks = 0;  ///< marker chunks queued after the cloud (paced)
+  size_t queued_blocks = 0;   ///< blocks the cache left queued after the cloud
+  double total() const { return sync + markers + cloud + grid + serialise; }
   /// One marker update: built and serialised.
   double markerUpdate() const { return markers + marker_serialise; }
   /// One publication of the whole-map outputs: cache update, messages, serialised.
@@ -116,6 +124,8 @@ bool g_flat_markers = false;
 /// --cells-always: the after path's cache reads every refreshed block's cells (as before it
 /// read the state masks where they suffice).
 bool g_cells_always = false;
+/// --sync-stage: the write-back before a take-in timed apart (the header's note).
+bool g_sync_stage = false;
 
 /// Which outputs of the after path go out after a cloud.
 struct Due {
@@ -146,12 +156,28 @@ class Outputs {
   /// whole-map messages only when due).
   Times publish(const fragg::Map& map, Due due = Due(), const Pace& pace = Pace()) {
     Times t;
+    const bool paced_markers = !before_ && pace.on && pace.marker_period_s > 0.0;
+    const bool paced_maps = !before_ && pace.on && pace.map_period_s > 0.0;
+    // The markers take the changes in at the first call, then a period after the last take-in
+    // (every call unpaced); the cache lists at a publication.
+    const bool takes_in =
+        !paced_markers || !synced_once_ || pace.now_s - last_sync_s_ >= pace.marker_period_s - 1e-6;
+    if (g_sync_stage && !before_ && (takes_in || due.maps)) {
+      const auto ts = Clock::now();
+      const long f = minorFaults();
+      (void)map.blockView();  // a CUDA map's changed blocks written back
+      t.sync = msSince(ts);
+      t.sync_faults = minorFaults() - f;
+      t.synced = true;
+    }
+    if (takes_in) {
+      synced_once_ = true;
+      last_sync_s_ = pace.now_s;
+    }
     auto t0 = Clock::now();
     long faults = minorFaults(), marker_faults = 0;
     fragg::ros::SerializedMarkerArray markers;  // as the server publishes them
-    const bool paced_markers = !before_ && pace.on && pace.marker_period_s > 0.0;
-    const bool paced_maps = !before_ && pace.on && pace.map_period_s > 0.0;
-    if (paced_markers) due.markers = true;  // something may be sent after every cloud
+    if (paced_markers) due.markers = true;      // something may be sent after every cloud
     if (!before_ && due.markers) {
       markers =
           fragg::ros::pacedBlockMarkersWire(map, style_, ros::Time(), pace.now_s,
@@ -226,6 +252,8 @@ class Outputs {
   static constexpr double kMinZ = -std::numeric_limits<double>::infinity();
   static constexpr double kMaxZ = std::numeric_limits<double>::infinity();
   bool before_;
+  bool synced_once_ = false;  ///< --sync-stage: the markers' first take-in happened
+  double last_sync_s_ = 0.0;  ///< and the time of the last
   fragg::ros::MarkerStyle style_;
   fragg::ros::MarkerLedger ledger_;
   fragg::ros::MapOutputCache cache_;
@@ -309,27 +337,27 @@ void printWorst(const std::vector<double>& total_ms, const std::vector<double>& 
       "the %zu costliest clouds (CPU ms: total = convert + markers built + markers serialised + "
       "whole-map outputs (cache update + messages) + their serialisation; the cache update's "
       "stages in wall ms: list, pieces, columns and grid, gather; minor page faults of the markers "
-      "and of the whole-map outputs)\n",
+      "and of the whole-map outputs; --sync-stage: the write-back before a take-in, its ms and "
+      "faults)\n",
       std::min(g_worst, order.size()));
   std::printf(
-      "%6s %8s %8s %8s %8s %6s %8s %8s %8s %8s | %7s %7s %7s %7s | %8s %8s %7s %9s %8s %8s %7s "
-      "%7s\n",
-      "cloud", "total", "convert", "mk_build", "mk_ser", "mk_MB", "cache", "cloud_msg", "grid_msg",
-      "map_ser", "list", "pieces", "grid", "gather", "blocks", "of_cells", "gathered", "MB_gath",
-      "chunks_q", "blocks_q", "mk_flt", "map_flt");
+      "%6s %8s %8s %8s %7s %8s %8s %6s %8s %8s %8s %8s | %7s %7s %7s %7s | %8s %8s %7s %9s %8s "
+      "%8s %7s %7s\n",
+      "cloud", "total", "convert", "sync", "sync_flt", "mk_build", "mk_ser", "mk_MB", "cache",
+      "cloud_msg", "grid_msg", "map_ser", "list", "pieces", "grid", "gather", "blocks", "of_cells",
+      "gathered", "MB_gath", "chunks_q", "blocks_q", "mk_flt", "map_flt");
   for (size_t k = 0; k < std::min(g_worst, order.size()); ++k) {
     const size_t i = order[k];
     const Times& t = after[i];
     std::printf(
-        "%6zu %8.2f %8.2f %8.2f %8.2f %6.2f %8.2f %8.2f %8.2f %8.2f | %7.2f %7.2f %7.2f %7.2f | "
-        "%8zu "
-        "%8zu "
-        "%7zu %9.2f %8zu %8zu %7ld %7ld\n",
-        i + 1, total_ms[i], convert_ms[i], t.markers, t.marker_serialise, t.marker_bytes / 1e6,
-        t.cache_update, t.cloud - t.cache_update, t.grid, t.serialise - t.marker_serialise,
-        t.stages.list_ms, t.stages.pieces_ms, t.stages.grid_ms, t.stages.gather_ms, t.blocks_read,
-        t.cells_read, t.stages.pieces_gathered, t.stages.bytes_gathered / 1e6, t.pending_chunks,
-        t.queued_blocks, t.marker_faults, t.map_faults);
+        "%6zu %8.2f %8.2f %8.2f %7ld %8.2f %8.2f %6.2f %8.2f %8.2f %8.2f %8.2f | %7.2f %7.2f %7.2f "
+        "%7.2f | %8zu %8zu %7zu %9.2f %8zu %8zu %7ld %7ld\n",
+        i + 1, total_ms[i], convert_ms[i], t.sync, t.sync_faults, t.markers, t.marker_serialise,
+        t.marker_bytes / 1e6, t.cache_update, t.cloud - t.cache_update, t.grid,
+        t.serialise - t.marker_serialise, t.stages.list_ms, t.stages.pieces_ms, t.stages.grid_ms,
+        t.stages.gather_ms, t.blocks_read, t.cells_read, t.stages.pieces_gathered,
+        t.stages.bytes_gathered / 1e6, t.pending_chunks, t.queued_blocks, t.marker_faults,
+        t.map_faults);
   }
 }
 
@@ -414,6 +442,20 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
       "%.2f ms over %zu clouds\n",
       paced ? " (paced)" : "", percentile(total_after, 0.5), percentile(total_after, 0.99),
       percentile(total_after, 1.0), scans.size());
+  if (g_sync_stage) {
+    std::vector<double> sync_ms;
+    long sync_faults = 0;
+    for (const Times& t : after_times)
+      if (t.synced) {
+        sync_ms.push_back(t.sync);
+        sync_faults += t.sync_faults;
+      }
+    if (!sync_ms.empty())
+      std::printf(
+          "  of it, the write-back before a take-in (Map::blockView()): %zu times, median %.2f ms, "
+          "max %.2f ms, %ld page faults in all\n",
+          sync_ms.size(), percentile(sync_ms, 0.5), percentile(sync_ms, 1.0), sync_faults);
+  }
   printWorst(total_after, converts, after_times);
   if (!after_only)
     std::printf("any:   median %.2f ms, max %.2f ms per cloud over %zu clouds\n",
@@ -487,6 +529,9 @@ int runMain(int argc, char** argv) {
   app.add_option("--worst", g_worst,
                  "print the N costliest clouds of the after path stage by stage (what makes its "
                  "p99)");
+  app.add_flag("--sync-stage", g_sync_stage,
+               "time the write-back before each take-in of the changes apart (Map::blockView(): a "
+               "CUDA map's changed blocks copied back) and print it");
   bool unpaced = false;
   app.add_flag("--unpaced", unpaced,
                "as the server with paced_outputs false: the throttled updates whole when due "
