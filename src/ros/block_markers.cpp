@@ -81,6 +81,55 @@ CellMask cellMask(const fragg::Map& map, const fragg::Block& block, fragg::CellS
   return mask;
 }
 
+namespace {
+
+/// `cells` of block `key` within `style`'s heights, speckles left out when it hides them.
+template <class View>
+CellMask shownCells(const fragg::Map& map, const View& blocks, const fragg::BlockKey& key,
+                    CellMask cells, const MarkerStyle& style) {
+  if (!style.heights.unbounded()) {
+    const uint8_t layers = style.heights.blockLayers(key.z, map.resolution());
+    CellMask shown;
+    for (int z = 0; z < fragg::kBlockSize; ++z)
+      if (layers >> z & 1) shown |= CellMask(~uint64_t{0}) << (64 * z);
+    cells &= shown;
+  }
+  if (style.hide_speckles && cells.any()) cells = withoutSpeckles(map, blocks, key, cells);
+  return cells;
+}
+
+/// Whether the view holds block `key`.
+bool holdsBlock(const fragg::BlockView& blocks, const fragg::BlockKey& key) {
+  return blocks.findBlock(key) != nullptr;
+}
+bool holdsBlock(const MaskMirror& blocks, const fragg::BlockKey& key) {
+  return blocks.contains(key);
+}
+
+/// drawnCells of block `key` (none when the view does not hold it).
+CellMask drawnCellsOf(const fragg::Map& map, const fragg::BlockView& blocks,
+                      const fragg::BlockKey& key, const MarkerStyle& style) {
+  const fragg::Block* b = blocks.findBlock(key);
+  return b ? drawnCells(map, blocks, key, *b, style) : CellMask();
+}
+/// The same from a mask mirror: every state from the block's masks (unknown: neither).
+CellMask drawnCellsOf(const fragg::Map& map, const MaskMirror& blocks, const fragg::BlockKey& key,
+                      const MarkerStyle& style) {
+  const fragg::BlockStateMasks* masks = blocks.findMasks(key);
+  CellMask cells;
+  if (!masks) return cells;
+  for (int w = 0; w < fragg::kStateMaskWords; ++w) {
+    const uint64_t word = style.state == fragg::CellState::kOccupied ? masks->occupied[w]
+                          : style.state == fragg::CellState::kFree
+                              ? masks->free[w]
+                              : ~(masks->occupied[w] | masks->free[w]);
+    if (word) cells |= CellMask(word) << (64 * w);
+  }
+  return shownCells(map, blocks, key, cells, style);
+}
+
+}  // namespace
+
 CellMask drawnCells(const fragg::Map& map, const fragg::BlockView& blocks,
                     const fragg::BlockKey& key, const fragg::Block& block,
                     const MarkerStyle& style) {
@@ -97,15 +146,7 @@ CellMask drawnCells(const fragg::Map& map, const fragg::BlockView& blocks,
   } else {
     cells = cellMask(map, block, style.state);
   }
-  if (!style.heights.unbounded()) {
-    const uint8_t layers = style.heights.blockLayers(key.z, map.resolution());
-    CellMask shown;
-    for (int z = 0; z < fragg::kBlockSize; ++z)
-      if (layers >> z & 1) shown |= CellMask(~uint64_t{0}) << (64 * z);
-    cells &= shown;
-  }
-  if (style.hide_speckles && cells.any()) cells = withoutSpeckles(map, blocks, key, cells);
-  return cells;
+  return shownCells(map, blocks, key, cells, style);
 }
 
 namespace {
@@ -270,170 +311,177 @@ SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map& map, const MarkerS
   // every call and all at once.
   const bool paced = period_s > 0.0;
   const bool note = !paced || !ledger->paced_ || now_s - ledger->last_note_s_ >= period_s - 1e-6;
-  // A take-in reads the whole map (a CUDA map's changes written back first); a share draws its
-  // chunks' listed blocks from the host's copy as it stands, so a CUDA map is written back once
-  // a period, not at every cloud (same cells on a CPU map).
-  const fragg::BlockView blocks = note ? map.blockView() : map.hostBlockView();
-  // A call that takes the changes in sends what is left of the last ones (nothing, when the
-  // shares kept up); the others their share: what is left over the calls left until it is a
-  // period old.
-  size_t take = ledger->pending_.size();
-  if (paced && !note && !ledger->pending_.empty()) {
-    const double interval_s = std::clamp(now_s - ledger->last_paced_s_, 1e-6, period_s);
-    const double left_s = ledger->pending_.front().since_s + period_s - now_s;
-    const double calls_left = std::max(1.0, std::floor(left_s / interval_s + 1e-6));
-    take =
-        static_cast<size_t>(std::ceil(static_cast<double>(ledger->pending_.size()) / calls_left));
-  }
-  if (paced) {
-    ledger->last_paced_s_ = now_s;
-    ledger->paced_ = true;
-  }
-  // A chunk joins the queue once (a queued chunk is drawn when it is sent: its latest cells).
-  const auto queue = [&](const fragg::BlockKey& chunk_key) -> MarkerLedger::Chunk& {
-    MarkerLedger::Chunk& chunk = ledger->chunks_[chunk_key];
-    if (!chunk.pending) {
-      chunk.pending = true;
-      ledger->pending_.push_back({chunk_key, now_s});
+  // The rest reads `blocks`: the map's view or the ledger's mask mirror (useMirror).
+  const auto send = [&](const auto& blocks) -> SerializedMarkerArray {
+    // A call that takes the changes in sends what is left of the last ones (nothing, when the
+    // shares kept up); the others their share: what is left over the calls left until it is a
+    // period old.
+    size_t take = ledger->pending_.size();
+    if (paced && !note && !ledger->pending_.empty()) {
+      const double interval_s = std::clamp(now_s - ledger->last_paced_s_, 1e-6, period_s);
+      const double left_s = ledger->pending_.front().since_s + period_s - now_s;
+      const double calls_left = std::max(1.0, std::floor(left_s / interval_s + 1e-6));
+      take =
+          static_cast<size_t>(std::ceil(static_cast<double>(ledger->pending_.size()) / calls_left));
     }
-    return chunk;
-  };
-  if (note) {
-    // Shown blocks that were erased (clearBox, reset, paged out) are not listed as changed: look
-    // them up, when the map's view changed since the last update (no erase without that).
-    if (map.viewEpoch() != ledger->view_epoch_) {
-      std::vector<fragg::BlockKey> emptied;
-      for (auto& [chunk_key, chunk] : ledger->chunks_) {
-        auto& list = chunk.blocks;
-        const size_t before = list.size();
-        list.erase(std::remove_if(list.begin(), list.end(),
-                                  [&](const MarkerLedger::ShownBlock& b) {
-                                    return blocks.findBlock(b.key) == nullptr;
-                                  }),
-                   list.end());
-        if (list.size() != before) {
-          ledger->shown_blocks_ -= before - list.size();
-          emptied.push_back(chunk_key);
+    if (paced) {
+      ledger->last_paced_s_ = now_s;
+      ledger->paced_ = true;
+    }
+    // A chunk joins the queue once (a queued chunk is drawn when it is sent: its latest cells).
+    const auto queue = [&](const fragg::BlockKey& chunk_key) -> MarkerLedger::Chunk& {
+      MarkerLedger::Chunk& chunk = ledger->chunks_[chunk_key];
+      if (!chunk.pending) {
+        chunk.pending = true;
+        ledger->pending_.push_back({chunk_key, now_s});
+      }
+      return chunk;
+    };
+    if (note) {
+      // Shown blocks that were erased (clearBox, reset, paged out) are not listed as changed: look
+      // them up, when the map's view changed since the last update (no erase without that).
+      if (map.viewEpoch() != ledger->view_epoch_) {
+        std::vector<fragg::BlockKey> emptied;
+        for (auto& [chunk_key, chunk] : ledger->chunks_) {
+          auto& list = chunk.blocks;
+          const size_t before = list.size();
+          list.erase(std::remove_if(list.begin(), list.end(),
+                                    [&](const MarkerLedger::ShownBlock& b) {
+                                      return !holdsBlock(blocks, b.key);
+                                    }),
+                     list.end());
+          if (list.size() != before) {
+            ledger->shown_blocks_ -= before - list.size();
+            emptied.push_back(chunk_key);
+          }
+        }
+        for (const fragg::BlockKey& chunk_key : emptied) queue(chunk_key).redraw = true;
+      }
+      // The blocks whose drawn state changed, with their 26 neighbours when speckles are hidden
+      // (a cell's speckle state follows its neighbours' occupancy).
+      // Occupied markers: the blocks where a cell crossed the occupied threshold (most blocks a
+      // scan changes gain free cells only); other states: those whose masks changed, from the
+      // change log. Listed by chunk only: their cells are drawn when the chunk is sent.
+      std::vector<fragg::BlockKey> changed = blocks.changedSince(
+          since, style.state == fragg::CellState::kOccupied ? fragg::BlockChange::kOccupied
+                                                            : fragg::BlockChange::kMasks);
+      if (style.hide_speckles && !changed.empty()) {
+        std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around;
+        for (const fragg::BlockKey& k : changed)
+          for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dx = -1; dx <= 1; ++dx) around.insert({k.x + dx, k.y + dy, k.z + dz});
+        changed.clear();
+        for (const fragg::BlockKey& k : around)
+          if (holdsBlock(blocks, k)) changed.push_back(k);
+      }
+      for (const fragg::BlockKey& k : changed) queue(chunkOf(k, chunk_blocks)).listed.push_back(k);
+      // colored_map: blocks whose colours changed are redrawn even with the same cells.
+      if (style.colors) {
+        for (const fragg::BlockKey& k : style.colors->recoloredSince(ledger->colors_drawn_)) {
+          if (!holdsBlock(blocks, k)) continue;
+          MarkerLedger::Chunk& chunk = queue(chunkOf(k, chunk_blocks));
+          chunk.listed.push_back(k);
+          chunk.redraw = true;
         }
       }
-      for (const fragg::BlockKey& chunk_key : emptied) queue(chunk_key).redraw = true;
+      ledger->published_revision_ = map.revision();
+      ledger->view_epoch_ = map.viewEpoch();
+      if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
+      if (paced) ledger->last_note_s_ = now_s;
     }
-    // The blocks whose drawn state changed, with their 26 neighbours when speckles are hidden
-    // (a cell's speckle state follows its neighbours' occupancy).
-    // Occupied markers: the blocks where a cell crossed the occupied threshold (most blocks a
-    // scan changes gain free cells only); other states: those whose masks changed, from the
-    // change log. Listed by chunk only: their cells are drawn when the chunk is sent.
-    std::vector<fragg::BlockKey> changed = blocks.changedSince(
-        since, style.state == fragg::CellState::kOccupied ? fragg::BlockChange::kOccupied
-                                                          : fragg::BlockChange::kMasks);
-    if (style.hide_speckles && !changed.empty()) {
-      std::unordered_set<fragg::BlockKey, fragg::BlockKeyHash> around;
-      for (const fragg::BlockKey& k : changed)
-        for (int dz = -1; dz <= 1; ++dz)
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) around.insert({k.x + dx, k.y + dy, k.z + dz});
-      changed.clear();
-      for (const fragg::BlockKey& k : around)
-        if (blocks.findBlock(k)) changed.push_back(k);
+    if (!paced) take = ledger->pending_.size();
+    // The chunks sent now, in key order.
+    std::vector<fragg::BlockKey> order;
+    order.reserve(take);
+    for (size_t q = 0; q < take; ++q) {
+      order.push_back(ledger->pending_.front().chunk);
+      ledger->pending_.pop_front();
     }
-    for (const fragg::BlockKey& k : changed) queue(chunkOf(k, chunk_blocks)).listed.push_back(k);
-    // colored_map: blocks whose colours changed are redrawn even with the same cells.
-    if (style.colors) {
-      for (const fragg::BlockKey& k : style.colors->recoloredSince(ledger->colors_drawn_)) {
-        if (!blocks.findBlock(k)) continue;
-        MarkerLedger::Chunk& chunk = queue(chunkOf(k, chunk_blocks));
-        chunk.listed.push_back(k);
+    std::sort(order.begin(), order.end(), byKey);
+    // Their listed blocks' drawn cells, in parallel (read-only; a block that left the map draws
+    // nothing), then the ledger in order.
+    struct Listed {
+      MarkerLedger::Chunk* chunk;
+      fragg::BlockKey key;
+    };
+    std::vector<MarkerLedger::Chunk*> sent;
+    sent.reserve(order.size());
+    std::vector<Listed> listed;
+    for (const fragg::BlockKey& chunk_key : order) {
+      MarkerLedger::Chunk& chunk = ledger->chunks_.at(chunk_key);
+      sent.push_back(&chunk);
+      std::sort(chunk.listed.begin(), chunk.listed.end(), byKey);
+      chunk.listed.erase(std::unique(chunk.listed.begin(), chunk.listed.end()), chunk.listed.end());
+      for (const fragg::BlockKey& k : chunk.listed) listed.push_back({&chunk, k});
+    }
+    std::vector<CellMask> masks(listed.size());
+    const int64_t n = static_cast<int64_t>(listed.size());
+#pragma omp parallel for schedule(static) if (n > 256)
+    for (int64_t j = 0; j < n; ++j) {
+      masks[j] = drawnCellsOf(map, blocks, listed[j].key, style);
+    }
+    for (size_t j = 0; j < listed.size(); ++j) {
+      MarkerLedger::Chunk& chunk = *listed[j].chunk;
+      const fragg::BlockKey& key = listed[j].key;
+      const CellMask& cells = masks[j];
+      auto& list = chunk.blocks;
+      const auto shown =
+          std::find_if(list.begin(), list.end(),
+                       [&](const MarkerLedger::ShownBlock& b) { return b.key == key; });
+      if (shown == list.end()) {
+        if (cells.none()) continue;
+        list.push_back({key, cells});
+        ++ledger->shown_blocks_;
+        chunk.redraw = true;
+      } else if (cells.none()) {
+        list.erase(shown);
+        --ledger->shown_blocks_;
+        chunk.redraw = true;
+      } else if (cells != shown->cells) {
+        shown->cells = cells;
         chunk.redraw = true;
       }
     }
-    ledger->published_revision_ = map.revision();
-    ledger->view_epoch_ = map.viewEpoch();
-    if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
-    if (paced) ledger->last_note_s_ = now_s;
-  }
-  if (!paced) take = ledger->pending_.size();
-  // The chunks sent now, in key order.
-  std::vector<fragg::BlockKey> order;
-  order.reserve(take);
-  for (size_t q = 0; q < take; ++q) {
-    order.push_back(ledger->pending_.front().chunk);
-    ledger->pending_.pop_front();
-  }
-  std::sort(order.begin(), order.end(), byKey);
-  // Their listed blocks' drawn cells, in parallel (read-only; a block that left the map draws
-  // nothing), then the ledger in order.
-  struct Listed {
-    MarkerLedger::Chunk* chunk;
-    fragg::BlockKey key;
+    // One entry per chunk whose drawing changed: its whole marker (encoded again and kept), or
+    // DELETE when it draws nothing now.
+    std::vector<MarkerLedger::Chunk*> redrawn;
+    redrawn.reserve(order.size());
+    out.markers.reserve(order.size());
+    for (size_t i = 0; i < order.size(); ++i) {
+      MarkerLedger::Chunk& chunk = *sent[i];
+      chunk.pending = false;
+      chunk.listed.clear();
+      const bool redraw = chunk.redraw;
+      chunk.redraw = false;
+      if (chunk.blocks.empty()) {
+        if (chunk.id >= 0)
+          out.markers.push_back(
+              wireOf(markerHeader(style, stamp, chunk.id, visualization_msgs::Marker::DELETE)));
+        ledger->chunks_.erase(order[i]);
+        continue;
+      }
+      if (!redraw) continue;  // its blocks' drawn cells are as last sent
+      if (chunk.id < 0) chunk.id = ledger->next_id_++;
+      redrawn.push_back(&chunk);
+      out.markers.emplace_back();  // its wire, once encoded
+    }
+    encodeChunks(map, style, redrawn);
+    size_t next = 0;
+    for (WireMarkerPtr& m : out.markers)
+      if (!m) m = redrawn[next++]->wire;
+    return out;
   };
-  std::vector<MarkerLedger::Chunk*> sent;
-  sent.reserve(order.size());
-  std::vector<Listed> listed;
-  for (const fragg::BlockKey& chunk_key : order) {
-    MarkerLedger::Chunk& chunk = ledger->chunks_.at(chunk_key);
-    sent.push_back(&chunk);
-    std::sort(chunk.listed.begin(), chunk.listed.end(), byKey);
-    chunk.listed.erase(std::unique(chunk.listed.begin(), chunk.listed.end()), chunk.listed.end());
-    for (const fragg::BlockKey& k : chunk.listed) listed.push_back({&chunk, k});
+  // A take-in reads the whole map (a CUDA map's changes written back first) or brings the mask
+  // mirror up to date (the changed blocks' masks only); a share draws its chunks' listed blocks
+  // from the host's copy or the mirror as they stand, so a CUDA map is written back (or its
+  // masks read) once a period, not at every cloud (the same cells on a CPU map).
+  if (ledger->mirror_) {
+    if (note) ledger->mirror_->sync(map);
+    return send(*ledger->mirror_);
   }
-  std::vector<CellMask> masks(listed.size());
-  const int64_t n = static_cast<int64_t>(listed.size());
-#pragma omp parallel for schedule(static) if (n > 256)
-  for (int64_t j = 0; j < n; ++j) {
-    if (const fragg::Block* b = blocks.findBlock(listed[j].key))
-      masks[j] = drawnCells(map, blocks, listed[j].key, *b, style);
-  }
-  for (size_t j = 0; j < listed.size(); ++j) {
-    MarkerLedger::Chunk& chunk = *listed[j].chunk;
-    const fragg::BlockKey& key = listed[j].key;
-    const CellMask& cells = masks[j];
-    auto& list = chunk.blocks;
-    const auto shown = std::find_if(
-        list.begin(), list.end(), [&](const MarkerLedger::ShownBlock& b) { return b.key == key; });
-    if (shown == list.end()) {
-      if (cells.none()) continue;
-      list.push_back({key, cells});
-      ++ledger->shown_blocks_;
-      chunk.redraw = true;
-    } else if (cells.none()) {
-      list.erase(shown);
-      --ledger->shown_blocks_;
-      chunk.redraw = true;
-    } else if (cells != shown->cells) {
-      shown->cells = cells;
-      chunk.redraw = true;
-    }
-  }
-  // One entry per chunk whose drawing changed: its whole marker (encoded again and kept), or
-  // DELETE when it draws nothing now.
-  std::vector<MarkerLedger::Chunk*> redrawn;
-  redrawn.reserve(order.size());
-  out.markers.reserve(order.size());
-  for (size_t i = 0; i < order.size(); ++i) {
-    MarkerLedger::Chunk& chunk = *sent[i];
-    chunk.pending = false;
-    chunk.listed.clear();
-    const bool redraw = chunk.redraw;
-    chunk.redraw = false;
-    if (chunk.blocks.empty()) {
-      if (chunk.id >= 0)
-        out.markers.push_back(
-            wireOf(markerHeader(style, stamp, chunk.id, visualization_msgs::Marker::DELETE)));
-      ledger->chunks_.erase(order[i]);
-      continue;
-    }
-    if (!redraw) continue;  // its blocks' drawn cells are as last sent
-    if (chunk.id < 0) chunk.id = ledger->next_id_++;
-    redrawn.push_back(&chunk);
-    out.markers.emplace_back();  // its wire, once encoded
-  }
-  encodeChunks(map, style, redrawn);
-  size_t next = 0;
-  for (WireMarkerPtr& m : out.markers)
-    if (!m) m = redrawn[next++]->wire;
-  return out;
+  return send(note ? map.blockView() : map.hostBlockView());
 }
-
 SerializedMarkerArray allBlockMarkersWire(const fragg::Map& map, const MarkerStyle& style,
                                           const ::ros::Time& stamp, MarkerLedger* ledger) {
   SerializedMarkerArray out;

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "fragg_map/errors.h"
 #include "fragg_map/ros/layer_masks.h"
@@ -65,8 +66,9 @@ bool MapOutputCache::boundsSettled(const fragg::BlockKey& key, const XyBounds& k
          (known.max_y == fragg::kBlockMask || (seen_valid_ && y1 <= seen_hi_y_));
 }
 
-MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
-                                                        const fragg::BlockView& blocks,
+template <class View>
+MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map, const View& blocks,
+                                                        const fragg::BlockView& cells,
                                                         const Source& source, bool masks_suffice,
                                                         Piece* piece) const {
   // One 64-bit word per z layer of the block (cell index x + 8 y + 64 z): occupied and free
@@ -93,8 +95,18 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map,
       masks_bounds.max_y = std::max<int32_t>(masks_bounds.max_y, piece->max_y);
     }
   }
-  const bool from_masks = masks_may_serve && boundsSettled(key, masks_bounds);
-  const fragg::Block* block = from_masks ? nullptr : &blocks.blockAt(source.slot);
+  bool from_masks = masks_may_serve && boundsSettled(key, masks_bounds);
+  const fragg::Block* block = nullptr;
+  if (!from_masks) {
+    if constexpr (std::is_same_v<View, fragg::BlockView>) {
+      block = &blocks.blockAt(source.slot);
+    } else {
+      // A mirror holds masks only: the cells as the host holds them (a CUDA map's block may be
+      // older there, or missing: then its masks and kept bounds serve).
+      block = cells.findBlock(key);
+      from_masks = block == nullptr;
+    }
+  }
   delta.cells_read = !from_masks;
   const fragg::OccupancyModel& model = map.model();
   const int16_t above = model.occupied_above_fx, below = model.free_below_fx;
@@ -300,8 +312,11 @@ fragg::BlockChange MapOutputCache::refreshOn(const fragg::OccupancyModel& model)
   return leaves_band ? fragg::BlockChange::kMasks : fragg::BlockChange::kState;
 }
 
-void MapOutputCache::listChanges(const fragg::Map& map, const fragg::BlockView& blocks, bool full,
+template <class View>
+void MapOutputCache::listChanges(const fragg::Map& map, const View& blocks, bool full,
                                  bool masks_suffice, bool keys_only, std::vector<Source>* out) {
+  // A mirror holds no cells: its blocks always come with their masks.
+  constexpr bool kMirror = !std::is_same_v<View, fragg::BlockView>;
   const fragg::BlockChange refresh_on = refreshOn(map.model());
   std::vector<Source>& refresh = *out;
   refresh.clear();
@@ -312,7 +327,7 @@ void MapOutputCache::listChanges(const fragg::Map& map, const fragg::BlockView& 
   if (full) {
     const std::vector<fragg::BlockIndex> slots = blocks.allSlots();
     refresh.reserve(slots.size());
-    for (const fragg::BlockIndex i : slots) add(i, false);
+    for (const fragg::BlockIndex i : slots) add(i, kMirror);
   } else if (!options_.hide_speckles) {
     // Several revisions since the last update (a throttled map_rate): the change log names a
     // block once per revision it changed in (ten W1 clouds at 5 cm: 48-54 k blocks each, 87 k
@@ -320,7 +335,7 @@ void MapOutputCache::listChanges(const fragg::Map& map, const fragg::BlockView& 
     // stamps in slot order. kState lists the blocks of kMasks and those whose cells moved
     // within the unknown band (recomputed from their masks all the same). The CUDA backend
     // stamps state_at with every change, so there the log serves.
-    const bool walk = masks_suffice && map.revision() - revision_ > kLogRevisions &&
+    const bool walk = !kMirror && masks_suffice && map.revision() - revision_ > kLogRevisions &&
                       std::strcmp(map.backendName(), "cpu") == 0;
     blocks.changedSlotsSince(revision_, walk ? fragg::BlockChange::kState : refresh_on, &slots_);
     refresh.reserve(slots_.size());
@@ -365,18 +380,54 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   const uint64_t revision = map.revision();
   out.full = !valid_ || map.viewEpoch() != epoch_ || revision < revision_ ||
              map.resolution() != resolution_m_;
+  // A mirror serves where the masks do (it holds no cells to list kState changes by).
+  const bool mirrored = mirror_ != nullptr &&
+                        refreshOn(map.model()) == fragg::BlockChange::kMasks &&
+                        options_.masks_where_settled;
+  // The pieces are indexed by the mirror's slots: a mirror rebuilt (by this cache or another
+  // reader) rebuilds them.
+  if (mirrored && mirror_->generation() != mirror_generation_) out.full = true;
   // Paced, the changes are listed at a publication (with_grid) only, and recomputed in even
   // shares over the clouds of the next period.
-  const bool paced = period_s > 0.0 && !out.full;
+  bool paced = period_s > 0.0 && !out.full;
   const bool list = !paced || with_grid || !advanced_;
-  // A listing reads the whole map (a CUDA map's changes written back first); a share recomputes
-  // blocks listed then, from the host's copy as it stands: a CUDA map is written back once a
-  // period, not at every cloud (the same cells on a CPU map).
-  const fragg::BlockView blocks = list ? map.blockView() : map.hostBlockView();
+  if (mirrored && list) {
+    mirror_->sync(map);
+    if (mirror_->generation() != mirror_generation_) {  // rebuilt just now
+      out.full = true;
+      paced = false;
+    }
+  }
   // The blocks to recompute, and those that left the map. With the change log (kMasks) a block
   // comes with its state masks (its cells are read only where the grid's bounds need them).
-  const bool masks_suffice = !out.full && refreshOn(map.model()) == fragg::BlockChange::kMasks &&
+  const bool masks_suffice = (!out.full || mirrored) &&
+                             refreshOn(map.model()) == fragg::BlockChange::kMasks &&
                              options_.masks_where_settled;
+  if (mirrored) {
+    // Shares read the mirror as the last sync left it; cells, where the grid's bounds need
+    // them, from the host's copy (no write-back).
+    refreshOver(map, *mirror_, map.hostBlockView(), now_s, period_s, paced, list, with_grid,
+                gather_cloud, masks_suffice, t0, &out);
+    mirror_generation_ = mirror_->generation();
+  } else {
+    // A listing reads the whole map (a CUDA map's changes written back first); a share
+    // recomputes blocks listed then, from the host's copy as it stands: a CUDA map is written
+    // back once a period, not at every cloud (the same cells on a CPU map).
+    const fragg::BlockView blocks = list ? map.blockView() : map.hostBlockView();
+    refreshOver(map, blocks, blocks, now_s, period_s, paced, list, with_grid, gather_cloud,
+                masks_suffice, t0, &out);
+  }
+  return out;
+}
+
+template <class View>
+void MapOutputCache::refreshOver(const fragg::Map& map, const View& blocks,
+                                 const fragg::BlockView& cells, double now_s, double period_s,
+                                 bool paced, bool list, bool with_grid, bool gather_cloud,
+                                 bool masks_suffice, std::chrono::steady_clock::time_point t0,
+                                 OutputCacheUpdate* update) {
+  OutputCacheUpdate& out = *update;
+  const uint64_t revision = map.revision();
   for (const uint32_t c : dirty_) columns_[c].dirty = false;
   dirty_.clear();
   if (out.full) {
@@ -426,7 +477,7 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   }
   for (const fragg::BlockIndex slot : gone) dropPiece(slot);
   out.list_ms += msSince(t0);
-  recompute(map, blocks, queued, masks_suffice, &out);
+  recompute(map, blocks, cells, queued, masks_suffice, &out);
   // The queue recomputed: the pieces stay as they are until the next listing, and the clouds
   // until then gather them into the next publication's cloud message (its share: what is left
   // over the clouds left until the list is a period old, the publication's included).
@@ -451,7 +502,7 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
     listed.clear();
   }
   out.list_ms += msSince(t0);
-  recompute(map, blocks, listed, masks_suffice, &out);
+  recompute(map, blocks, cells, listed, masks_suffice, &out);
   out.blocks_queued = queuedBlocks();
   t0 = std::chrono::steady_clock::now();
   for (const uint32_t c : dirty_) {
@@ -467,12 +518,12 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   if (list) revision_ = revision;  // the changes up to it are in the pieces or queued
   epoch_ = map.viewEpoch();
   out.grid_ms = msSince(t0);
-  return out;
 }
 
-void MapOutputCache::recompute(const fragg::Map& map, const fragg::BlockView& blocks,
-                               const std::vector<Source>& sources, bool masks_suffice,
-                               OutputCacheUpdate* out) {
+template <class View>
+void MapOutputCache::recompute(const fragg::Map& map, const View& blocks,
+                               const fragg::BlockView& cells, const std::vector<Source>& sources,
+                               bool masks_suffice, OutputCacheUpdate* out) {
   if (sources.empty()) return;
   regather();  // pieces may change
   const auto t0 = std::chrono::steady_clock::now();
@@ -497,7 +548,8 @@ void MapOutputCache::recompute(const fragg::Map& map, const fragg::BlockView& bl
         __builtin_prefetch(m->free);
       }
     }
-    deltas[j] = computePiece(map, blocks, sources[j], masks_suffice, &pieces_[sources[j].slot]);
+    deltas[j] =
+        computePiece(map, blocks, cells, sources[j], masks_suffice, &pieces_[sources[j].slot]);
   }
   int64_t occupied_delta = 0;
   for (size_t j = 0; j < sources.size(); ++j) {

@@ -13,6 +13,7 @@ set(FRAGG_ROS_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/occupied_cloud.cpp
   ${CMAKE_CURRENT_LIST_DIR}/output_cache.cpp
   ${CMAKE_CURRENT_LIST_DIR}/speckles.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/mask_mirror.cpp
   ${CMAKE_CURRENT_LIST_DIR}/projected_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frustum_marker.cpp
   ${CMAKE_CURRENT_LIST_DIR}/server_params.cpp

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <iterator>
 #include <map>
+#include <memory>
 #include <set>
 #include <tuple>
 
@@ -99,9 +100,11 @@ void edit(fragg::Map& map, int step) {
   }
 }
 
-void expectIncrementsEqualRebuild(MarkerStyle style) {
+/// `mirror`: the topic reads the map through a mask mirror (MarkerLedger::useMirror).
+void expectIncrementsEqualRebuild(MarkerStyle style, bool mirror = false) {
   fragg::Map map(fragg::ros::test::cpuParams());
   MarkerLedger topic, late;
+  if (mirror) topic.useMirror(std::make_shared<fragg::ros::MaskMirror>());
   View view, late_view;
   for (int step = 0; step < 10; ++step) {
     SCOPED_TRACE("after edit " + std::to_string(step));
@@ -216,9 +219,10 @@ TEST(MarkerChunks, AnUpdateCarriesOnlyTheChunksThatChangedAndDeletesEmptiedOnes)
 // Clouds every 1/8 s, markers at 1 Hz, paced: the changes taken in once a period go out in
 // shares over the next period's calls (not all at once), none waits longer than two periods,
 // and once the map stops changing the view (and a late subscriber's) equals a full rebuild.
-void expectPacedReachesRebuild(MarkerStyle style) {
+void expectPacedReachesRebuild(MarkerStyle style, bool mirror = false) {
   fragg::Map map(fragg::ros::test::cpuParams());
   MarkerLedger topic;
+  if (mirror) topic.useMirror(std::make_shared<fragg::ros::MaskMirror>());
   View view, late_view;
   constexpr double kPeriodS = 1.0, kIntervalS = 0.125;  // exact in binary
   const auto paced = [&](double now_s) {
@@ -268,6 +272,33 @@ TEST(MarkerChunks, PacedSharesEqualAFullRebuildTwoPeriodsAfterTheLastChange) {
   style.hide_speckles = true;
   style.heights = {-0.45, 0.65};
   expectPacedReachesRebuild(style);
+}
+
+// Read through a mask mirror (the server's way on a CUDA map: the changed blocks' masks, no
+// write-back), the increments show the same: occupied and free cells, chunks of several sizes,
+// hidden speckles (their neighbours from the mirror's masks) and a height band, paced or not.
+TEST(MarkerChunks, ThroughAMaskMirrorToo) {
+  for (int chunk : {1, 4}) {
+    MarkerStyle style;
+    style.chunk_blocks = chunk;
+    SCOPED_TRACE("chunk_blocks " + std::to_string(chunk));
+    expectIncrementsEqualRebuild(style, true);
+  }
+  MarkerStyle style;
+  style.chunk_blocks = 4;
+  style.hide_speckles = true;
+  style.heights = {-0.45, 0.65};
+  expectIncrementsEqualRebuild(style, true);
+  MarkerStyle free_cells;
+  free_cells.chunk_blocks = 4;
+  free_cells.state = fragg::CellState::kFree;
+  free_cells.ns = "free";
+  expectIncrementsEqualRebuild(free_cells, true);
+  style.chunk_blocks = 2;
+  expectPacedReachesRebuild(style, true);
+  style.chunk_blocks = 1;
+  style.hide_speckles = false;
+  expectPacedReachesRebuild(style, true);
 }
 
 // Paced, the taking-in lists the changed blocks by chunk and draws none of them: each chunk's

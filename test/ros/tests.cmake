@@ -11,6 +11,7 @@ if(FRAGG_HAVE_ROS)
             ${CMAKE_CURRENT_LIST_DIR}/map_msgs_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/speckles_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/output_cache_test.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/mask_mirror_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/layer_masks_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/cell_colors_test.cpp
             ${CMAKE_CURRENT_LIST_DIR}/height_band_test.cpp

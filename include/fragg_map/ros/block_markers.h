@@ -16,6 +16,7 @@
 #include <bitset>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -25,6 +26,7 @@
 #include "fragg_map/ros/cell_colors.h"
 #include "fragg_map/ros/height_band.h"
 #include "fragg_map/ros/marker_wire.h"
+#include "fragg_map/ros/mask_mirror.h"
 
 namespace fragg::ros {
 
@@ -81,6 +83,12 @@ class MarkerLedger {
   [[nodiscard]] size_t pendingChunks() const { return pending_.size(); }
   /// The id of the marker that draws block `key`, or -1 when the block is not shown.
   [[nodiscard]] int32_t idOf(const fragg::BlockKey& key) const;
+  /// Reads the map through `mirror` from now on (nullptr: through the map's views again): the
+  /// increments' take-ins bring it up to date (MaskMirror::sync: the changed blocks' masks,
+  /// no write-back of a CUDA map's blocks) and every state is drawn from its masks. The mirror
+  /// may be shared with other readers of the same map (the output cache). The full sets
+  /// (allBlockMarkersWire, shownBlockMarkersWire) still read the map's view.
+  void useMirror(std::shared_ptr<MaskMirror> mirror) { mirror_ = std::move(mirror); }
 
   /// A block drawn in a chunk, with its drawn cells.
   struct ShownBlock {
@@ -119,7 +127,8 @@ class MarkerLedger {
   size_t shown_blocks_ = 0;
   int32_t next_id_ = 0;
   uint64_t published_revision_ = 0;
-  uint64_t colors_drawn_ = 0;  ///< CellColors::sequence() of the last update (colored_map)
+  uint64_t colors_drawn_ = 0;           ///< CellColors::sequence() of the last update (colored_map)
+  std::shared_ptr<MaskMirror> mirror_;  ///< useMirror
   /// The updates' serialised arrays are written into these (a full set gets its own buffer).
   std::shared_ptr<WireBufferPool> buffers_ = std::make_shared<WireBufferPool>();
   /// Map::viewEpoch() of the last update: shown blocks can only have left the map (clearBox,

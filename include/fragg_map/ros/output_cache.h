@@ -24,9 +24,11 @@
 #include <sensor_msgs/PointCloud2.h>
 
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -34,6 +36,7 @@
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
 #include "fragg_map/ros/height_band.h"
+#include "fragg_map/ros/mask_mirror.h"
 #include "fragg_map/ros/wire_payload.h"
 #include "fragg_map/state_masks.h"
 
@@ -107,6 +110,16 @@ class MapOutputCache {
   static constexpr double kRecomputedBy = 0.8;
   /// Forgets everything: the next update rebuilds.
   void invalidate() { valid_ = false; }
+  /// Reads the map through `mirror` from now on (nullptr: through the map's views again; the
+  /// next update rebuilds either way): listings bring it up to date (MaskMirror::sync: the
+  /// changed blocks' masks, no write-back of a CUDA map's blocks), shares read it as it stands,
+  /// and cells (only where the grid's bounds need them) come from Map::hostBlockView(). Used
+  /// where the map's refresh_on is kMasks with masks_where_settled (else the map's views serve).
+  /// The mirror may be shared with other readers of the same map (the markers' ledger).
+  void useMirror(std::shared_ptr<MaskMirror> mirror) {
+    mirror_ = std::move(mirror);
+    valid_ = false;
+  }
   /// Blocks queued by advance() and not yet recomputed.
   [[nodiscard]] size_t queuedBlocks() const { return queue_.size() - queue_head_; }
 
@@ -189,22 +202,34 @@ class MapOutputCache {
     bool dirty = false;    ///< listed in the update's dirty columns (bounds merged again)
     bool undrawn = false;  ///< merged since the grid was last drawn (listed in undrawn_)
   };
+  // `View`: fragg::BlockView (the map's view: slots are the map's) or MaskMirror (slots are
+  // the mirror's; `cells` the host's blocks, where the grid's bounds need cells).
   /// The blocks changed since the last update (all of them for a rebuild, `full`), in slot
   /// order. `keys_only`: the sources' masks are left out (they are queued).
-  void listChanges(const fragg::Map& map, const fragg::BlockView& blocks, bool full,
-                   bool masks_suffice, bool keys_only, std::vector<Source>* out);
+  template <class View>
+  void listChanges(const fragg::Map& map, const View& blocks, bool full, bool masks_suffice,
+                   bool keys_only, std::vector<Source>* out);
   /// Recomputes the pieces of `sources` (distinct blocks of the map), adding to `out`.
-  void recompute(const fragg::Map& map, const fragg::BlockView& blocks,
+  template <class View>
+  void recompute(const fragg::Map& map, const View& blocks, const fragg::BlockView& cells,
                  const std::vector<Source>& sources, bool masks_suffice, OutputCacheUpdate* out);
   /// The common path of update() and advance(): `period_s` <= 0 recomputes everything listed
   /// and queued.
   OutputCacheUpdate refresh(const fragg::Map& map, double now_s, double period_s, bool with_grid,
                             bool gather_cloud);
+  /// refresh() over the chosen view, once it has decided whether to rebuild (`update->full`),
+  /// whether it is paced and whether it lists.
+  template <class View>
+  void refreshOver(const fragg::Map& map, const View& blocks, const fragg::BlockView& cells,
+                   double now_s, double period_s, bool paced, bool list, bool with_grid,
+                   bool gather_cloud, bool masks_suffice, std::chrono::steady_clock::time_point t0,
+                   OutputCacheUpdate* update);
 
   /// Brings `piece` (new: default-constructed) up to date with `source`'s block. With
   /// `masks_suffice` (the change log lists every block where a cell became observed: refreshOn
   /// is kMasks) and source.masks, the masks alone serve where boundsSettled.
-  PieceDelta computePiece(const fragg::Map& map, const fragg::BlockView& blocks,
+  template <class View>
+  PieceDelta computePiece(const fragg::Map& map, const View& blocks, const fragg::BlockView& cells,
                           const Source& source, bool masks_suffice, Piece* piece) const;
   /// Observed xy key bounds within a block (min > max: none).
   struct XyBounds {
@@ -250,6 +275,8 @@ class MapOutputCache {
   void regather() { gathered_ = 0, gathered_bytes_ = 0; }
 
   OutputCacheOptions options_;
+  std::shared_ptr<MaskMirror> mirror_;  ///< useMirror
+  uint64_t mirror_generation_ = 0;      ///< the mirror's generation the pieces' slots are of
   bool valid_ = false;
   uint64_t revision_ = 0;
   uint64_t epoch_ = 0;

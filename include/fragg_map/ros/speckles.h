@@ -7,6 +7,7 @@
 #include "fragg_map/key.h"
 #include "fragg_map/map.h"
 #include "fragg_map/ros/block_markers.h"
+#include "fragg_map/ros/mask_mirror.h"
 
 namespace fragg::ros {
 
@@ -16,6 +17,13 @@ bool isSpeckle(const fragg::Map& map, const fragg::BlockView& blocks, const frag
 
 /// `cells` (cells of block `key`) without the speckles.
 CellMask withoutSpeckles(const fragg::Map& map, const fragg::BlockView& blocks,
+                         const fragg::BlockKey& key, CellMask cells);
+
+/// The same over a mask mirror: the neighbours' occupancy from their state masks (as of the
+/// mirror's last sync). `map` is unused (the signature matches the view's).
+bool isSpeckle(const fragg::Map& map, const MaskMirror& blocks, const fragg::VoxelKey& v);
+/// `cells` without the speckles, over a mask mirror.
+CellMask withoutSpeckles(const fragg::Map& map, const MaskMirror& blocks,
                          const fragg::BlockKey& key, CellMask cells);
 
 }  // namespace fragg::ros

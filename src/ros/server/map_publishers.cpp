@@ -10,6 +10,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
+#include <cstring>
 
 #include "flush_without_waiting.h"
 #include "fragg_map/errors.h"
@@ -152,8 +153,17 @@ void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
         stats_->toMsg(map, params_.frame_id, stamp, ServerStats::MapFigures::kRecent));
 }
 
+void MapPublishers::mirrorFor(const fragg::Map& map) {
+  if (mirror_ || std::strcmp(map.backendName(), "cpu") == 0) return;
+  mirror_ = std::make_shared<MaskMirror>();
+  outputs_.useMirror(mirror_);
+  occupied_markers_.ledger.useMirror(mirror_);
+  free_markers_.ledger.useMirror(mirror_);
+}
+
 void MapPublishers::publishMapOutputs(const fragg::Map& map, const ::ros::Time& stamp,
                                       bool throttled) {
+  mirrorFor(map);
   const bool cloud_wanted = wanted(occupied_cloud_pub_) || wanted(centers_pub_);
   const bool grid_wanted = wanted(projected_map_pub_);
   // Nobody to send to: a subscriber that connects later gets the current map
@@ -236,9 +246,11 @@ void MapPublishers::publishMarkers(const fragg::Map& map, MarkerTopic& topic,
   if (subscribers == 0) {
     // Nobody sees the markers: the next subscriber starts from a full set.
     topic.ledger = MarkerLedger();
+    topic.ledger.useMirror(mirror_);
     topic.subscribers = 0;
     return;
   }
+  mirrorFor(map);
   // A subscriber joined since the last update (its connect callback may not have run yet):
   // everyone gets the whole map, so that its first message is never a partial update.
   const bool joined = subscribers > topic.subscribers;

@@ -15,7 +15,9 @@
 // change; both go to roscpp already serialised, wire_payload.h); unpaced, after a cloud that is not
 // due nothing is done (the ledgers and the cache catch up from the revision they last saw at the
 // next update). Reset, load, clear and corrections publish the whole-map outputs at once; frustum
-// and ~stats go out after every cloud.
+// and ~stats go out after every cloud. On a CUDA map the incremental outputs read a mask mirror
+// (the changed blocks' state masks copied from the device at each take-in) instead of writing
+// the device's changed blocks back to the host first.
 #pragma once
 
 #include <ros/node_handle.h>
@@ -24,6 +26,7 @@
 #include <sensor_msgs/PointCloud2.h>
 
 #include <Eigen/Geometry>
+#include <memory>
 #include <mutex>
 #include <string>
 
@@ -77,6 +80,10 @@ class MapPublishers {
                       bool full, double now_s, double period_s);
   /// occupied_cells, octomap_point_cloud_centers and projected_map from the cache as it is.
   void sendMapOutputs(const ::ros::Time& stamp, bool cloud_wanted, bool grid_wanted);
+  /// On a map whose blocks live on a device (CUDA), the first call makes the mask mirror that
+  /// the output cache and both marker ledgers read from then on (MaskMirror: their take-ins
+  /// copy the changed blocks' masks, not the blocks); nothing on a CPU map.
+  void mirrorFor(const fragg::Map& map);
   /// paced_outputs with a marker_rate / map_rate limit in effect.
   bool pacedMarkers() const { return params_.paced_outputs && marker_throttle_.limited(); }
   bool pacedMaps() const { return params_.paced_outputs && held_maps_.throttle().limited(); }
@@ -107,6 +114,8 @@ class MapPublishers {
   ::ros::SteadyTimer marker_flush_timer_;
   /// The occupied cloud's and projected map's pieces (under publish_mutex_).
   MapOutputCache outputs_;
+  /// mirrorFor's mirror (under publish_mutex_), null on a CPU map.
+  std::shared_ptr<MaskMirror> mirror_;
   /// map_rate: whether the whole-map outputs are held back, with the last cloud's stamp.
   HeldBackUpdate<::ros::Time> held_maps_;
   ::ros::SteadyTimer map_flush_timer_;

@@ -30,12 +30,15 @@
 //                             [--cloud-rate HZ] [--marker-rate HZ] [--map-rate HZ]
 //                             [--marker-chunk N] [--after-only] [--cells-always]
 //                             [--fresh-buffers] [--unpaced] [--flat-markers] [--worst N]
-//                             [--backend cpu|cuda] [--sync-stage]
+//                             [--backend cpu|cuda] [--sync-stage] [--mirror auto|on|off]
+// --mirror: the after path's cache and markers read a mask mirror (MaskMirror, as the server
+// does on a CUDA map: auto) or the map's views.
 // --sync-stage: before the outputs of a cloud where the markers take the changes in or a
 // whole-map publication lists them (where the server's outputs read Map::blockView(), which on a
 // CUDA map writes the device's changed blocks back first), that write-back is done and timed on
 // its own (`sync`, `sync_flt` in --worst; a line of its own), so that the outputs' stages show
-// what they cost apart from it. On a CPU map it costs nothing.
+// what they cost apart from it. On a CPU map it costs nothing. With the mirror, the stage is
+// the mirror's sync (the changed blocks' masks copied) instead.
 #include <ros/serialization.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/PointField.h>
@@ -48,6 +51,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -56,6 +60,7 @@
 #include "fragg_map/map.h"
 #include "fragg_map/ros/block_markers.h"
 #include "fragg_map/ros/cloud_from_msg.h"
+#include "fragg_map/ros/mask_mirror.h"
 #include "fragg_map/ros/occupied_cloud.h"
 #include "fragg_map/ros/output_cache.h"
 #include "fragg_map/ros/projected_map.h"
@@ -126,6 +131,8 @@ bool g_flat_markers = false;
 bool g_cells_always = false;
 /// --sync-stage: the write-back before a take-in timed apart (the header's note).
 bool g_sync_stage = false;
+/// --mirror: the after path reads a mask mirror.
+bool g_mirror = false;
 
 /// Which outputs of the after path go out after a cloud.
 struct Due {
@@ -150,6 +157,11 @@ class Outputs {
       : before_(before), cache_(optionsWith(refresh_on)) {
     style_.chunk_blocks = g_marker_chunk_blocks;
     style_.height_colors = !g_flat_markers;
+    if (!before && g_mirror) {
+      mirror_ = std::make_shared<fragg::ros::MaskMirror>();
+      cache_.useMirror(mirror_);
+      ledger_.useMirror(mirror_);
+    }
   }
   /// `due`: the after path's throttled outputs (the before path ignores it); `pace`: paced,
   /// the markers' share goes out and the cache takes its share after every cloud (the
@@ -165,7 +177,10 @@ class Outputs {
     if (g_sync_stage && !before_ && (takes_in || due.maps)) {
       const auto ts = Clock::now();
       const long f = minorFaults();
-      (void)map.blockView();  // a CUDA map's changed blocks written back
+      if (mirror_)
+        (void)mirror_->sync(map);  // the changed blocks' masks
+      else
+        (void)map.blockView();  // a CUDA map's changed blocks written back
       t.sync = msSince(ts);
       t.sync_faults = minorFaults() - f;
       t.synced = true;
@@ -257,6 +272,7 @@ class Outputs {
   fragg::ros::MarkerStyle style_;
   fragg::ros::MarkerLedger ledger_;
   fragg::ros::MapOutputCache cache_;
+  std::shared_ptr<fragg::ros::MaskMirror> mirror_;  ///< --mirror (after path)
 };
 
 void printHeader() {
@@ -529,6 +545,11 @@ int runMain(int argc, char** argv) {
   app.add_option("--worst", g_worst,
                  "print the N costliest clouds of the after path stage by stage (what makes its "
                  "p99)");
+  std::string mirror = "auto";
+  app.add_option("--mirror", mirror,
+                 "auto | on | off: the after path reads a mask mirror (the server's way on a "
+                 "CUDA map: auto) or the map's views")
+      ->check(CLI::IsMember({"auto", "on", "off"}));
   app.add_flag("--sync-stage", g_sync_stage,
                "time the write-back before each take-in of the changes apart (Map::blockView(): a "
                "CUDA map's changed blocks copied back) and print it");
@@ -559,6 +580,8 @@ int runMain(int argc, char** argv) {
       w1.name.c_str(), w1.resolution_m, backend.c_str());
   {
     fragg::Map map(params);
+    g_mirror = mirror == "on" || (mirror == "auto" && std::strcmp(map.backendName(), "cpu") != 0);
+    std::printf("outputs read %s\n", g_mirror ? "a mask mirror" : "the map's views");
     std::vector<fragg::Scan> first(w1.scans.begin(),
                                    w1.scans.begin() + std::min(scans, w1.scans.size()));
     run(map, first, w1.max_range_m, shown, "new map, W1 scans 1.." + std::to_string(first.size()),

@@ -1,0 +1,110 @@
+// The host copy of a map's keys and state masks that the server's outputs read.
+#include "fragg_map/ros/mask_mirror.h"
+
+#include <chrono>
+#include <cstring>
+
+namespace fragg::ros {
+
+const MaskMirror::SyncStats& MaskMirror::sync(const fragg::Map& map) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const uint64_t revision = map.revision();
+  stats_ = SyncStats();
+  if (valid_ && revision == revision_ && map.viewEpoch() == epoch_ &&
+      map.resolution() == resolution_m_)
+    return stats_;
+  // Blocks leave the map only with a new view epoch (masksChangedSince does not list them).
+  const bool whole = !valid_ || map.viewEpoch() != epoch_ || revision < revision_ ||
+                     map.resolution() != resolution_m_ ||
+                     !map.masksChangedSince(revision_, &listed_keys_, &listed_masks_);
+  if (whole) {
+    rebuild(map);
+  } else {
+    stats_.listed = listed_keys_.size();
+    const size_t before = keys_.size();
+    table_.reserve(keys_.size() + listed_keys_.size());
+    for (size_t i = 0; i < listed_keys_.size(); ++i)
+      put(listed_keys_[i], listed_masks_[i], revision);
+    stats_.added = keys_.size() - before;
+  }
+  valid_ = true;
+  revision_ = revision;
+  epoch_ = map.viewEpoch();
+  resolution_m_ = map.resolution();
+  stats_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return stats_;
+}
+
+void MaskMirror::rebuild(const fragg::Map& map) {
+  const fragg::BlockView view = map.blockView();  // a CUDA map's changes written back once
+  const std::vector<fragg::BlockIndex> slots = view.allSlots();
+  table_.clear();
+  keys_.clear();
+  masks_.clear();
+  masks_at_.clear();
+  occupied_at_.clear();
+  table_.reserve(slots.size());
+  keys_.reserve(slots.size());
+  masks_.reserve(slots.size());
+  masks_at_.reserve(slots.size());
+  occupied_at_.reserve(slots.size());
+  const uint64_t revision = map.revision();
+  for (const fragg::BlockIndex s : slots) {
+    table_.insert(view.keyAt(s), static_cast<uint32_t>(keys_.size()));
+    keys_.push_back(view.keyAt(s));
+    masks_.push_back(view.masksAt(s));
+    // Everything counts as changed at the rebuild's revision (readers rebuild with it).
+    masks_at_.push_back(revision);
+    occupied_at_.push_back(revision);
+  }
+  stats_.rebuilt = true;
+  stats_.added = slots.size();
+  ++generation_;
+}
+
+void MaskMirror::put(const fragg::BlockKey& key, const fragg::BlockStateMasks& masks,
+                     uint64_t revision) {
+  const uint32_t s = table_.find(key);
+  if (s == fragg::BlockKeyTable::kNone) {
+    table_.insert(key, static_cast<uint32_t>(keys_.size()));
+    keys_.push_back(key);
+    masks_.push_back(masks);
+    masks_at_.push_back(revision);
+    bool occupied = false;
+    for (const uint64_t w : masks.occupied) occupied |= w != 0;
+    occupied_at_.push_back(occupied ? revision : 0);
+    return;
+  }
+  fragg::BlockStateMasks& kept = masks_[s];
+  if (std::memcmp(kept.occupied, masks.occupied, sizeof(kept.occupied)) != 0)
+    occupied_at_[s] = revision;
+  if (std::memcmp(&kept, &masks, sizeof(kept)) != 0) masks_at_[s] = revision;
+  kept = masks;
+}
+
+std::vector<fragg::BlockIndex> MaskMirror::allSlots() const {
+  std::vector<fragg::BlockIndex> out(keys_.size());
+  for (size_t i = 0; i < out.size(); ++i) out[i] = static_cast<fragg::BlockIndex>(i);
+  return out;
+}
+
+void MaskMirror::changedSlotsSince(uint64_t revision, fragg::BlockChange what,
+                                   std::vector<fragg::BlockIndex>* out) const {
+  out->clear();
+  const std::vector<uint64_t>& stamps =
+      what == fragg::BlockChange::kOccupied ? occupied_at_ : masks_at_;
+  for (size_t i = 0; i < stamps.size(); ++i)
+    if (stamps[i] > revision) out->push_back(static_cast<fragg::BlockIndex>(i));
+}
+
+std::vector<fragg::BlockKey> MaskMirror::changedSince(uint64_t revision,
+                                                      fragg::BlockChange what) const {
+  std::vector<fragg::BlockIndex> slots;
+  changedSlotsSince(revision, what, &slots);
+  std::vector<fragg::BlockKey> keys;
+  keys.reserve(slots.size());
+  for (const fragg::BlockIndex s : slots) keys.push_back(keys_[s]);
+  return keys;
+}
+
+}  // namespace fragg::ros

@@ -1,0 +1,153 @@
+// MaskMirror: after every sync it holds exactly the map's blocks with their current state masks
+// (compared with Map::blockView() block by block); a sync that follows insertions and cell
+// edits reads only the changed-block list (no rebuild), stamps exactly the blocks whose masks
+// changed (and, for kOccupied, those whose occupied cells changed) and keeps every block's
+// slot; a change of the map's view (clear_bbx, reset, load) rebuilds it and moves its
+// generation; a sync with nothing new does nothing.
+#include "fragg_map/ros/mask_mirror.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "map_fixtures.h"
+
+namespace fragg::ros {
+namespace {
+
+struct KeyLess {
+  bool operator()(const fragg::BlockKey& a, const fragg::BlockKey& b) const {
+    return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
+  }
+};
+using MasksByKey = std::map<fragg::BlockKey, fragg::BlockStateMasks, KeyLess>;
+
+bool sameMasks(const fragg::BlockStateMasks& a, const fragg::BlockStateMasks& b) {
+  return std::memcmp(&a, &b, sizeof(a)) == 0;
+}
+
+/// The mirror holds the map's blocks, each with its masks, and nothing else.
+void expectMirrors(const fragg::Map& map, const MaskMirror& mirror, const std::string& step) {
+  SCOPED_TRACE(step);
+  const fragg::BlockView view = map.blockView();
+  EXPECT_EQ(mirror.size(), view.size());
+  EXPECT_EQ(mirror.slotCount(), view.size());
+  size_t differ = 0;
+  for (const fragg::BlockIndex s : view.allSlots()) {
+    const fragg::BlockStateMasks* m = mirror.findMasks(view.keyAt(s));
+    ASSERT_NE(m, nullptr);
+    differ += !sameMasks(*m, view.masksAt(s));
+  }
+  EXPECT_EQ(differ, 0u);
+  for (const fragg::BlockIndex s : mirror.allSlots()) {
+    EXPECT_TRUE(view.findBlock(mirror.keyAt(s)) != nullptr);
+    EXPECT_TRUE(mirror.holds(s, mirror.keyAt(s)));
+    EXPECT_EQ(mirror.slotOf(mirror.keyAt(s)), s);
+  }
+  EXPECT_EQ(mirror.revision(), map.revision());
+}
+
+/// Each block's masks by key (a snapshot).
+MasksByKey masksByKey(const fragg::Map& map) {
+  MasksByKey out;
+  const fragg::BlockView view = map.blockView();
+  for (const fragg::BlockIndex s : view.allSlots()) out[view.keyAt(s)] = view.masksAt(s);
+  return out;
+}
+
+TEST(MaskMirror, FollowsInsertionsAndEditsFromTheChangedBlockList) {
+  fragg::Map map(test::cpuParams(0.1));
+  MaskMirror mirror;
+  EXPECT_TRUE(mirror.sync(map).rebuilt);  // the first sync reads the (empty) map
+  expectMirrors(map, mirror, "empty");
+  const uint64_t first_generation = mirror.generation();
+  EXPECT_FALSE(mirror.sync(map).rebuilt);
+  EXPECT_EQ(mirror.sync(map).listed, 0u) << "nothing new, yet something was read";
+
+  test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  const uint64_t after_wall = map.revision();
+  MaskMirror::SyncStats s = mirror.sync(map);
+  EXPECT_FALSE(s.rebuilt);
+  EXPECT_GT(s.added, 10u);
+  expectMirrors(map, mirror, "a wall");
+  std::vector<fragg::BlockIndex> changed;
+  mirror.changedSlotsSince(0, fragg::BlockChange::kMasks, &changed);
+  EXPECT_EQ(changed.size(), mirror.size()) << "every block is new";
+
+  // Keep every block's slot, then change some: the mirror lists exactly those.
+  std::map<fragg::BlockKey, fragg::BlockIndex, KeyLess> slots;
+  for (const fragg::BlockIndex i : mirror.allSlots()) slots[mirror.keyAt(i)] = i;
+  const auto before = masksByKey(map);
+  test::insertWall(map, Eigen::Vector3d(0.0, 1.5, 0.3), 3.0);
+  const fragg::VoxelKey lone{40, -17, 5};
+  test::setCell(map, lone, fragg::CellState::kOccupied);
+  s = mirror.sync(map);
+  EXPECT_FALSE(s.rebuilt);
+  expectMirrors(map, mirror, "a second wall and a lone cell");
+  for (const auto& [key, slot] : slots) EXPECT_EQ(mirror.slotOf(key), slot) << "a slot moved";
+  const auto after = masksByKey(map);
+  std::vector<fragg::BlockKey> want_masks, want_occupied;
+  for (const auto& [key, m] : after) {
+    const auto was = before.find(key);
+    if (was == before.end()) {
+      want_masks.push_back(key);
+      bool any = false;
+      for (const uint64_t w : m.occupied) any |= w != 0;
+      if (any) want_occupied.push_back(key);
+      continue;
+    }
+    if (!sameMasks(was->second, m)) want_masks.push_back(key);
+    if (std::memcmp(was->second.occupied, m.occupied, sizeof(m.occupied)) != 0)
+      want_occupied.push_back(key);
+  }
+  auto got_masks = mirror.changedSince(after_wall, fragg::BlockChange::kMasks);
+  auto got_occupied = mirror.changedSince(after_wall, fragg::BlockChange::kOccupied);
+  std::sort(got_masks.begin(), got_masks.end(), KeyLess());
+  std::sort(got_occupied.begin(), got_occupied.end(), KeyLess());
+  std::sort(want_masks.begin(), want_masks.end(), KeyLess());
+  std::sort(want_occupied.begin(), want_occupied.end(), KeyLess());
+  EXPECT_EQ(got_masks, want_masks);
+  EXPECT_EQ(got_occupied, want_occupied);
+  EXPECT_FALSE(got_occupied.empty());
+  EXPECT_LT(got_occupied.size(), got_masks.size()) << "free cells changed more blocks";
+  const fragg::BlockStateMasks* lone_masks = mirror.findMasks(fragg::blockKeyOf(lone));
+  ASSERT_NE(lone_masks, nullptr);
+  EXPECT_EQ(lone_masks->state(fragg::cellIndexOf(lone)), fragg::CellState::kOccupied);
+  EXPECT_EQ(mirror.generation(), first_generation) << "rebuilt without a reason";
+
+  // The view moves (blocks erased): a rebuild, a new generation.
+  const uint64_t epoch = map.viewEpoch();
+  map.clearBox(Eigen::Vector3d(2.0, -10.0, -10.0), Eigen::Vector3d(10.0, 10.0, 10.0));
+  ASSERT_NE(map.viewEpoch(), epoch) << "no block was erased: the case is not tested";
+  EXPECT_TRUE(mirror.sync(map).rebuilt);
+  EXPECT_NE(mirror.generation(), first_generation);
+  expectMirrors(map, mirror, "clear_bbx");
+  EXPECT_FALSE(mirror.contains(fragg::blockKeyOf(map.keyOf(Eigen::Vector3d(3.0, 0.0, 0.0)))));
+  test::setCell(map, lone, fragg::CellState::kFree);
+  EXPECT_FALSE(mirror.sync(map).rebuilt);
+  expectMirrors(map, mirror, "the lone cell freed");
+  map.reset();
+  EXPECT_TRUE(mirror.sync(map).rebuilt);
+  expectMirrors(map, mirror, "reset");
+  EXPECT_EQ(mirror.size(), 0u);
+}
+
+TEST(MaskMirror, InvalidateRebuilds) {
+  fragg::Map map(test::cpuParams(0.1));
+  test::insertWall(map, Eigen::Vector3d::Zero(), 2.0);
+  MaskMirror mirror;
+  (void)mirror.sync(map);
+  const uint64_t g = mirror.generation();
+  mirror.invalidate();
+  EXPECT_FALSE(mirror.valid());
+  EXPECT_TRUE(mirror.sync(map).rebuilt);
+  EXPECT_EQ(mirror.generation(), g + 1);
+  expectMirrors(map, mirror, "after invalidate");
+}
+
+}  // namespace
+}  // namespace fragg::ros
