@@ -17,6 +17,8 @@ const MaskMirror::SyncStats& MaskMirror::sync(const fragg::Map& map) {
   const bool whole = !valid_ || map.viewEpoch() != epoch_ || revision < revision_ ||
                      map.resolution() != resolution_m_ ||
                      !map.masksChangedSince(revision_, &listed_keys_, &listed_masks_);
+  stats_.list_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (whole) {
     rebuild(map);
   } else {

@@ -25,16 +25,19 @@ class MaskMirror {
  public:
   /// What the last sync() did.
   struct SyncStats {
-    bool rebuilt = false;  ///< read whole from Map::blockView()
-    size_t listed = 0;     ///< blocks the changed-block list named (0 after a rebuild)
-    size_t added = 0;      ///< blocks new to the mirror
-    double seconds = 0.0;  ///< wall time of the sync
+    bool rebuilt = false;       ///< read whole from Map::blockView()
+    size_t listed = 0;          ///< blocks the changed-block list named (0 after a rebuild)
+    size_t added = 0;           ///< blocks new to the mirror
+    double seconds = 0.0;       ///< wall time of the sync
+    double list_seconds = 0.0;  ///< of it, Map::masksChangedSince (or the rebuild's blockView)
   };
 
   /// Brings the mirror up to date with `map` (held under its read lock); nothing to do when it
   /// is at the map's revision and view already. Blocks whose masks changed get the map's
   /// revision as their stamp (kOccupied: when their occupied cells changed).
   const SyncStats& sync(const fragg::Map& map);
+  /// What the last sync did.
+  [[nodiscard]] const SyncStats& lastSync() const { return stats_; }
   /// Forgets everything: the next sync rebuilds.
   void invalidate() { valid_ = false; }
   [[nodiscard]] bool valid() const { return valid_; }

@@ -177,9 +177,13 @@ class Outputs {
     if (g_sync_stage && !before_ && (takes_in || due.maps)) {
       const auto ts = Clock::now();
       const long f = minorFaults();
-      if (mirror_)
-        (void)mirror_->sync(map);  // the changed blocks' masks
-      else
+      if (mirror_) {
+        const fragg::ros::MaskMirror::SyncStats& m = mirror_->sync(map);  // changed blocks' masks
+        if (getenv("FRAGG_MIRROR_DEBUG"))
+          std::fprintf(stderr,
+                       "mirror sync: rebuilt %d listed %zu added %zu list %.2f ms all %.2f ms\n",
+                       m.rebuilt, m.listed, m.added, m.list_seconds * 1e3, m.seconds * 1e3);
+      } else
         (void)map.blockView();  // a CUDA map's changed blocks written back
       t.sync = msSince(ts);
       t.sync_faults = minorFaults() - f;
