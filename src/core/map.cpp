@@ -600,14 +600,13 @@ bool Map::masksChangedSince(uint64_t revision, std::vector<BlockKey>* keys,
   std::lock_guard<std::mutex> lock(*sync_mutex_);
   std::vector<BlockIndex> host;
   if (!blocks_.masksChangedSince(revision, &host)) return false;
-  std::vector<BlockKey> device_keys;
-  std::vector<BlockStateMasks> device_masks;
-  backend_->masksChangedSince(revision, &device_keys, &device_masks);
   // The backend's copies are the newer ones; the host's serve the blocks it holds no longer.
-  *keys = std::move(device_keys);
-  *masks = std::move(device_masks);
-  BlockKeyTable listed;
-  if (!keys->empty()) {
+  // Written into the caller's vectors (a reader that keeps them reuses their pages).
+  keys->clear();
+  masks->clear();
+  backend_->masksChangedSince(revision, keys, masks);
+  BlockKeyTable listed;  // the device's keys, where the host lists blocks too
+  if (!keys->empty() && !host.empty()) {
     listed.reserve(keys->size() + host.size());
     for (uint32_t i = 0; i < keys->size(); ++i) listed.insert((*keys)[i], i);
   }
