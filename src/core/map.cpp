@@ -667,6 +667,18 @@ size_t Map::knownVoxelCount() const {
   return n;
 }
 
+MemoryStats Map::memoryAsHeld() const {
+  MemoryStats m;
+  {
+    std::lock_guard<std::mutex> lock(*sync_mutex_);  // not while another reader writes back
+    m.host_block_bytes = blocks_.hostBytes();
+  }
+  m.device_bytes = backend_->deviceBytes();
+  m.device_estimate_bytes = backend_->deviceEstimateBytes();
+  m.scan_store_bytes = scan_store_->memoryBytes();
+  return m;
+}
+
 MemoryStats Map::memory() const {
   MemoryStats m;
   m.host_block_bytes = hostBlocks().hostBytes();

@@ -5,6 +5,17 @@
 #include <cstring>
 
 namespace fragg::ros {
+namespace {
+
+/// Cells free or occupied in `m`.
+uint64_t knownIn(const fragg::BlockStateMasks& m) {
+  uint64_t n = 0;
+  for (int w = 0; w < fragg::kStateMaskWords; ++w)
+    n += __builtin_popcountll(m.occupied[w] | m.free[w]);
+  return n;
+}
+
+}  // namespace
 
 const MaskMirror::SyncStats& MaskMirror::sync(const fragg::Map& map) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -45,6 +56,7 @@ void MaskMirror::rebuild(const fragg::Map& map) {
   masks_.clear();
   masks_at_.clear();
   occupied_at_.clear();
+  known_cells_ = 0;
   table_.reserve(slots.size());
   keys_.reserve(slots.size());
   masks_.reserve(slots.size());
@@ -55,6 +67,7 @@ void MaskMirror::rebuild(const fragg::Map& map) {
     table_.insert(view.keyAt(s), static_cast<uint32_t>(keys_.size()));
     keys_.push_back(view.keyAt(s));
     masks_.push_back(view.masksAt(s));
+    known_cells_ += knownIn(view.masksAt(s));
     // Everything counts as changed at the rebuild's revision (readers rebuild with it).
     masks_at_.push_back(revision);
     occupied_at_.push_back(revision);
@@ -71,6 +84,7 @@ void MaskMirror::put(const fragg::BlockKey& key, const fragg::BlockStateMasks& m
     table_.insert(key, static_cast<uint32_t>(keys_.size()));
     keys_.push_back(key);
     masks_.push_back(masks);
+    known_cells_ += knownIn(masks);
     masks_at_.push_back(revision);
     bool occupied = false;
     for (const uint64_t w : masks.occupied) occupied |= w != 0;
@@ -80,7 +94,11 @@ void MaskMirror::put(const fragg::BlockKey& key, const fragg::BlockStateMasks& m
   fragg::BlockStateMasks& kept = masks_[s];
   if (std::memcmp(kept.occupied, masks.occupied, sizeof(kept.occupied)) != 0)
     occupied_at_[s] = revision;
-  if (std::memcmp(&kept, &masks, sizeof(kept)) != 0) masks_at_[s] = revision;
+  if (std::memcmp(&kept, &masks, sizeof(kept)) != 0) {
+    masks_at_[s] = revision;
+    known_cells_ += knownIn(masks);
+    known_cells_ -= knownIn(kept);
+  }
   kept = masks;
 }
 

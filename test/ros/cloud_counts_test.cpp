@@ -26,6 +26,7 @@
 #include "cloud_msg_builder.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/map.h"
+#include "fragg_map/ros/mask_mirror.h"
 
 namespace {
 
@@ -228,6 +229,34 @@ TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
 
 TEST(CloudTraceCsv, AnUnwritablePathIsAClearError) {
   EXPECT_THROW(fragg::ros::CloudTraceCsv("/nonexistent-dir/trace.csv"), fragg::IoError);
+}
+
+// ~stats on a CUDA map reads its figures from the outputs' mask mirror (no write-back, no walk
+// over the cells): the same blocks and known voxels as Map::memory(), and the host's bytes.
+TEST(ServerStatsFigures, FromAMaskMirrorTheSameAsTheMapsOwn) {
+  fragg::MapParams params;
+  params.resolution_m = 0.1;
+  params.backend = fragg::Backend::kCpu;
+  fragg::Map map(params);
+  fragg::PointCloud wall;
+  for (int y = -20; y <= 20; ++y)
+    for (int z = -5; z <= 5; ++z) wall.points_S.emplace_back(3.0f, 0.1f * y, 0.1f * z);
+  map.insert(wall, Eigen::Isometry3d::Identity(), fragg::SensorModel::autoFromCloud(0.0, -1.0));
+  fragg::ros::MaskMirror mirror;
+  ServerStats stats;
+  // Not synced yet: the map's own figures.
+  const fragg_map::MapStats before =
+      stats.toMsg(map, "map", ::ros::Time(0), ServerStats::MapFigures::kRecent, &mirror);
+  (void)mirror.sync(map);
+  const fragg_map::MapStats exact = stats.toMsg(map, "map", ::ros::Time(0));
+  const fragg_map::MapStats recent =
+      stats.toMsg(map, "map", ::ros::Time(0), ServerStats::MapFigures::kRecent, &mirror);
+  EXPECT_GT(exact.known_voxels, 1000u);
+  EXPECT_EQ(before.known_voxels, exact.known_voxels);
+  EXPECT_EQ(recent.known_voxels, exact.known_voxels);
+  EXPECT_EQ(recent.blocks, exact.blocks);
+  EXPECT_EQ(recent.host_bytes, exact.host_bytes);
+  EXPECT_EQ(recent.gpu_bytes, exact.gpu_bytes);
 }
 
 }  // namespace

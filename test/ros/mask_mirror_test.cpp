@@ -2,8 +2,9 @@
 // (compared with Map::blockView() block by block); a sync that follows insertions and cell
 // edits reads only the changed-block list (no rebuild), stamps exactly the blocks whose masks
 // changed (and, for kOccupied, those whose occupied cells changed) and keeps every block's
-// slot; a change of the map's view (clear_bbx, reset, load) rebuilds it and moves its
-// generation; a sync with nothing new does nothing.
+// slot, and counts the cells free or occupied as they change; a change of the map's view
+// (clear_bbx, reset, load) rebuilds it and moves its generation; a sync with nothing new does
+// nothing.
 #include "fragg_map/ros/mask_mirror.h"
 
 #include <gtest/gtest.h>
@@ -37,12 +38,18 @@ void expectMirrors(const fragg::Map& map, const MaskMirror& mirror, const std::s
   EXPECT_EQ(mirror.size(), view.size());
   EXPECT_EQ(mirror.slotCount(), view.size());
   size_t differ = 0;
+  uint64_t known = 0;
   for (const fragg::BlockIndex s : view.allSlots()) {
     const fragg::BlockStateMasks* m = mirror.findMasks(view.keyAt(s));
     ASSERT_NE(m, nullptr);
     differ += !sameMasks(*m, view.masksAt(s));
+    for (int w = 0; w < fragg::kStateMaskWords; ++w)
+      known += __builtin_popcountll(view.masksAt(s).occupied[w] | view.masksAt(s).free[w]);
   }
   EXPECT_EQ(differ, 0u);
+  EXPECT_EQ(mirror.knownCells(), known);
+  // With OctoMap's model every observed cell is free or occupied: memory()'s count.
+  EXPECT_EQ(mirror.knownCells(), map.memory().known_voxels);
   for (const fragg::BlockIndex s : mirror.allSlots()) {
     EXPECT_TRUE(view.findBlock(mirror.keyAt(s)) != nullptr);
     EXPECT_TRUE(mirror.holds(s, mirror.keyAt(s)));

@@ -46,6 +46,9 @@ class MaskMirror {
   [[nodiscard]] uint64_t viewEpoch() const { return epoch_; }
   /// Blocks held.
   [[nodiscard]] size_t size() const { return table_.size(); }
+  /// Cells free or occupied in the held masks (kept as they change: no walk). Observed cells
+  /// in the unknown band are not among them (Map::memory's known_voxels counts those too).
+  [[nodiscard]] uint64_t knownCells() const { return known_cells_; }
   /// Counts the rebuilds: the slots of one generation are not those of another (a reader that
   /// keeps records by slot starts over when it changes; a rebuild stamps every block changed).
   [[nodiscard]] uint64_t generation() const { return generation_; }
@@ -107,6 +110,7 @@ class MaskMirror {
   std::vector<fragg::BlockKey> listed_keys_;
   std::vector<fragg::BlockStateMasks> listed_masks_;
   SyncStats stats_;
+  uint64_t known_cells_ = 0;  ///< knownCells()
 };
 
 }  // namespace fragg::ros

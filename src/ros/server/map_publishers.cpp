@@ -149,8 +149,8 @@ void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
   publishMarkerTopics(map, stamp, full_markers);
   publishMapOutputs(map, stamp, throttle_maps);
   if (wanted(stats_pub_))
-    stats_pub_.publish(
-        stats_->toMsg(map, params_.frame_id, stamp, ServerStats::MapFigures::kRecent));
+    stats_pub_.publish(stats_->toMsg(map, params_.frame_id, stamp, ServerStats::MapFigures::kRecent,
+                                     mirror_.get()));
 }
 
 void MapPublishers::mirrorFor(const fragg::Map& map) {

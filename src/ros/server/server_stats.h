@@ -12,6 +12,7 @@
 #include "fragg_map/MapStats.h"
 #include "fragg_map/insert_stats.h"
 #include "fragg_map/map.h"
+#include "fragg_map/ros/mask_mirror.h"
 #include "fragg_map/ros/timing_stats.h"
 
 namespace fragg::ros {
@@ -70,10 +71,14 @@ class ServerStats {
   };
   static constexpr double kMapFiguresPeriodSeconds = 5.0;
 
-  /// The statistics message; `map` must be locked by the caller.
+  /// The statistics message; `map` must be locked by the caller. kRecent with `mirror` (the
+  /// outputs' mask mirror of a CUDA map, synced at their take-ins): blocks and known voxels
+  /// from it (cells free or occupied; kept as they change) and the bytes from
+  /// Map::memoryAsHeld, so that ~stats neither writes the device's blocks back nor walks the
+  /// cells.
   fragg_map::MapStats toMsg(const fragg::Map& map, const std::string& frame_id,
-                            const ::ros::Time& stamp,
-                            MapFigures figures = MapFigures::kExact) const;
+                            const ::ros::Time& stamp, MapFigures figures = MapFigures::kExact,
+                            const MaskMirror* mirror = nullptr) const;
   uint64_t droppedNoTf() const;
   uint64_t faults(CloudFault fault) const;
 
