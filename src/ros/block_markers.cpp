@@ -477,7 +477,9 @@ SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map& map, const MarkerS
   // from the host's copy or the mirror as they stand, so a CUDA map is written back (or its
   // masks read) once a period, not at every cloud (the same cells on a CPU map).
   if (ledger->mirror_) {
-    if (note) ledger->mirror_->sync(map);
+    // A mirror never synced (just handed to a ledger in use) holds nothing yet: a share drawn
+    // from it would take every listed block for gone.
+    if (note || !ledger->mirror_->valid()) ledger->mirror_->sync(map);
     return send(*ledger->mirror_);
   }
   return send(note ? map.blockView() : map.hostBlockView());

@@ -301,6 +301,35 @@ TEST(MarkerChunks, ThroughAMaskMirrorToo) {
   expectPacedReachesRebuild(style, true);
 }
 
+// A mirror handed to a ledger in the middle of a period (chunks listed from the map's view and
+// still queued): the next share syncs it first, so no queued block is taken for gone.
+TEST(MarkerChunks, AMirrorHandedOverMidPeriodLosesNoQueuedChunk) {
+  fragg::Map map(fragg::ros::test::cpuParams());
+  MarkerStyle style;
+  style.chunk_blocks = 1;
+  MarkerLedger topic;
+  View view;
+  constexpr double kPeriodS = 1.0, kIntervalS = 0.125;  // exact in binary
+  const auto paced = [&](double now_s) {
+    apply(map,
+          fragg::ros::toMarkerArray(
+              fragg::ros::pacedBlockMarkersWire(map, style, kStamp, now_s, kPeriodS, &topic)),
+          &view);
+  };
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  paced(0.0);  // the taking-in: every chunk queued
+  paced(kIntervalS);
+  ASSERT_GT(topic.pendingChunks(), 2u);
+  topic.useMirror(std::make_shared<fragg::ros::MaskMirror>());
+  for (double now_s = 2 * kIntervalS; now_s < 2 * kPeriodS; now_s += kIntervalS) paced(now_s);
+  EXPECT_EQ(topic.pendingChunks(), 0u);
+  MarkerLedger rebuilt;
+  View full;
+  apply(map, fragg::ros::allBlockMarkers(map, style, kStamp, &rebuilt), &full);
+  EXPECT_EQ(allDrawn(view), allDrawn(full));
+  EXPECT_EQ(topic.shownBlocks(), rebuilt.shownBlocks());
+}
+
 // Paced, the taking-in lists the changed blocks by chunk and draws none of them: each chunk's
 // blocks are drawn when it is sent (the work comes in the shares, not on one cloud), and a
 // chunk whose drawn cells did not change (a cell above the height band turned occupied) is not
