@@ -680,13 +680,10 @@ MemoryStats Map::memoryAsHeld() const {
 }
 
 MemoryStats Map::memory() const {
-  MemoryStats m;
-  m.host_block_bytes = hostBlocks().hostBytes();
+  (void)hostBlocks();  // the device's changes written back first
+  MemoryStats m = memoryAsHeld();
   m.blocks = blocks_.size();
-  m.device_bytes = backend_->deviceBytes();
-  m.device_estimate_bytes = backend_->deviceEstimateBytes();
   m.known_voxels = knownVoxelCount();
-  m.scan_store_bytes = scan_store_->memoryBytes();
   return m;
 }
 

@@ -380,10 +380,11 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   const uint64_t revision = map.revision();
   out.full = !valid_ || map.viewEpoch() != epoch_ || revision < revision_ ||
              map.resolution() != resolution_m_;
-  // A mirror serves where the masks do (it holds no cells to list kState changes by).
-  const bool mirrored = mirror_ != nullptr &&
-                        refreshOn(map.model()) == fragg::BlockChange::kMasks &&
-                        options_.masks_where_settled;
+  // Blocks come with their masks where the change log lists every change of outputs (kMasks);
+  // a mirror serves only then (it holds no cells to list kState changes by).
+  const bool masks_serve =
+      refreshOn(map.model()) == fragg::BlockChange::kMasks && options_.masks_where_settled;
+  const bool mirrored = mirror_ != nullptr && masks_serve;
   // The pieces are indexed by the mirror's slots: a mirror rebuilt (by this cache or another
   // reader) rebuilds them.
   if (mirrored && mirror_->generation() != mirror_generation_) out.full = true;
@@ -400,9 +401,7 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   }
   // The blocks to recompute, and those that left the map. With the change log (kMasks) a block
   // comes with its state masks (its cells are read only where the grid's bounds need them).
-  const bool masks_suffice = (!out.full || mirrored) &&
-                             refreshOn(map.model()) == fragg::BlockChange::kMasks &&
-                             options_.masks_where_settled;
+  const bool masks_suffice = (!out.full || mirrored) && masks_serve;
   if (mirrored) {
     // Shares read the mirror as the last sync left it; cells, where the grid's bounds need
     // them, from the host's copy (no write-back).

@@ -212,7 +212,10 @@ TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
     std::getline(row, total_ms, ',');
     ++outcomes[outcome];
     EXPECT_EQ(std::stoul(points), 231u);
-    EXPECT_GE(std::stod(total_ms) + 1e-3,
+    // The CSV writes ms to 3 decimals: each of the five fields is off by up to 0.0005 ms, so the
+    // four stages' sum may pass the total by up to 0.0025 (1e-3 failed ~7 % of runs: 2.742 total
+    // against 2.743 summed).
+    EXPECT_GE(std::stod(total_ms) + 3e-3,
               std::stod(queue_ms) + std::stod(tf_ms) + std::stod(insert_ms) + std::stod(publish_ms))
         << line;
   }

@@ -36,8 +36,6 @@ class MaskMirror {
   /// is at the map's revision and view already. Blocks whose masks changed get the map's
   /// revision as their stamp (kOccupied: when their occupied cells changed).
   const SyncStats& sync(const fragg::Map& map);
-  /// What the last sync did.
-  [[nodiscard]] const SyncStats& lastSync() const { return stats_; }
   /// Forgets everything: the next sync rebuilds.
   void invalidate() { valid_ = false; }
   [[nodiscard]] bool valid() const { return valid_; }

@@ -110,7 +110,10 @@ struct Times {
   size_t cells_read = 0;         ///< of those, blocks whose cells it read (the others: masks)
   fragg::ros::OutputCacheUpdate stages;  ///< the cache update's own account (wall times)
   double cache_update = 0;               ///< of `cloud`: MapOutputCache::update alone (after path)
-  double sync = 0;            ///< --sync-stage: Map::blockView() alone (a CUDA map's write-back)
+  /// --sync-stage: Map::blockView() alone (a CUDA map's write-back), or the mirror's sync
+  double sync = 0;
+  size_t sync_listed = 0;     ///< the mirror's sync: blocks the changed-block list named
+  double sync_list_ms = 0;    ///< and the wall ms of Map::masksChangedSince in it
   long sync_faults = 0;       ///< minor page faults in it
   bool synced = false;        ///< the stage ran before this cloud's outputs
   size_t pending_chunks = 0;  ///< marker chunks queued after the cloud (paced)
@@ -179,12 +182,11 @@ class Outputs {
       const long f = minorFaults();
       if (mirror_) {
         const fragg::ros::MaskMirror::SyncStats& m = mirror_->sync(map);  // changed blocks' masks
-        if (getenv("FRAGG_MIRROR_DEBUG"))
-          std::fprintf(stderr,
-                       "mirror sync: rebuilt %d listed %zu added %zu list %.2f ms all %.2f ms\n",
-                       m.rebuilt, m.listed, m.added, m.list_seconds * 1e3, m.seconds * 1e3);
-      } else
+        t.sync_listed = m.listed;
+        t.sync_list_ms = m.list_seconds * 1e3;
+      } else {
         (void)map.blockView();  // a CUDA map's changed blocks written back
+      }
       t.sync = msSince(ts);
       t.sync_faults = minorFaults() - f;
       t.synced = true;
@@ -463,14 +465,24 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
       paced ? " (paced)" : "", percentile(total_after, 0.5), percentile(total_after, 0.99),
       percentile(total_after, 1.0), scans.size());
   if (g_sync_stage) {
-    std::vector<double> sync_ms;
+    std::vector<double> sync_ms, list_ms, listed;
     long sync_faults = 0;
     for (const Times& t : after_times)
       if (t.synced) {
         sync_ms.push_back(t.sync);
+        list_ms.push_back(t.sync_list_ms);
+        listed.push_back(static_cast<double>(t.sync_listed));
         sync_faults += t.sync_faults;
       }
-    if (!sync_ms.empty())
+    if (!sync_ms.empty() && g_mirror)
+      std::printf(
+          "  of it, the mask mirror's sync before a take-in: %zu times, median %.2f ms, max %.2f "
+          "ms, %ld page faults in all; blocks listed median %.0f, max %.0f; "
+          "Map::masksChangedSince wall ms median %.2f, max %.2f\n",
+          sync_ms.size(), percentile(sync_ms, 0.5), percentile(sync_ms, 1.0), sync_faults,
+          percentile(listed, 0.5), percentile(listed, 1.0), percentile(list_ms, 0.5),
+          percentile(list_ms, 1.0));
+    else if (!sync_ms.empty())
       std::printf(
           "  of it, the write-back before a take-in (Map::blockView()): %zu times, median %.2f ms, "
           "max %.2f ms, %ld page faults in all\n",
