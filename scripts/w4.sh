@@ -181,7 +181,8 @@ if "paged" in runs:
               f"scan, {p['seconds_redone']:.2f} s with the stops); "
               f"store reads+decode {pg['seconds_page_in']:.2f}; device write-back (sync) "
               f"{pg['seconds_sync']:.2f}; page-out {pg['seconds_page_out']:.2f} (evict "
-              f"{pg['seconds_evict']:.2f}, encode {pg['seconds_encode']:.2f}); rounds "
+              f"{pg['seconds_evict']:.2f}, encode {pg['seconds_encode']:.2f}, choosing "
+              f"{pg.get('seconds_choose', float('nan')):.2f}); rounds "
               f"{pg['rounds_between_scans']} between scans, {pg['rounds_in_scan']} in scans; "
               f"commits {pg['seconds_commit']:.2f} on the map's thread, writer "
               f"{pg['seconds_writer']:.2f}")

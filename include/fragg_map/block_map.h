@@ -165,6 +165,10 @@ class BlockMap {
                     const std::function<void(BlockIndex)>& fn) const;
   /// Every live block, in unspecified order.
   void forEach(const std::function<void(BlockIndex)>& fn) const;
+  /// Calls `fn(blocks)` once for each cell of the coarse spatial index (kBlockSize^3 blocks: a
+  /// block key >> kBlockBits) with the live blocks in it, cells and blocks in unspecified
+  /// order: a pass over every block grouped by place without a look-up per block.
+  void forEachCoarseCell(const std::function<void(const std::vector<BlockIndex>&)>& fn) const;
 
   /// Exact bounds of observed cells (reads every cell of every block).
   KeyBounds observedBounds() const;

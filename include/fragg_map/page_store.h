@@ -177,6 +177,9 @@ struct PagingStats {
   double seconds_evict = 0;
   /// ... of it encoding the changed regions that leave (records held for the next commit)
   double seconds_encode = 0;
+  /// ... of it choosing the blocks that leave (Pager::victims: a pass over every resident
+  /// block, by region; also where a round finds too few clean blocks and chooses again)
+  double seconds_choose = 0;
   /// Paging rounds (blocks paged out to make room): between scans (after one, for the next:
   /// Map::pageAfterScan; or before a device's ray pass, for its read-ahead), and inside a scan
   /// (the CPU backend's page-in of the blocks its rays mark, a device pass's stop).

@@ -256,6 +256,12 @@ void BlockMap::forEach(const std::function<void(BlockIndex)>& fn) const {
   index_.forEach([&](const BlockKey&, BlockIndex i) { fn(i); });
 }
 
+void BlockMap::forEachCoarseCell(
+    const std::function<void(const std::vector<BlockIndex>&)>& fn) const {
+  for (const auto& [skey, list] : super_)
+    if (!list.empty()) fn(list);
+}
+
 KeyBounds BlockMap::observedBounds() const {
   KeyBounds b;
   index_.forEach([&](const BlockKey& key, BlockIndex i) {

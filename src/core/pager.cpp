@@ -1,6 +1,7 @@
 #include "fragg_map/internal/pager.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -628,40 +629,71 @@ std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vect
   last_sensor_m_ = sensor_m;
   const size_t target = blocksWithin(policy_.low_water);
   if (blocks.size() + incoming <= target) return {};
+  const auto t0 = Clock::now();
   std::unordered_map<BlockKey, bool, BlockKeyHash> pinned_regions;
   if (pinned)
     for (const BlockKey& k : *pinned) pinned_regions.emplace(regionOf(k), true);
   // Blocks leave by region (a store record holds a region): the candidates are the resident
-  // regions, each with its blocks.
+  // regions, each with its blocks. A region lies inside one cell of the map's coarse index
+  // (kBlockSize^3 blocks), so the blocks are grouped cell by cell into the cell's regions: no
+  // look-up per block (this pass over every resident block runs at every paging round).
+  static_assert(kRegionBits <= kBlockBits, "a region lies inside a coarse index cell");
+  constexpr int kRegionsPerAxis = 1 << (kBlockBits - kRegionBits);
+  constexpr int kRegionsPerCell = kRegionsPerAxis * kRegionsPerAxis * kRegionsPerAxis;
   struct Candidate {
     bool near = false;   ///< within the radius: after every other region
     uint64_t order = 0;  ///< outside: the last use; inside: farther first
     BlockKey region;
     bool dirty = false;
-    std::vector<BlockIndex> members;
+    uint32_t first = 0, count = 0;  ///< its blocks: members[first, first + count)
   };
-  std::unordered_map<BlockKey, size_t, BlockKeyHash> slot;
   std::vector<Candidate> candidates;
-  blocks.forEach([&](BlockIndex i) {
-    const BlockMeta& m = blocks.meta(i);
-    const BlockKey region = regionOf(m.key);
-    const auto [it, added] = slot.emplace(region, candidates.size());
-    if (added) {
-      candidates.emplace_back();
-      candidates.back().region = region;
+  std::vector<BlockIndex> members;
+  members.reserve(blocks.size());
+  blocks.forEachCoarseCell([&](const std::vector<BlockIndex>& cell) {
+    const auto local = [&](BlockIndex i) {
+      const BlockKey r = regionOf(blocks.meta(i).key);
+      return ((r.z & (kRegionsPerAxis - 1)) * kRegionsPerAxis + (r.y & (kRegionsPerAxis - 1))) *
+                 kRegionsPerAxis +
+             (r.x & (kRegionsPerAxis - 1));
+    };
+    std::array<uint32_t, kRegionsPerCell> count{}, at{};
+    std::array<int32_t, kRegionsPerCell> candidate;
+    candidate.fill(-1);
+    for (const BlockIndex i : cell) ++count[local(i)];
+    uint32_t filled = static_cast<uint32_t>(members.size());
+    for (int r = 0; r < kRegionsPerCell; ++r) {
+      at[r] = filled;
+      filled += count[r];
     }
-    Candidate& c = candidates[it->second];
-    c.dirty |= dirty(m);
-    c.members.push_back(i);
+    members.resize(filled);
+    for (const BlockIndex i : cell) {
+      const int r = local(i);
+      const BlockMeta& m = blocks.meta(i);
+      if (candidate[r] < 0) {
+        candidate[r] = static_cast<int32_t>(candidates.size());
+        candidates.emplace_back();
+        candidates.back().region = regionOf(m.key);
+        candidates.back().first = at[r];
+      }
+      Candidate& c = candidates[candidate[r]];
+      c.dirty |= dirty(m);
+      members[at[r] + c.count++] = i;
+    }
   });
   // A region with a block erased since the last commit has a record older than it.
-  for (const BlockKey& k : erased_) {
-    auto it = slot.find(regionOf(k));
-    if (it != slot.end()) candidates[it->second].dirty = true;
-  }
-  for (const auto& s : stale_) {
-    auto it = slot.find(s.first);
-    if (it != slot.end()) candidates[it->second].dirty = true;
+  if (!erased_.empty() || !stale_.empty()) {
+    std::unordered_map<BlockKey, size_t, BlockKeyHash> slot;
+    slot.reserve(candidates.size());
+    for (size_t j = 0; j < candidates.size(); ++j) slot.emplace(candidates[j].region, j);
+    for (const BlockKey& k : erased_) {
+      auto it = slot.find(regionOf(k));
+      if (it != slot.end()) candidates[it->second].dirty = true;
+    }
+    for (const auto& s : stale_) {
+      auto it = slot.find(s.first);
+      if (it != slot.end()) candidates[it->second].dirty = true;
+    }
   }
   const double r2 = policy_.radius_m * policy_.radius_m;
   const double region_m = block_m_ * (1 << kRegionBits);
@@ -695,9 +727,10 @@ std::vector<BlockIndex> Pager::victims(const BlockMap& blocks, const Eigen::Vect
   bool any_near = false;
   for (const Candidate* c : order) {
     if (out.size() >= needed) break;
-    out.insert(out.end(), c->members.begin(), c->members.end());
+    out.insert(out.end(), members.begin() + c->first, members.begin() + c->first + c->count);
     any_near |= c->near;
   }
+  counters_.seconds_choose += secondsSince(t0);
   if (any_near && !radius_yield_warned_) {
     radius_yield_warned_ = true;
     logMessage(LogLevel::kWarning,

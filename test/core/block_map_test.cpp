@@ -377,6 +377,52 @@ TEST(BlockMapTest, ForEachVisitsEachLiveBlockOnce) {
   EXPECT_EQ(calls, 0);
 }
 
+TEST(BlockMapTest, ForEachCoarseCellGroupsEveryLiveBlockOnceByCell) {
+  BlockMap m;
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> coord(-30, 30);  // negative keys: cells by arithmetic shift
+  std::set<BlockIndex> live;
+  std::vector<BlockKey> keys;
+  while (keys.size() < 2000) {
+    const BlockKey k{coord(rng), coord(rng), coord(rng) / 4};
+    bool created = false;
+    const BlockIndex i = m.findOrCreate(k, &created);
+    if (!created) continue;
+    keys.push_back(k);
+    live.insert(i);
+  }
+  std::vector<BlockKey> gone;
+  for (size_t j = 0; j < keys.size(); ++j) {
+    if (j % 5 == 0) gone.push_back(keys[j]);
+    if (j % 11 == 0) {  // one by one too
+      live.erase(m.find(keys[j]));
+      m.erase(keys[j]);
+    }
+  }
+  for (const BlockKey& k : gone) live.erase(m.find(k));
+  m.erase(gone);
+  const auto cellOf = [](const BlockKey& b) {
+    return BlockKey{b.x >> kBlockBits, b.y >> kBlockBits, b.z >> kBlockBits};
+  };
+  std::set<BlockKey, KeyLess> cells;
+  std::vector<BlockIndex> seen;
+  m.forEachCoarseCell([&](const std::vector<BlockIndex>& cell) {
+    ASSERT_FALSE(cell.empty());
+    const BlockKey c = cellOf(m.meta(cell.front()).key);
+    EXPECT_TRUE(cells.insert(c).second) << "a cell visited twice";
+    for (const BlockIndex i : cell) {
+      EXPECT_TRUE(m.liveAt(i));
+      EXPECT_EQ(cellOf(m.meta(i).key), c);
+      seen.push_back(i);
+    }
+  });
+  std::sort(seen.begin(), seen.end());
+  EXPECT_EQ(seen, std::vector<BlockIndex>(live.begin(), live.end()));
+  int calls = 0;
+  BlockMap().forEachCoarseCell([&](const std::vector<BlockIndex>&) { ++calls; });
+  EXPECT_EQ(calls, 0);
+}
+
 TEST(BlockMapTest, ObservedBoundsAreExact) {
   BlockMap m;
   EXPECT_TRUE(m.observedBounds().empty);

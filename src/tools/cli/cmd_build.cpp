@@ -410,6 +410,7 @@ void runBuild(const BuildOptions& o) {
                      {"seconds_page_out", paging.seconds_page_out},
                      {"seconds_evict", paging.seconds_evict},
                      {"seconds_encode", paging.seconds_encode},
+                     {"seconds_choose", paging.seconds_choose},
                      {"rounds_between_scans", paging.rounds_between_scans},
                      {"rounds_in_scan", paging.rounds_in_scan},
                      {"scans_read_ahead", paging.scans_read_ahead},
