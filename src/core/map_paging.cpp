@@ -35,13 +35,6 @@ StoreMapMeta metaOf(const MapParams& p, uint64_t scans) {
   return m;
 }
 
-/// Rays the CUDA read-ahead walks at most (Map::pageInAhead). Three W4 scans (~162,000
-/// points, 5 cm, 30 m), one thread of the 2-core machine (loaded): every ray 20-31 ms; 32,768
-/// rays 3.3-4.5 ms, missing 1.2-1.5 % of the regions every ray reaches (16,384: 1.7-2.3 ms,
-/// 2.1-3.3 %; 65,536: 5.5-7.6 ms, 0.5-0.6 %). A missed paged-out region costs a stop and a
-/// pass redone.
-constexpr size_t kReadAheadRays = 32768;
-
 InvalidArgument scanTooLarge(size_t needed, size_t block_bytes, double budget_mb) {
   const double needed_mb = static_cast<double>(needed * block_bytes) / (1024.0 * 1024.0);
   return InvalidArgument("paging: one scan needs " + std::to_string(needed) +
@@ -330,9 +323,9 @@ void Map::pageInAhead(const PointCloud& cloud, const ScanRecord& how, const Bloc
                       const BlockKey& hi, size_t* read) {
   // The CPU path pages in exactly the blocks its rays mark before it applies any; the device's
   // rays run on the device, so the regions they pass through are walked here first (at region
-  // granularity; up to kReadAheadRays rays, an even sample of a denser scan): the paged-out ones
-  // are read back and the resident ones pinned while room is made. A region the walk misses
-  // (reached by rays between the sample's, at a corner in float, a no-return ray) is still
+  // granularity; up to PagingPolicy::read_ahead_rays rays, an even sample of a denser scan): the
+  // paged-out ones are read back and the resident ones pinned while room is made. A region the walk
+  // misses (reached by rays between the sample's, at a corner in float, a no-return ray) is still
   // caught by the pass (a miss, read back, the pass redone).
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<BlockKey> paged_regions = pager_->pagedOutRegionsIn(lo, hi);
@@ -346,7 +339,7 @@ void Map::pageInAhead(const PointCloud& cloud, const ScanRecord& how, const Bloc
   const double region_m = params_.resolution_m * kBlockSize * (1 << kRegionBits);
   const std::vector<BlockKey> regions =
       regionsReached(cloud, how.T_map_sensor, how.model.max_range_m, region_m, regionOf(lo),
-                     regionOf(hi), params_.threads, kReadAheadRays);
+                     regionOf(hi), params_.threads, pager_->policy().read_ahead_rays);
   std::vector<BlockKey> reached, pinned;
   for (const BlockKey& r : regions) (paged.count(r) ? reached : pinned).push_back(firstBlockOf(r));
   c.seconds_reach += secondsSince(t0);

@@ -32,9 +32,11 @@ bool readNumber(const XmlRpcValue& root, const char* name, double* out) {
 }  // namespace
 
 const std::vector<std::string>& pagingParameterNames() {
-  static const std::vector<std::string> names = {"paging/store", "paging/budget_mb",
-                                                 "paging/radius_m", "paging/commit_every_scans",
-                                                 "paging/commit_every_s"};
+  static const std::vector<std::string> names = {
+      "paging/store",          "paging/budget_mb",
+      "paging/radius_m",       "paging/commit_every_scans",
+      "paging/commit_every_s", "paging/low_water",
+      "paging/read_ahead_rays"};
   return names;
 }
 
@@ -54,6 +56,13 @@ PagingParams parsePagingParameters(const XmlRpcValue& root, fragg::MapParams* ma
     p.policy.commit_every_scans = static_cast<uint64_t>(every_scans);
   }
   readNumber(root, "commit_every_s", &p.policy.commit_every_s);
+  readNumber(root, "low_water", &p.policy.low_water);
+  double rays = static_cast<double>(p.policy.read_ahead_rays);
+  if (readNumber(root, "read_ahead_rays", &rays)) {
+    if (rays != std::floor(rays) || rays > 1e9)
+      badParam("paging/read_ahead_rays", "expected a whole number of rays (0: every ray)");
+    p.policy.read_ahead_rays = static_cast<size_t>(rays);
+  }
   if (p.store.empty()) {
     if (p.policy.budget_mb > 0 || p.policy.radius_m > 0)
       badParam(p.policy.budget_mb > 0 ? "paging/budget_mb" : "paging/radius_m",
@@ -70,7 +79,9 @@ PagingParams parsePagingParameters(const XmlRpcValue& root, fragg::MapParams* ma
   try {
     p.policy.validate();
   } catch (const fragg::InvalidArgument& e) {
-    badParam("paging/budget_mb", e.what());
+    badParam(
+        p.policy.low_water > 0 && p.policy.low_water <= 1 ? "paging/budget_mb" : "paging/low_water",
+        e.what());
   }
   return p;
 }

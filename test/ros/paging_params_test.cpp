@@ -52,6 +52,8 @@ TEST(PagingParams, AStoreTurnsKeptScansOffAndTakesTheBudget) {
   root["paging"]["radius_m"] = 30.5;
   root["paging"]["commit_every_scans"] = 20;
   root["paging"]["commit_every_s"] = 0;
+  root["paging"]["low_water"] = 0.5;
+  root["paging"]["read_ahead_rays"] = 0;
   fragg::MapParams map;
   map.scans.keep = true;  // the server's default
   const fragg::ros::PagingParams p = fragg::ros::parsePagingParameters(root, &map);
@@ -60,6 +62,8 @@ TEST(PagingParams, AStoreTurnsKeptScansOffAndTakesTheBudget) {
   EXPECT_EQ(p.policy.radius_m, 30.5);
   EXPECT_EQ(p.policy.commit_every_scans, 20u);
   EXPECT_EQ(p.policy.commit_every_s, 0.0);
+  EXPECT_EQ(p.policy.low_water, 0.5);
+  EXPECT_EQ(p.policy.read_ahead_rays, 0u);  // every ray
   EXPECT_FALSE(map.scans.keep);
 }
 
@@ -80,6 +84,16 @@ TEST(PagingParams, BadValuesAreRefusedNamingTheParameter) {
     XmlRpcValue r = with_store;
     r["paging"]["commit_every_scans"] = 2.5;
     expectRejected(r, "paging/commit_every_scans");
+  }
+  {
+    XmlRpcValue r = with_store;
+    r["paging"]["low_water"] = 1.5;  // a round cannot leave more than the budget
+    expectRejected(r, "paging/low_water");
+  }
+  {
+    XmlRpcValue r = with_store;
+    r["paging"]["read_ahead_rays"] = 100.5;
+    expectRejected(r, "paging/read_ahead_rays");
   }
   {
     XmlRpcValue r = with_store;

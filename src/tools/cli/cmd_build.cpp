@@ -571,6 +571,14 @@ void addBuildCommand(CLI::App& app) {
                 "Blocks within this distance of the sensor are paged out last, only when the "
                 "budget needs it (m)")
       ->capture_default_str();
+  c->add_option("--page-low-water", o->paging.low_water,
+                "Page store: a paging round brings the resident blocks down to this fraction of "
+                "the budget (0-1]")
+      ->capture_default_str();
+  c->add_option("--read-ahead-rays", o->paging.read_ahead_rays,
+                "Page store, CUDA backend: rays walked on the host before the ray pass to read "
+                "back the paged-out regions it reaches (a sample of a denser scan; 0 = every ray)")
+      ->capture_default_str();
   c->add_option("--commit-every", o->paging.commit_every_scans,
                 "Page store: commit the changed blocks every N scans (0 = by time only)")
       ->capture_default_str();
