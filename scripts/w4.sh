@@ -10,6 +10,7 @@
 # says about pages.
 # Usage: bash scripts/w4.sh [--workloads DIR] [--out DIR] [--bin DIR] [--budget-mb N]
 #                           [--backend cpu|cuda|auto] [--scans N] [--no-paged] [--keep-maps]
+#                           [--page-args "FLAGS"]
 #   --workloads DIR  workload cache (default: $FRAGG_WORKLOADS or ~/.cache/fragg_map/workloads)
 #   --out DIR        maps, logs and JSON (default: WORKLOADS/w4_runs)
 #   --bin DIR        folder with fragg_map and fragg_map_sim (default: <checkout>_ws/devel/lib/fragg_map,
@@ -23,12 +24,14 @@
 #   --cmp            the paged build also writes its map with -o (read back whole: its peak RSS
 #                    then includes the whole map), compared byte for byte with the in-memory one
 #   --disk           also writes 2 GiB with dd conv=fdatasync into OUT: the disk's bandwidth
+#   --page-args "A"  more flags for the paged build only (e.g. "--read-ahead-rays 0
+#                    --page-low-water 0.5"; word-split)
 # The last line gives the paged build's throughput against the in-memory one (build loops).
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
 workloads="${FRAGG_WORKLOADS:-$HOME/.cache/fragg_map/workloads}"
 out="" bin="" budget_mb=512 store_ext=lmdb radius_m=40 backend=auto scans=0 paged=1 keep=0
-compare=0 cmp_files=0 disk=0
+compare=0 cmp_files=0 disk=0 page_args=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --workloads) workloads="${2:?}"; shift 2 ;;
@@ -44,7 +47,8 @@ while [ $# -gt 0 ]; do
     --compare) compare=1; shift ;;
     --cmp) cmp_files=1; shift ;;
     --disk) disk=1; shift ;;
-    -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
+    --page-args) read -r -a page_args <<<"${2?}"; shift 2 ;;
+    -h|--help) sed -n '2,28p' "$0"; exit 0 ;;
     *) echo "w4: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
@@ -116,7 +120,7 @@ if [ "$paged" = 1 ]; then
     paged_out=()
     [ "$cmp_files" = 1 ] && paged_out=(-o "$out/paged.fgm")
     build paged --page-store "$out/w4_pages.$store_ext" --page-budget-mb "$budget_mb" \
-      --page-radius "$radius_m" "${paged_out[@]}"
+      --page-radius "$radius_m" "${page_args[@]}" "${paged_out[@]}"
     if [ "$compare" = 1 ]; then
       "$fm" compare "$out/in_memory.fgm" "$out/w4_pages.$store_ext" >"$out/compare.log" 2>&1
       checks+=("compare (cell states): $(grep '^known in either' "$out/compare.log")")
