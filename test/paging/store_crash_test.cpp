@@ -227,7 +227,7 @@ TEST(CliPaging, StoresAreReadWhereMapsAreAndBadFlagsAreRefused) {
 }
 
 TEST(CliPaging, BatchesStopAtTheScanLimitAndAResumedStoreMatchesOneBuild) {
-  // The CLI inserts batches of 16 scans (Map::insertSequence): a limit inside a batch, and a
+  // The CLI inserts batches of up to 16 scans (Map::insertSequence): a limit inside a batch, and a
   // store continued from a count that is not a multiple of 16, give the one build's map.
   const std::string dir = testDir();
   writeKittiSequence(dir);
