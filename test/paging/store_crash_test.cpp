@@ -201,11 +201,13 @@ TEST(CliPaging, StoresAreReadWhereMapsAreAndBadFlagsAreRefused) {
   ASSERT_EQ(runCli(dir, "build " + common + " -o '" + dir + "/mem.fgm'", &out), 0) << out;
   ASSERT_EQ(runCli(dir,
                    "build " + common + " --page-store '" + dir +
-                       "/s.lmdb' --page-budget-mb 10 --page-radius 3 --json",
+                       "/s.lmdb' --page-budget-mb 10 --page-radius 3 --page-low-water 0.5 "
+                       "--read-ahead-rays 0 --json",
                    &out),
             0)
       << out;
-  for (const char* field : {"\"peak_resident_blocks\"", "\"pages_written\"", "\"pages_read\""})
+  for (const char* field : {"\"peak_resident_blocks\"", "\"pages_written\"", "\"pages_read\"",
+                            "\"low_water\":0.5", "\"read_ahead_rays\":0"})
     EXPECT_NE(out.find(field), std::string::npos) << field << " missing in " << out;
   // compare accepts the store as a map: every cell agrees with the in-memory build's.
   ASSERT_EQ(runCli(dir, "compare '" + dir + "/s.lmdb' '" + dir + "/mem.fgm' --json", &out), 0)
@@ -222,6 +224,10 @@ TEST(CliPaging, StoresAreReadWhereMapsAreAndBadFlagsAreRefused) {
       runCli(dir, "build " + common + " --page-store '" + dir + "/t.db' --page-radius -1", &out),
       2);
   EXPECT_NE(out.find("radius"), std::string::npos) << out;
+  EXPECT_EQ(runCli(dir, "build " + common + " --page-store '" + dir + "/t.db' --page-low-water 1.5",
+                   &out),
+            2);
+  EXPECT_NE(out.find("low_water"), std::string::npos) << out;
   EXPECT_EQ(runCli(dir, "stats '" + dir + "/missing.db'", &out), 1);
   EXPECT_NE(out.find("no such file"), std::string::npos) << out;
 }
