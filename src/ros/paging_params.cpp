@@ -79,9 +79,10 @@ PagingParams parsePagingParameters(const XmlRpcValue& root, fragg::MapParams* ma
   try {
     p.policy.validate();
   } catch (const fragg::InvalidArgument& e) {
-    badParam(
-        p.policy.low_water > 0 && p.policy.low_water <= 1 ? "paging/budget_mb" : "paging/low_water",
-        e.what());
+    // readNumber checked the others already: the policy's own rule refuses low_water, and
+    // its message names it.
+    const bool low_water = std::string(e.what()).find("low_water") != std::string::npos;
+    badParam(low_water ? "paging/low_water" : "paging/budget_mb", e.what());
   }
   return p;
 }
