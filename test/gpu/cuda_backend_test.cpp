@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "../core/test_scenes.h"
+#include "../test_dir.h"
 #include "bench/synthetic_lidar.h"
 #include "fragg_map/errors.h"
 #include "fragg_map/geometry/mesh_bvh.h"
@@ -548,7 +549,7 @@ TEST(CudaBackendTest, HostReadersSeeDeviceChanges) {
   insertAll(cpu, {scans[0], scans[1]}, sensor);
   insertAll(gpu, {scans[0], scans[1]}, sensor);
   // save (write-back), clear a box on the host (device copies dropped), insert more.
-  const std::string path = std::string(FRAGG_TEST_TMP) + "/gpu_save.fgm";
+  const std::string path = fragg::test::testDir() + "/gpu_save.fgm";
   gpu.save(path);
   expectSameBlocks(cpu, Map::load(path), "saved after 2 scans", /*same_history=*/false);
   const Eigen::Vector3d lo = scans[1].T.translation() - Eigen::Vector3d(4, 4, 2);
