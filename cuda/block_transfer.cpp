@@ -52,27 +52,38 @@ void BlockTransfer::writeBack(
     const std::function<BlockIndex(int32_t slot, const BlockKey& key)>& host_block_of) {
   for (size_t begin = 0; begin < slots.size(); begin += kBatch) {
     const size_t n = std::min(kBatch, slots.size() - begin);
-    reserve(n, /*staging=*/true);
+    reserve(n, /*staging=*/!direct_);
     stamps_.reserve(3 * n);
-    for (size_t j = 0; j < n; ++j) {
-      slots_[j] = slots[begin + j];
-      block_ptrs_[j] = staging_.device() + j;
-    }
+    for (size_t j = 0; j < n; ++j) slots_[j] = slots[begin + j];
     slots_.toDevice(n, stream_);
+    std::vector<BlockIndex> target(n);
+    if (direct_) {
+      // Pinned host blocks the device addresses: the download kernel writes each block in
+      // place (no staging, no host copy). Their keys first, so that the host blocks of slots
+      // made on the device exist (in order: creating host blocks is not thread-safe).
+      launchGatherKeys(pool, slots_.device(), uint32_t(n), keys_.device(), stream_);
+      keys_.toHost(n, stream_);
+      FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
+      for (size_t j = 0; j < n; ++j) target[j] = host_block_of(slots_[j], keys_[j]);
+      for (size_t j = 0; j < n; ++j) block_ptrs_[j] = &blocks.block(target[j]);
+    } else {
+      for (size_t j = 0; j < n; ++j) block_ptrs_[j] = staging_.device() + j;
+    }
     block_ptrs_.toDevice(n, stream_);
     launchDownload(pool, block_ptrs_.device(), masks_.device(), slots_.device(), uint32_t(n),
                    keys_.device(), stamps_.device(), stream_);
-    staging_.toHost(n, stream_);
+    if (!direct_) staging_.toHost(n, stream_);
     masks_.toHost(n, stream_);
     keys_.toHost(n, stream_);
     stamps_.toHost(3 * n, stream_);
     FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
-    // Targets first, in order (creating host blocks is not thread-safe), then the copies.
-    std::vector<BlockIndex> target(n);
-    for (size_t j = 0; j < n; ++j) target[j] = host_block_of(slots_[j], keys_[j]);
-#pragma omp parallel for schedule(static) num_threads(threads_)
+    if (!direct_) {
+      // Targets first, in order (creating host blocks is not thread-safe), then the copies.
+      for (size_t j = 0; j < n; ++j) target[j] = host_block_of(slots_[j], keys_[j]);
+    }
+#pragma omp parallel for schedule(static) num_threads(threads_) if (!direct_ || n > 4096)
     for (long j = 0; j < static_cast<long>(n); ++j) {
-      std::memcpy(&blocks.block(target[j]), &staging_[j], sizeof(Block));
+      if (!direct_) std::memcpy(&blocks.block(target[j]), &staging_[j], sizeof(Block));
       blocks.masks(target[j]) = masks_[j];
       BlockMeta& m = blocks.meta(target[j]);
       m.changed_at = std::max(m.changed_at, stamps_[j]);

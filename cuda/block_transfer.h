@@ -1,6 +1,6 @@
-// Batched block copies between the host map and the device pool: uploads (straight from
-// pinned host blocks, or through pinned staging) and write-backs (through staging), each in
-// batches of kBatch blocks with one kernel per batch.
+// Batched block copies between the host map and the device pool: uploads and write-backs,
+// straight from and into pinned host blocks the device addresses (direct), else through
+// pinned staging, each in batches of kBatch blocks with one kernel per batch.
 #pragma once
 
 #include <functional>
@@ -15,11 +15,12 @@ namespace fragg::cuda {
 
 class BlockTransfer {
  public:
-  /// Blocks moved per batch (32 MiB of staging).
+  /// Blocks moved per batch (32 MiB of staging where the host blocks are not direct).
   static constexpr size_t kBatch = 16384;
 
   /// `direct`: host blocks are pinned and device-addressable, so the upload kernel reads
-  /// them in place; `host_threads`: threads of the host-side copies (0: every core).
+  /// them in place and the download kernel writes them in place (no staging is allocated);
+  /// `host_threads`: threads of the host-side copies (0: every core).
   BlockTransfer(cudaStream_t stream, bool direct, int host_threads)
       : stream_(stream), direct_(direct), threads_(threadCount(host_threads)) {}
 
@@ -28,7 +29,8 @@ class BlockTransfer {
   void upload(const SlotArrays& pool, const std::vector<BlockIndex>& host_blocks,
               const std::vector<int32_t>& slots, const BlockMap& blocks, uint32_t scan);
   /// Copies each slot back to the host block `host_block_of(slot, key)` names (called in
-  /// order, on this thread: it may create the block), with its state masks, and its
+  /// order, on this thread: it may create the block; direct, before the copy, which then
+  /// lands in place), with its state masks, and its
   /// changed_at / occupied_at merged into the block's metadata (a newer masks_at through
   /// BlockMap::noteMasksChanged: the change log); clears the slots' dirty flags.
   void writeBack(const SlotArrays& pool, const std::vector<int32_t>& slots, BlockMap& blocks,

@@ -134,6 +134,10 @@ void launchWindowMarkBoxes(const Window& w, const BlockKey* first, uint32_t n, i
 void launchUpload(const SlotArrays& s, const Block* const* src, const BlockStateMasks* masks,
                   const int32_t* slots, const BlockKey* keys, uint32_t n, uint32_t scan,
                   cudaStream_t stream);
+/// Copies the key of slot slots[j] to keys[j] (j < n): what a direct write-back needs before
+/// it makes the host blocks the device writes into.
+void launchGatherKeys(const SlotArrays& s, const int32_t* slots, uint32_t n, BlockKey* keys,
+                      cudaStream_t stream);
 /// Copies slot slots[j] to dst[j], its state masks to masks[j] and its key / changed_at /
 /// occupied_at / masks_at to keys[j] / changed_at[j] / changed_at[n + j] / changed_at[2n + j]
 /// (changed_at holds 3n values); clears dirty.

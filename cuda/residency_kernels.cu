@@ -85,6 +85,11 @@ __global__ void __launch_bounds__(kCopyThreads)
   }
 }
 
+__global__ void gatherKeysKernel(SlotArrays s, const int32_t* slots, uint32_t n, BlockKey* keys) {
+  const uint32_t j = blockIdx.x * blockDim.x + threadIdx.x;
+  if (j < n) keys[j] = s.keys[slots[j]];
+}
+
 __global__ void cullSlotsKernel(SlotArrays s, Frustum f, CullContext ctx, double block_m,
                                 uint32_t scan) {
   const int32_t slot = blockIdx.x * blockDim.x + threadIdx.x;
@@ -145,6 +150,13 @@ void launchDownload(const SlotArrays& s, Block* const* dst, BlockStateMasks* mas
   if (n == 0) return;
   downloadKernel<<<n, kCopyThreads, 0, stream>>>(s, dst, masks, slots, keys, changed_at);
   FRAGG_CUDA_CHECK_LAUNCH("downloadKernel");
+}
+
+void launchGatherKeys(const SlotArrays& s, const int32_t* slots, uint32_t n, BlockKey* keys,
+                      cudaStream_t stream) {
+  if (n == 0) return;
+  gatherKeysKernel<<<blocksFor(n, kThreads), kThreads, 0, stream>>>(s, slots, n, keys);
+  FRAGG_CUDA_CHECK_LAUNCH("gatherKeysKernel");
 }
 
 void launchCullSlots(const SlotArrays& s, const Frustum& f, const CullContext& ctx, double block_m,

@@ -16,9 +16,13 @@ void BlockChangeLog::record(uint64_t revision, const BlockKey& key) {
 }
 
 void BlockChangeLog::dropOldest() {
-  // Records arrive nearly in revision order (a device write-back may bring older ones).
-  std::stable_sort(records_.begin(), records_.end(),
-                   [](const Record& a, const Record& b) { return a.revision < b.revision; });
+  // Records arrive nearly in revision order (a device write-back may bring older ones): the
+  // prefix still in order is kept, the rest sorted and merged into it (both stable: the order
+  // a whole stable sort gives).
+  const auto by_revision = [](const Record& a, const Record& b) { return a.revision < b.revision; };
+  const auto mid = records_.begin() + static_cast<std::ptrdiff_t>(sorted_up_to_);
+  std::stable_sort(mid, records_.end(), by_revision);
+  std::inplace_merge(records_.begin(), mid, records_.end(), by_revision);
   const size_t half = records_.size() / 2;
   if (half == 0) return;
   uint64_t cut = records_[half - 1].revision;

@@ -268,26 +268,23 @@ std::vector<BlockIndex> Pager::pageIn(const std::vector<BlockKey>& keys, BlockMa
 
 std::vector<BlockKey> Pager::pagedOutOfRegions(const std::vector<BlockKey>& keys,
                                                const BlockMap& blocks, size_t* fresh) const {
+  // Both passes read only (the index and the paged-out bits): the keys are split over the
+  // threads (a LiDAR scan reaches tens of thousands of blocks; this ran on the map's thread).
+  const long n = static_cast<long>(keys.size());
   if (fresh) {
-    *fresh = 0;
-    for (const BlockKey& k : keys) *fresh += !isPagedOut(k) && blocks.find(k) == kNoBlock;
+    size_t count = 0;
+#pragma omp parallel for schedule(static) reduction(+ : count) if (n > 4096)
+    for (long j = 0; j < n; ++j) count += !isPagedOut(keys[j]) && blocks.find(keys[j]) == kNoBlock;
+    *fresh = count;
   }
   if (paged_count_ == 0) return {};
   // Every paged-out block of the keys' regions (a region comes back whole).
+  std::vector<uint8_t> reaches(keys.size());
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (long j = 0; j < n; ++j) reaches[j] = regionHasPagedOut(keys[j]);
   std::vector<BlockKey> regions;
-  for (const BlockKey& k : keys) {
-    auto it = paged_super_.find(superOf(k));
-    if (it == paged_super_.end()) continue;
-    BlockKey lo = k, hi = k;
-    regionBox(&lo, &hi);
-    bool any = false;
-    for (size_t b = it->second._Find_first(); b < it->second.size() && !any;
-         b = it->second._Find_next(b)) {
-      const BlockKey p = keyOfBit(it->first, b);
-      any = p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
-    }
-    if (any) regions.push_back(regionOf(k));
-  }
+  for (long j = 0; j < n; ++j)
+    if (reaches[j]) regions.push_back(regionOf(keys[j]));
   std::sort(regions.begin(), regions.end(), storeOrder);
   regions.erase(std::unique(regions.begin(), regions.end()), regions.end());
   std::vector<BlockKey> wanted;
@@ -300,6 +297,23 @@ std::vector<BlockKey> Pager::pagedOutOfRegions(const std::vector<BlockKey>& keys
     });
   }
   return wanted;
+}
+
+bool Pager::regionHasPagedOut(const BlockKey& key) const {
+  const auto it = paged_super_.find(superOf(key));
+  if (it == paged_super_.end()) return false;
+  // A region lies inside one 8x8x8-block super region (kRegionBits <= kBlockBits): its bits
+  // there, one mask for each of the region's places in it.
+  constexpr int kPlacesBits = kBlockBits - kRegionBits;
+  static const std::array<RegionBits, size_t{1} << (3 * kPlacesBits)> masks = [] {
+    std::array<RegionBits, size_t{1} << (3 * kPlacesBits)> out{};
+    for (size_t bit = 0; bit < RegionBits().size(); ++bit) {
+      const BlockKey b = keyOfBit(BlockKey{0, 0, 0}, bit);
+      out[placeOf(b)].set(bit);
+    }
+    return out;
+  }();
+  return (it->second & masks[placeOf(key)]).any();
 }
 
 std::vector<BlockIndex> Pager::readBack(std::vector<BlockKey> wanted, BlockMap& blocks) {

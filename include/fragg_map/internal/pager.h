@@ -205,6 +205,15 @@ class Pager {
     const VoxelKey k = voxelKeyOf(region, static_cast<int>(bit));
     return {k.x, k.y, k.z};
   }
+  /// Which of its super region's places the region of block `b` takes (kRegionBits <=
+  /// kBlockBits: (1 << (kBlockBits - kRegionBits))^3 places).
+  static size_t placeOf(const BlockKey& b) {
+    constexpr int32_t bits = kBlockBits - kRegionBits, m = (1 << bits) - 1;
+    return static_cast<size_t>(((b.x >> kRegionBits) & m) | (((b.y >> kRegionBits) & m) << bits) |
+                               (((b.z >> kRegionBits) & m) << (2 * bits)));
+  }
+  /// Whether a block of `key`'s region is paged out.
+  [[nodiscard]] bool regionHasPagedOut(const BlockKey& key) const;
   template <class Fn>
   void forEachPagedOutIn(const BlockKey& lo, const BlockKey& hi, Fn&& fn) const;
   std::unordered_map<BlockKey, RegionBits, BlockKeyHash> paged_super_;
