@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <set>
 #include <string>
+#include <tuple>
 
 #include "fragg_map/cell_writer.h"
 #include "fragg_map/errors.h"
@@ -18,6 +20,13 @@ namespace fragg::test {
 namespace {
 
 constexpr int kScans = 80;
+
+/// Block keys in (x, y, z) order, for sets.
+struct KeyOrder {
+  bool operator()(const BlockKey& a, const BlockKey& b) const {
+    return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+  }
+};
 
 PagingPolicy budgetOf(double mb) {
   PagingPolicy p;
@@ -210,6 +219,70 @@ TEST_P(PagingBudget, PagedOutRegionsInABoxAndTheRoomLeftForNewBlocks) {
   EXPECT_EQ(pager.pagedOutRegionsIn({0, 0, 0}, {4 * e, 4 * e, 4 * e}).size(), 0u);
   EXPECT_EQ(pager.pagedOutRegionsIn({-4 * e, -4 * e, -4 * e}, {0, 0, 0}),
             (std::vector<BlockKey>{rm}));
+}
+
+// Pager::pagedOutOfRegions (what a scan's keys bring back: every paged-out block of their
+// regions; with `fresh`, how many of the keys are neither resident nor paged out) against a
+// brute-force answer, over whole regions paged out on both sides of the origin, with key sets
+// small (one thread) and large (split over the threads).
+TEST_P(PagingBudget, PagedOutOfRegionsEqualsABruteForceAnswer) {
+  const std::string dir = testDir();
+  PagingPolicy policy = budgetOf(64.0);
+  policy.background_writer = false;
+  BlockMap blocks;
+  Pager pager(openPageStore(storePath(dir), false), policy, 0.05);
+  pager.reserveSlots(blocks);
+  uint32_t seed = 2024;
+  auto next = [&seed](int32_t n) {
+    seed = seed * 1664525u + 1013904223u;
+    return static_cast<int32_t>((seed >> 8) % static_cast<uint32_t>(n));
+  };
+  // Blocks scattered over [-24, 24)^3 (regions of 4^3 blocks, super regions of 8^3).
+  for (int j = 0; j < 3000; ++j) {
+    const BlockKey k{next(48) - 24, next(48) - 24, next(48) - 24};
+    const BlockIndex i = blocks.findOrCreate(k);
+    blocks.block(i).cells[0] = Cell{1, 100};
+    blocks.meta(i).changed_at = 1;
+  }
+  StoreMapMeta meta;
+  meta.resolution_m = 0.05;
+  pager.commit(blocks, 1, meta);
+  // Whole regions leave: about one in three.
+  std::set<BlockKey, KeyOrder> paged;
+  std::vector<BlockIndex> out;
+  blocks.forEach([&](BlockIndex i) {
+    const BlockKey r = regionOf(blocks.meta(i).key);
+    if (((r.x * 7 + r.y * 13 + r.z * 29) % 3 + 3) % 3 == 0) {
+      out.push_back(i);
+      paged.insert(blocks.meta(i).key);
+    }
+  });
+  ASSERT_GT(paged.size(), 300u);
+  pager.pageOut(out, blocks);
+  for (const BlockKey& k : paged) ASSERT_TRUE(pager.isPagedOut(k));
+  for (const size_t n : {size_t{50}, size_t{20000}}) {
+    std::vector<BlockKey> keys;
+    for (size_t j = 0; j < n; ++j) keys.push_back({next(64) - 32, next(64) - 32, next(64) - 32});
+    std::set<BlockKey, KeyOrder> regions;
+    size_t want_fresh = 0;
+    for (const BlockKey& k : keys) {
+      want_fresh += !paged.count(k) && blocks.find(k) == kNoBlock;
+      for (const BlockKey& p : paged)
+        if (regionOf(p) == regionOf(k)) {
+          regions.insert(regionOf(k));
+          break;
+        }
+    }
+    std::set<BlockKey, KeyOrder> want;
+    for (const BlockKey& p : paged)
+      if (regions.count(regionOf(p))) want.insert(p);
+    size_t fresh = 0;
+    const std::vector<BlockKey> got = pager.pagedOutOfRegions(keys, blocks, &fresh);
+    EXPECT_EQ(fresh, want_fresh) << n << " keys";
+    EXPECT_EQ(got.size(), want.size()) << n << " keys";
+    EXPECT_EQ((std::set<BlockKey, KeyOrder>(got.begin(), got.end())), want) << n << " keys";
+    EXPECT_FALSE(want.empty()) << n << " keys: the check is empty";
+  }
 }
 
 TEST_P(PagingBudget, ACommitCompressesOnlyTheBlocksThatChanged) {
