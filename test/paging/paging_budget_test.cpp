@@ -47,6 +47,18 @@ class PagingBudget : public ::testing::TestWithParam<PageStoreKind> {
   }
 };
 
+/// Makes a block at each key (one occupied cell, changed at revision 1) and commits them.
+void makeAndCommit(Pager& pager, BlockMap& blocks, const std::vector<BlockKey>& keys) {
+  for (const BlockKey& k : keys) {
+    const BlockIndex i = blocks.findOrCreate(k);
+    blocks.block(i).cells[0] = Cell{1, 100};
+    blocks.meta(i).changed_at = 1;
+  }
+  StoreMapMeta meta;
+  meta.resolution_m = 0.05;
+  pager.commit(blocks, 1, meta);
+}
+
 void insertScans(Map& map, int from, int to) {
   for (int i = from; i < to; ++i) {
     const Eigen::Isometry3d T = corridorPose(i, kScans);
@@ -175,15 +187,10 @@ TEST_P(PagingBudget, PagedOutRegionsInABoxAndTheRoomLeftForNewBlocks) {
   const std::vector<BlockKey> near = {{0, 0, 0}, {1, 0, 0}};
   const std::vector<BlockKey> far = {{3 * e, 0, 0}, {3 * e, 1, 0}};
   const std::vector<BlockKey> below = {{-3 * e, -1, -1}};
-  for (const auto* keys : {&near, &far, &below})
-    for (const BlockKey& k : *keys) {
-      const BlockIndex i = blocks.findOrCreate(k);
-      blocks.block(i).cells[0] = Cell{1, 100};
-      blocks.meta(i).changed_at = 1;
-    }
-  StoreMapMeta meta;
-  meta.resolution_m = 0.05;
-  pager.commit(blocks, 1, meta);
+  std::vector<BlockKey> all = near;
+  all.insert(all.end(), far.begin(), far.end());
+  all.insert(all.end(), below.begin(), below.end());
+  makeAndCommit(pager, blocks, all);
   EXPECT_TRUE(pager.pagedOutRegionsIn({-8 * e, -8 * e, -8 * e}, {8 * e, 8 * e, 8 * e}).empty());
 
   // Region (3,0,0) leaves with a change the store lacks (held for the next commit), region
@@ -238,15 +245,9 @@ TEST_P(PagingBudget, PagedOutOfRegionsEqualsABruteForceAnswer) {
     return static_cast<int32_t>((seed >> 8) % static_cast<uint32_t>(n));
   };
   // Blocks scattered over [-24, 24)^3 (regions of 4^3 blocks, super regions of 8^3).
-  for (int j = 0; j < 3000; ++j) {
-    const BlockKey k{next(48) - 24, next(48) - 24, next(48) - 24};
-    const BlockIndex i = blocks.findOrCreate(k);
-    blocks.block(i).cells[0] = Cell{1, 100};
-    blocks.meta(i).changed_at = 1;
-  }
-  StoreMapMeta meta;
-  meta.resolution_m = 0.05;
-  pager.commit(blocks, 1, meta);
+  std::vector<BlockKey> made;
+  for (int j = 0; j < 3000; ++j) made.push_back({next(48) - 24, next(48) - 24, next(48) - 24});
+  makeAndCommit(pager, blocks, made);
   // Whole regions leave: about one in three.
   std::set<BlockKey, KeyOrder> paged;
   std::vector<BlockIndex> out;
