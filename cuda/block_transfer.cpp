@@ -74,7 +74,7 @@ void BlockTransfer::writeBack(
                    keys_.device(), stamps_.device(), stream_);
     if (!direct_) staging_.toHost(n, stream_);
     masks_.toHost(n, stream_);
-    keys_.toHost(n, stream_);
+    if (!direct_) keys_.toHost(n, stream_);  // direct: gathered before the copy
     stamps_.toHost(3 * n, stream_);
     FRAGG_CUDA_CHECK(cudaStreamSynchronize(stream_));
     if (!direct_) {

@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <set>
 #include <string>
-#include <tuple>
 
 #include "fragg_map/cell_writer.h"
 #include "fragg_map/errors.h"
@@ -21,12 +20,8 @@ namespace {
 
 constexpr int kScans = 80;
 
-/// Block keys in (x, y, z) order, for sets.
-struct KeyOrder {
-  bool operator()(const BlockKey& a, const BlockKey& b) const {
-    return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
-  }
-};
+/// Block keys in the stores' order (storeOrder), for sets.
+using KeySet = std::set<BlockKey, decltype(&storeOrder)>;
 
 PagingPolicy budgetOf(double mb) {
   PagingPolicy p;
@@ -249,7 +244,7 @@ TEST_P(PagingBudget, PagedOutOfRegionsEqualsABruteForceAnswer) {
   for (int j = 0; j < 3000; ++j) made.push_back({next(48) - 24, next(48) - 24, next(48) - 24});
   makeAndCommit(pager, blocks, made);
   // Whole regions leave: about one in three.
-  std::set<BlockKey, KeyOrder> paged;
+  KeySet paged(storeOrder);
   std::vector<BlockIndex> out;
   blocks.forEach([&](BlockIndex i) {
     const BlockKey r = regionOf(blocks.meta(i).key);
@@ -264,7 +259,7 @@ TEST_P(PagingBudget, PagedOutOfRegionsEqualsABruteForceAnswer) {
   for (const size_t n : {size_t{50}, size_t{20000}}) {
     std::vector<BlockKey> keys;
     for (size_t j = 0; j < n; ++j) keys.push_back({next(64) - 32, next(64) - 32, next(64) - 32});
-    std::set<BlockKey, KeyOrder> regions;
+    KeySet regions(storeOrder);
     size_t want_fresh = 0;
     for (const BlockKey& k : keys) {
       want_fresh += !paged.count(k) && blocks.find(k) == kNoBlock;
@@ -274,14 +269,14 @@ TEST_P(PagingBudget, PagedOutOfRegionsEqualsABruteForceAnswer) {
           break;
         }
     }
-    std::set<BlockKey, KeyOrder> want;
+    KeySet want(storeOrder);
     for (const BlockKey& p : paged)
       if (regions.count(regionOf(p))) want.insert(p);
     size_t fresh = 0;
     const std::vector<BlockKey> got = pager.pagedOutOfRegions(keys, blocks, &fresh);
     EXPECT_EQ(fresh, want_fresh) << n << " keys";
     EXPECT_EQ(got.size(), want.size()) << n << " keys";
-    EXPECT_EQ((std::set<BlockKey, KeyOrder>(got.begin(), got.end())), want) << n << " keys";
+    EXPECT_EQ(KeySet(got.begin(), got.end(), storeOrder), want) << n << " keys";
     EXPECT_FALSE(want.empty()) << n << " keys: the check is empty";
   }
 }
