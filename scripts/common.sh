@@ -18,7 +18,8 @@ FRAGG_JOBS="${FRAGG_JOBS:-2}"
 # CUDA kernels: "all" (every supported architecture: build.sh, test.sh), "check" (CI, .ci/run:
 # one architecture, the oldest supported, sm_75: every kernel compiled and checked by ptxas once,
 # not seven times; a GPU-less CI machine runs none of them) or "machine" (the demo scripts: only
-# the GPU present, native, and no CUDA at all without a GPU).
+# the GPU present, native, and no CUDA at all without a GPU), or an architecture's number
+# (90: sm_90 only, for another machine's GPU, e.g. the node staged by scripts/stage_ros.sh).
 FRAGG_CUDA="${FRAGG_CUDA:-all}"
 # The tests (FRAGG_BUILD_TESTS): ON for build.sh, test.sh and CI; OFF for the demo scripts, whose
 # first run builds only what it runs. Passed on every catkin_make, so a workspace the demo
@@ -137,7 +138,12 @@ fragg_cuda_choice() {
         FRAGG_CUDA_ARGS=(-DFRAGG_WITH_CUDA=OFF -DFRAGG_CUDA_NATIVE=OFF)
         FRAGG_CUDA_NOTE="CUDA: no GPU found (nvidia-smi): building without CUDA, CPU backend only"
       fi ;;
-    *) echo "FRAGG_CUDA must be all, check or machine, not '$FRAGG_CUDA'" >&2; return 2 ;;
+    [1-9][0-9]|[1-9][0-9][0-9])
+      FRAGG_CUDA_ARGS=(-DFRAGG_WITH_CUDA=ON -DFRAGG_CUDA_NATIVE=OFF
+        -DCMAKE_CUDA_ARCHITECTURES="$FRAGG_CUDA-real")
+      FRAGG_CUDA_NOTE="CUDA: kernels compiled for sm_$FRAGG_CUDA only (another machine's GPU)" ;;
+    *) echo "FRAGG_CUDA must be all, check, machine or an architecture (90), not '$FRAGG_CUDA'" >&2
+       return 2 ;;
   esac
   echo "$FRAGG_CUDA_NOTE"
 }
