@@ -18,7 +18,7 @@
 #   (scripts/device_node_rate.sh: W1 at sensor rate with every output subscribed, on it)
 # Checked on this machine (Debian 12) from a bare environment (env -i, only env.sh): the smoke
 # bag played through the staged node, 10 of 10 clouds inserted. Not run on the GPU machine.
-# The node must be built with CUDA for the GPU (nvcc is here: FRAGG_CUDA=on, sm_90) first;
+# The node must be built with CUDA for the GPU (nvcc is here: `FRAGG_CUDA=90 bash scripts/build.sh --ws WS`, sm_90 only) first;
 # NODE names it (default: <checkout>_ws/devel/lib/fragg_map/fragg_map_server).
 #   bash scripts/stage_ros.sh [DEST]
 # On the GPU machine (run's carry: .device/ros.tar.xz; the folder is over 64 MiB):

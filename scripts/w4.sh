@@ -169,7 +169,10 @@ for name in runs:
         print(f"{name}: peak RSS of the build loop {r['peak_build_loop']:,.0f} MiB, before the "
               f"first scan {r['before_first_scan']:,.0f} MiB (the process and the backend); at "
               f"the loop's end anonymous {r.get('anon_loop_end', 0):,.0f}, files "
-              f"{r.get('file_loop_end', 0):,.0f}, shared {r.get('shmem_loop_end', 0):,.0f} MiB")
+              f"{r.get('file_loop_end', 0):,.0f}, shared {r.get('shmem_loop_end', 0):,.0f} MiB; "
+              f"malloc's heap in use {r.get('heap_in_use_loop_end', 0):,.0f}, free in its arenas "
+              f"{r.get('heap_free_loop_end', 0):,.0f}, mapped apart "
+              f"{r.get('heap_mapped_loop_end', 0):,.0f} MiB")
 if "paged" in runs:
     p = json.load(open(f"{out}/paged.json"))
     pg = p["paging"]

@@ -1,6 +1,9 @@
 // fragg_map build INPUT -o MAP.fgm: integrates every scan of a dataset into a map.
 #include <fmt/format.h>
 #include <sys/resource.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 #include <algorithm>
 #include <chrono>
@@ -43,6 +46,24 @@ double statusMib(const char* field) {
     if (std::sscanf(line, format.c_str(), &kib) == 1) break;
   std::fclose(f);
   return kib / 1024.0;
+}
+
+/// The C heap as malloc holds it, MiB: `in_use` the bytes handed out, `free` the bytes its
+/// arenas keep free (fragments, freed memory not yet returned), `mapped` the large blocks it
+/// mapped apart (each returned when freed). Zeros without glibc.
+struct HeapMib {
+  double in_use = 0.0, free = 0.0, mapped = 0.0;
+};
+HeapMib heapMib() {
+  HeapMib h;
+#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
+  const struct mallinfo2 m = mallinfo2();
+  constexpr double kMib = 1024.0 * 1024.0;
+  h.in_use = static_cast<double>(m.uordblks) / kMib;
+  h.free = static_cast<double>(m.fordblks) / kMib;
+  h.mapped = static_cast<double>(m.hblkhd) / kMib;
+#endif
+  return h;
 }
 
 /// The process's peak resident memory so far (getrusage's ru_maxrss), MiB.
@@ -315,6 +336,7 @@ void runBuild(const BuildOptions& o) {
   // mapped files (LMDB's map, libraries), shared memory.
   const double rss_anon_mib = statusMib("RssAnon"), rss_file_mib = statusMib("RssFile"),
                rss_shmem_mib = statusMib("RssShmem");
+  const HeapMib heap = heapMib();  // how much of the anonymous memory is malloc's, and in use
   map.commitPages();
   if (!o.output.empty()) map.save(o.output);
   const PagingStats paging = map.pagingStats();
@@ -359,7 +381,10 @@ void runBuild(const BuildOptions& o) {
           {"peak_build_loop", peak_rss_loop_mib},
           {"anon_loop_end", rss_anon_mib},
           {"file_loop_end", rss_file_mib},
-          {"shmem_loop_end", rss_shmem_mib}}},
+          {"shmem_loop_end", rss_shmem_mib},
+          {"heap_in_use_loop_end", heap.in_use},
+          {"heap_free_loop_end", heap.free},
+          {"heap_mapped_loop_end", heap.mapped}}},
         {"passes_redone", total.passes_redone},
         {"seconds_redone", total.seconds_redone},
         {"seconds_residency", total.seconds_residency},
