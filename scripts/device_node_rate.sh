@@ -84,7 +84,10 @@ for arg in sys.argv[6:]:
     name, value = arg.split(":=", 1)
     m.setParam("/fragg_map/" + name, yaml.safe_load(value))
 PY
-fragg_map_server __name:=fragg_map cloud_in:=/points > "$out/node.log" 2>&1 &
+# The node's environment as launch/fragg_map.launch sets it unless given (2 MiB pages for the
+# large output messages; OpenMP threads that sleep rather than spin beside the node's others).
+GLIBC_TUNABLES=${GLIBC_TUNABLES-glibc.malloc.hugetlb=1} OMP_WAIT_POLICY=${OMP_WAIT_POLICY-passive} \
+  fragg_map_server __name:=fragg_map cloud_in:=/points > "$out/node.log" 2>&1 &
 node_pid=$!
 pids+=("$node_pid")
 for _ in $(seq 300); do grep -q "map at" "$out/node.log" && break; sleep 0.2; done
@@ -110,6 +113,7 @@ kill -INT "$node_pid" 2>/dev/null || true
 wait "$node_pid" 2>/dev/null || true
 echo "card: $(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -1)"
 echo "commit: $(git -C "$top" rev-parse --short HEAD 2>/dev/null), W1 street (128 x $azimuth_steps beams), $clouds clouds at $rate/s, $resolution m, max range $max_range m, backend $backend ${params[*]+"${params[*]}"}"
+echo "node environment: GLIBC_TUNABLES=${GLIBC_TUNABLES-glibc.malloc.hugetlb=1} OMP_WAIT_POLICY=${OMP_WAIT_POLICY-passive}"
 echo "outputs received by the subscriber (the last <= 2 GB kept): $(du -ch "$scratch"/outputs* 2>/dev/null | tail -1 | cut -f1)"
 echo "node parameters: default.yaml's marker_rate $(grep -m1 '^marker_rate' "$top/config/default.yaml" | awk '{print $2}'), map_rate $(grep -m1 '^map_rate' "$top/config/default.yaml" | awk '{print $2}') unless given above"
 python3 - "$out/trace.csv" "$clouds" <<'PY'

@@ -16,6 +16,11 @@ class CellWriter {
   /// a file's exact log-odds, even beyond the clamping range). Throws InvalidArgument for a
   /// negative hit count (nothing written).
   void set(const VoxelKey& key, const Cell& cell);
+  /// Sets every cell of block `key` to `block`'s (copies of another map's blocks: the
+  /// server's mirror of its map). Only the cells that differ are written (and stamped); a block
+  /// the map lacks is made only when `block` has an observed cell. Throws InvalidArgument for a
+  /// negative hit count (nothing written).
+  void setBlock(const BlockKey& key, const Block& block);
   /// Sets the fixed-point log-odds of every cell of the cube [lo, lo + edge_vox - 1], keeping
   /// their hit counts.
   void fillCube(const VoxelKey& lo, int32_t edge_vox, int16_t log_odds_fx);

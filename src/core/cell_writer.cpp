@@ -1,6 +1,7 @@
 #include "fragg_map/cell_writer.h"
 
 #include <algorithm>
+#include <cstring>
 #include <string>
 
 #include "fragg_map/errors.h"
@@ -27,6 +28,27 @@ void CellWriter::set(const VoxelKey& key, const Cell& cell) {
   if (cell.hits < 0)
     throw InvalidArgument("negative hit count " + std::to_string(cell.hits) + " for a cell");
   setInBlock(blocks_.findOrCreate(blockKeyOf(key)), cellIndexOf(key), cell);
+}
+
+void CellWriter::setBlock(const BlockKey& key, const Block& block) {
+  bool observed = false;
+  for (const Cell& c : block.cells) {
+    if (c.hits < 0)
+      throw InvalidArgument("negative hit count " + std::to_string(c.hits) + " for a cell");
+    observed |= c.observed();
+  }
+  BlockIndex i = blocks_.find(key);
+  if (i == kNoBlock) {
+    if (!observed) return;
+    i = blocks_.findOrCreate(key);
+  }
+  const Block& now = blocks_.block(i);
+  if (std::memcmp(&now, &block, sizeof(Block)) == 0) return;
+  for (int c = 0; c < kCellsPerBlock; ++c) {
+    const Cell& from = block.cells[c];
+    const Cell& to = now.cells[c];
+    if (from.log_odds_fx != to.log_odds_fx || from.hits != to.hits) setInBlock(i, c, from);
+  }
 }
 
 void CellWriter::fillCube(const VoxelKey& lo, int32_t edge_vox, int16_t log_odds_fx) {

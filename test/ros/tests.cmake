@@ -49,6 +49,11 @@ if(FRAGG_HAVE_ROS)
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/pose_correction_test.cpp
     LIBS fragg_map_ros
     LABELS ros)
+  # The frontier topics' mirror of the observed cells, copied a piece per read lock.
+  fragg_add_test(ros_observed_mirror_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/observed_mirror_test.cpp
+    LIBS fragg_map_nodelet
+    LABELS ros)
   # The server's map files (.fgm, .bt): the nodelet library's loader.
   if(TARGET fragg_map_octomap)
     fragg_add_test(ros_map_file_loader_test

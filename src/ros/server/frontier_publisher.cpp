@@ -10,7 +10,6 @@
 
 #include "fragg_map/planning/viewpoints.h"
 #include "fragg_map/ros/frontier_markers.h"
-#include "map_copy.h"
 
 namespace fragg::ros {
 
@@ -71,18 +70,16 @@ void FrontierPublisher::onTimer(const ::ros::SteadyTimerEvent&) {
     if (changes) update = tracker_.apply(*changes);
     cells = tracker_.cells();
     if (marker_subs > 0) {
-      // Clusters and viewpoints read the cells around the frontier: on a copy of the observed
-      // cells (map_copy.h: they answer as on the map), taken under the lock.
-      std::optional<Map> states;
-      {
-        const SharedMap::ReadGuard state = shared_->read();
-        states.emplace(observedCopy(state->map));
-      }
-      clusters = clusterer_.cluster(*states, cells);
+      // Clusters and viewpoints read the cells around the frontier: on the mirror of the
+      // observed cells (they answer as on the map), brought up to date a piece per read lock
+      // (a whole-map copy under one lock held insertion back for seconds on a big map).
+      mirror_.refresh(*shared_);
+      const Map& states = mirror_.map();
+      clusters = clusterer_.cluster(states, cells);
       if (fp.viewpoints > 0) {
         views.resize(clusters.size());
         for (size_t i = 0; i < clusters.size(); ++i)
-          views[i] = planning::clusterViewpoints(*states, clusters[i], fp.views);
+          views[i] = planning::clusterViewpoints(states, clusters[i], fp.views);
       }
     }
   } catch (const std::exception& e) {

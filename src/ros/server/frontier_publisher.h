@@ -7,8 +7,9 @@
 // the same while a cluster's cells do (one FrontierClusterer for the topic's lifetime). The
 // tracker's input (the changed-block list with masks: FrontierTracker::collect) is copied under
 // the map's read lock and the tracker updated without it (but with the obstacle distance filter,
-// which reads cells); the clusters and viewpoints (markers only) on a copy of the observed cells
-// (map_copy.h) taken under the lock;
+// which reads cells); the clusters and viewpoints (markers only) on a mirror of the observed
+// cells (observed_mirror.h: the blocks changed since the last tick copied a piece per read
+// lock, so a big map never holds insertion back for the copy);
 // at most frontiers/max_marker_cells cells go out (an even subsample beyond it, logged). The
 // timer runs on a thread of its own (service_threads.h).
 #pragma once
@@ -23,6 +24,7 @@
 #include "fragg_map/planning/frontier_clusters.h"
 #include "fragg_map/planning/frontier_tracker.h"
 #include "fragg_map/ros/server_params.h"
+#include "observed_mirror.h"
 #include "server_stats.h"
 #include "shared_map.h"
 
@@ -42,6 +44,7 @@ class FrontierPublisher {
   std::mutex mutex_;  ///< the tracker, the clusterer and the bookkeeping below
   planning::FrontierTracker tracker_;
   planning::FrontierClusterer clusterer_;
+  ObservedMirror mirror_;  ///< the observed cells the clusters and viewpoints read
   bool published_ = false;
   uint64_t published_revision_ = 0;
   /// Subscribers of each topic at the last timer tick (one more gets a fresh update).

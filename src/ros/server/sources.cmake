@@ -5,6 +5,7 @@ set(FRAGG_ROS_SERVER_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/map_services.cpp
   ${CMAKE_CURRENT_LIST_DIR}/service_threads.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_copy.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/observed_mirror.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_file_loader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/autosave.cpp
   ${CMAKE_CURRENT_LIST_DIR}/file_root.cpp

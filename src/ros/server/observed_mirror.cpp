@@ -1,0 +1,91 @@
+// ObservedMirror: the changed blocks, copied a piece per read lock.
+#include "observed_mirror.h"
+
+#include <algorithm>
+#include <tuple>
+#include <vector>
+
+#include "fragg_map/cell_writer.h"
+#include "fragg_map/errors.h"
+
+namespace fragg::ros {
+
+namespace {
+fragg::MapParams copyParams(const fragg::Map& source) {
+  fragg::MapParams p = source.params();
+  p.backend = fragg::Backend::kCpu;
+  p.scans = fragg::ScanStoreParams();
+  p.scans.keep = false;
+  return p;
+}
+
+bool sameModel(const fragg::OccupancyParams& a, const fragg::OccupancyParams& b) {
+  return a.prob_hit == b.prob_hit && a.prob_miss == b.prob_miss && a.clamp_min == b.clamp_min &&
+         a.clamp_max == b.clamp_max && a.unknown_band == b.unknown_band;
+}
+}  // namespace
+
+ObservedMirror::ObservedMirror(size_t blocks_per_lock) : blocks_per_lock_(blocks_per_lock) {
+  if (blocks_per_lock_ == 0)
+    throw fragg::InvalidArgument("a mirror copies at least one block a lock");
+}
+
+const fragg::Map& ObservedMirror::map() const {
+  static const fragg::Map empty = [] {
+    fragg::MapParams p;
+    p.backend = fragg::Backend::kCpu;  // no backend choice (and its log line) for an empty map
+    return fragg::Map(p);
+  }();
+  return copy_ ? *copy_ : empty;
+}
+
+ObservedMirror::RefreshStats ObservedMirror::refresh(const SharedMap& shared) {
+  RefreshStats stats;
+  std::vector<fragg::BlockKey> keys;
+  uint64_t revision = 0, epoch = 0;
+  {
+    const SharedMap::ReadGuard state = shared.read();
+    const fragg::Map& map = state->map;
+    ++stats.locks;
+    revision = map.revision();
+    epoch = map.viewEpoch();
+    stats.rebuilt = !copy_ || epoch != epoch_ || map.resolution() != copy_->resolution() ||
+                    !sameModel(map.params().occupancy, copy_->params().occupancy);
+    if (stats.rebuilt) {
+      copy_.emplace(copyParams(map));
+      const fragg::BlockView view = map.blockView();
+      keys.reserve(view.size());
+      view.forEach([&](const fragg::BlockKey& key, const fragg::Block&) { keys.push_back(key); });
+    } else if (revision != revision_) {
+      keys = map.changedBlocksSince(revision_, fragg::BlockChange::kAny);
+    }
+  }
+  stats.blocks_listed = keys.size();
+  // Store order: neighbouring blocks are copied together.
+  std::sort(keys.begin(), keys.end(), [](const fragg::BlockKey& a, const fragg::BlockKey& b) {
+    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+  });
+  for (size_t first = 0; first < keys.size(); first += blocks_per_lock_) {
+    const size_t last = std::min(keys.size(), first + blocks_per_lock_);
+    const SharedMap::ReadGuard state = shared.read();
+    const fragg::Map& map = state->map;
+    ++stats.locks;
+    if (map.viewEpoch() != epoch) {
+      // Blocks left the view while the pieces were copied (an erase, a reset, a load): what
+      // the copy holds may be gone from the map. Rebuilt at the next refresh.
+      copy_.reset();
+      stats.complete = false;
+      return stats;
+    }
+    const fragg::BlockView view = map.blockView();
+    copy_->writeCells([&](fragg::CellWriter& writer) {
+      for (size_t j = first; j < last; ++j)
+        if (const fragg::Block* block = view.findBlock(keys[j])) writer.setBlock(keys[j], *block);
+    });
+  }
+  revision_ = revision;
+  epoch_ = epoch;
+  return stats;
+}
+
+}  // namespace fragg::ros
