@@ -196,6 +196,10 @@ class BlockMap {
   std::vector<BlockStateMasks> masks_;  ///< parallel to meta_
   BlockChangeLog changes_;              ///< blocks whose masks changed, by revision
   std::vector<BlockIndex> free_;
+  /// How many of free_'s first entries are in descending order (orderFreeSlots sorts only
+  /// those after them and merges: a paging round frees tens of thousands of slots beside a
+  /// free list hundreds of thousands long, sorted by the round before).
+  size_t free_sorted_ = 0;
   /// Per memory page of the arena: handed back by releaseFreePages() and not used since.
   std::vector<uint8_t> page_released_;
   BlockKeyTable index_;

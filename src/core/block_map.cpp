@@ -56,6 +56,7 @@ BlockMap& BlockMap::operator=(BlockMap&& o) noexcept {
   masks_ = std::move(o.masks_);
   changes_ = std::move(o.changes_);
   free_ = std::move(o.free_);
+  free_sorted_ = o.free_sorted_;
   page_released_ = std::move(o.page_released_);
   index_ = std::move(o.index_);
   super_ = std::move(o.super_);
@@ -108,6 +109,7 @@ BlockIndex BlockMap::findOrCreate(const BlockKey& key, bool* created, bool initi
   }
   if (reused) {
     free_.pop_back();
+    free_sorted_ = std::min(free_sorted_, free_.size());
     if (i / kBlocksPerPage < page_released_.size()) page_released_[i / kBlocksPerPage] = 0;
   }
   index_.insert(key, i);
@@ -142,8 +144,12 @@ void BlockMap::erase(const BlockKey& key) {
 }
 
 void BlockMap::orderFreeSlots() {
-  // findOrCreate takes the back: descending order hands out the lowest slot first.
-  std::sort(free_.begin(), free_.end(), std::greater<BlockIndex>());
+  // findOrCreate takes the back: descending order hands out the lowest slot first. The slots
+  // freed since the last call are sorted and merged into those already in order.
+  const auto middle = free_.begin() + static_cast<std::ptrdiff_t>(free_sorted_);
+  std::sort(middle, free_.end(), std::greater<BlockIndex>());
+  std::inplace_merge(free_.begin(), middle, free_.end(), std::greater<BlockIndex>());
+  free_sorted_ = free_.size();
 }
 
 void BlockMap::erase(const std::vector<BlockKey>& keys) {
@@ -212,6 +218,7 @@ void BlockMap::clear() {
   index_.clear();
   super_.clear();
   free_.clear();
+  free_sorted_ = 0;
   for (BlockIndex i = static_cast<BlockIndex>(meta_.size()); i-- > 0;) freeSlot(i);
 }
 

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "fragg_map/errors.h"
+#include "fragg_map/state_masks.h"
 
 namespace fragg {
 
@@ -42,13 +43,33 @@ void CellWriter::setBlock(const BlockKey& key, const Block& block) {
     if (!observed) return;
     i = blocks_.findOrCreate(key);
   }
-  const Block& now = blocks_.block(i);
+  Block& now = blocks_.block(i);
   if (std::memcmp(&now, &block, sizeof(Block)) == 0) return;
+  // The whole block at once (as setInBlock would leave it cell by cell, ~10x faster): the
+  // cells, the masks recomputed, the stamps of what changed.
+  size_t differ = 0;
+  bool state_changed = false;
   for (int c = 0; c < kCellsPerBlock; ++c) {
     const Cell& from = block.cells[c];
     const Cell& to = now.cells[c];
-    if (from.log_odds_fx != to.log_odds_fx || from.hits != to.hits) setInBlock(i, c, from);
+    if (from.log_odds_fx == to.log_odds_fx && from.hits == to.hits) continue;
+    ++differ;
+    state_changed |= model_.stateDiffers(to, from);
   }
+  now = block;
+  const BlockStateMasks masks = stateMasksOf(block, model_);
+  BlockStateMasks& kept = blocks_.masks(i);
+  const bool occupied_changed =
+      std::memcmp(kept.occupied, masks.occupied, sizeof(masks.occupied)) != 0;
+  const bool masks_changed =
+      occupied_changed || std::memcmp(kept.free, masks.free, sizeof(masks.free)) != 0;
+  kept = masks;
+  if (masks_changed) blocks_.noteMasksChanged(i, revision_);
+  BlockMeta& m = blocks_.meta(i);
+  m.changed_at = revision_;
+  if (occupied_changed) m.occupied_at = revision_;
+  if (state_changed) m.state_at = revision_;
+  written_ += differ;
 }
 
 void CellWriter::fillCube(const VoxelKey& lo, int32_t edge_vox, int16_t log_odds_fx) {

@@ -197,6 +197,48 @@ TEST(BlockMapTest, ErasedIndicesAreReusedBeforeTheArenaGrows) {
   EXPECT_EQ(collectInBox(m, {0, -10, 0}, {500, 0, 10}), (std::vector<BlockIndex>{0, 2, 4}));
 }
 
+// Rounds as a paging map runs them: blocks erased in no order, the free slots ordered, some
+// of them taken again, more erased: after every ordering the next blocks take the lowest free
+// slots first, as a whole sort of the free list would hand them out (orderFreeSlots sorts
+// only the slots freed since the last ordering and merges them).
+TEST(BlockMapTest, RoundsOfErasuresHandOutTheLowestFreeSlotFirst) {
+  BlockMap m;
+  std::mt19937 rng(11);
+  std::vector<BlockKey> live;
+  int next = 0;
+  auto create = [&] {
+    const BlockKey k{next % 97, next / 97, 3};
+    ++next;
+    m.findOrCreate(k);
+    live.push_back(k);
+    return k;
+  };
+  for (int i = 0; i < 3000; ++i) create();
+  std::set<BlockIndex> model;  // the free slots
+  for (int round = 0; round < 25; ++round) {
+    std::shuffle(live.begin(), live.end(), rng);
+    const size_t leaving = live.size() / 4;
+    std::vector<BlockKey> out(live.end() - static_cast<std::ptrdiff_t>(leaving), live.end());
+    live.resize(live.size() - leaving);
+    for (const BlockKey& k : out) model.insert(m.find(k));
+    if (round % 2 == 0) {
+      m.erase(out);
+    } else {
+      for (const BlockKey& k : out) m.erase(k);
+    }
+    m.orderFreeSlots();
+    ASSERT_EQ(m.freeSlots(), model.size());
+    // Some of the free slots are taken again (fewer than were freed, so the list keeps an
+    // ordered head and the next round's slots join it), lowest first.
+    const size_t taken = leaving / 2 + static_cast<size_t>(round);
+    for (size_t j = 0; j < taken && !model.empty(); ++j) {
+      const BlockKey k = create();
+      ASSERT_EQ(m.find(k), *model.begin()) << "round " << round << ", block " << j;
+      model.erase(model.begin());
+    }
+  }
+}
+
 TEST(BlockMapTest, OrderedFreeSlotsAreTakenLowestFirst) {
   BlockMap m;
   std::vector<BlockKey> keys;

@@ -2,6 +2,8 @@
 #include "observed_mirror.h"
 
 #include <algorithm>
+#include <chrono>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -67,6 +69,9 @@ ObservedMirror::RefreshStats ObservedMirror::refresh(const SharedMap& shared) {
   });
   for (size_t first = 0; first < keys.size(); first += blocks_per_lock_) {
     const size_t last = std::min(keys.size(), first + blocks_per_lock_);
+    // A pause between pieces: glibc's reader-writer lock lets a reader in ahead of a waiting
+    // writer, so insertion, waiting for a piece to end, takes the lock before the next piece.
+    if (first > 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     const SharedMap::ReadGuard state = shared.read();
     const fragg::Map& map = state->map;
     ++stats.locks;

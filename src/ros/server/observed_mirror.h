@@ -3,7 +3,8 @@
 // observedCopy (map_copy.h) copies the whole map under one read lock, which on a big map held
 // insertion back for seconds at every tick (W1 on the GPU machine: a 3.4 s stall, 29 clouds
 // dropped). The mirror copies only the blocks changed since its last refresh, a bounded number
-// per read lock, the lock released between pieces.
+// per read lock (whole blocks, CellWriter::setBlock), the lock released for a millisecond
+// between pieces.
 #pragma once
 
 #include <cstddef>
@@ -25,8 +26,8 @@ class ObservedMirror {
     bool complete = true;      ///< false: the map's view changed mid-way; the next one rebuilds
   };
 
-  /// `blocks_per_lock`: blocks copied under one read lock (> 0; 2 KiB each).
-  explicit ObservedMirror(size_t blocks_per_lock = 8192);
+  /// `blocks_per_lock`: blocks copied under one read lock (> 0; 2 KiB each; ~1 us a block).
+  explicit ObservedMirror(size_t blocks_per_lock = 2048);
 
   /// Brings the copy up to `shared`'s map: every observed cell as the map holds it at the
   /// revision read at the start, or newer (blocks that change while the pieces are copied are
