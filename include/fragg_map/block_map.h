@@ -176,8 +176,9 @@ class BlockMap {
   size_t hostBytes() const;
 
   /// Hands the memory pages that hold only free blocks back to the system (paging out leaves
-  /// the arena with holes the size of the blocks that left); no-op for an allocator whose
-  /// pages cannot be released. Returns the bytes released by this call.
+  /// the arena with holes the size of the blocks that left), in runs of at least 64 KiB (a
+  /// call to the system for each shorter run cost more than the pages are worth); no-op for an
+  /// allocator whose pages cannot be released. Returns the bytes released by this call.
   size_t releaseFreePages();
 
  private:

@@ -319,6 +319,22 @@ size_t residentBytes() {
   return resident * static_cast<size_t>(sysconf(_SC_PAGESIZE));
 }
 
+// Free pages scattered one or two at a time stay (each release is a TLB shootdown on every
+// core); a run of 64 KiB or more goes back.
+TEST(BlockMap, ScatteredFreePagesStayAndLongRunsGoBack) {
+  BlockMap blocks;
+  constexpr int kBlocks = 4096;  // 8 MiB of cells, two blocks a 4 KiB page
+  for (int i = 0; i < kBlocks; ++i) blocks.findOrCreate({i, 0, 0});
+  // Every other page free: runs of one page.
+  for (int i = 0; i < kBlocks; ++i)
+    if ((i / 2) % 2 == 1) blocks.erase({i, 0, 0});
+  EXPECT_EQ(blocks.releaseFreePages(), 0u);
+  // Pages 0-99 free as well (blocks 0-199): one run of 100 pages, released whole, and only it.
+  for (int i = 0; i < 200; ++i) blocks.erase({i, 0, 0});
+  EXPECT_EQ(blocks.releaseFreePages(), size_t{100} * 4096);
+  EXPECT_EQ(blocks.releaseFreePages(), 0u);
+}
+
 TEST(BlockMap, PagesOfFreeBlocksGoBackToTheSystemAndComeBackUsable) {
   BlockMap blocks;
   constexpr int kBlocks = 20000;  // 40 MiB of cells
