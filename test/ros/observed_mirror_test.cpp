@@ -100,6 +100,12 @@ TEST(ObservedMirror, FollowsTheMapThroughEditsInPieces) {
   EXPECT_TRUE(s.rebuilt);
   expectMirrors(shared, mirror);
 
+  // Cleared (the markers' subscriber left): empty until the next refresh rebuilds it.
+  mirror.clear();
+  EXPECT_EQ(mirror.map().knownVoxelCount(), 0u);
+  EXPECT_TRUE(mirror.refresh(shared).rebuilt);
+  expectMirrors(shared, mirror);
+
   shared.write()->map.reset();
   s = mirror.refresh(shared);
   EXPECT_TRUE(s.rebuilt);

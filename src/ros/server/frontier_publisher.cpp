@@ -34,6 +34,9 @@ void FrontierPublisher::onTimer(const ::ros::SteadyTimerEvent&) {
   const uint32_t marker_subs = markers_pub_.getNumSubscribers();
   const uint32_t cloud_subs = cloud_pub_.getNumSubscribers();
   std::lock_guard<std::mutex> lock(mutex_);
+  // Only the markers' clusters and viewpoints read the mirror: without a marker subscriber
+  // its memory (a copy of the observed cells) goes.
+  if (marker_subs == 0) mirror_.clear();
   if (marker_subs == 0 && cloud_subs == 0) {  // nobody listens: no work
     marker_subscribers_ = cloud_subscribers_ = 0;
     return;

@@ -9,7 +9,8 @@
 // the map's read lock and the tracker updated without it (but with the obstacle distance filter,
 // which reads cells); the clusters and viewpoints (markers only) on a mirror of the observed
 // cells (observed_mirror.h: the blocks changed since the last tick copied a piece per read
-// lock, so a big map never holds insertion back for the copy);
+// lock, so a big map never holds insertion back for the copy; dropped while the markers have
+// no subscriber);
 // at most frontiers/max_marker_cells cells go out (an even subsample beyond it, logged). The
 // timer runs on a thread of its own (service_threads.h).
 #pragma once

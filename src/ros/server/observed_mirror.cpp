@@ -41,6 +41,12 @@ const fragg::Map& ObservedMirror::map() const {
   return copy_ ? *copy_ : empty;
 }
 
+void ObservedMirror::clear() {
+  copy_.reset();
+  revision_ = 0;
+  epoch_ = 0;
+}
+
 ObservedMirror::RefreshStats ObservedMirror::refresh(const SharedMap& shared) {
   RefreshStats stats;
   std::vector<fragg::BlockKey> keys;

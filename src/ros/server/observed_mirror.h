@@ -36,6 +36,10 @@ class ObservedMirror {
   /// piece at a time; never the write lock.
   RefreshStats refresh(const SharedMap& shared);
 
+  /// Drops the copy and its memory (as much as the map's observed blocks); the next refresh
+  /// rebuilds it.
+  void clear();
+
   /// The copy (a CPU map of the source's resolution and occupancy model, no kept scans); empty
   /// before the first refresh. Read it between refreshes, from the thread that refreshes.
   [[nodiscard]] const fragg::Map& map() const;
