@@ -88,7 +88,11 @@ ObservedMirror::RefreshStats ObservedMirror::refresh(const SharedMap& shared) {
       stats.complete = false;
       return stats;
     }
-    const fragg::BlockView view = map.blockView();
+    // The host's blocks as they stand (Map::hostBlockView): the listing's blockView() wrote
+    // a device's changes back, so every listed block is there at least as new as `revision`;
+    // what changed since is listed next time. A write-back per piece (blockView) would cost
+    // a CUDA map's insertion a write-back of its last cloud at every piece.
+    const fragg::BlockView view = map.hostBlockView();
     copy_->writeCells([&](fragg::CellWriter& writer) {
       for (size_t j = first; j < last; ++j)
         if (const fragg::Block* block = view.findBlock(keys[j])) writer.setBlock(keys[j], *block);
