@@ -24,6 +24,8 @@ struct OccupancyParams {
   /// Throws InvalidArgument naming the bad field.
   void validate() const;
 };
+/// Every field equal (the same occupancy model: a store's, a copy's).
+[[nodiscard]] bool operator==(const OccupancyParams& a, const OccupancyParams& b);
 
 /// The same model in fixed point, as the update kernels use it. Built on the host by
 /// `OccupancyModel::fromParams`; plain data so it can be copied to the device.

@@ -21,10 +21,7 @@ namespace fragg {
 
 namespace {
 bool sameModel(const MapParams& p, const StoreMapMeta& m) {
-  const OccupancyParams &a = p.occupancy, &b = m.occupancy;
-  return p.resolution_m == m.resolution_m && a.prob_hit == b.prob_hit &&
-         a.prob_miss == b.prob_miss && a.clamp_min == b.clamp_min && a.clamp_max == b.clamp_max &&
-         a.unknown_band == b.unknown_band;
+  return p.resolution_m == m.resolution_m && p.occupancy == m.occupancy;
 }
 
 StoreMapMeta metaOf(const MapParams& p, uint64_t scans) {

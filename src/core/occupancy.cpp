@@ -41,6 +41,11 @@ void requireProbability(double p, const char* name) {
 }  // namespace
 
 // Messages name the fields as MapParams holds them (occupancy.*); front ends rename them.
+bool operator==(const OccupancyParams& a, const OccupancyParams& b) {
+  return a.prob_hit == b.prob_hit && a.prob_miss == b.prob_miss && a.clamp_min == b.clamp_min &&
+         a.clamp_max == b.clamp_max && a.unknown_band == b.unknown_band;
+}
+
 void OccupancyParams::validate() const {
   requireProbability(prob_hit, "occupancy.prob_hit");
   requireProbability(prob_miss, "occupancy.prob_miss");

@@ -20,11 +20,6 @@ fragg::MapParams copyParams(const fragg::Map& source) {
   p.scans.keep = false;
   return p;
 }
-
-bool sameModel(const fragg::OccupancyParams& a, const fragg::OccupancyParams& b) {
-  return a.prob_hit == b.prob_hit && a.prob_miss == b.prob_miss && a.clamp_min == b.clamp_min &&
-         a.clamp_max == b.clamp_max && a.unknown_band == b.unknown_band;
-}
 }  // namespace
 
 ObservedMirror::ObservedMirror(size_t blocks_per_lock) : blocks_per_lock_(blocks_per_lock) {
@@ -58,7 +53,7 @@ ObservedMirror::RefreshStats ObservedMirror::refresh(const SharedMap& shared) {
     revision = map.revision();
     epoch = map.viewEpoch();
     stats.rebuilt = !copy_ || epoch != epoch_ || map.resolution() != copy_->resolution() ||
-                    !sameModel(map.params().occupancy, copy_->params().occupancy);
+                    !(map.params().occupancy == copy_->params().occupancy);
     if (stats.rebuilt) {
       copy_.emplace(copyParams(map));
       const fragg::BlockView view = map.blockView();
