@@ -7,7 +7,9 @@
 # output subscribed (the staged rosbag recorder on occupied and free markers, occupied cloud,
 # centres, projected map, frontiers, frontier cells, frustum and ~stats). Prints the card, the
 # trace_csv rows by outcome (drops included), and the receive-to-published latency p50/p99
-# with each stage's p99. Parameters: config/default.yaml with backend, resolution and
+# with each stage's p99, the p99 of the insertion's and outputs' parts and each cloud over
+# 20 ms by part (FRAGG_NODE_COMMIT names the staged node's commit: the device's checkout may
+# report a stale HEAD). Parameters: config/default.yaml with backend, resolution and
 # sensor_model/max_range set, plus any `name:=value` arguments (e.g. marker_rate:=1
 # map_rate:=1; publish_free_space:=true adds the free-space markers, huge on a LiDAR map).
 # Usage (on the device, in the checkout; .device/ros or .device/ros.tar.xz carried):
@@ -112,7 +114,7 @@ sleep 3
 kill -INT "$node_pid" 2>/dev/null || true
 wait "$node_pid" 2>/dev/null || true
 echo "card: $(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -1)"
-echo "commit: $(git -C "$top" rev-parse --short HEAD 2>/dev/null), W1 street (128 x $azimuth_steps beams), $clouds clouds at $rate/s, $resolution m, max range $max_range m, backend $backend ${params[*]+"${params[*]}"}"
+echo "commit: ${FRAGG_NODE_COMMIT:-$(git -C "$top" rev-parse --short HEAD 2>/dev/null)}, W1 street (128 x $azimuth_steps beams), $clouds clouds at $rate/s, $resolution m, max range $max_range m, backend $backend ${params[*]+"${params[*]}"}"
 echo "node environment: GLIBC_TUNABLES=${GLIBC_TUNABLES-glibc.malloc.hugetlb=1} OMP_WAIT_POLICY=${OMP_WAIT_POLICY-passive}"
 echo "outputs received by the subscriber (the last <= 2 GB kept): $(du -ch "$scratch"/outputs* 2>/dev/null | tail -1 | cut -f1)"
 echo "node parameters: default.yaml's marker_rate $(grep -m1 '^marker_rate' "$top/config/default.yaml" | awk '{print $2}'), map_rate $(grep -m1 '^map_rate' "$top/config/default.yaml" | awk '{print $2}') unless given above"
@@ -132,4 +134,16 @@ print("receive-to-published ms: p50 %.2f, p99 %.2f, max %.2f" %
       (pct("total_ms", 0.5), pct("total_ms", 0.99), pct("total_ms", 1.0)))
 print("p99 by stage ms: queue %.2f, tf %.2f, insert %.2f, publish %.2f" %
       tuple(pct(c, 0.99) for c in ("queue_ms", "tf_ms", "insert_ms", "publish_ms")))
+parts = ("lock_wait_ms", "publish_wait_ms", "markers_ms", "map_outputs_ms", "stats_ms")
+if ok and all(c in ok[0] for c in parts):
+    print("p99 of the parts ms: write-lock wait %.2f, publishers' wait %.2f, markers %.2f, "
+          "whole-map outputs %.2f, stats %.2f" % tuple(pct(c, 0.99) for c in parts))
+    slow = [(i, r) for i, r in enumerate(rows) if r["outcome"] == "inserted" and float(r["total_ms"]) > 20]
+    print("clouds over 20 ms: %d of %d (index: total = queue + tf + insert [lock wait] + publish "
+          "[wait, markers, maps, stats])" % (len(slow), len(ok)))
+    for i, r in slow[:40]:
+        print("  %4d: %7.2f = %.2f + %.2f + %.2f [%.2f] + %.2f [%.2f, %.2f, %.2f, %.2f]" % (
+            i, float(r["total_ms"]), float(r["queue_ms"]), float(r["tf_ms"]), float(r["insert_ms"]),
+            float(r["lock_wait_ms"]), float(r["publish_ms"]), float(r["publish_wait_ms"]),
+            float(r["markers_ms"]), float(r["map_outputs_ms"]), float(r["stats_ms"])))
 PY

@@ -201,7 +201,8 @@ TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
   while (std::getline(in, line)) {
     ++rows;
     std::stringstream row(line);
-    std::string stamp, points, outcome, queue_ms, tf_ms, insert_ms, publish_ms, total_ms;
+    std::string stamp, points, outcome, queue_ms, tf_ms, insert_ms, publish_ms, total_ms, depth,
+        lock_wait_ms, publish_parts;
     std::getline(row, stamp, ',');
     std::getline(row, points, ',');
     std::getline(row, outcome, ',');
@@ -210,7 +211,15 @@ TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
     std::getline(row, insert_ms, ',');
     std::getline(row, publish_ms, ',');
     std::getline(row, total_ms, ',');
+    std::getline(row, depth, ',');
+    std::getline(row, lock_wait_ms, ',');
+    std::getline(row, publish_parts);
     ++outcomes[outcome];
+    // The write lock's wait is part of the insertion, and only an insertion waits for it; no
+    // publishing hook here, so its four parts are 0.
+    EXPECT_LE(std::stod(lock_wait_ms), std::stod(insert_ms) + 1e-3) << line;
+    if (outcome != "inserted") EXPECT_EQ(std::stod(lock_wait_ms), 0.0) << line;
+    EXPECT_EQ(publish_parts, "0.000,0.000,0.000,0.000") << line;
     EXPECT_EQ(std::stoul(points), 231u);
     // The CSV writes ms to 3 decimals: each of the five fields is off by up to 0.0005 ms, so the
     // four stages' sum may pass the total by up to 0.0025 (1e-3 failed ~7 % of runs: 2.742 total

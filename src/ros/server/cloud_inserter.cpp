@@ -164,7 +164,8 @@ std::optional<fragg::PointCloud> CloudInserter::convert(const sensor_msgs::Point
 
 bool CloudInserter::insert(const fragg::PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                            int64_t stamp_ns, const std::string& frame, fragg::InsertStats* inserted,
-                           std::vector<Eigen::Vector3f>* dynamic_points_S) const {
+                           std::vector<Eigen::Vector3f>* dynamic_points_S,
+                           double* lock_wait_ms) const {
   if (const auto problem = transformProblem(T_map_sensor, params_.map.resolution_m)) {
     stats_->addFault(CloudFault::kBadTransform);
     ROS_ERROR_THROTTLE(5.0, "fragg_map: cloud from '%s' dropped: %s (%lu such so far)",
@@ -183,7 +184,12 @@ bool CloudInserter::insert(const fragg::PointCloud& cloud, const Eigen::Isometry
   try {
     // One scan per lock: a query waits for this scan at most. The map drops points outside
     // the height band (pointcloud_min_z/max_z) and resolves an `auto` sensor, as for the CLI.
+    const auto asked = std::chrono::steady_clock::now();
     const SharedMap::WriteGuard state = shared_->write();
+    if (lock_wait_ms)
+      *lock_wait_ms = std::chrono::duration<double, std::milli>(
+                          std::chrono::steady_clock::now() - asked)
+                          .count();
     const std::string backend_before = state->map.backendName();
     *inserted = state->map.insert(cloud, T_map_sensor, params_.sensor, stamp_ns, frame);
     if (dynamic_points_S) *dynamic_points_S = state->map.lastDynamicPoints_S();

@@ -68,9 +68,11 @@ class CloudInserter {
   /// (counted, logged, map unchanged) for an unusable transform or when the map throws.
   /// Counts the scan's left-out points and a CUDA -> CPU fallback. `dynamic_points_S` (when
   /// given) gets the scan's points classified dynamic (MapParams::dynamic), sensor frame.
+  /// `lock_wait_ms` (when given) gets the time spent waiting for the write lock.
   bool insert(const fragg::PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
               int64_t stamp_ns, const std::string& frame, fragg::InsertStats* inserted,
-              std::vector<Eigen::Vector3f>* dynamic_points_S = nullptr) const;
+              std::vector<Eigen::Vector3f>* dynamic_points_S = nullptr,
+              double* lock_wait_ms = nullptr) const;
 
  private:
   const ServerParams params_;

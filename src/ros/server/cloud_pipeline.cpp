@@ -156,7 +156,8 @@ void CloudPipeline::process(const Queued& item, CloudTrace* trace) {
   std::vector<Eigen::Vector3f> dynamic_S;
   const bool ok = inserter_.insert(
       *cloud, T_map_sensor, static_cast<int64_t>(msg.header.stamp.toNSec()),
-      withoutLeadingSlash(msg.header.frame_id), &inserted, publish_dynamic ? &dynamic_S : nullptr);
+      withoutLeadingSlash(msg.header.frame_id), &inserted, publish_dynamic ? &dynamic_S : nullptr,
+      &trace->lock_wait_ms);
   const Clock::time_point done = Clock::now();
   trace->insert_ms = msBetween(transformed, done);
   if (!ok) {
@@ -174,7 +175,7 @@ void CloudPipeline::process(const Queued& item, CloudTrace* trace) {
   }
   if (!on_inserted_) return;
   try {
-    on_inserted_(msg, inserted.sensor, T_map_sensor);
+    on_inserted_(msg, inserted.sensor, T_map_sensor, &trace->publish);
   } catch (const std::exception& e) {
     ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing after an insertion failed: %s", e.what());
   }

@@ -36,11 +36,11 @@ namespace fragg::ros {
 class CloudPipeline {
  public:
   /// Called on the insertion thread after each insertion (the map is not locked), with the
-  /// sensor model the map used (an `auto` model resolved for the cloud) and the message
-  /// (colored_map reads its colours).
+  /// sensor model the map used (an `auto` model resolved for the cloud), the message
+  /// (colored_map reads its colours) and where the cloud's trace takes the outputs' parts.
   using InsertedFn =
       std::function<void(const sensor_msgs::PointCloud2& msg, const fragg::SensorModel&,
-                         const Eigen::Isometry3d& T_map_sensor)>;
+                         const Eigen::Isometry3d& T_map_sensor, PublishTimes* times)>;
 
   /// The points of a scan classified dynamic (MapParams::dynamic; sensor frame), for the
   /// `dynamic_points` topic: `wanted` says whether anyone listens (asked before the insertion),

@@ -10,6 +10,14 @@
 
 namespace fragg::ros {
 
+/// Where the outputs' time after one insertion went (ms; MapPublishers::publishAfterInsert).
+struct PublishTimes {
+  double wait_ms = 0.0;         ///< for the publishers' mutex and the map's read lock
+  double markers_ms = 0.0;      ///< both marker topics (the cloud's share, or an update when due)
+  double map_outputs_ms = 0.0;  ///< occupied cloud, centers, projected map (share; sent when due)
+  double stats_ms = 0.0;        ///< ~stats
+};
+
 /// One cloud's way through the server. Times in ms; a stage the cloud did not reach is 0.
 struct CloudTrace {
   double stamp_s = 0.0;     ///< the cloud's header stamp
@@ -21,6 +29,8 @@ struct CloudTrace {
   double publish_ms = 0.0;  ///< the outputs after the insertion
   double total_ms = 0.0;    ///< receipt -> done (outputs published for an inserted cloud)
   size_t queue_depth = 0;   ///< clouds waiting behind it when it was taken
+  double lock_wait_ms = 0.0;  ///< the part of insert_ms spent waiting for the map's write lock
+  PublishTimes publish;       ///< parts of publish_ms (the rest: dynamic points, octomaps, frustum)
 };
 
 class CloudTraceCsv {

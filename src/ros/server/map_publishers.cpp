@@ -10,6 +10,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 
 #include "flush_without_waiting.h"
@@ -23,6 +24,11 @@ namespace {
 // would leave that subscriber's view wrong until the next full set (the whole-map topics
 // carry the whole map in every message and keep 1).
 constexpr uint32_t kMarkerQueue = 50;
+
+double msSince(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since)
+      .count();
+}
 
 }  // namespace
 
@@ -110,10 +116,13 @@ bool MapPublishers::wanted(const ::ros::Publisher& pub) const {
 
 void MapPublishers::publishAfterInsert(const sensor_msgs::PointCloud2& cloud,
                                        const fragg::SensorModel& sensor,
-                                       const Eigen::Isometry3d& T_map_sensor) {
+                                       const Eigen::Isometry3d& T_map_sensor,
+                                       PublishTimes* times) {
   const ::ros::Time& stamp = cloud.header.stamp;
+  const auto asked = std::chrono::steady_clock::now();
   std::lock_guard<std::mutex> publishing(publish_mutex_);
   const SharedMap::ReadGuard state = shared_->read();
+  if (times) times->wait_ms = msSince(asked);
   if (coloredMap()) {
     try {
       colors_.integrate(cloud, T_map_sensor, sensor.max_range_m, state->map);
@@ -121,7 +130,7 @@ void MapPublishers::publishAfterInsert(const sensor_msgs::PointCloud2& cloud,
       ROS_WARN_THROTTLE(5.0, "fragg_map: colored_map: no colours from this cloud: %s", e.what());
     }
   }
-  publishMaps(state->map, stamp, false, true);
+  publishMaps(state->map, stamp, false, true, times);
   if (wanted(frustum_pub_) && sensor.type != fragg::SensorType::kAuto && sensor.max_range_m > 0.0)
     frustum_pub_.publish(frustumMarker(sensor, T_map_sensor, params_.frame_id, stamp));
 }
@@ -145,12 +154,23 @@ void MapPublishers::publishFull(const ::ros::Time& stamp) {
 }
 
 void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp, bool full_markers,
-                                bool throttle_maps) {
+                                bool throttle_maps, PublishTimes* times) {
+  auto started = std::chrono::steady_clock::now();
+  // Each part's ms into `times` (when given), from the end of the one before.
+  auto lap = [&](double PublishTimes::*part) {
+    if (!times) return;
+    const auto now = std::chrono::steady_clock::now();
+    times->*part = std::chrono::duration<double, std::milli>(now - started).count();
+    started = now;
+  };
   publishMarkerTopics(map, stamp, full_markers);
+  lap(&PublishTimes::markers_ms);
   publishMapOutputs(map, stamp, throttle_maps);
+  lap(&PublishTimes::map_outputs_ms);
   if (wanted(stats_pub_))
     stats_pub_.publish(stats_->toMsg(map, params_.frame_id, stamp, ServerStats::MapFigures::kRecent,
                                      mirror_.get()));
+  lap(&PublishTimes::stats_ms);
 }
 
 void MapPublishers::mirrorFor(const fragg::Map& map) {

@@ -34,6 +34,7 @@
 #include "fragg_map/ros/cell_colors.h"
 #include "fragg_map/ros/output_cache.h"
 #include "fragg_map/ros/rate_throttle.h"
+#include "cloud_trace.h"
 #include "fragg_map/ros/server_params.h"
 #include "server_stats.h"
 #include "shared_map.h"
@@ -47,9 +48,10 @@ class MapPublishers {
 
   /// After an insertion of `cloud` (stamp, and with colored_map its colours): incremental
   /// markers (throttled by marker_rate), occupied cloud and projected map (throttled by
-  /// map_rate), frustum, stats. Takes the map's read lock itself.
+  /// map_rate), frustum, stats. Takes the map's read lock itself. `times` (when given) gets
+  /// where the time went (the cloud's trace).
   void publishAfterInsert(const sensor_msgs::PointCloud2& cloud, const fragg::SensorModel& sensor,
-                          const Eigen::Isometry3d& T_map_sensor);
+                          const Eigen::Isometry3d& T_map_sensor, PublishTimes* times = nullptr);
   /// After a pose correction, a truncation or a merge: the markers of the blocks it changed
   /// (incremental, as after an insertion; throttled by marker_rate), occupied cloud, projected
   /// map (at once: not throttled), stats. Takes the read lock.
@@ -66,9 +68,9 @@ class MapPublishers {
   };
   // Callers hold publish_mutex_ and the map's read lock.
   /// Markers (a full set, or the changes when due), whole-map outputs (with `throttle_maps`
-  /// only when map_rate lets them out) and stats.
+  /// only when map_rate lets them out) and stats; `times` (when given) gets each part's ms.
   void publishMaps(const fragg::Map& map, const ::ros::Time& stamp, bool full_markers,
-                   bool throttle_maps);
+                   bool throttle_maps, PublishTimes* times = nullptr);
   /// occupied_cells, octomap_point_cloud_centers and projected_map: the cache brought up to
   /// date and the messages sent; when `throttled` and not due, nothing but a note that they
   /// are pending.

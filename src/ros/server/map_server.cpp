@@ -200,10 +200,10 @@ void MapServer::startInput() {
   input_ = std::make_unique<CloudInput>(
       nh_, params_, tf_buffer_, shared_.get(), &stats_,
       [this](const sensor_msgs::PointCloud2& msg, const fragg::SensorModel& sensor,
-             const Eigen::Isometry3d& T_map_sensor) {
+             const Eigen::Isometry3d& T_map_sensor, PublishTimes* times) {
         try {
           const std::shared_lock<std::shared_mutex> outputs(outputs_mutex_);
-          publishers_->publishAfterInsert(msg, sensor, T_map_sensor);
+          publishers_->publishAfterInsert(msg, sensor, T_map_sensor, times);
           publishOctomaps(msg.header.stamp, true);
         } catch (const std::exception& e) {
           ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
