@@ -187,9 +187,9 @@ bool CloudInserter::insert(const fragg::PointCloud& cloud, const Eigen::Isometry
     const auto asked = std::chrono::steady_clock::now();
     const SharedMap::WriteGuard state = shared_->write();
     if (lock_wait_ms)
-      *lock_wait_ms = std::chrono::duration<double, std::milli>(
-                          std::chrono::steady_clock::now() - asked)
-                          .count();
+      *lock_wait_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - asked)
+              .count();
     const std::string backend_before = state->map.backendName();
     *inserted = state->map.insert(cloud, T_map_sensor, params_.sensor, stamp_ns, frame);
     if (dynamic_points_S) *dynamic_points_S = state->map.lastDynamicPoints_S();

@@ -15,7 +15,8 @@ CloudTraceCsv::CloudTraceCsv(const std::string& path) : out_(path, std::ios::tru
 }
 
 const char* CloudTraceCsv::header() {
-  return "stamp_s,points,outcome,queue_ms,tf_ms,insert_ms,publish_ms,total_ms,queue_depth,lock_wait_ms,"
+  return "stamp_s,points,outcome,queue_ms,tf_ms,insert_ms,publish_ms,total_ms,queue_depth,lock_"
+         "wait_ms,"
          "publish_wait_ms,markers_ms,map_outputs_ms,stats_ms";
 }
 

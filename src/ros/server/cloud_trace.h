@@ -20,15 +20,15 @@ struct PublishTimes {
 
 /// One cloud's way through the server. Times in ms; a stage the cloud did not reach is 0.
 struct CloudTrace {
-  double stamp_s = 0.0;     ///< the cloud's header stamp
-  uint64_t points = 0;      ///< width x height
-  std::string outcome;      ///< inserted, queue_full, no_tf, tf_too_old, rejected, insert_failed
-  double queue_ms = 0.0;    ///< receipt -> taken by the insertion thread
-  double tf_ms = 0.0;       ///< conversion and the wait for the transform(s)
-  double insert_ms = 0.0;   ///< the insertion, the wait for the write lock included
-  double publish_ms = 0.0;  ///< the outputs after the insertion
-  double total_ms = 0.0;    ///< receipt -> done (outputs published for an inserted cloud)
-  size_t queue_depth = 0;   ///< clouds waiting behind it when it was taken
+  double stamp_s = 0.0;       ///< the cloud's header stamp
+  uint64_t points = 0;        ///< width x height
+  std::string outcome;        ///< inserted, queue_full, no_tf, tf_too_old, rejected, insert_failed
+  double queue_ms = 0.0;      ///< receipt -> taken by the insertion thread
+  double tf_ms = 0.0;         ///< conversion and the wait for the transform(s)
+  double insert_ms = 0.0;     ///< the insertion, the wait for the write lock included
+  double publish_ms = 0.0;    ///< the outputs after the insertion
+  double total_ms = 0.0;      ///< receipt -> done (outputs published for an inserted cloud)
+  size_t queue_depth = 0;     ///< clouds waiting behind it when it was taken
   double lock_wait_ms = 0.0;  ///< the part of insert_ms spent waiting for the map's write lock
   PublishTimes publish;       ///< parts of publish_ms (the rest: dynamic points, octomaps, frustum)
 };

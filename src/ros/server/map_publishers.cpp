@@ -116,8 +116,7 @@ bool MapPublishers::wanted(const ::ros::Publisher& pub) const {
 
 void MapPublishers::publishAfterInsert(const sensor_msgs::PointCloud2& cloud,
                                        const fragg::SensorModel& sensor,
-                                       const Eigen::Isometry3d& T_map_sensor,
-                                       PublishTimes* times) {
+                                       const Eigen::Isometry3d& T_map_sensor, PublishTimes* times) {
   const ::ros::Time& stamp = cloud.header.stamp;
   const auto asked = std::chrono::steady_clock::now();
   std::lock_guard<std::mutex> publishing(publish_mutex_);

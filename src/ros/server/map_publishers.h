@@ -30,11 +30,11 @@
 #include <mutex>
 #include <string>
 
+#include "cloud_trace.h"
 #include "fragg_map/ros/block_markers.h"
 #include "fragg_map/ros/cell_colors.h"
 #include "fragg_map/ros/output_cache.h"
 #include "fragg_map/ros/rate_throttle.h"
-#include "cloud_trace.h"
 #include "fragg_map/ros/server_params.h"
 #include "server_stats.h"
 #include "shared_map.h"
