@@ -277,7 +277,8 @@ class Map {
   const std::string& backendReason() const { return backend_reason_; }
 
   /// Memory and counts of the whole map: on a CUDA map the device's changes are written back
-  /// first, and known_voxels walks every cell (a LiDAR map of 80 M cells: ~180 ms on 2 cores).
+  /// first, and known_voxels walks every cell of the live blocks, in slot order on the map's
+  /// threads (W1 at 5 cm after 40 clouds, 212 k blocks: 11 ms on 2 cores).
   MemoryStats memory() const;
   /// What memory() says without a write-back or a walk over the cells: the host's copy of the
   /// blocks as it stands (host_block_bytes), the device's bytes and estimate, the kept scans;

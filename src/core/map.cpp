@@ -659,11 +659,20 @@ std::unique_ptr<DeviceViewLease> Map::deviceViewOf(const ViewScope& scope) const
 }
 
 size_t Map::knownVoxelCount() const {
-  size_t n = 0;
   const BlockMap& host = hostBlocks();
-  host.forEach([&](BlockIndex i) {
-    for (const Cell& c : host.block(i).cells) n += c.observed() ? 1 : 0;
-  });
+  // Slot order (the arena's, not the index's) on every thread: a LiDAR map of 212 k blocks
+  // (434 MB of cells) took 141 ms walked through the index on one thread of the 2-core machine.
+  const long slots = static_cast<long>(host.slotCount());
+  size_t n = 0;
+#pragma omp parallel for schedule(static) reduction(+ : n) if (slots > 4096)
+  for (long i = 0; i < slots; ++i) {
+    if (!host.liveAt(static_cast<BlockIndex>(i))) continue;
+    const Cell* cells = host.block(static_cast<BlockIndex>(i)).cells;
+    size_t in_block = 0;
+    for (int c = 0; c < kCellsPerBlock; ++c)
+      in_block += cells[c].log_odds_fx != kUnobservedLogOdds ? 1 : 0;
+    n += in_block;
+  }
   return n;
 }
 

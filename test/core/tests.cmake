@@ -17,6 +17,7 @@ fragg_add_test(fragg_core_test
           ${CMAKE_CURRENT_LIST_DIR}/field_names_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/extreme_points_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/free_box_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/map_memory_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/free_cut_cell_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/state_masks_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/change_log_test.cpp
