@@ -35,9 +35,7 @@ const MaskMirror::SyncStats& MaskMirror::sync(const fragg::Map& map) {
   } else {
     stats_.listed = listed_keys_.size();
     const size_t before = keys_.size();
-    table_.reserve(keys_.size() + listed_keys_.size());
-    for (size_t i = 0; i < listed_keys_.size(); ++i)
-      put(listed_keys_[i], listed_masks_[i], revision);
+    applyListed(revision);
     stats_.added = keys_.size() - before;
   }
   valid_ = true;
@@ -77,6 +75,43 @@ void MaskMirror::rebuild(const fragg::Map& map) {
   ++generation_;
 }
 
+void MaskMirror::applyListed(uint64_t revision) {
+  // The listed keys are distinct (Map::masksChangedSince): the blocks held already are updated
+  // in parallel, each slot by one thread (a LiDAR second lists ~90 k blocks, most of them held);
+  // the new ones are added after, in the list's order, as one by one.
+  const int64_t n = static_cast<int64_t>(listed_keys_.size());
+  listed_slots_.resize(listed_keys_.size());
+  int64_t known_change = 0;
+  int64_t added = 0;
+#pragma omp parallel for schedule(static) reduction(+ : known_change, added) if (n > 4096)
+  for (int64_t j = 0; j < n; ++j) {
+    const uint32_t s = table_.find(listed_keys_[j]);
+    listed_slots_[j] = s;
+    if (s == fragg::BlockKeyTable::kNone) {
+      ++added;
+      continue;
+    }
+    known_change += update(s, listed_masks_[j], revision);
+  }
+  known_cells_ = static_cast<uint64_t>(static_cast<int64_t>(known_cells_) + known_change);
+  if (added == 0) return;
+  table_.reserve(keys_.size() + static_cast<size_t>(added));
+  for (int64_t j = 0; j < n; ++j)
+    if (listed_slots_[j] == fragg::BlockKeyTable::kNone)
+      put(listed_keys_[j], listed_masks_[j], revision);
+}
+
+int64_t MaskMirror::update(uint32_t s, const fragg::BlockStateMasks& masks, uint64_t revision) {
+  fragg::BlockStateMasks& kept = masks_[s];
+  if (std::memcmp(kept.occupied, masks.occupied, sizeof(kept.occupied)) != 0)
+    occupied_at_[s] = revision;
+  if (std::memcmp(&kept, &masks, sizeof(kept)) == 0) return 0;
+  masks_at_[s] = revision;
+  const int64_t change = static_cast<int64_t>(knownIn(masks)) - static_cast<int64_t>(knownIn(kept));
+  kept = masks;
+  return change;
+}
+
 void MaskMirror::put(const fragg::BlockKey& key, const fragg::BlockStateMasks& masks,
                      uint64_t revision) {
   const uint32_t s = table_.find(key);
@@ -91,15 +126,8 @@ void MaskMirror::put(const fragg::BlockKey& key, const fragg::BlockStateMasks& m
     occupied_at_.push_back(occupied ? revision : 0);
     return;
   }
-  fragg::BlockStateMasks& kept = masks_[s];
-  if (std::memcmp(kept.occupied, masks.occupied, sizeof(kept.occupied)) != 0)
-    occupied_at_[s] = revision;
-  if (std::memcmp(&kept, &masks, sizeof(kept)) != 0) {
-    masks_at_[s] = revision;
-    known_cells_ += knownIn(masks);
-    known_cells_ -= knownIn(kept);
-  }
-  kept = masks;
+  known_cells_ =
+      static_cast<uint64_t>(static_cast<int64_t>(known_cells_) + update(s, masks, revision));
 }
 
 std::vector<fragg::BlockIndex> MaskMirror::allSlots() const {

@@ -143,6 +143,62 @@ TEST(MaskMirror, FollowsInsertionsAndEditsFromTheChangedBlockList) {
   EXPECT_EQ(mirror.size(), 0u);
 }
 
+// A sync listing thousands of blocks (the held ones updated in parallel, the new ones added
+// after): the same mirror, stamps and count as block by block.
+TEST(MaskMirror, ThousandsOfListedBlocksSyncAsOneByOne) {
+  fragg::Map map(test::cpuParams(0.1));
+  // One cell in every block of a 24 x 24 x 10 slab (5,760 blocks).
+  const auto write = [&](int32_t x_blocks, int shift) {
+    map.writeCells([&](fragg::CellWriter& cells) {
+      for (int32_t bz = 0; bz < 10; ++bz)
+        for (int32_t by = 0; by < 24; ++by)
+          for (int32_t bx = 0; bx < x_blocks; ++bx) {
+            // Occupied or free (a block whose cells are all unknown is not listed: the
+            // mirror holds blocks with a known cell).
+            const bool occupied = (bx + by + bz + shift) % 2 == 0;
+            fragg::Cell c;
+            c.log_odds_fx = occupied ? map.model().max_fx : map.model().min_fx;
+            c.hits = occupied ? 1 : 0;
+            cells.set({bx * 8 + (by % 8), by * 8 + (bz % 8), bz * 8 + (bx % 8)}, c);
+          }
+    });
+  };
+  write(24, 0);
+  MaskMirror mirror;
+  (void)mirror.sync(map);
+  expectMirrors(map, mirror, "the slab");
+  const uint64_t generation = mirror.generation();
+  const uint64_t after_slab = map.revision();
+  std::map<fragg::BlockKey, fragg::BlockIndex, KeyLess> slots;
+  for (const fragg::BlockIndex i : mirror.allSlots()) slots[mirror.keyAt(i)] = i;
+  const auto before = masksByKey(map);
+  // Every held block's cell changes state, and the slab grows by 8 x 24 x 10 blocks.
+  write(32, 1);
+  const MaskMirror::SyncStats s = mirror.sync(map);
+  EXPECT_FALSE(s.rebuilt);
+  EXPECT_GT(s.listed, 4096u) << "the parallel update is not exercised";
+  EXPECT_EQ(s.added, 8u * 24u * 10u);
+  EXPECT_EQ(mirror.generation(), generation);
+  expectMirrors(map, mirror, "the slab changed and grown");
+  for (const auto& [key, slot] : slots) EXPECT_EQ(mirror.slotOf(key), slot) << "a slot moved";
+  std::vector<fragg::BlockKey> want_masks, want_occupied;
+  for (const auto& [key, m] : masksByKey(map)) {
+    const auto was = before.find(key);
+    const fragg::BlockStateMasks empty;
+    const fragg::BlockStateMasks& old = was == before.end() ? empty : was->second;
+    if (was == before.end() || !sameMasks(old, m)) want_masks.push_back(key);
+    if (std::memcmp(old.occupied, m.occupied, sizeof(m.occupied)) != 0)
+      want_occupied.push_back(key);
+  }
+  auto got_masks = mirror.changedSince(after_slab, fragg::BlockChange::kMasks);
+  auto got_occupied = mirror.changedSince(after_slab, fragg::BlockChange::kOccupied);
+  std::sort(got_masks.begin(), got_masks.end(), KeyLess());
+  std::sort(got_occupied.begin(), got_occupied.end(), KeyLess());
+  EXPECT_EQ(got_masks, want_masks);
+  EXPECT_EQ(got_occupied, want_occupied);
+  EXPECT_GT(want_occupied.size(), 1000u);
+}
+
 TEST(MaskMirror, InvalidateRebuilds) {
   fragg::Map map(test::cpuParams(0.1));
   test::insertWall(map, Eigen::Vector3d::Zero(), 2.0);

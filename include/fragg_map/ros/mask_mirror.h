@@ -93,6 +93,11 @@ class MaskMirror {
   void rebuild(const fragg::Map& map);
   /// Sets the masks of `key` (added when new), stamping what changed with `revision`.
   void put(const fragg::BlockKey& key, const fragg::BlockStateMasks& masks, uint64_t revision);
+  /// put() of every listed block (listed_keys_, listed_masks_): those held in parallel.
+  void applyListed(uint64_t revision);
+  /// Sets the masks of the block in slot `s`, stamping what changed with `revision`; returns
+  /// the change of its known cells.
+  int64_t update(uint32_t s, const fragg::BlockStateMasks& masks, uint64_t revision);
 
   bool valid_ = false;
   uint64_t generation_ = 0;
@@ -107,6 +112,7 @@ class MaskMirror {
   // The changed-block list's buffers, kept between syncs (their pages stay resident).
   std::vector<fragg::BlockKey> listed_keys_;
   std::vector<fragg::BlockStateMasks> listed_masks_;
+  std::vector<uint32_t> listed_slots_;  ///< applyListed: each listed key's slot or kNone
   SyncStats stats_;
   uint64_t known_cells_ = 0;  ///< knownCells()
 };
