@@ -79,6 +79,7 @@ void MaskMirror::applyListed(uint64_t revision) {
   // The listed keys are distinct (Map::masksChangedSince): the blocks held already are updated
   // in parallel, each slot by one thread (a LiDAR second lists ~90 k blocks, most of them held);
   // the new ones are added after, in the list's order, as one by one.
+  const auto started = std::chrono::steady_clock::now();
   const int64_t n = static_cast<int64_t>(listed_keys_.size());
   listed_slots_.resize(listed_keys_.size());
   int64_t known_change = 0;
@@ -94,11 +95,47 @@ void MaskMirror::applyListed(uint64_t revision) {
     known_change += update(s, listed_masks_[j], revision);
   }
   known_cells_ = static_cast<uint64_t>(static_cast<int64_t>(known_cells_) + known_change);
+  const auto updated = std::chrono::steady_clock::now();
+  stats_.update_seconds = std::chrono::duration<double>(updated - started).count();
+  // Every return below leaves add_seconds set.
+  struct AddTime {
+    SyncStats* stats;
+    std::chrono::steady_clock::time_point from;
+    ~AddTime() {
+      stats->add_seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - from).count();
+    }
+  } add_time{&stats_, updated};
   if (added == 0) return;
-  table_.reserve(keys_.size() + static_cast<size_t>(added));
+  // The new ones take the next slots in the list's order (as one by one), filled in parallel;
+  // the index gets them in that order too.
+  const size_t base = keys_.size();
+  size_t next = base;
   for (int64_t j = 0; j < n; ++j)
     if (listed_slots_[j] == fragg::BlockKeyTable::kNone)
-      put(listed_keys_[j], listed_masks_[j], revision);
+      listed_slots_[j] = static_cast<uint32_t>(next++);
+  keys_.resize(next);
+  masks_.resize(next);
+  masks_at_.resize(next);
+  occupied_at_.resize(next);
+  uint64_t known_added = 0;
+#pragma omp parallel for schedule(static) reduction(+ : known_added) if (n > 4096)
+  for (int64_t j = 0; j < n; ++j) {
+    const uint32_t s = listed_slots_[j];
+    if (s < base) continue;
+    const fragg::BlockStateMasks& masks = listed_masks_[j];
+    keys_[s] = listed_keys_[j];
+    masks_[s] = masks;
+    masks_at_[s] = revision;
+    bool occupied = false;
+    for (const uint64_t w : masks.occupied) occupied |= w != 0;
+    occupied_at_[s] = occupied ? revision : 0;
+    known_added += knownIn(masks);
+  }
+  known_cells_ += known_added;
+  table_.reserve(next);
+  for (int64_t j = 0; j < n; ++j)
+    if (listed_slots_[j] >= base) table_.insert(listed_keys_[j], listed_slots_[j]);
 }
 
 int64_t MaskMirror::update(uint32_t s, const fragg::BlockStateMasks& masks, uint64_t revision) {
@@ -110,24 +147,6 @@ int64_t MaskMirror::update(uint32_t s, const fragg::BlockStateMasks& masks, uint
   const int64_t change = static_cast<int64_t>(knownIn(masks)) - static_cast<int64_t>(knownIn(kept));
   kept = masks;
   return change;
-}
-
-void MaskMirror::put(const fragg::BlockKey& key, const fragg::BlockStateMasks& masks,
-                     uint64_t revision) {
-  const uint32_t s = table_.find(key);
-  if (s == fragg::BlockKeyTable::kNone) {
-    table_.insert(key, static_cast<uint32_t>(keys_.size()));
-    keys_.push_back(key);
-    masks_.push_back(masks);
-    known_cells_ += knownIn(masks);
-    masks_at_.push_back(revision);
-    bool occupied = false;
-    for (const uint64_t w : masks.occupied) occupied |= w != 0;
-    occupied_at_.push_back(occupied ? revision : 0);
-    return;
-  }
-  known_cells_ =
-      static_cast<uint64_t>(static_cast<int64_t>(known_cells_) + update(s, masks, revision));
 }
 
 std::vector<fragg::BlockIndex> MaskMirror::allSlots() const {

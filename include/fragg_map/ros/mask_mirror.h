@@ -25,11 +25,13 @@ class MaskMirror {
  public:
   /// What the last sync() did.
   struct SyncStats {
-    bool rebuilt = false;       ///< read whole from Map::blockView()
-    size_t listed = 0;          ///< blocks the changed-block list named (0 after a rebuild)
-    size_t added = 0;           ///< blocks new to the mirror
-    double seconds = 0.0;       ///< wall time of the sync
-    double list_seconds = 0.0;  ///< of it, Map::masksChangedSince (or the rebuild's blockView)
+    bool rebuilt = false;         ///< read whole from Map::blockView()
+    size_t listed = 0;            ///< blocks the changed-block list named (0 after a rebuild)
+    size_t added = 0;             ///< blocks new to the mirror
+    double seconds = 0.0;         ///< wall time of the sync
+    double list_seconds = 0.0;    ///< of it, Map::masksChangedSince (or the rebuild's blockView)
+    double update_seconds = 0.0;  ///< the held blocks' update (after the list)
+    double add_seconds = 0.0;     ///< the new blocks added (after the update)
   };
 
   /// Brings the mirror up to date with `map` (held under its read lock); nothing to do when it
@@ -91,9 +93,8 @@ class MaskMirror {
 
  private:
   void rebuild(const fragg::Map& map);
-  /// Sets the masks of `key` (added when new), stamping what changed with `revision`.
-  void put(const fragg::BlockKey& key, const fragg::BlockStateMasks& masks, uint64_t revision);
-  /// put() of every listed block (listed_keys_, listed_masks_): those held in parallel.
+  /// Every listed block (listed_keys_, listed_masks_) set, stamping what changed with
+  /// `revision`: the held ones updated in parallel, then the new ones added in the list's order.
   void applyListed(uint64_t revision);
   /// Sets the masks of the block in slot `s`, stamping what changed with `revision`; returns
   /// the change of its known cells.

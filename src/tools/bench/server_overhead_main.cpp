@@ -114,6 +114,8 @@ struct Times {
   double sync = 0;
   size_t sync_listed = 0;     ///< the mirror's sync: blocks the changed-block list named
   double sync_list_ms = 0;    ///< and the wall ms of Map::masksChangedSince in it
+  double sync_update_ms = 0;  ///< of the held blocks' update
+  double sync_add_ms = 0;     ///< of the new blocks' addition
   long sync_faults = 0;       ///< minor page faults in it
   bool synced = false;        ///< the stage ran before this cloud's outputs
   size_t pending_chunks = 0;  ///< marker chunks queued after the cloud (paced)
@@ -184,6 +186,8 @@ class Outputs {
         const fragg::ros::MaskMirror::SyncStats& m = mirror_->sync(map);  // changed blocks' masks
         t.sync_listed = m.listed;
         t.sync_list_ms = m.list_seconds * 1e3;
+        t.sync_update_ms = m.update_seconds * 1e3;
+        t.sync_add_ms = m.add_seconds * 1e3;
       } else {
         (void)map.blockView();  // a CUDA map's changed blocks written back
       }
@@ -482,7 +486,15 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
           sync_ms.size(), percentile(sync_ms, 0.5), percentile(sync_ms, 1.0), sync_faults,
           percentile(listed, 0.5), percentile(listed, 1.0), percentile(list_ms, 0.5),
           percentile(list_ms, 1.0));
-    else if (!sync_ms.empty())
+    if (!sync_ms.empty() && g_mirror)
+      for (const Times& t : after_times)
+        if (t.synced)
+          std::printf(
+              "    a sync: %zu blocks listed, %.2f ms = list %.2f + held blocks updated %.2f + "
+              "new ones added %.2f (+ the rest), %ld page faults\n",
+              t.sync_listed, t.sync, t.sync_list_ms, t.sync_update_ms, t.sync_add_ms,
+              t.sync_faults);
+    if (!sync_ms.empty() && !g_mirror)
       std::printf(
           "  of it, the write-back before a take-in (Map::blockView()): %zu times, median %.2f ms, "
           "max %.2f ms, %ld page faults in all\n",
