@@ -162,6 +162,7 @@ void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
     times->*part = std::chrono::duration<double, std::milli>(now - started).count();
     started = now;
   };
+  if (throttle_maps && !full_markers) followChanges(map);
   publishMarkerTopics(map, stamp, full_markers);
   lap(&PublishTimes::markers_ms);
   publishMapOutputs(map, stamp, throttle_maps);
@@ -170,6 +171,15 @@ void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
     stats_pub_.publish(stats_->toMsg(map, params_.frame_id, stamp, ServerStats::MapFigures::kRecent,
                                      mirror_.get()));
   lap(&PublishTimes::stats_ms);
+}
+
+void MapPublishers::followChanges(const fragg::Map& map) {
+  if (!mirror_ || !mirror_->valid() || !(pacedMarkers() || pacedMaps())) return;
+  const bool markers_seen = occupied_markers_.subscribers > 0 || free_markers_.subscribers > 0;
+  if (!markers_seen && !wanted(occupied_cloud_pub_) && !wanted(centers_pub_) &&
+      !wanted(projected_map_pub_))
+    return;
+  (void)mirror_->sync(map);
 }
 
 void MapPublishers::mirrorFor(const fragg::Map& map) {
