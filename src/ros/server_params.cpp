@@ -544,6 +544,7 @@ ServerParams parseKnown(const XmlRpcValue& root) {
   if (!(p.map_rate_hz >= 0.0) || !std::isfinite(p.map_rate_hz))
     badParam("map_rate", "must be a finite rate in Hz >= 0 (0 = after every cloud)");
   readBool(root, "paced_outputs", &p.paced_outputs);
+  readBool(root, "mirror_every_cloud", &p.mirror_every_cloud);
   readInt(root, "markers/chunk_blocks", &p.marker_chunk_blocks);
   if (p.marker_chunk_blocks < 1 || p.marker_chunk_blocks > 64)
     badParam("markers/chunk_blocks", "must be 1..64 blocks a side");

@@ -174,7 +174,9 @@ void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
 }
 
 void MapPublishers::followChanges(const fragg::Map& map) {
-  if (!mirror_ || !mirror_->valid() || !(pacedMarkers() || pacedMaps())) return;
+  if (!params_.mirror_every_cloud || !mirror_ || !mirror_->valid() ||
+      !(pacedMarkers() || pacedMaps()))
+    return;
   const bool markers_seen = occupied_markers_.subscribers > 0 || free_markers_.subscribers > 0;
   if (!markers_seen && !wanted(occupied_cloud_pub_) && !wanted(centers_pub_) &&
       !wanted(projected_map_pub_))
