@@ -73,7 +73,7 @@ TEST(CloudInputLock, AQueryIsAnsweredBetweenEveryTwoCloudsOfTheServersInsertion)
   std::vector<int> free_at, scans_seen;  // per cloud: the lock was free, the scans it saw
   std::atomic<int> inserted{0};
   auto on_inserted = [&](const sensor_msgs::PointCloud2&, const fragg::SensorModel&,
-                         const Eigen::Isometry3d&) {
+                         const Eigen::Isometry3d&, fragg::ros::PublishTimes*) {
     // A query from another thread while the insertion thread is between two clouds.
     bool got = false;
     int scans = -1;
