@@ -667,10 +667,8 @@ size_t Map::knownVoxelCount() const {
 #pragma omp parallel for schedule(static) reduction(+ : n) if (slots > 4096)
   for (long i = 0; i < slots; ++i) {
     if (!host.liveAt(static_cast<BlockIndex>(i))) continue;
-    const Cell* cells = host.block(static_cast<BlockIndex>(i)).cells;
     size_t in_block = 0;
-    for (int c = 0; c < kCellsPerBlock; ++c)
-      in_block += cells[c].log_odds_fx != kUnobservedLogOdds ? 1 : 0;
+    for (const Cell& c : host.block(static_cast<BlockIndex>(i)).cells) in_block += c.observed();
     n += in_block;
   }
   return n;

@@ -97,45 +97,39 @@ void MaskMirror::applyListed(uint64_t revision) {
   known_cells_ = static_cast<uint64_t>(static_cast<int64_t>(known_cells_) + known_change);
   const auto updated = std::chrono::steady_clock::now();
   stats_.update_seconds = std::chrono::duration<double>(updated - started).count();
-  // Every return below leaves add_seconds set.
-  struct AddTime {
-    SyncStats* stats;
-    std::chrono::steady_clock::time_point from;
-    ~AddTime() {
-      stats->add_seconds =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - from).count();
-    }
-  } add_time{&stats_, updated};
-  if (added == 0) return;
-  // The new ones take the next slots in the list's order (as one by one), filled in parallel;
-  // the index gets them in that order too.
-  const size_t base = keys_.size();
-  size_t next = base;
-  for (int64_t j = 0; j < n; ++j)
-    if (listed_slots_[j] == fragg::BlockKeyTable::kNone)
-      listed_slots_[j] = static_cast<uint32_t>(next++);
-  keys_.resize(next);
-  masks_.resize(next);
-  masks_at_.resize(next);
-  occupied_at_.resize(next);
-  uint64_t known_added = 0;
+  if (added > 0) {
+    // The new ones take the next slots in the list's order (as one by one), filled in parallel;
+    // the index gets them in that order too.
+    const size_t base = keys_.size();
+    size_t next = base;
+    for (int64_t j = 0; j < n; ++j)
+      if (listed_slots_[j] == fragg::BlockKeyTable::kNone)
+        listed_slots_[j] = static_cast<uint32_t>(next++);
+    keys_.resize(next);
+    masks_.resize(next);
+    masks_at_.resize(next);
+    occupied_at_.resize(next);
+    uint64_t known_added = 0;
 #pragma omp parallel for schedule(static) reduction(+ : known_added) if (n > 4096)
-  for (int64_t j = 0; j < n; ++j) {
-    const uint32_t s = listed_slots_[j];
-    if (s < base) continue;
-    const fragg::BlockStateMasks& masks = listed_masks_[j];
-    keys_[s] = listed_keys_[j];
-    masks_[s] = masks;
-    masks_at_[s] = revision;
-    bool occupied = false;
-    for (const uint64_t w : masks.occupied) occupied |= w != 0;
-    occupied_at_[s] = occupied ? revision : 0;
-    known_added += knownIn(masks);
+    for (int64_t j = 0; j < n; ++j) {
+      const uint32_t s = listed_slots_[j];
+      if (s < base) continue;
+      const fragg::BlockStateMasks& masks = listed_masks_[j];
+      keys_[s] = listed_keys_[j];
+      masks_[s] = masks;
+      masks_at_[s] = revision;
+      bool occupied = false;
+      for (const uint64_t w : masks.occupied) occupied |= w != 0;
+      occupied_at_[s] = occupied ? revision : 0;
+      known_added += knownIn(masks);
+    }
+    known_cells_ += known_added;
+    table_.reserve(next);
+    for (int64_t j = 0; j < n; ++j)
+      if (listed_slots_[j] >= base) table_.insert(listed_keys_[j], listed_slots_[j]);
   }
-  known_cells_ += known_added;
-  table_.reserve(next);
-  for (int64_t j = 0; j < n; ++j)
-    if (listed_slots_[j] >= base) table_.insert(listed_keys_[j], listed_slots_[j]);
+  stats_.add_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - updated).count();
 }
 
 int64_t MaskMirror::update(uint32_t s, const fragg::BlockStateMasks& masks, uint64_t revision) {

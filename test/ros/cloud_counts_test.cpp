@@ -218,7 +218,9 @@ TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
     // The write lock's wait is part of the insertion, and only an insertion waits for it; no
     // publishing hook here, so its four parts are 0.
     EXPECT_LE(std::stod(lock_wait_ms), std::stod(insert_ms) + 1e-3) << line;
-    if (outcome != "inserted") EXPECT_EQ(std::stod(lock_wait_ms), 0.0) << line;
+    if (outcome != "inserted") {
+      EXPECT_EQ(std::stod(lock_wait_ms), 0.0) << line;
+    }
     EXPECT_EQ(publish_parts, "0.000,0.000,0.000,0.000") << line;
     EXPECT_EQ(std::stoul(points), 231u);
     // The CSV writes ms to 3 decimals: each of the five fields is off by up to 0.0005 ms, so the

@@ -141,7 +141,7 @@ struct ServerParams {
   /// change) instead of coming as one burst when the update is due. false: the burst.
   bool paced_outputs = true;
   /// mirror_every_cloud: on a CUDA map with paced outputs, the outputs' mask mirror takes every
-  /// cloud's changed blocks in (a few ms after each cloud) instead of a period's at once when
+  /// cloud's changed blocks in (after each cloud, that cloud's only) instead of a period's when
   /// the markers take the changes in (11-17 ms at W1 5 cm on an H100, once a second). false:
   /// once a period.
   bool mirror_every_cloud = true;

@@ -158,9 +158,8 @@ void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
   // Each part's ms into `times` (when given), from the end of the one before.
   auto lap = [&](double PublishTimes::*part) {
     if (!times) return;
-    const auto now = std::chrono::steady_clock::now();
-    times->*part = std::chrono::duration<double, std::milli>(now - started).count();
-    started = now;
+    times->*part = msSince(started);
+    started = std::chrono::steady_clock::now();
   };
   if (throttle_maps && !full_markers) followChanges(map);
   publishMarkerTopics(map, stamp, full_markers);
