@@ -146,4 +146,9 @@ if ok and all(c in ok[0] for c in parts):
             i, float(r["total_ms"]), float(r["queue_ms"]), float(r["tf_ms"]), float(r["insert_ms"]),
             float(r["lock_wait_ms"]), float(r["publish_ms"]), float(r["publish_wait_ms"]),
             float(r["markers_ms"]), float(r["map_outputs_ms"]), float(r["stats_ms"])))
+if ok and "lock_holders" in ok[0]:
+    waits = [(i, r) for i, r in enumerate(rows) if r["outcome"] == "inserted" and float(r["lock_wait_ms"]) > 5]
+    print("insertions that waited over 5 ms for the write lock: %d (index: wait ms: whom for)" % len(waits))
+    for i, r in sorted(waits, key=lambda x: -float(x[1]["lock_wait_ms"]))[:15]:
+        print("  %4d: %7.2f: %s" % (i, float(r["lock_wait_ms"]), r["lock_holders"] or "(none named)"))
 PY

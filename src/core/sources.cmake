@@ -12,6 +12,7 @@ set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/auto_sensor.cpp
   ${CMAKE_CURRENT_LIST_DIR}/state_masks.cpp
   ${CMAKE_CURRENT_LIST_DIR}/change_log.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/lock_holders.cpp
   ${CMAKE_CURRENT_LIST_DIR}/block_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/block_view.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frustum_builder.cpp

@@ -7,12 +7,16 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <mutex>
+#include <optional>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "test_scenes.h"
 
@@ -191,6 +195,102 @@ TEST(MapLock, ReadersNeverSeeAHalfInsertedScan) {
   reader.join();
   EXPECT_EQ(inconsistent.load(), 0) << "of " << answers.load() << " answers";
   EXPECT_EQ(occupiedHits(*locked.read(), kScans), kScans);
+}
+
+// A writer that finds the lock held names whom it waited for: the reader that held it when it
+// came and the one that took it while it waited (glibc's rwlock lets readers in ahead of a
+// waiting writer), each once, with the time it held the lock; the holders' board is empty after.
+TEST(MapLock, AWriterThatWaitedNamesTheReadersItWaitedFor) {
+  LockedMap locked{Map(cpuParams())};
+  Flag first_holds, second_holds;
+  std::thread first([&] {
+    const LockedMap::ReadGuard map = locked.read("first reader");
+    first_holds.set();
+    // Until the writer waits (a counter, no sleep), then until the second reader holds it too.
+    while (locked.writersWaiting() == 0) std::this_thread::yield();
+    ASSERT_TRUE(second_holds.wait());
+  });
+  ASSERT_TRUE(first_holds.wait());
+  std::thread second([&] {
+    while (locked.writersWaiting() == 0) std::this_thread::yield();
+    // Taken while the writer waits: shared with the first reader.
+    std::optional<LockedMap::ReadGuard> map;
+    while (!(map = locked.tryRead("second reader"))) std::this_thread::yield();
+    second_holds.set();
+  });
+  const std::vector<LockHolder> now = locked.holders();
+  ASSERT_EQ(now.size(), 1u);
+  EXPECT_STREQ(now[0].who, "first reader");
+  EXPECT_FALSE(now[0].writes);
+  std::vector<LockHolder> waited_for;
+  {
+    const LockedMap::WriteGuard map = locked.write("writer", &waited_for);
+    const std::vector<LockHolder> holding = locked.holders();
+    ASSERT_EQ(holding.size(), 1u);
+    EXPECT_STREQ(holding[0].who, "writer");
+    EXPECT_TRUE(holding[0].writes);
+    EXPECT_EQ(locked.writersWaiting(), 0u);
+  }
+  first.join();
+  second.join();
+  ASSERT_EQ(waited_for.size(), 2u);
+  std::vector<std::string> names{waited_for[0].who, waited_for[1].who};
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"first reader", "second reader"}));
+  for (const LockHolder& h : waited_for) {
+    EXPECT_FALSE(h.writes);
+    EXPECT_GE(h.held_ms, 0.0);
+  }
+  EXPECT_TRUE(locked.holders().empty());
+  // A writer that found the lock free waited for nobody.
+  { const LockedMap::WriteGuard map = locked.write("writer", &waited_for); }
+  EXPECT_TRUE(waited_for.empty());
+}
+
+// A guard moved out of an optional leaves the board once, when the last owner goes.
+TEST(MapLock, AMovedGuardLeavesTheBoardOnce) {
+  LockedMap locked{Map(cpuParams())};
+  {
+    std::optional<LockedMap::ReadGuard> a = locked.tryRead("moved");
+    ASSERT_TRUE(a.has_value());
+    const LockedMap::ReadGuard b = std::move(*a);
+    a.reset();
+    ASSERT_EQ(locked.holders().size(), 1u);
+    EXPECT_STREQ(locked.holders()[0].who, "moved");
+  }
+  EXPECT_TRUE(locked.holders().empty());
+  EXPECT_TRUE(locked.tryWrite().has_value()) << "the lock was left held";
+}
+
+// Holders by name, the longest total first, at most `most` names, no commas (a CSV field).
+TEST(LockHolders, DescribedByNameLongestFirst) {
+  const std::vector<LockHolder> holders = {{"mirror piece", false, 2.0},
+                                           {"stats", false, 1.0},
+                                           {"mirror piece", false, 3.5},
+                                           {"a, b", true, 0.25},
+                                           {"frontiers", false, 40.0}};
+  EXPECT_EQ(describeLockHolders(holders),
+            "frontiers 40.0 ms; mirror piece x2 5.5 ms; stats 1.0 ms; +1 more");
+  EXPECT_EQ(describeLockHolders(holders, 10),
+            "frontiers 40.0 ms; mirror piece x2 5.5 ms; stats 1.0 ms; a  b 0.2 ms");
+  EXPECT_EQ(describeLockHolders({}), "");
+}
+
+// The board remembers the last kKept departures: a writer that waited through more sees the
+// most recent ones, oldest first.
+TEST(LockHolders, KeepsTheLastDepartures) {
+  LockHolders board;
+  const LockHolders::Mark mark = board.startWaiting();
+  EXPECT_EQ(board.writersWaiting(), 1u);
+  static const char* const kNames[] = {"even", "odd"};
+  for (size_t i = 0; i < LockHolders::kKept + 5; ++i) {
+    HolderTicket t = board.enter(kNames[i % 2], false);
+  }
+  const std::vector<LockHolder> left = board.doneWaiting(mark);
+  EXPECT_EQ(board.writersWaiting(), 0u);
+  ASSERT_EQ(left.size(), LockHolders::kKept);
+  EXPECT_STREQ(left.front().who, kNames[5 % 2]);  // departures 5 .. kKept + 4
+  EXPECT_STREQ(left.back().who, kNames[(LockHolders::kKept + 4) % 2]);
 }
 
 }  // namespace

@@ -100,7 +100,7 @@ class CloudCountsTest : public ::testing::Test {
 
   // Holds the map's write lock until release(): the insertion thread takes `first` and waits.
   void blockOn(const CloudPtr& first) {
-    lock_.emplace(shared_->write());
+    lock_.emplace(shared_->write("the test's hold"));
     pipeline_->offer(first);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
     while (pipeline_->waiting() > 0 && std::chrono::steady_clock::now() < deadline)
@@ -197,12 +197,13 @@ TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
   ASSERT_TRUE(std::getline(in, line));
   EXPECT_EQ(line, fragg::ros::CloudTraceCsv::header());
   std::map<std::string, int> outcomes;
-  int rows = 0;
+  int rows = 0, named = 0;
+  const double first_stamp = wall("map", 1.0)->header.stamp.toSec();
   while (std::getline(in, line)) {
     ++rows;
     std::stringstream row(line);
     std::string stamp, points, outcome, queue_ms, tf_ms, insert_ms, publish_ms, total_ms, depth,
-        lock_wait_ms, publish_parts;
+        lock_wait_ms, publish_wait, markers, map_outputs, stats_part, holders;
     std::getline(row, stamp, ',');
     std::getline(row, points, ',');
     std::getline(row, outcome, ',');
@@ -213,7 +214,11 @@ TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
     std::getline(row, total_ms, ',');
     std::getline(row, depth, ',');
     std::getline(row, lock_wait_ms, ',');
-    std::getline(row, publish_parts);
+    std::getline(row, publish_wait, ',');
+    std::getline(row, markers, ',');
+    std::getline(row, map_outputs, ',');
+    std::getline(row, stats_part, ',');
+    std::getline(row, holders);
     ++outcomes[outcome];
     // The write lock's wait is part of the insertion, and only an insertion waits for it; no
     // publishing hook here, so its four parts are 0.
@@ -221,7 +226,16 @@ TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
     if (outcome != "inserted") {
       EXPECT_EQ(std::stod(lock_wait_ms), 0.0) << line;
     }
-    EXPECT_EQ(publish_parts, "0.000,0.000,0.000,0.000") << line;
+    EXPECT_EQ(publish_wait + markers + map_outputs + stats_part, "0.0000.0000.0000.000") << line;
+    // The first cloud waited for the test's hold of the write lock and names it; no other
+    // insertion found the lock held.
+    if (outcome == "inserted" && std::stod(stamp) == first_stamp) {
+      ++named;
+      EXPECT_EQ(holders.rfind("the test's hold ", 0), 0u) << line;
+      EXPECT_GT(std::stod(lock_wait_ms), 0.0) << line;
+    } else {
+      EXPECT_EQ(holders, "") << line;
+    }
     EXPECT_EQ(std::stoul(points), 231u);
     // The CSV writes ms to 3 decimals: each of the five fields is off by up to 0.0005 ms, so the
     // four stages' sum may pass the total by up to 0.0025 (1e-3 failed ~7 % of runs: 2.742 total
@@ -232,6 +246,7 @@ TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
   }
   const fragg_map::MapStats s = stats();
   EXPECT_EQ(rows, static_cast<int>(s.clouds_received));
+  EXPECT_EQ(named, 1);
   EXPECT_EQ(outcomes["inserted"], 3);
   EXPECT_EQ(outcomes["queue_full"], 1);
   EXPECT_EQ(outcomes["tf_too_old"], 1);

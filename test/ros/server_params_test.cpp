@@ -232,7 +232,7 @@ TEST(ServerParams, ReadsEveryName) {
   set(root, "occupancy_min_z", 0.1);
   set(root, "occupancy_max_z", 1.8);
   set(root, "latch", false);
-  set(root, "mirror_every_cloud", false);
+  set(root, "mirror_every_cloud", true);
   set(root, "publish_free_space", true);
   set(root, "backend", std::string("cpu"));
   set(root, "raycast", std::string("bresenham"));
@@ -246,7 +246,7 @@ TEST(ServerParams, ReadsEveryName) {
   const fragg::ros::ServerParams p = fragg::ros::parseParameters(root);
   EXPECT_EQ(p.map.resolution_m, 0.1);
   EXPECT_EQ(p.frame_id, "odom");
-  EXPECT_FALSE(p.mirror_every_cloud);
+  EXPECT_TRUE(p.mirror_every_cloud);
   EXPECT_EQ(p.map.occupancy.prob_hit, 0.8);
   EXPECT_EQ(p.map.occupancy.prob_miss, 0.3);
   EXPECT_EQ(p.map.occupancy.clamp_min, 0.1);
@@ -497,7 +497,7 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.collision.max_markers, d.collision.max_markers);
   EXPECT_EQ(p.paced_outputs, d.paced_outputs);
   EXPECT_EQ(p.mirror_every_cloud, d.mirror_every_cloud);
-  EXPECT_TRUE(d.mirror_every_cloud);
+  EXPECT_FALSE(d.mirror_every_cloud);
   EXPECT_EQ(p.file_root, d.file_root);
 }
 

@@ -87,7 +87,7 @@ bool Autosaver::saveNow(bool force) {
     fragg::MapImage image;
     std::tuple<uint64_t, uint64_t, size_t, size_t> version;
     {
-      const SharedMap::ReadGuard state = shared_->read();  // the copy only, not the write
+      const SharedMap::ReadGuard state = shared_->read("autosave");  // the copy only, not the write
       const fragg::Map& map = state->map;
       version = {map.viewEpoch(), map.revision(), map.scanCount(), map.blockCount()};
       if (!force && saved_version_ == version) return false;

@@ -15,6 +15,7 @@
 
 #include "fragg_map/errors.h"
 #include "fragg_map/internal/rigid_pose.h"
+#include "fragg_map/lock_holders.h"
 #include "fragg_map/ros/cloud_from_msg.h"
 
 namespace fragg::ros {
@@ -164,8 +165,8 @@ std::optional<fragg::PointCloud> CloudInserter::convert(const sensor_msgs::Point
 
 bool CloudInserter::insert(const fragg::PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
                            int64_t stamp_ns, const std::string& frame, fragg::InsertStats* inserted,
-                           std::vector<Eigen::Vector3f>* dynamic_points_S,
-                           double* lock_wait_ms) const {
+                           std::vector<Eigen::Vector3f>* dynamic_points_S, double* lock_wait_ms,
+                           std::string* lock_holders) const {
   if (const auto problem = transformProblem(T_map_sensor, params_.map.resolution_m)) {
     stats_->addFault(CloudFault::kBadTransform);
     ROS_ERROR_THROTTLE(5.0, "fragg_map: cloud from '%s' dropped: %s (%lu such so far)",
@@ -185,11 +186,20 @@ bool CloudInserter::insert(const fragg::PointCloud& cloud, const Eigen::Isometry
     // One scan per lock: a query waits for this scan at most. The map drops points outside
     // the height band (pointcloud_min_z/max_z) and resolves an `auto` sensor, as for the CLI.
     const auto asked = std::chrono::steady_clock::now();
-    const SharedMap::WriteGuard state = shared_->write();
-    if (lock_wait_ms)
-      *lock_wait_ms =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - asked)
-              .count();
+    std::vector<fragg::LockHolder> waited_for;
+    const SharedMap::WriteGuard state = shared_->write("insertion", &waited_for);
+    const double waited_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - asked).count();
+    if (lock_wait_ms) *lock_wait_ms = waited_ms;
+    if (!waited_for.empty()) {
+      const std::string holders = fragg::describeLockHolders(waited_for);
+      if (waited_ms >= kLongLockWaitMs)
+        ROS_WARN_THROTTLE(10.0, "fragg_map: a cloud waited %.0f ms for the map's write lock: %s",
+                          waited_ms, holders.c_str());
+      if (lock_holders) *lock_holders = holders;
+    } else if (lock_holders) {
+      lock_holders->clear();
+    }
     const std::string backend_before = state->map.backendName();
     *inserted = state->map.insert(cloud, T_map_sensor, params_.sensor, stamp_ns, frame);
     if (dynamic_points_S) *dynamic_points_S = state->map.lastDynamicPoints_S();

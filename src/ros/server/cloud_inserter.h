@@ -68,11 +68,15 @@ class CloudInserter {
   /// (counted, logged, map unchanged) for an unusable transform or when the map throws.
   /// Counts the scan's left-out points and a CUDA -> CPU fallback. `dynamic_points_S` (when
   /// given) gets the scan's points classified dynamic (MapParams::dynamic), sensor frame.
-  /// `lock_wait_ms` (when given) gets the time spent waiting for the write lock.
+  /// `lock_wait_ms` (when given) gets the time spent waiting for the write lock, and
+  /// `lock_holders` whom it waited for (fragg::describeLockHolders; empty: the lock was free).
+  /// A wait over kLongLockWaitMs is logged with its holders (throttled).
   bool insert(const fragg::PointCloud& cloud, const Eigen::Isometry3d& T_map_sensor,
               int64_t stamp_ns, const std::string& frame, fragg::InsertStats* inserted,
               std::vector<Eigen::Vector3f>* dynamic_points_S = nullptr,
-              double* lock_wait_ms = nullptr) const;
+              double* lock_wait_ms = nullptr, std::string* lock_holders = nullptr) const;
+  /// A wait for the write lock this long (ms) is logged with whom it waited for.
+  static constexpr double kLongLockWaitMs = 100.0;
 
  private:
   const ServerParams params_;

@@ -154,10 +154,10 @@ void CloudPipeline::process(const Queued& item, CloudTrace* trace) {
   fragg::InsertStats inserted;
   const bool publish_dynamic = dynamic_.wanted && dynamic_.publish && dynamic_.wanted();
   std::vector<Eigen::Vector3f> dynamic_S;
-  const bool ok =
-      inserter_.insert(*cloud, T_map_sensor, static_cast<int64_t>(msg.header.stamp.toNSec()),
-                       withoutLeadingSlash(msg.header.frame_id), &inserted,
-                       publish_dynamic ? &dynamic_S : nullptr, &trace->lock_wait_ms);
+  const bool ok = inserter_.insert(
+      *cloud, T_map_sensor, static_cast<int64_t>(msg.header.stamp.toNSec()),
+      withoutLeadingSlash(msg.header.frame_id), &inserted, publish_dynamic ? &dynamic_S : nullptr,
+      &trace->lock_wait_ms, &trace->lock_holders);
   const Clock::time_point done = Clock::now();
   trace->insert_ms = msBetween(transformed, done);
   if (!ok) {

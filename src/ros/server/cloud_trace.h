@@ -30,7 +30,10 @@ struct CloudTrace {
   double total_ms = 0.0;      ///< receipt -> done (outputs published for an inserted cloud)
   size_t queue_depth = 0;     ///< clouds waiting behind it when it was taken
   double lock_wait_ms = 0.0;  ///< the part of insert_ms spent waiting for the map's write lock
-  PublishTimes publish;       ///< parts of publish_ms (the rest: dynamic points, octomaps, frustum)
+  /// Whom that wait was for (fragg::describeLockHolders: "frontier topics 12.3 ms; ..."),
+  /// empty when the lock was free.
+  std::string lock_holders;
+  PublishTimes publish;  ///< parts of publish_ms (the rest: dynamic points, octomaps, frustum)
 };
 
 class CloudTraceCsv {

@@ -126,7 +126,7 @@ bool CollisionService::check(fragg_map::CheckCollision::Request& req,
       // holds neither insertion nor the other services back.
       std::optional<Map> reach;
       {
-        const SharedMap::ReadGuard state = shared_->read();
+        const SharedMap::ReadGuard state = shared_->read("~check_collision");
         reach.emplace(reachableCopy(state->map, shape, poses, options.margin_m));
       }
       results = planning::checkPoses(*reach, shape, poses, options);

@@ -51,7 +51,7 @@ bool CorrectionService::correct(fragg_map::CorrectPoses::Request& req,
     const int64_t tolerance_ns = std::llround(params_.correction.stamp_tolerance_s * 1e9);
     std::string unknown_reason;
     {
-      const SharedMap::WriteGuard state = shared_->write();
+      const SharedMap::WriteGuard state = shared_->write("pose correction service");
       requireKeptScans(state->map);
       const CorrectionPlan plan =
           planCorrection(requests, state->stamps, state->map.scanStore(), tolerance_ns,

@@ -61,7 +61,7 @@ void FrontierPublisher::onTimer(const ::ros::SteadyTimerEvent&) {
   try {
     std::optional<planning::FrontierMapChanges> changes;
     {
-      const SharedMap::ReadGuard state = shared_->read();
+      const SharedMap::ReadGuard state = shared_->read("frontier topics");
       revision = state->map.revision();
       if (published_ && revision == published_revision_ && !joined) return;
       resolution_m = state->map.resolution();

@@ -204,7 +204,7 @@ bool FrontierService::get(fragg_map::GetFrontiers::Request& req,
     // the copy is made: insertion and the other services go on meanwhile.
     std::optional<Map> copy;
     {
-      const SharedMap::ReadGuard state = shared_->read();
+      const SharedMap::ReadGuard state = shared_->read("~get_frontiers");
       res.revision = state->map.revision();
       if (coarse_cells == 0) coarse_cells = autoCoarseCells(*state, &grid_note);
       q.views.gain = gain               ? *gain

@@ -100,7 +100,7 @@ MapPublishers::MapPublishers(::ros::NodeHandle& nh, ::ros::NodeHandle& private_n
   if (params_.latch) return ::ros::SubscriberStatusCallback();
   return [this, pub](const ::ros::SingleSubscriberPublisher& sub) {
     std::lock_guard<std::mutex> publishing(publish_mutex_);
-    const SharedMap::ReadGuard state = shared_->read();
+    const SharedMap::ReadGuard state = shared_->read("late subscriber's map");
     const ::ros::Time now = ::ros::Time::now();
     outputs_.update(state->map);
     if (pub == &projected_map_pub_)
@@ -120,7 +120,7 @@ void MapPublishers::publishAfterInsert(const sensor_msgs::PointCloud2& cloud,
   const ::ros::Time& stamp = cloud.header.stamp;
   const auto asked = std::chrono::steady_clock::now();
   std::lock_guard<std::mutex> publishing(publish_mutex_);
-  const SharedMap::ReadGuard state = shared_->read();
+  const SharedMap::ReadGuard state = shared_->read("outputs after a cloud");
   if (times) times->wait_ms = msSince(asked);
   if (coloredMap()) {
     try {
@@ -136,7 +136,7 @@ void MapPublishers::publishAfterInsert(const sensor_msgs::PointCloud2& cloud,
 
 void MapPublishers::publishAfterCorrection(const ::ros::Time& stamp) {
   std::lock_guard<std::mutex> publishing(publish_mutex_);
-  const SharedMap::ReadGuard state = shared_->read();
+  const SharedMap::ReadGuard state = shared_->read("outputs after a correction");
   if (coloredMap()) colors_.prune(state->map);  // truncated cells lose theirs
   // A scan taken out can leave a cell observed in the unknown band unobserved without a mask
   // change: the whole-map outputs are rebuilt (corrections are rare; the markers read masks
@@ -147,7 +147,7 @@ void MapPublishers::publishAfterCorrection(const ::ros::Time& stamp) {
 
 void MapPublishers::publishFull(const ::ros::Time& stamp) {
   std::lock_guard<std::mutex> publishing(publish_mutex_);
-  const SharedMap::ReadGuard state = shared_->read();
+  const SharedMap::ReadGuard state = shared_->read("full outputs");
   if (coloredMap()) colors_.prune(state->map);  // reset, load, clear_bbx
   publishMaps(state->map, stamp, true, false);
 }
@@ -298,7 +298,7 @@ void MapPublishers::publishMarkers(const fragg::Map& map, MarkerTopic& topic,
 void MapPublishers::sendAllMarkersTo(MarkerTopic& topic,
                                      const ::ros::SingleSubscriberPublisher& sub) {
   std::lock_guard<std::mutex> publishing(publish_mutex_);
-  const SharedMap::ReadGuard state = shared_->read();
+  const SharedMap::ReadGuard state = shared_->read("late subscriber's markers");
   const ::ros::Time now = ::ros::Time::now();
   // This subscriber has its whole map: the next update need not send everyone a full set for it.
   topic.subscribers = std::min(topic.subscribers + 1, topic.pub.getNumSubscribers());

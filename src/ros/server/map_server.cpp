@@ -106,14 +106,14 @@ MapServer::MapServer(::ros::NodeHandle& nh, ::ros::NodeHandle& private_nh,
   }
   publishers_->publishFull(::ros::Time::now());
   {
-    const SharedMap::ReadGuard state = shared_->read();
+    const SharedMap::ReadGuard state = shared_->read("start-up");
     ROS_INFO("fragg_map: %s map at %.3f m in '%s', backend %s (%s), sensor %s, queue %d",
              params_.latch ? "latched" : "unlatched", params_.map.resolution_m,
              params_.frame_id.c_str(), state->map.backendName(), state->map.backendReason().c_str(),
              params_.sensor.describe().c_str(), params_.queue_size);
   }
   if (!paging_.store.empty()) {
-    const SharedMap::ReadGuard state = shared_->read();
+    const SharedMap::ReadGuard state = shared_->read("start-up");
     const fragg::PagingStats paging = state->map.pagingStats();
     ROS_INFO(
         "fragg_map: paging to %s (budget %.0f MB, radius %.1f m): %zu scans and %lu "
@@ -154,7 +154,7 @@ void MapServer::loadStartMap() {
     if (saved) {
       const size_t scans = saved->scanCount(), blocks = saved->blockCount();
       {
-        const SharedMap::WriteGuard state = shared_->write();
+        const SharedMap::WriteGuard state = shared_->write("autosave load");
         state->map = std::move(*saved);
         state->stamps.rebuild(state->map.scanStore());
         stats_.restart(state->map.scanCount());

@@ -70,7 +70,7 @@ bool MapServices::saveMap(fragg_map::SaveMap::Request& req, fragg_map::SaveMap::
       fragg::MapImage image;
       size_t known = 0;
       {
-        const SharedMap::ReadGuard state = shared_->read();
+        const SharedMap::ReadGuard state = shared_->read("~save_map");
         known = state->map.knownVoxelCount();
         if (state->map.paging()) {
           state->map.save(path);
@@ -89,7 +89,7 @@ bool MapServices::saveMap(fragg_map::SaveMap::Request& req, fragg_map::SaveMap::
     // export reads the resident blocks under the lock.
     std::optional<fragg::Map> copy;
     {
-      const SharedMap::ReadGuard state = shared_->read();
+      const SharedMap::ReadGuard state = shared_->read("~save_map");
       if (state->map.paging()) {
         fragg::exportOctomap(state->map, path);
         return saved(state->map.knownVoxelCount());
@@ -109,7 +109,7 @@ std::string MapServices::loadMap(const std::string& path) {
   fragg::Map loaded = loadMapFile(path, params_.map);
   std::string message;
   {
-    const SharedMap::WriteGuard state = shared_->write();
+    const SharedMap::WriteGuard state = shared_->write("~load_map");
     state->map = std::move(loaded);
     state->stamps.rebuild(state->map.scanStore());
     stats_->restart(state->map.scanCount());
@@ -125,7 +125,7 @@ std::string MapServices::resetMap() {
   const size_t rss_before = residentBytes();
   {
     // A new map rather than Map::reset(), which keeps its block storage for reuse.
-    const SharedMap::WriteGuard state = shared_->write();
+    const SharedMap::WriteGuard state = shared_->write("~reset");
     state->map = fragg::Map(params_.map);  // as MapServer builds it
     state->stamps.clear();
     stats_->restart(0);
@@ -143,7 +143,7 @@ std::string MapServices::resetMap() {
 std::string MapServices::clearBox(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m) {
   std::string message;
   {
-    const SharedMap::WriteGuard state = shared_->write();
+    const SharedMap::WriteGuard state = shared_->write("~clear_bbox");
     const size_t before = state->map.blockCount();
     state->map.clearBox(min_m, max_m);  // validates the box first
     message = "cleared; blocks " + std::to_string(before) + " -> " +
@@ -156,7 +156,7 @@ std::string MapServices::clearBox(const Eigen::Vector3d& min_m, const Eigen::Vec
 std::string MapServices::freeBox(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m) {
   uint64_t cells = 0;
   {
-    const SharedMap::WriteGuard state = shared_->write();
+    const SharedMap::WriteGuard state = shared_->write("~clear_bbx");
     cells = state->map.freeBox(min_m, max_m);  // validates the box first
   }
   if (on_map_replaced_) on_map_replaced_();
@@ -178,7 +178,7 @@ bool MapServices::clearBox(fragg_map::ClearBox::Request& req, fragg_map::ClearBo
 
 bool MapServices::getStats(fragg_map::GetStats::Request&, fragg_map::GetStats::Response& res) {
   return answer("get_stats", res, [&] {
-    const SharedMap::ReadGuard state = shared_->read();
+    const SharedMap::ReadGuard state = shared_->read("~get_stats");
     res.stats = stats_->toMsg(state->map, params_.frame_id, ::ros::Time::now());
     return std::string("ok");
   });

@@ -47,7 +47,7 @@ ObservedMirror::RefreshStats ObservedMirror::refresh(const SharedMap& shared) {
   std::vector<fragg::BlockKey> keys;
   uint64_t revision = 0, epoch = 0;
   {
-    const SharedMap::ReadGuard state = shared.read();
+    const SharedMap::ReadGuard state = shared.read("frontier mirror listing");
     const fragg::Map& map = state->map;
     ++stats.locks;
     revision = map.revision();
@@ -73,7 +73,7 @@ ObservedMirror::RefreshStats ObservedMirror::refresh(const SharedMap& shared) {
     // A pause between pieces: glibc's reader-writer lock lets a reader in ahead of a waiting
     // writer, so insertion, waiting for a piece to end, takes the lock before the next piece.
     if (first > 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    const SharedMap::ReadGuard state = shared.read();
+    const SharedMap::ReadGuard state = shared.read("frontier mirror piece");
     const fragg::Map& map = state->map;
     ++stats.locks;
     if (map.viewEpoch() != epoch) {

@@ -50,8 +50,8 @@ OctomapOutputs::OctomapOutputs(::ros::NodeHandle& nh, const ServerParams& params
     return [this, binary](const ::ros::SingleSubscriberPublisher& sub) {
       std::lock_guard<std::mutex> publishing(publish_mutex_);
       try {
-        sub.publish(octomapMsg(shared_->read()->map, binary, params_.octomap.compress_map,
-                               params_.frame_id, ::ros::Time::now()));
+        sub.publish(octomapMsg(shared_->read("octomap late subscriber")->map, binary,
+                               params_.octomap.compress_map, params_.frame_id, ::ros::Time::now()));
       } catch (const std::exception& e) {
         ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
       }
@@ -69,7 +69,7 @@ OctomapOutputs::OctomapOutputs(::ros::NodeHandle& nh, const ServerParams& params
       try {
         // The tree is built from a copy of the observed cells, taken under the read lock:
         // insertion waits for the copy only (the service has a thread of its own).
-        const fragg::Map copy = observedCopy(shared_->read()->map);
+        const fragg::Map copy = observedCopy(shared_->read("octomap late subscriber")->map);
         res.map = octomapMsg(copy, binary, params_.octomap.compress_map, params_.frame_id,
                              ::ros::Time::now());
         return true;
@@ -100,7 +100,7 @@ void OctomapOutputs::publishIfDue(const ::ros::Time& stamp, bool throttled) {
   std::lock_guard<std::mutex> publishing(publish_mutex_);
   const double now_s = ::ros::SteadyTime::now().toSec();
   if (throttled && !held_.letThrough(now_s, stamp)) return;
-  const SharedMap::ReadGuard state = shared_->read();
+  const SharedMap::ReadGuard state = shared_->read("octomap topics");
   publishLocked(state->map, stamp, now_s);
 }
 

@@ -70,7 +70,7 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
     std::vector<ToPlace> to_place;
     std::vector<bool> unknown(requests.size(), false);
     {
-      const SharedMap::ReadGuard state = shared_->read();
+      const SharedMap::ReadGuard state = shared_->read("corrected_path");
       requireKeptScans(state->map);
       for (size_t i = 0; i < requests.size(); ++i) {
         const ScanStampIndex::Entry* entry = state->stamps.find(requests[i].stamp_ns, tolerance_ns);
@@ -113,7 +113,7 @@ void PathCorrector::correct(const nav_msgs::Path& path) {
   CorrectionPlan plan;
   double ms = 0.0;
   {
-    const SharedMap::WriteGuard state = shared_->write();
+    const SharedMap::WriteGuard state = shared_->write("corrected_path");
     requireKeptScans(state->map);
     const PoseThresholds& thresholds = params_.correction.thresholds;
     plan =

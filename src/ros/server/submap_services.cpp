@@ -91,14 +91,14 @@ bool SubmapServices::truncate(fragg_map::Truncate::Request& req,
     const auto t0 = Clock::now();
     fragg::SubmapStats st;
     if (req.keep) {
-      const SharedMap::ReadGuard state = shared_->read();
+      const SharedMap::ReadGuard state = shared_->read("~truncate");
       fragg::Map sub = copyOf(state->map, region, &st);
       sub.setRegion(region);
       sub.save(path);
       res.known_voxels = state->map.knownVoxelCount();
     } else {
       // The copy is written first: a failed write leaves the map as it was.
-      const SharedMap::WriteGuard state = shared_->write();
+      const SharedMap::WriteGuard state = shared_->write("~truncate");
       fragg::Map sub = copyOf(state->map, region, &st);
       sub.setRegion(region);
       sub.save(path);
@@ -139,7 +139,7 @@ bool SubmapServices::merge(fragg_map::Merge::Request& req, fragg_map::Merge::Res
     runtime.backend = fragg::Backend::kCpu;
     const fragg::Map sub = fragg::Map::load(path, runtime);  // validates the file
     const auto t0 = Clock::now();
-    const SharedMap::WriteGuard state = shared_->write();
+    const SharedMap::WriteGuard state = shared_->write("~merge");
     fragg::SubmapStats st;
     try {
       st = state->map.merge(sub, mode, T_map_sub);  // checks resolution and model first
