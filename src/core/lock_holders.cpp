@@ -1,10 +1,10 @@
 #include "fragg_map/lock_holders.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cstring>
 #include <utility>
-
-#include <fmt/format.h>
 
 namespace fragg {
 
@@ -33,8 +33,8 @@ HolderTicket LockHolders::enter(const char* who, bool writes) {
 void LockHolders::leave(uint64_t id) {
   const Clock::time_point t = Clock::now();
   std::lock_guard<std::mutex> guard(mutex_);
-  const auto it = std::find_if(holding_.begin(), holding_.end(),
-                               [id](const Entry& e) { return e.id == id; });
+  const auto it =
+      std::find_if(holding_.begin(), holding_.end(), [id](const Entry& e) { return e.id == id; });
   if (it == holding_.end()) return;
   left_[departures_ % kKept] = {it->who, it->writes,
                                 std::chrono::duration<double, std::milli>(t - it->since).count()};
@@ -70,7 +70,8 @@ std::vector<LockHolder> LockHolders::now() const {
   std::vector<LockHolder> out;
   out.reserve(holding_.size());
   for (const Entry& e : holding_)
-    out.push_back({e.who, e.writes, std::chrono::duration<double, std::milli>(t - e.since).count()});
+    out.push_back(
+        {e.who, e.writes, std::chrono::duration<double, std::milli>(t - e.since).count()});
   return out;
 }
 
@@ -89,7 +90,8 @@ std::string describeLockHolders(const std::vector<LockHolder>& holders, size_t m
     else
       ++it->count, it->ms += h.held_ms;
   }
-  std::stable_sort(sums.begin(), sums.end(), [](const Sum& a, const Sum& b) { return a.ms > b.ms; });
+  std::stable_sort(sums.begin(), sums.end(),
+                   [](const Sum& a, const Sum& b) { return a.ms > b.ms; });
   std::string out;
   for (size_t i = 0; i < sums.size() && i < most; ++i) {
     if (!out.empty()) out += "; ";
