@@ -82,9 +82,10 @@ class MapPublishers {
                       bool full, double now_s, double period_s);
   /// occupied_cells, octomap_point_cloud_centers and projected_map from the cache as it is.
   void sendMapOutputs(const ::ros::Time& stamp, bool cloud_wanted, bool grid_wanted);
-  /// On a map whose blocks live on a device (CUDA), the first call makes the mask mirror that
-  /// the output cache and both marker ledgers read from then on (MaskMirror: their take-ins
-  /// copy the changed blocks' masks, not the blocks); nothing on a CPU map.
+  /// On a map whose blocks live on a device (CUDA), the first call (the start-up publication)
+  /// makes and syncs the mask mirror that the output cache and both marker ledgers read from
+  /// then on (MaskMirror: their take-ins copy the changed blocks' masks, not the blocks);
+  /// nothing on a CPU map.
   void mirrorFor(const fragg::Map& map);
   /// Paced outputs on a CUDA map take a period's changes in at once: the mask mirror's sync of
   /// a second's changed blocks (~90 k at W1 5 cm: 11-17 ms on an H100) was the node's p99
