@@ -136,19 +136,12 @@ MapOutputCache::PieceDelta MapOutputCache::computePiece(const fragg::Map& map, c
     band_free |= f;
   }
   if (shown != piece->shown) {
-    const int64_t before = static_cast<int64_t>(piece->xyz.size() / 3);
+    const int64_t before = piece->shown_cells;
     piece->shown = shown;
-    piece->xyz.clear();
-    for (int z = 0; z < fragg::kBlockSize; ++z) {
-      for (uint64_t m = shown[z]; m; m &= m - 1) {
-        const Eigen::Vector3d p_map =
-            map.centerOf(fragg::voxelKeyOf(key, 64 * z + __builtin_ctzll(m)));
-        piece->xyz.insert(piece->xyz.end(),
-                          {static_cast<float>(p_map.x()), static_cast<float>(p_map.y()),
-                           static_cast<float>(p_map.z())});
-      }
-    }
-    delta.occupied = static_cast<int64_t>(piece->xyz.size() / 3) - before;
+    uint32_t cells = 0;
+    for (const uint64_t word : shown) cells += static_cast<uint32_t>(__builtin_popcountll(word));
+    piece->shown_cells = cells;
+    delta.occupied = static_cast<int64_t>(cells) - before;
   }
   // A column is occupied where a cell of it is, else free where one is (the grid's values).
   band_free &= ~band_occupied;
@@ -241,7 +234,7 @@ void MapOutputCache::mergeBounds(Column* col) const {
 
 void MapOutputCache::relist(uint32_t i) {
   Piece& piece = pieces_[i];
-  const bool has_cells = !piece.xyz.empty();
+  const bool has_cells = piece.shown_cells > 0;
   if (has_cells == (piece.listed >= 0)) return;
   if (!has_cells) return unlist(i);
   piece.listed = static_cast<int64_t>(with_cells_.size());
@@ -291,7 +284,7 @@ void MapOutputCache::dropPiece(uint32_t i) {
   if (i >= pieces_.size() || pieces_[i].column == kNoColumn) return;
   regather();  // with_cells_ changes
   Piece& piece = pieces_[i];
-  occupied_cells_ -= piece.xyz.size() / 3;
+  occupied_cells_ -= piece.shown_cells;
   unlist(i);
   Column& col = columns_[piece.column];
   countPiece(&col, piece.band_occupied, piece.band_free, 0, 0);
@@ -380,6 +373,7 @@ OutputCacheUpdate MapOutputCache::refresh(const fragg::Map& map, double now_s, d
   const uint64_t revision = map.revision();
   out.full = !valid_ || map.viewEpoch() != epoch_ || revision < revision_ ||
              map.resolution() != resolution_m_;
+  resolution_m_ = map.resolution();  // the gathered centres' (writeCenters)
   // Blocks come with their masks where the change log lists every change of outputs (kMasks);
   // a mirror serves only then (it holds no cells to list kState changes by).
   const bool masks_serve =
@@ -511,7 +505,6 @@ void MapOutputCache::refreshOver(const fragg::Map& map, const View& blocks,
     markUndrawn(c);
   }
   out.columns_merged += dirty_.size();
-  resolution_m_ = map.resolution();  // refreshGrid's octomap bounds need it
   refreshGrid(out.full, with_grid);
   valid_ = true;
   if (list) revision_ = revision;  // the changes up to it are in the pieces or queued
@@ -657,12 +650,7 @@ const sensor_msgs::PointCloud2& MapOutputCache::occupiedCloud(const std::string&
   }
   data.resize(bytes);
   uint8_t* dst = data.data();
-  for (const uint32_t i : with_cells_) {
-    const std::vector<float>& xyz = pieces_[i].xyz;
-    const size_t piece_bytes = xyz.size() * sizeof(float);
-    std::memcpy(dst, xyz.data(), piece_bytes);
-    dst += piece_bytes;
-  }
+  for (const uint32_t i : with_cells_) dst = writeCenters(pieces_[i], dst);
   cloud_msg_.data = std::move(data);
   return cloud_msg_;
 }
@@ -672,12 +660,27 @@ void MapOutputCache::gatherCloud(size_t pieces) {
       cloud_wire_.reserve(occupied_cells_ * 3 * sizeof(float), gathered_bytes_) + gathered_bytes_;
   const size_t end = std::min(with_cells_.size(), gathered_ + pieces);
   for (; gathered_ < end; ++gathered_) {
-    const std::vector<float>& xyz = pieces_[with_cells_[gathered_]].xyz;
-    const size_t bytes = xyz.size() * sizeof(float);
-    std::memcpy(payload, xyz.data(), bytes);
-    payload += bytes;
-    gathered_bytes_ += bytes;
+    uint8_t* const written = writeCenters(pieces_[with_cells_[gathered_]], payload);
+    gathered_bytes_ += static_cast<size_t>(written - payload);
+    payload = written;
   }
+}
+
+uint8_t* MapOutputCache::writeCenters(const Piece& piece, uint8_t* dst) const {
+  // Map::centerOf's arithmetic ((key + 0.5) * resolution in double, then float), in the
+  // piece's cell order (x + 8 y + 64 z).
+  const fragg::BlockKey& key = piece.key;
+  for (int z = 0; z < fragg::kBlockSize; ++z) {
+    for (uint64_t m = piece.shown[z]; m; m &= m - 1) {
+      const fragg::VoxelKey k = fragg::voxelKeyOf(key, 64 * z + __builtin_ctzll(m));
+      const float p[3] = {static_cast<float>((k.x + 0.5) * resolution_m_),
+                          static_cast<float>((k.y + 0.5) * resolution_m_),
+                          static_cast<float>((k.z + 0.5) * resolution_m_)};
+      std::memcpy(dst, p, sizeof(p));
+      dst += sizeof(p);
+    }
+  }
+  return dst;
 }
 
 PreserializedCloud MapOutputCache::occupiedCloudWire(const std::string& frame_id,

@@ -158,15 +158,16 @@ class MapOutputCache {
   struct Piece {
     fragg::BlockKey key;
     /// The occupied cells shown (in the band, speckles left out when hidden), one word per z
-    /// layer: xyz is rebuilt only when these change.
+    /// layer: the occupied cloud's points, their centres written where it is gathered (no
+    /// per-block list of centres kept).
     std::array<uint64_t, fragg::kBlockSize> shown{};
     /// The block's columns in the height band (bit lx + 8 ly): some cell occupied, some free.
     uint64_t band_occupied = 0, band_free = 0;
     /// Observed cells' xy key bounds within the block (lo > hi: none observed).
     int8_t min_x = 0, max_x = -1, min_y = 0, max_y = -1;
     uint32_t column = kNoColumn;  ///< its place in columns_; kNoColumn: no piece here
-    int64_t listed = -1;          ///< its place in with_cells_; -1 while xyz is empty
-    std::vector<float> xyz;       ///< the shown cells' centres
+    int64_t listed = -1;          ///< its place in with_cells_; -1 while none is shown
+    uint32_t shown_cells = 0;     ///< cells set in `shown`
   };
   /// What recomputing a piece changed.
   struct PieceDelta {
@@ -271,6 +272,9 @@ class MapOutputCache {
   void drawColumn(const Column& col);
   /// Gathers the next `pieces` of with_cells_ into the next cloud message (gathered_ on).
   void gatherCloud(size_t pieces);
+  /// Writes the centres of `piece`'s shown cells at `dst` (packed float32 x, y, z, as
+  /// Map::centerOf); returns the end.
+  uint8_t* writeCenters(const Piece& piece, uint8_t* dst) const;
   /// The pieces changed: the next cloud message is gathered from the start.
   void regather() { gathered_ = 0, gathered_bytes_ = 0; }
 
