@@ -215,6 +215,20 @@ TEST(CliPaging, StoresAreReadWhereMapsAreAndBadFlagsAreRefused) {
   EXPECT_NE(out.find("\"agreement_in_either\":1.0"), std::string::npos) << out;
   ASSERT_EQ(runCli(dir, "stats '" + dir + "/s.lmdb'", &out), 0) << out;
   EXPECT_NE(out.find("scans        12"), std::string::npos) << out;
+  // A paged build's malloc settings (the default) or glibc's own (--heap-defaults): the same
+  // map file, byte for byte, and the in-memory build's.
+  for (const char* heap : {"h1", "h2"}) {
+    const std::string flag = std::string(heap) == "h1" ? " --heap-defaults" : "";
+    ASSERT_EQ(runCli(dir,
+                     "build " + common + " --page-store '" + dir + "/" + heap +
+                         ".lmdb' --page-budget-mb 10 --page-radius 3 -o '" + dir + "/" + heap +
+                         ".fgm'" + flag,
+                     &out),
+              0)
+        << out;
+  }
+  EXPECT_EQ(readBytes(dir + "/h1.fgm"), readBytes(dir + "/h2.fgm"));
+  EXPECT_EQ(readBytes(dir + "/h2.fgm"), readBytes(dir + "/mem.fgm"));
 
   EXPECT_EQ(runCli(dir, "build " + common + " --page-budget-mb 5 -o '" + dir + "/x.fgm'", &out), 2);
   EXPECT_NE(out.find("--page-store"), std::string::npos) << out;

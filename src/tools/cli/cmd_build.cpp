@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/paged_heap.h"
 #include "cli/progress.h"
 #include "fragg_map/atomic_file.h"
 #include "fragg_map/errors.h"
@@ -100,6 +101,7 @@ struct BuildOptions {
   DynamicParams dynamic;
   std::string dynamic_rule = "pass-through";  ///< DynamicParams::rule by name
   std::string page_store;                     ///< out-of-core paging: the store is the map
+  bool heap_defaults = false;                 ///< paged: leave malloc's settings as they are
   PagingPolicy paging;
 };
 
@@ -196,6 +198,10 @@ SensorModel sensorFrom(const BuildOptions& o) {
 }
 
 void runBuild(const BuildOptions& o) {
+  // Before any thread or buffer: a paged build's heap in one arena, large buffers mapped apart.
+  if (!o.page_store.empty() && !o.heap_defaults && !compactHeapForPaging())
+    std::fprintf(stderr,
+                 "fragg_map: note: malloc's settings for paging not applied (not glibc?)\n");
   MapParams params;
   SensorModel sensor;
   // The core checks the values; its messages come back naming the flags.
@@ -599,6 +605,9 @@ void addBuildCommand(CLI::App& app) {
                 "Out-of-core paging: the store that holds the map (.lmdb LMDB, .db SQLite; other "
                 "names: LMDB where built, else SQLite); an "
                 "existing store is continued (its scans are the input's first scans)");
+  c->add_flag("--heap-defaults", o->heap_defaults,
+              "Page store: leave malloc's settings as they are (by default a paged build keeps one "
+              "arena and maps buffers of 1 MiB or more apart: a smaller peak RSS)");
   c->add_option("--page-budget-mb", o->paging.budget_mb,
                 "Resident blocks' memory above which blocks are paged out (MB; 0 = never)")
       ->capture_default_str();
