@@ -4,6 +4,7 @@
 // simulated LiDAR clouds against the spacing they were made with.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -240,6 +241,56 @@ TEST(BeamSpacing, OfSimulatedLidars) {
   std::vector<Eigen::Vector3f> nan(5000, Eigen::Vector3f::Constant(NAN));
   EXPECT_FALSE(estimateBeamSpacing(nan).has_value());
   EXPECT_FALSE(BeamSpacingTracker().estimate().has_value());
+}
+
+// The estimate against a plain reference on the same samples: every stride-th point with a
+// finite position, 1 m away or more, sorted by (azimuth wedge of 1 degree, elevation); the
+// median of the steps between neighbours of a wedge that are 0.02 degrees apart or more; the
+// 99th-percentile range. The estimate (samples in parallel, a sort per wedge) gives the same
+// doubles, with NaNs and points too near mixed in.
+TEST(BeamSpacing, EqualsAPlainSortOfTheSamePoints) {
+  sim::Scene scene = sim::loadScene(std::string(FRAGG_SOURCE_DIR) + "/config/scenes/campus.json");
+  const geometry::MeshBvh bvh(std::move(scene.mesh));
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(-30.0, 0.0, 2.7);
+  sim::LidarSpec spec;
+  spec.beams = 128;
+  spec.azimuth_steps = 1406;
+  spec.max_range_m = 60.0;
+  spec.range_noise_m = 0.02;
+  spec.dropout = 0.1;
+  std::vector<Eigen::Vector3f> points = sim::simulateLidar(bvh, spec, T, 3, 11).points_S;
+  for (size_t i = 0; i < points.size(); i += 101) points[i] = Eigen::Vector3f::Constant(NAN);
+  for (size_t i = 50; i < points.size(); i += 211) points[i] = Eigen::Vector3f(0.3f, 0.2f, 0.1f);
+  ASSERT_GT(points.size(), size_t{60000});
+
+  const size_t stride = std::max<size_t>(1, points.size() / 60000);
+  std::vector<std::pair<int32_t, double>> samples;
+  std::vector<double> ranges;
+  for (size_t i = 0; i < points.size(); i += stride) {
+    const Eigen::Vector3d p = points[i].cast<double>();
+    if (!p.allFinite()) continue;
+    const double horizontal = std::hypot(p.x(), p.y()), range = p.norm();
+    if (range < 1.0 || horizontal <= 0.0) continue;
+    samples.emplace_back(int32_t((std::atan2(p.y(), p.x()) + kPi) / (kPi / 180.0)),
+                         std::atan2(p.z(), horizontal));
+    ranges.push_back(range);
+  }
+  std::sort(samples.begin(), samples.end());
+  std::vector<double> steps;
+  for (size_t i = 1; i < samples.size(); ++i) {
+    if (samples[i].first != samples[i - 1].first) continue;
+    const double step = samples[i].second - samples[i - 1].second;
+    if (step >= 0.02 * (kPi / 180.0)) steps.push_back(step);
+  }
+  std::nth_element(steps.begin(), steps.begin() + ptrdiff_t(steps.size() / 2), steps.end());
+  const size_t far = std::min(ranges.size() - 1, size_t(0.99 * double(ranges.size())));
+  std::nth_element(ranges.begin(), ranges.begin() + ptrdiff_t(far), ranges.end());
+
+  const auto b = estimateBeamSpacing(points);
+  ASSERT_TRUE(b.has_value());
+  EXPECT_EQ(b->angle_rad, steps[steps.size() / 2]);
+  EXPECT_EQ(b->range_m, ranges[far]);
 }
 
 }  // namespace
