@@ -26,6 +26,12 @@ struct BlockKey {
   FRAGG_HD bool operator!=(const BlockKey& o) const { return !(*this == o); }
 };
 
+/// The centre of voxel index `k` along one axis, metres: (k + 0.5) * resolution, in double
+/// (Map::centerOf per axis; the server's occupied cloud writes these as float).
+FRAGG_HD double voxelCenterM(int32_t k, double resolution_m) {
+  return (static_cast<double>(k) + 0.5) * resolution_m;
+}
+
 /// Block holding a voxel (floor division by 8, right for negative keys).
 FRAGG_HD BlockKey blockKeyOf(const VoxelKey& v) {
   return {v.x >> kBlockBits, v.y >> kBlockBits, v.z >> kBlockBits};

@@ -432,8 +432,8 @@ VoxelKey Map::keyOf(const Eigen::Vector3d& p_map) const {
 }
 
 Eigen::Vector3d Map::centerOf(const VoxelKey& key) const {
-  return (Eigen::Vector3d(key.x, key.y, key.z) + Eigen::Vector3d::Constant(0.5)) *
-         params_.resolution_m;
+  const double r = params_.resolution_m;
+  return {voxelCenterM(key.x, r), voxelCenterM(key.y, r), voxelCenterM(key.z, r)};
 }
 
 void Map::fallBackToCpu(const std::string& why) {

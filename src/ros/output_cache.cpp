@@ -667,15 +667,14 @@ void MapOutputCache::gatherCloud(size_t pieces) {
 }
 
 uint8_t* MapOutputCache::writeCenters(const Piece& piece, uint8_t* dst) const {
-  // Map::centerOf's arithmetic ((key + 0.5) * resolution in double, then float), in the
-  // piece's cell order (x + 8 y + 64 z).
+  // Map::centerOf's (voxelCenterM) as float, in the piece's cell order (x + 8 y + 64 z).
   const fragg::BlockKey& key = piece.key;
   for (int z = 0; z < fragg::kBlockSize; ++z) {
     for (uint64_t m = piece.shown[z]; m; m &= m - 1) {
       const fragg::VoxelKey k = fragg::voxelKeyOf(key, 64 * z + __builtin_ctzll(m));
-      const float p[3] = {static_cast<float>((k.x + 0.5) * resolution_m_),
-                          static_cast<float>((k.y + 0.5) * resolution_m_),
-                          static_cast<float>((k.z + 0.5) * resolution_m_)};
+      const float p[3] = {static_cast<float>(fragg::voxelCenterM(k.x, resolution_m_)),
+                          static_cast<float>(fragg::voxelCenterM(k.y, resolution_m_)),
+                          static_cast<float>(fragg::voxelCenterM(k.z, resolution_m_))};
       std::memcpy(dst, p, sizeof(p));
       dst += sizeof(p);
     }

@@ -202,11 +202,20 @@ TEST(CoarseFrontiers, BoxCopyAnswersAsTheWholeCopy) {
 // Simulated spinning LiDARs in the campus scene: the estimate is the spacing they were made
 // with (beams evenly spread), with returns dropped and range noise; the far range is near the
 // sensor's reach. Too few points, or none, give no estimate.
-TEST(BeamSpacing, OfSimulatedLidars) {
-  sim::Scene scene = sim::loadScene(std::string(FRAGG_SOURCE_DIR) + "/config/scenes/campus.json");
-  const geometry::MeshBvh bvh(std::move(scene.mesh));
+// The campus scene's mesh and a LiDAR pose in it (-30, 0, 2.7), for the beam-spacing tests.
+struct CampusLidar {
+  CampusLidar()
+      : bvh(sim::loadScene(std::string(FRAGG_SOURCE_DIR) + "/config/scenes/campus.json").mesh) {
+    T.translation() = Eigen::Vector3d(-30.0, 0.0, 2.7);
+  }
+  geometry::MeshBvh bvh;
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.translation() = Eigen::Vector3d(-30.0, 0.0, 2.7);
+};
+
+TEST(BeamSpacing, OfSimulatedLidars) {
+  const CampusLidar campus;
+  const geometry::MeshBvh& bvh = campus.bvh;
+  const Eigen::Isometry3d& T = campus.T;
   BeamSpacingTracker tracker;
   for (const int beams : {32, 64, 128}) {
     sim::LidarSpec spec;
@@ -249,17 +258,15 @@ TEST(BeamSpacing, OfSimulatedLidars) {
 // 99th-percentile range. The estimate (samples in parallel, a sort per wedge) gives the same
 // doubles, with NaNs and points too near mixed in.
 TEST(BeamSpacing, EqualsAPlainSortOfTheSamePoints) {
-  sim::Scene scene = sim::loadScene(std::string(FRAGG_SOURCE_DIR) + "/config/scenes/campus.json");
-  const geometry::MeshBvh bvh(std::move(scene.mesh));
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.translation() = Eigen::Vector3d(-30.0, 0.0, 2.7);
+  const CampusLidar campus;
   sim::LidarSpec spec;
   spec.beams = 128;
   spec.azimuth_steps = 1406;
   spec.max_range_m = 60.0;
   spec.range_noise_m = 0.02;
   spec.dropout = 0.1;
-  std::vector<Eigen::Vector3f> points = sim::simulateLidar(bvh, spec, T, 3, 11).points_S;
+  std::vector<Eigen::Vector3f> points =
+      sim::simulateLidar(campus.bvh, spec, campus.T, 3, 11).points_S;
   for (size_t i = 0; i < points.size(); i += 101) points[i] = Eigen::Vector3f::Constant(NAN);
   for (size_t i = 50; i < points.size(); i += 211) points[i] = Eigen::Vector3f(0.3f, 0.2f, 0.1f);
   ASSERT_GT(points.size(), size_t{60000});

@@ -143,7 +143,7 @@ struct ServerParams {
   /// mirror_every_cloud: on a CUDA map with paced outputs, the outputs' mask mirror takes every
   /// cloud's changed blocks in (after each cloud, that cloud's only) instead of a period's when
   /// the markers take the changes in. false (default): once a period, which made fewer clouds
-  /// late on an H100 (W1 5 cm at 10 Hz: 49 over 20 ms against 130; docs/benchmarks.md).
+  /// late on an H100 (W1 5 cm at 10 Hz, after the first five: 49 over 20 ms against 130).
   bool mirror_every_cloud = false;
   /// trace_csv: a file that gets one row per cloud received (its outcome and where its time
   /// went: queue, conversion, tf, insertion, outputs); empty: none.

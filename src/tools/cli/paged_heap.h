@@ -10,7 +10,7 @@ namespace fragg::cli {
 /// allocations of 1 MiB or more mapped on their own at a fixed threshold (freed, they go back
 /// to the system; glibc otherwise raises the threshold as large blocks are freed). W4 paged on
 /// CUDA (H100, 16 threads; the same two settings through MALLOC_ARENA_MAX and
-/// MALLOC_MMAP_THRESHOLD_): peak RSS 1,168 -> 1,034 MiB, the loop as fast; on the 2-core
+/// MALLOC_MMAP_THRESHOLD_): peak RSS 1,168 -> 1,034 MiB, loop 3.52 -> 3.66 s; on the 2-core
 /// machine (CPU, 2 threads) 972 / 943 -> 887 / 948 MiB, alternated (docs/benchmarks.md). False
 /// where malloc refuses (not glibc): the build goes on with its defaults.
 bool compactHeapForPaging();
