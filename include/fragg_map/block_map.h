@@ -137,7 +137,7 @@ class BlockMap {
     BlockMeta& m = meta_[i];
     if (m.masks_at >= revision) return;
     m.masks_at = revision;
-    changes_.record(revision, m.key);
+    changes_.record(revision, m.key, i);
   }
   /// Keys of the live blocks whose masks changed after map revision `revision`, from the change
   /// log (no walk over the map); false (nothing written) when the log no longer reaches back
@@ -184,6 +184,9 @@ class BlockMap {
  private:
   /// Puts slot `i` on the free list, its metadata marked free (kFreedSlotKey, no stamps).
   void freeSlot(BlockIndex i);
+  /// masksChangedSince by the slots the change log recorded (no look-up by key): false (`out`
+  /// partly written) when a block recorded since was erased; the caller looks the keys up.
+  bool slotsOfRecordsServe(uint64_t revision, std::vector<BlockIndex>* out) const;
   struct SuperKeyHash {
     size_t operator()(const BlockKey& k) const noexcept { return BlockKeyHash()(k); }
   };

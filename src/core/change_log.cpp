@@ -6,13 +6,13 @@
 
 namespace fragg {
 
-void BlockChangeLog::record(uint64_t revision, const BlockKey& key) {
+void BlockChangeLog::record(uint64_t revision, const BlockKey& key, uint32_t slot) {
   if (revision <= dropped_up_to_) return;  // older than what the log answers for anyway
   if (records_.size() >= capacity_) dropOldest();
   if (sorted_up_to_ == records_.size() &&
       (records_.empty() || records_.back().revision <= revision))
     ++sorted_up_to_;  // still in revision order
-  records_.push_back({revision, key});
+  records_.push_back({revision, key, slot});
 }
 
 void BlockChangeLog::dropOldest() {
@@ -34,13 +34,18 @@ void BlockChangeLog::dropOldest() {
   sorted_up_to_ = records_.size();
 }
 
-std::vector<BlockKey> BlockChangeLog::keysAfter(uint64_t revision) const {
+size_t BlockChangeLog::firstSortedAfter(uint64_t revision) const {
   // The records in revision order are searched, the rest (a device's write-back may bring
   // older revisions) scanned: a question about the last scan reads that scan's records only.
   const auto sorted_end = records_.begin() + static_cast<std::ptrdiff_t>(sorted_up_to_);
   const auto first =
       std::upper_bound(records_.begin(), sorted_end, revision,
                        [](uint64_t r, const Record& rec) { return r < rec.revision; });
+  return static_cast<size_t>(first - records_.begin());
+}
+
+std::vector<BlockKey> BlockChangeLog::keysAfter(uint64_t revision) const {
+  const auto first = records_.begin() + static_cast<std::ptrdiff_t>(firstSortedAfter(revision));
   std::vector<BlockKey> out;
   // One revision in order (a question about the last scan): each block is recorded once.
   if (sorted_up_to_ == records_.size() &&
