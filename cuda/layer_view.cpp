@@ -1,6 +1,7 @@
 #include "layer_view.h"
 
 #include "cuda_stream.h"
+#include "fragg_map/internal/reserve_headroom.h"
 
 namespace fragg::cuda {
 
@@ -56,6 +57,8 @@ void LayerViews::masksChangedSince(const DeviceBlockCache& cache, uint64_t revis
   changed_masks_.reserve(n);
   launchGatherMasks(slots, changed_slots_.get(), n, changed_keys_.get(), changed_masks_.get(),
                     stream_);
+  reserveWithHeadroom(keys, n);
+  reserveWithHeadroom(masks, n);
   keys->resize(n);
   masks->resize(n);
   copyToHost(keys->data(), changed_keys_.get(), n, stream_);

@@ -15,6 +15,7 @@
 #include "fragg_map/internal/height_filter.h"
 #include "fragg_map/internal/no_return_beams.h"
 #include "fragg_map/internal/pager.h"
+#include "fragg_map/internal/reserve_headroom.h"
 #include "fragg_map/internal/rigid_pose.h"
 #include "fragg_map/log.h"
 
@@ -612,6 +613,8 @@ bool Map::masksChangedSince(uint64_t revision, std::vector<BlockKey>* keys,
   }
   if (keys->empty()) {  // every changed block is on the host (a CPU map): copied in parallel
     const int64_t n = static_cast<int64_t>(host.size());
+    reserveWithHeadroom(keys, host.size());
+    reserveWithHeadroom(masks, host.size());
     keys->resize(host.size());
     masks->resize(host.size());
 #pragma omp parallel for schedule(static) if (n > 4096)
@@ -621,8 +624,8 @@ bool Map::masksChangedSince(uint64_t revision, std::vector<BlockKey>* keys,
     }
     return true;
   }
-  keys->reserve(keys->size() + host.size());
-  masks->reserve(masks->size() + host.size());
+  reserveWithHeadroom(keys, keys->size() + host.size());
+  reserveWithHeadroom(masks, masks->size() + host.size());
   for (const BlockIndex b : host) {
     const BlockKey& k = blocks_.meta(b).key;
     if (listed.size() != 0 && listed.find(k) != BlockKeyTable::kNone) continue;

@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cstring>
 
+#include "fragg_map/internal/reserve_headroom.h"
+
 namespace fragg::ros {
 namespace {
 
@@ -56,10 +58,6 @@ void MaskMirror::rebuild(const fragg::Map& map) {
   occupied_at_.clear();
   known_cells_ = 0;
   table_.reserve(slots.size());
-  keys_.reserve(slots.size());
-  masks_.reserve(slots.size());
-  masks_at_.reserve(slots.size());
-  occupied_at_.reserve(slots.size());
   const uint64_t revision = map.revision();
   for (const fragg::BlockIndex s : slots) {
     table_.insert(view.keyAt(s), static_cast<uint32_t>(keys_.size()));
@@ -81,6 +79,7 @@ void MaskMirror::applyListed(uint64_t revision) {
   // the new ones are added after, in the list's order, as one by one.
   const auto started = std::chrono::steady_clock::now();
   const int64_t n = static_cast<int64_t>(listed_keys_.size());
+  reserveWithHeadroom(&listed_slots_, listed_keys_.size());
   listed_slots_.resize(listed_keys_.size());
   int64_t known_change = 0;
   int64_t added = 0;
@@ -152,7 +151,7 @@ std::vector<fragg::BlockIndex> MaskMirror::allSlots() const {
 void MaskMirror::changedSlotsSince(uint64_t revision, fragg::BlockChange what,
                                    std::vector<fragg::BlockIndex>* out) const {
   out->clear();
-  const std::vector<uint64_t>& stamps =
+  const ChunkedArray<uint64_t>& stamps =
       what == fragg::BlockChange::kOccupied ? occupied_at_ : masks_at_;
   for (size_t i = 0; i < stamps.size(); ++i)
     if (stamps[i] > revision) out->push_back(static_cast<fragg::BlockIndex>(i));

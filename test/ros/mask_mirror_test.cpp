@@ -66,6 +66,35 @@ MasksByKey masksByKey(const fragg::Map& map) {
   return out;
 }
 
+// The mirror's arrays grow by chunks: what they hold keeps its value and its address across
+// growth (no copy), new elements are value-initialised, also after a shrink.
+TEST(ChunkedArray, GrowsWithoutMovingWhatItHolds) {
+  ChunkedArray<uint64_t, 4> a;  // 16 elements a chunk
+  std::vector<const uint64_t*> where;
+  for (uint64_t i = 0; i < 100; ++i) {
+    a.push_back(i * 7 + 1);
+    where.push_back(&a[i]);
+  }
+  a.resize(1000);
+  ASSERT_EQ(a.size(), 1000u);
+  for (uint64_t i = 0; i < 100; ++i) {
+    EXPECT_EQ(a[i], i * 7 + 1);
+    EXPECT_EQ(&a[i], where[i]) << i;
+  }
+  for (size_t i = 100; i < 1000; ++i) EXPECT_EQ(a[i], 0u) << i;
+  a[999] = 5;
+  a[40] = 9;
+  a.resize(30);  // shrink: what comes back when it grows again is zero
+  a.resize(1000);
+  EXPECT_EQ(a[29], 29u * 7 + 1);
+  EXPECT_EQ(a[40], 0u);
+  EXPECT_EQ(a[999], 0u);
+  a.clear();
+  EXPECT_EQ(a.size(), 0u);
+  a.push_back(3);
+  EXPECT_EQ(a[0], 3u);
+}
+
 TEST(MaskMirror, FollowsInsertionsAndEditsFromTheChangedBlockList) {
   fragg::Map map(test::cpuParams(0.1));
   MaskMirror mirror;

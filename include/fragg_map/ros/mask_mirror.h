@@ -17,6 +17,7 @@
 #include "fragg_map/block_key_table.h"
 #include "fragg_map/block_view.h"
 #include "fragg_map/map.h"
+#include "fragg_map/ros/chunked_array.h"
 #include "fragg_map/state_masks.h"
 
 namespace fragg::ros {
@@ -106,10 +107,11 @@ class MaskMirror {
   uint64_t epoch_ = 0;
   double resolution_m_ = 0.0;
   fragg::BlockKeyTable table_;  ///< key -> slot
-  std::vector<fragg::BlockKey> keys_;
-  std::vector<fragg::BlockStateMasks> masks_;
-  std::vector<uint64_t> masks_at_;     ///< revision of the sync that last changed the masks
-  std::vector<uint64_t> occupied_at_;  ///< the same for the occupied cells
+  // By slot; they grow in chunks (a sync that adds blocks copies none of those held).
+  ChunkedArray<fragg::BlockKey> keys_;
+  ChunkedArray<fragg::BlockStateMasks> masks_;
+  ChunkedArray<uint64_t> masks_at_;     ///< revision of the sync that last changed the masks
+  ChunkedArray<uint64_t> occupied_at_;  ///< the same for the occupied cells
   // The changed-block list's buffers, kept between syncs (their pages stay resident).
   std::vector<fragg::BlockKey> listed_keys_;
   std::vector<fragg::BlockStateMasks> listed_masks_;
