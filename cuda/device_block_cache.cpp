@@ -181,6 +181,25 @@ void DeviceBlockCache::sync(BlockMap& blocks) {
   any_dirty_ = false;
 }
 
+bool DeviceBlockCache::syncSome(BlockMap& blocks, size_t max_blocks) {
+  if (!any_dirty_) return false;
+  max_blocks = std::max<size_t>(max_blocks, 1);
+  const uint8_t* dirty_flags = downloadDirtyFlags();
+  std::vector<int32_t> dirty;
+  bool more = false;
+  for (int32_t s = 0; s < pool_.capacity(); ++s) {
+    if (!dirty_flags[s]) continue;
+    if (dirty.size() == max_blocks) {
+      more = true;
+      break;
+    }
+    dirty.push_back(s);
+  }
+  writeBack(dirty, blocks);  // the download clears their dirty flags
+  if (!more) any_dirty_ = false;
+  return more;
+}
+
 void DeviceBlockCache::invalidate(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) {
   sync(blocks);  // device-only blocks get their host blocks (and keys) here
   std::vector<int32_t> inside;

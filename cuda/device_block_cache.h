@@ -27,6 +27,7 @@ class DeviceBlockCache : public BlockCache {
   void ensureResident(const std::vector<BlockKey>& keys, BlockMap& blocks) override;
   void ensureResident(const BlockKey& lo, const BlockKey& hi, BlockMap& blocks) override;
   void sync(BlockMap& blocks) override;
+  bool syncSome(BlockMap& blocks, size_t max_blocks) override;
   bool needsSync() const override { return any_dirty_; }
   size_t blocksNotInHostMap() const override {
     return static_cast<size_t>(pool_.table().deviceOnlyCount());

@@ -164,6 +164,16 @@ class Map {
   /// take-ins: a write-back of every changed block at every cloud cost a CUDA map's markers
   /// ~53 ms a cloud). Hold the map's read lock.
   [[nodiscard]] BlockView hostBlockView() const;
+  /// Whether a device holds changes the host's blocks lack (hostBlockView() shows them older;
+  /// blockView() writes them back first). False on a CPU map.
+  [[nodiscard]] bool deviceChangesPending() const;
+  /// Writes back at most `max_blocks` (>= 1) of the blocks a device changed since the last
+  /// write-back; true when more are left. For a reader about to read a CUDA map's changes of a
+  /// long stretch (the frontier topics' mirror, after a frontier update of seconds): the whole
+  /// write-back in one blockView() held insertion back for ~0.4 s on the GPU machine; in
+  /// pieces, each under its own write lock, insertion waits for one piece at most. Hold the
+  /// map's write lock (host blocks are made and written: no reader may hold a view).
+  bool writeBackSome(size_t max_blocks);
   /// Calls fn(key, block) for every block, in unspecified order.
   void forEachBlock(const BlockVisitor& fn) const { blockView().forEach(fn); }
   /// Calls fn(key, block) for every block whose key lies in [lo, hi] (inclusive).

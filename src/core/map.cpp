@@ -594,6 +594,16 @@ BlockView Map::hostBlockView() const {
   return BlockView(blocks_);
 }
 
+bool Map::deviceChangesPending() const {
+  std::lock_guard<std::mutex> lock(*sync_mutex_);
+  return backend_->cache().needsSync();
+}
+
+bool Map::writeBackSome(size_t max_blocks) {
+  std::lock_guard<std::mutex> lock(*sync_mutex_);
+  return backend_->cache().syncSome(blocks_, max_blocks);
+}
+
 const char* Map::backendName() const { return backend_->name(); }
 
 bool Map::masksChangedSince(uint64_t revision, std::vector<BlockKey>* keys,

@@ -6,6 +6,7 @@
 // Skipped without a device.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <functional>
 #include <map>
 #include <set>
@@ -160,6 +161,41 @@ TEST(StateMasksGpuTest, HostBlockViewLagsTheDeviceUntilAWriteBack) {
     if (!a || !h || !(*a == *h)) ++differ;
   });
   EXPECT_EQ(differ, 0u);
+}
+
+// Map::writeBackSome (the frontier mirror's write-back in pieces, each under the write lock):
+// pieces until none is left give the host the same blocks, cells, masks and stamps as one
+// whole write-back (blockView) of the same scans on another CUDA map.
+TEST(StateMasksGpuTest, AWriteBackInPiecesEqualsOneWholeWriteBack) {
+  REQUIRE_DEVICE();
+  const std::vector<Input> scans = outAndBack(3, 0.5);
+  Map pieces(paramsFor(Backend::kCuda, 0.05));
+  Map whole(paramsFor(Backend::kCuda, 0.05));
+  ASSERT_STREQ(pieces.backendName(), "cuda") << pieces.backendReason();
+  const SensorModel sensor = SensorModel::autoFromCloud(0.0, 30.0);
+  for (size_t i = 0; i < 2; ++i) {
+    pieces.insert(scans[i].cloud, scans[i].T, sensor);
+    whole.insert(scans[i].cloud, scans[i].T, sensor);
+  }
+  EXPECT_TRUE(pieces.deviceChangesPending());
+  size_t calls = 0;
+  while (pieces.writeBackSome(500)) ASSERT_LT(++calls, 100000u);
+  EXPECT_GT(calls, 2u) << "the scans changed fewer than 1,500 blocks";
+  EXPECT_FALSE(pieces.deviceChangesPending());
+  EXPECT_FALSE(pieces.writeBackSome(500));
+  const BlockView host = pieces.hostBlockView();
+  const BlockView all = whole.blockView();
+  ASSERT_EQ(host.size(), all.size());
+  size_t differ = 0;
+  all.forEach([&](const BlockKey& key, const Block& block) {
+    const Block* h = host.findBlock(key);
+    if (!h || std::memcmp(h, &block, sizeof(Block)) != 0 ||
+        !(*host.findMasks(key) == *all.findMasks(key)))
+      ++differ;
+  });
+  EXPECT_EQ(differ, 0u);
+  for (const BlockChange what : {BlockChange::kAny, BlockChange::kMasks, BlockChange::kOccupied})
+    EXPECT_EQ(host.changedSince(0, what).size(), all.changedSince(0, what).size());
 }
 
 TEST(StateMasksGpuTest, NamedEditsAreByteIdentical) {

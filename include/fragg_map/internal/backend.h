@@ -61,6 +61,10 @@ class BlockCache {
   /// Writes the cache's changes back into `blocks`: after it the host map is complete. Cheap
   /// when nothing changed since the last call.
   virtual void sync(BlockMap& blocks) = 0;
+  /// Writes back at most `max_blocks` (>= 1) of the cache's changed blocks, lowest slots
+  /// first; true when changed blocks are left (more calls, or sync(), write them). For a
+  /// writer that brings the host map up to date in pieces, each under a short lock.
+  virtual bool syncSome(BlockMap& blocks, size_t max_blocks) = 0;
   /// Whether sync() has anything to write back.
   virtual bool needsSync() const = 0;
   /// Blocks the cache holds that the host map lacks (created in the backend's memory since
@@ -87,6 +91,7 @@ class HostBlockCache final : public BlockCache {
   void ensureResident(const std::vector<BlockKey>&, BlockMap&) override {}
   void ensureResident(const BlockKey&, const BlockKey&, BlockMap&) override {}
   void sync(BlockMap&) override {}
+  bool syncSome(BlockMap&, size_t) override { return false; }
   bool needsSync() const override { return false; }
   size_t blocksNotInHostMap() const override { return 0; }
   void invalidate(const BlockKey&, const BlockKey&, BlockMap&) override {}

@@ -42,26 +42,55 @@ void ObservedMirror::clear() {
   epoch_ = 0;
 }
 
-ObservedMirror::RefreshStats ObservedMirror::refresh(const SharedMap& shared) {
+ObservedMirror::RefreshStats ObservedMirror::refresh(SharedMap& shared) {
   RefreshStats stats;
   std::vector<fragg::BlockKey> keys;
   uint64_t revision = 0, epoch = 0;
-  {
-    const SharedMap::ReadGuard state = shared.read("frontier mirror listing");
-    const fragg::Map& map = state->map;
-    ++stats.locks;
-    revision = map.revision();
-    epoch = map.viewEpoch();
-    stats.rebuilt = !copy_ || epoch != epoch_ || map.resolution() != copy_->resolution() ||
-                    !(map.params().occupancy == copy_->params().occupancy);
-    if (stats.rebuilt) {
-      copy_.emplace(copyParams(map));
-      const fragg::BlockView view = map.blockView();
-      keys.reserve(view.size());
-      view.forEach([&](const fragg::BlockKey& key, const fragg::Block&) { keys.push_back(key); });
-    } else if (revision != revision_) {
-      keys = map.changedBlocksSince(revision_, fragg::BlockChange::kAny);
+  // The listing reads the host's blocks (hostBlockView): a device's changes are written back
+  // first, in pieces under the write lock (Map::writeBackSome; a blockView() under the listing's
+  // read lock wrote back every block changed since the last refresh at once: after a frontier
+  // update of ~30 s on the GPU machine, insertion waited 357-472 ms). The listing claims the
+  // revision up to which the host's blocks are complete: the map's when nothing is pending
+  // under its read lock, else the one the last piece left (what insertion changed since is
+  // listed next time, its stamps newer).
+  bool written_back = false;  // the last piece wrote every pending change back
+  uint64_t written_back_at = 0, written_back_epoch = 0;
+  for (size_t piece = 0;; ++piece) {
+    {
+      const SharedMap::ReadGuard state = shared.read("frontier mirror listing");
+      const fragg::Map& map = state->map;
+      const bool pending = map.deviceChangesPending();
+      const bool complete = !pending || (written_back && written_back_epoch == map.viewEpoch());
+      if (complete || piece >= kMaxWriteBackPieces) {
+        ++stats.locks;
+        epoch = map.viewEpoch();
+        stats.rebuilt = !copy_ || epoch != epoch_ || map.resolution() != copy_->resolution() ||
+                        !(map.params().occupancy == copy_->params().occupancy);
+        // Complete up to: the map's revision, the last piece's, or (pieces given up on while
+        // insertion kept changing the map) nothing new: what was written back is listed
+        // again next time.
+        revision = !pending        ? map.revision()
+                   : complete      ? written_back_at
+                   : stats.rebuilt ? 0
+                                   : revision_;
+        const fragg::BlockView view = map.hostBlockView();
+        if (stats.rebuilt) {
+          copy_.emplace(copyParams(map));
+          keys.reserve(view.size());
+          view.forEach(
+              [&](const fragg::BlockKey& key, const fragg::Block&) { keys.push_back(key); });
+        } else if (map.revision() != revision_) {
+          keys = view.changedSince(revision_, fragg::BlockChange::kAny);
+        }
+        break;
+      }
     }
+    if (piece > 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    SharedMap::WriteGuard state = shared.write("frontier mirror write-back");
+    ++stats.write_back_pieces;
+    written_back = !state->map.writeBackSome(kBlocksPerWriteBack);
+    written_back_at = state->map.revision();
+    written_back_epoch = state->map.viewEpoch();
   }
   stats.blocks_listed = keys.size();
   // Store order: neighbouring blocks are copied together.
@@ -83,10 +112,9 @@ ObservedMirror::RefreshStats ObservedMirror::refresh(const SharedMap& shared) {
       stats.complete = false;
       return stats;
     }
-    // The host's blocks as they stand (Map::hostBlockView): the listing's blockView() wrote
-    // a device's changes back, so every listed block is there at least as new as `revision`;
-    // what changed since is listed next time. A write-back per piece (blockView) would cost
-    // a CUDA map's insertion a write-back of its last cloud at every piece.
+    // The host's blocks as they stand (Map::hostBlockView): written back up to `revision`
+    // before the listing, so every listed block is there at least as new as that; what
+    // changed since is listed next time.
     const fragg::BlockView view = map.hostBlockView();
     copy_->writeCells([&](fragg::CellWriter& writer) {
       for (size_t j = first; j < last; ++j)

@@ -20,11 +20,18 @@ class ObservedMirror {
  public:
   /// What one refresh did.
   struct RefreshStats {
-    bool rebuilt = false;      ///< every block copied (the first refresh, a new view epoch)
-    size_t blocks_listed = 0;  ///< blocks changed since the last refresh (all when rebuilt)
-    size_t locks = 0;          ///< read locks taken (one for the listing, one a piece)
-    bool complete = true;      ///< false: the map's view changed mid-way; the next one rebuilds
+    bool rebuilt = false;          ///< every block copied (the first refresh, a new view epoch)
+    size_t blocks_listed = 0;      ///< blocks changed since the last refresh (all when rebuilt)
+    size_t locks = 0;              ///< read locks taken (one for the listing, one a piece)
+    size_t write_back_pieces = 0;  ///< write locks taken to write a device's changes back
+    bool complete = true;          ///< false: the map's view changed mid-way; the next one rebuilds
   };
+
+  /// Blocks a device writes back under one write lock (Map::writeBackSome; ~2.3 KB each).
+  static constexpr size_t kBlocksPerWriteBack = 8192;
+  /// Write-back pieces a refresh takes at most before it lists what the host holds (a map
+  /// that a device changes faster than pieces write back: what is left comes next time).
+  static constexpr size_t kMaxWriteBackPieces = 512;
 
   /// `blocks_per_lock`: blocks copied under one read lock (> 0; 2 KiB each; ~1 us a block).
   explicit ObservedMirror(size_t blocks_per_lock = 2048);
@@ -33,8 +40,9 @@ class ObservedMirror {
   /// revision read at the start, or newer (blocks that change while the pieces are copied are
   /// copied again by the next refresh). A change of the map's view epoch (blocks erased, paged,
   /// a reset or load) rebuilds the copy from every block. Takes the map's read lock, for one
-  /// piece at a time; never the write lock.
-  RefreshStats refresh(const SharedMap& shared);
+  /// piece at a time; on a CUDA map whose device holds changes not written back, first the
+  /// write lock for each piece of that write-back (kBlocksPerWriteBack blocks).
+  RefreshStats refresh(SharedMap& shared);
 
   /// Drops the copy and its memory (as much as the map's observed blocks); the next refresh
   /// rebuilds it.
