@@ -47,11 +47,12 @@ ObservedMirror::RefreshStats ObservedMirror::refresh(SharedMap& shared) {
   std::vector<fragg::BlockKey> keys;
   uint64_t revision = 0, epoch = 0;
   // The listing reads the host's blocks (hostBlockView): a device's changes are written back
-  // first, in pieces under the write lock (Map::writeBackSome; a blockView() under the listing's
-  // read lock wrote back every block changed since the last refresh at once: after a frontier
-  // update of ~30 s on the GPU machine, insertion waited 357-472 ms). The listing claims the
-  // revision up to which the host's blocks are complete: the map's when nothing is pending
-  // under its read lock, else the one the last piece left (what insertion changed since is
+  // first, in pieces under the write lock (Map::writeBackSome). A blockView() under the
+  // listing's read lock wrote back every block changed since the last refresh at once: after a
+  // frontier update of ~28 s, the suspect for a 357-472 ms insertion wait on the GPU machine;
+  // and a write-back makes host blocks, which no other reader's view may see happen. The listing
+  // claims the revision up to which the host's blocks are complete: the map's when nothing is
+  // pending under its read lock, else the one the last piece left (what insertion changed since is
   // listed next time, its stamps newer).
   bool written_back = false;  // the last piece wrote every pending change back
   uint64_t written_back_at = 0, written_back_epoch = 0;
