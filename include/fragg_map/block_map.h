@@ -143,8 +143,12 @@ class BlockMap {
   /// log (no walk over the map); false (nothing written) when the log no longer reaches back
   /// that far.
   [[nodiscard]] bool masksChangedSince(uint64_t revision, std::vector<BlockKey>* out) const;
+  /// The order of a list of changed blocks: the change log's (each block where it first
+  /// comes), or ascending slots (the metadata's storage order, for callers that walk it).
+  enum class ListOrder { kLog, kSlots };
   /// The same blocks as indices (one lookup a block, for callers that read them next).
-  [[nodiscard]] bool masksChangedSince(uint64_t revision, std::vector<BlockIndex>* out) const;
+  [[nodiscard]] bool masksChangedSince(uint64_t revision, std::vector<BlockIndex>* out,
+                                       ListOrder order = ListOrder::kLog) const;
   [[nodiscard]] const BlockChangeLog& changeLog() const { return changes_; }
 
   size_t size() const { return index_.size(); }
@@ -186,7 +190,7 @@ class BlockMap {
   void freeSlot(BlockIndex i);
   /// masksChangedSince by the slots the change log recorded (no look-up by key): false (`out`
   /// partly written) when a block recorded since was erased; the caller looks the keys up.
-  bool slotsOfRecordsServe(uint64_t revision, std::vector<BlockIndex>* out) const;
+  bool slotsOfRecordsServe(uint64_t revision, std::vector<BlockIndex>* out, ListOrder order) const;
   struct SuperKeyHash {
     size_t operator()(const BlockKey& k) const noexcept { return BlockKeyHash()(k); }
   };

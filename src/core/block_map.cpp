@@ -318,10 +318,11 @@ bool BlockMap::masksChangedSince(uint64_t revision, std::vector<BlockKey>* out) 
   return true;
 }
 
-bool BlockMap::masksChangedSince(uint64_t revision, std::vector<BlockIndex>* out) const {
+bool BlockMap::masksChangedSince(uint64_t revision, std::vector<BlockIndex>* out,
+                                 ListOrder order) const {
   if (!changes_.reaches(revision)) return false;
   out->clear();
-  if (slotsOfRecordsServe(revision, out)) return true;
+  if (slotsOfRecordsServe(revision, out, order)) return true;
   out->clear();
   // The keys' blocks looked up in parallel (a scan changes tens of thousands: the lookups are
   // the list's cost), then each index kept once in the log's order (a block erased and made
@@ -338,10 +339,12 @@ bool BlockMap::masksChangedSince(uint64_t revision, std::vector<BlockIndex>* out
     listed[i] = 1;
     out->push_back(i);
   }
+  if (order == ListOrder::kSlots) std::sort(out->begin(), out->end());
   return true;
 }
 
-bool BlockMap::slotsOfRecordsServe(uint64_t revision, std::vector<BlockIndex>* out) const {
+bool BlockMap::slotsOfRecordsServe(uint64_t revision, std::vector<BlockIndex>* out,
+                                   ListOrder order) const {
   // The slots the records name, each once in the log's order, without a look-up by key: a
   // question spanning several revisions reads each block's records several times (ten W1
   // clouds: ~500 k records for ~100 k blocks), and a hash of their keys cost 20-60 ms on two
@@ -373,7 +376,14 @@ bool BlockMap::slotsOfRecordsServe(uint64_t revision, std::vector<BlockIndex>* o
   int64_t stale = 0;
 #pragma omp parallel for schedule(static) reduction(+ : stale) if (n > 4096)
   for (int64_t j = 0; j < n; ++j) stale += meta_[(*out)[j]].key == keys[j] ? 0 : 1;
-  return stale == 0;
+  if (stale != 0) return false;
+  if (order == ListOrder::kSlots) {
+    // Ascending: the listed slots read off in storage order (cheaper than a sort of them).
+    out->clear();
+    for (size_t s = 0; s < slots; ++s)
+      if (at[s] != 0) out->push_back(static_cast<BlockIndex>(s));
+  }
+  return true;
 }
 
 size_t BlockMap::hostBytes() const {

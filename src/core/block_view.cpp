@@ -1,7 +1,5 @@
 #include "fragg_map/block_view.h"
 
-#include <algorithm>
-
 namespace fragg {
 
 void BlockView::forEach(const BlockVisitor& fn) const {
@@ -86,10 +84,9 @@ std::vector<BlockIndex> BlockView::changedSlotsSince(uint64_t revision, BlockCha
 void BlockView::changedSlotsSince(uint64_t revision, BlockChange what,
                                   std::vector<BlockIndex>* out) const {
   out->clear();
-  if (what == BlockChange::kMasks && blocks_->masksChangedSince(revision, out)) {
-    std::sort(out->begin(), out->end());
+  if (what == BlockChange::kMasks &&
+      blocks_->masksChangedSince(revision, out, BlockMap::ListOrder::kSlots))
     return;
-  }
   stampedAfter(*blocks_, revision, what, out);
 }
 

@@ -114,7 +114,8 @@ TEST(BlockChangeLogTest, OutOfOrderWriteBacksAreDroppedByRevisionAndAnsweredExac
 // BlockMap::masksChangedSince reads the slots the records name and falls back to a look-up by
 // key when a block recorded since was erased (its slot free or another block's). Checked against
 // the look-ups by key over a long run of random changes, erasures and blocks made again:
-// the same blocks in the same order (each block once, where its key first comes in the log).
+// the same blocks in the same order (each block once, where its key first comes in the log),
+// and ascending when asked for slot order.
 TEST(BlockChangeLogTest, TheRecordedSlotsListWhatTheLookUpsByKeyList) {
   BlockMap blocks;
   struct Rec {
@@ -160,6 +161,11 @@ TEST(BlockChangeLogTest, TheRecordedSlotsListWhatTheLookUpsByKeyList) {
         want.push_back(i);
       }
       ASSERT_EQ(got, want) << "revision " << rev << ", asked " << asked;
+      // In slot order: the same blocks ascending.
+      std::vector<BlockIndex> ascending;
+      ASSERT_TRUE(blocks.masksChangedSince(asked, &ascending, BlockMap::ListOrder::kSlots));
+      std::sort(want.begin(), want.end());
+      ASSERT_EQ(ascending, want) << "revision " << rev << ", asked " << asked;
       // Where no block recorded since was erased, every listed slot holds its key.
       bool erased_since = false;
       for (const Rec& r : records)
