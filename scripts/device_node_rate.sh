@@ -16,7 +16,8 @@
 #   bash scripts/device_node_rate.sh [--rate HZ] [--clouds N] [--resolution M] [--max-range M]
 #     [--backend cuda|cpu|auto] [--azimuth-steps N] [--bag FILE] [--out DIR] [name:=value ...]
 # --azimuth-steps: columns a revolution (default 1406: 179,968 points a cloud; 2048: 262,144,
-# a 128-beam LiDAR at 2048 columns).
+# a 128-beam LiDAR at 2048 columns). FRAGG_ROS_DIR: another staged runtime than .device/ros
+# (an older node side by side in one call: the same runtime with its fragg_map binaries).
 set -euo pipefail
 rate=10 clouds=620 resolution=0.05 max_range=30 backend=cuda bag="" out="${OUT:-/tmp/node_rate}"
 azimuth_steps=1406
@@ -36,7 +37,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 top=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)
-ros="$top/.device/ros"
+ros="${FRAGG_ROS_DIR:-$top/.device/ros}"
 if [ ! -d "$ros" ]; then
   [ -f "$ros.tar.xz" ] || { echo "device_node_rate: no $ros (bash scripts/stage_ros.sh)" >&2; exit 2; }
   tar -C "$top/.device" -xJf "$ros.tar.xz"
