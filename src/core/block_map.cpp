@@ -378,7 +378,7 @@ bool BlockMap::slotsOfRecordsServe(uint64_t revision, std::vector<BlockIndex>* o
   for (int64_t j = 0; j < n; ++j) stale += meta_[(*out)[j]].key == keys[j] ? 0 : 1;
   if (stale != 0) return false;
   if (order == ListOrder::kSlots) {
-    // Ascending: the listed slots read off in storage order (cheaper than a sort of them).
+    // Ascending: the listed slots read off the places array, which is indexed by slot.
     out->clear();
     for (size_t s = 0; s < slots; ++s)
       if (at[s] != 0) out->push_back(static_cast<BlockIndex>(s));
