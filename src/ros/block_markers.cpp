@@ -385,7 +385,9 @@ SerializedMarkerArray pacedBlockMarkersWire(const fragg::Map& map, const MarkerS
           chunk.redraw = true;
         }
       }
-      ledger->published_revision_ = map.revision();
+      // What was listed: the map's changes up to the revision `blocks` is at (a mirror may be
+      // left behind the map: MaskMirror::acceptLag).
+      ledger->published_revision_ = revisionOf(map, blocks);
       ledger->view_epoch_ = map.viewEpoch();
       if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
       if (paced) ledger->last_note_s_ = now_s;

@@ -23,9 +23,11 @@ const MaskMirror::SyncStats& MaskMirror::sync(const fragg::Map& map) {
   const auto t0 = std::chrono::steady_clock::now();
   const uint64_t revision = map.revision();
   stats_ = SyncStats();
-  if (valid_ && revision == revision_ && map.viewEpoch() == epoch_ &&
-      map.resolution() == resolution_m_)
+  if (valid_ && revision >= revision_ && revision - revision_ <= accepted_lag_ &&
+      map.viewEpoch() == epoch_ && map.resolution() == resolution_m_) {
+    stats_.lagged = revision - revision_;
     return stats_;
+  }
   // Blocks leave the map only with a new view epoch (masksChangedSince does not list them).
   const bool whole = !valid_ || map.viewEpoch() != epoch_ || revision < revision_ ||
                      map.resolution() != resolution_m_ ||

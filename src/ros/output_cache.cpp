@@ -420,7 +420,7 @@ void MapOutputCache::refreshOver(const fragg::Map& map, const View& blocks,
                                  bool masks_suffice, std::chrono::steady_clock::time_point t0,
                                  OutputCacheUpdate* update) {
   OutputCacheUpdate& out = *update;
-  const uint64_t revision = map.revision();
+  const uint64_t revision = revisionOf(map, blocks);  // a mirror's may lag (acceptLag)
   for (const uint32_t c : dirty_) columns_[c].dirty = false;
   dirty_.clear();
   if (out.full) {

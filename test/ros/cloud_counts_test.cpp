@@ -13,6 +13,8 @@
 #include <tf2/buffer_core.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -210,7 +212,7 @@ TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
     ++rows;
     std::stringstream row(line);
     std::string stamp, points, outcome, queue_ms, tf_ms, insert_ms, publish_ms, total_ms, depth,
-        lock_wait_ms, publish_wait, markers, map_outputs, stats_part, holders;
+        lock_wait_ms, publish_wait, markers, map_outputs, stats_part, between, holders;
     std::getline(row, stamp, ',');
     std::getline(row, points, ',');
     std::getline(row, outcome, ',');
@@ -225,6 +227,7 @@ TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
     std::getline(row, markers, ',');
     std::getline(row, map_outputs, ',');
     std::getline(row, stats_part, ',');
+    std::getline(row, between, ',');
     std::getline(row, holders);
     ++outcomes[outcome];
     // The write lock's wait is part of the insertion, and only an insertion waits for it; no
@@ -234,6 +237,7 @@ TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
       EXPECT_EQ(std::stod(lock_wait_ms), 0.0) << line;
     }
     EXPECT_EQ(publish_wait + markers + map_outputs + stats_part, "0.0000.0000.0000.000") << line;
+    EXPECT_EQ(between, "0.000") << line;  // no work between clouds given
     // The first cloud waited for the test's hold of the write lock (blockOn saw it wait) and
     // names it; the later ones came after the hold had gone (they may meet the test's reads).
     if (outcome == "inserted" && std::stod(stamp) == first_stamp) {
@@ -261,6 +265,54 @@ TEST_F(CloudCountsTest, TraceCsvHasOneRowPerCloudWithItsOutcome) {
   EXPECT_EQ(outcomes["no_tf"], 1);
   EXPECT_GT(s.latency_ms_p99, 0.0f);
   EXPECT_GE(s.latency_ms_p99, s.latency_ms_p50);
+  std::remove(path.c_str());
+}
+
+TEST_F(CloudCountsTest, WorkBetweenCloudsRunsAfterAnInsertionWithNoCloudWaiting) {
+  const std::string path =
+      ::testing::TempDir() + "fragg_cloud_between_" + std::to_string(::getpid()) + ".csv";
+  params_.trace_csv = path;
+  std::atomic<int> calls{0};
+  pipeline_ = std::make_unique<CloudPipeline>(
+      params_, tf_, shared_.get(), &stats_, nullptr, CloudPipeline::DynamicOutput{}, [&] {
+        // The map is not locked by the pipeline meanwhile: the write lock is free to take.
+        const SharedMap::WriteGuard hold = shared_->write("work between clouds");
+        std::this_thread::sleep_for(std::chrono::milliseconds(3));
+        ++calls;
+      });
+  offerAlone(wall("map", 1.0));     // inserted, nothing waits: the work runs
+  offerAlone(wall("map", 2.0));     // the same
+  offerAlone(wall("sensor", 1.5));  // tf_too_old: nothing inserted, no work
+  blockOn(wall("map", 3.0));        // inserted with the next one waiting: no work after it
+  pipeline_->offer(wall("map", 4.0));
+  release();
+  settleAndCheckSum();
+  pipeline_.reset();  // the last work and its row are done
+  EXPECT_EQ(calls.load(), 3);
+  std::ifstream in(path);
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  const std::string header = line;
+  const size_t column = static_cast<size_t>(
+      std::count(header.begin(),
+                 header.begin() + static_cast<std::ptrdiff_t>(header.find("between_ms")), ','));
+  std::map<double, double> between_by_stamp;
+  while (std::getline(in, line)) {
+    std::stringstream row(line);
+    std::string field, stamp;
+    for (size_t i = 0; i <= column && std::getline(row, field, ','); ++i)
+      if (i == 0) stamp = field;
+    between_by_stamp[std::stod(stamp)] = std::stod(field);
+  }
+  ASSERT_EQ(between_by_stamp.size(), 5u);
+  const auto between = [&](const CloudPtr& msg) {
+    return between_by_stamp.at(msg->header.stamp.toSec());
+  };
+  EXPECT_GE(between(wall("map", 1.0)), 3.0);
+  EXPECT_GE(between(wall("map", 2.0)), 3.0);
+  EXPECT_EQ(between(wall("sensor", 1.5)), 0.0);
+  EXPECT_EQ(between(wall("map", 3.0)), 0.0);
+  EXPECT_GE(between(wall("map", 4.0)), 3.0);
   std::remove(path.c_str());
 }
 

@@ -219,15 +219,26 @@ TEST(MarkerChunks, AnUpdateCarriesOnlyTheChunksThatChangedAndDeletesEmptiedOnes)
 // Clouds every 1/8 s, markers at 1 Hz, paced: the changes taken in once a period go out in
 // shares over the next period's calls (not all at once), none waits longer than two periods,
 // and once the map stops changing the view (and a late subscriber's) equals a full rebuild.
-void expectPacedReachesRebuild(MarkerStyle style, bool mirror = false) {
+/// `follows` (with `mirror`): as the server that brings the mirror up to date between clouds,
+/// each call reads it one edit behind (MaskMirror::acceptLag) and a sync follows it.
+void expectPacedReachesRebuild(MarkerStyle style, bool mirror = false, bool follows = false) {
   fragg::Map map(fragg::ros::test::cpuParams());
   MarkerLedger topic;
-  if (mirror) topic.useMirror(std::make_shared<fragg::ros::MaskMirror>());
+  const auto masks = std::make_shared<fragg::ros::MaskMirror>();
+  if (mirror) topic.useMirror(masks);
   View view, late_view;
   constexpr double kPeriodS = 1.0, kIntervalS = 0.125;  // exact in binary
+  size_t lagged = 0;  // calls that read the mirror one edit behind
   const auto paced = [&](double now_s) {
-    return fragg::ros::toMarkerArray(
+    if (follows) masks->acceptLag(1);
+    const MarkerArray out = fragg::ros::toMarkerArray(
         fragg::ros::pacedBlockMarkersWire(map, style, kStamp, now_s, kPeriodS, &topic));
+    if (follows) {
+      lagged += masks->valid() && masks->revision() + 1 == map.revision();
+      masks->acceptLag(0);
+      (void)masks->sync(map);  // between clouds
+    }
+    return out;
   };
   bool shared = false;  // some call left chunks queued for later calls
   double now_s = 0.0;
@@ -262,6 +273,7 @@ void expectPacedReachesRebuild(MarkerStyle style, bool mirror = false) {
   EXPECT_EQ(view.size(), full.size()) << "one marker per chunk";
   EXPECT_EQ(topic.shownChunks(), rebuilt.shownChunks());
   EXPECT_TRUE(paced(now_s).markers.empty()) << "nothing left to send";
+  if (follows) EXPECT_GE(lagged, 5u) << "the mirror was synced on the calls' path: not tested";
 }
 
 TEST(MarkerChunks, PacedSharesEqualAFullRebuildTwoPeriodsAfterTheLastChange) {
@@ -296,9 +308,11 @@ TEST(MarkerChunks, ThroughAMaskMirrorToo) {
   expectIncrementsEqualRebuild(free_cells, true);
   style.chunk_blocks = 2;
   expectPacedReachesRebuild(style, true);
+  expectPacedReachesRebuild(style, true, true);
   style.chunk_blocks = 1;
   style.hide_speckles = false;
   expectPacedReachesRebuild(style, true);
+  expectPacedReachesRebuild(style, true, true);
 }
 
 // A mirror handed to a ledger in the middle of a period (chunks listed from the map's view and

@@ -241,5 +241,44 @@ TEST(MaskMirror, InvalidateRebuilds) {
   expectMirrors(map, mirror, "after invalidate");
 }
 
+// acceptLag: a sync leaves the mirror behind by up to that many revisions (its blocks, stamps and
+// revision as the last sync left them), and syncs it once the map is further ahead, its view
+// moved, or the lag goes back to 0; what was left behind is then stamped and listed.
+TEST(MaskMirror, AnAcceptedLagLeavesItBehindUntilTheMapIsFurtherAhead) {
+  fragg::Map map(test::cpuParams(0.1));
+  MaskMirror mirror;
+  test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  (void)mirror.sync(map);
+  const uint64_t synced_at = map.revision();
+  const size_t blocks = mirror.size();
+  mirror.acceptLag(1);
+  EXPECT_EQ(mirror.acceptedLag(), 1u);
+  test::insertWall(map, Eigen::Vector3d(0.0, 4.0, 0.0), 3.0);  // new blocks
+  ASSERT_EQ(map.revision(), synced_at + 1);
+  EXPECT_EQ(mirror.sync(map).lagged, 1u);
+  EXPECT_EQ(mirror.revision(), synced_at);
+  EXPECT_EQ(mirror.size(), blocks) << "synced although one revision behind";
+  EXPECT_TRUE(mirror.changedSince(synced_at, fragg::BlockChange::kMasks).empty());
+  test::insertWall(map, Eigen::Vector3d(0.0, -4.0, 0.0), 3.0);  // two behind: synced
+  const MaskMirror::SyncStats& s = mirror.sync(map);
+  EXPECT_EQ(s.lagged, 0u);
+  EXPECT_GT(s.listed, 0u);
+  expectMirrors(map, mirror, "two revisions behind");
+  const size_t both_walls = mirror.changedSince(synced_at, fragg::BlockChange::kMasks).size();
+  EXPECT_GT(mirror.size(), blocks);
+  EXPECT_GE(both_walls, mirror.size() - blocks) << "the blocks left behind were not stamped";
+  // One behind, but the view moved (blocks erased): rebuilt at once.
+  const uint64_t epoch = map.viewEpoch();
+  map.clearBox(Eigen::Vector3d(2.0, -10.0, -10.0), Eigen::Vector3d(10.0, 10.0, 10.0));
+  ASSERT_NE(map.viewEpoch(), epoch);
+  EXPECT_TRUE(mirror.sync(map).rebuilt);
+  expectMirrors(map, mirror, "the view moved");
+  // Lag 0 again: every sync catches up.
+  test::insertWall(map, Eigen::Vector3d(0.5, 0.0, 0.0), 3.0);
+  mirror.acceptLag(0);
+  EXPECT_EQ(mirror.sync(map).lagged, 0u);
+  expectMirrors(map, mirror, "lag 0");
+}
+
 }  // namespace
 }  // namespace fragg::ros

@@ -33,12 +33,22 @@ class MaskMirror {
     double list_seconds = 0.0;    ///< of it, Map::masksChangedSince (or the rebuild's blockView)
     double update_seconds = 0.0;  ///< the held blocks' update (after the list)
     double add_seconds = 0.0;     ///< the new blocks added (after the update)
+    uint64_t lagged = 0;  ///< left this many revisions behind the map (acceptLag), not synced
   };
 
   /// Brings the mirror up to date with `map` (held under its read lock); nothing to do when it
   /// is at the map's revision and view already. Blocks whose masks changed get the map's
   /// revision as their stamp (kOccupied: when their occupied cells changed).
+  /// With a lag accepted (acceptLag), a mirror at the map's view epoch and resolution that is
+  /// at most that many revisions behind is left as it is (SyncStats::lagged says so).
   const SyncStats& sync(const fragg::Map& map);
+  /// Lets sync() leave the mirror up to `revisions` map revisions behind the map (0, the
+  /// default: every sync brings it up to the map's revision). For a server that brings it up
+  /// to date between clouds: a cloud's outputs then read it as that sync left it, one insertion
+  /// old. Readers keep the mirror's revision as what they have seen, not the map's.
+  void acceptLag(uint64_t revisions) { accepted_lag_ = revisions; }
+  /// The lag acceptLag set.
+  [[nodiscard]] uint64_t acceptedLag() const { return accepted_lag_; }
   /// Forgets everything: the next sync rebuilds.
   void invalidate() { valid_ = false; }
   [[nodiscard]] bool valid() const { return valid_; }
@@ -105,6 +115,7 @@ class MaskMirror {
   uint64_t generation_ = 0;
   uint64_t revision_ = 0;
   uint64_t epoch_ = 0;
+  uint64_t accepted_lag_ = 0;  ///< acceptLag
   double resolution_m_ = 0.0;
   fragg::BlockKeyTable table_;  ///< key -> slot
   // By slot; they grow in chunks (a sync that adds blocks copies none of those held).
@@ -119,5 +130,14 @@ class MaskMirror {
   SyncStats stats_;
   uint64_t known_cells_ = 0;  ///< knownCells()
 };
+
+/// The map revision whose changes `view` shows: the map's own view is at the map's revision.
+[[nodiscard]] inline uint64_t revisionOf(const fragg::Map& map, const fragg::BlockView& /*view*/) {
+  return map.revision();
+}
+/// A mask mirror is at the revision of its last sync (it may lag: MaskMirror::acceptLag).
+[[nodiscard]] inline uint64_t revisionOf(const fragg::Map& /*map*/, const MaskMirror& mirror) {
+  return mirror.revision();
+}
 
 }  // namespace fragg::ros

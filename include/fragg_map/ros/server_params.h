@@ -140,10 +140,12 @@ struct ServerParams {
   /// and a share of the changed blocks goes into the output cache; each within a period of its
   /// change) instead of coming as one burst when the update is due. false: the burst.
   bool paced_outputs = true;
-  /// mirror_every_cloud: on a CUDA map with paced outputs, the outputs' mask mirror takes every
-  /// cloud's changed blocks in (after each cloud, that cloud's only) instead of a period's when
-  /// the markers take the changes in. false (default): once a period, which made fewer clouds
-  /// late on an H100 (W1 5 cm at 10 Hz, after the first five: 49 over 20 ms against 130).
+  /// mirror_every_cloud: on a CUDA map with paced outputs, the outputs' mask mirror takes each
+  /// cloud's changed blocks in after that cloud's outputs, when no other cloud waits (between
+  /// clouds: CloudPipeline::BetweenFn), and a cloud's take-ins read it as that left it (one
+  /// insertion behind) instead of syncing a period's changes on the cloud's path. false: once
+  /// a period, on the path of the cloud whose take-in is due (11-17 ms on an H100 at W1 5 cm).
+  /// (Before 2026-12-08 this synced on every cloud's path, which made more clouds late.)
   bool mirror_every_cloud = false;
   /// trace_csv: a file that gets one row per cloud received (its outcome and where its time
   /// went: queue, conversion, tf, insertion, outputs); empty: none.

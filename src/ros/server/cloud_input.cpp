@@ -8,7 +8,8 @@
 namespace fragg::ros {
 
 CloudInput::CloudInput(::ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
-                       SharedMap* shared, ServerStats* stats, InsertedFn on_inserted)
+                       SharedMap* shared, ServerStats* stats, InsertedFn on_inserted,
+                       BetweenFn between_clouds)
     : pipeline_(
           params, tf, shared, stats, std::move(on_inserted),
           CloudPipeline::DynamicOutput{
@@ -20,7 +21,8 @@ CloudInput::CloudInput(::ros::NodeHandle& nh, const ServerParams& params, const 
                 for (const Eigen::Vector3f& p : points_S)
                   xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
                 dynamic_pub_.publish(packedXyzCloud(xyz, msg.header.frame_id, msg.header.stamp));
-              }}) {
+              }},
+          std::move(between_clouds)) {
   // MapParams::dynamic: the points of each scan classified dynamic (sensor frame), built only
   // while someone listens (advertised before the subscription below brings the first cloud).
   if (params.map.dynamic.enabled)

@@ -33,9 +33,13 @@ namespace fragg::ros {
 class CloudInput {
  public:
   using InsertedFn = CloudPipeline::InsertedFn;
+  using BetweenFn = CloudPipeline::BetweenFn;
 
+  /// Subscribes to cloud_in; `on_inserted` publishes after each insertion, `between_clouds`
+  /// (may be empty) runs when a cloud's work is done and no other waits.
   CloudInput(::ros::NodeHandle& nh, const ServerParams& params, const tf2_ros::Buffer& tf,
-             SharedMap* shared, ServerStats* stats, InsertedFn on_inserted);
+             SharedMap* shared, ServerStats* stats, InsertedFn on_inserted,
+             BetweenFn between_clouds = {});
   ~CloudInput();  ///< stops the subscription, then the insertion thread
   CloudInput(const CloudInput&) = delete;
   CloudInput& operator=(const CloudInput&) = delete;

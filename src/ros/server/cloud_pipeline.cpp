@@ -24,13 +24,14 @@ GroundFilterParams groundFilterParamsOf(const OctomapCompatParams& o) {
 
 CloudPipeline::CloudPipeline(const ServerParams& params, const tf2::BufferCore& tf,
                              SharedMap* shared, ServerStats* stats, InsertedFn on_inserted,
-                             DynamicOutput dynamic)
+                             DynamicOutput dynamic, BetweenFn between_clouds)
     : params_(params),
       tf_(tf),
       stats_(stats),
       inserter_(params, shared, stats),
       on_inserted_(std::move(on_inserted)),
       dynamic_(std::move(dynamic)),
+      between_clouds_(std::move(between_clouds)),
       queue_(static_cast<size_t>(params.queue_size)) {
   if (!params.trace_csv.empty()) trace_csv_ = std::make_unique<CloudTraceCsv>(params.trace_csv);
   worker_ = std::thread([this] { run(); });
@@ -80,6 +81,15 @@ void CloudPipeline::run() {
     trace.total_ms = msBetween(item.received, Clock::now());
     if (trace.outcome == "inserted")
       stats_->addLatency(trace.queue_ms, trace.tf_ms, trace.publish_ms, trace.total_ms);
+    if (between_clouds_ && trace.outcome == "inserted" && queue_.size() == 0 && !stopping_) {
+      const Clock::time_point started = Clock::now();
+      try {
+        between_clouds_();
+      } catch (const std::exception& e) {  // the cloud is in the map: logged, not counted
+        ROS_ERROR_THROTTLE(5.0, "fragg_map: work between clouds failed: %s", e.what());
+      }
+      trace.between_ms = msBetween(started, Clock::now());
+    }
     if (trace_csv_ && !trace.outcome.empty()) trace_csv_->write(trace);
   }
 }

@@ -42,6 +42,12 @@ class CloudPipeline {
       std::function<void(const sensor_msgs::PointCloud2& msg, const fragg::SensorModel&,
                          const Eigen::Isometry3d& T_map_sensor, PublishTimes* times)>;
 
+  /// Called on the insertion thread after a cloud's work (its trace row written, its latency
+  /// counted) when no other cloud waits: upkeep that would otherwise fall on a cloud's path
+  /// (MapPublishers::betweenClouds). A cloud that arrives meanwhile waits in the queue (its
+  /// queue_ms shows it); the time goes into the finished cloud's trace as between_ms.
+  using BetweenFn = std::function<void()>;
+
   /// The points of a scan classified dynamic (MapParams::dynamic; sensor frame), for the
   /// `dynamic_points` topic: `wanted` says whether anyone listens (asked before the insertion),
   /// `publish` gets them after it with the cloud's message.
@@ -55,7 +61,8 @@ class CloudPipeline {
   /// Starts the insertion thread. `tf` outlives the pipeline. With params.trace_csv, opens
   /// that file (throws fragg::IoError when it cannot) for one row per cloud.
   CloudPipeline(const ServerParams& params, const tf2::BufferCore& tf, SharedMap* shared,
-                ServerStats* stats, InsertedFn on_inserted, DynamicOutput dynamic = {});
+                ServerStats* stats, InsertedFn on_inserted, DynamicOutput dynamic = {},
+                BetweenFn between_clouds = {});
   ~CloudPipeline();  ///< stops the insertion thread; clouds still waiting are discarded
   CloudPipeline(const CloudPipeline&) = delete;
   CloudPipeline& operator=(const CloudPipeline&) = delete;
@@ -90,6 +97,7 @@ class CloudPipeline {
   CloudInserter inserter_;
   InsertedFn on_inserted_;
   DynamicOutput dynamic_;
+  BetweenFn between_clouds_;
   DropOldestQueue<Queued> queue_;
   std::unique_ptr<CloudTraceCsv> trace_csv_;  ///< null without trace_csv
   std::atomic<bool> stopping_{false};

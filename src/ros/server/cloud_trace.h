@@ -34,6 +34,9 @@ struct CloudTrace {
   /// empty when the lock was free.
   std::string lock_holders;
   PublishTimes publish;  ///< parts of publish_ms (the rest: dynamic points, octomaps, frustum)
+  /// Work after the cloud's outputs, before the next cloud was taken (CloudPipeline::BetweenFn:
+  /// the outputs' mask mirror taking the changes in); not part of total_ms.
+  double between_ms = 0.0;
 };
 
 class CloudTraceCsv {

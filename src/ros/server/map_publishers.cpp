@@ -25,6 +25,11 @@ namespace {
 // carry the whole map in every message and keep 1).
 constexpr uint32_t kMarkerQueue = 50;
 
+// The revisions a cloud's take-ins let the mask mirror lag when it follows the changes between
+// clouds: the cloud's own insertion (Map::insert makes one revision). A map changed more since
+// the last sync (a correction, clouds back to back with no pause between) is synced as before.
+constexpr uint64_t kFollowedLag = 1;
+
 double msSince(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since)
       .count();
@@ -129,7 +134,18 @@ void MapPublishers::publishAfterInsert(const sensor_msgs::PointCloud2& cloud,
       ROS_WARN_THROTTLE(5.0, "fragg_map: colored_map: no colours from this cloud: %s", e.what());
     }
   }
-  publishMaps(state->map, stamp, false, true, times);
+  // Following the changes between clouds, this cloud's take-ins read the mirror as the last of
+  // those syncs left it: without this cloud's changes (the next sync brings them in), one
+  // insertion behind. A correction, a full publication and the timers' flushes sync it whole.
+  const bool lagging = followsChanges();
+  if (lagging) mirror_->acceptLag(kFollowedLag);
+  try {
+    publishMaps(state->map, stamp, false, true, times);
+  } catch (...) {
+    if (lagging) mirror_->acceptLag(0);
+    throw;
+  }
+  if (lagging) mirror_->acceptLag(0);
   if (wanted(frustum_pub_) && sensor.type != fragg::SensorType::kAuto && sensor.max_range_m > 0.0)
     frustum_pub_.publish(frustumMarker(sensor, T_map_sensor, params_.frame_id, stamp));
 }
@@ -162,7 +178,6 @@ void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
     started = std::chrono::steady_clock::now();
   };
   mirrorFor(map);
-  if (throttle_maps && !full_markers) followChanges(map);
   publishMarkerTopics(map, stamp, full_markers);
   lap(&PublishTimes::markers_ms);
   publishMapOutputs(map, stamp, throttle_maps);
@@ -173,15 +188,21 @@ void MapPublishers::publishMaps(const fragg::Map& map, const ::ros::Time& stamp,
   lap(&PublishTimes::stats_ms);
 }
 
-void MapPublishers::followChanges(const fragg::Map& map) {
+bool MapPublishers::followsChanges() const {
   if (!params_.mirror_every_cloud || !mirror_ || !mirror_->valid() ||
       !(pacedMarkers() || pacedMaps()))
-    return;
+    return false;
   const bool markers_seen = occupied_markers_.subscribers > 0 || free_markers_.subscribers > 0;
-  if (!markers_seen && !wanted(occupied_cloud_pub_) && !wanted(centers_pub_) &&
-      !wanted(projected_map_pub_))
-    return;
-  (void)mirror_->sync(map);
+  return markers_seen || wanted(occupied_cloud_pub_) || wanted(centers_pub_) ||
+         wanted(projected_map_pub_);
+}
+
+void MapPublishers::betweenClouds() {
+  std::lock_guard<std::mutex> publishing(publish_mutex_);
+  if (!followsChanges()) return;
+  const SharedMap::ReadGuard state = shared_->read("outputs' mirror between clouds");
+  mirror_->acceptLag(0);
+  (void)mirror_->sync(state->map);
 }
 
 void MapPublishers::mirrorFor(const fragg::Map& map) {

@@ -52,6 +52,12 @@ class MapPublishers {
   /// where the time went (the cloud's trace).
   void publishAfterInsert(const sensor_msgs::PointCloud2& cloud, const fragg::SensorModel& sensor,
                           const Eigen::Isometry3d& T_map_sensor, PublishTimes* times = nullptr);
+  /// Between clouds (the insertion thread, when no cloud waits): with mirror_every_cloud on a
+  /// CUDA map whose paced outputs someone reads, the mask mirror takes in the changes of the
+  /// clouds since its last sync, so that the next cloud's take-ins read it as it stands (one
+  /// insertion behind: MaskMirror::acceptLag) instead of syncing a period's changes on that
+  /// cloud's path. Takes the publishers' mutex and the map's read lock; nothing otherwise.
+  void betweenClouds();
   /// After a pose correction, a truncation or a merge: the markers of the blocks it changed
   /// (incremental, as after an insertion; throttled by marker_rate), occupied cloud, projected
   /// map (at once: not throttled), stats. Takes the read lock.
@@ -89,10 +95,10 @@ class MapPublishers {
   void mirrorFor(const fragg::Map& map);
   /// Paced outputs on a CUDA map take a period's changes in at once: the mask mirror's sync of
   /// a second's changed blocks (~90 k at W1 5 cm: 11-17 ms on an H100) was the node's p99
-  /// latency. After every cloud (while anyone reads the mirror's outputs) the mirror takes that
-  /// cloud's changes in instead (its held blocks updated in parallel), so that at a take-in it
-  /// holds all but the last cloud's. Nothing on a CPU map (no mirror).
-  void followChanges(const fragg::Map& map);
+  /// latency. betweenClouds: the mirror takes each cloud's changes in after that cloud (while
+  /// anyone reads the mirror's outputs). Whether it is on: mirror_every_cloud, a mirror, paced
+  /// outputs and someone to read them. Nothing on a CPU map (no mirror).
+  [[nodiscard]] bool followsChanges() const;
   /// paced_outputs with a marker_rate / map_rate limit in effect.
   bool pacedMarkers() const { return params_.paced_outputs && marker_throttle_.limited(); }
   bool pacedMaps() const { return params_.paced_outputs && held_maps_.throttle().limited(); }

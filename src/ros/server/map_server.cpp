@@ -208,6 +208,10 @@ void MapServer::startInput() {
         } catch (const std::exception& e) {
           ROS_ERROR_THROTTLE(5.0, "fragg_map: publishing failed: %s", e.what());
         }
+      },
+      [this] {
+        const std::shared_lock<std::shared_mutex> outputs(outputs_mutex_);
+        publishers_->betweenClouds();
       });
 }
 

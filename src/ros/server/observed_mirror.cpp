@@ -98,8 +98,8 @@ ObservedMirror::RefreshStats ObservedMirror::refresh(SharedMap& shared) {
   std::sort(keys.begin(), keys.end(), [](const fragg::BlockKey& a, const fragg::BlockKey& b) {
     return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
   });
-  for (size_t first = 0; first < keys.size(); first += blocks_per_lock_) {
-    const size_t last = std::min(keys.size(), first + blocks_per_lock_);
+  for (size_t first = 0; first < keys.size();) {
+    const size_t most = std::min(keys.size(), first + blocks_per_lock_);
     // A pause between pieces: glibc's reader-writer lock lets a reader in ahead of a waiting
     // writer, so insertion, waiting for a piece to end, takes the lock before the next piece.
     if (first > 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -117,10 +117,19 @@ ObservedMirror::RefreshStats ObservedMirror::refresh(SharedMap& shared) {
     // before the listing, so every listed block is there at least as new as that; what
     // changed since is listed next time.
     const fragg::BlockView view = map.hostBlockView();
+    // A piece ends at blocks_per_lock blocks or, past kPieceCheckBlocks, at kPieceBudget of
+    // wall time (an H100 host copied 2,048 blocks in 12-55 ms: an insertion waited that long).
+    const auto began = std::chrono::steady_clock::now();
+    size_t j = first;
     copy_->writeCells([&](fragg::CellWriter& writer) {
-      for (size_t j = first; j < last; ++j)
+      for (; j < most; ++j) {
+        if (j > first && (j - first) % kPieceCheckBlocks == 0 &&
+            std::chrono::steady_clock::now() - began > kPieceBudget)
+          break;
         if (const fragg::Block* block = view.findBlock(keys[j])) writer.setBlock(keys[j], *block);
+      }
     });
+    first = j;
   }
   revision_ = revision;
   epoch_ = epoch;

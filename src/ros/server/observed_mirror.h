@@ -7,6 +7,7 @@
 // between pieces.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -27,13 +28,18 @@ class ObservedMirror {
     bool complete = true;          ///< false: the map's view changed mid-way; the next one rebuilds
   };
 
-  /// Blocks a device writes back under one write lock (Map::writeBackSome; ~2.3 KB each).
-  static constexpr size_t kBlocksPerWriteBack = 8192;
+  /// Blocks a device writes back under one write lock (Map::writeBackSome; ~2.3 KB each). An
+  /// H100 host wrote back 1.4-2.2 us a block: 8,192 a piece held insertion back 12-20 ms.
+  static constexpr size_t kBlocksPerWriteBack = 2048;
   /// Write-back pieces a refresh takes at most before it lists what the host holds (a map
   /// that a device changes faster than pieces write back: what is left comes next time).
-  static constexpr size_t kMaxWriteBackPieces = 512;
+  static constexpr size_t kMaxWriteBackPieces = 2048;
+  /// A copied piece ends at this much wall time (checked every kPieceCheckBlocks blocks), or
+  /// at blocks_per_lock blocks, whichever comes first.
+  static constexpr std::chrono::microseconds kPieceBudget{2000};
+  static constexpr size_t kPieceCheckBlocks = 64;
 
-  /// `blocks_per_lock`: blocks copied under one read lock (> 0; 2 KiB each; ~1 us a block).
+  /// `blocks_per_lock`: blocks copied under one read lock at most (> 0; 2 KiB each).
   explicit ObservedMirror(size_t blocks_per_lock = 2048);
 
   /// Brings the copy up to `shared`'s map: every observed cell as the map holds it at the

@@ -136,6 +136,7 @@ bool g_flat_markers = false;
 bool g_cells_always = false;
 /// --sync-stage: the write-back before a take-in timed apart (the header's note).
 bool g_sync_stage = false;
+bool g_sync_between = false;
 /// --mirror: the after path reads a mask mirror.
 bool g_mirror = false;
 
@@ -262,6 +263,18 @@ class Outputs {
     t.pending_chunks = ledger_.pendingChunks();
     t.queued_blocks = cache_.queuedBlocks();
     return t;
+  }
+  /// --sync-between, the server's work between clouds (mirror_every_cloud): the mirror takes in
+  /// the changes since its last sync, and the next cloud's take-ins read it as it stands, one
+  /// cloud behind (MaskMirror::acceptLag). Returns the sync's wall ms (0 without a mirror).
+  double syncBetween(const fragg::Map& map) {
+    if (!mirror_) return 0.0;
+    const auto t0 = Clock::now();
+    mirror_->acceptLag(0);
+    (void)mirror_->sync(map);
+    const double ms = msSince(t0);
+    mirror_->acceptLag(1);
+    return ms;
   }
   /// Blocks and chunks queued by the paced path (what the server's timers send once the clouds
   /// stop).
@@ -413,7 +426,7 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
   // The first call reads the whole map (a loaded map, or nothing yet): untimed.
   after.publish(map);
   if (!after_only) any.publish(map);
-  std::vector<double> total_before, total_after, total_any, converts;
+  std::vector<double> total_before, total_after, total_any, converts, between_ms;
   std::vector<Times> after_times;
   std::vector<Due> dues;
   fragg::ros::RateThrottle marker_throttle(rates.marker_hz), map_throttle(rates.map_hz);
@@ -436,6 +449,7 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
     pace.marker_period_s = rates.marker_hz > 0.0 ? 1.0 / rates.marker_hz : 0.0;
     pace.map_period_s = rates.map_hz > 0.0 ? 1.0 / rates.map_hz : 0.0;
     const Times a = after.publish(map, due, pace);
+    if (g_sync_between) between_ms.push_back(after.syncBetween(map));
     if (paced && pace.marker_period_s > 0.0) due.markers = true;  // a share after every cloud
     total_after.push_back(convert_ms + a.total());
     converts.push_back(convert_ms);
@@ -468,6 +482,11 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
       "%.2f ms over %zu clouds\n",
       paced ? " (paced)" : "", percentile(total_after, 0.5), percentile(total_after, 0.99),
       percentile(total_after, 1.0), scans.size());
+  if (!between_ms.empty())
+    std::printf(
+        "  between clouds (--sync-between; not in the figures above): the mask mirror's sync p50 "
+        "%.2f ms, p99 %.2f ms, max %.2f ms\n",
+        percentile(between_ms, 0.5), percentile(between_ms, 0.99), percentile(between_ms, 1.0));
   if (g_sync_stage) {
     std::vector<double> sync_ms, list_ms, listed;
     long sync_faults = 0;
@@ -581,6 +600,10 @@ int runMain(int argc, char** argv) {
   app.add_flag("--sync-stage", g_sync_stage,
                "time the write-back before each take-in of the changes apart (Map::blockView(): a "
                "CUDA map's changed blocks copied back) and print it");
+  app.add_flag("--sync-between", g_sync_between,
+               "as the server with mirror_every_cloud: the mask mirror takes each cloud's changes "
+               "in after its outputs (timed apart, printed), and the take-ins read it one cloud "
+               "behind (with a mirror only)");
   bool unpaced = false;
   app.add_flag("--unpaced", unpaced,
                "as the server with paced_outputs false: the throttled updates whole when due "
