@@ -520,6 +520,7 @@ SerializedMarkerArray allBlockMarkersWire(const fragg::Map& map, const MarkerSty
   encodeChunks(map, style, chunks);
   for (const MarkerLedger::Chunk* chunk : chunks) out.markers.push_back(chunk->wire);
   ledger->published_revision_ = map.revision();
+  ledger->started_ = true;
   ledger->view_epoch_ = map.viewEpoch();
   if (style.colors) ledger->colors_drawn_ = style.colors->sequence();
   return out;

@@ -315,6 +315,41 @@ TEST(MarkerChunks, ThroughAMaskMirrorToo) {
   expectPacedReachesRebuild(style, true, true);
 }
 
+// A full set of the empty map (a subscriber connected at start-up) starts the ledger at revision
+// 0: the first clouds' changes then come as paced increments (taken in, sent in shares), which
+// reach a full rebuild; a ledger no full set started is not started.
+TEST(MarkerChunks, AFullSetOfTheEmptyMapStartsTheIncrements) {
+  fragg::Map map(fragg::ros::test::cpuParams());
+  MarkerStyle style;
+  style.chunk_blocks = 1;
+  MarkerLedger topic;
+  EXPECT_FALSE(topic.started());
+  View view;
+  apply(map, fragg::ros::toMarkerArray(fragg::ros::allBlockMarkersWire(map, style, kStamp, &topic)),
+        &view);
+  EXPECT_TRUE(topic.started());
+  EXPECT_EQ(topic.publishedRevision(), 0u);
+  EXPECT_TRUE(view.empty());
+  constexpr double kPeriodS = 1.0, kIntervalS = 0.125;  // exact in binary
+  fragg::ros::test::insertWall(map, Eigen::Vector3d::Zero(), 3.0);
+  double now_s = 0.0;
+  const MarkerArray taken_in = fragg::ros::toMarkerArray(
+      fragg::ros::pacedBlockMarkersWire(map, style, kStamp, now_s, kPeriodS, &topic));
+  EXPECT_TRUE(taken_in.markers.empty()) << "the first cloud's markers all at once";
+  EXPECT_GT(topic.pendingChunks(), 2u);
+  for (now_s += kIntervalS; now_s < 2 * kPeriodS; now_s += kIntervalS)
+    apply(map,
+          fragg::ros::toMarkerArray(
+              fragg::ros::pacedBlockMarkersWire(map, style, kStamp, now_s, kPeriodS, &topic)),
+          &view);
+  EXPECT_EQ(topic.pendingChunks(), 0u);
+  MarkerLedger rebuilt;
+  View full;
+  apply(map, fragg::ros::allBlockMarkers(map, style, kStamp, &rebuilt), &full);
+  EXPECT_FALSE(full.empty());
+  EXPECT_EQ(allDrawn(view), allDrawn(full));
+}
+
 // A mirror handed to a ledger in the middle of a period (chunks listed from the map's view and
 // still queued): the next share syncs it first, so no queued block is taken for gone.
 TEST(MarkerChunks, AMirrorHandedOverMidPeriodLosesNoQueuedChunk) {

@@ -75,6 +75,10 @@ CellMask drawnCells(const fragg::Map& map, const fragg::BlockView& blocks,
 class MarkerLedger {
  public:
   uint64_t publishedRevision() const { return published_revision_; }
+  /// A full set went out (allBlockMarkersWire): the subscribers hold what the ledger records, so
+  /// the changes since publishedRevision() can follow as increments, also from an empty map
+  /// (revision 0).
+  [[nodiscard]] bool started() const { return started_; }
   /// Blocks with drawn cells.
   size_t shownBlocks() const { return shown_blocks_; }
   /// Chunks shown (markers a subscriber holds), and those queued to be sent (paced).
@@ -127,6 +131,7 @@ class MarkerLedger {
   size_t shown_blocks_ = 0;
   int32_t next_id_ = 0;
   uint64_t published_revision_ = 0;
+  bool started_ = false;                ///< started()
   uint64_t colors_drawn_ = 0;           ///< CellColors::sequence() of the last update (colored_map)
   std::shared_ptr<MaskMirror> mirror_;  ///< useMirror
   /// The updates' serialised arrays are written into these (a full set gets its own buffer).

@@ -313,7 +313,10 @@ void MapPublishers::publishMarkers(const fragg::Map& map, MarkerTopic& topic,
   // everyone gets the whole map, so that its first message is never a partial update.
   const bool joined = subscribers > topic.subscribers;
   topic.subscribers = subscribers;
-  const bool first = topic.ledger.publishedRevision() == 0;
+  // No full set yet (a subscriber's connect callback sends one, also of an empty map at
+  // start-up: then the first clouds come as paced increments, not as one full set of the first
+  // cloud, 180-208 ms on an H100 at W1 5 cm).
+  const bool first = !topic.ledger.started();
   // Kept wire bytes of the chunks (marker_wire.h): roscpp copies them, nothing is serialised
   // again.
   const SerializedMarkerArray markers =
@@ -330,7 +333,7 @@ void MapPublishers::sendAllMarkersTo(MarkerTopic& topic,
   const ::ros::Time now = ::ros::Time::now();
   // This subscriber has its whole map: the next update need not send everyone a full set for it.
   topic.subscribers = std::min(topic.subscribers + 1, topic.pub.getNumSubscribers());
-  if (topic.ledger.publishedRevision() == 0 && topic.ledger.shownChunks() == 0) {
+  if (!topic.ledger.started()) {
     // Nobody subscribed before: the ledger starts here, from the whole map.
     sub.publish(allBlockMarkersWire(state->map, topic.style, now, &topic.ledger));
     return;
