@@ -37,7 +37,7 @@ class ObservedMirror {
   /// A copied piece ends at this much wall time (checked every kPieceCheckBlocks blocks), or
   /// at blocks_per_lock blocks, whichever comes first.
   static constexpr std::chrono::microseconds kPieceBudget{2000};
-  static constexpr size_t kPieceCheckBlocks = 64;
+  static constexpr size_t kPieceCheckBlocks = 8;
 
   /// `blocks_per_lock`: blocks copied under one read lock at most (> 0; 2 KiB each).
   explicit ObservedMirror(size_t blocks_per_lock = 2048);
