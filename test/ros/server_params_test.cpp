@@ -497,7 +497,7 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.collision.max_markers, d.collision.max_markers);
   EXPECT_EQ(p.paced_outputs, d.paced_outputs);
   EXPECT_EQ(p.mirror_every_cloud, d.mirror_every_cloud);
-  EXPECT_FALSE(d.mirror_every_cloud);
+  EXPECT_TRUE(d.mirror_every_cloud);
   EXPECT_EQ(p.file_root, d.file_root);
 }
 
