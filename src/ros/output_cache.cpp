@@ -523,6 +523,7 @@ void MapOutputCache::recompute(const fragg::Map& map, const View& blocks,
   // computed), then the pieces in parallel (read-only map, one piece per iteration), then the
   // sums in order.
   for (const Source& source : sources) pieceFor(source);  // a piece's index is its slot
+  const auto made = std::chrono::steady_clock::now();
   std::vector<PieceDelta>& deltas = deltas_;
   deltas.assign(sources.size(), PieceDelta());
   const int64_t n = static_cast<int64_t>(sources.size());
@@ -543,6 +544,7 @@ void MapOutputCache::recompute(const fragg::Map& map, const View& blocks,
     deltas[j] =
         computePiece(map, blocks, cells, sources[j], masks_suffice, &pieces_[sources[j].slot]);
   }
+  const auto computed = std::chrono::steady_clock::now();
   int64_t occupied_delta = 0;
   for (size_t j = 0; j < sources.size(); ++j) {
     const PieceDelta& d = deltas[j];
@@ -569,6 +571,9 @@ void MapOutputCache::recompute(const fragg::Map& map, const View& blocks,
   occupied_cells_ = static_cast<size_t>(static_cast<int64_t>(occupied_cells_) + occupied_delta);
   out->blocks_read += sources.size();
   out->pieces_ms += msSince(t0);
+  out->pieces_made_ms += std::chrono::duration<double, std::milli>(made - t0).count();
+  out->pieces_computed_ms += std::chrono::duration<double, std::milli>(computed - made).count();
+  out->pieces_summed_ms += msSince(computed);
 }
 
 void MapOutputCache::drawColumn(const Column& col) {

@@ -273,7 +273,9 @@ void expectPacedReachesRebuild(MarkerStyle style, bool mirror = false, bool foll
   EXPECT_EQ(view.size(), full.size()) << "one marker per chunk";
   EXPECT_EQ(topic.shownChunks(), rebuilt.shownChunks());
   EXPECT_TRUE(paced(now_s).markers.empty()) << "nothing left to send";
-  if (follows) EXPECT_GE(lagged, 5u) << "the mirror was synced on the calls' path: not tested";
+  if (follows) {
+    EXPECT_GE(lagged, 5u) << "the mirror was synced on the calls' path: not tested";
+  }
 }
 
 TEST(MarkerChunks, PacedSharesEqualAFullRebuildTwoPeriodsAfterTheLastChange) {

@@ -533,10 +533,14 @@ TEST_P(OutputCachePaced, EqualsARebuildTwoPeriodsAfterTheLastChange) {
     (void)advance(now_s);
   }
   // (Following, the publication read the mirror one cloud behind: nothing new listed yet.)
-  if (!follows) EXPECT_GT(paced.queuedBlocks(), 0u);
+  if (!follows) {
+    EXPECT_GT(paced.queuedBlocks(), 0u);
+  }
   EXPECT_EQ(paced.update(map).blocks_queued, 0u);
   expectSameAsRebuild(map, paced, o, "update() after paced clouds");
-  if (follows) EXPECT_GE(lagged, 2u) << "no publication read a lagging mirror: not tested";
+  if (follows) {
+    EXPECT_GE(lagged, 2u) << "no publication read a lagging mirror: not tested";
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Options, OutputCachePaced, ::testing::Values(0, 3, 4, 7, 12, 15));

@@ -83,6 +83,9 @@ struct OutputCacheUpdate {
   /// pieces found or made and recomputed, the columns merged and the grid drawn, the pieces
   /// gathered into the next occupied cloud message.
   double list_ms = 0.0, pieces_ms = 0.0, grid_ms = 0.0, gather_ms = 0.0;
+  /// Wall milliseconds of pieces_ms's parts: pieces found or made (in order), recomputed (in
+  /// parallel), their changes summed into the columns (in order).
+  double pieces_made_ms = 0.0, pieces_computed_ms = 0.0, pieces_summed_ms = 0.0;
 };
 
 class MapOutputCache {

@@ -398,6 +398,13 @@ void printWorst(const std::vector<double>& total_ms, const std::vector<double>& 
         t.stages.bytes_gathered / 1e6, t.pending_chunks, t.queued_blocks, t.marker_faults,
         t.map_faults);
   }
+  std::printf(
+      "  their pieces' wall ms: made (in order) + recomputed (in parallel) + summed (in order)\n");
+  for (size_t k = 0; k < std::min(g_worst, order.size()); ++k) {
+    const Times& t = after[order[k]];
+    std::printf("%6zu %8.2f = %7.2f + %7.2f + %7.2f\n", order[k] + 1, t.stages.pieces_ms,
+                t.stages.pieces_made_ms, t.stages.pieces_computed_ms, t.stages.pieces_summed_ms);
+  }
 }
 
 /// Occupied cells of the whole map (for the rows; untimed).
