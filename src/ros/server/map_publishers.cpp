@@ -30,6 +30,22 @@ constexpr uint32_t kMarkerQueue = 50;
 // the last sync (a correction, clouds back to back with no pause between) is synced as before.
 constexpr uint64_t kFollowedLag = 1;
 
+/// MaskMirror::acceptLag for a scope (nothing with a null mirror); 0 again when it ends.
+class LagAccepted {
+ public:
+  LagAccepted(MaskMirror* mirror, uint64_t revisions) : mirror_(mirror) {
+    if (mirror_) mirror_->acceptLag(revisions);
+  }
+  ~LagAccepted() {
+    if (mirror_) mirror_->acceptLag(0);
+  }
+  LagAccepted(const LagAccepted&) = delete;
+  LagAccepted& operator=(const LagAccepted&) = delete;
+
+ private:
+  MaskMirror* mirror_;
+};
+
 double msSince(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since)
       .count();
@@ -137,15 +153,10 @@ void MapPublishers::publishAfterInsert(const sensor_msgs::PointCloud2& cloud,
   // Following the changes between clouds, this cloud's take-ins read the mirror as the last of
   // those syncs left it: without this cloud's changes (the next sync brings them in), one
   // insertion behind. A correction, a full publication and the timers' flushes sync it whole.
-  const bool lagging = followsChanges();
-  if (lagging) mirror_->acceptLag(kFollowedLag);
-  try {
+  {
+    const LagAccepted lag(followsChanges() ? mirror_.get() : nullptr, kFollowedLag);
     publishMaps(state->map, stamp, false, true, times);
-  } catch (...) {
-    if (lagging) mirror_->acceptLag(0);
-    throw;
   }
-  if (lagging) mirror_->acceptLag(0);
   if (wanted(frustum_pub_) && sensor.type != fragg::SensorType::kAuto && sensor.max_range_m > 0.0)
     frustum_pub_.publish(frustumMarker(sensor, T_map_sensor, params_.frame_id, stamp));
 }
@@ -201,8 +212,7 @@ void MapPublishers::betweenClouds() {
   std::lock_guard<std::mutex> publishing(publish_mutex_);
   if (!followsChanges()) return;
   const SharedMap::ReadGuard state = shared_->read("outputs' mirror between clouds");
-  mirror_->acceptLag(0);
-  (void)mirror_->sync(state->map);
+  (void)mirror_->sync(state->map);  // no lag accepted outside a cloud's outputs
 }
 
 void MapPublishers::mirrorFor(const fragg::Map& map) {
