@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstdint>
 #include <string>
 
 #include "cuda_stream.h"
@@ -171,15 +172,7 @@ const uint8_t* DeviceBlockCache::downloadDirtyFlags() {
   return dirty_host_.get();
 }
 
-void DeviceBlockCache::sync(BlockMap& blocks) {
-  if (!any_dirty_) return;
-  const uint8_t* dirty_flags = downloadDirtyFlags();
-  std::vector<int32_t> dirty;
-  for (int32_t s = 0; s < pool_.capacity(); ++s)
-    if (dirty_flags[s]) dirty.push_back(s);
-  writeBack(dirty, blocks);
-  any_dirty_ = false;
-}
+void DeviceBlockCache::sync(BlockMap& blocks) { (void)syncSome(blocks, SIZE_MAX); }
 
 bool DeviceBlockCache::syncSome(BlockMap& blocks, size_t max_blocks) {
   if (!any_dirty_) return false;

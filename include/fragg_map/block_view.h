@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "fragg_map/block_map.h"
@@ -40,6 +41,10 @@ struct BlockStamps {
 class BlockView {
  public:
   explicit BlockView(const BlockMap& blocks) : blocks_(&blocks) {}
+  /// A view that holds `pin` while it (or a copy) lives (Map::hostBlockView: the host's blocks
+  /// are not written back meanwhile).
+  BlockView(const BlockMap& blocks, std::shared_ptr<const void> pin)
+      : blocks_(&blocks), pin_(std::move(pin)) {}
 
   size_t size() const { return blocks_->size(); }
   bool empty() const { return blocks_->empty(); }
@@ -103,6 +108,7 @@ class BlockView {
 
  private:
   const BlockMap* blocks_;
+  std::shared_ptr<const void> pin_;  ///< HostViewGate::Pin, or none
 };
 
 }  // namespace fragg

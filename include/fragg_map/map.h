@@ -46,6 +46,7 @@ class Culler;
 class Pager;
 struct ScanRecord;
 struct MapImage;
+class HostViewGate;
 
 /// One scan of a batch (Map::insertSequence): Map::insert's arguments. The cloud is not
 /// copied; it must stay alive and unchanged during the call.
@@ -162,7 +163,10 @@ class Map {
   /// cells and masks, and blocks made there since are missing. For readers that took their keys
   /// from a blockView() and accept cells that old (the server's paced outputs between their
   /// take-ins: a write-back of every changed block at every cloud cost a CUDA map's markers
-  /// ~53 ms a cloud). Hold the map's read lock.
+  /// ~53 ms a cloud). Hold the map's read lock. The view pins the host's blocks while it lives:
+  /// another reader's blockView() waits to write back until it is gone, and this thread gets a
+  /// std::logic_error from blockView() while it holds one (a write-back would move the blocks
+  /// under it); take blockView() first where both are needed.
   [[nodiscard]] BlockView hostBlockView() const;
   /// Whether a device holds changes the host's blocks lack (hostBlockView() shows them older;
   /// blockView() writes them back first). False on a CPU map.
@@ -429,6 +433,12 @@ class Map {
   mutable BlockMap blocks_;
   /// Serialises that write-back between concurrent readers (a pointer: Map is movable).
   std::unique_ptr<std::mutex> sync_mutex_;
+  /// Pinned by every hostBlockView(): a reader's write-back waits until no such view is read
+  /// (host_view_gate.h). Shared: the views keep it alive.
+  std::shared_ptr<HostViewGate> host_view_gate_;
+  /// The backend's changes written into blocks_ (under sync_mutex_) once no hostBlockView() is
+  /// held; nothing when none is pending. The caller holds neither sync_mutex_ nor a view.
+  void writeBack() const;
   /// Held by a DeviceViewLease: one device view at a time (its blocks stay resident).
   std::unique_ptr<std::mutex> view_mutex_;
   /// deviceView() with its scope.

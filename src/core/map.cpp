@@ -13,6 +13,7 @@
 #include "fragg_map/internal/culler.h"
 #include "fragg_map/internal/frustum_builder.h"
 #include "fragg_map/internal/height_filter.h"
+#include "fragg_map/internal/host_view_gate.h"
 #include "fragg_map/internal/no_return_beams.h"
 #include "fragg_map/internal/pager.h"
 #include "fragg_map/internal/reserve_headroom.h"
@@ -102,6 +103,7 @@ Map::Map(const MapParams& params)
   backend_reason_ = std::move(choice.reason);
   blocks_ = BlockMap(backend_->hostAllocator());
   sync_mutex_ = std::make_unique<std::mutex>();
+  host_view_gate_ = std::make_shared<HostViewGate>();
   view_mutex_ = std::make_unique<std::mutex>();
   culler_ = std::make_unique<Culler>(params_.culling);
   scan_store_ = std::make_unique<ScanStore>(params_.scans);
@@ -117,6 +119,7 @@ Map& Map::operator=(Map&& other) noexcept {
   backend_reason_ = std::move(other.backend_reason_);
   blocks_ = std::move(other.blocks_);
   sync_mutex_ = std::move(other.sync_mutex_);
+  host_view_gate_ = std::move(other.host_view_gate_);
   view_mutex_ = std::move(other.view_mutex_);
   culler_ = std::move(other.culler_);
   revision_ = other.revision_;
@@ -583,15 +586,28 @@ void Map::reset() {
   next_scan_id_ = 0;
 }
 
+void Map::writeBack() const {
+  {
+    std::lock_guard<std::mutex> lock(*sync_mutex_);
+    if (!backend_->cache().needsSync()) return;
+  }
+  // Once no hostBlockView() is read (sync_mutex_ is not held while waiting for them: a reader
+  // holding a view may take it, e.g. deviceChangesPending()).
+  host_view_gate_->exclusive([&] {
+    std::lock_guard<std::mutex> lock(*sync_mutex_);
+    backend_->cache().sync(blocks_);
+  });
+}
+
 const BlockMap& Map::hostBlocks() const {
-  std::lock_guard<std::mutex> lock(*sync_mutex_);
-  backend_->cache().sync(blocks_);
+  writeBack();
   return blocks_;
 }
 
 BlockView Map::hostBlockView() const {
-  std::lock_guard<std::mutex> lock(*sync_mutex_);  // not while another reader writes back
-  return BlockView(blocks_);
+  // No reader writes back while the view lives (the insertion, which writes blocks_ under
+  // sync_mutex_, runs under the map's write lock: never beside a reader).
+  return BlockView(blocks_, host_view_gate_->pin());
 }
 
 bool Map::deviceChangesPending() const {
@@ -600,8 +616,12 @@ bool Map::deviceChangesPending() const {
 }
 
 bool Map::writeBackSome(size_t max_blocks) {
-  std::lock_guard<std::mutex> lock(*sync_mutex_);
-  return backend_->cache().syncSome(blocks_, max_blocks);
+  bool more = false;
+  host_view_gate_->exclusive([&] {
+    std::lock_guard<std::mutex> lock(*sync_mutex_);
+    more = backend_->cache().syncSome(blocks_, max_blocks);
+  });
+  return more;
 }
 
 const char* Map::backendName() const { return backend_->name(); }

@@ -80,10 +80,7 @@ void Map::attachPageStore(std::shared_ptr<PageStore> store, const PagingPolicy& 
   }
   if (!store->keys().empty())
     throw IoError(store->path() + ": the store holds blocks but no map metadata");
-  {
-    std::lock_guard<std::mutex> lock(*sync_mutex_);
-    backend_->cache().sync(blocks_);
-  }
+  writeBack();
   auto pager = std::make_unique<Pager>(std::move(store), policy, params_.resolution_m);
   pager->reserveSlots(blocks_);  // the arrays never grow under the budget
   pager->markAllDirty();
@@ -382,10 +379,7 @@ Map Map::extract(const Eigen::Vector3d& min_map, const Eigen::Vector3d& max_map,
 
 void Map::commitPages() {
   if (!pager_) return;
-  {
-    std::lock_guard<std::mutex> lock(*sync_mutex_);
-    backend_->cache().sync(blocks_);
-  }
+  writeBack();
   pager_->commit(blocks_, revision_, metaOf(params_, scans_));
   pager_->flush();  // in the store when this returns
 }
@@ -407,8 +401,7 @@ void Map::pageAfterScan(const Eigen::Vector3d& sensor_map) {
     // The host map is made complete (the device's changes written back, and the blocks the
     // rays created on the device given host blocks) before it is committed or its clean
     // blocks are chosen.
-    std::lock_guard<std::mutex> lock(*sync_mutex_);
-    backend_->cache().sync(blocks_);
+    writeBack();
   }
   pager_->noteSyncSeconds(std::chrono::duration<double>(Clock::now() - t0).count());
   pager_->noteResident(blocks_.size());

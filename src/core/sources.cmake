@@ -27,6 +27,7 @@ set(FRAGG_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/log.cpp
   ${CMAKE_CURRENT_LIST_DIR}/backend_factory.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cell_writer.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/host_view_gate.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/block_chunks.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_file.cpp

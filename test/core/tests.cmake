@@ -21,6 +21,7 @@ fragg_add_test(fragg_core_test
           ${CMAKE_CURRENT_LIST_DIR}/free_cut_cell_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/state_masks_test.cpp
           ${CMAKE_CURRENT_LIST_DIR}/change_log_test.cpp
+          ${CMAKE_CURRENT_LIST_DIR}/host_view_gate_test.cpp
   LIBS fragg_map_core ZLIB::ZLIB
   LABELS core)
 # Map::image + writeMapImage (the server's autosave) and the kill test: fragg_map_save_loop

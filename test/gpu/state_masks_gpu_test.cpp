@@ -10,6 +10,7 @@
 #include <functional>
 #include <map>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -161,6 +162,34 @@ TEST(StateMasksGpuTest, HostBlockViewLagsTheDeviceUntilAWriteBack) {
     if (!a || !h || !(*a == *h)) ++differ;
   });
   EXPECT_EQ(differ, 0u);
+}
+
+// A hostBlockView() pins the host's blocks (host_view_gate.h): with device changes pending, the
+// thread that holds one gets a logic_error from blockView() (the write-back would move the
+// blocks under its own view) and the map stays as it was; once the view is gone the write-back
+// runs and the host shows the device's blocks. (Another thread's write-back waits for the view
+// instead: HostViewGate's own tests.)
+TEST(StateMasksGpuTest, AWriteBackUnderThisThreadsHostViewIsRefused) {
+  REQUIRE_DEVICE();
+  const std::vector<Input> scans = outAndBack(2, 0.5);
+  Map gpu(paramsFor(Backend::kCuda, 0.05));
+  ASSERT_STREQ(gpu.backendName(), "cuda") << gpu.backendReason();
+  const SensorModel sensor = SensorModel::autoFromCloud(0.0, 30.0);
+  gpu.insert(scans[0].cloud, scans[0].T, sensor);
+  gpu.insert(scans[1].cloud, scans[1].T, sensor);
+  ASSERT_TRUE(gpu.deviceChangesPending());
+  size_t host_size = 0;
+  {
+    const BlockView host = gpu.hostBlockView();
+    host_size = host.size();
+    EXPECT_THROW((void)gpu.blockView(), std::logic_error);
+    EXPECT_TRUE(gpu.deviceChangesPending()) << "written back under the view";
+    EXPECT_EQ(host.size(), host_size);
+  }
+  const BlockView all = gpu.blockView();
+  EXPECT_FALSE(gpu.deviceChangesPending());
+  EXPECT_GE(all.size(), host_size);
+  EXPECT_EQ(gpu.hostBlockView().size(), all.size());
 }
 
 // Map::writeBackSome (the frontier mirror's write-back in pieces, each under the write lock):
