@@ -576,19 +576,29 @@ void MapOutputCache::recompute(const fragg::Map& map, const View& blocks,
   out->pieces_summed_ms += msSince(computed);
 }
 
+MapOutputCache::Tile& MapOutputCache::tileAt(int64_t x, int64_t y) {
+  const fragg::BlockKey tile_key{static_cast<int32_t>(x >> kTileBits),
+                                 static_cast<int32_t>(y >> kTileBits), 0};
+  uint32_t t = tile_index_.find(tile_key);
+  if (t == fragg::BlockKeyTable::kNone) {
+    t = static_cast<uint32_t>(tiles_.size());
+    tiles_.emplace_back().cells.fill(kUnknown);
+    tile_index_.insert(tile_key, t);
+  }
+  return tiles_[t];
+}
+
 void MapOutputCache::drawColumn(const Column& col) {
-  const int64_t x0 = int64_t{col.x} * fragg::kBlockSize - grid_min_x_;
-  const int64_t y0 = int64_t{col.y} * fragg::kBlockSize - grid_min_y_;
+  // A column's 8 x 8 cells lie in one tile (tiles are multiples of 8 cells, aligned).
+  static_assert(kTileCells % fragg::kBlockSize == 0, "a column never straddles two tiles");
+  const int64_t x0 = int64_t{col.x} * fragg::kBlockSize, y0 = int64_t{col.y} * fragg::kBlockSize;
+  Tile& tile = tileAt(x0, y0);
+  const int64_t tx = x0 & (kTileCells - 1), ty = y0 & (kTileCells - 1);
   for (int ly = 0; ly < fragg::kBlockSize; ++ly) {
-    const int64_t gy = y0 + ly;
-    if (gy < 0 || gy >= grid_height_) continue;
+    int8_t* row = tile.cells.data() + (ty + ly) * kTileCells + tx;
     for (int lx = 0; lx < fragg::kBlockSize; ++lx) {
-      const int64_t gx = x0 + lx;
-      if (gx < 0 || gx >= grid_width_) continue;
       const int bit = lx + fragg::kBlockSize * ly;
-      grid_[static_cast<size_t>(gy * grid_width_ + gx)] = (col.occupied >> bit & 1) ? kOccupied
-                                                          : (col.free >> bit & 1)   ? kFree
-                                                                                    : kUnknown;
+      row[lx] = (col.occupied >> bit & 1) ? kOccupied : (col.free >> bit & 1) ? kFree : kUnknown;
     }
   }
 }
@@ -610,9 +620,17 @@ void MapOutputCache::refreshGrid(bool all, bool draw) {
   redraw_owed_ = false;
   undrawn_.swap(drawing_);
   undrawn_.clear();
+  if (redraw) {
+    // Every column again on tiles made unknown (their memory kept: no fresh pages).
+    for (Tile& tile : tiles_) tile.cells.fill(kUnknown);
+    for (const Column& col : columns_) drawColumn(col);
+  } else {
+    // The columns merged since the last draw (an emptied column merged to unknown); the
+    // others are drawn as they were, wherever the published bounds have moved to.
+    for (const uint32_t c : drawing_) drawColumn(columns_[c]);
+  }
   if (empty) {
     grid_empty_ = true;
-    grid_.clear();
     grid_width_ = grid_height_ = 0;
     return;
   }
@@ -621,21 +639,44 @@ void MapOutputCache::refreshGrid(bool all, bool draw) {
     const GridSpan y = octomapServerGridSpan(lo_y, hi_y, resolution_m_);
     lo_x = x.lo, hi_x = x.hi, lo_y = y.lo, hi_y = y.hi;
   }
-  const bool moved = grid_empty_ || lo_x != grid_min_x_ || lo_y != grid_min_y_ ||
-                     hi_x - lo_x + 1 != grid_width_ || hi_y - lo_y + 1 != grid_height_;
-  if (moved || redraw) {
-    grid_empty_ = false;
-    grid_min_x_ = static_cast<int32_t>(lo_x);
-    grid_min_y_ = static_cast<int32_t>(lo_y);
-    grid_width_ = hi_x - lo_x + 1;
-    grid_height_ = hi_y - lo_y + 1;
-    grid_.assign(static_cast<size_t>(grid_width_ * grid_height_), kUnknown);
-    for (const Column& col : columns_) drawColumn(col);
-    return;
+  // Every drawn cell is observed, so it lies inside the bounds: cells of the tiles outside
+  // them are unknown and not published.
+  grid_empty_ = false;
+  grid_min_x_ = static_cast<int32_t>(lo_x);
+  grid_min_y_ = static_cast<int32_t>(lo_y);
+  grid_width_ = hi_x - lo_x + 1;
+  grid_height_ = hi_y - lo_y + 1;
+}
+
+void MapOutputCache::copyPublished(int8_t* dst) const {
+  // Tile by tile: each tile's part of the rectangle row by row; no tile: unknown.
+  const int64_t x_end = int64_t{grid_min_x_} + grid_width_;
+  const int64_t y_end = int64_t{grid_min_y_} + grid_height_;
+  const size_t row_bytes = static_cast<size_t>(grid_width_);
+  for (int64_t y0 = grid_min_y_; y0 < y_end;) {
+    const int64_t tile_y = y0 >> kTileBits;
+    const int64_t y1 = std::min(y_end, (tile_y + 1) << kTileBits);
+    for (int64_t x0 = grid_min_x_; x0 < x_end;) {
+      const int64_t tile_x = x0 >> kTileBits;
+      const int64_t x1 = std::min(x_end, (tile_x + 1) << kTileBits);
+      const uint32_t t =
+          tile_index_.find({static_cast<int32_t>(tile_x), static_cast<int32_t>(tile_y), 0});
+      const size_t bytes = static_cast<size_t>(x1 - x0);
+      for (int64_t y = y0; y < y1; ++y) {
+        int8_t* out = dst + static_cast<size_t>(y - grid_min_y_) * row_bytes +
+                      static_cast<size_t>(x0 - grid_min_x_);
+        if (t == fragg::BlockKeyTable::kNone) {
+          std::memset(out, kUnknown, bytes);
+        } else {
+          const int8_t* in = tiles_[t].cells.data() + (y & (kTileCells - 1)) * kTileCells +
+                             (x0 & (kTileCells - 1));
+          std::memcpy(out, in, bytes);
+        }
+      }
+      x0 = x1;
+    }
+    y0 = y1;
   }
-  // Same bounds: patch the columns merged since the last draw (an emptied column merged to
-  // unknown).
-  for (const uint32_t c : drawing_) drawColumn(columns_[c]);
 }
 
 const sensor_msgs::PointCloud2& MapOutputCache::occupiedCloud(const std::string& frame_id,
@@ -707,8 +748,8 @@ PreserializedCloud MapOutputCache::occupiedCloudWire(const std::string& frame_id
 PreserializedGrid MapOutputCache::projectedMapWire(const std::string& frame_id,
                                                    const ::ros::Time& stamp) {
   const nav_msgs::OccupancyGrid empty = gridWithoutData(frame_id, stamp);
-  const size_t bytes = grid_empty_ ? 0 : grid_.size();
-  if (bytes > 0) std::memcpy(grid_wire_.reserve(bytes, 0), grid_.data(), bytes);
+  const size_t bytes = grid_empty_ ? 0 : static_cast<size_t>(grid_width_ * grid_height_);
+  if (bytes > 0) copyPublished(reinterpret_cast<int8_t*>(grid_wire_.reserve(bytes, 0)));
   const ::ros::SerializedMessage fields = ::ros::serialization::serializeMessage(empty);
   return PreserializedGrid{grid_wire_.finish(fields, 0, bytes)};
 }
@@ -732,7 +773,9 @@ nav_msgs::OccupancyGrid MapOutputCache::gridWithoutData(const std::string& frame
 nav_msgs::OccupancyGrid MapOutputCache::projectedMap(const std::string& frame_id,
                                                      const ::ros::Time& stamp) const {
   nav_msgs::OccupancyGrid grid = gridWithoutData(frame_id, stamp);
-  if (!grid_empty_) grid.data = grid_;
+  if (grid_empty_) return grid;
+  grid.data.resize(static_cast<size_t>(grid_width_ * grid_height_));
+  copyPublished(grid.data.data());
   return grid;
 }
 

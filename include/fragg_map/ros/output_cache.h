@@ -316,11 +316,26 @@ class MapOutputCache {
   /// A piece left or lost bounds: seen_* are recomputed over every column.
   bool bounds_stale_ = false;
   int64_t seen_lo_x_ = 0, seen_hi_x_ = -1, seen_lo_y_ = 0, seen_hi_y_ = -1;
-  // The grid: cells [grid_min_x, +width) x [grid_min_y, +height), row-major (y rows).
+  // The grid published: cells [grid_min_x, +width) x [grid_min_y, +height) (the observed
+  // bounds, or octomap_server's span of them).
   bool grid_empty_ = true;
   int32_t grid_min_x_ = 0, grid_min_y_ = 0;
   int64_t grid_width_ = 0, grid_height_ = 0;
-  std::vector<int8_t> grid_;
+  /// The grid's cells, drawn column by column into tiles of kTileCells x kTileCells (made
+  /// where a column is first drawn, unknown until then): the published rectangle moves as the
+  /// map grows (at nearly every publication while the sensor moves) without a redraw or a new
+  /// buffer; a publication copies the rectangle out of the tiles (copyPublished).
+  static constexpr int kTileBits = 8;
+  static constexpr int64_t kTileCells = int64_t{1} << kTileBits;
+  struct Tile {
+    std::array<int8_t, kTileCells * kTileCells> cells;  ///< row-major (y rows)
+  };
+  std::deque<Tile> tiles_;           ///< never moved as it grows
+  fragg::BlockKeyTable tile_index_;  ///< {tile x, tile y, 0} -> index into tiles_
+  /// The tile holding cell (x, y) (made, unknown, when missing).
+  Tile& tileAt(int64_t x, int64_t y);
+  /// Copies the published rectangle to `dst` (grid_width_ * grid_height_ bytes, row-major).
+  void copyPublished(int8_t* dst) const;
   /// The next occupied cloud message's payload: with_cells_[0, gathered_) are in it, their
   /// gathered_bytes_ written (the pieces have not changed since: any recompute starts over).
   WirePayload cloud_wire_;
