@@ -1,5 +1,9 @@
 #include "fragg_map/block_view.h"
 
+#include <omp.h>
+
+#include <cstdint>
+
 namespace fragg {
 
 void BlockView::forEach(const BlockVisitor& fn) const {
@@ -35,28 +39,54 @@ BlockStamps BlockView::stamps(const BlockKey& key) const {
 }
 
 namespace {
-uint64_t stampOf(const BlockMeta& m, BlockChange what) {
+/// The stamp of BlockMeta that `what` reads.
+uint64_t BlockMeta::*stampField(BlockChange what) {
   switch (what) {
     case BlockChange::kOccupied:
-      return m.occupied_at;
+      return &BlockMeta::occupied_at;
     case BlockChange::kState:
-      return m.state_at;
+      return &BlockMeta::state_at;
     case BlockChange::kMasks:
-      return m.masks_at;
+      return &BlockMeta::masks_at;
     case BlockChange::kAny:
       break;
   }
-  return m.changed_at;
+  return &BlockMeta::changed_at;
 }
+
+/// Slots from which a walk runs on the map's threads (below, one thread is quicker).
+constexpr BlockIndex kParallelWalkSlots = 32768;
 
 /// Appends the slots whose `what` stamp is after `revision` to `out`, ascending: the metadata
 /// read in storage order (free slots carry no stamps), where a walk through the index reads it
-/// at random.
+/// at random. A large map's walk is cut into one range per thread (each thread's slots kept
+/// apart, then joined in order): it reads every block's metadata, ~3 ms for a LiDAR map of
+/// 150 k blocks on one thread of the 2-core machine, at each whole-map publication.
 void stampedAfter(const BlockMap& blocks, uint64_t revision, BlockChange what,
                   std::vector<BlockIndex>* out) {
   const BlockIndex n = static_cast<BlockIndex>(blocks.slotCount());
-  for (BlockIndex i = 0; i < n; ++i)
-    if (stampOf(blocks.meta(i), what) > revision) out->push_back(i);
+  uint64_t BlockMeta::*const stamp = stampField(what);
+  const int threads = n >= kParallelWalkSlots ? omp_get_max_threads() : 1;
+  if (threads <= 1) {
+    for (BlockIndex i = 0; i < n; ++i)
+      if (blocks.meta(i).*stamp > revision) out->push_back(i);
+    return;
+  }
+  std::vector<std::vector<BlockIndex>> parts(static_cast<size_t>(threads));
+#pragma omp parallel num_threads(threads)
+  {
+    const int t = omp_get_thread_num(), team = omp_get_num_threads();
+    const BlockIndex begin = static_cast<BlockIndex>(int64_t{n} * t / team);
+    const BlockIndex end = static_cast<BlockIndex>(int64_t{n} * (t + 1) / team);
+    std::vector<BlockIndex>& part = parts[static_cast<size_t>(t)];
+    for (BlockIndex i = begin; i < end; ++i)
+      if (blocks.meta(i).*stamp > revision) part.push_back(i);
+  }
+  size_t total = out->size();
+  for (const std::vector<BlockIndex>& part : parts) total += part.size();
+  out->reserve(total);
+  for (const std::vector<BlockIndex>& part : parts)
+    out->insert(out->end(), part.begin(), part.end());
 }
 
 std::vector<BlockIndex> stampedAfter(const BlockMap& blocks, uint64_t revision, BlockChange what) {

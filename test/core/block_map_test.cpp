@@ -4,6 +4,7 @@
 #include "fragg_map/block_map.h"
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <map>
@@ -669,6 +670,55 @@ TEST(BlockViewSlots, ChangedSlotsEqualTheChangedKeysAndErasedSlotsHoldNothing) {
   blocks.clear();
   EXPECT_TRUE(view.allSlots().empty());
   EXPECT_TRUE(view.changedSlotsSince(0, BlockChange::kAny).empty());
+}
+
+// A walk over a large map's stamps runs on the map's threads in ranges (kParallelWalkSlots):
+// it lists exactly the slots a one-thread walk lists, ascending, for every stamp, with erased
+// slots among them, whatever the thread count (3: ranges of unequal ends).
+TEST(BlockViewSlots, ALargeMapsWalkOnSeveralThreadsListsWhatOneThreadLists) {
+  BlockMap blocks;
+  uint64_t state = 12345;
+  const auto next = [&] {  // a fixed LCG: the same stamps on every run
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return state >> 33;
+  };
+  constexpr int kBlocks = 40000;  // above the walk's threshold for threads
+  std::vector<BlockKey> keys;
+  for (int i = 0; i < kBlocks; ++i) {
+    const BlockKey k{i % 53 - 26, (i / 53) % 41 - 20, i / (53 * 41)};
+    keys.push_back(k);
+    BlockMeta& m = blocks.meta(blocks.findOrCreate(k));
+    m.masks_at = next() % 100;
+    m.occupied_at = m.masks_at + next() % 10;
+    m.state_at = m.occupied_at + next() % 10;
+    m.changed_at = m.state_at + next() % 10;
+  }
+  std::vector<BlockKey> erased;
+  for (int i = 0; i < kBlocks; i += 97) erased.push_back(keys[i]);
+  blocks.erase(erased);
+  const BlockView view(blocks);
+  const int threads_before = omp_get_max_threads();
+  for (const int threads : {1, 2, 3}) {
+    omp_set_num_threads(threads);
+    for (const BlockChange what :
+         {BlockChange::kAny, BlockChange::kOccupied, BlockChange::kState}) {
+      for (const uint64_t revision : {uint64_t{0}, uint64_t{50}, uint64_t{110}, uint64_t{200}}) {
+        SCOPED_TRACE(::testing::Message()
+                     << threads << " threads, change " << int(what) << ", after " << revision);
+        std::vector<BlockIndex> expected;
+        for (BlockIndex i = 0; i < view.slotCount(); ++i) {
+          if (!blocks.liveAt(i)) continue;
+          const BlockStamps st = view.stamps(view.keyAt(i));
+          const uint64_t stamp = what == BlockChange::kOccupied ? st.occupied_at
+                                 : what == BlockChange::kState  ? st.state_at
+                                                                : st.changed_at;
+          if (stamp > revision) expected.push_back(i);
+        }
+        EXPECT_EQ(view.changedSlotsSince(revision, what), expected);
+      }
+    }
+  }
+  omp_set_num_threads(threads_before);
 }
 
 }  // namespace
