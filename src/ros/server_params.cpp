@@ -545,6 +545,7 @@ ServerParams parseKnown(const XmlRpcValue& root) {
     badParam("map_rate", "must be a finite rate in Hz >= 0 (0 = after every cloud)");
   readBool(root, "paced_outputs", &p.paced_outputs);
   readBool(root, "mirror_every_cloud", &p.mirror_every_cloud);
+  readBool(root, "shares_between_clouds", &p.shares_between_clouds);
   readInt(root, "markers/chunk_blocks", &p.marker_chunk_blocks);
   if (p.marker_chunk_blocks < 1 || p.marker_chunk_blocks > 64)
     badParam("markers/chunk_blocks", "must be 1..64 blocks a side");

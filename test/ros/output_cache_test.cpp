@@ -463,8 +463,11 @@ TEST_P(OutputCachePaced, EqualsARebuildTwoPeriodsAfterTheLastChange) {
   // 4: both through one mask mirror (shared, as the server's outputs share it); 8: as the
   // server that brings it up to date between clouds, each paced call reads it one cloud behind
   // (MaskMirror::acceptLag) and a sync follows the call.
+  // 16 (with 8 and 4): as the server with shares_between_clouds, a cloud's call only at a
+  // publication, and each cloud's share of the queue between clouds, after the sync.
   const auto mirror = std::make_shared<MaskMirror>();
   const bool follows = GetParam() & 8;
+  const bool between = GetParam() & 16;
   if (GetParam() & 4) {
     paced.useMirror(mirror);
     caught_up.useMirror(mirror);
@@ -478,15 +481,29 @@ TEST_P(OutputCachePaced, EqualsARebuildTwoPeriodsAfterTheLastChange) {
   // As the server: a publication (the grid drawn, the changes listed, the messages sent) once a
   // period; the cloud message is gathered in shares once a period's queue is recomputed.
   size_t gather_shares = 0;  // clouds between publications that gathered part of the cloud
+  size_t queued_after = 0;   // the queue right after the call whose result advance returns
   const auto advance = [&](double t_s) {
     const bool due = t_s - published_s >= kPeriodS;
     if (due) published_s = t_s;
     if (follows) mirror->acceptLag(1);
-    const OutputCacheUpdate u = paced.advance(map, t_s, kPeriodS, due);
+    OutputCacheUpdate u;
+    if (!between || due) {
+      u = paced.advance(map, t_s, kPeriodS, due);
+      queued_after = paced.queuedBlocks();
+    }
     if (follows) {
       lagged += due && mirror->revision() + 1 == map.revision();
       mirror->acceptLag(0);
       (void)mirror->sync(map);  // between clouds
+    }
+    if (between) {
+      // The share between clouds (right after a publication's call too: a share of nothing).
+      const OutputCacheUpdate share = paced.advance(map, t_s, kPeriodS, false);
+      EXPECT_FALSE(share.full);
+      if (!due) {
+        u = share;
+        queued_after = paced.queuedBlocks();
+      }
     }
     if (due) {
       expectWireEqualsMessages(&paced, "map", "publication at " + std::to_string(t_s) + " s");
@@ -504,7 +521,7 @@ TEST_P(OutputCachePaced, EqualsARebuildTwoPeriodsAfterTheLastChange) {
     map.insert(ringScan(&rng, 2000), T_map_sensor, fragg::SensorModel::autoFromCloud(0.0, 10.0));
     const OutputCacheUpdate u = advance(now_s);
     EXPECT_FALSE(u.full) << cloud;
-    EXPECT_EQ(u.blocks_queued, paced.queuedBlocks());
+    EXPECT_EQ(u.blocks_queued, queued_after);
     shares += u.blocks_read > 0 && u.blocks_queued > 0;
     if (cloud == 5) {
       // update() lists and takes everything at once: a second cache kept that way agrees.
@@ -543,7 +560,7 @@ TEST_P(OutputCachePaced, EqualsARebuildTwoPeriodsAfterTheLastChange) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Options, OutputCachePaced, ::testing::Values(0, 3, 4, 7, 12, 15));
+INSTANTIATE_TEST_SUITE_P(Options, OutputCachePaced, ::testing::Values(0, 3, 4, 7, 12, 15, 28, 31));
 
 // A message handed to roscpp is never written again while roscpp holds it (a latched topic, a
 // subscriber's queue): the next one goes into another buffer; one roscpp let go of is reused.

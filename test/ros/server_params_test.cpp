@@ -233,6 +233,7 @@ TEST(ServerParams, ReadsEveryName) {
   set(root, "occupancy_max_z", 1.8);
   set(root, "latch", false);
   set(root, "mirror_every_cloud", true);
+  set(root, "shares_between_clouds", false);
   set(root, "publish_free_space", true);
   set(root, "backend", std::string("cpu"));
   set(root, "raycast", std::string("bresenham"));
@@ -247,6 +248,7 @@ TEST(ServerParams, ReadsEveryName) {
   EXPECT_EQ(p.map.resolution_m, 0.1);
   EXPECT_EQ(p.frame_id, "odom");
   EXPECT_TRUE(p.mirror_every_cloud);
+  EXPECT_FALSE(p.shares_between_clouds);
   EXPECT_EQ(p.map.occupancy.prob_hit, 0.8);
   EXPECT_EQ(p.map.occupancy.prob_miss, 0.3);
   EXPECT_EQ(p.map.occupancy.clamp_min, 0.1);
@@ -498,6 +500,8 @@ TEST(ServerParamsConfig, DefaultYamlMatchesTheCoreDefaults) {
   EXPECT_EQ(p.paced_outputs, d.paced_outputs);
   EXPECT_EQ(p.mirror_every_cloud, d.mirror_every_cloud);
   EXPECT_TRUE(d.mirror_every_cloud);
+  EXPECT_EQ(p.shares_between_clouds, d.shares_between_clouds);
+  EXPECT_TRUE(d.shares_between_clouds);
   EXPECT_EQ(p.file_root, d.file_root);
 }
 

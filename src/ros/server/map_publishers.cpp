@@ -208,11 +208,22 @@ bool MapPublishers::followsChanges() const {
          wanted(projected_map_pub_);
 }
 
+bool MapPublishers::sharesBetweenClouds() const {
+  return params_.shares_between_clouds && pacedMaps() && followsChanges() &&
+         (wanted(occupied_cloud_pub_) || wanted(centers_pub_) || wanted(projected_map_pub_));
+}
+
 void MapPublishers::betweenClouds() {
   std::lock_guard<std::mutex> publishing(publish_mutex_);
   if (!followsChanges()) return;
   const SharedMap::ReadGuard state = shared_->read("outputs' mirror between clouds");
   (void)mirror_->sync(state->map);  // no lag accepted outside a cloud's outputs
+  // The output cache's share of what the last publication listed (and of the next cloud
+  // message), read from the mirror just synced: staging, nothing is published.
+  if (sharesBetweenClouds())
+    (void)outputs_.advance(state->map, ::ros::SteadyTime::now().toSec(),
+                           held_maps_.throttle().periodS(), false,
+                           wanted(occupied_cloud_pub_) || wanted(centers_pub_));
 }
 
 void MapPublishers::mirrorFor(const fragg::Map& map) {
@@ -245,6 +256,8 @@ void MapPublishers::publishMapOutputs(const fragg::Map& map, const ::ros::Time& 
     // Paced: the cache takes its share of the changed blocks after every cloud (each within a
     // period of its change), and the messages go out when due, as the cache has them.
     const bool due = held_maps_.letThrough(now_s, stamp);
+    // Shares between clouds: only a publication's call (its listing) stays on the path.
+    if (!due && sharesBetweenClouds()) return;
     outputs_.advance(map, now_s, held_maps_.throttle().periodS(), due, cloud_wanted);
     if (!due) return;
     held_maps_.published(now_s);

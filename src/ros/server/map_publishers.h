@@ -56,7 +56,9 @@ class MapPublishers {
   /// CUDA map whose paced outputs someone reads, the mask mirror takes in the changes of the
   /// clouds since its last sync, so that the next cloud's take-ins read it as it stands (one
   /// insertion behind: MaskMirror::acceptLag) instead of syncing a period's changes on that
-  /// cloud's path. Takes the publishers' mutex and the map's read lock; nothing otherwise.
+  /// cloud's path; with shares_between_clouds the output cache then takes its share too
+  /// (sharesBetweenClouds). Takes the publishers' mutex and the map's read lock; nothing
+  /// otherwise.
   void betweenClouds();
   /// After a pose correction, a truncation or a merge: the markers of the blocks it changed
   /// (incremental, as after an insertion; throttled by marker_rate), occupied cloud, projected
@@ -99,6 +101,11 @@ class MapPublishers {
   /// anyone reads the mirror's outputs). Whether it is on: mirror_every_cloud, a mirror, paced
   /// outputs and someone to read them. Nothing on a CPU map (no mirror).
   [[nodiscard]] bool followsChanges() const;
+  /// Whether the output cache's paced shares run between clouds (betweenClouds) rather than on
+  /// each cloud's path: shares_between_clouds, followsChanges, paced whole-map outputs and
+  /// someone to send them to. A publication's call (the listing, the grid, the messages) stays
+  /// on the path of the cloud it is due after.
+  [[nodiscard]] bool sharesBetweenClouds() const;
   /// paced_outputs with a marker_rate / map_rate limit in effect.
   bool pacedMarkers() const { return params_.paced_outputs && marker_throttle_.limited(); }
   bool pacedMaps() const { return params_.paced_outputs && held_maps_.throttle().limited(); }

@@ -139,6 +139,8 @@ bool g_sync_stage = false;
 bool g_sync_between = false;
 /// --mirror: the after path reads a mask mirror.
 bool g_mirror = false;
+/// --shares-between: with --sync-between, the output cache's shares run between clouds.
+bool g_shares_between = false;
 
 /// Which outputs of the after path go out after a cloud.
 struct Due {
@@ -225,6 +227,8 @@ class Outputs {
       t0 = Clock::now();
       grid = fragg::ros::projectedMap(map, kMinZ, kMaxZ, "map", ros::Time());
       t.grid = msSince(t0);
+    } else if (paced_maps && !due.maps && sharesBetween()) {
+      // The share runs between clouds (syncBetween): nothing on the path.
     } else if (paced_maps && !due.maps) {
       // This cloud's share of the changed blocks; no message.
       const fragg::ros::OutputCacheUpdate u =
@@ -267,12 +271,20 @@ class Outputs {
   /// --sync-between, the server's work between clouds (mirror_every_cloud): the mirror takes in
   /// the changes since its last sync, and the next cloud's take-ins read it as it stands, one
   /// cloud behind (MaskMirror::acceptLag). Returns the sync's wall ms (0 without a mirror).
-  double syncBetween(const fragg::Map& map) {
+  /// With --shares-between (and paced whole-map outputs) the output cache's share follows the
+  /// sync (the server's shares_between_clouds); its wall ms go to `*share_ms`.
+  double syncBetween(const fragg::Map& map, const Pace& pace, double* share_ms) {
+    *share_ms = 0.0;
     if (!mirror_) return 0.0;
     const auto t0 = Clock::now();
     mirror_->acceptLag(0);
     (void)mirror_->sync(map);
     const double ms = msSince(t0);
+    if (sharesBetween() && pace.on && pace.map_period_s > 0.0) {
+      const auto t1 = Clock::now();
+      (void)cache_.advance(map, pace.now_s, pace.map_period_s, false);
+      *share_ms = msSince(t1);
+    }
     mirror_->acceptLag(1);
     return ms;
   }
@@ -281,6 +293,8 @@ class Outputs {
   size_t queued() const { return cache_.queuedBlocks() + ledger_.pendingChunks(); }
 
  private:
+  /// The after path's cache shares run between clouds (--shares-between with a mirror).
+  bool sharesBetween() const { return !before_ && mirror_ && g_sync_between && g_shares_between; }
   static fragg::ros::OutputCacheOptions optionsWith(fragg::BlockChange refresh_on) {
     fragg::ros::OutputCacheOptions o;
     o.refresh_on = refresh_on;
@@ -433,7 +447,7 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
   // The first call reads the whole map (a loaded map, or nothing yet): untimed.
   after.publish(map);
   if (!after_only) any.publish(map);
-  std::vector<double> total_before, total_after, total_any, converts, between_ms;
+  std::vector<double> total_before, total_after, total_any, converts, between_ms, between_share_ms;
   std::vector<Times> after_times;
   std::vector<Due> dues;
   fragg::ros::RateThrottle marker_throttle(rates.marker_hz), map_throttle(rates.map_hz);
@@ -456,7 +470,11 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
     pace.marker_period_s = rates.marker_hz > 0.0 ? 1.0 / rates.marker_hz : 0.0;
     pace.map_period_s = rates.map_hz > 0.0 ? 1.0 / rates.map_hz : 0.0;
     const Times a = after.publish(map, due, pace);
-    if (g_sync_between) between_ms.push_back(after.syncBetween(map));
+    if (g_sync_between) {
+      double share_ms = 0.0;
+      between_ms.push_back(after.syncBetween(map, pace, &share_ms));
+      between_share_ms.push_back(share_ms);
+    }
     if (paced && pace.marker_period_s > 0.0) due.markers = true;  // a share after every cloud
     total_after.push_back(convert_ms + a.total());
     converts.push_back(convert_ms);
@@ -494,6 +512,16 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
         "  between clouds (--sync-between; not in the figures above): the mask mirror's sync p50 "
         "%.2f ms, p99 %.2f ms, max %.2f ms\n",
         percentile(between_ms, 0.5), percentile(between_ms, 0.99), percentile(between_ms, 1.0));
+  if (g_shares_between && !between_share_ms.empty()) {
+    std::vector<double> sum(between_ms.size());
+    for (size_t i = 0; i < sum.size(); ++i) sum[i] = between_ms[i] + between_share_ms[i];
+    std::printf(
+        "  between clouds (--shares-between): the output cache's share p50 %.2f ms, p99 %.2f ms, "
+        "max %.2f ms; sync and share p50 %.2f ms, p99 %.2f ms, max %.2f ms\n",
+        percentile(between_share_ms, 0.5), percentile(between_share_ms, 0.99),
+        percentile(between_share_ms, 1.0), percentile(sum, 0.5), percentile(sum, 0.99),
+        percentile(sum, 1.0));
+  }
   if (g_sync_stage) {
     std::vector<double> sync_ms, list_ms, listed;
     long sync_faults = 0;
@@ -611,6 +639,10 @@ int runMain(int argc, char** argv) {
                "as the server with mirror_every_cloud: the mask mirror takes each cloud's changes "
                "in after its outputs (timed apart, printed), and the take-ins read it one cloud "
                "behind (with a mirror only)");
+  app.add_flag("--shares-between", g_shares_between,
+               "with --sync-between, as the server with shares_between_clouds: the output "
+               "cache's shares run between clouds after the sync (timed apart, printed), only a "
+               "publication's call stays on the cloud's path");
   bool unpaced = false;
   app.add_flag("--unpaced", unpaced,
                "as the server with paced_outputs false: the throttled updates whole when due "
