@@ -614,21 +614,23 @@ void MapOutputCache::refreshGrid(bool all, bool draw) {
   const bool empty = !seen_valid_;
   int64_t lo_x = seen_lo_x_, hi_x = seen_hi_x_, lo_y = seen_lo_y_, hi_y = seen_hi_y_;
   redraw_owed_ = redraw_owed_ || all;
-  if (!draw) return;  // drawn before the next publication (advance with_grid, or update)
+  // The tiles do not depend on the bounds: the columns merged since the last draw are drawn at
+  // once (a paced share draws its own, so a publication draws little), a whole redraw (after a
+  // rebuild) at the next publication.
+  if (redraw_owed_ && !draw) return;
   for (const uint32_t c : undrawn_) columns_[c].undrawn = false;
-  const bool redraw = redraw_owed_;
-  redraw_owed_ = false;
   undrawn_.swap(drawing_);
   undrawn_.clear();
-  if (redraw) {
+  if (redraw_owed_) {
     // Every column again on tiles made unknown (their memory kept: no fresh pages).
+    redraw_owed_ = false;
     for (Tile& tile : tiles_) tile.cells.fill(kUnknown);
     for (const Column& col : columns_) drawColumn(col);
   } else {
-    // The columns merged since the last draw (an emptied column merged to unknown); the
-    // others are drawn as they were, wherever the published bounds have moved to.
+    // An emptied column is merged to unknown.
     for (const uint32_t c : drawing_) drawColumn(columns_[c]);
   }
+  if (!draw) return;  // the published rectangle: at a publication (advance with_grid, update)
   if (empty) {
     grid_empty_ = true;
     grid_width_ = grid_height_ = 0;

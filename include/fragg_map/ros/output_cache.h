@@ -268,9 +268,10 @@ class MapOutputCache {
   void widenSeen(const Column& col);
   /// Lists column `c` in undrawn_ (once).
   void markUndrawn(uint32_t c);
-  /// Grid bounds from the columns (kept for boundsSettled); with `draw`, reallocates and redraws
-  /// the grid when they moved (or `all`, or a redraw is owed), else draws the columns merged
-  /// since the last draw; without, only notes what is owed.
+  /// Grid bounds from the columns (kept for boundsSettled); draws the columns merged since the
+  /// last draw into the tiles (every call: the tiles do not move with the bounds); with `draw`
+  /// (a publication), also a whole redraw when one is owed (`all`: a rebuild) and the published
+  /// rectangle; without, a whole redraw waits for the next call with `draw`.
   void refreshGrid(bool all, bool draw);
   void drawColumn(const Column& col);
   /// Gathers the next `pieces` of with_cells_ into the next cloud message (gathered_ on).
