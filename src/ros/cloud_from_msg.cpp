@@ -120,10 +120,20 @@ void copyStrided(const sensor_msgs::PointCloud2& msg, const XyzFields& xyz,
 }  // namespace
 
 fragg::PointCloud cloudFromMsg(const sensor_msgs::PointCloud2& msg, CloudLayout* layout) {
+  fragg::PointCloud cloud;
+  cloudFromMsg(msg, &cloud, layout);
+  return cloud;
+}
+
+void cloudFromMsg(const sensor_msgs::PointCloud2& msg, fragg::PointCloud* out,
+                  CloudLayout* layout) {
   const XyzFields xyz = findXyz(msg);
   checkExtent(msg);
-  fragg::PointCloud cloud;
-  cloud.points_S.resize(size_t{msg.width} * msg.height);
+  fragg::PointCloud& cloud = *out;
+  cloud.width = 0;
+  cloud.height = 1;
+  cloud.free_only.clear();
+  cloud.points_S.resize(size_t{msg.width} * msg.height);  // within its capacity: no new buffer
   const bool packed = isPackedFloat32(msg, xyz);
   if (packed)
     copyPackedFloat32(msg, cloud);
@@ -139,7 +149,6 @@ fragg::PointCloud cloudFromMsg(const sensor_msgs::PointCloud2& msg, CloudLayout*
   if (finitePointCount(cloud) == 0)
     throw fragg::InvalidArgument("PointCloud2 without a usable point: no finite point among " +
                                  std::to_string(cloud.size()) + " (all NaN or Inf)");
-  return cloud;
 }
 
 size_t finitePointCount(const fragg::PointCloud& cloud) {

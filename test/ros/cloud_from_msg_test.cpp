@@ -120,6 +120,37 @@ TEST(CloudFromMsg, OrganisedDepthCloudKeepsItsNaNsInPlace) {
   EXPECT_EQ(fragg::ros::finitePointCount(cloud), 45u);
 }
 
+// Converting into a kept cloud (the server's insertion thread keeps the last cloud's point
+// buffer): every field is the new message's (an organised cloud after an unorganised one, a
+// flag list dropped), and a buffer large enough is written in place, not replaced.
+TEST(CloudFromMsg, IntoAKeptCloudEveryFieldIsNewAndItsBufferIsReused) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  fragg::PointCloud kept = cloudFromMsg(makeCloud(randomPoints(1000, 1), 1000, 1, packedXyz(), 12));
+  kept.free_only.assign(kept.size(), 1);
+  const Eigen::Vector3f* buffer = kept.points_S.data();
+  auto organised = randomPoints(8 * 6, 2);
+  organised[5] = {nan, nan, nan};
+  CloudLayout layout{};
+  cloudFromMsg(makeCloud(organised, 8, 6, packedXyz(), 16), &kept, &layout);
+  EXPECT_EQ(layout, CloudLayout::kPackedFloat32);
+  expectSamePoints(organised, kept);
+  EXPECT_TRUE(kept.organised());
+  EXPECT_EQ(kept.width, 8u);
+  EXPECT_EQ(kept.height, 6u);
+  EXPECT_FALSE(kept.hasFreeOnly()) << "the last cloud's flags stayed";
+  EXPECT_EQ(kept.points_S.data(), buffer) << "a buffer large enough was replaced";
+  // And back to an unorganised cloud through the strided path, in the same buffer.
+  const std::vector<FieldSpec> fields = {
+      {"z", 0, F::FLOAT32}, {"x", 4, F::FLOAT32}, {"y", 8, F::FLOAT32}};
+  const auto pts = randomPoints(900, 3);
+  cloudFromMsg(makeCloud(pts, 900, 1, fields, 12), &kept, &layout);
+  EXPECT_EQ(layout, CloudLayout::kStrided);
+  expectSamePoints(pts, kept);
+  EXPECT_FALSE(kept.organised());
+  EXPECT_EQ(kept.width, 0u);
+  EXPECT_EQ(kept.points_S.data(), buffer);
+}
+
 TEST(CloudFromMsg, RejectsMissingField) {
   const auto pts = randomPoints(10);
   expectRejected(makeCloud(pts, 10, 1, {{"x", 0, F::FLOAT32}, {"y", 4, F::FLOAT32}}, 12),

@@ -26,6 +26,12 @@ enum class CloudLayout { kPackedFloat32, kStrided };
 /// point ("... no finite point among N (all NaN or Inf)", not called malformed). `layout`
 /// (optional) tells which path converted it.
 fragg::PointCloud cloudFromMsg(const sensor_msgs::PointCloud2& msg, CloudLayout* layout = nullptr);
+/// The same into `out`, every field overwritten, its point buffer reused: within its capacity
+/// no new buffer is taken (a server converting clouds of one size writes into pages it already
+/// has; a fresh 2 MiB buffer faults in at ~3.7 ms on the 2-core VM). The same exceptions; after
+/// one `out` holds no valid cloud.
+void cloudFromMsg(const sensor_msgs::PointCloud2& msg, fragg::PointCloud* out,
+                  CloudLayout* layout = nullptr);
 
 /// Points of `cloud` with finite coordinates.
 size_t finitePointCount(const fragg::PointCloud& cloud);

@@ -117,8 +117,10 @@ std::optional<std::string> transformProblem(const Eigen::Isometry3d& T_map_senso
 CloudInserter::CloudInserter(const ServerParams& params, SharedMap* shared, ServerStats* stats)
     : params_(params), shared_(shared), stats_(stats) {}
 
-std::optional<fragg::PointCloud> CloudInserter::convert(const sensor_msgs::PointCloud2& msg) const {
+std::optional<fragg::PointCloud> CloudInserter::convert(const sensor_msgs::PointCloud2& msg,
+                                                        std::vector<Eigen::Vector3f> reuse) const {
   fragg::PointCloud cloud;
+  cloud.points_S = std::move(reuse);
   try {
     if (msg.header.frame_id.empty()) throw fragg::InvalidArgument("cloud has no frame_id");
     if (msg.width == 0 || msg.height == 0) {
@@ -129,7 +131,7 @@ std::optional<fragg::PointCloud> CloudInserter::convert(const sensor_msgs::Point
                          msg.header.frame_id.c_str(), msg.width, msg.height);
       return std::nullopt;
     }
-    cloud = cloudFromMsg(msg);
+    cloudFromMsg(msg, &cloud);
   } catch (const std::exception& e) {
     // cloudFromMsg's last check: no finite point (all NaN) is a cause of its own.
     const bool no_point = std::string(e.what()).find("no finite point") != std::string::npos;

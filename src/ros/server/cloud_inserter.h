@@ -61,8 +61,10 @@ class CloudInserter {
 
   /// The cloud of `msg`, validated; nullopt (counted, logged) when it is malformed or holds no
   /// usable point, and nullopt (counted as empty_clouds, logged at DEBUG only) when it has 0
-  /// points.
-  std::optional<fragg::PointCloud> convert(const sensor_msgs::PointCloud2& msg) const;
+  /// points. `reuse`: a point buffer to convert into (its capacity kept: the last cloud's, so
+  /// that clouds of one size take no fresh memory).
+  std::optional<fragg::PointCloud> convert(const sensor_msgs::PointCloud2& msg,
+                                           std::vector<Eigen::Vector3f> reuse = {}) const;
 
   /// Inserts `cloud` (sensor frame `frame`) at `T_map_sensor` under the write lock. False
   /// (counted, logged, map unchanged) for an unusable transform or when the map throws.

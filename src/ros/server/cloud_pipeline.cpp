@@ -129,7 +129,16 @@ void CloudPipeline::process(const Queued& item, CloudTrace* trace) {
   const Clock::time_point taken = Clock::now();
   trace->queue_ms = msBetween(item.received, taken);
   trace->outcome = "rejected";  // until a later step says otherwise
-  std::optional<fragg::PointCloud> cloud = inserter_.convert(msg);  // before the tf wait
+  // Into the last cloud's point buffer (before the tf wait); the buffer is kept again for the
+  // next cloud however this one ends.
+  std::optional<fragg::PointCloud> cloud = inserter_.convert(msg, std::move(spare_points_));
+  struct KeepPoints {
+    std::optional<fragg::PointCloud>& cloud;
+    std::vector<Eigen::Vector3f>& spare;
+    ~KeepPoints() {
+      if (cloud) spare = std::move(cloud->points_S);
+    }
+  } keep{cloud, spare_points_};
   if (!cloud) {
     trace->outcome = msg.width == 0 || msg.height == 0 ? "empty" : "rejected";
     return;

@@ -95,6 +95,8 @@ class CloudPipeline {
   const tf2::BufferCore& tf_;
   ServerStats* stats_;
   CloudInserter inserter_;
+  /// The last cloud's point buffer, converted into by the next (the insertion thread's only).
+  std::vector<Eigen::Vector3f> spare_points_;
   InsertedFn on_inserted_;
   DynamicOutput dynamic_;
   BetweenFn between_clouds_;
