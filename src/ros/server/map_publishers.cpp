@@ -143,6 +143,7 @@ void MapPublishers::publishAfterInsert(const sensor_msgs::PointCloud2& cloud,
   std::lock_guard<std::mutex> publishing(publish_mutex_);
   const SharedMap::ReadGuard state = shared_->read("outputs after a cloud");
   if (times) times->wait_ms = msSince(asked);
+  last_cloud_stamp_ = stamp;
   if (coloredMap()) {
     try {
       colors_.integrate(cloud, T_map_sensor, sensor.max_range_m, state->map);
@@ -224,6 +225,27 @@ void MapPublishers::betweenClouds() {
     (void)outputs_.advance(state->map, ::ros::SteadyTime::now().toSec(),
                            held_maps_.throttle().periodS(), false,
                            wanted(occupied_cloud_pub_) || wanted(centers_pub_));
+  // The markers' next share, built from the mirror as the next cloud's take-ins would read it
+  // (the sync just now), published on that cloud's path.
+  if (markerSharesBetweenClouds()) {
+    const double now_s = ::ros::SteadyTime::now().toSec();
+    prepareMarkers(state->map, occupied_markers_, now_s);
+    if (params_.publish_free_space) prepareMarkers(state->map, free_markers_, now_s);
+  }
+}
+
+bool MapPublishers::markerSharesBetweenClouds() const {
+  return params_.shares_between_clouds && pacedMarkers() && followsChanges();
+}
+
+void MapPublishers::prepareMarkers(const fragg::Map& map, MarkerTopic& topic, double now_s) {
+  if (topic.prepared || !topic.pub || !topic.ledger.started()) return;
+  const uint32_t subscribers = topic.pub.getNumSubscribers();
+  // Nobody to send to, or a new subscriber: the next cloud's path decides (a reset or a full
+  // set for everyone).
+  if (subscribers == 0 || subscribers > topic.subscribers) return;
+  topic.prepared = pacedBlockMarkersWire(map, topic.style, last_cloud_stamp_, now_s,
+                                         marker_throttle_.periodS(), &topic.ledger);
 }
 
 void MapPublishers::mirrorFor(const fragg::Map& map) {
@@ -308,7 +330,8 @@ void MapPublishers::flushPendingMarkers(const ::ros::SteadyTimerEvent&) {
   // What is pending shows in the map (the ledgers lag its revision) or, paced, in the ledgers'
   // queues.
   const auto pending = [this](const MarkerTopic& topic, uint64_t revision) {
-    return topic.ledger.publishedRevision() != revision || topic.ledger.pendingChunks() > 0;
+    return topic.ledger.publishedRevision() != revision || topic.ledger.pendingChunks() > 0 ||
+           topic.prepared.has_value();
   };
   flushWithoutWaiting(
       publish_mutex_, *shared_, [] { return true; },
@@ -324,6 +347,10 @@ void MapPublishers::publishMarkers(const fragg::Map& map, MarkerTopic& topic,
                                    const ::ros::Time& stamp, bool full, double now_s,
                                    double period_s) {
   const uint32_t subscribers = topic.pub ? topic.pub.getNumSubscribers() : 0;
+  // A share built between clouds (markerSharesBetweenClouds) goes out now, unless a full set
+  // follows (it holds what the share would have sent).
+  std::optional<SerializedMarkerArray> prepared = std::move(topic.prepared);
+  topic.prepared.reset();
   if (subscribers == 0) {
     // Nobody sees the markers: the next subscriber starts from a full set.
     topic.ledger = MarkerLedger();
@@ -340,6 +367,10 @@ void MapPublishers::publishMarkers(const fragg::Map& map, MarkerTopic& topic,
   // start-up: then the first clouds come as paced increments, not as one full set of the first
   // cloud, 180-208 ms on an H100 at W1 5 cm).
   const bool first = !topic.ledger.started();
+  if (prepared && !(full || first || joined)) {
+    if (!prepared->markers.empty()) topic.pub.publish(*prepared);
+    return;
+  }
   // Kept wire bytes of the chunks (marker_wire.h): roscpp copies them, nothing is serialised
   // again.
   const SerializedMarkerArray markers =

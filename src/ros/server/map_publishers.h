@@ -28,6 +28,7 @@
 #include <Eigen/Geometry>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "cloud_trace.h"
@@ -73,6 +74,9 @@ class MapPublishers {
     MarkerStyle style;
     MarkerLedger ledger;
     uint32_t subscribers = 0;  ///< at the last update
+    /// The next cloud's share, built between clouds (shares_between_clouds): that cloud's path
+    /// publishes it instead of building one (the same mirror state its take-ins would read).
+    std::optional<SerializedMarkerArray> prepared;
   };
   // Callers hold publish_mutex_ and the map's read lock.
   /// Markers (a full set, or the changes when due), whole-map outputs (with `throttle_maps`
@@ -106,6 +110,13 @@ class MapPublishers {
   /// someone to send them to. A publication's call (the listing, the grid, the messages) stays
   /// on the path of the cloud it is due after.
   [[nodiscard]] bool sharesBetweenClouds() const;
+  /// The same for the markers: shares_between_clouds, followsChanges and paced markers. The
+  /// share is built between clouds and published on the next cloud's path (a publication stays
+  /// on a cloud's path).
+  [[nodiscard]] bool markerSharesBetweenClouds() const;
+  /// Between clouds: `topic`'s next share built into topic.prepared (when it has subscribers,
+  /// a started ledger, no new subscriber and no share waiting).
+  void prepareMarkers(const fragg::Map& map, MarkerTopic& topic, double now_s);
   /// paced_outputs with a marker_rate / map_rate limit in effect.
   bool pacedMarkers() const { return params_.paced_outputs && marker_throttle_.limited(); }
   bool pacedMaps() const { return params_.paced_outputs && held_maps_.throttle().limited(); }
@@ -132,6 +143,9 @@ class MapPublishers {
   CellColors colors_;
   MarkerTopic occupied_markers_;
   MarkerTopic free_markers_;
+  /// The last inserted cloud's stamp (under publish_mutex_): the stamp of marker shares built
+  /// between clouds (they show the map as of that cloud).
+  ::ros::Time last_cloud_stamp_;
   RateThrottle marker_throttle_;
   ::ros::SteadyTimer marker_flush_timer_;
   /// The occupied cloud's and projected map's pieces (under publish_mutex_).
