@@ -148,12 +148,13 @@ struct ServerParams {
   /// period, on the path of the cloud whose take-in is due (11-17 ms on an H100 at W1 5 cm).
   /// (Before 2026-12-08 true synced on every cloud's path, which made more clouds late.)
   bool mirror_every_cloud = true;
-  /// shares_between_clouds: with mirror_every_cloud in effect (a CUDA map, paced whole-map
-  /// outputs that someone reads), the output cache's shares (recomputing the blocks a
-  /// publication listed, gathering the next occupied cloud message) run between clouds too,
-  /// right after the mirror's sync, instead of on each cloud's path: they stage the next
-  /// publication and publish nothing (the markers' shares are publications: they stay on the
-  /// path). A cloud arriving meanwhile waits for the share (queue_ms). false: on the path.
+  /// shares_between_clouds: with mirror_every_cloud in effect (a CUDA map, paced outputs that
+  /// someone reads), the paced shares are worked out between clouds too, right after the
+  /// mirror's sync, instead of on each cloud's path: the output cache's (recomputing the blocks
+  /// a publication listed, gathering the next occupied cloud message: staging, nothing
+  /// published) and the markers' next share, built from the mirror as the next cloud's
+  /// take-ins would read it and published on that cloud's path (publications stay on a
+  /// cloud's path). A cloud arriving meanwhile waits for them (queue_ms). false: on the path.
   bool shares_between_clouds = true;
   /// trace_csv: a file that gets one row per cloud received (its outcome and where its time
   /// went: queue, conversion, tf, insertion, outputs); empty: none.
