@@ -148,13 +148,15 @@ struct ServerParams {
   /// period, on the path of the cloud whose take-in is due (11-17 ms on an H100 at W1 5 cm).
   /// (Before 2026-12-08 true synced on every cloud's path, which made more clouds late.)
   bool mirror_every_cloud = true;
-  /// shares_between_clouds: with mirror_every_cloud in effect (a CUDA map, paced outputs that
-  /// someone reads), the paced shares are worked out between clouds too, right after the
-  /// mirror's sync, instead of on each cloud's path: the output cache's (recomputing the blocks
-  /// a publication listed, gathering the next occupied cloud message: staging, nothing
-  /// published) and the markers' next share, built from the mirror as the next cloud's
-  /// take-ins would read it and published on that cloud's path (publications stay on a
-  /// cloud's path). A cloud arriving meanwhile waits for them (queue_ms). false: on the path.
+  /// shares_between_clouds: with paced outputs that someone reads, the paced shares are worked
+  /// out between clouds (when no cloud waits; on a CUDA map right after the mirror's sync)
+  /// instead of on each cloud's path: the output cache's (recomputing the blocks a publication
+  /// listed, gathering the next occupied cloud message: staging, nothing published) and the
+  /// markers' next share, built from the map as it is then (on a CUDA map the mirror state the
+  /// next cloud's take-ins would read; on a CPU map one insertion older) and published on the
+  /// next cloud's path (publications stay on a cloud's path). A cloud after which no gap ran
+  /// them takes them on its path as before; a cloud arriving meanwhile waits for them
+  /// (queue_ms). false: always on the path.
   bool shares_between_clouds = true;
   /// trace_csv: a file that gets one row per cloud received (its outcome and where its time
   /// went: queue, conversion, tf, insertion, outputs); empty: none.

@@ -210,24 +210,31 @@ bool MapPublishers::followsChanges() const {
 }
 
 bool MapPublishers::sharesBetweenClouds() const {
-  return params_.shares_between_clouds && pacedMaps() && followsChanges() &&
+  return params_.shares_between_clouds && pacedMaps() &&
          (wanted(occupied_cloud_pub_) || wanted(centers_pub_) || wanted(projected_map_pub_));
 }
 
 void MapPublishers::betweenClouds() {
   std::lock_guard<std::mutex> publishing(publish_mutex_);
-  if (!followsChanges()) return;
-  const SharedMap::ReadGuard state = shared_->read("outputs' mirror between clouds");
-  (void)mirror_->sync(state->map);  // no lag accepted outside a cloud's outputs
+  const bool sync = followsChanges();
+  const bool cache_share = sharesBetweenClouds();
+  const bool marker_shares = markerSharesBetweenClouds();
+  if (!sync && !cache_share && !marker_shares) return;
+  const SharedMap::ReadGuard state = shared_->read("outputs between clouds");
+  if (sync) (void)mirror_->sync(state->map);  // no lag accepted outside a cloud's outputs
   // The output cache's share of what the last publication listed (and of the next cloud
-  // message), read from the mirror just synced: staging, nothing is published.
-  if (sharesBetweenClouds())
+  // message), read from the mirror just synced or the map: staging, nothing is published. The
+  // next cloud's path then takes none (it does when no cloud's gap ran one).
+  if (cache_share) {
     (void)outputs_.advance(state->map, ::ros::SteadyTime::now().toSec(),
                            held_maps_.throttle().periodS(), false,
                            wanted(occupied_cloud_pub_) || wanted(centers_pub_));
-  // The markers' next share, built from the mirror as the next cloud's take-ins would read it
-  // (the sync just now), published on that cloud's path.
-  if (markerSharesBetweenClouds()) {
+    cache_share_between_ = true;
+  }
+  // The markers' next share, built from the mirror or the map as they are now (what the next
+  // cloud's take-ins would read on a CUDA map; one insertion older on a CPU map), published on
+  // that cloud's path.
+  if (marker_shares) {
     const double now_s = ::ros::SteadyTime::now().toSec();
     prepareMarkers(state->map, occupied_markers_, now_s);
     if (params_.publish_free_space) prepareMarkers(state->map, free_markers_, now_s);
@@ -235,7 +242,8 @@ void MapPublishers::betweenClouds() {
 }
 
 bool MapPublishers::markerSharesBetweenClouds() const {
-  return params_.shares_between_clouds && pacedMarkers() && followsChanges();
+  return params_.shares_between_clouds && pacedMarkers() &&
+         (occupied_markers_.subscribers > 0 || free_markers_.subscribers > 0);
 }
 
 void MapPublishers::prepareMarkers(const fragg::Map& map, MarkerTopic& topic, double now_s) {
@@ -278,8 +286,11 @@ void MapPublishers::publishMapOutputs(const fragg::Map& map, const ::ros::Time& 
     // Paced: the cache takes its share of the changed blocks after every cloud (each within a
     // period of its change), and the messages go out when due, as the cache has them.
     const bool due = held_maps_.letThrough(now_s, stamp);
-    // Shares between clouds: only a publication's call (its listing) stays on the path.
-    if (!due && sharesBetweenClouds()) return;
+    // Shares between clouds: only a publication's call (its listing) stays on the path, and a
+    // share when no gap between clouds took one since the last cloud (clouds back to back).
+    const bool share_taken = cache_share_between_;
+    cache_share_between_ = false;
+    if (!due && share_taken) return;
     outputs_.advance(map, now_s, held_maps_.throttle().periodS(), due, cloud_wanted);
     if (!due) return;
     held_maps_.published(now_s);

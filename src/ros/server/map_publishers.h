@@ -57,9 +57,9 @@ class MapPublishers {
   /// CUDA map whose paced outputs someone reads, the mask mirror takes in the changes of the
   /// clouds since its last sync, so that the next cloud's take-ins read it as it stands (one
   /// insertion behind: MaskMirror::acceptLag) instead of syncing a period's changes on that
-  /// cloud's path; with shares_between_clouds the output cache then takes its share too
-  /// (sharesBetweenClouds). Takes the publishers' mutex and the map's read lock; nothing
-  /// otherwise.
+  /// cloud's path; with shares_between_clouds (either backend) the output cache then takes its
+  /// share and the markers' next share is built (sharesBetweenClouds, markerSharesBetweenClouds).
+  /// Takes the publishers' mutex and the map's read lock; nothing when none of these is on.
   void betweenClouds();
   /// After a pose correction, a truncation or a merge: the markers of the blocks it changed
   /// (incremental, as after an insertion; throttled by marker_rate), occupied cloud, projected
@@ -106,13 +106,14 @@ class MapPublishers {
   /// outputs and someone to read them. Nothing on a CPU map (no mirror).
   [[nodiscard]] bool followsChanges() const;
   /// Whether the output cache's paced shares run between clouds (betweenClouds) rather than on
-  /// each cloud's path: shares_between_clouds, followsChanges, paced whole-map outputs and
-  /// someone to send them to. A publication's call (the listing, the grid, the messages) stays
-  /// on the path of the cloud it is due after.
+  /// each cloud's path: shares_between_clouds, paced whole-map outputs and someone to send
+  /// them to (either backend: on a CUDA map after the mirror's sync). A publication's call
+  /// (the listing, the grid, the messages) stays on the path of the cloud it is due after, and
+  /// a cloud after which no gap ran a share takes its share on its path.
   [[nodiscard]] bool sharesBetweenClouds() const;
-  /// The same for the markers: shares_between_clouds, followsChanges and paced markers. The
-  /// share is built between clouds and published on the next cloud's path (a publication stays
-  /// on a cloud's path).
+  /// The same for the markers: shares_between_clouds, paced markers and a subscriber. The share
+  /// is built between clouds and published on the next cloud's path (a publication stays on a
+  /// cloud's path); with none built, that path builds one.
   [[nodiscard]] bool markerSharesBetweenClouds() const;
   /// Between clouds: `topic`'s next share built into topic.prepared (when it has subscribers,
   /// a started ledger, no new subscriber and no share waiting).
@@ -146,6 +147,9 @@ class MapPublishers {
   /// The last inserted cloud's stamp (under publish_mutex_): the stamp of marker shares built
   /// between clouds (they show the map as of that cloud).
   ::ros::Time last_cloud_stamp_;
+  /// The output cache took a share between clouds since the last cloud's outputs (the next
+  /// cloud's path takes none).
+  bool cache_share_between_ = false;
   RateThrottle marker_throttle_;
   ::ros::SteadyTimer marker_flush_timer_;
   /// The occupied cloud's and projected map's pieces (under publish_mutex_).

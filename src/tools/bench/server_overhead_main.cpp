@@ -284,11 +284,13 @@ class Outputs {
   /// the next cloud publishes it.
   double syncBetween(const fragg::Map& map, const Pace& pace, double* share_ms, double* marker_ms) {
     *share_ms = *marker_ms = 0.0;
-    if (!mirror_) return 0.0;
-    const auto t0 = Clock::now();
-    mirror_->acceptLag(0);
-    (void)mirror_->sync(map);
-    const double ms = msSince(t0);
+    double ms = 0.0;
+    if (mirror_ && g_sync_between) {
+      const auto t0 = Clock::now();
+      mirror_->acceptLag(0);
+      (void)mirror_->sync(map);
+      ms = msSince(t0);
+    }
     if (sharesBetween() && pace.on && pace.map_period_s > 0.0) {
       const auto t1 = Clock::now();
       (void)cache_.advance(map, pace.now_s, pace.map_period_s, false);
@@ -300,7 +302,7 @@ class Outputs {
                                                     pace.marker_period_s, &ledger_);
       *marker_ms = msSince(t1);
     }
-    mirror_->acceptLag(1);
+    if (mirror_ && g_sync_between) mirror_->acceptLag(1);
     return ms;
   }
   /// Blocks and chunks queued by the paced path (what the server's timers send once the clouds
@@ -308,8 +310,8 @@ class Outputs {
   size_t queued() const { return cache_.queuedBlocks() + ledger_.pendingChunks(); }
 
  private:
-  /// The after path's cache shares run between clouds (--shares-between with a mirror).
-  bool sharesBetween() const { return !before_ && mirror_ && g_sync_between && g_shares_between; }
+  /// The after path's shares run between clouds (--shares-between; either map).
+  bool sharesBetween() const { return !before_ && g_shares_between; }
   static fragg::ros::OutputCacheOptions optionsWith(fragg::BlockChange refresh_on) {
     fragg::ros::OutputCacheOptions o;
     o.refresh_on = refresh_on;
@@ -490,7 +492,7 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
     pace.marker_period_s = rates.marker_hz > 0.0 ? 1.0 / rates.marker_hz : 0.0;
     pace.map_period_s = rates.map_hz > 0.0 ? 1.0 / rates.map_hz : 0.0;
     const Times a = after.publish(map, due, pace);
-    if (g_sync_between) {
+    if (g_sync_between || g_shares_between) {
       double share_ms = 0.0, marker_ms = 0.0;
       between_ms.push_back(after.syncBetween(map, pace, &share_ms, &marker_ms));
       between_share_ms.push_back(share_ms);
@@ -528,7 +530,7 @@ void run(fragg::Map& map, const std::vector<fragg::Scan>& scans, double max_rang
       "%.2f ms over %zu clouds\n",
       paced ? " (paced)" : "", percentile(total_after, 0.5), percentile(total_after, 0.99),
       percentile(total_after, 1.0), scans.size());
-  if (!between_ms.empty())
+  if (g_sync_between && !between_ms.empty())
     std::printf(
         "  between clouds (--sync-between; not in the figures above): the mask mirror's sync p50 "
         "%.2f ms, p99 %.2f ms, max %.2f ms\n",
@@ -664,9 +666,10 @@ int runMain(int argc, char** argv) {
                "in after its outputs (timed apart, printed), and the take-ins read it one cloud "
                "behind (with a mirror only)");
   app.add_flag("--shares-between", g_shares_between,
-               "with --sync-between, as the server with shares_between_clouds: the output "
-               "cache's shares run between clouds after the sync (timed apart, printed), only a "
-               "publication's call stays on the cloud's path");
+               "as the server with shares_between_clouds: the output cache's shares and the "
+               "markers' next share are worked out between clouds (after the sync with "
+               "--sync-between; timed apart, printed), the markers' published by the next "
+               "cloud; only a publication's call stays on the cloud's path");
   bool unpaced = false;
   app.add_flag("--unpaced", unpaced,
                "as the server with paced_outputs false: the throttled updates whole when due "
