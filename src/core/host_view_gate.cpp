@@ -47,21 +47,18 @@ void HostViewGate::exclusive(const std::function<void()>& write_back) {
     --writers_waiting_;
     writing_ = true;
   }
-  try {
-    write_back();
-  } catch (...) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      writing_ = false;
+  // The gate opens again however the write-back ends.
+  struct Reopen {
+    HostViewGate* gate;
+    ~Reopen() {
+      {
+        std::lock_guard<std::mutex> lock(gate->mutex_);
+        gate->writing_ = false;
+      }
+      gate->changed_.notify_all();
     }
-    changed_.notify_all();
-    throw;
-  }
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    writing_ = false;
-  }
-  changed_.notify_all();
+  } reopen{this};
+  write_back();
 }
 
 size_t HostViewGate::pins() const {

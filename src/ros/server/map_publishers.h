@@ -75,7 +75,8 @@ class MapPublishers {
     MarkerLedger ledger;
     uint32_t subscribers = 0;  ///< at the last update
     /// The next cloud's share, built between clouds (shares_between_clouds): that cloud's path
-    /// publishes it instead of building one (the same mirror state its take-ins would read).
+    /// publishes it instead of building one (on a CUDA map the mirror state its take-ins would
+    /// read; on a CPU map the map one insertion older).
     std::optional<SerializedMarkerArray> prepared;
   };
   // Callers hold publish_mutex_ and the map's read lock.

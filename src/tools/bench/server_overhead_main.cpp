@@ -140,7 +140,7 @@ bool g_sync_stage = false;
 bool g_sync_between = false;
 /// --mirror: the after path reads a mask mirror.
 bool g_mirror = false;
-/// --shares-between: with --sync-between, the output cache's shares run between clouds.
+/// --shares-between: the output cache's and the markers' shares run between clouds.
 bool g_shares_between = false;
 
 /// Which outputs of the after path go out after a cloud.
@@ -277,9 +277,9 @@ class Outputs {
   }
   /// --sync-between, the server's work between clouds (mirror_every_cloud): the mirror takes in
   /// the changes since its last sync, and the next cloud's take-ins read it as it stands, one
-  /// cloud behind (MaskMirror::acceptLag). Returns the sync's wall ms (0 without a mirror).
+  /// cloud behind (MaskMirror::acceptLag). Returns the sync's CPU ms (0 without a mirror).
   /// With --shares-between (and paced whole-map outputs) the output cache's share follows the
-  /// sync (the server's shares_between_clouds); its wall ms go to `*share_ms`.
+  /// sync (the server's shares_between_clouds); its CPU ms go to `*share_ms`.
   /// With --shares-between the markers' next share is built there too (`*marker_ms`), and
   /// the next cloud publishes it.
   double syncBetween(const fragg::Map& map, const Pace& pace, double* share_ms, double* marker_ms) {
